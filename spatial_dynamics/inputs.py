@@ -1,0 +1,157 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Joint-space inputs from ROS message arrays, mapped to model order by joint name.
+
+Pure Python + numpy (no ROS imports), so it is tested without a ROS graph. The node passes the
+fields of a ``sensor_msgs/JointState`` or the first point of a ``trajectory_msgs/JointTrajectory``
+and gets ``(q, qd, qdd)``, each of shape ``(n,)`` in the order of ``model.joint_names``:
+
+====================  ===========================  ===========================
+message               q (rad | m)                  qd (rad/s | m/s), qdd (rad/s² | m/s²)
+====================  ===========================  ===========================
+JointState            ``position``                 ``velocity``, ``effort`` (when the node's
+                                                   ``acceleration_source`` is ``effort``)
+JointTrajectory       ``points[0].positions``      ``points[0].velocities``,
+                                                   ``points[0].accelerations``
+====================  ===========================  ===========================
+
+Values are matched by joint **name**; the message may list joints in any order and may carry
+joints the model doesn't have (ignored). An empty optional array means zeros. Anything else that
+is wrong raises :class:`InputError`, whose ``reason`` is one of :data:`REASONS` (a diagnostics
+counter key) and whose message names the offending joint or field.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+REASONS = (
+    'empty',            # no joint names in the message
+    'no_points',        # a trajectory without points
+    'length_mismatch',  # an array whose length differs from the list of names
+    'duplicate_joint',  # a model joint named twice
+    'missing_joint',    # a model joint the message doesn't name
+    'non_finite',       # NaN or Inf in a value the model uses
+)
+"""Reason codes of :class:`InputError`, in the order the checks run."""
+
+_MAX_LISTED = 5  # names listed in an error message before '...'
+
+
+class InputError(ValueError):
+    """A message that cannot be turned into ``(q, qd, qdd)``; ``reason`` is in :data:`REASONS`."""
+
+    def __init__(self, reason: str, message: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+def _listed(names: Sequence[str]) -> str:
+    shown = ', '.join(repr(name) for name in names[:_MAX_LISTED])
+    return shown + (', ...' if len(names) > _MAX_LISTED else '')
+
+
+@lru_cache(maxsize=256)
+def name_index(joint_names: Tuple[str, ...], names: Tuple[str, ...]) -> np.ndarray:
+    """Indices ``idx`` such that ``values[idx]`` is in the order of ``joint_names``.
+
+    ``joint_names`` is the model's order, ``names`` the message's. Cached per pair of tuples, so
+    a publisher that keeps its name order costs one dict build, not one per message; the
+    returned array is read-only and shared.
+
+    Raises :class:`InputError` (``duplicate_joint``, ``missing_joint``).
+    """
+    position = {}
+    duplicated = []
+    for i, name in enumerate(names):
+        if name in position and name not in duplicated:
+            duplicated.append(name)
+        position[name] = i
+    duplicated = [name for name in joint_names if name in duplicated]
+    if duplicated:
+        raise InputError('duplicate_joint',
+                         f'joint(s) named more than once: {_listed(duplicated)}')
+    missing = [name for name in joint_names if name not in position]
+    if missing:
+        raise InputError('missing_joint', f'missing joint(s) {_listed(missing)}')
+    idx = np.fromiter((position[name] for name in joint_names), dtype=np.intp,
+                      count=len(joint_names))
+    idx.setflags(write=False)
+    return idx
+
+
+def _arrays(
+    joint_names: Tuple[str, ...],
+    names: Sequence[str],
+    fields: Sequence[Tuple[str, Optional[Sequence[float]]]],
+) -> Tuple[np.ndarray, ...]:
+    """Map each ``(field, values)`` to model order; the first field is required, ``None`` = zeros.
+
+    Checks run in the order of :data:`REASONS`; one check failing stops the conversion, so the
+    caller never sees a partial result.
+    """
+    count = len(names)
+    if count == 0:
+        raise InputError('empty', "field 'name' is empty: no joints in the message")
+    for k, (field, values) in enumerate(fields):
+        if values is None:
+            continue
+        length = len(values)
+        if length != count and (k == 0 or length != 0):
+            allowed = f'{count}' if k == 0 else f'0 or {count}'
+            raise InputError(
+                'length_mismatch',
+                f"field '{field}' has {length} values for {count} names (expected {allowed})")
+    idx = name_index(joint_names, tuple(names))
+    n = len(joint_names)
+    result = []
+    for field, values in fields:
+        if values is None or len(values) == 0:
+            result.append(np.zeros(n))
+            continue
+        mapped = np.asarray(values, dtype=np.float64)[idx]
+        if not np.isfinite(mapped).all():
+            bad = [joint_names[i] for i in np.flatnonzero(~np.isfinite(mapped))]
+            raise InputError('non_finite',
+                             f"field '{field}' is not finite for joint(s) {_listed(bad)}")
+        result.append(mapped)
+    return tuple(result)
+
+
+def joint_state_arrays(
+    joint_names: Tuple[str, ...],
+    name: Sequence[str],
+    position: Sequence[float],
+    velocity: Sequence[float],
+    effort: Optional[Sequence[float]],
+) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(q, qd, qdd)`` in ``joint_names`` order from the arrays of a ``sensor_msgs/JointState``.
+
+    ``effort`` carries the desired accelerations qdd (rad/s² or m/s²); pass ``None`` when they
+    come from elsewhere (``acceleration_source: none``), and qdd is zeros. ``position`` is
+    required (same length as ``name``); ``velocity`` and ``effort`` may be empty (zeros).
+    """
+    return _arrays(joint_names, name,
+                   (('position', position), ('velocity', velocity), ('effort', effort)))
+
+
+def trajectory_arrays(
+    joint_names: Tuple[str, ...],
+    names: Sequence[str],
+    points: Sequence,
+) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(q, qd, qdd)`` in ``joint_names`` order from a ``trajectory_msgs/JointTrajectory``.
+
+    ``names`` is its ``joint_names``; ``points[0]`` gives ``positions`` (required),
+    ``velocities`` and ``accelerations`` (empty = zeros). Later points are ignored.
+    """
+    if len(points) == 0:
+        raise InputError('no_points', "field 'points' is empty: no trajectory point")
+    point = points[0]
+    return _arrays(joint_names, names,
+                   (('points[0].positions', point.positions),
+                    ('points[0].velocities', point.velocities),
+                    ('points[0].accelerations', point.accelerations)))
