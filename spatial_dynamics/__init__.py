@@ -1,0 +1,17 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""spatial_dynamics: inverse dynamics (RNEA) on Featherstone's spatial vector algebra.
+
+The core (``spatial``, ``joints``, ``model``, ``rnea``) is plain Python + numpy and never
+imports rclpy; ``node`` is the ROS 2 shell around it.
+
+    >>> import spatial_dynamics as sd
+    >>> model = sd.Model.from_urdf('robot.urdf')          # doctest: +SKIP
+    >>> tau = sd.rnea(model, q, qd, qdd)                  # doctest: +SKIP
+"""
+
+from .model import Frame, Model
+from .rnea import GRAVITY, rnea, rnea_components, rnea_spatial
+
+__all__ = ['Frame', 'GRAVITY', 'Model', 'rnea', 'rnea_components', 'rnea_spatial']
+__version__ = '0.1.0'

@@ -1,0 +1,391 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The kinematic-tree model (RBDA ch. 4) and its construction from a URDF.
+
+A :class:`Model` is immutable and holds flat arrays indexed by body. Body 0 is the fixed
+base (the URDF root link and everything fixed to it); bodies ``1..NB`` each hang on one
+movable joint, numbered so that ``parent[i] < i``. Links attached by ``fixed`` joints are
+lumped into the body they are fixed to; their frames stay reachable through ``frames``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Mapping, Union
+
+import numpy as np
+
+from .joints import FIXED, PRISMATIC, REVOLUTE, URDF_KINDS
+from .spatial import mcI, plux, plux_Er
+
+Source = Union[str, bytes, os.PathLike]
+
+#: Relative tolerance of the inertia checks (positive semi-definite, triangle inequality).
+INERTIA_RTOL = 1e-6
+#: Largest magnitude accepted for a URDF number (lengths, masses, inertias, angles).
+MAX_ABS_VALUE = 1e12
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """A URDF link's frame on its body: ``body`` index and ``lXb`` (link ← body, 6×6)."""
+
+    body: int
+    lXb: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """Immutable kinematic tree with flat per-body arrays (index 0 = fixed base).
+
+    Attributes (``NB`` moving bodies, ``n`` = ``len(joint_names)`` generalised coordinates):
+        name: robot name.
+        joint_names: movable, non-mimic joint names; the order of ``q``.
+        body_names: (NB+1,) link name of each body (the link its joint moves).
+        body_joints: (NB+1,) name of each body's joint ('' for the base).
+        NB: number of moving bodies.
+        parent: (NB+1,) parent body index, ``parent[0] = -1``.
+        jtype: (NB+1,) joint kind per body (``joints.REVOLUTE``, ``PRISMATIC``; base ``FIXED``).
+        axis: (NB+1, 3) unit joint axis in the body frame.
+        Xtree: (NB+1, 6, 6) ``iXλ(i)`` at q = 0: parent body → body motion transform.
+        inertia: (NB+1, 6, 6) spatial inertia of each body with its lumped links, body frame.
+        qidx, qmul, qoff: (NB+1,) body ``i`` moves by ``qmul[i]·q[qidx[i]] + qoff[i]``
+            (mimic joints have ``qidx`` of their source); base entries are ``-1, 0, 0``.
+        frames: link name → :class:`Frame` for every link, lumped or not.
+        effort_limit, velocity_limit, lower, upper, damping, friction: (n,) URDF
+            ``<limit>`` and ``<dynamics>`` values per joint of ``q`` (``nan`` when absent).
+    """
+
+    name: str
+    joint_names: tuple
+    body_names: tuple
+    body_joints: tuple
+    NB: int
+    parent: np.ndarray
+    jtype: np.ndarray
+    axis: np.ndarray
+    Xtree: np.ndarray
+    inertia: np.ndarray
+    qidx: np.ndarray
+    qmul: np.ndarray
+    qoff: np.ndarray
+    frames: Mapping[str, Frame]
+    effort_limit: np.ndarray
+    velocity_limit: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    damping: np.ndarray
+    friction: np.ndarray
+    _kernel: tuple = field(default=(), repr=False)
+
+    def __post_init__(self) -> None:
+        for name, value in vars(self).items():
+            if isinstance(value, np.ndarray):
+                value.setflags(write=False)
+        object.__setattr__(self, 'frames', MappingProxyType(dict(self.frames)))
+        object.__setattr__(self, '_kernel', _kernel_data(self))
+
+    @property
+    def nq(self) -> int:
+        """Number of generalised coordinates, ``len(joint_names)``."""
+        return len(self.joint_names)
+
+    @classmethod
+    def from_urdf(cls, source: Source) -> 'Model':
+        """Build a model from a URDF file path or an XML string (meshes are never loaded).
+
+        Raises ``ValueError`` naming the offending element for malformed or unphysical
+        descriptions.
+        """
+        return _from_robot(_parse_urdf(source))
+
+    def __repr__(self) -> str:
+        return (f'Model(name={self.name!r}, dof={self.nq}, bodies={self.NB}, '
+                f'links={len(self.frames)})')
+
+
+# --------------------------------------------------------------------------------------------
+# URDF parsing (yourdfpy's element parsers on an lxml tree we parse safely ourselves)
+
+def _parse_urdf(source: Source):
+    from lxml import etree
+    import yourdfpy
+
+    if isinstance(source, os.PathLike):
+        source = os.fspath(source)
+    if isinstance(source, bytes):
+        text = source
+    elif isinstance(source, str) and source.lstrip().startswith('<'):
+        text = source.encode('utf-8')
+    elif isinstance(source, str):
+        try:
+            with open(source, 'rb') as fh:
+                text = fh.read()
+        except OSError as err:
+            raise ValueError(f'cannot read URDF file {source!r}: {err.strerror}') from None
+    else:
+        raise ValueError(f'URDF source must be a path or an XML string, not {type(source)}')
+
+    # No DTD loading, no entity expansion, no network, no huge trees: an external entity
+    # cannot leak a local file and an entity bomb cannot expand.
+    parser = etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True,
+                             huge_tree=False, remove_comments=True, remove_pis=True)
+    try:
+        root = etree.fromstring(text, parser)
+    except etree.XMLSyntaxError as err:
+        raise ValueError(f'malformed URDF XML: {err}') from None
+    dtd = root.getroottree().docinfo.internalDTD
+    if dtd is not None and any(True for _ in dtd.iterentities()):
+        raise ValueError('URDF declares XML entities (<!ENTITY ...>): not supported '
+                         '(expand xacro/entities before loading)')
+    if root.tag != 'robot':
+        raise ValueError(f'URDF root element must be <robot>, not <{root.tag}>')
+    if not root.get('name'):
+        raise ValueError('the <robot> element has no name attribute')
+
+    links, joints = [], []
+    for el in root.findall('link'):
+        name = el.get('name')
+        if not name:
+            raise ValueError('a <link> element has no name attribute')
+        try:
+            links.append(yourdfpy.URDF._parse_link(el))
+        except (ValueError, TypeError, AttributeError, KeyError) as err:
+            raise ValueError(f'link {name!r}: cannot parse: {err}') from None
+    for el in root.findall('joint'):
+        name = el.get('name')
+        if not name:
+            raise ValueError('a <joint> element has no name attribute')
+        if el.find('parent') is None or el.find('child') is None:
+            raise ValueError(f'joint {name!r}: missing <parent> or <child> element')
+        try:
+            joints.append(yourdfpy.URDF._parse_joint(el))
+        except (ValueError, TypeError, AttributeError, KeyError) as err:
+            raise ValueError(f'joint {name!r}: cannot parse: {err}') from None
+    return root.get('name'), links, joints
+
+
+def _finite(what: str, values) -> np.ndarray:
+    a = np.asarray(values, dtype=float)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f'{what}: non-finite number in {a.tolist()}')
+    if np.any(np.abs(a) > MAX_ABS_VALUE):
+        raise ValueError(f'{what}: absurd magnitude (> {MAX_ABS_VALUE:g}) in {a.tolist()}')
+    return a
+
+
+def _origin(what: str, T) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation ``R`` (child → parent coordinates) and position ``p`` of a URDF origin."""
+    if T is None:
+        return np.eye(3), np.zeros(3)
+    T = _finite(f'{what} origin', T)
+    return T[:3, :3], T[:3, 3]
+
+
+def _link_inertia(link) -> np.ndarray:
+    """Spatial inertia (6×6) of a URDF link in its own frame; zero without ``<inertial>``."""
+    inertial = link.inertial
+    if inertial is None:
+        return np.zeros((6, 6))
+    what = f'link {link.name!r} <inertial>'
+    m = float(_finite(f'{what} mass', 0.0 if inertial.mass is None else inertial.mass))
+    if m < 0.0:
+        raise ValueError(f'{what}: negative mass {m}')
+    Ii = np.zeros((3, 3)) if inertial.inertia is None else inertial.inertia
+    Ii = _finite(f'{what} inertia', np.asarray(Ii, dtype=float))
+    lam = np.linalg.eigvalsh(Ii)
+    tol = INERTIA_RTOL * max(float(np.abs(lam).max()), 1e-300)
+    if lam[0] < -tol:
+        raise ValueError(f'{what}: inertia is not positive semi-definite '
+                         f'(principal moments {lam.tolist()})')
+    if lam[0] + lam[1] < lam[2] - tol:
+        raise ValueError(f'{what}: inertia breaks the triangle inequality '
+                         f'(principal moments {lam.tolist()})')
+    R, c = _origin(what, inertial.origin)
+    return mcI(m, c, R @ Ii @ R.T)
+
+
+def _joint_axis(joint) -> np.ndarray:
+    axis = _finite(f'joint {joint.name!r} axis', joint.axis if joint.axis is not None
+                   else (1.0, 0.0, 0.0))
+    if axis.shape != (3,):
+        raise ValueError(f'joint {joint.name!r}: axis must have 3 components, got {axis}')
+    norm = float(np.linalg.norm(axis))
+    if not norm > 1e-12:
+        raise ValueError(f'joint {joint.name!r}: zero-length axis {axis.tolist()}')
+    return axis / norm
+
+
+def _number(what: str, value, default: float = math.nan) -> float:
+    if value is None:
+        return default
+    try:
+        return float(_finite(what, float(value)))
+    except (TypeError, ValueError) as err:
+        raise ValueError(f'{what}: {err}') from None
+
+
+def _from_robot(parsed) -> Model:
+    robot_name, links, joints = parsed
+    link_by_name = {}
+    for link in links:
+        if link.name in link_by_name:
+            raise ValueError(f'duplicate link name {link.name!r}')
+        link_by_name[link.name] = link
+    joint_by_name, parent_joint, children = {}, {}, {name: [] for name in link_by_name}
+    for joint in joints:
+        if joint.name in joint_by_name:
+            raise ValueError(f'duplicate joint name {joint.name!r}')
+        joint_by_name[joint.name] = joint
+        if joint.type not in URDF_KINDS:
+            if joint.type in ('floating', 'planar'):
+                raise ValueError(f'joint {joint.name!r}: {joint.type} joints are not '
+                                 'supported (fixed-base, 1-DOF joints only)')
+            raise ValueError(f'joint {joint.name!r}: unknown joint type {joint.type!r}')
+        for role, link in (('parent', joint.parent), ('child', joint.child)):
+            if link not in link_by_name:
+                raise ValueError(f'joint {joint.name!r}: unknown {role} link {link!r}')
+        if joint.child in parent_joint:
+            raise ValueError(f'link {joint.child!r} is the child of two joints: '
+                             f'{parent_joint[joint.child].name!r} and {joint.name!r}')
+        parent_joint[joint.child] = joint
+        children[joint.parent].append(joint)
+    if not link_by_name:
+        raise ValueError(f'robot {robot_name!r} has no links')
+    roots = [name for name in link_by_name if name not in parent_joint]
+    if len(roots) != 1:
+        if not roots:
+            raise ValueError('the joints form a cycle: no root link')
+        raise ValueError(f'several root links (a URDF is one tree): {roots}')
+
+    # Depth-first walk from the root in declaration order. Each link gets its body and the
+    # pose (R, p) of its frame in that body's frame; movable joints start new bodies.
+    body_names, body_joints, parent, jtype, axis, Xtree = [roots[0]], [''], [-1], [FIXED], \
+        [np.zeros(3)], [np.eye(6)]
+    pose = {roots[0]: (0, np.eye(3), np.zeros(3))}
+    stack = [roots[0]]
+    order = []
+    while stack:
+        link = stack.pop()
+        order.append(link)
+        b, R_bl, p_bl = pose[link]
+        for joint in children[link]:
+            R_o, p_o = _origin(f'joint {joint.name!r}', joint.origin)
+            # Child link frame in body b's frame at q = 0.
+            R, p = R_bl @ R_o, R_bl @ p_o + p_bl
+            if URDF_KINDS[joint.type] == FIXED:
+                pose[joint.child] = (b, R, p)
+            else:
+                body_names.append(joint.child)
+                body_joints.append(joint.name)
+                parent.append(b)
+                jtype.append(URDF_KINDS[joint.type])
+                axis.append(_joint_axis(joint))
+                Xtree.append(plux(R.T, p))
+                pose[joint.child] = (len(body_names) - 1, np.eye(3), np.zeros(3))
+        stack.extend(joint.child for joint in reversed(children[link]))
+    if len(order) != len(link_by_name):
+        lost = sorted(set(link_by_name) - set(order))
+        raise ValueError(f'the joints form a cycle: links {lost} are not reachable from the '
+                         f'root link {roots[0]!r}')
+    # parent[i] < i holds: a body is appended when its parent link is expanded.
+    NB = len(body_names) - 1
+
+    # Inertias of all links, lumped into their bodies: I_b += lXbᵀ I_l lXb (RBDA eq. 2.66).
+    inertia = np.zeros((NB + 1, 6, 6))
+    frames = {}
+    for name in order:
+        b, R, p = pose[name]
+        lXb = plux(R.T, p)
+        frames[name] = Frame(b, lXb)
+        frames[name].lXb.setflags(write=False)
+        inertia[b] += lXb.T @ _link_inertia(link_by_name[name]) @ lXb
+
+    # Generalised coordinates: movable non-mimic joints in body order; mimic joints follow
+    # their (transitively resolved) source: q_i = mult·q_src + offset.
+    joint_names = tuple(j for j in body_joints[1:] if joint_by_name[j].mimic is None)
+    index = {j: k for k, j in enumerate(joint_names)}
+    qidx, qmul, qoff = [-1], [0.0], [0.0]
+    for jname in body_joints[1:]:
+        k, mult, off = _resolve_mimic(jname, joint_by_name, index)
+        qidx.append(k)
+        qmul.append(mult)
+        qoff.append(off)
+
+    def per_joint(get) -> np.ndarray:
+        return np.array([get(joint_by_name[j]) for j in joint_names], dtype=float)
+
+    def limit(attr):
+        return per_joint(lambda j: _number(f'joint {j.name!r} <limit {attr}>',
+                                           getattr(j.limit, attr, None)))
+
+    def dyn(attr):
+        return per_joint(lambda j: _number(f'joint {j.name!r} <dynamics {attr}>',
+                                           getattr(j.dynamics, attr, None), 0.0))
+
+    return Model(
+        name=robot_name, joint_names=joint_names, body_names=tuple(body_names),
+        body_joints=tuple(body_joints), NB=NB, parent=np.array(parent, dtype=np.intp),
+        jtype=np.array(jtype, dtype=np.intp), axis=np.array(axis), Xtree=np.array(Xtree),
+        inertia=inertia, qidx=np.array(qidx, dtype=np.intp), qmul=np.array(qmul),
+        qoff=np.array(qoff), frames=frames, effort_limit=limit('effort'),
+        velocity_limit=limit('velocity'), lower=limit('lower'), upper=limit('upper'),
+        damping=dyn('damping'), friction=dyn('friction'))
+
+
+def _resolve_mimic(jname: str, joint_by_name: dict, index: dict) -> tuple[int, float, float]:
+    """Follow a chain of ``<mimic>`` tags to a joint of ``q``: ``(q index, mult, offset)``."""
+    mult, off, seen = 1.0, 0.0, [jname]
+    joint = joint_by_name[jname]
+    while joint.mimic is not None:
+        src = joint.mimic.joint
+        what = f'joint {joint.name!r} <mimic>'
+        if src not in joint_by_name:
+            raise ValueError(f'{what}: mimics a missing joint {src!r}')
+        if src in seen:
+            raise ValueError(f'{what}: mimic joints form a loop {seen + [src]}')
+        if URDF_KINDS.get(joint_by_name[src].type, FIXED) == FIXED:
+            raise ValueError(f'{what}: mimics {src!r}, which is not movable')
+        m = _number(f'{what} multiplier', joint.mimic.multiplier, 1.0)
+        o = _number(f'{what} offset', joint.mimic.offset, 0.0)
+        mult, off = mult * m, mult * o + off
+        seen.append(src)
+        joint = joint_by_name[src]
+    return index[joint.name], mult, off
+
+
+# --------------------------------------------------------------------------------------------
+# Flat per-body data for the component-wise RNEA kernel (plain floats, see rnea.py)
+
+#: Kernel joint codes: revolute about x, y, z or a general axis; prismatic.
+RX, RY, RZ, RA, PR = 0, 1, 2, 3, 4
+
+
+def _kernel_data(model: Model) -> tuple:
+    rows = []
+    for i in range(1, model.NB + 1):
+        E, r = plux_Er(model.Xtree[i])
+        ax = model.axis[i]
+        if model.jtype[i] == REVOLUTE:
+            code = RA
+            for k in range(3):
+                if ax[k] == 1.0 and ax[(k + 1) % 3] == 0.0 and ax[(k + 2) % 3] == 0.0:
+                    code = k
+        elif model.jtype[i] == PRISMATIC:
+            code = PR
+        else:  # pragma: no cover - bodies always hang on movable joints
+            raise AssertionError('body without a movable joint')
+        Ii = model.inertia[i]
+        m = float(Ii[3, 3])
+        # I = [[Ibar, h×], [h×ᵀ, m 1]] with h = m c (RBDA eq. 2.63): read h off I[:3, 3:].
+        h = (float(Ii[2, 4]), float(Ii[0, 5]), float(Ii[1, 3]))
+        Ibar = (float(Ii[0, 0]), float(Ii[0, 1]), float(Ii[0, 2]),
+                float(Ii[1, 1]), float(Ii[1, 2]), float(Ii[2, 2]))
+        rows.append((int(model.parent[i]), code, tuple(float(x) for x in ax),
+                     tuple(float(x) for x in E.ravel()), tuple(float(x) for x in r),
+                     m, h, Ibar, int(model.qidx[i]), float(model.qmul[i]),
+                     float(model.qoff[i])))
+    return tuple(rows)
