@@ -53,6 +53,13 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     Returns:
         τ (N m or N), same shape and floating dtype as the broadcast inputs.
     """
+    single = _single_state(model, q, qd, qdd)
+    if single is not None and not f_ext:
+        # One float64 state: plain Python floats, no per-term numpy call overhead.
+        g = [float(x) for x in gravity]
+        if len(g) != 3:
+            raise ValueError(f'gravity must be a 3-vector, got {gravity!r}')
+        return np.array(rnea_components(model, *single, g))
     q, qd, qdd = _as_joint_arrays(model, q, qd, qdd)
     g = _as_vector('gravity', gravity, 3)
     fb = _f_ext_in_bodies(model, f_ext)
@@ -71,6 +78,15 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     for k, t in enumerate(tau):
         out[:, k] = t
     return out.reshape(q.shape)
+
+
+def _single_state(model: Model, *arrays) -> Optional[list]:
+    """``[q, qd, qdd]`` as lists of floats when all three are float64 arrays of shape (n,)."""
+    n = model.nq
+    for x in arrays:
+        if type(x) is not np.ndarray or x.shape != (n,) or x.dtype != np.float64:
+            return None
+    return [x.tolist() for x in arrays]
 
 
 def _as_joint_arrays(model: Model, *arrays) -> list:
