@@ -14,12 +14,12 @@ import math
 import os
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Mapping, Union
+from typing import Mapping, Optional, Sequence, Union
 
 import numpy as np
 
 from .joints import FIXED, PRISMATIC, REVOLUTE, URDF_KINDS
-from .spatial import mcI, plux, plux_Er
+from .spatial import Eaxis, mcI, plux, plux_Er
 
 Source = Union[str, bytes, os.PathLike]
 
@@ -57,6 +57,9 @@ class Model:
         frames: link name → :class:`Frame` for every link, lumped or not.
         effort_limit, velocity_limit, lower, upper, damping, friction: (n,) URDF
             ``<limit>`` and ``<dynamics>`` values per joint of ``q`` (``nan`` when absent).
+        lumped: links merged into a moving body by fixed (or locked) joints.
+        pruned: links fixed to the base, which no joint's torque depends on.
+        locked: joints locked by model reduction and their values.
     """
 
     name: str
@@ -79,6 +82,9 @@ class Model:
     upper: np.ndarray
     damping: np.ndarray
     friction: np.ndarray
+    lumped: tuple = ()
+    pruned: tuple = ()
+    locked: Mapping[str, float] = field(default_factory=dict)
     _kernel: tuple = field(default=(), repr=False)
 
     def __post_init__(self) -> None:
@@ -86,6 +92,7 @@ class Model:
             if isinstance(value, np.ndarray):
                 value.setflags(write=False)
         object.__setattr__(self, 'frames', MappingProxyType(dict(self.frames)))
+        object.__setattr__(self, 'locked', MappingProxyType(dict(self.locked)))
         object.__setattr__(self, '_kernel', _kernel_data(self))
 
     @property
@@ -94,13 +101,27 @@ class Model:
         return len(self.joint_names)
 
     @classmethod
-    def from_urdf(cls, source: Source) -> 'Model':
+    def from_urdf(cls, source: Source, joints: Optional[Sequence[str]] = None,
+                  locked: Optional[Mapping[str, float]] = None) -> 'Model':
         """Build a model from a URDF file path or an XML string (meshes are never loaded).
 
+        Model reduction: with ``joints``, only those joints stay movable (in that order as
+        ``joint_names``); every other movable joint is locked at ``locked[name]`` (rad or m,
+        default 0) and its child lumped into its parent. Links that end up fixed to the base
+        cannot change any kept joint's torque and are pruned. Mimic joints follow their
+        source: locked with it, or kept with it.
+
         Raises ``ValueError`` naming the offending element for malformed or unphysical
-        descriptions.
+        descriptions, and naming the joint for a bad ``joints``/``locked`` entry.
         """
-        return _from_robot(_parse_urdf(source))
+        return _from_robot(_parse_urdf(source), joints, locked)
+
+    def summary(self) -> str:
+        """One line for logs: dof, bodies kept, links lumped and pruned, locked joints."""
+        locked = ', '.join(f'{j}={v:g}' for j, v in self.locked.items())
+        return (f'{self.name}: {self.nq} dof, {self.NB} moving bodies, '
+                f'{len(self.lumped)} links lumped by fixed joints, {len(self.pruned)} links '
+                f'pruned (fixed to the base)' + (f', locked: {locked}' if locked else ''))
 
     def __repr__(self) -> str:
         return (f'Model(name={self.name!r}, dof={self.nq}, bodies={self.NB}, '
@@ -228,7 +249,8 @@ def _number(what: str, value, default: float = math.nan) -> float:
         raise ValueError(f'{what}: {err}') from None
 
 
-def _from_robot(parsed) -> Model:
+def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
+                locked: Optional[Mapping[str, float]] = None) -> Model:
     robot_name, links, joints = parsed
     link_by_name = {}
     for link in links:
@@ -261,37 +283,40 @@ def _from_robot(parsed) -> Model:
             raise ValueError('the joints form a cycle: no root link')
         raise ValueError(f'several root links (a URDF is one tree): {roots}')
 
-    # Depth-first walk from the root in declaration order. Each link gets its body and the
-    # pose (R, p) of its frame in that body's frame; movable joints start new bodies.
+    lock = _locked_values(joint_by_name, keep, locked)
+
+    # Each link gets its body and the pose (R, p) of its frame in that body's frame;
+    # movable joints start new bodies, so parent[i] < i.
     body_names, body_joints, parent, jtype, axis, Xtree = [roots[0]], [''], [-1], [FIXED], \
         [np.zeros(3)], [np.eye(6)]
     pose = {roots[0]: (0, np.eye(3), np.zeros(3))}
-    stack = [roots[0]]
-    order = []
-    while stack:
-        link = stack.pop()
-        order.append(link)
-        b, R_bl, p_bl = pose[link]
-        for joint in children[link]:
-            R_o, p_o = _origin(f'joint {joint.name!r}', joint.origin)
-            # Child link frame in body b's frame at q = 0.
-            R, p = R_bl @ R_o, R_bl @ p_o + p_bl
-            if URDF_KINDS[joint.type] == FIXED:
-                pose[joint.child] = (b, R, p)
-            else:
-                body_names.append(joint.child)
-                body_joints.append(joint.name)
-                parent.append(b)
-                jtype.append(URDF_KINDS[joint.type])
-                axis.append(_joint_axis(joint))
-                Xtree.append(plux(R.T, p))
-                pose[joint.child] = (len(body_names) - 1, np.eye(3), np.zeros(3))
-        stack.extend(joint.child for joint in reversed(children[link]))
+    order = [roots[0]]
+    stack = list(reversed(children[roots[0]]))
+    while stack:  # depth-first preorder, children in declaration order (as Pinocchio)
+        joint = stack.pop()
+        b, R_bl, p_bl = pose[joint.parent]
+        R_o, p_o = _origin(f'joint {joint.name!r}', joint.origin)
+        # Child link frame in body b's frame at q = 0.
+        R, p = R_bl @ R_o, R_bl @ p_o + p_bl
+        if joint.name in lock:
+            # A locked joint is a fixed joint displaced by its value.
+            R, p = _displaced(joint, lock[joint.name], R, p)
+        if URDF_KINDS[joint.type] == FIXED or joint.name in lock:
+            pose[joint.child] = (b, R, p)
+        else:
+            body_names.append(joint.child)
+            body_joints.append(joint.name)
+            parent.append(b)
+            jtype.append(URDF_KINDS[joint.type])
+            axis.append(_joint_axis(joint))
+            Xtree.append(plux(R.T, p))
+            pose[joint.child] = (len(body_names) - 1, np.eye(3), np.zeros(3))
+        order.append(joint.child)
+        stack.extend(reversed(children[joint.child]))
     if len(order) != len(link_by_name):
         lost = sorted(set(link_by_name) - set(order))
         raise ValueError(f'the joints form a cycle: links {lost} are not reachable from the '
                          f'root link {roots[0]!r}')
-    # parent[i] < i holds: a body is appended when its parent link is expanded.
     NB = len(body_names) - 1
 
     # Inertias of all links, lumped into their bodies: I_b += lXbᵀ I_l lXb (RBDA eq. 2.66).
@@ -306,12 +331,13 @@ def _from_robot(parsed) -> Model:
 
     # Generalised coordinates: movable non-mimic joints in body order; mimic joints follow
     # their (transitively resolved) source: q_i = mult·q_src + offset.
-    joint_names = tuple(j for j in body_joints[1:] if joint_by_name[j].mimic is None)
+    joint_names = tuple(keep) if keep is not None else tuple(
+        j for j in body_joints[1:] if joint_by_name[j].mimic is None)
     index = {j: k for k, j in enumerate(joint_names)}
     qidx, qmul, qoff = [-1], [0.0], [0.0]
     for jname in body_joints[1:]:
-        k, mult, off = _resolve_mimic(jname, joint_by_name, index)
-        qidx.append(k)
+        src, mult, off = _resolve_mimic(jname, joint_by_name)
+        qidx.append(index[src])
         qmul.append(mult)
         qoff.append(off)
 
@@ -333,11 +359,17 @@ def _from_robot(parsed) -> Model:
         inertia=inertia, qidx=np.array(qidx, dtype=np.intp), qmul=np.array(qmul),
         qoff=np.array(qoff), frames=frames, effort_limit=limit('effort'),
         velocity_limit=limit('velocity'), lower=limit('lower'), upper=limit('upper'),
-        damping=dyn('damping'), friction=dyn('friction'))
+        damping=dyn('damping'), friction=dyn('friction'),
+        lumped=tuple(n for n in order if pose[n][0] > 0 and n not in body_names),
+        pruned=tuple(n for n in order[1:] if pose[n][0] == 0),
+        locked={j: v for j, v in lock.items() if joint_by_name[j].mimic is None})
 
 
-def _resolve_mimic(jname: str, joint_by_name: dict, index: dict) -> tuple[int, float, float]:
-    """Follow a chain of ``<mimic>`` tags to a joint of ``q``: ``(q index, mult, offset)``."""
+def _resolve_mimic(jname: str, joint_by_name: dict) -> tuple[str, float, float]:
+    """Follow a chain of ``<mimic>`` tags to a non-mimic joint: ``(its name, mult, offset)``.
+
+    The joint then moves by ``mult·q_src + offset``.
+    """
     mult, off, seen = 1.0, 0.0, [jname]
     joint = joint_by_name[jname]
     while joint.mimic is not None:
@@ -354,7 +386,49 @@ def _resolve_mimic(jname: str, joint_by_name: dict, index: dict) -> tuple[int, f
         mult, off = mult * m, mult * o + off
         seen.append(src)
         joint = joint_by_name[src]
-    return index[joint.name], mult, off
+    return joint.name, mult, off
+
+
+def _locked_values(joint_by_name: dict, keep, locked) -> dict:
+    """Joint name → locked value for every movable joint that model reduction locks."""
+    locked = dict(locked or {})
+    movable = [j for j, jt in joint_by_name.items() if URDF_KINDS[jt.type] != FIXED]
+    independent = {j for j in movable if joint_by_name[j].mimic is None}
+    for j, v in locked.items():
+        if j not in independent:
+            why = 'is a mimic joint (lock its source)' if j in movable else \
+                'is not a movable joint of the URDF'
+            raise ValueError(f'locked joint {j!r} {why}')
+        locked[j] = _number(f'locked joint {j!r} value', v)
+    if keep is None:
+        if locked:
+            raise ValueError(f'locked joints {sorted(locked)} need a list of kept joints')
+        return {}
+    if isinstance(keep, str):
+        raise ValueError('joints must be a list of joint names, not a string')
+    for j in keep:
+        if j not in independent:
+            why = 'is a mimic joint (keep its source)' if j in movable else \
+                'is not a movable joint of the URDF'
+            raise ValueError(f'kept joint {j!r} {why}')
+        if j in locked:
+            raise ValueError(f'joint {j!r} is both kept and locked')
+    if len(set(keep)) != len(keep):
+        raise ValueError(f'joints lists a joint twice: {list(keep)}')
+    lock = {j: locked.get(j, 0.0) for j in independent if j not in keep}
+    for j in movable:
+        src, mult, off = _resolve_mimic(j, joint_by_name)
+        if j not in independent and src in lock:
+            lock[j] = mult * lock[src] + off
+    return lock
+
+
+def _displaced(joint, value: float, R: np.ndarray, p: np.ndarray):
+    """Pose of a joint's child frame moved by ``value`` along/about its axis."""
+    axis = _joint_axis(joint)
+    if URDF_KINDS[joint.type] == PRISMATIC:
+        return R, p + R @ (axis * value)
+    return R @ Eaxis(axis, value).T, p
 
 
 # --------------------------------------------------------------------------------------------
