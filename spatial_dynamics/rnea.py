@@ -27,15 +27,20 @@ Two implementations of the same equations:
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
 from .joints import jcalc
-from .model import PR, RA, RX, RY, RZ, Model
+from .model import PR, RX, RY, RZ, Model
 from .spatial import crf, crm
 
 GRAVITY = (0.0, 0.0, -9.81)
+
+#: Per model, the last single-call ``q`` and its transforms (values only; never stale: a hit
+#: needs the identical ``q``).
+_LAST_XUP: 'weakref.WeakKeyDictionary[Model, tuple]' = weakref.WeakKeyDictionary()
 
 
 def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
@@ -59,7 +64,14 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         g = [float(x) for x in gravity]
         if len(g) != 3:
             raise ValueError(f'gravity must be a 3-vector, got {gravity!r}')
-        return np.array(rnea_components(model, *single, g))
+        q_list = single[0]
+        last = _LAST_XUP.get(model)
+        if last is not None and last[0] == q_list:
+            Xup = last[1]          # q unchanged since the last call: reuse the transforms
+        else:
+            Xup = xup_components(model, q_list)
+            _LAST_XUP[model] = (q_list, Xup)
+        return np.array(rnea_components(model, *single, g, Xup=Xup))
     q, qd, qdd = _as_joint_arrays(model, q, qd, qdd)
     g = _as_vector('gravity', gravity, 3)
     fb = _f_ext_in_bodies(model, f_ext)
@@ -127,21 +139,25 @@ def _f_ext_in_bodies(model: Model, f_ext) -> dict:
     return fb
 
 
-def rnea_components(model: Model, q, qd, qdd, gravity, f_body=None, m=math) -> list:
+def rnea_components(model: Model, q, qd, qdd, gravity, f_body=None, m=math,
+                    Xup: Optional[list] = None) -> list:
     """RNEA on scalar components; returns ``τ`` as a list of ``model.nq`` scalars.
 
     ``q, qd, qdd`` are sequences (indexed like ``joint_names``) of scalars of one kind:
     floats, (N,) arrays, or mpmath numbers; ``m`` provides ``sin`` and ``cos`` for them
     (``math``, ``numpy`` or ``mpmath``). ``f_body`` maps a body index to its external force
-    ``[n; f]`` in body coordinates as 6 scalars. ``Xup = (E, r)`` acts on motion vectors as
-    ``[E ω; E (v - r × ω)]`` and its transpose on forces as ``[Eᵀn + r × Eᵀf; Eᵀf]``.
+    ``[n; f]`` in body coordinates as 6 scalars. ``Xup`` may pass the transforms
+    :func:`xup_components` returned for the same ``q``.
+
+    Terms that cannot change the answer are skipped: with q̇ = 0 every body velocity and
+    velocity-product term is zero; a body on the fixed base sees only ``a_0 = -a_grav``.
     """
-    sin, cos = m.sin, m.cos
     gx, gy, gz = gravity
     zero = 0.0 * gx
-    # Per body: Xup (E as 9 scalars, r), v = (w, u), a = (aw, au), f = [n, f] (6 scalars).
+    if Xup is None:
+        Xup = xup_components(model, q, m)
+    moving = any(_nonzero(x) for x in qd)
     NB = len(model._kernel)
-    Xup = [None] * (NB + 1)
     vel = [None] * (NB + 1)
     acc = [None] * (NB + 1)
     frc = [None] * (NB + 1)
@@ -151,64 +167,9 @@ def rnea_components(model: Model, q, qd, qdd, gravity, f_body=None, m=math) -> l
     f_body = f_body or {}
 
     for i, row in enumerate(model._kernel, start=1):
-        p, code, (ax, ay, az), Et, (rx, ry, rz), mass, (hx, hy, hz), Ib, k, mul, off = row
-        if mul == 1.0 and off == 0.0:
-            qi, qdi, qddi = q[k], qd[k], qdd[k]
-        else:
-            qi, qdi, qddi = mul * q[k] + off, mul * qd[k], mul * qdd[k]
-        t00, t01, t02, t10, t11, t12, t20, t21, t22 = Et
-
-        # Xup_i = XJ(q_i) Xtree_i  (RBDA table 4.1, eq. 2.27 for the product)
-        if code == PR:
-            e00, e01, e02, e10, e11, e12, e20, e21, e22 = Et
-            # r = r_tree + E_treeᵀ (axis q)
-            rx = rx + (t00 * ax + t10 * ay + t20 * az) * qi
-            ry = ry + (t01 * ax + t11 * ay + t21 * az) * qi
-            rz = rz + (t02 * ax + t12 * ay + t22 * az) * qi
-        else:
-            c, s = cos(qi), sin(qi)
-            if code == RZ:
-                e00, e01, e02 = c * t00 + s * t10, c * t01 + s * t11, c * t02 + s * t12
-                e10, e11, e12 = c * t10 - s * t00, c * t11 - s * t01, c * t12 - s * t02
-                e20, e21, e22 = t20, t21, t22
-            elif code == RX:
-                e00, e01, e02 = t00, t01, t02
-                e10, e11, e12 = c * t10 + s * t20, c * t11 + s * t21, c * t12 + s * t22
-                e20, e21, e22 = c * t20 - s * t10, c * t21 - s * t11, c * t22 - s * t12
-            elif code == RY:
-                e00, e01, e02 = c * t00 - s * t20, c * t01 - s * t21, c * t02 - s * t22
-                e10, e11, e12 = t10, t11, t12
-                e20, e21, e22 = s * t00 + c * t20, s * t01 + c * t21, s * t02 + c * t22
-            else:  # RA: E_J = R(axis, q)ᵀ = c 1 - s axis× + (1 - c) axis axisᵀ
-                C = 1.0 - c
-                j00, j11, j22 = c + C * ax * ax, c + C * ay * ay, c + C * az * az
-                cxy, cxz, cyz = C * ax * ay, C * ax * az, C * ay * az
-                sx, sy, sz = s * ax, s * ay, s * az
-                j01, j02, j10 = cxy + sz, cxz - sy, cxy - sz
-                j12, j20, j21 = cyz + sx, cxz + sy, cyz - sx
-                e00 = j00 * t00 + j01 * t10 + j02 * t20
-                e01 = j00 * t01 + j01 * t11 + j02 * t21
-                e02 = j00 * t02 + j01 * t12 + j02 * t22
-                e10 = j10 * t00 + j11 * t10 + j12 * t20
-                e11 = j10 * t01 + j11 * t11 + j12 * t21
-                e12 = j10 * t02 + j11 * t12 + j12 * t22
-                e20 = j20 * t00 + j21 * t10 + j22 * t20
-                e21 = j20 * t01 + j21 * t11 + j22 * t21
-                e22 = j20 * t02 + j21 * t12 + j22 * t22
-        Xup[i] = (e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz)
-
-        # v_i = Xup_i v_λ(i) + vJ,  vJ = S_i q̇_i
-        pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
-        u0 = pv0 - (ry * pw2 - rz * pw1)
-        u1 = pv1 - (rz * pw0 - rx * pw2)
-        u2 = pv2 - (rx * pw1 - ry * pw0)
-        w0 = e00 * pw0 + e01 * pw1 + e02 * pw2
-        w1 = e10 * pw0 + e11 * pw1 + e12 * pw2
-        w2 = e20 * pw0 + e21 * pw1 + e22 * pw2
-        v0 = e00 * u0 + e01 * u1 + e02 * u2
-        v1 = e10 * u0 + e11 * u1 + e12 * u2
-        v2 = e20 * u0 + e21 * u1 + e22 * u2
-        j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
+        p, code, (ax, ay, az), _, _, mass, (hx, hy, hz), Ib, k, mul, _ = row
+        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
+        qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
 
         # a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ
         pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
@@ -222,23 +183,42 @@ def rnea_components(model: Model, q, qd, qdd, gravity, f_body=None, m=math) -> l
         l1 = e10 * u0 + e11 * u1 + e12 * u2
         l2 = e20 * u0 + e21 * u1 + e22 * u2
         if code == PR:
-            v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
-            l0 += ax * qddi + (w1 * j2 - w2 * j1)
-            l1 += ay * qddi + (w2 * j0 - w0 * j2)
-            l2 += az * qddi + (w0 * j1 - w1 * j0)
+            l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
         else:
-            w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
-            a0 += ax * qddi + (w1 * j2 - w2 * j1)
-            a1 += ay * qddi + (w2 * j0 - w0 * j2)
-            a2 += az * qddi + (w0 * j1 - w1 * j0)
-            l0 += v1 * j2 - v2 * j1
-            l1 += v2 * j0 - v0 * j2
-            l2 += v0 * j1 - v1 * j0
-        vel[i] = (w0, w1, w2, v0, v1, v2)
-        acc[i] = (a0, a1, a2, l0, l1, l2)
+            a0, a1, a2 = a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi
 
         # f_i = I_i a_i + v_i ×* I_i v_i - f_ext_i, with I = [[Ibar, h×], [h×ᵀ, m 1]]
         Ixx, Ixy, Ixz, Iyy, Iyz, Izz = Ib
+        if moving:
+            # v_i = Xup_i v_λ(i) + vJ,  vJ = S_i q̇_i
+            qdi = qd[k] if mul == 1.0 else mul * qd[k]
+            pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
+            u0 = pv0 - (ry * pw2 - rz * pw1)
+            u1 = pv1 - (rz * pw0 - rx * pw2)
+            u2 = pv2 - (rx * pw1 - ry * pw0)
+            w0 = e00 * pw0 + e01 * pw1 + e02 * pw2
+            w1 = e10 * pw0 + e11 * pw1 + e12 * pw2
+            w2 = e20 * pw0 + e21 * pw1 + e22 * pw2
+            v0 = e00 * u0 + e01 * u1 + e02 * u2
+            v1 = e10 * u0 + e11 * u1 + e12 * u2
+            v2 = e20 * u0 + e21 * u1 + e22 * u2
+            j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
+            if code == PR:
+                v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
+                l0 += w1 * j2 - w2 * j1
+                l1 += w2 * j0 - w0 * j2
+                l2 += w0 * j1 - w1 * j0
+            else:
+                w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
+                a0 += w1 * j2 - w2 * j1
+                a1 += w2 * j0 - w0 * j2
+                a2 += w0 * j1 - w1 * j0
+                l0 += v1 * j2 - v2 * j1
+                l1 += v2 * j0 - v0 * j2
+                l2 += v0 * j1 - v1 * j0
+            vel[i] = (w0, w1, w2, v0, v1, v2)
+        acc[i] = (a0, a1, a2, l0, l1, l2)
+
         # I_i a_i
         n0 = Ixx * a0 + Ixy * a1 + Ixz * a2 + (hy * l2 - hz * l1)
         n1 = Ixy * a0 + Iyy * a1 + Iyz * a2 + (hz * l0 - hx * l2)
@@ -246,19 +226,20 @@ def rnea_components(model: Model, q, qd, qdd, gravity, f_body=None, m=math) -> l
         f0 = mass * l0 - (hy * a2 - hz * a1)
         f1 = mass * l1 - (hz * a0 - hx * a2)
         f2 = mass * l2 - (hx * a1 - hy * a0)
-        # h = I_i v_i (momentum), then v_i ×* h = [w × hn + v × hf; w × hf]
-        m0 = Ixx * w0 + Ixy * w1 + Ixz * w2 + (hy * v2 - hz * v1)
-        m1 = Ixy * w0 + Iyy * w1 + Iyz * w2 + (hz * v0 - hx * v2)
-        m2 = Ixz * w0 + Iyz * w1 + Izz * w2 + (hx * v1 - hy * v0)
-        k0 = mass * v0 - (hy * w2 - hz * w1)
-        k1 = mass * v1 - (hz * w0 - hx * w2)
-        k2 = mass * v2 - (hx * w1 - hy * w0)
-        n0 += (w1 * m2 - w2 * m1) + (v1 * k2 - v2 * k1)
-        n1 += (w2 * m0 - w0 * m2) + (v2 * k0 - v0 * k2)
-        n2 += (w0 * m1 - w1 * m0) + (v0 * k1 - v1 * k0)
-        f0 += w1 * k2 - w2 * k1
-        f1 += w2 * k0 - w0 * k2
-        f2 += w0 * k1 - w1 * k0
+        if moving:
+            # momentum I_i v_i, then v_i ×* (I_i v_i) = [w × hn + v × hf; w × hf]
+            m0 = Ixx * w0 + Ixy * w1 + Ixz * w2 + (hy * v2 - hz * v1)
+            m1 = Ixy * w0 + Iyy * w1 + Iyz * w2 + (hz * v0 - hx * v2)
+            m2 = Ixz * w0 + Iyz * w1 + Izz * w2 + (hx * v1 - hy * v0)
+            k0 = mass * v0 - (hy * w2 - hz * w1)
+            k1 = mass * v1 - (hz * w0 - hx * w2)
+            k2 = mass * v2 - (hx * w1 - hy * w0)
+            n0 += (w1 * m2 - w2 * m1) + (v1 * k2 - v2 * k1)
+            n1 += (w2 * m0 - w0 * m2) + (v2 * k0 - v0 * k2)
+            n2 += (w0 * m1 - w1 * m0) + (v0 * k1 - v1 * k0)
+            f0 += w1 * k2 - w2 * k1
+            f1 += w2 * k0 - w0 * k2
+            f2 += w0 * k1 - w1 * k0
         fe = f_body.get(i)
         if fe is not None:
             n0, n1, n2 = n0 - fe[0], n1 - fe[1], n2 - fe[2]
@@ -288,6 +269,61 @@ def rnea_components(model: Model, q, qd, qdd, gravity, f_body=None, m=math) -> l
         fp[4] += F1
         fp[5] += F2
     return tau
+
+
+def xup_components(model: Model, q, m=math) -> list:
+    """Body transforms ``Xup_i = XJ(q_i) Xtree_i`` as ``(E (9 scalars), r (3))`` per body.
+
+    RBDA table 4.1 for ``XJ`` and eq. 2.27 for the product ``(E_J, 0)(E_t, r_t)`` (revolute:
+    ``E = E_J E_t``, ``r = r_t``) or ``(1, axis q)(E_t, r_t)`` (prismatic: ``E = E_t``,
+    ``r = r_t + E_tᵀ axis q``). Index 0 (the base) is ``None``.
+    """
+    sin, cos = m.sin, m.cos
+    Xup = [None]
+    for p, code, (ax, ay, az), Et, (rx, ry, rz), _, _, _, k, mul, off in model._kernel:
+        qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
+        t00, t01, t02, t10, t11, t12, t20, t21, t22 = Et
+        if code == PR:
+            Xup.append(Et + (rx + (t00 * ax + t10 * ay + t20 * az) * qi,
+                             ry + (t01 * ax + t11 * ay + t21 * az) * qi,
+                             rz + (t02 * ax + t12 * ay + t22 * az) * qi))
+            continue
+        c, s = cos(qi), sin(qi)
+        if code == RZ:
+            E = (c * t00 + s * t10, c * t01 + s * t11, c * t02 + s * t12,
+                 c * t10 - s * t00, c * t11 - s * t01, c * t12 - s * t02,
+                 t20, t21, t22)
+        elif code == RX:
+            E = (t00, t01, t02,
+                 c * t10 + s * t20, c * t11 + s * t21, c * t12 + s * t22,
+                 c * t20 - s * t10, c * t21 - s * t11, c * t22 - s * t12)
+        elif code == RY:
+            E = (c * t00 - s * t20, c * t01 - s * t21, c * t02 - s * t22,
+                 t10, t11, t12,
+                 s * t00 + c * t20, s * t01 + c * t21, s * t02 + c * t22)
+        else:  # general axis: E_J = R(axis, q)ᵀ = c 1 - s axis× + (1 - c) axis axisᵀ
+            C = 1.0 - c
+            j00, j11, j22 = c + C * ax * ax, c + C * ay * ay, c + C * az * az
+            cxy, cxz, cyz = C * ax * ay, C * ax * az, C * ay * az
+            sx, sy, sz = s * ax, s * ay, s * az
+            j01, j02, j10 = cxy + sz, cxz - sy, cxy - sz
+            j12, j20, j21 = cyz + sx, cxz + sy, cyz - sx
+            E = (j00 * t00 + j01 * t10 + j02 * t20,
+                 j00 * t01 + j01 * t11 + j02 * t21,
+                 j00 * t02 + j01 * t12 + j02 * t22,
+                 j10 * t00 + j11 * t10 + j12 * t20,
+                 j10 * t01 + j11 * t11 + j12 * t21,
+                 j10 * t02 + j11 * t12 + j12 * t22,
+                 j20 * t00 + j21 * t10 + j22 * t20,
+                 j20 * t01 + j21 * t11 + j22 * t21,
+                 j20 * t02 + j21 * t12 + j22 * t22)
+        Xup.append(E + (rx, ry, rz))
+    return Xup
+
+
+def _nonzero(x) -> bool:
+    """True when a scalar or array component is not identically zero."""
+    return bool(x != 0) if not isinstance(x, np.ndarray) else bool(x.any())
 
 
 def rnea_spatial(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
