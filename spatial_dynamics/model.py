@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Mapping, Optional, Sequence, Union
 
@@ -212,11 +212,29 @@ def _link_inertia(link) -> np.ndarray:
     if inertial is None:
         return np.zeros((6, 6))
     what = f'link {link.name!r} <inertial>'
-    m = float(_finite(f'{what} mass', 0.0 if inertial.mass is None else inertial.mass))
+    R, c = _origin(what, inertial.origin)
+    return rigid_body_inertia(what, 0.0 if inertial.mass is None else inertial.mass, c,
+                              np.zeros((3, 3)) if inertial.inertia is None
+                              else inertial.inertia, R)
+
+
+def rigid_body_inertia(what: str, mass, com, inertia, R: Optional[np.ndarray] = None
+                       ) -> np.ndarray:
+    """Validated spatial inertia (6×6) of a rigid body, ``mcI(m, c, R Ic Rᵀ)``.
+
+    ``mass`` (kg) finite and non-negative; ``com`` (m, 3); ``inertia`` (kg m², 3×3 about the
+    centre of mass, in a frame rotated by ``R`` from the link frame) positive semi-definite
+    with principal moments obeying the triangle inequality. ``ValueError`` names ``what``.
+    """
+    m = float(_finite(f'{what} mass', mass))
     if m < 0.0:
         raise ValueError(f'{what}: negative mass {m}')
-    Ii = np.zeros((3, 3)) if inertial.inertia is None else inertial.inertia
-    Ii = _finite(f'{what} inertia', np.asarray(Ii, dtype=float))
+    c = _finite(f'{what} centre of mass', com)
+    Ii = _finite(f'{what} inertia', np.asarray(inertia, dtype=float))
+    if c.shape != (3,) or Ii.shape != (3, 3):
+        raise ValueError(f'{what}: centre of mass must be 3 numbers and inertia 3×3')
+    if not np.allclose(Ii, Ii.T, rtol=0.0, atol=1e-12 * max(np.abs(Ii).max(), 1e-300)):
+        raise ValueError(f'{what}: inertia matrix is not symmetric')
     lam = np.linalg.eigvalsh(Ii)
     tol = INERTIA_RTOL * max(float(np.abs(lam).max()), 1e-300)
     if lam[0] < -tol:
@@ -225,8 +243,28 @@ def _link_inertia(link) -> np.ndarray:
     if lam[0] + lam[1] < lam[2] - tol:
         raise ValueError(f'{what}: inertia breaks the triangle inequality '
                          f'(principal moments {lam.tolist()})')
-    R, c = _origin(what, inertial.origin)
-    return mcI(m, c, R @ Ii @ R.T)
+    if R is not None:
+        Ii = R @ Ii @ R.T
+    return mcI(m, c, Ii)
+
+
+def with_payload(model: Model, link: str, mass: float, com=(0.0, 0.0, 0.0),
+                 inertia=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)) -> Model:
+    """A new model with a rigid payload attached to ``link`` (the model stays immutable).
+
+    ``mass`` in kg, ``com`` (x, y, z) in m in the link frame, ``inertia``
+    (ixx, ixy, ixz, iyy, iyz, izz) in kg m² about the payload's centre of mass, axes of the
+    link frame. The payload's spatial inertia joins the link's body: ``I_b += lXbᵀ I_p lXb``.
+    """
+    frame = model.frames.get(link)
+    if frame is None:
+        raise ValueError(f'payload link {link!r} is not a link of {model.name!r}')
+    ixx, ixy, ixz, iyy, iyz, izz = _finite('payload inertia', inertia).reshape(6)
+    Ip = rigid_body_inertia(f'payload on {link!r}', mass, com,
+                            [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    inertia6 = np.array(model.inertia)
+    inertia6[frame.body] += frame.lXb.T @ Ip @ frame.lXb
+    return replace(model, inertia=inertia6)
 
 
 def _joint_axis(joint) -> np.ndarray:

@@ -1,0 +1,71 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Joint-space terms a real drive adds to the rigid-body torque (all off by default).
+
+    τ = RNEA(q, q̇, q̈) + armature·q̈ + damping·q̇ + friction·s(q̇)
+
+``armature`` is the reflected rotor inertia (kg m² or kg), ``damping`` viscous friction
+(N m s/rad or N s/m) and ``friction`` Coulomb friction (N m or N) from the URDF
+``<dynamics>``; ``s(q̇) = tanh(q̇ / threshold)`` is a smooth sign, so the output never jumps at
+q̇ = 0. Arrays are (n,) in the order of ``model.joint_names`` or broadcast against (..., n).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence, Union
+
+import numpy as np
+
+from .model import Model
+
+PerJoint = Union[float, Sequence[float], Mapping[str, float], np.ndarray]
+
+
+def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0) -> np.ndarray:
+    """Expand a scalar, a list in joint order, or a {joint name: value} map to an (n,) array."""
+    n = model.nq
+    if isinstance(values, Mapping):
+        out = np.full(n, float(default))
+        for name, v in values.items():
+            if name not in model.joint_names:
+                raise ValueError(f'{what}: unknown joint {name!r}')
+            out[model.joint_names.index(name)] = float(v)
+    else:
+        out = np.asarray(values, dtype=float)
+        if out.ndim == 0:
+            out = np.full(n, float(out))
+        if out.shape != (n,):
+            raise ValueError(f'{what}: expected {n} values for {model.joint_names}, '
+                             f'got {out.shape[0] if out.ndim == 1 else out.shape}')
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f'{what}: non-finite value in {out.tolist()}')
+    return out
+
+
+def armature_torque(armature: np.ndarray, qdd) -> np.ndarray:
+    """Rotor inertia reflected through the gear: ``τ = armature · q̈``."""
+    return armature * np.asarray(qdd, dtype=float)
+
+
+def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:
+    """URDF ``<dynamics>`` friction: ``τ = damping·q̇ + friction·tanh(q̇ / threshold)``.
+
+    ``threshold`` (rad/s or m/s, > 0) is the velocity at which the Coulomb term reaches
+    tanh(1) ≈ 76 % of its full value.
+    """
+    if not threshold > 0.0 or not np.isfinite(threshold):
+        raise ValueError(f'friction velocity threshold must be > 0, got {threshold}')
+    qd = np.asarray(qd, dtype=float)
+    return model.damping * qd + model.friction * np.tanh(qd / threshold)
+
+
+def clamp_to_effort_limits(model: Model, tau) -> tuple[np.ndarray, np.ndarray]:
+    """Clamp τ to the URDF ``<limit effort>``; returns ``(clamped, saturated)``.
+
+    Joints without a positive effort limit are left alone; ``saturated`` is a boolean array
+    of τ's shape marking the clamped entries.
+    """
+    tau = np.asarray(tau, dtype=float)
+    limit = np.where(model.effort_limit > 0.0, model.effort_limit, np.inf)
+    clamped = np.clip(tau, -limit, limit)
+    return clamped, clamped != tau
