@@ -211,3 +211,33 @@ def test_random_tree_continuous_joints_wrap():
     tau = sd.rnea(model, q, qd, qdd)
     assert max_diff(tau, oracle.rnea(model.joint_names, q, qd, qdd)) <= TOL
     assert max_diff(sd.rnea(model, q + 2 * np.pi, qd, qdd), tau) <= 1e-9
+
+
+@pytest.mark.parametrize('name', ['panda', 'talos'])
+def test_repeated_and_mutated_states(name, rng):
+    """Same q with new qd, qdd, gravity; then q changed in place: always the oracle's answer."""
+    model, oracle = robot(name)
+    names = model.joint_names
+    n = len(names)
+    q = random_state(rng, (), n)[0]
+    for gravity in GRAVITIES.values():
+        for _ in range(3):
+            _, qd, qdd = random_state(rng, (), n)
+            tau = sd.rnea(model, q, qd, qdd, gravity=gravity)
+            assert max_diff(tau, oracle.rnea(names, q, qd, qdd, gravity)) <= TOL
+        q[::2] += 0.3  # in place: the same array object now holds another state
+        tau = sd.rnea(model, q, qd, qdd, gravity=gravity)
+        assert max_diff(tau, oracle.rnea(names, q, qd, qdd, gravity)) <= TOL
+
+
+@pytest.mark.parametrize('name', ['panda', 'ur5'])
+def test_lists_and_integer_arrays_are_accepted(name, rng):
+    model, oracle = robot(name)
+    n = len(model.joint_names)
+    q = rng.integers(-2, 3, n)
+    qd, qdd = np.ones(n, dtype=int), np.arange(n)
+    expected = oracle.rnea(model.joint_names, q, qd, qdd)
+    assert max_diff(sd.rnea(model, q, qd, qdd), expected) <= TOL
+    assert max_diff(sd.rnea(model, list(q), list(qd), list(qdd)), expected) <= TOL
+    assert max_diff(sd.rnea(model, q.astype(float).tolist(), qd.astype(float), qdd.astype(float)),
+                    expected) <= TOL
