@@ -56,7 +56,7 @@ def _listed(names: Sequence[str]) -> str:
 
 @lru_cache(maxsize=256)
 def name_index(joint_names: Tuple[str, ...], names: Tuple[str, ...]) -> np.ndarray:
-    """Indices ``idx`` such that ``values[idx]`` is in the order of ``joint_names``.
+    """Return indices ``idx`` such that ``values[idx]`` is in the order of ``joint_names``.
 
     ``joint_names`` is the model's order, ``names`` the message's. Cached per pair of tuples, so
     a publisher that keeps its name order costs one dict build, not one per message; the

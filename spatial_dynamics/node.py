@@ -146,7 +146,8 @@ def check_acceleration_source(value: str) -> str:
 
 def check_input_timeout(value: float) -> float:
     if not (math.isfinite(value) and value > 0.0):
-        raise ConfigError(f'parameter input_timeout: need a positive number of seconds, got {value}')
+        raise ConfigError(
+            f'parameter input_timeout: need a positive number of seconds, got {value}')
     return float(value)
 
 
@@ -289,7 +290,8 @@ class InverseDynamicsNode(Node):
             model = parse_description(msg.data, 'topic robot_description')
             output = Output.build(model, 'topic robot_description', self._value('joints'))
         except ConfigError as err:
-            self.get_logger().error(f'robot description rejected, keeping the current model: {err}')
+            self.get_logger().error(
+                f'robot description rejected, keeping the current model: {err}')
             self._count_description_rejected(str(err))
             return
         self.output = output

@@ -86,7 +86,7 @@ class NodeProcess:
                                      stderr=subprocess.STDOUT)
 
     def log(self) -> str:
-        """What the node printed so far."""
+        """Return what the node printed so far."""
         self._log.flush()
         with open(self.log_path) as f:
             return f.read()
@@ -253,7 +253,7 @@ class Io:
         raise AssertionError(f'no status {name!r} in {self.diagnostics[-1]}')
 
     def fresh_status(self, suffix: str):
-        """A diagnostics status published after now (waits for the next period)."""
+        """Return a diagnostics status published after now (waits for the next period)."""
         return self.status(suffix, after=len(self.diagnostics) + 1)
 
 
@@ -263,18 +263,18 @@ def values(status) -> Dict[str, str]:
 
 
 def stamp(k: int):
-    """A unique, recognisable header stamp for message ``k`` (not wall time)."""
+    """Return a unique, recognisable header stamp for message ``k`` (not wall time)."""
     from builtin_interfaces.msg import Time
     return Time(sec=1_000_000 + k // 1000, nanosec=(k % 1000) * 1000)
 
 
 def stamp_key(t) -> int:
-    """The ``k`` of :func:`stamp`."""
+    """Return the ``k`` of :func:`stamp`."""
     return (t.sec - 1_000_000) * 1000 + t.nanosec // 1000
 
 
 def joint_state(names: Sequence[str], q, qd, qdd, k: int):
-    """A JointState with the given arrays (already in ``names`` order) and stamp ``k``."""
+    """Return a JointState with the arrays (already in ``names`` order) and stamp ``k``."""
     from sensor_msgs.msg import JointState
     msg = JointState()
     msg.header.stamp = stamp(k)
@@ -319,4 +319,3 @@ def pin_oracle(urdf: str):
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from conftest import PinOracle
     return PinOracle(urdf)
-
