@@ -158,7 +158,11 @@ def _parse_urdf(source: Source):
         root = etree.fromstring(text, parser)
     except etree.XMLSyntaxError as err:
         raise ValueError(f'malformed URDF XML: {err}') from None
-    dtd = root.getroottree().docinfo.internalDTD
+    docinfo = root.getroottree().docinfo
+    if docinfo.system_url or docinfo.public_id:
+        raise ValueError(f'URDF refers to an external DTD ({docinfo.system_url!r}): not '
+                         'supported')
+    dtd = docinfo.internalDTD
     if dtd is not None and any(True for _ in dtd.iterentities()):
         raise ValueError('URDF declares XML entities (<!ENTITY ...>): not supported '
                          '(expand xacro/entities before loading)')
@@ -220,7 +224,7 @@ def _link_inertia(link) -> np.ndarray:
 
 def rigid_body_inertia(what: str, mass, com, inertia, R: Optional[np.ndarray] = None
                        ) -> np.ndarray:
-    """Validated spatial inertia (6×6) of a rigid body, ``mcI(m, c, R Ic Rᵀ)``.
+    """Return the validated spatial inertia (6×6) ``mcI(m, c, R Ic Rᵀ)`` of a rigid body.
 
     ``mass`` (kg) finite and non-negative; ``com`` (m, 3); ``inertia`` (kg m², 3×3 about the
     centre of mass, in a frame rotated by ``R`` from the link frame) positive semi-definite
@@ -250,7 +254,7 @@ def rigid_body_inertia(what: str, mass, com, inertia, R: Optional[np.ndarray] = 
 
 def with_payload(model: Model, link: str, mass: float, com=(0.0, 0.0, 0.0),
                  inertia=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)) -> Model:
-    """A new model with a rigid payload attached to ``link`` (the model stays immutable).
+    """Return a new model with a rigid payload attached to ``link`` (models are immutable).
 
     ``mass`` in kg, ``com`` (x, y, z) in m in the link frame, ``inertia``
     (ixx, ixy, ixz, iyy, iyz, izz) in kg m² about the payload's centre of mass, axes of the
@@ -318,7 +322,14 @@ def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
     roots = [name for name in link_by_name if name not in parent_joint]
     if len(roots) != 1:
         if not roots:
-            raise ValueError('the joints form a cycle: no root link')
+            link, cycle = next(iter(link_by_name)), []
+            while link not in cycle:   # every link has a parent joint: walk up to a repeat
+                cycle.append(link)
+                link = parent_joint[link].parent
+            cycle = cycle[cycle.index(link):]
+            raise ValueError('the joints form a cycle, so there is no root link: '
+                             + ' -> '.join(f'{parent_joint[c].name!r}' for c in cycle)
+                             + f' (links {cycle})')
         raise ValueError(f'several root links (a URDF is one tree): {roots}')
 
     lock = _locked_values(joint_by_name, keep, locked)

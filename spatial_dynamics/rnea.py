@@ -32,6 +32,7 @@ from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
+from . import backends
 from .joints import jcalc
 from .model import PR, RX, RY, RZ, Model
 from .spatial import crf, crm
@@ -44,7 +45,7 @@ _LAST_XUP: 'weakref.WeakKeyDictionary[Model, tuple]' = weakref.WeakKeyDictionary
 
 
 def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
-         f_ext: Optional[Mapping[str, np.ndarray]] = None) -> np.ndarray:
+         f_ext: Optional[Mapping[str, np.ndarray]] = None, backend: str = 'auto') -> np.ndarray:
     """Joint torques/forces ``τ = M(q) q̈ + C(q, q̇) q̇ + g(q) - Σ Jᵀ f_ext``.
 
     Args:
@@ -54,11 +55,18 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         gravity: gravitational acceleration (m/s²) in root-link coordinates.
         f_ext: link name → spatial force ``[n; f]`` (N m, N), angular first, acting on that
             link and expressed in that link's frame; shape (6,) or broadcastable to (..., 6).
+        backend: ``'auto'`` (compiled when numba is importable), ``'numpy'`` or
+            ``'compiled'`` (float64 inputs; other dtypes run on numpy); see ``backends``.
 
     Returns:
         τ (N m or N), same shape and floating dtype as the broadcast inputs.
     """
-    single = _single_state(model, q, qd, qdd)
+    kernels = backends.compiled(backend)
+    if kernels is not None and not f_ext:
+        tau = kernels.rnea_single(model, q, qd, qdd, gravity)
+        if tau is not None:
+            return tau
+    single = _single_state(model, q, qd, qdd) if kernels is None else None
     if single is not None and not f_ext:
         # One float64 state: plain Python floats, no per-term numpy call overhead.
         g = [float(x) for x in gravity]
@@ -75,6 +83,8 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     q, qd, qdd = _as_joint_arrays(model, q, qd, qdd)
     g = _as_vector('gravity', gravity, 3)
     fb = _f_ext_in_bodies(model, f_ext)
+    if kernels is not None and q.dtype == np.float64:
+        return kernels.rnea(model, q, qd, qdd, g, fb)
     if q.ndim == 1 and q.dtype == np.float64 and not any(np.ndim(f) > 1 for f in fb.values()):
         fl = {b: [float(x) for x in f] for b, f in fb.items()}
         tau = rnea_components(model, q.tolist(), qd.tolist(), qdd.tolist(),
@@ -322,7 +332,7 @@ def xup_components(model: Model, q, m=math) -> list:
 
 
 def _nonzero(x) -> bool:
-    """True when a scalar or array component is not identically zero."""
+    """Tell whether a scalar or array component is not identically zero."""
     return bool(x != 0) if not isinstance(x, np.ndarray) else bool(x.any())
 
 

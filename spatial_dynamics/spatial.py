@@ -18,7 +18,7 @@ ArrayLike = np.typing.ArrayLike
 
 
 def skew(w: ArrayLike) -> np.ndarray:
-    """Return the cross-product matrix ``w×`` with ``skew(w) @ u == cross(w, u)``; (..., 3, 3)."""
+    """Return the cross-product matrix ``w×``: ``skew(w) @ u == cross(w, u)``; (..., 3, 3)."""
     w = np.asarray(w, dtype=float) if not isinstance(w, np.ndarray) else w
     z = np.zeros_like(w[..., 0])
     x, y, s = w[..., 0], w[..., 1], w[..., 2]
@@ -40,7 +40,7 @@ def crm(v: ArrayLike) -> np.ndarray:
 
 
 def crf(v: ArrayLike) -> np.ndarray:
-    """Force cross product ``v×*`` (RBDA eq. 2.32): ``crf(v) = -crm(v)ᵀ``; (..., 6, 6)."""
+    """Force cross product ``v×*`` (RBDA eq. 2.32), equal to ``-crm(v)ᵀ``; (..., 6, 6)."""
     return -np.swapaxes(crm(v), -1, -2)
 
 
@@ -112,7 +112,7 @@ def Eaxis(axis: ArrayLike, theta: ArrayLike) -> np.ndarray:
 
 
 def xlt(r: ArrayLike) -> np.ndarray:
-    """Plücker translation ``xlt(r)`` = ``[[1, 0], [-r×, 1]]`` (RBDA eq. 2.28); (..., 6, 6)."""
+    """Plücker translation by ``r``: ``[[1, 0], [-r×, 1]]`` (RBDA eq. 2.28); (..., 6, 6)."""
     r = np.asarray(r, dtype=float)
     X = np.zeros(r.shape[:-1] + (6, 6))
     X[..., :3, :3] = np.eye(3)
