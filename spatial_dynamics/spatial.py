@@ -18,7 +18,7 @@ ArrayLike = np.typing.ArrayLike
 
 
 def skew(w: ArrayLike) -> np.ndarray:
-    """Return the cross-product matrix ``w×``: ``skew(w) @ u == cross(w, u)``; (..., 3, 3)."""
+    """Return the cross-product matrix ``w×``, such that ``w× u = w × u``; (..., 3, 3)."""
     w = np.asarray(w, dtype=float) if not isinstance(w, np.ndarray) else w
     z = np.zeros_like(w[..., 0])
     x, y, s = w[..., 0], w[..., 1], w[..., 2]
