@@ -94,13 +94,23 @@ def read_description(path: str) -> str:
 
 
 def parse_description(urdf: str, source: str) -> 'sd.Model':
-    """Build the model from URDF text; ``source`` names where it came from in the error."""
+    """Build the model from URDF text; ``source`` names where it came from in the error.
+
+    One inverse-dynamics call at q = qd = qdd = 0 follows, before the model is used: it proves
+    the model computes, and any one-time cost of the first call (imports, compilation, caches)
+    is paid here, at load time, not by the first live message.
+    """
     if not urdf.strip():
         raise ConfigError(f'{source}: empty robot description')
     try:
-        return sd.Model.from_urdf(urdf)
+        model = sd.Model.from_urdf(urdf)
+        zeros = np.zeros(len(model.joint_names))
+        tau = sd.rnea(model, zeros, zeros, zeros)
     except Exception as err:  # a bad description must never take the node down
         raise ConfigError(f'{source}: {err}')
+    if not np.isfinite(tau).all():
+        raise ConfigError(f'{source}: the model gives non-finite torques at rest')
+    return model
 
 
 @dataclass(frozen=True)

@@ -87,7 +87,6 @@ class NodeProcess:
 
     def log(self) -> str:
         """Return what the node printed so far."""
-        self._log.flush()
         with open(self.log_path) as f:
             return f.read()
 

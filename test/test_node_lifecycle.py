@@ -1,0 +1,213 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Install layout, start-up, robot_description topic, parameter file, launch file, signals."""
+
+import os
+import py_compile
+import re
+import signal
+import subprocess
+import sys
+import time
+
+from diagnostic_msgs.msg import DiagnosticStatus
+import numpy as np
+import pytest
+import yaml
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from node_harness import (  # noqa: E402
+    colcon_install, DEMO_URDF, Driver, Io, joint_state, NodeProcess, PACKAGE, random_states,
+    ROOT, TIMEOUT, values)
+import spatial_dynamics as sd  # noqa: E402
+
+YAML = os.path.join(ROOT, 'config', 'inverse_dynamics.yaml')
+LAUNCH = os.path.join(ROOT, 'launch', 'inverse_dynamics.launch.py')
+
+
+@pytest.fixture(scope='module')
+def install():
+    return colcon_install()
+
+
+@pytest.fixture(scope='module')
+def driver():
+    d = Driver()
+    yield d
+    d.close()
+
+
+def declared_parameters():
+    """Names the node declares (read from its source, so this test needs no ROS)."""
+    with open(os.path.join(ROOT, 'spatial_dynamics', 'node.py')) as f:
+        return set(re.findall(r"declare_parameter\(\s*'(\w+)'", f.read()))
+
+
+def test_ros2_run_layout(install):
+    """What `ros2 run spatial_dynamics inverse_dynamics` needs after a colcon build."""
+    assert os.path.isfile(install.marker)
+    assert os.path.isfile(install.executable) and os.access(install.executable, os.X_OK)
+    code = ('from ament_index_python.packages import get_package_prefix; '
+            f'print(get_package_prefix({PACKAGE!r}))')
+    out = subprocess.run([sys.executable, '-c', code], env=install.env(), check=True,
+                         capture_output=True, text=True).stdout.strip()
+    assert out == install.prefix
+    share = os.path.join(install.prefix, 'share', PACKAGE)
+    for name in ('package.xml', 'config/inverse_dynamics.yaml', 'config/demo_arm.urdf',
+                 'launch/inverse_dynamics.launch.py'):
+        assert os.path.isfile(os.path.join(share, name)), name
+
+
+def test_yaml_documents_every_parameter():
+    with open(YAML) as f:
+        text = f.read()
+    declared = declared_parameters()
+    assert declared == {'robot_description', 'robot_description_file', 'joints', 'gravity',
+                        'acceleration_source', 'input_timeout'}
+    for name in declared:
+        assert re.search(rf'^\s*#?\s*{name}:', text, re.M), f'{name} missing in the yaml'
+    params = yaml.safe_load(text)['inverse_dynamics']['ros__parameters']
+    assert params['gravity'] == [0.0, 0.0, -9.81]
+    assert params['acceleration_source'] == 'effort'
+
+
+def test_launch_file_compiles():
+    py_compile.compile(LAUNCH, doraise=True)
+    with open(LAUNCH) as f:
+        text = f.read()
+    assert "executable='inverse_dynamics'" in text and 'inverse_dynamics.yaml' in text
+
+
+@pytest.mark.ros
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
+def test_clean_exit_on_signal_while_busy(install, driver, tmp_path, sig):
+    """Exit status 0 on SIGINT/SIGTERM, also while answering 500 messages a second."""
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}'], str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        model = sd.Model.from_urdf(DEMO_URDF)
+        names = model.joint_names
+        states = random_states(20, 1000, len(names))
+        k = 0
+        while not io.efforts:
+            assert k < 1000, 'no answer: ' + node.log()
+            io.joint_states.publish(joint_state(names, *states[k], k))
+            driver.spin_for(0.002)
+            k += 1
+        for j in range(k, k + 200):
+            io.joint_states.publish(joint_state(names, *states[j], j))
+            driver.spin_for(0.002)
+        start = time.monotonic()
+        status = node.stop(sig)
+        print(f'{sig!r}: exit status {status} after {time.monotonic() - start:.2f} s')
+        assert status == 0, node.log()
+        assert 'Traceback' not in node.log()
+    finally:
+        io.close()
+        node.stop(signal.SIGKILL)
+
+
+@pytest.mark.ros
+def test_bad_start_up_description_exits_with_reason(install, tmp_path):
+    bad = tmp_path / 'bad.urdf'
+    bad.write_text('<robot name="r"><link name="a"/><joint name="j" type="revolute">'
+                   '<parent link="a"/><child link="missing"/></joint></robot>')
+    for arg, expect in [(f'robot_description_file:={tmp_path}/none.urdf', 'no such file'),
+                        (f'robot_description_file:={bad}', 'bad.urdf')]:
+        proc = subprocess.run([install.executable, '--ros-args', '-p', arg],
+                              env=install.env(), capture_output=True, text=True,
+                              timeout=TIMEOUT)
+        assert proc.returncode == 1, proc
+        assert 'cannot start' in proc.stderr + proc.stdout and expect in proc.stderr + proc.stdout
+        assert 'Traceback' not in proc.stderr
+
+
+@pytest.mark.ros
+def test_description_from_topic_then_rejected_update(install, driver, tmp_path):
+    """No parameter: waits (warning, ERROR diagnostics, inputs rejected), then the topic."""
+    node = NodeProcess(install, [], str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        node.wait_for_log('no robot model')
+        status = io.fresh_status('robot model')
+        assert status.level == DiagnosticStatus.ERROR and 'waiting' in status.message
+        model = sd.Model.from_urdf(DEMO_URDF)
+        names = model.joint_names
+        states = random_states(21, 50, len(names))
+        for k in range(5):
+            io.joint_states.publish(joint_state(names, *states[k], k))
+            driver.spin_for(0.05)
+        kv = values(io.fresh_status('feedforward'))
+        assert int(kv['rejected no_model']) >= 1 and not io.efforts
+
+        from std_msgs.msg import String
+        with open(DEMO_URDF) as f:
+            io.description.publish(String(data=f.read()))
+        node.wait_for_log("robot 'demo_arm' from topic robot_description")
+        k = 10
+        while not io.efforts:
+            assert k < 50
+            io.joint_states.publish(joint_state(names, *states[k], k))
+            driver.spin_for(0.05)
+            k += 1
+        tau = sd.rnea(model, *states[k - 1])
+        np.testing.assert_allclose(io.efforts[-1].effort, tau, rtol=0, atol=1e-9)
+
+        io.description.publish(String(data='<robot name="half">'))
+        node.wait_for_log('robot description rejected, keeping the current model')
+        before = len(io.efforts)
+        io.joint_states.publish(joint_state(names, *states[49], 49))
+        driver.spin_until(lambda: len(io.efforts) > before, what='answer after a bad update')
+        np.testing.assert_allclose(io.efforts[-1].effort, sd.rnea(model, *states[49]),
+                                   rtol=0, atol=1e-9)
+        status = io.fresh_status('robot model')
+        kv = values(status)
+        assert status.level == DiagnosticStatus.OK and kv['source'] == 'topic robot_description'
+        assert kv['descriptions rejected'] == '1' and 'topic robot_description' in \
+            kv['last rejection']
+    finally:
+        io.close()
+        assert node.stop() == 0
+
+
+@pytest.mark.ros
+def test_parameter_file_and_xacro(install, driver, tmp_path):
+    """The shipped yaml loads; a .xacro file is expanded when xacro is importable."""
+    try:
+        import xacro  # noqa: F401
+        description = tmp_path / 'arm.urdf.xacro'
+        with open(DEMO_URDF) as f:
+            text = f.read()
+        text = text.replace('<robot name="demo_arm">',
+                            '<robot name="demo_arm" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+                            '<xacro:property name="hand_mass" value="0.6"/>')
+        text = text.replace('<mass value="0.6"/>', '<mass value="${hand_mass}"/>')
+        description.write_text(text)
+    except ImportError:
+        description = DEMO_URDF
+    node = NodeProcess(install, ['--params-file', YAML,
+                                 '-p', f'robot_description_file:={description}',
+                                 '-p', 'gravity:=[0.0, -9.81, 0.0]'], str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        model = sd.Model.from_urdf(DEMO_URDF)
+        names = model.joint_names
+        state = random_states(22, 1, len(names))[0]
+        k = 0
+        while not io.efforts:
+            assert k < 200
+            io.joint_states.publish(joint_state(names, *state, k))
+            driver.spin_for(0.05)
+            k += 1
+        np.testing.assert_allclose(io.efforts[-1].effort,
+                                   sd.rnea(model, *state, gravity=(0.0, -9.81, 0.0)),
+                                   rtol=0, atol=1e-9)
+        kv = values(io.fresh_status('feedforward'))
+        assert kv['acceleration source'] == 'effort' and kv['input timeout [s]'] == '0.5'
+    finally:
+        io.close()
+        assert node.stop() == 0
