@@ -57,6 +57,8 @@ class Model:
         frames: link name → :class:`Frame` for every link, lumped or not.
         effort_limit, velocity_limit, lower, upper, damping, friction: (n,) URDF
             ``<limit>`` and ``<dynamics>`` values per joint of ``q`` (``nan`` when absent).
+        body_damping, body_friction: (NB+1,) ``<dynamics>`` of every body's joint, mimic
+            joints included (0 when absent).
         lumped: links merged into a moving body by fixed (or locked) joints.
         pruned: links fixed to the base, which no joint's torque depends on.
         locked: joints locked by model reduction and their values.
@@ -82,6 +84,8 @@ class Model:
     upper: np.ndarray
     damping: np.ndarray
     friction: np.ndarray
+    body_damping: np.ndarray = field(default_factory=lambda: np.zeros(1))
+    body_friction: np.ndarray = field(default_factory=lambda: np.zeros(1))
     lumped: tuple = ()
     pruned: tuple = ()
     locked: Mapping[str, float] = field(default_factory=dict)
@@ -263,7 +267,11 @@ def with_payload(model: Model, link: str, mass: float, com=(0.0, 0.0, 0.0),
     frame = model.frames.get(link)
     if frame is None:
         raise ValueError(f'payload link {link!r} is not a link of {model.name!r}')
-    ixx, ixy, ixz, iyy, iyz, izz = _finite('payload inertia', inertia).reshape(6)
+    inertia = _finite('payload inertia', inertia)
+    if inertia.shape != (6,):
+        raise ValueError('payload inertia must be 6 numbers (ixx ixy ixz iyy iyz izz), got '
+                         f'{inertia.tolist()}')
+    ixx, ixy, ixz, iyy, iyz, izz = inertia
     Ip = rigid_body_inertia(f'payload on {link!r}', mass, com,
                             [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
     inertia6 = np.array(model.inertia)
@@ -397,9 +405,10 @@ def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
         return per_joint(lambda j: _number(f'joint {j.name!r} <limit {attr}>',
                                            getattr(j.limit, attr, None)))
 
-    def dyn(attr):
-        return per_joint(lambda j: _number(f'joint {j.name!r} <dynamics {attr}>',
-                                           getattr(j.dynamics, attr, None), 0.0))
+    def dyn(attr, names=joint_names):
+        return np.array([_number(f'joint {j!r} <dynamics {attr}>',
+                                 getattr(joint_by_name[j].dynamics, attr, None), 0.0)
+                         for j in names])
 
     return Model(
         name=robot_name, joint_names=joint_names, body_names=tuple(body_names),
@@ -409,6 +418,8 @@ def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
         qoff=np.array(qoff), frames=frames, effort_limit=limit('effort'),
         velocity_limit=limit('velocity'), lower=limit('lower'), upper=limit('upper'),
         damping=dyn('damping'), friction=dyn('friction'),
+        body_damping=np.r_[0.0, dyn('damping', body_joints[1:])],
+        body_friction=np.r_[0.0, dyn('friction', body_joints[1:])],
         lumped=tuple(n for n in order if pose[n][0] > 0 and n not in body_names),
         pruned=tuple(n for n in order[1:] if pose[n][0] == 0),
         locked={j: v for j, v in lock.items() if joint_by_name[j].mimic is None})

@@ -83,6 +83,9 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     q, qd, qdd = _as_joint_arrays(model, q, qd, qdd)
     g = _as_vector('gravity', gravity, 3)
     fb = _f_ext_in_bodies(model, f_ext)
+    if fb:  # batched wrenches broadcast against the batch of states
+        batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
+        q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
     if kernels is not None and q.dtype == np.float64:
         return kernels.rnea(model, q, qd, qdd, g, fb)
     if q.ndim == 1 and q.dtype == np.float64 and not any(np.ndim(f) > 1 for f in fb.values()):

@@ -21,8 +21,13 @@ from .model import Model
 PerJoint = Union[float, Sequence[float], Mapping[str, float], np.ndarray]
 
 
-def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0) -> np.ndarray:
-    """Expand a scalar, a list in joint order, or a {joint name: value} map to an (n,) array."""
+def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
+              nonnegative: bool = False) -> np.ndarray:
+    """Expand a scalar, a list in joint order, or a {joint name: value} map to an (n,) array.
+
+    ``ValueError`` names the joint of an unknown name or a non-finite (or, with
+    ``nonnegative``, negative) value.
+    """
     n = model.nq
     if isinstance(values, Mapping):
         out = np.full(n, float(default))
@@ -37,8 +42,10 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0) -
         if out.shape != (n,):
             raise ValueError(f'{what}: expected {n} values for {model.joint_names}, '
                              f'got {out.shape[0] if out.ndim == 1 else out.shape}')
-    if not np.all(np.isfinite(out)):
-        raise ValueError(f'{what}: non-finite value in {out.tolist()}')
+    for name, v in zip(model.joint_names, out):
+        if not np.isfinite(v) or (nonnegative and v < 0.0):
+            raise ValueError(f'{what}: joint {name!r} has the value {v}, need a finite '
+                             + ('non-negative ' if nonnegative else '') + 'number')
     return out
 
 
@@ -51,12 +58,19 @@ def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:
     """URDF ``<dynamics>`` friction: ``τ = damping·q̇ + friction·tanh(q̇ / threshold)``.
 
     ``threshold`` (rad/s or m/s, > 0) is the velocity at which the Coulomb term reaches
-    tanh(1) ≈ 76 % of its full value.
+    tanh(1) ≈ 76 % of its full value. A mimic joint's own friction, at its rate
+    ``mult·q̇_src``, is folded back onto its source like its torque: ``τ_src += mult·τ_mimic``.
     """
     if not threshold > 0.0 or not np.isfinite(threshold):
         raise ValueError(f'friction velocity threshold must be > 0, got {threshold}')
     qd = np.asarray(qd, dtype=float)
-    return model.damping * qd + model.friction * np.tanh(qd / threshold)
+    qidx, qmul = model.qidx[1:], model.qmul[1:]
+    qd_body = qmul * qd[..., qidx]
+    tau_body = model.body_damping[1:] * qd_body + model.body_friction[1:] * np.tanh(
+        qd_body / threshold)
+    fold = np.zeros((model.NB, model.nq))
+    fold[np.arange(model.NB), qidx] = qmul
+    return tau_body @ fold
 
 
 def clamp_to_effort_limits(model: Model, tau) -> tuple[np.ndarray, np.ndarray]:
@@ -67,5 +81,4 @@ def clamp_to_effort_limits(model: Model, tau) -> tuple[np.ndarray, np.ndarray]:
     """
     tau = np.asarray(tau, dtype=float)
     limit = np.where(model.effort_limit > 0.0, model.effort_limit, np.inf)
-    clamped = np.clip(tau, -limit, limit)
-    return clamped, clamped != tau
+    return np.clip(tau, -limit, limit), np.abs(tau) > limit
