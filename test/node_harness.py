@@ -23,6 +23,7 @@ from typing import Callable, Dict, List, Sequence
 
 import numpy as np
 import pytest
+from spatial_dynamics.driving import die_with_parent
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGE = 'spatial_dynamics'
@@ -83,7 +84,7 @@ class NodeProcess:
         self._log = open(self.log_path, 'w')
         self.proc = subprocess.Popen([install.executable, '--ros-args', *args],
                                      env=install.env(), stdout=self._log,
-                                     stderr=subprocess.STDOUT)
+                                     stderr=subprocess.STDOUT, preexec_fn=die_with_parent)
 
     def log(self) -> str:
         """Return what the node printed so far."""

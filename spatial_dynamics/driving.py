@@ -1,0 +1,151 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Shared by the demo, the latency benchmark and the soak: start nodes, make a trajectory.
+
+No rclpy import at module level: :func:`node_command` and :class:`Sinusoids` work without ROS.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+PACKAGE = 'spatial_dynamics'
+
+
+def package_prefix() -> Optional[str]:
+    """Install prefix of the package on ``AMENT_PREFIX_PATH`` (a colcon install), or None."""
+    try:
+        from ament_index_python.packages import get_package_prefix, PackageNotFoundError
+    except ImportError:
+        return None
+    try:
+        return get_package_prefix(PACKAGE)
+    except (PackageNotFoundError, OSError):  # OSError: AMENT_PREFIX_PATH not set
+        return None
+
+
+def node_command(executable: str, module: str) -> List[str]:
+    """Command that starts ``executable`` as ``ros2 run`` would, else ``python -m module``.
+
+    ``ros2 run spatial_dynamics <executable>`` runs ``<prefix>/lib/spatial_dynamics/<exe>`` of
+    the prefix whose ament index lists the package; without a sourced install, the module of
+    this source tree runs instead.
+    """
+    prefix = package_prefix()
+    if prefix is not None:
+        path = os.path.join(prefix, 'lib', PACKAGE, executable)
+        if os.access(path, os.X_OK):
+            return [path]
+    return [sys.executable, '-m', module]
+
+
+def share_file(*parts: str) -> str:
+    """Return a file of the package's share directory (installed), else of this source tree."""
+    prefix = package_prefix()
+    if prefix is not None:
+        path = os.path.join(prefix, 'share', PACKAGE, *parts)
+        if os.path.exists(path):
+            return path
+    return os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), *parts)
+
+
+def demo_urdf() -> str:
+    """Path of the embedded demo robot, ``config/demo_arm.urdf``."""
+    return share_file('config', 'demo_arm.urdf')
+
+
+def start(command: Sequence[str], namespace: str, parameters: Dict[str, str],
+          log_path: Optional[str] = None) -> subprocess.Popen:
+    """Start a ROS node process in ``namespace`` with ``-p name:=value`` parameters.
+
+    Its output goes to ``log_path`` (or is discarded). The child ignores nothing: Ctrl-C in a
+    terminal reaches it too, and :func:`stop` ends it with SIGINT.
+    """
+    args = list(command) + ['--ros-args', '-r', f'__ns:={namespace}']
+    for name, value in parameters.items():
+        args += ['-p', f'{name}:={value}']
+    out = open(log_path, 'w') if log_path else subprocess.DEVNULL
+    try:
+        return subprocess.Popen(args, stdout=out, stderr=subprocess.STDOUT,
+                                preexec_fn=die_with_parent)
+    finally:
+        if log_path:
+            out.close()
+
+
+def die_with_parent() -> None:
+    """In a child before exec: get SIGTERM when the parent dies (Linux), so none is orphaned."""
+    try:
+        import ctypes
+        PR_SET_PDEATHSIG = 1
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    except (OSError, AttributeError):
+        pass
+
+
+def stop(proc: subprocess.Popen, timeout: float = 10.0) -> Optional[int]:
+    """SIGINT, then wait; SIGKILL after ``timeout`` s. Returns the exit status."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    return proc.returncode
+
+
+def rss_bytes(pid: int) -> int:
+    """Resident set size of process ``pid`` from ``/proc/<pid>/status`` (Linux)."""
+    with open(f'/proc/{pid}/status') as f:
+        for line in f:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1]) * 1024
+    raise RuntimeError(f'no VmRSS for pid {pid}')
+
+
+class Sinusoids:
+    """A smooth, consistent joint trajectory: q, qd = dq/dt, qdd = d²q/dt² of sinusoids.
+
+        q_i(t)   = c_i + a_i sin(w_i t + phi_i)
+        qd_i(t)  = a_i w_i cos(w_i t + phi_i)
+        qdd_i(t) = -a_i w_i² sin(w_i t + phi_i)
+
+    Centre ``c_i`` and amplitude ``a_i`` keep q inside the URDF limits when the model has them
+    (``model.lower``/``model.upper`` if present), else ±1 rad around 0; periods 4..8 s.
+    """
+
+    def __init__(self, joint_names: Sequence[str], lower: Optional[Sequence[float]] = None,
+                 upper: Optional[Sequence[float]] = None) -> None:
+        n = len(joint_names)
+        self.joint_names = tuple(joint_names)
+        lo = np.full(n, -1.0) if lower is None else np.asarray(lower, dtype=float)
+        hi = np.full(n, 1.0) if upper is None else np.asarray(upper, dtype=float)
+        bounded = np.isfinite(lo) & np.isfinite(hi) & (hi > lo)
+        lo = np.where(bounded, lo, -1.0)
+        hi = np.where(bounded, hi, 1.0)
+        self.c = 0.5 * (lo + hi)
+        self.a = 0.25 * (hi - lo)
+        self.w = 2.0 * np.pi / np.linspace(4.0, 8.0, n)
+        self.phi = np.linspace(0.0, np.pi, n)
+
+    @classmethod
+    def for_model(cls, model) -> 'Sinusoids':
+        """Use the model's joint limits when it exposes them."""
+        lower = getattr(model, 'lower', None)
+        upper = getattr(model, 'upper', None)
+        if lower is not None and upper is not None and len(lower) != len(model.joint_names):
+            lower = upper = None
+        return cls(model.joint_names, lower, upper)
+
+    def __call__(self, t: float):
+        """``(q, qd, qdd)`` at time ``t`` (s), each of shape (n,)."""
+        angle = self.w * t + self.phi
+        s = np.sin(angle)
+        return self.c + self.a * s, self.a * self.w * np.cos(angle), -self.a * self.w ** 2 * s

@@ -1,0 +1,56 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""A trivial relay node: the latency baseline for ``inverse_dynamics``.
+
+Same inputs and QoS as the node (``desired_joint_states``: best effort, keep last 1; output
+``feedforward_efforts``: reliable), no computation: every message received is published as is.
+Whatever the node's latency exceeds the relay's in the same run is the node's own cost.
+
+    python -m spatial_dynamics.relay --ros-args -r __ns:=/baseline
+"""
+
+import sys
+from typing import Optional, Sequence
+
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from sensor_msgs.msg import JointState
+
+from spatial_dynamics.node import INPUT_QOS, OUTPUT_QOS
+
+
+class Relay(Node):
+    """Republish ``desired_joint_states`` on ``feedforward_efforts`` unchanged."""
+
+    def __init__(self) -> None:
+        super().__init__('relay')
+        self.publisher = self.create_publisher(
+            JointState, 'feedforward_efforts', OUTPUT_QOS,
+            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self.create_subscription(
+            JointState, 'desired_joint_states', self.publisher.publish, INPUT_QOS,
+            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+
+
+def main(args: Optional[Sequence[str]] = None) -> int:
+    """Run the relay until SIGINT/SIGTERM; 0 on a clean exit."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = Relay()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
