@@ -13,8 +13,7 @@ Every function accepts leading batch dimensions: ``(..., 3)`` / ``(..., 6)`` vec
 from __future__ import annotations
 
 import numpy as np
-
-ArrayLike = np.typing.ArrayLike
+from numpy.typing import ArrayLike
 
 
 def skew(w: ArrayLike) -> np.ndarray:
