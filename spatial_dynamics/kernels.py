@@ -1,0 +1,385 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Compiled RNEA backend: :func:`rnea.rnea_components` as a numba kernel on flat arrays.
+
+The kernel is the component-wise RNEA of ``rnea.py`` statement for statement (RBDA table 5.1,
+``Xup = (E, r)`` as in RBDA §2.12), on float64 scalars, in the same order of operations and
+without fast-math or fused multiply-adds, so it agrees with the numpy backend to a few ulps
+(to the bit against the single-state float path on the same libm).
+
+Importing this module imports numba and compiles the entries, or loads them from numba's
+on-disk cache (``cache=True``): the signatures are explicit, so nothing is compiled after
+import and a call with other argument types is refused instead of compiling in the hot path.
+Use it through ``rnea(..., backend=...)``; :mod:`backends` imports it on first use.
+
+Per-body tables (row ``i`` = body ``i``, row 0 = the fixed base, unused), built once per model
+by :func:`kernel_arrays` from ``model._kernel``:
+
+* ``J`` (NB+1, 3) int64: parent ``λ(i)``, joint code (``RX RY RZ RA PR``), index into ``q``;
+* ``K`` (NB+1, 27) float64: axis (3), ``E_tree`` row-major (9), ``r_tree`` (3), mass, ``h = m c``
+  (3), ``Ibar`` (xx xy xz yy yz zz), mimic multiplier and offset (columns below).
+"""
+
+from __future__ import annotations
+
+import functools
+import threading
+
+import numba
+from numba import prange, types
+import numpy as np
+
+from .model import Model, PR, RX, RY, RZ
+
+# Columns of J and K.
+PARENT, CODE, QIDX = 0, 1, 2
+AX, E, R, MASS, H, IBAR, MUL, OFF, WIDTH = 0, 3, 12, 15, 16, 19, 25, 26, 27
+# Columns of the per-body scratch: Xup = (E, r) (12), v (6), a (6), f (6).
+XUP, VEL, ACC, FRC, WORK = 0, 12, 18, 24, 30
+
+#: Smallest batch handed to the parallel entry (below it the thread launch costs more).
+PARALLEL_MIN = 64
+
+_f8_1 = types.Array(types.float64, 1, 'C', readonly=True)
+_f8_2 = types.Array(types.float64, 2, 'C', readonly=True)
+_f8_3 = types.Array(types.float64, 3, 'C', readonly=True)
+_i8_2 = types.Array(types.int64, 2, 'C', readonly=True)
+_out_1 = types.Array(types.float64, 1, 'C')
+_out_2 = types.Array(types.float64, 2, 'C')
+_SINGLE = types.void(_i8_2, _f8_2, _f8_1, _f8_1, _f8_1, types.float64, types.float64,
+                     types.float64, _f8_3, _out_1)
+_BATCH = types.void(_i8_2, _f8_2, _f8_2, _f8_2, _f8_2, types.float64, types.float64,
+                    types.float64, _f8_3, _out_2)
+_PARALLEL = types.void(_i8_2, _f8_2, _f8_2, _f8_2, _f8_2, types.float64, types.float64,
+                       types.float64, _f8_3, _out_2, types.int64)
+_JIT = dict(cache=True, fastmath=False, nogil=True, error_model='numpy')
+
+
+@functools.lru_cache(maxsize=64)
+def kernel_arrays(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return ``(J, K, F0)``: the model's per-body tables and an empty f_ext (0, NB+1, 6).
+
+    Built once per model (models hash by identity) from ``model._kernel``; read-only.
+    """
+    rows = model._kernel
+    NB = len(rows)
+    J = np.full((NB + 1, 3), -1, dtype=np.int64)
+    K = np.zeros((NB + 1, WIDTH))
+    for i, (p, code, axis, Et, r, mass, h, Ib, k, mul, off) in enumerate(rows, start=1):
+        J[i] = p, code, k
+        K[i, AX:AX + 3] = axis
+        K[i, E:E + 9] = Et
+        K[i, R:R + 3] = r
+        K[i, MASS] = mass
+        K[i, H:H + 3] = h
+        K[i, IBAR:IBAR + 6] = Ib
+        K[i, MUL], K[i, OFF] = mul, off
+    F0 = np.zeros((0, NB + 1, 6))
+    for a in (J, K, F0):
+        a.setflags(write=False)
+    return J, K, F0
+
+
+@numba.njit(**_JIT)
+def _xup(J, K, q, work):
+    """Body transforms ``Xup_i = XJ(q_i) Xtree_i`` as ``(E, r)`` into ``work[i, XUP:]``.
+
+    RBDA table 4.1 for ``XJ`` and eq. 2.27 for the product, as ``rnea.xup_components``.
+    """
+    for i in range(1, J.shape[0]):
+        code, k = J[i, CODE], J[i, QIDX]
+        ax, ay, az = K[i, AX], K[i, AX + 1], K[i, AX + 2]
+        mul, off = K[i, MUL], K[i, OFF]
+        qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
+        t00, t01, t02 = K[i, E], K[i, E + 1], K[i, E + 2]
+        t10, t11, t12 = K[i, E + 3], K[i, E + 4], K[i, E + 5]
+        t20, t21, t22 = K[i, E + 6], K[i, E + 7], K[i, E + 8]
+        rx, ry, rz = K[i, R], K[i, R + 1], K[i, R + 2]
+        if code == PR:
+            e00, e01, e02, e10, e11, e12, e20, e21, e22 = \
+                t00, t01, t02, t10, t11, t12, t20, t21, t22
+            rx = rx + (t00 * ax + t10 * ay + t20 * az) * qi
+            ry = ry + (t01 * ax + t11 * ay + t21 * az) * qi
+            rz = rz + (t02 * ax + t12 * ay + t22 * az) * qi
+        else:
+            c, s = np.cos(qi), np.sin(qi)
+            if code == RZ:
+                e00, e01, e02 = c * t00 + s * t10, c * t01 + s * t11, c * t02 + s * t12
+                e10, e11, e12 = c * t10 - s * t00, c * t11 - s * t01, c * t12 - s * t02
+                e20, e21, e22 = t20, t21, t22
+            elif code == RX:
+                e00, e01, e02 = t00, t01, t02
+                e10, e11, e12 = c * t10 + s * t20, c * t11 + s * t21, c * t12 + s * t22
+                e20, e21, e22 = c * t20 - s * t10, c * t21 - s * t11, c * t22 - s * t12
+            elif code == RY:
+                e00, e01, e02 = c * t00 - s * t20, c * t01 - s * t21, c * t02 - s * t22
+                e10, e11, e12 = t10, t11, t12
+                e20, e21, e22 = s * t00 + c * t20, s * t01 + c * t21, s * t02 + c * t22
+            else:  # general axis: E_J = R(axis, q)ᵀ = c 1 - s axis× + (1 - c) axis axisᵀ
+                C = 1.0 - c
+                j00, j11, j22 = c + C * ax * ax, c + C * ay * ay, c + C * az * az
+                cxy, cxz, cyz = C * ax * ay, C * ax * az, C * ay * az
+                sx, sy, sz = s * ax, s * ay, s * az
+                j01, j02, j10 = cxy + sz, cxz - sy, cxy - sz
+                j12, j20, j21 = cyz + sx, cxz + sy, cyz - sx
+                e00 = j00 * t00 + j01 * t10 + j02 * t20
+                e01 = j00 * t01 + j01 * t11 + j02 * t21
+                e02 = j00 * t02 + j01 * t12 + j02 * t22
+                e10 = j10 * t00 + j11 * t10 + j12 * t20
+                e11 = j10 * t01 + j11 * t11 + j12 * t21
+                e12 = j10 * t02 + j11 * t12 + j12 * t22
+                e20 = j20 * t00 + j21 * t10 + j22 * t20
+                e21 = j20 * t01 + j21 * t11 + j22 * t21
+                e22 = j20 * t02 + j21 * t12 + j22 * t22
+        work[i, XUP], work[i, XUP + 1], work[i, XUP + 2] = e00, e01, e02
+        work[i, XUP + 3], work[i, XUP + 4], work[i, XUP + 5] = e10, e11, e12
+        work[i, XUP + 6], work[i, XUP + 7], work[i, XUP + 8] = e20, e21, e22
+        work[i, XUP + 9], work[i, XUP + 10], work[i, XUP + 11] = rx, ry, rz
+
+
+@numba.njit(**_JIT)
+def _rnea_one(J, K, q, qd, qdd, gx, gy, gz, fext, row, tau, work):
+    """RNEA on one state into ``tau`` (n,); ``fext[row]`` is f_ext (none if ``row < 0``).
+
+    ``work`` (NB+1, 30) holds, per body, ``Xup = (E, r)``, ``v``, ``a`` and ``f``. As in
+    ``rnea.rnea_components``, the velocity terms are skipped when q̇ = 0.
+    """
+    NB = J.shape[0] - 1
+    zero = 0.0 * gx
+    _xup(J, K, q, work)
+    moving = False
+    for k in range(qd.shape[0]):
+        if qd[k] != 0.0:
+            moving = True
+            break
+    work[0, VEL:VEL + 6] = zero
+    work[0, ACC], work[0, ACC + 1], work[0, ACC + 2] = zero, zero, zero
+    work[0, ACC + 3], work[0, ACC + 4], work[0, ACC + 5] = -gx, -gy, -gz   # a_0 = -a_grav
+    tau[:] = zero
+
+    for i in range(1, NB + 1):
+        p, code, k = J[i, PARENT], J[i, CODE], J[i, QIDX]
+        ax, ay, az = K[i, AX], K[i, AX + 1], K[i, AX + 2]
+        mul = K[i, MUL]
+        e00, e01, e02 = work[i, XUP], work[i, XUP + 1], work[i, XUP + 2]
+        e10, e11, e12 = work[i, XUP + 3], work[i, XUP + 4], work[i, XUP + 5]
+        e20, e21, e22 = work[i, XUP + 6], work[i, XUP + 7], work[i, XUP + 8]
+        rx, ry, rz = work[i, XUP + 9], work[i, XUP + 10], work[i, XUP + 11]
+        qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
+
+        # a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ
+        pa0, pa1, pa2 = work[p, ACC], work[p, ACC + 1], work[p, ACC + 2]
+        pl0, pl1, pl2 = work[p, ACC + 3], work[p, ACC + 4], work[p, ACC + 5]
+        u0 = pl0 - (ry * pa2 - rz * pa1)
+        u1 = pl1 - (rz * pa0 - rx * pa2)
+        u2 = pl2 - (rx * pa1 - ry * pa0)
+        a0 = e00 * pa0 + e01 * pa1 + e02 * pa2
+        a1 = e10 * pa0 + e11 * pa1 + e12 * pa2
+        a2 = e20 * pa0 + e21 * pa1 + e22 * pa2
+        l0 = e00 * u0 + e01 * u1 + e02 * u2
+        l1 = e10 * u0 + e11 * u1 + e12 * u2
+        l2 = e20 * u0 + e21 * u1 + e22 * u2
+        if code == PR:
+            l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
+        else:
+            a0, a1, a2 = a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi
+
+        # f_i = I_i a_i + v_i ×* I_i v_i - f_ext_i, with I = [[Ibar, h×], [h×ᵀ, m 1]]
+        mass = K[i, MASS]
+        hx, hy, hz = K[i, H], K[i, H + 1], K[i, H + 2]
+        Ixx, Ixy, Ixz = K[i, IBAR], K[i, IBAR + 1], K[i, IBAR + 2]
+        Iyy, Iyz, Izz = K[i, IBAR + 3], K[i, IBAR + 4], K[i, IBAR + 5]
+        w0 = w1 = w2 = v0 = v1 = v2 = zero
+        if moving:
+            # v_i = Xup_i v_λ(i) + vJ,  vJ = S_i q̇_i
+            qdi = qd[k] if mul == 1.0 else mul * qd[k]
+            pw0, pw1, pw2 = work[p, VEL], work[p, VEL + 1], work[p, VEL + 2]
+            pv0, pv1, pv2 = work[p, VEL + 3], work[p, VEL + 4], work[p, VEL + 5]
+            u0 = pv0 - (ry * pw2 - rz * pw1)
+            u1 = pv1 - (rz * pw0 - rx * pw2)
+            u2 = pv2 - (rx * pw1 - ry * pw0)
+            w0 = e00 * pw0 + e01 * pw1 + e02 * pw2
+            w1 = e10 * pw0 + e11 * pw1 + e12 * pw2
+            w2 = e20 * pw0 + e21 * pw1 + e22 * pw2
+            v0 = e00 * u0 + e01 * u1 + e02 * u2
+            v1 = e10 * u0 + e11 * u1 + e12 * u2
+            v2 = e20 * u0 + e21 * u1 + e22 * u2
+            j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
+            if code == PR:
+                v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
+                l0 += w1 * j2 - w2 * j1
+                l1 += w2 * j0 - w0 * j2
+                l2 += w0 * j1 - w1 * j0
+            else:
+                w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
+                a0 += w1 * j2 - w2 * j1
+                a1 += w2 * j0 - w0 * j2
+                a2 += w0 * j1 - w1 * j0
+                l0 += v1 * j2 - v2 * j1
+                l1 += v2 * j0 - v0 * j2
+                l2 += v0 * j1 - v1 * j0
+            work[i, VEL], work[i, VEL + 1], work[i, VEL + 2] = w0, w1, w2
+            work[i, VEL + 3], work[i, VEL + 4], work[i, VEL + 5] = v0, v1, v2
+        work[i, ACC], work[i, ACC + 1], work[i, ACC + 2] = a0, a1, a2
+        work[i, ACC + 3], work[i, ACC + 4], work[i, ACC + 5] = l0, l1, l2
+
+        # I_i a_i
+        n0 = Ixx * a0 + Ixy * a1 + Ixz * a2 + (hy * l2 - hz * l1)
+        n1 = Ixy * a0 + Iyy * a1 + Iyz * a2 + (hz * l0 - hx * l2)
+        n2 = Ixz * a0 + Iyz * a1 + Izz * a2 + (hx * l1 - hy * l0)
+        f0 = mass * l0 - (hy * a2 - hz * a1)
+        f1 = mass * l1 - (hz * a0 - hx * a2)
+        f2 = mass * l2 - (hx * a1 - hy * a0)
+        if moving:
+            # momentum I_i v_i, then v_i ×* (I_i v_i) = [w × hn + v × hf; w × hf]
+            m0 = Ixx * w0 + Ixy * w1 + Ixz * w2 + (hy * v2 - hz * v1)
+            m1 = Ixy * w0 + Iyy * w1 + Iyz * w2 + (hz * v0 - hx * v2)
+            m2 = Ixz * w0 + Iyz * w1 + Izz * w2 + (hx * v1 - hy * v0)
+            k0 = mass * v0 - (hy * w2 - hz * w1)
+            k1 = mass * v1 - (hz * w0 - hx * w2)
+            k2 = mass * v2 - (hx * w1 - hy * w0)
+            n0 += (w1 * m2 - w2 * m1) + (v1 * k2 - v2 * k1)
+            n1 += (w2 * m0 - w0 * m2) + (v2 * k0 - v0 * k2)
+            n2 += (w0 * m1 - w1 * m0) + (v0 * k1 - v1 * k0)
+            f0 += w1 * k2 - w2 * k1
+            f1 += w2 * k0 - w0 * k2
+            f2 += w0 * k1 - w1 * k0
+        if row >= 0:
+            fe = fext[row]
+            n0, n1, n2 = n0 - fe[i, 0], n1 - fe[i, 1], n2 - fe[i, 2]
+            f0, f1, f2 = f0 - fe[i, 3], f1 - fe[i, 4], f2 - fe[i, 5]
+        work[i, FRC], work[i, FRC + 1], work[i, FRC + 2] = n0, n1, n2
+        work[i, FRC + 3], work[i, FRC + 4], work[i, FRC + 5] = f0, f1, f2
+
+    # Backward pass: τ_i = S_iᵀ f_i, f_λ(i) += Xup_iᵀ f_i
+    for i in range(NB, 0, -1):
+        p, code, k = J[i, PARENT], J[i, CODE], J[i, QIDX]
+        ax, ay, az = K[i, AX], K[i, AX + 1], K[i, AX + 2]
+        mul = K[i, MUL]
+        n0, n1, n2 = work[i, FRC], work[i, FRC + 1], work[i, FRC + 2]
+        f0, f1, f2 = work[i, FRC + 3], work[i, FRC + 4], work[i, FRC + 5]
+        if code == PR:
+            t = ax * f0 + ay * f1 + az * f2
+        else:
+            t = ax * n0 + ay * n1 + az * n2
+        tau[k] = tau[k] + (t if mul == 1.0 else mul * t)
+        if p == 0:
+            continue
+        e00, e01, e02 = work[i, XUP], work[i, XUP + 1], work[i, XUP + 2]
+        e10, e11, e12 = work[i, XUP + 3], work[i, XUP + 4], work[i, XUP + 5]
+        e20, e21, e22 = work[i, XUP + 6], work[i, XUP + 7], work[i, XUP + 8]
+        rx, ry, rz = work[i, XUP + 9], work[i, XUP + 10], work[i, XUP + 11]
+        F0 = e00 * f0 + e10 * f1 + e20 * f2
+        F1 = e01 * f0 + e11 * f1 + e21 * f2
+        F2 = e02 * f0 + e12 * f1 + e22 * f2
+        work[p, FRC] += e00 * n0 + e10 * n1 + e20 * n2 + (ry * F2 - rz * F1)
+        work[p, FRC + 1] += e01 * n0 + e11 * n1 + e21 * n2 + (rz * F0 - rx * F2)
+        work[p, FRC + 2] += e02 * n0 + e12 * n1 + e22 * n2 + (rx * F1 - ry * F0)
+        work[p, FRC + 3] += F0
+        work[p, FRC + 4] += F1
+        work[p, FRC + 5] += F2
+
+
+@numba.njit(_SINGLE, **_JIT)
+def _rnea_single(J, K, q, qd, qdd, gx, gy, gz, fext, tau):
+    """One state: q, qd, qdd (n,), fext (1 or 0, NB+1, 6) → tau (n,)."""
+    work = np.empty((J.shape[0], WORK))
+    _rnea_one(J, K, q, qd, qdd, gx, gy, gz, fext, fext.shape[0] - 1, tau, work)
+
+
+@numba.njit(_BATCH, **_JIT)
+def _rnea_batch(J, K, q, qd, qdd, gx, gy, gz, fext, tau):
+    """N states in one thread: q, qd, qdd (N, n), fext (N, 1 or 0 rows, NB+1, 6) → tau (N, n)."""
+    work = np.empty((J.shape[0], WORK))
+    M = fext.shape[0]
+    for n in range(q.shape[0]):
+        row = n if M > 1 else M - 1
+        _rnea_one(J, K, q[n], qd[n], qdd[n], gx, gy, gz, fext, row, tau[n], work)
+
+
+@numba.njit(_PARALLEL, parallel=True, **_JIT)
+def _rnea_batch_parallel(J, K, q, qd, qdd, gx, gy, gz, fext, tau, chunks):
+    """As :func:`_rnea_batch`, in ``chunks`` contiguous slices spread over numba's threads."""
+    N = q.shape[0]
+    M = fext.shape[0]
+    for c in prange(chunks):
+        work = np.empty((J.shape[0], WORK))
+        for n in range(c * N // chunks, (c + 1) * N // chunks):
+            row = n if M > 1 else M - 1
+            _rnea_one(J, K, q[n], qd[n], qdd[n], gx, gy, gz, fext, row, tau[n], work)
+
+
+# The workqueue threading layer (used when neither TBB nor OpenMP is available) must not be
+# entered by two threads at once; a lock is cheap next to a parallel batch.
+_parallel_lock = threading.Lock()
+
+
+def rnea_single(model: Model, q, qd, qdd, gravity) -> np.ndarray | None:
+    """τ for one state without f_ext, or ``None`` when the inputs need the general path.
+
+    Takes the shortcut only for C-contiguous float64 ndarrays of shape (n,) and a gravity
+    that is a tuple or list of three floats; validation is left to the general path.
+    """
+    J, K, F0 = kernel_arrays(model)
+    n = len(model.joint_names)
+    if (type(q) is not np.ndarray or type(qd) is not np.ndarray or type(qdd) is not np.ndarray
+            or q.shape != (n,) or qd.shape != (n,) or qdd.shape != (n,)):
+        return None
+    if type(gravity) is not tuple and type(gravity) is not list or len(gravity) != 3:
+        return None
+    gx, gy, gz = gravity
+    if type(gx) is not float or type(gy) is not float or type(gz) is not float:
+        return None
+    tau = np.empty(n)
+    try:
+        _rnea_single(J, K, q, qd, qdd, gx, gy, gz, F0, tau)
+    except TypeError:   # not float64, or not contiguous: no overload, nothing compiled
+        return None
+    return tau
+
+
+def rnea(model: Model, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: np.ndarray,
+         f_body: dict) -> np.ndarray:
+    """τ from validated float64 arrays of one broadcast shape (..., n) (any strides).
+
+    ``gravity`` (3,) m/s² in root coordinates; ``f_body`` maps a body index to its external
+    force ``[n; f]`` in body coordinates, shape (6,) or broadcastable to (..., 6), as made by
+    ``rnea._f_ext_in_bodies``. Returns τ of shape (..., n), float64.
+    """
+    J, K, F0 = kernel_arrays(model)
+    NB = J.shape[0] - 1
+    batch, n = q.shape[:-1], q.shape[-1]
+    gx, gy, gz = (float(x) for x in gravity)
+    fext = F0
+    if f_body:
+        # One f_ext for all states unless some wrench varies along the batch.
+        shared = all(np.ndim(f) <= 1 for f in f_body.values())
+        fext = np.zeros(((1,) if shared else batch) + (NB + 1, 6))
+        for b, f in f_body.items():
+            fext[..., b, :] = f
+        fext = fext.reshape(-1, NB + 1, 6)
+    if not batch:
+        args = [np.ascontiguousarray(x, dtype=np.float64) for x in (q, qd, qdd)]
+        tau = np.empty(n)
+        _rnea_single(J, K, *args, gx, gy, gz, fext, tau)
+        return tau
+    N = int(np.prod(batch, dtype=np.intp))
+    args = [np.ascontiguousarray(x.reshape(N, n), dtype=np.float64) for x in (q, qd, qdd)]
+    tau = np.empty((N, n))
+    threads = numba.get_num_threads()
+    if N >= PARALLEL_MIN and threads > 1:
+        with _parallel_lock:
+            _rnea_batch_parallel(J, K, *args, gx, gy, gz, fext, tau, min(N, 4 * threads))
+    else:
+        _rnea_batch(J, K, *args, gx, gy, gz, fext, tau)
+    return tau.reshape(batch + (n,))
+
+
+def warmup(model: Model) -> None:
+    """Run every entry once on a zero state of ``model`` (loads code, starts the threads)."""
+    n = len(model.joint_names)
+    z1, z2 = np.zeros(n), np.zeros((PARALLEL_MIN, n))
+    g = np.array([0.0, 0.0, -9.81])
+    rnea(model, z1, z1, z1, g, {})
+    rnea(model, z2[:1], z2[:1], z2[:1], g, {})
+    rnea(model, z2, z2, z2, g, {})

@@ -1,0 +1,353 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The compiled (numba) backend against the numpy backend and against Pinocchio.
+
+- compiled vs Pinocchio: max abs difference <= 1e-10 Nm, as the numpy backend;
+- compiled vs numpy: a few ulps of the largest torque (the kernel is the same arithmetic in
+  the same order; on one libm the results are identical);
+- single states, batches (serial and parallel entries, broadcast, shared and per-sample
+  wrenches), gravity variations, the Panda with its mimic finger, UR5, Talos, Solo12 and
+  seeded random trees (revolute, continuous, prismatic, fixed, mimic);
+- non-float64 inputs run on numpy; without numba the package imports and ``backend='auto'``
+  runs on numpy, ``backend='compiled'`` says how to install numba; numba is imported only
+  when a compiled call needs it.
+
+The compiled tests skip only when numba is missing (``pytest.importorskip('numba')``).
+"""
+
+import functools
+import os
+import subprocess
+import sys
+import textwrap
+
+from conftest import PinOracle, random_state, robot_urdf_path
+import numpy as np
+import pytest
+import spatial_dynamics as sd
+from spatial_dynamics import backends
+from urdf_gen import random_tree_urdf
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TOL_PIN = 1e-10      # Nm (N for prismatic joints), as test_oracle_pinocchio.py
+ULPS = 64            # compiled vs numpy: ULPS * eps * max(1, max |tau|)
+ROBOTS = ['panda', 'ur5', 'talos', 'talos_reduced', 'solo12']
+GRAVITIES = {'g': (0.0, 0.0, -9.81), 'no_g': (0.0, 0.0, 0.0), 'g_oblique': (1.3, -2.1, -9.5)}
+# (seed, n_links, branching, mimic), joints drawn from revolute/continuous/prismatic/fixed
+TREES = [(1, 2, False, False), (2, 6, True, True), (3, 9, False, True), (4, 14, True, False),
+         (5, 20, True, True), (6, 28, True, True)]
+TREE_IDS = [f'seed{s}-{n}links-{"tree" if b else "chain"}{"-mimic" if m else ""}'
+            for s, n, b, m in TREES]
+
+
+@pytest.fixture
+def kernels():
+    """Return the compiled backend's module; skip when numba is not installed."""
+    pytest.importorskip('numba')
+    return backends.compiled('compiled')
+
+
+@functools.lru_cache(maxsize=None)
+def robot(name):
+    """Return (Model, PinOracle) of an example-robot-data robot, built once per session."""
+    path = robot_urdf_path(name)
+    return sd.Model.from_urdf(path), PinOracle(path)
+
+
+@functools.lru_cache(maxsize=None)
+def tree(seed, n_links, branching, mimic):
+    """Return (Model, PinOracle) of a seeded random tree."""
+    xml = random_tree_urdf(np.random.default_rng(2000 + seed), n_links, branching=branching,
+                           mimic=mimic)
+    return sd.Model.from_urdf(xml), PinOracle(xml)
+
+
+def model_and_oracle(case):
+    return robot(case) if isinstance(case, str) else tree(*case)
+
+
+CASES = ROBOTS + TREES
+CASE_IDS = ROBOTS + TREE_IDS
+
+
+def assert_ulps_close(compiled, numpy_tau):
+    """Compiled and numpy torques agree to ULPS ulps of the largest torque."""
+    assert compiled.shape == numpy_tau.shape
+    assert compiled.dtype == np.float64
+    scale = max(1.0, float(np.abs(numpy_tau).max(initial=0.0)))
+    worst = float(np.abs(compiled - numpy_tau).max(initial=0.0))
+    assert worst <= ULPS * np.finfo(np.float64).eps * scale, worst
+
+
+def max_diff(a, b):
+    return float(np.abs(np.asarray(a) - np.asarray(b)).max(initial=0.0))
+
+
+def random_wrenches(rng, model, k, shape=()):
+    """Return {link: wrench of shape shape + (6,)} on k links (root and lumped links too)."""
+    links = sorted(model.frames)
+    pick = rng.choice(len(links), size=min(k, len(links)), replace=False)
+    return {links[i]: rng.normal(0.0, 10.0, tuple(shape) + (6,)) for i in pick}
+
+
+# --------------------------------------------------------------------------------------------
+# Compiled vs numpy vs Pinocchio
+
+
+@pytest.mark.parametrize('gravity', list(GRAVITIES.values()), ids=list(GRAVITIES))
+@pytest.mark.parametrize('case', CASES, ids=CASE_IDS)
+def test_single_states(kernels, case, gravity, rng):
+    model, oracle = model_and_oracle(case)
+    n = model.nq
+    for _ in range(5):
+        q, qd, qdd = random_state(rng, (), n)
+        tau = sd.rnea(model, q, qd, qdd, gravity=gravity, backend='compiled')
+        assert tau.shape == (n,)
+        assert_ulps_close(tau, sd.rnea(model, q, qd, qdd, gravity=gravity, backend='numpy'))
+        assert max_diff(tau, oracle.rnea(model.joint_names, q, qd, qdd, gravity)) <= TOL_PIN
+
+
+@pytest.mark.parametrize('case', CASES, ids=CASE_IDS)
+def test_static_and_velocity_only_states(kernels, case, rng):
+    """q̇ = 0 (the kernel skips the velocity terms), q̇ = q̈ = 0 and zero gravity."""
+    model, oracle = model_and_oracle(case)
+    n = model.nq
+    q, qd, qdd = random_state(rng, (), n)
+    z = np.zeros(n)
+    for args, gravity in [((q, z, qdd), GRAVITIES['g']), ((q, z, z), GRAVITIES['g_oblique']),
+                          ((q, qd, z), GRAVITIES['no_g']), ((q, z, z), GRAVITIES['no_g'])]:
+        tau = sd.rnea(model, *args, gravity=gravity, backend='compiled')
+        assert_ulps_close(tau, sd.rnea(model, *args, gravity=gravity, backend='numpy'))
+        assert max_diff(tau, oracle.rnea(model.joint_names, *args, gravity)) <= TOL_PIN
+
+
+@pytest.mark.parametrize('N', [1, 7, 150], ids=['N1', 'N7-serial', 'N150-parallel'])
+@pytest.mark.parametrize('case', CASES, ids=CASE_IDS)
+def test_batches(kernels, case, N, rng):
+    """Batches below and above kernels.PARALLEL_MIN (serial and parallel entries)."""
+    model, oracle = model_and_oracle(case)
+    n = model.nq
+    q, qd, qdd = random_state(rng, (N,), n)
+    qd[::3] = 0.0   # some states at rest: the q̇ = 0 shortcut is per state
+    gravity = GRAVITIES['g_oblique']
+    tau = sd.rnea(model, q, qd, qdd, gravity=gravity, backend='compiled')
+    assert tau.shape == (N, n)
+    assert_ulps_close(tau, sd.rnea(model, q, qd, qdd, gravity=gravity, backend='numpy'))
+    k = slice(None) if N <= 7 else slice(None, None, 17)   # the oracle loops in Python
+    assert max_diff(tau[k], oracle.rnea(model.joint_names, q[k], qd[k], qdd[k],
+                                        gravity)) <= TOL_PIN
+    for j in (0, N - 1):
+        single = sd.rnea(model, q[j], qd[j], qdd[j], gravity=gravity, backend='compiled')
+        assert_ulps_close(single, tau[j])
+
+
+@pytest.mark.parametrize('case', CASES, ids=CASE_IDS)
+def test_external_wrenches(kernels, case, rng):
+    """Wrenches on random links (base, lumped and mimic links included).
+
+    One state; shared by a batch; varying along a batch; a (2, 3) batch with (3, 6) wrenches.
+    """
+    model, oracle = model_and_oracle(case)
+    n, names, g = model.nq, model.joint_names, GRAVITIES['g']
+    f_ext = random_wrenches(rng, model, 5)
+    q, qd, qdd = random_state(rng, (), n)
+    tau = sd.rnea(model, q, qd, qdd, f_ext=f_ext, backend='compiled')
+    assert_ulps_close(tau, sd.rnea(model, q, qd, qdd, f_ext=f_ext, backend='numpy'))
+    assert max_diff(tau, oracle.rnea(names, q, qd, qdd, g, f_ext)) <= TOL_PIN
+
+    Q, QD, QDD = random_state(rng, (70,), n)
+    tau = sd.rnea(model, Q, QD, QDD, f_ext=f_ext, backend='compiled')
+    assert_ulps_close(tau, sd.rnea(model, Q, QD, QDD, f_ext=f_ext, backend='numpy'))
+    assert max_diff(tau[:3], oracle.rnea(names, Q[:3], QD[:3], QDD[:3], g, f_ext)) <= TOL_PIN
+
+    f_var = random_wrenches(rng, model, 3, shape=(70,))
+    tau = sd.rnea(model, Q, QD, QDD, f_ext=f_var, backend='compiled')
+    assert_ulps_close(tau, sd.rnea(model, Q, QD, QDD, f_ext=f_var, backend='numpy'))
+    for j in (0, 69):
+        f_j = {link: f[j] for link, f in f_var.items()}
+        assert max_diff(tau[j], oracle.rnea(names, Q[j], QD[j], QDD[j], g, f_j)) <= TOL_PIN
+
+    Q, QD, QDD = random_state(rng, (2, 3), n)
+    f_b = random_wrenches(rng, model, 2, shape=(3,))
+    tau = sd.rnea(model, Q, QD, QDD, f_ext=f_b, backend='compiled')
+    assert tau.shape == (2, 3, n)
+    assert_ulps_close(tau, sd.rnea(model, Q, QD, QDD, f_ext=f_b, backend='numpy'))
+
+
+def test_panda_mimic_finger_and_hand_wrenches(kernels, rng):
+    """The mimic finger's torque is folded onto its source; wrenches on lumped hand links."""
+    model, oracle = robot('panda')
+    n, names = model.nq, model.joint_names
+    for link in ['panda_hand_tcp', 'panda_hand', 'panda_leftfinger', 'panda_rightfinger']:
+        f_ext = {link: rng.normal(0.0, 10.0, 6)}
+        q, qd, qdd = random_state(rng, (), n)
+        tau = sd.rnea(model, q, qd, qdd, f_ext=f_ext, backend='compiled')
+        assert max_diff(tau, oracle.rnea(names, q, qd, qdd, f_ext=f_ext)) <= TOL_PIN
+        assert max_diff(tau, sd.rnea(model, q, qd, qdd, backend='compiled')) > 1e-3, link
+
+
+def test_broadcast_strided_readonly_and_list_inputs(kernels, rng):
+    """Inputs the single-state shortcut declines take the general compiled path."""
+    model, oracle = robot('ur5')
+    n = model.nq
+    Q, QD, QDD = random_state(rng, (4,), n)
+    ref = sd.rnea(model, Q, QD, QDD, backend='numpy')
+    # q of shape (n,) broadcast against batches of qd, qdd
+    tau = sd.rnea(model, Q[0], QD, QDD, backend='compiled')
+    assert_ulps_close(tau, sd.rnea(model, Q[0], QD, QDD, backend='numpy'))
+    # non-contiguous rows, read-only arrays, lists, integer arrays, gravity as an array
+    wide = np.repeat(np.stack([Q, QD, QDD]), 2, axis=-1)[..., ::2]
+    assert not wide[0, 0].flags.c_contiguous
+    assert_ulps_close(sd.rnea(model, *wide[:, 0], backend='compiled'), ref[0])
+    assert_ulps_close(sd.rnea(model, *wide, backend='compiled'), ref)
+    frozen = [x[1].copy() for x in (Q, QD, QDD)]
+    for x in frozen:
+        x.setflags(write=False)
+    assert_ulps_close(sd.rnea(model, *frozen, backend='compiled'), ref[1])
+    assert_ulps_close(sd.rnea(model, *(x[2].tolist() for x in (Q, QD, QDD)),
+                              backend='compiled'), ref[2])
+    ints = [np.arange(n) % 3 - 1, np.ones(n, dtype=int), np.zeros(n, dtype=np.int32)]
+    assert_ulps_close(sd.rnea(model, *ints, backend='compiled'),
+                      sd.rnea(model, *ints, backend='numpy'))
+    g = np.array([0.5, 0.0, -9.0])
+    assert_ulps_close(sd.rnea(model, Q[3], QD[3], QDD[3], gravity=g, backend='compiled'),
+                      sd.rnea(model, Q[3], QD[3], QDD[3], gravity=g, backend='numpy'))
+    assert max_diff(sd.rnea(model, Q[3], QD[3], QDD[3], gravity=g, backend='compiled'),
+                    oracle.rnea(model.joint_names, Q[3], QD[3], QDD[3], tuple(g))) <= TOL_PIN
+
+
+def test_validation_errors_are_the_numpy_ones(kernels):
+    model, _ = robot('ur5')
+    n = model.nq
+    z = np.zeros(n)
+    with pytest.raises(ValueError, match=r'q must have shape \(\.\.\., 6\)'):
+        sd.rnea(model, np.zeros(n + 1), z, z, backend='compiled')
+    with pytest.raises(ValueError, match='gravity must be a 3-vector'):
+        sd.rnea(model, z, z, z, gravity=(0.0, -9.81), backend='compiled')
+    with pytest.raises(ValueError, match='unknown link'):
+        sd.rnea(model, z, z, z, f_ext={'nope': np.zeros(6)}, backend='compiled')
+    with pytest.raises(ValueError, match='backend must be one of'):
+        sd.rnea(model, z, z, z, backend='fortran')
+
+
+@pytest.mark.parametrize('dtype', [np.float32, np.longdouble])
+def test_other_float_dtypes_run_on_numpy(kernels, dtype, rng):
+    """Only float64 goes to the kernel: float32 and longdouble keep their dtype (numpy path)."""
+    model, _ = robot('panda')
+    q, qd, qdd = (x.astype(dtype) for x in random_state(rng, (3,), model.nq))
+    for args in [(q, qd, qdd), (q[0], qd[0], qdd[0])]:
+        tau = sd.rnea(model, *args, backend='compiled')
+        assert tau.dtype == dtype
+        np.testing.assert_array_equal(tau, sd.rnea(model, *args, backend='numpy'))
+
+
+def test_kernel_arrays_are_cached_read_only_tables(kernels):
+    model, _ = robot('panda')
+    J, K, F0 = kernels.kernel_arrays(model)
+    assert kernels.kernel_arrays(model)[1] is K
+    assert J.shape == (model.NB + 1, 3) and K.shape == (model.NB + 1, kernels.WIDTH)
+    assert F0.shape == (0, model.NB + 1, 6)
+    assert not (J.flags.writeable or K.flags.writeable or F0.flags.writeable)
+    np.testing.assert_array_equal(J[1:, kernels.PARENT], model.parent[1:])
+    np.testing.assert_array_equal(K[1:, kernels.MUL], model.qmul[1:])
+
+
+def test_warmup_and_describe(kernels):
+    model, _ = robot('talos_reduced')
+    assert backends.warmup(model).startswith('compiled (numba ')
+    assert backends.warmup(model, backend='numpy') == 'numpy'
+    assert backends.describe('compiled').startswith('compiled')
+
+
+def test_concurrent_callers_agree(kernels, rng):
+    """Several Python threads calling single and parallel-batch entries at once."""
+    from concurrent.futures import ThreadPoolExecutor
+    model, _ = robot('talos_reduced')
+    Q, QD, QDD = random_state(rng, (200,), model.nq)
+    ref = sd.rnea(model, Q, QD, QDD, backend='numpy')
+
+    def job(j):
+        if j % 2:
+            return sd.rnea(model, Q, QD, QDD)
+        return np.stack([sd.rnea(model, Q[k], QD[k], QDD[k]) for k in range(0, 200, 20)])
+
+    with ThreadPoolExecutor(4) as pool:
+        results = list(pool.map(job, range(8)))
+    for j, tau in enumerate(results):
+        assert_ulps_close(tau, ref if j % 2 else ref[::20])
+
+
+# --------------------------------------------------------------------------------------------
+# Without numba, and lazily imported
+
+
+def run_python(code):
+    """Run code in a fresh interpreter that imports this checkout's spatial_dynamics."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [os.path.dirname(os.path.dirname(os.path.abspath(sd.__file__))), ROOT]
+        + [p for p in os.environ.get('PYTHONPATH', '').split(os.pathsep) if p]))
+    proc = subprocess.run([sys.executable, '-c', textwrap.dedent(code)], capture_output=True,
+                          text=True, cwd=ROOT, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return proc.stdout
+
+
+URDF = ('<robot name="r"><link name="base"/><link name="arm"><inertial><mass value="1"/>'
+        '<origin xyz="0 0 -0.5"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" '
+        'izz="0.1"/></inertial></link><joint name="j" type="revolute"><parent link="base"/>'
+        '<child link="arm"/><axis xyz="0 1 0"/>'
+        '<limit effort="1" velocity="1" lower="-1" upper="1"/></joint></robot>')
+
+
+def test_without_numba_auto_runs_on_numpy():
+    out = run_python(f'''
+        import sys
+        sys.modules['numba'] = None          # `import numba` raises ImportError
+        import numpy as np
+        import spatial_dynamics as sd
+        from spatial_dynamics import backends
+        m = sd.Model.from_urdf({URDF!r})
+        tau = sd.rnea(m, np.array([0.3]), np.zeros(1), np.zeros(1))
+        assert abs(tau[0] - 9.81 * 0.5 * np.sin(0.3)) < 1e-12, tau
+        assert sd.rnea(m, np.ones((5, 1)), np.ones((5, 1)), np.ones((5, 1))).shape == (5, 1)
+        print('describe:', backends.describe())
+        print('warmup:', backends.warmup(m))
+        try:
+            sd.rnea(m, np.zeros(1), np.zeros(1), np.zeros(1), backend='compiled')
+        except ImportError as err:
+            print('error:', type(err).__name__, err)
+        print('kernels imported:', 'spatial_dynamics.kernels' in sys.modules)
+    ''')
+    assert 'describe: numpy (numba unavailable: ' in out, out
+    assert 'warmup: numpy (numba unavailable' in out, out
+    assert 'error: CompiledBackendUnavailable' in out, out
+    assert 'pip install numba' in out and 'spatial_dynamics[fast]' in out, out
+    assert 'kernels imported: False' in out, out
+
+
+def test_numba_is_imported_only_when_the_compiled_backend_runs():
+    out = run_python(f'''
+        import sys
+        import numpy as np
+        import spatial_dynamics as sd
+        m = sd.Model.from_urdf({URDF!r})
+        print('after import:', 'numba' in sys.modules)
+        sd.rnea(m, np.zeros(1), np.zeros(1), np.zeros(1), backend='numpy')
+        print('after numpy call:', 'numba' in sys.modules)
+    ''')
+    assert 'after import: False' in out, out
+    assert 'after numpy call: False' in out, out
+
+
+def test_cache_dir_fallback(monkeypatch, tmp_path):
+    """A read-only package directory sends numba's cache to $XDG_CACHE_HOME/spatial_dynamics."""
+    monkeypatch.delenv('NUMBA_CACHE_DIR', raising=False)
+    monkeypatch.setenv('XDG_CACHE_HOME', str(tmp_path))
+    monkeypatch.setattr(os, 'access', lambda path, mode: False)
+    assert backends.cache_dir_fallback() == os.path.join(str(tmp_path), 'spatial_dynamics',
+                                                         'numba')
+    monkeypatch.setenv('NUMBA_CACHE_DIR', '/somewhere/else')
+    assert backends.cache_dir_fallback() is None       # the user's choice wins
+    monkeypatch.delenv('NUMBA_CACHE_DIR')
+    monkeypatch.setattr(os, 'access', lambda path, mode: True)
+    assert backends.cache_dir_fallback() is None       # numba caches next to the package
