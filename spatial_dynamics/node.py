@@ -201,6 +201,8 @@ class InverseDynamicsNode(Node):
             JointState, 'feedforward_efforts', OUTPUT_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._commands = Float64MultiArray()
+        self._efforts = JointState()
         self.create_subscription(
             JointState, 'desired_joint_states', self._on_joint_state, INPUT_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
@@ -361,10 +363,11 @@ class InverseDynamicsNode(Node):
         tau_out = tau[index]
         t1 = time.monotonic_ns()
 
-        commands = Float64MultiArray()
+        # The two output messages are reused: publish() serialises them before it returns.
+        commands = self._commands
         commands.data = array('d', tau_out.tobytes())
         self.commands_pub.publish(commands)
-        efforts = JointState()
+        efforts = self._efforts
         efforts.header = msg.header
         efforts.name = output.joints
         efforts.position = array('d', q[index].tobytes())
