@@ -1,0 +1,79 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The demo, the latency benchmark and their pieces."""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from node_harness import colcon_install, DEMO_URDF, TIMEOUT  # noqa: E402
+import spatial_dynamics as sd  # noqa: E402
+from spatial_dynamics import demo  # noqa: E402
+from spatial_dynamics.driving import node_command, Sinusoids  # noqa: E402
+
+
+def test_sinusoids_are_consistent_and_within_limits():
+    """qd = dq/dt and qdd = dqd/dt (central differences), q inside the URDF limits."""
+    model = sd.Model.from_urdf(DEMO_URDF)
+    trajectory = Sinusoids.for_model(model)
+    h = 1e-5
+    for t in np.linspace(0.0, 20.0, 41):
+        q, qd, qdd = trajectory(t)
+        q_minus, qd_minus, _ = trajectory(t - h)
+        q_plus, qd_plus, _ = trajectory(t + h)
+        np.testing.assert_allclose(qd, (q_plus - q_minus) / (2 * h), atol=1e-6)
+        np.testing.assert_allclose(qdd, (qd_plus - qd_minus) / (2 * h), atol=1e-5)
+        bounded = np.isfinite(model.lower) & np.isfinite(model.upper)
+        assert np.all(q[bounded] >= model.lower[bounded])
+        assert np.all(q[bounded] <= model.upper[bounded])
+
+
+def test_node_command_prefers_the_installed_executable(monkeypatch):
+    monkeypatch.delenv('AMENT_PREFIX_PATH', raising=False)
+    assert node_command('inverse_dynamics', 'spatial_dynamics.node') == \
+        [sys.executable, '-m', 'spatial_dynamics.node']
+    install = colcon_install()
+    monkeypatch.setenv('AMENT_PREFIX_PATH', install.prefix)
+    assert node_command('inverse_dynamics', 'spatial_dynamics.node') == [install.executable]
+
+
+def test_plot_skipped_with_a_note_without_matplotlib(monkeypatch, tmp_path):
+    recorder = demo.Recorder()
+    recorder.t, recorder.tau, recorder.names = [0.0, 0.1], [(1.0, 2.0), (1.5, 2.5)], ('a', 'b')
+    monkeypatch.setitem(sys.modules, 'matplotlib', None)
+    note = demo.plot(recorder, str(tmp_path / 'x.png'), 'robot')
+    assert 'matplotlib is not installed' in note and not (tmp_path / 'x.png').exists()
+
+
+@pytest.mark.ros
+def test_demo_runs_the_installed_node_and_writes_the_plot(tmp_path):
+    pytest.importorskip('matplotlib')
+    install = colcon_install()
+    png = tmp_path / 'torques.png'
+    proc = subprocess.run(
+        [sys.executable, '-m', 'spatial_dynamics.demo', '--duration', '12', '--plot', str(png),
+         '--node-log', str(tmp_path / 'node.log')],
+        env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 30, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert f'starting {install.executable}' in proc.stdout
+    assert 'node exit status 0' in proc.stdout and f'written to {png}' in proc.stdout
+    assert png.stat().st_size > 10_000
+    assert "robot 'demo_arm'" in (tmp_path / 'node.log').read_text()
+
+
+@pytest.mark.ros
+def test_latency_benchmark_runs(tmp_path):
+    install = colcon_install()
+    proc = subprocess.run(
+        [sys.executable, '-m', 'spatial_dynamics.latency', '--rate', '200', '--seconds', '1',
+         '--block', '0.5', '--warmup', '0.2', '--json', str(tmp_path / 'latency.json')],
+        env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 60, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    for target in ('relay', 'inverse_dynamics'):
+        assert f'\n{target} ' in proc.stdout
+    assert (tmp_path / 'latency.json').exists()
