@@ -30,7 +30,7 @@ PACKAGE = 'spatial_dynamics'
 DEMO_URDF = os.path.join(ROOT, 'config', 'demo_arm.urdf')
 PENDULUM_URDF = os.path.join(ROOT, 'config', 'pendulum.urdf')
 DOMAIN_ID = random.SystemRandom().randint(1, 200)
-TIMEOUT = 20.0  # generous: only bounds how long a broken run hangs
+TIMEOUT = 60.0  # generous: bounds a broken run; a fresh install JIT-compiles at first start
 PRIME = -1      # stamp key of priming messages
 
 

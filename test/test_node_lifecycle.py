@@ -110,14 +110,21 @@ def test_clean_exit_on_signal_while_busy(install, driver, tmp_path, sig):
 
 
 @pytest.mark.ros
-def test_bad_start_up_description_exits_with_reason(install, tmp_path):
+def test_bad_start_up_configuration_exits_1_with_reason(install, tmp_path):
     bad = tmp_path / 'bad.urdf'
     bad.write_text('<robot name="r"><link name="a"/><joint name="j" type="revolute">'
                    '<parent link="a"/><child link="missing"/></joint></robot>')
-    for arg, expect in [(f'robot_description_file:={tmp_path}/none.urdf', 'no such file'),
-                        (f'robot_description_file:={bad}', 'bad.urdf')]:
-        proc = subprocess.run([install.executable, '--ros-args', '-p', arg],
-                              env=install.env(), capture_output=True, text=True,
+    good = f'robot_description_file:={DEMO_URDF}'
+    for args, expect in [([f'robot_description_file:={tmp_path}/none.urdf'], 'no such file'),
+                         ([f'robot_description_file:={bad}'], 'bad.urdf'),
+                         ([good, 'gravity:=[0,0,-10]'], 'gravity'),
+                         ([good, 'input_timeout:=0.0'], 'input_timeout'),
+                         ([good, 'acceleration_source:=torque'], 'acceleration_source'),
+                         ([good, 'joints:=[joint1,gripper]'], "['gripper']")]:
+        command = [install.executable, '--ros-args']
+        for arg in args:
+            command += ['-p', arg]
+        proc = subprocess.run(command, env=install.env(), capture_output=True, text=True,
                               timeout=TIMEOUT)
         assert proc.returncode == 1, proc
         assert 'cannot start' in proc.stderr + proc.stdout and expect in proc.stderr + proc.stdout
