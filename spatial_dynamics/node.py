@@ -185,7 +185,7 @@ class InverseDynamicsNode(Node):
         self._declare_parameters()
         self.output: Optional[Output] = None
         self.gravity = DEFAULT_GRAVITY
-        self.qdd_from_effort = True
+        self.acceleration_source = 'effort'
         self.input_timeout = DEFAULT_INPUT_TIMEOUT
         self.rejected: Counter = Counter({reason: 0 for reason in REASONS + NODE_REASONS})
         self.descriptions_rejected = 0
@@ -193,7 +193,7 @@ class InverseDynamicsNode(Node):
         self.answered = 0
         self.last_input_ns: Optional[int] = None
         self.window = Window()
-        self._configure({name: self._value(name) for name in self._PARAMETERS}, startup=True)
+        self._configure({name: self._value(name) for name in self._PARAMETERS})
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
         self.commands_pub = self.create_publisher(
@@ -217,8 +217,6 @@ class InverseDynamicsNode(Node):
         self.create_timer(1.0, self._publish_diagnostics)
         if self.output is None:
             self._warn_waiting()
-        else:
-            self._log_model()
 
     # -- parameters ------------------------------------------------------------------------
 
@@ -268,11 +266,10 @@ class InverseDynamicsNode(Node):
                 return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
 
-    def _configure(self, changes: dict, startup: bool = False) -> None:
+    def _configure(self, changes: dict) -> None:
         """Validate ``changes`` against the current state, then apply all of them at once."""
         output = self.output
-        model = None if output is None else output.model
-        source = None if output is None else output.source
+        model = source = None
         if changes.get('robot_description'):
             model = parse_description(changes['robot_description'],
                                       'parameter robot_description')
@@ -281,22 +278,22 @@ class InverseDynamicsNode(Node):
             path = changes['robot_description_file']
             model = parse_description(read_description(path), f'robot_description_file {path!r}')
             source = f'file {path}'
-        joints = changes['joints'] if 'joints' in changes else self._value('joints')
-        if model is not None and (startup or model is not getattr(output, 'model', None)
-                                  or 'joints' in changes):
+        elif output is not None and 'joints' in changes:
+            model, source = output.model, output.source
+        if model is not None:
+            joints = changes['joints'] if 'joints' in changes else self._value('joints')
             output = Output.build(model, source, joints)
         gravity = check_gravity(changes.get('gravity', self.gravity))
-        qdd_from_effort = check_acceleration_source(
-            changes.get('acceleration_source',
-                        'effort' if self.qdd_from_effort else 'none')) == 'effort'
+        acceleration_source = check_acceleration_source(
+            changes.get('acceleration_source', self.acceleration_source))
         input_timeout = check_input_timeout(changes.get('input_timeout', self.input_timeout))
         # Everything parsed: swap in.
-        changed_model = output is not self.output and not startup
+        changed = output is not self.output
         self.output = output
         self.gravity = gravity
-        self.qdd_from_effort = qdd_from_effort
+        self.acceleration_source = acceleration_source
         self.input_timeout = input_timeout
-        if changed_model:
+        if changed:
             self._log_model()
 
     def _on_description_topic(self, msg: String) -> None:
@@ -333,7 +330,7 @@ class InverseDynamicsNode(Node):
     def _on_joint_state(self, msg: JointState) -> None:
         self._answer(msg, 'desired_joint_states', joint_state_arrays,
                      (msg.name, msg.position, msg.velocity,
-                      msg.effort if self.qdd_from_effort else None))
+                      msg.effort if self.acceleration_source == 'effort' else None))
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
         self._answer(msg, 'desired_trajectory', trajectory_arrays,
@@ -469,7 +466,7 @@ class InverseDynamicsNode(Node):
         ]
         values += [(f'rejected {reason}', str(count)) for reason, count in self.rejected.items()]
         values += [('gravity [m/s^2]', str(list(self.gravity))),
-                   ('acceleration source', 'effort' if self.qdd_from_effort else 'none')]
+                   ('acceleration source', self.acceleration_source)]
         status.values = [KeyValue(key=k, value=v) for k, v in values]
 
         diagnostics = DiagnosticArray(status=[model, status])
