@@ -132,6 +132,13 @@ def prime(executor, target: Target, msg, trajectory: Sinusoids, timeout: float) 
         spin_until(executor, lambda: target.answers > 0, 0.05)
 
 
+def input_depth(namespace: str, depth: Optional[int]) -> Dict[str, str]:
+    """QoS override parameter of the ``desired_joint_states`` subscription depth, if given."""
+    if depth is None:
+        return {}
+    return {f'qos_overrides.{namespace}/desired_joint_states.subscription.depth': str(depth)}
+
+
 def format_table(rows: List[Dict[str, float]]) -> str:
     """Format the results as a fixed-width text table."""
     lines = [f'{"target":<18}{"sent":>7}{"answered":>11}{"p50 ms":>9}{"p99 ms":>9}'
@@ -154,6 +161,9 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         help='unmeasured seconds at full rate per target first (default 1)')
     parser.add_argument('--urdf', default=None, help='robot (default: the demo arm)')
     parser.add_argument('--json', default=None, help='also write the results here')
+    parser.add_argument('--input-depth', type=int, default=None,
+                        help='override the input subscription depth of node and relay (QoS '
+                             'override parameter; default: their keep last 1)')
     parser.add_argument('--log-dir', default=None, help='node and relay logs (default: none)')
     return parser.parse_args(argv)
 
@@ -175,9 +185,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         os.makedirs(logs, exist_ok=True)
     procs = {
         'relay': start(node_command('relay', 'spatial_dynamics.relay'), f'{namespace}/relay',
-                       {}, logs and os.path.join(logs, 'relay.log')),
+                       input_depth(f'{namespace}/relay', args.input_depth),
+                       logs and os.path.join(logs, 'relay.log')),
         'inverse_dynamics': start(node_command('inverse_dynamics', 'spatial_dynamics.node'),
-                                  f'{namespace}/node', {'robot_description_file': urdf},
+                                  f'{namespace}/node',
+                                  {'robot_description_file': urdf,
+                                   **input_depth(f'{namespace}/node', args.input_depth)},
                                   logs and os.path.join(logs, 'inverse_dynamics.log')),
     }
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
@@ -215,8 +228,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         spin_until(executor, lambda: all(len(t.latency_ns) == len(t.sent) for t in targets),
                    1.0)
         rows = [t.summary() for t in targets]
+        depth = 'keep last 1' if args.input_depth is None else f'depth {args.input_depth}'
         print(f'latency: {model.name} ({len(model.joint_names)} joints), {args.rate:g} Hz, '
-              f'{args.seconds:g} s per target in {args.block:g} s blocks, same run')
+              f'{args.seconds:g} s per target in {args.block:g} s blocks, same run, input '
+              f'{depth}')
         print(format_table(rows))
         diff = rows[1]['p50_ms'] - rows[0]['p50_ms']
         print(f'inverse_dynamics - relay: p50 {diff:+.3f} ms, '

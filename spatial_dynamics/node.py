@@ -61,10 +61,23 @@ DEFAULT_INPUT_TIMEOUT = 0.5
 # Rejection reasons the node adds to those of the input mapping.
 NODE_REASONS = ('no_model', 'compute_error', 'non_finite_output')
 
-INPUT_QOS = QoSProfile(reliability=QoSReliabilityPolicy.BEST_EFFORT,
-                       history=HistoryPolicy.KEEP_LAST, depth=1)
-OUTPUT_QOS = QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
-                        history=HistoryPolicy.KEEP_LAST, depth=10)
+
+def input_qos() -> QoSProfile:
+    """Input QoS: best effort, keep last 1 (connects to reliable and best-effort publishers).
+
+    A new object per call: QoS overrides (``qos_overrides.<topic>.subscription.*``) are
+    written into the profile passed to ``create_subscription``, so it must not be shared.
+    """
+    return QoSProfile(reliability=QoSReliabilityPolicy.BEST_EFFORT,
+                      history=HistoryPolicy.KEEP_LAST, depth=1)
+
+
+def output_qos() -> QoSProfile:
+    """Output QoS: reliable (what ros2_control's controllers subscribe with), keep last 10."""
+    return QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
+                      history=HistoryPolicy.KEEP_LAST, depth=10)
+
+
 DESCRIPTION_QOS = QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL,
                              history=HistoryPolicy.KEEP_LAST, depth=1)
@@ -197,19 +210,19 @@ class InverseDynamicsNode(Node):
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
         self.commands_pub = self.create_publisher(
-            Float64MultiArray, 'effort_commands', OUTPUT_QOS,
+            Float64MultiArray, 'effort_commands', output_qos(),
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
         self.efforts_pub = self.create_publisher(
-            JointState, 'feedforward_efforts', OUTPUT_QOS,
+            JointState, 'feedforward_efforts', output_qos(),
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._commands = Float64MultiArray()
         self._efforts = JointState()
         self.create_subscription(
-            JointState, 'desired_joint_states', self._on_joint_state, INPUT_QOS,
+            JointState, 'desired_joint_states', self._on_joint_state, input_qos(),
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
         self.create_subscription(
-            JointTrajectory, 'desired_trajectory', self._on_trajectory, INPUT_QOS,
+            JointTrajectory, 'desired_trajectory', self._on_trajectory, input_qos(),
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
         if self.output is None:
             self.create_subscription(String, 'robot_description', self._on_description_topic,

@@ -18,7 +18,7 @@ from rclpy.node import Node
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import JointState
 
-from spatial_dynamics.node import INPUT_QOS, OUTPUT_QOS
+from spatial_dynamics.node import input_qos, output_qos
 
 
 class Relay(Node):
@@ -27,10 +27,10 @@ class Relay(Node):
     def __init__(self) -> None:
         super().__init__('relay')
         self.publisher = self.create_publisher(
-            JointState, 'feedforward_efforts', OUTPUT_QOS,
+            JointState, 'feedforward_efforts', output_qos(),
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
         self.create_subscription(
-            JointState, 'desired_joint_states', self.publisher.publish, INPUT_QOS,
+            JointState, 'desired_joint_states', self.publisher.publish, input_qos(),
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
 
 

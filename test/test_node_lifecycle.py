@@ -18,8 +18,8 @@ import yaml
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import (  # noqa: E402
-    colcon_install, DEMO_URDF, Driver, Io, joint_state, NodeProcess, PACKAGE, random_states,
-    ROOT, TIMEOUT, values)
+    colcon_install, DEMO_URDF, DOMAIN_ID, Driver, Io, joint_state, NodeProcess, PACKAGE,
+    random_states, ROOT, TIMEOUT, values)
 import spatial_dynamics as sd  # noqa: E402
 
 YAML = os.path.join(ROOT, 'config', 'inverse_dynamics.yaml')
@@ -218,3 +218,32 @@ def test_parameter_file_and_xacro(install, driver, tmp_path):
     finally:
         io.close()
         assert node.stop() == 0
+
+
+@pytest.mark.ros
+def test_qos_override_changes_its_own_topic_only():
+    """qos_overrides.<topic>... reach that subscription, and only that one."""
+    import rclpy
+    from rclpy.qos import ReliabilityPolicy
+    from spatial_dynamics.node import InverseDynamicsNode
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=DOMAIN_ID, args=[
+        '--ros-args', '-r', '__ns:=/qos_test', '-p', f'robot_description_file:={DEMO_URDF}',
+        '-p', 'qos_overrides./qos_test/desired_joint_states.subscription.depth:=5',
+        '-p', 'qos_overrides./qos_test/effort_commands.publisher.depth:=3'])
+    node = InverseDynamicsNode(context=context)
+    try:
+        subscriptions = {s.topic_name: s.qos_profile for s in node.subscriptions}
+        publishers = {p.topic_name: p.qos_profile for p in node.publishers}
+        assert subscriptions['/qos_test/desired_joint_states'].depth == 5
+        assert subscriptions['/qos_test/desired_trajectory'].depth == 1
+        for qos in (subscriptions['/qos_test/desired_joint_states'],
+                    subscriptions['/qos_test/desired_trajectory']):
+            assert qos.reliability == ReliabilityPolicy.BEST_EFFORT
+        assert publishers['/qos_test/effort_commands'].depth == 3
+        assert publishers['/qos_test/feedforward_efforts'].depth == 10
+        for topic in ('/qos_test/effort_commands', '/qos_test/feedforward_efforts'):
+            assert publishers[topic].reliability == ReliabilityPolicy.RELIABLE
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
