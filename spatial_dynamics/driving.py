@@ -110,6 +110,13 @@ def rss_bytes(pid: int) -> int:
     raise RuntimeError(f'no VmRSS for pid {pid}')
 
 
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of process ``pid`` so far, from ``/proc/<pid>/stat`` (Linux)."""
+    with open(f'/proc/{pid}/stat') as f:
+        fields = f.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
 class Sinusoids:
     """A smooth, consistent joint trajectory: q, qd = dq/dt, qdd = d²q/dt² of sinusoids.
 

@@ -9,9 +9,10 @@ its own namespace, and publishes the same smooth trajectory (sensor_msgs/JointSt
 order) to each at ``--rate`` Hz, alternating between them in blocks of ``--block`` seconds until
 each got ``--seconds``. Latency is input publish -> ``feedforward_efforts`` received, in this
 process, matched by the header stamp (wall time at publish, unique per message). Reported per
-target: messages sent, fraction answered, p50 / p99 / max. The relay does everything the node
-does except the inverse dynamics and the second publication (``effort_commands``, published
-first), so node p50 - relay p50 is the node's own cost.
+target: messages sent, fraction answered, p50 / p99 / max, and the CPU time (user + system) its
+process used per message while measured. The relay does everything the node does except the
+inverse dynamics and the second publication (``effort_commands``, published first), so node
+p50 - relay p50 is the node's own cost.
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ from typing import Callable, Dict, List, Optional, Sequence, Set
 
 import numpy as np
 
-from spatial_dynamics.driving import demo_urdf, node_command, Sinusoids, start, stop
+from spatial_dynamics.driving import (cpu_seconds, demo_urdf, node_command, Sinusoids, start,
+                                      stop)
 
 
 class Target:
@@ -45,6 +47,7 @@ class Target:
             JointState, f'{namespace}/feedforward_efforts', self._on_answer,
             QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
         self.answers = 0
+        self.cpu_s = 0.0   # CPU time of the target's process while it was measured
 
     def _on_answer(self, msg) -> None:
         now = time.time_ns()
@@ -70,6 +73,7 @@ class Target:
         for key, q in (('p50_ms', 50), ('p99_ms', 99)):
             out[key] = float(np.percentile(ms, q)) if len(ms) else float('nan')
         out['max_ms'] = float(ms.max()) if len(ms) else float('nan')
+        out['cpu_us_per_msg'] = 1e6 * self.cpu_s / sent if sent else float('nan')
         out['mean_ms'] = float(ms.mean()) if len(ms) else float('nan')
         return out
 
@@ -142,10 +146,11 @@ def input_depth(namespace: str, depth: Optional[int]) -> Dict[str, str]:
 def format_table(rows: List[Dict[str, float]]) -> str:
     """Format the results as a fixed-width text table."""
     lines = [f'{"target":<18}{"sent":>7}{"answered":>11}{"p50 ms":>9}{"p99 ms":>9}'
-             f'{"max ms":>9}']
+             f'{"max ms":>9}{"CPU us/msg":>12}']
     for r in rows:
         lines.append(f'{r["target"]:<18}{r["sent"]:>7}{100 * r["answered_fraction"]:>10.2f}%'
-                     f'{r["p50_ms"]:>9.3f}{r["p99_ms"]:>9.3f}{r["max_ms"]:>9.3f}')
+                     f'{r["p50_ms"]:>9.3f}{r["p99_ms"]:>9.3f}{r["max_ms"]:>9.3f}'
+                     f'{r["cpu_us_per_msg"]:>12.1f}')
     return '\n'.join(lines)
 
 
@@ -220,11 +225,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 block = min(args.block, args.seconds - measured[target.name])
                 if block <= 0:
                     continue
+                pid = procs[target.name].pid
+                cpu = cpu_seconds(pid)
                 target.measuring = True
                 pace(executor, args.rate, block, send(target))
                 target.measuring = False
-                measured[target.name] += block
                 executor.spin_once(timeout_sec=0.05)  # let the last answers of a block land
+                target.cpu_s += cpu_seconds(pid) - cpu
+                measured[target.name] += block
         spin_until(executor, lambda: all(len(t.latency_ns) == len(t.sent) for t in targets),
                    1.0)
         rows = [t.summary() for t in targets]
