@@ -12,12 +12,12 @@ on-disk cache (``cache=True``): the signatures are explicit, so nothing is compi
 import and a call with other argument types is refused instead of compiling in the hot path.
 Use it through ``rnea(..., backend=...)``; :mod:`backends` imports it on first use.
 
-Per-body tables (row ``i`` = body ``i``, row 0 = the fixed base, unused), built once per model
-by :func:`kernel_arrays` from ``model._kernel``:
-
-* ``J`` (NB+1, 3) int64: parent ``λ(i)``, joint code (``RX RY RZ RA PR``), index into ``q``;
-* ``K`` (NB+1, 27) float64: axis (3), ``E_tree`` row-major (9), ``r_tree`` (3), mass, ``h = m c``
-  (3), ``Ibar`` (xx xy xz yy yz zz), mimic multiplier and offset (columns below).
+The model enters as one table ``K`` (NB+1, 30) float64, row ``i`` = body ``i`` (row 0, the
+fixed base, is unused), built once per model by :func:`kernel_arrays` from ``model._kernel``:
+parent ``λ(i)``, joint code (``RX RY RZ RA PR``) and index into ``q`` (small integers, exact
+in float64), axis (3), ``E_tree`` row-major (9), ``r_tree`` (3), mass, ``h = m c`` (3),
+``Ibar`` (xx xy xz yy yz zz), mimic multiplier and offset (columns below). One array is one
+argument less to unbox per call.
 """
 
 from __future__ import annotations
@@ -27,46 +27,53 @@ import threading
 
 import numba
 from numba import prange, types
+from numba.extending import intrinsic
 import numpy as np
 
 from .model import Model, PR, RX, RY, RZ
 
-# Columns of J and K.
-PARENT, CODE, QIDX = 0, 1, 2
-AX, E, R, MASS, H, IBAR, MUL, OFF, WIDTH = 0, 3, 12, 15, 16, 19, 25, 26, 27
+# Columns of K.
+PARENT, CODE, QIDX, AX, E, R, MASS, H, IBAR, MUL, OFF, WIDTH = \
+    0, 1, 2, 3, 6, 15, 18, 19, 22, 28, 29, 30
 # Columns of the per-body scratch: Xup = (E, r) (12), v (6), a (6), f (6).
 XUP, VEL, ACC, FRC, WORK = 0, 12, 18, 24, 30
 
 #: Smallest batch handed to the parallel entry (below it the thread launch costs more).
 PARALLEL_MIN = 64
+#: Largest model (NB + 1 rows) whose single-state scratch goes on the stack (30 KiB).
+STACK_ROWS = 128
 
-_f8_1 = types.Array(types.float64, 1, 'C', readonly=True)
-_f8_2 = types.Array(types.float64, 2, 'C', readonly=True)
-_f8_3 = types.Array(types.float64, 3, 'C', readonly=True)
-_i8_2 = types.Array(types.int64, 2, 'C', readonly=True)
-_out_1 = types.Array(types.float64, 1, 'C')
-_out_2 = types.Array(types.float64, 2, 'C')
-_SINGLE = types.void(_i8_2, _f8_2, _f8_1, _f8_1, _f8_1, types.float64, types.float64,
-                     types.float64, _f8_3, _out_1)
-_BATCH = types.void(_i8_2, _f8_2, _f8_2, _f8_2, _f8_2, types.float64, types.float64,
-                    types.float64, _f8_3, _out_2)
-_PARALLEL = types.void(_i8_2, _f8_2, _f8_2, _f8_2, _f8_2, types.float64, types.float64,
-                       types.float64, _f8_3, _out_2, types.int64)
-_JIT = dict(cache=True, fastmath=False, nogil=True, error_model='numpy')
+# Signatures: inputs are read-only C arrays (writable arrays convert to them), then gravity.
+_f8, _in1, _in2, _in3 = (types.float64,) + tuple(
+    types.Array(types.float64, nd, 'C', readonly=True) for nd in (1, 2, 3))
+_out1, _out2 = (types.Array(types.float64, nd, 'C') for nd in (1, 2))
+_SINGLE = types.boolean(_in2, _in1, _in1, _in1, _f8, _f8, _f8, _out1)
+_BATCH = types.void(_in2, _in2, _in2, _in2, _f8, _f8, _f8, _in3, _out2)
+_PARALLEL = types.void(_in2, _in2, _in2, _in2, _f8, _f8, _f8, _in3, _out2, types.int64)
+_JIT = dict(cache=True, fastmath=False, error_model='numpy')
+#: f_ext of the single-state entry: none (a compile-time constant).
+_NO_FEXT = np.zeros((0, 1, 6))
+
+
+@intrinsic
+def _stack_doubles(typingctx, count):
+    """Pointer to ``count`` float64 on the caller's stack frame (freed when it returns)."""
+    def codegen(context, builder, signature, args):
+        return builder.alloca(context.get_value_type(types.float64), size=args[0])
+    return types.CPointer(types.float64)(types.intp), codegen
 
 
 @functools.lru_cache(maxsize=64)
-def kernel_arrays(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Return ``(J, K, F0)``: the model's per-body tables and an empty f_ext (0, NB+1, 6).
+def kernel_arrays(model: Model) -> tuple[np.ndarray, int]:
+    """Return ``(K, n)``: the model's per-body table (read-only) and ``n = model.nq``.
 
-    Built once per model (models hash by identity) from ``model._kernel``; read-only.
+    Built once per model (models hash by identity) from ``model._kernel``.
     """
     rows = model._kernel
-    NB = len(rows)
-    J = np.full((NB + 1, 3), -1, dtype=np.int64)
-    K = np.zeros((NB + 1, WIDTH))
+    K = np.zeros((len(rows) + 1, WIDTH))
+    K[0, PARENT:QIDX + 1] = -1
     for i, (p, code, axis, Et, r, mass, h, Ib, k, mul, off) in enumerate(rows, start=1):
-        J[i] = p, code, k
+        K[i, PARENT], K[i, CODE], K[i, QIDX] = p, code, k
         K[i, AX:AX + 3] = axis
         K[i, E:E + 9] = Et
         K[i, R:R + 3] = r
@@ -74,20 +81,18 @@ def kernel_arrays(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         K[i, H:H + 3] = h
         K[i, IBAR:IBAR + 6] = Ib
         K[i, MUL], K[i, OFF] = mul, off
-    F0 = np.zeros((0, NB + 1, 6))
-    for a in (J, K, F0):
-        a.setflags(write=False)
-    return J, K, F0
+    K.setflags(write=False)
+    return K, model.nq
 
 
-@numba.njit(**_JIT)
-def _xup(J, K, q, work):
+@numba.njit(inline='always', **_JIT)
+def _xup(K, q, work):
     """Body transforms ``Xup_i = XJ(q_i) Xtree_i`` as ``(E, r)`` into ``work[i, XUP:]``.
 
     RBDA table 4.1 for ``XJ`` and eq. 2.27 for the product, as ``rnea.xup_components``.
     """
-    for i in range(1, J.shape[0]):
-        code, k = J[i, CODE], J[i, QIDX]
+    for i in range(1, K.shape[0]):
+        code, k = int(K[i, CODE]), int(K[i, QIDX])
         ax, ay, az = K[i, AX], K[i, AX + 1], K[i, AX + 2]
         mul, off = K[i, MUL], K[i, OFF]
         qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
@@ -137,16 +142,16 @@ def _xup(J, K, q, work):
         work[i, XUP + 9], work[i, XUP + 10], work[i, XUP + 11] = rx, ry, rz
 
 
-@numba.njit(**_JIT)
-def _rnea_one(J, K, q, qd, qdd, gx, gy, gz, fext, row, tau, work):
+@numba.njit(inline='always', **_JIT)
+def _rnea_one(K, q, qd, qdd, gx, gy, gz, fext, row, tau, work):
     """RNEA on one state into ``tau`` (n,); ``fext[row]`` is f_ext (none if ``row < 0``).
 
     ``work`` (NB+1, 30) holds, per body, ``Xup = (E, r)``, ``v``, ``a`` and ``f``. As in
     ``rnea.rnea_components``, the velocity terms are skipped when q̇ = 0.
     """
-    NB = J.shape[0] - 1
+    NB = K.shape[0] - 1
     zero = 0.0 * gx
-    _xup(J, K, q, work)
+    _xup(K, q, work)
     moving = False
     for k in range(qd.shape[0]):
         if qd[k] != 0.0:
@@ -158,7 +163,7 @@ def _rnea_one(J, K, q, qd, qdd, gx, gy, gz, fext, row, tau, work):
     tau[:] = zero
 
     for i in range(1, NB + 1):
-        p, code, k = J[i, PARENT], J[i, CODE], J[i, QIDX]
+        p, code, k = int(K[i, PARENT]), int(K[i, CODE]), int(K[i, QIDX])
         ax, ay, az = K[i, AX], K[i, AX + 1], K[i, AX + 2]
         mul = K[i, MUL]
         e00, e01, e02 = work[i, XUP], work[i, XUP + 1], work[i, XUP + 2]
@@ -253,7 +258,7 @@ def _rnea_one(J, K, q, qd, qdd, gx, gy, gz, fext, row, tau, work):
 
     # Backward pass: τ_i = S_iᵀ f_i, f_λ(i) += Xup_iᵀ f_i
     for i in range(NB, 0, -1):
-        p, code, k = J[i, PARENT], J[i, CODE], J[i, QIDX]
+        p, code, k = int(K[i, PARENT]), int(K[i, CODE]), int(K[i, QIDX])
         ax, ay, az = K[i, AX], K[i, AX + 1], K[i, AX + 2]
         mul = K[i, MUL]
         n0, n1, n2 = work[i, FRC], work[i, FRC + 1], work[i, FRC + 2]
@@ -281,61 +286,55 @@ def _rnea_one(J, K, q, qd, qdd, gx, gy, gz, fext, row, tau, work):
 
 
 @numba.njit(_SINGLE, **_JIT)
-def _rnea_single(J, K, q, qd, qdd, gx, gy, gz, fext, tau):
-    """One state: q, qd, qdd (n,), fext (1 or 0, NB+1, 6) → tau (n,)."""
-    work = np.empty((J.shape[0], WORK))
-    _rnea_one(J, K, q, qd, qdd, gx, gy, gz, fext, fext.shape[0] - 1, tau, work)
+def rnea_single(K, q, qd, qdd, gx, gy, gz, tau):
+    """One state without f_ext: q, qd, qdd (n,) → tau (n,); False (nothing done) if not (n,).
+
+    ``rnea.rnea`` calls it directly on its arguments (the fast path from Python: no
+    validation copies, one dispatch); an argument of another type (not a C-contiguous
+    float64 array, gravity not three numbers) raises ``TypeError`` as no overload matches,
+    and the caller falls back to the general path. Holds the GIL: a call is too short to
+    gain from releasing it. The scratch is on the stack (no allocation) unless the model is
+    large.
+    """
+    n = tau.shape[0]
+    if q.shape[0] != n or qd.shape[0] != n or qdd.shape[0] != n:
+        return False
+    rows = K.shape[0]
+    if rows <= STACK_ROWS:
+        work = numba.carray(_stack_doubles(rows * WORK), (rows, WORK))
+    else:
+        work = np.empty((rows, WORK))
+    _rnea_one(K, q, qd, qdd, gx, gy, gz, _NO_FEXT, -1, tau, work)
+    return True
 
 
-@numba.njit(_BATCH, **_JIT)
-def _rnea_batch(J, K, q, qd, qdd, gx, gy, gz, fext, tau):
-    """N states in one thread: q, qd, qdd (N, n), fext (N, 1 or 0 rows, NB+1, 6) → tau (N, n)."""
-    work = np.empty((J.shape[0], WORK))
+@numba.njit(_BATCH, nogil=True, **_JIT)
+def _rnea_batch(K, q, qd, qdd, gx, gy, gz, fext, tau):
+    """N states, one thread: q, qd, qdd (N, n), fext (N, 1 or 0 rows, NB+1, 6) → tau (N, n)."""
+    work = np.empty((K.shape[0], WORK))
     M = fext.shape[0]
     for n in range(q.shape[0]):
         row = n if M > 1 else M - 1
-        _rnea_one(J, K, q[n], qd[n], qdd[n], gx, gy, gz, fext, row, tau[n], work)
+        _rnea_one(K, q[n], qd[n], qdd[n], gx, gy, gz, fext, row, tau[n], work)
 
 
-@numba.njit(_PARALLEL, parallel=True, **_JIT)
-def _rnea_batch_parallel(J, K, q, qd, qdd, gx, gy, gz, fext, tau, chunks):
-    """As :func:`_rnea_batch`, in ``chunks`` contiguous slices spread over numba's threads."""
+@numba.njit(_PARALLEL, nogil=True, parallel=True, **_JIT)
+def _rnea_batch_parallel(K, q, qd, qdd, gx, gy, gz, fext, tau, chunks):
+    """As :func:`_rnea_batch`, on ``chunks`` contiguous slices of the batch in numba's threads.
+
+    Each slice is one call of the compiled :func:`_rnea_batch` (not re-lowered here).
+    """
     N = q.shape[0]
-    M = fext.shape[0]
+    per_state = fext.shape[0] > 1
     for c in prange(chunks):
-        work = np.empty((J.shape[0], WORK))
-        for n in range(c * N // chunks, (c + 1) * N // chunks):
-            row = n if M > 1 else M - 1
-            _rnea_one(J, K, q[n], qd[n], qdd[n], gx, gy, gz, fext, row, tau[n], work)
+        lo, hi = c * N // chunks, (c + 1) * N // chunks
+        _rnea_batch(K, q[lo:hi], qd[lo:hi], qdd[lo:hi], gx, gy, gz,
+                    fext[lo:hi] if per_state else fext, tau[lo:hi])
 
 
 # The workqueue threading layer (used when neither TBB nor OpenMP is available) must not be
 # entered by two threads at once; a lock is cheap next to a parallel batch.
 _parallel_lock = threading.Lock()
-
-
-def rnea_single(model: Model, q, qd, qdd, gravity) -> np.ndarray | None:
-    """τ for one state without f_ext, or ``None`` when the inputs need the general path.
-
-    Takes the shortcut only for C-contiguous float64 ndarrays of shape (n,) and a gravity
-    that is a tuple or list of three floats; validation is left to the general path.
-    """
-    J, K, F0 = kernel_arrays(model)
-    n = len(model.joint_names)
-    if (type(q) is not np.ndarray or type(qd) is not np.ndarray or type(qdd) is not np.ndarray
-            or q.shape != (n,) or qd.shape != (n,) or qdd.shape != (n,)):
-        return None
-    if type(gravity) is not tuple and type(gravity) is not list or len(gravity) != 3:
-        return None
-    gx, gy, gz = gravity
-    if type(gx) is not float or type(gy) is not float or type(gz) is not float:
-        return None
-    tau = np.empty(n)
-    try:
-        _rnea_single(J, K, q, qd, qdd, gx, gy, gz, F0, tau)
-    except TypeError:   # not float64, or not contiguous: no overload, nothing compiled
-        return None
-    return tau
 
 
 def rnea(model: Model, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: np.ndarray,
@@ -346,40 +345,33 @@ def rnea(model: Model, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: 
     force ``[n; f]`` in body coordinates, shape (6,) or broadcastable to (..., 6), as made by
     ``rnea._f_ext_in_bodies``. Returns τ of shape (..., n), float64.
     """
-    J, K, F0 = kernel_arrays(model)
-    NB = J.shape[0] - 1
-    batch, n = q.shape[:-1], q.shape[-1]
-    gx, gy, gz = (float(x) for x in gravity)
-    fext = F0
-    if f_body:
-        # One f_ext for all states unless some wrench varies along the batch.
-        shared = all(np.ndim(f) <= 1 for f in f_body.values())
-        fext = np.zeros(((1,) if shared else batch) + (NB + 1, 6))
-        for b, f in f_body.items():
-            fext[..., b, :] = f
-        fext = fext.reshape(-1, NB + 1, 6)
-    if not batch:
-        args = [np.ascontiguousarray(x, dtype=np.float64) for x in (q, qd, qdd)]
-        tau = np.empty(n)
-        _rnea_single(J, K, *args, gx, gy, gz, fext, tau)
-        return tau
+    K, n = kernel_arrays(model)
+    NB = K.shape[0] - 1
+    batch = q.shape[:-1]
     N = int(np.prod(batch, dtype=np.intp))
+    gx, gy, gz = (float(x) for x in gravity)
+    # f_ext per body as (M, NB+1, 6): M = 0 (none), 1 (one for all states) or N.
+    shared = all(np.ndim(f) <= 1 for f in f_body.values())
+    fext = np.zeros(((1 if f_body else 0,) if shared else batch) + (NB + 1, 6))
+    for b, f in f_body.items():
+        fext[..., b, :] = f
+    fext = fext.reshape(-1, NB + 1, 6)
     args = [np.ascontiguousarray(x.reshape(N, n), dtype=np.float64) for x in (q, qd, qdd)]
     tau = np.empty((N, n))
     threads = numba.get_num_threads()
     if N >= PARALLEL_MIN and threads > 1:
         with _parallel_lock:
-            _rnea_batch_parallel(J, K, *args, gx, gy, gz, fext, tau, min(N, 4 * threads))
+            _rnea_batch_parallel(K, *args, gx, gy, gz, fext, tau, min(N, 4 * threads))
     else:
-        _rnea_batch(J, K, *args, gx, gy, gz, fext, tau)
+        _rnea_batch(K, *args, gx, gy, gz, fext, tau)
     return tau.reshape(batch + (n,))
 
 
 def warmup(model: Model) -> None:
     """Run every entry once on a zero state of ``model`` (loads code, starts the threads)."""
-    n = len(model.joint_names)
+    n = model.nq
     z1, z2 = np.zeros(n), np.zeros((PARALLEL_MIN, n))
     g = np.array([0.0, 0.0, -9.81])
+    rnea_single(kernel_arrays(model)[0], z1, z1, z1, *g, np.empty(n))
     rnea(model, z1, z1, z1, g, {})
-    rnea(model, z2[:1], z2[:1], z2[:1], g, {})
     rnea(model, z2, z2, z2, g, {})

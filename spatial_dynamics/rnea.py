@@ -63,9 +63,16 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     """
     kernels = backends.compiled(backend)
     if kernels is not None and not f_ext:
-        tau = kernels.rnea_single(model, q, qd, qdd, gravity)
-        if tau is not None:
-            return tau
+        # One C-contiguous float64 state of shape (n,) goes straight into the kernel; other
+        # types match no overload (TypeError), other shapes return False: general path.
+        K, n = kernels.kernel_arrays(model)
+        tau = np.empty(n)
+        try:
+            gx, gy, gz = gravity
+            if kernels.rnea_single(K, q, qd, qdd, gx, gy, gz, tau):
+                return tau
+        except (TypeError, ValueError):
+            pass
     single = _single_state(model, q, qd, qdd) if kernels is None else None
     if single is not None and not f_ext:
         # One float64 state: plain Python floats, no per-term numpy call overhead.

@@ -243,12 +243,11 @@ def test_other_float_dtypes_run_on_numpy(kernels, dtype, rng):
 
 def test_kernel_arrays_are_cached_read_only_tables(kernels):
     model, _ = robot('panda')
-    J, K, F0 = kernels.kernel_arrays(model)
-    assert kernels.kernel_arrays(model)[1] is K
-    assert J.shape == (model.NB + 1, 3) and K.shape == (model.NB + 1, kernels.WIDTH)
-    assert F0.shape == (0, model.NB + 1, 6)
-    assert not (J.flags.writeable or K.flags.writeable or F0.flags.writeable)
-    np.testing.assert_array_equal(J[1:, kernels.PARENT], model.parent[1:])
+    K, n = kernels.kernel_arrays(model)
+    assert kernels.kernel_arrays(model)[0] is K and n == model.nq
+    assert K.shape == (model.NB + 1, kernels.WIDTH) and not K.flags.writeable
+    np.testing.assert_array_equal(K[1:, kernels.PARENT], model.parent[1:])
+    np.testing.assert_array_equal(K[1:, kernels.QIDX], model.qidx[1:])
     np.testing.assert_array_equal(K[1:, kernels.MUL], model.qmul[1:])
 
 
