@@ -66,7 +66,7 @@ class Recorder:
 
     def on_diagnostics(self, msg) -> None:
         for status in msg.status:
-            if status.name == 'inverse_dynamics: feedforward':
+            if status.name == f'{NAMESPACE.lstrip("/")}/inverse_dynamics: feedforward':
                 for kv in status.values:
                     if kv.key == 'compute time mean [us]':
                         self.compute_us = kv.value

@@ -46,7 +46,8 @@ class Target:
         self.subscription = bench.create_subscription(
             JointState, f'{namespace}/feedforward_efforts', self._on_answer,
             QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
-        self.answers = 0
+        self.answers = 0     # all answers, measured or not
+        self.published = 0   # all messages, measured or not
         self.cpu_s = 0.0   # CPU time of the target's process while it was measured
 
     def _on_answer(self, msg) -> None:
@@ -62,6 +63,7 @@ class Target:
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(now, 1_000_000_000)
         if self.measuring:
             self.sent.add(now)
+        self.published += 1
         self.publisher.publish(msg)
 
     def summary(self) -> Dict[str, float]:

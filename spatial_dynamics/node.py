@@ -413,7 +413,7 @@ class InverseDynamicsNode(Node):
         now_ns = time.monotonic_ns()
         window, self.window = self.window, Window()
         period = max((now_ns - window.start_ns) * 1e-9, 1e-9)
-        name = self.get_name()
+        name = self.get_fully_qualified_name().lstrip('/')  # 'inverse_dynamics' in the root ns
         output = self.output
 
         model = DiagnosticStatus(name=f'{name}: robot model')

@@ -21,12 +21,30 @@ import os
 import random
 import sys
 import time
-from typing import Optional, Sequence
+from typing import Optional, Sequence, Tuple
 
 from spatial_dynamics.driving import demo_urdf, node_command, rss_bytes, Sinusoids, start, stop
 from spatial_dynamics.latency import fill, joint_state_for, pace, prime, spin_until, Target
 
 MB = 1024.0 * 1024.0
+
+
+class NodeCounts:
+    """The node's own ``answered`` and ``rejected`` totals, from its diagnostics."""
+
+    def __init__(self, bench, namespace: str) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+        self.name = f'{namespace.lstrip("/")}/inverse_dynamics: feedforward'
+        self.latest: Optional[Tuple[int, int]] = None
+        self.reports = 0
+        bench.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
+
+    def _on_diagnostics(self, msg) -> None:
+        for status in msg.status:
+            if status.name == self.name:
+                values = {kv.key: kv.value for kv in status.values}
+                self.latest = (int(values['answered']), int(values['rejected']))
+                self.reports += 1
 
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
@@ -67,6 +85,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     executor = SingleThreadedExecutor()
     executor.add_node(bench)
     target = Target(bench, 'inverse_dynamics', namespace)
+    counts = NodeCounts(bench, namespace)
     msg = joint_state_for(model.joint_names)
     names = list(model.joint_names)
     rng = random.Random(0)
@@ -109,6 +128,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         baseline = after[0]
         growth = (max(after) - baseline) / MB
         end_growth = (after[-1] - baseline) / MB
+        reports = counts.reports   # totals final once a report after the last message came
+        spin_until(executor, lambda: counts.reports >= reports + 2, 3.0)
         summary = target.summary()
         missed = summary['sent'] - summary['answered']
         print(f'RSS after warm-up {baseline / MB:.2f} MB, max growth {growth:+.2f} MB, at the end '
@@ -116,6 +137,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f'answered {summary["answered"]} of {summary["sent"]} after warm-up '
               f'({missed} missed); latency p50 {summary["p50_ms"]:.3f} ms, p99 '
               f'{summary["p99_ms"]:.3f} ms, max {summary["max_ms"]:.3f} ms')
+        if counts.latest is not None:
+            answered, rejected = counts.latest
+            print(f'whole run incl. warm-up: published {target.published}, the node answered '
+                  f'{answered} and rejected {rejected} (its diagnostics), this process received '
+                  f'{target.answers} answers: {target.published - answered - rejected} inputs '
+                  f'never reached the node (best effort, keep last 1), {answered - target.answers}'
+                  ' answers were lost on the way back')
         ok = growth < args.max_growth_mb and missed == 0 and summary['sent'] > 0
         print('PASS' if ok else 'FAIL')
         status = 0 if ok else 1
