@@ -280,11 +280,12 @@ def test_concurrent_callers_agree(kernels, rng):
 # Without numba, and lazily imported
 
 
-def run_python(code):
+def run_python(code, env=None):
     """Run code in a fresh interpreter that imports this checkout's spatial_dynamics."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+    env = dict(os.environ if env is None else env)
+    env['PYTHONPATH'] = os.pathsep.join(
         [os.path.dirname(os.path.dirname(os.path.abspath(sd.__file__))), ROOT]
-        + [p for p in os.environ.get('PYTHONPATH', '').split(os.pathsep) if p]))
+        + [p for p in env.get('PYTHONPATH', '').split(os.pathsep) if p])
     proc = subprocess.run([sys.executable, '-c', textwrap.dedent(code)], capture_output=True,
                           text=True, cwd=ROOT, env=env, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -350,3 +351,41 @@ def test_cache_dir_fallback(monkeypatch, tmp_path):
     monkeypatch.delenv('NUMBA_CACHE_DIR')
     monkeypatch.setattr(os, 'access', lambda path, mode: True)
     assert backends.cache_dir_fallback() is None       # numba caches next to the package
+
+
+@pytest.mark.slow
+def test_read_only_install_caches_in_the_fallback_dir_and_reloads(tmp_path):
+    """Read-only package dir and no NUMBA_CACHE_DIR: the cache goes to the fallback dir.
+
+    The kernels compile into $XDG_CACHE_HOME/spatial_dynamics/numba once (slow: a cold
+    compile), and a new process loads every entry from there instead of compiling.
+    """
+    pytest.importorskip('numba')
+    code = f'''
+        import os
+        import numpy as np
+        import spatial_dynamics as sd
+        from spatial_dynamics import backends
+        here = os.path.dirname(os.path.abspath(sd.__file__))
+        access = os.access
+        os.access = lambda path, mode, **kw: (False if os.path.abspath(path).startswith(here)
+                                              else access(path, mode, **kw))
+        m = sd.Model.from_urdf({URDF!r})
+        backends.warmup(m)
+        from spatial_dynamics import kernels
+        import numba
+        print('cache dir:', numba.config.CACHE_DIR)
+        for f in (kernels.rnea_single, kernels._rnea_batch, kernels._rnea_batch_parallel):
+            print(f.__name__, 'hits', sum(f.stats.cache_hits.values()),
+                  'misses', sum(f.stats.cache_misses.values()))
+    '''
+    env = {k: v for k, v in os.environ.items() if k != 'NUMBA_CACHE_DIR'}
+    env['XDG_CACHE_HOME'] = str(tmp_path)
+    first = run_python(code, env)
+    fallback = os.path.join(str(tmp_path), 'spatial_dynamics', 'numba')
+    assert f'cache dir: {fallback}' in first, first
+    assert 'misses 1' in first, first
+    assert any(name.endswith('.nbi') for _, _, names in os.walk(fallback) for name in names)
+    second = run_python(code, env)
+    for name in ('rnea_single', '_rnea_batch', '_rnea_batch_parallel'):
+        assert f'{name} hits 1 misses 0' in second, second
