@@ -139,7 +139,7 @@ def prime(executor, target: Target, msg, trajectory: Sinusoids, timeout: float) 
 
 
 def input_depth(namespace: str, depth: Optional[int]) -> Dict[str, str]:
-    """QoS override parameter of the ``desired_joint_states`` subscription depth, if given."""
+    """Return the QoS override of the ``desired_joint_states`` subscription depth, if any."""
     if depth is None:
         return {}
     return {f'qos_overrides.{namespace}/desired_joint_states.subscription.depth': str(depth)}

@@ -55,7 +55,7 @@ def test_any_order_and_unknown_names_ignored(names, extra):
 
 
 def test_array_array_input_like_rclpy():
-    """rclpy hands float64[] fields over as array.array('d'); the result is a copy."""
+    """Accept array.array('d'), as rclpy hands over float64[] fields; the result is a copy."""
     import array
     names, q, qd, qdd = state(reversed(JOINTS))
     position = array.array('d', q)

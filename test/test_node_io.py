@@ -72,7 +72,7 @@ def io(unprimed_io, model):
 
 
 def shuffled_message(names, row, k, rng, extra=(UNKNOWN,)):
-    """A JointState for state ``row`` (3, n) in shuffled name order plus unknown joints."""
+    """Return a JointState for state ``row`` (3, n), names shuffled, plus unknown joints."""
     all_names = list(names) + list(extra)
     data = np.concatenate([row, np.full((3, len(extra)), 7.0)], axis=1)
     order = list(range(len(all_names)))
@@ -271,7 +271,7 @@ def _request(**params):
 
 
 def heavier_hand(urdf_path, mass):
-    """The demo arm's URDF text with the hand's mass changed (a payload change)."""
+    """Return the demo arm's URDF text with the hand's mass changed (a payload change)."""
     with open(urdf_path) as f:
         text = f.read()
     start = text.index('<link name="hand">')

@@ -18,7 +18,7 @@ from spatial_dynamics.driving import node_command, Sinusoids  # noqa: E402
 
 
 def test_sinusoids_are_consistent_and_within_limits():
-    """qd = dq/dt and qdd = dqd/dt (central differences), q inside the URDF limits."""
+    """Check qd = dq/dt, qdd = dqd/dt (central differences) and q inside the URDF limits."""
     model = sd.Model.from_urdf(DEMO_URDF)
     trajectory = Sinusoids.for_model(model)
     h = 1e-5
