@@ -102,7 +102,7 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         return np.array(tau)
     batch = q.shape[:-1]
     N = int(np.prod(batch, dtype=np.intp))
-    cols = [np.ascontiguousarray(x.reshape(N, -1).T) for x in (q, qd, qdd)]
+    cols = [np.ascontiguousarray(x.reshape(N, model.nq).T) for x in (q, qd, qdd)]
     fl = {b: list(np.broadcast_to(f, batch + (6,)).reshape(N, 6).T.astype(q.dtype))
           for b, f in fb.items()}
     tau = rnea_components(model, *cols, [q.dtype.type(x) for x in g], fl, np)
