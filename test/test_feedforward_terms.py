@@ -427,8 +427,10 @@ def urdf_mimics(xml, names):
 
 
 def friction_by_hand(xml, names, qd, threshold, coulomb=None):
-    """τ_k = d_k q̇_k + f_k s(q̇_k), plus each mimic joint's own term at its rate mult·q̇_src,
-    folded back with its multiplier; ``coulomb`` replaces tanh(q̇/threshold) (e.g. np.sign).
+    """Return τ_k = d_k q̇_k + f_k s(q̇_k) plus the folded mimic terms, by hand.
+
+    Each mimic joint adds its own term at its rate mult·q̇_src, folded back with its
+    multiplier; ``coulomb`` replaces tanh(q̇/threshold) (e.g. np.sign).
     """
     s = coulomb or (lambda v: np.tanh(v / threshold))
     damping, friction = urdf_dynamics(xml, names)

@@ -132,7 +132,7 @@ def test_gravity_torque_is_gradient_of_potential(seed, n_links, branching, mimic
 
 @pytest.mark.parametrize('seed,n_links,branching,mimic', TREES, ids=TREE_IDS)
 def test_power_balance_along_trajectory(seed, n_links, branching, mimic):
-    """qd . tau = dE/dt, E = 1/2 qd^T M qd + V, along q(t) = q0 + A sin(w t + phi)."""
+    """Power balance q̇·τ = dE/dt, E = ½ q̇ᵀ M q̇ + V, along q(t) = q0 + A sin(w t + phi)."""
     xml, model, oracle, rng = tree(seed, n_links, branching, mimic)
     names = model.joint_names
     n = len(names)

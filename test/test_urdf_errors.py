@@ -40,7 +40,7 @@ def robot(*elements):
 
 
 def arm(*extra, upper_body=inertial(), elbow_axis='0 1 0', elbow_kind='revolute'):
-    """A valid 2-joint arm (base - shoulder - upper_arm - elbow - forearm) plus extra elements."""
+    """Return a valid 2-joint arm: base, shoulder, upper_arm, elbow, forearm; plus extras."""
     return robot(link('base'), link('upper_arm', upper_body), link('forearm'),
                  joint('shoulder', 'base', 'upper_arm'),
                  joint('elbow', 'upper_arm', 'forearm', kind=elbow_kind, axis=elbow_axis),
