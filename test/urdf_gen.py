@@ -1,26 +1,19 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Seeded generator of random kinematic-tree URDFs, and the small rotation helpers it needs.
+"""Seeded generator of random kinematic-tree URDFs, and URDF re-expression helpers.
 
 Every generated robot is physical (positive masses, inertias that are positive definite and
 satisfy the triangle inequality) so that it loads in both spatial_dynamics and Pinocchio.
+The XML and rotation helpers live in ``spatial_dynamics.generate`` (shared with the
+benchmark) and are re-exported here.
 """
 
-from typing import Iterable, Optional
+from typing import Optional
 
 import numpy as np
-
-MOVABLE = ('revolute', 'continuous', 'prismatic')
-
-
-def rpy_to_matrix(rpy) -> np.ndarray:
-    """Return the URDF rotation R = Rz(yaw) Ry(pitch) Rx(roll), mapping child to parent coords."""
-    r, p, y = (float(a) for a in rpy)
-    cr, sr, cp, s_p, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
-    ry = np.array([[cp, 0.0, s_p], [0.0, 1.0, 0.0], [-s_p, 0.0, cp]])
-    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
-    return rz @ ry @ rx
+# The XML and rotation helpers are shared with the benchmark's generator.
+from spatial_dynamics.generate import (  # noqa: F401 (re-exported to the tests)
+    fmt, inertia_xml, inertial_xml, MOVABLE, origin_xml, random_rotation, rpy_to_matrix)
 
 
 def matrix_to_rpy(R: np.ndarray) -> np.ndarray:
@@ -29,38 +22,6 @@ def matrix_to_rpy(R: np.ndarray) -> np.ndarray:
     if np.hypot(R[0, 0], R[1, 0]) < 1e-12:  # gimbal lock: put all of the rotation in roll
         return np.array([np.arctan2(-R[1, 2], R[1, 1]), pitch, 0.0])
     return np.array([np.arctan2(R[2, 1], R[2, 2]), pitch, np.arctan2(R[1, 0], R[0, 0])])
-
-
-def random_rotation(rng: np.random.Generator) -> np.ndarray:
-    """Return a uniformly distributed rotation matrix (QR of a Gaussian matrix)."""
-    Q, R = np.linalg.qr(rng.standard_normal((3, 3)))
-    Q = Q * np.sign(np.diag(R))
-    if np.linalg.det(Q) < 0.0:
-        Q[:, 0] = -Q[:, 0]
-    return Q
-
-
-def fmt(values: Iterable[float]) -> str:
-    """Format floats for a URDF attribute with full (round-trip) precision."""
-    return ' '.join(repr(float(v)) for v in values)
-
-
-def origin_xml(xyz, rpy) -> str:
-    """Return an <origin> element."""
-    return f'<origin xyz="{fmt(xyz)}" rpy="{fmt(rpy)}"/>'
-
-
-def inertia_xml(Ic: np.ndarray) -> str:
-    """Return an <inertia> element for a symmetric 3x3 rotational inertia."""
-    names = ('ixx', 'ixy', 'ixz', 'iyy', 'iyz', 'izz')
-    values = (Ic[0, 0], Ic[0, 1], Ic[0, 2], Ic[1, 1], Ic[1, 2], Ic[2, 2])
-    return '<inertia ' + ' '.join(f'{k}="{float(v)!r}"' for k, v in zip(names, values)) + '/>'
-
-
-def inertial_xml(mass: float, xyz, rpy, Ic: np.ndarray) -> str:
-    """Return an <inertial> element; Ic is about the com, in the frame rotated by rpy."""
-    return (f'<inertial>{origin_xml(xyz, rpy)}<mass value="{float(mass)!r}"/>'
-            f'{inertia_xml(np.asarray(Ic, dtype=float))}</inertial>')
 
 
 def random_inertia(rng: np.random.Generator, mass: float) -> np.ndarray:
