@@ -95,11 +95,13 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
     if kernels is not None and q.dtype == np.float64:
         return kernels.rnea(model, q, qd, qdd, g, fb)
-    if q.ndim == 1 and q.dtype == np.float64 and not any(np.ndim(f) > 1 for f in fb.values()):
-        fl = {b: [float(x) for x in f] for b, f in fb.items()}
-        tau = rnea_components(model, q.tolist(), qd.tolist(), qdd.tolist(),
+    if q.dtype == np.float64 and q.size == q.shape[-1] > 0:
+        # One state (maybe with batch dimensions of 1): plain floats beat the batch path's
+        # fixed cost of one numpy call per term.
+        fl = {b: np.reshape(f, -1)[-6:].tolist() for b, f in fb.items()}
+        tau = rnea_components(model, *(x.reshape(-1).tolist() for x in (q, qd, qdd)),
                               [float(x) for x in g], fl)
-        return np.array(tau)
+        return np.array(tau).reshape(q.shape)
     batch = q.shape[:-1]
     N = int(np.prod(batch, dtype=np.intp))
     cols = [np.ascontiguousarray(x.reshape(N, model.nq).T) for x in (q, qd, qdd)]
