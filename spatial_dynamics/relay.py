@@ -2,9 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """A trivial relay node: the latency baseline for ``inverse_dynamics``.
 
-Same inputs and QoS as the node (``desired_joint_states``: best effort, keep last 1; output
-``feedforward_efforts``: reliable), no computation: every message received is published as is.
-Whatever the node's latency exceeds the relay's in the same run is the node's own cost.
+Same endpoints as the node, made by the node's own ``subscribe`` and ``advertise``
+(``desired_joint_states``: best effort, keep last 1; ``feedforward_efforts``: reliable), no
+computation: every message received is published as is. Whatever the node's latency exceeds
+the relay's in the same run is the node's own cost.
 
     python -m spatial_dynamics.relay --ros-args -r __ns:=/baseline
 """
@@ -15,10 +16,9 @@ from typing import Optional, Sequence
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import JointState
 
-from spatial_dynamics.node import input_qos, output_qos
+from spatial_dynamics.node import advertise, subscribe
 
 
 class Relay(Node):
@@ -26,12 +26,8 @@ class Relay(Node):
 
     def __init__(self) -> None:
         super().__init__('relay')
-        self.publisher = self.create_publisher(
-            JointState, 'feedforward_efforts', output_qos(),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
-        self.create_subscription(
-            JointState, 'desired_joint_states', self.publisher.publish, input_qos(),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self.publisher = advertise(self, JointState, 'feedforward_efforts')
+        subscribe(self, JointState, 'desired_joint_states', self.publisher.publish)
 
 
 def main(args: Optional[Sequence[str]] = None) -> int:

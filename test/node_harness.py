@@ -231,6 +231,22 @@ class Io:
         self.efforts.clear()
         self.commands.clear()
 
+    def publish_until_answered(self, make: Callable[[int], object], period: float = 0.02,
+                               timeout: float = TIMEOUT) -> int:
+        """Publish ``make(k)``, k = 0, 1, ..., every ``period`` s until an answer; return k.
+
+        The answer is to message k or an earlier one (the tests use the same state for all).
+        """
+        count = len(self.efforts)
+        deadline = time.monotonic() + timeout
+        k = 0
+        while len(self.efforts) == count:
+            assert time.monotonic() < deadline, 'the node never answered'
+            self.joint_states.publish(make(k))
+            self.driver.spin_for(period)
+            k += 1
+        return k
+
     def set_parameters(self, **values) -> List:
         """Set parameters of the node; returns the SetParametersResult list."""
         from rcl_interfaces.srv import SetParameters

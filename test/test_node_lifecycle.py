@@ -89,14 +89,9 @@ def test_clean_exit_on_signal_while_busy(install, driver, tmp_path, sig):
         io.wait_connected()
         model = sd.Model.from_urdf(DEMO_URDF)
         names = model.joint_names
-        states = random_states(20, 1000, len(names))
-        k = 0
-        while not io.efforts:
-            assert k < 1000, 'no answer: ' + node.log()
-            io.joint_states.publish(joint_state(names, *states[k], k))
-            driver.spin_for(0.002)
-            k += 1
-        for j in range(k, k + 200):
+        states = random_states(20, 200, len(names))
+        io.publish_until_answered(lambda k: joint_state(names, *states[0], k))
+        for j in range(200):
             io.joint_states.publish(joint_state(names, *states[j], j))
             driver.spin_for(0.002)
         start = time.monotonic()
@@ -154,14 +149,9 @@ def test_description_from_topic_then_rejected_update(install, driver, tmp_path):
         with open(DEMO_URDF) as f:
             io.description.publish(String(data=f.read()))
         node.wait_for_log("robot 'demo_arm' from topic robot_description")
-        k = 10
-        while not io.efforts:
-            assert k < 50
-            io.joint_states.publish(joint_state(names, *states[k], k))
-            driver.spin_for(0.05)
-            k += 1
-        tau = sd.rnea(model, *states[k - 1])
-        np.testing.assert_allclose(io.efforts[-1].effort, tau, rtol=0, atol=1e-9)
+        io.publish_until_answered(lambda k: joint_state(names, *states[10], k), 0.05)
+        np.testing.assert_allclose(io.efforts[-1].effort, sd.rnea(model, *states[10]),
+                                   rtol=0, atol=1e-9)
 
         io.description.publish(String(data='<robot name="half">'))
         node.wait_for_log('robot description rejected, keeping the current model')
@@ -204,12 +194,7 @@ def test_parameter_file_and_xacro(install, driver, tmp_path):
         model = sd.Model.from_urdf(DEMO_URDF)
         names = model.joint_names
         state = random_states(22, 1, len(names))[0]
-        k = 0
-        while not io.efforts:
-            assert k < 200
-            io.joint_states.publish(joint_state(names, *state, k))
-            driver.spin_for(0.05)
-            k += 1
+        io.publish_until_answered(lambda k: joint_state(names, *state, k), 0.05)
         np.testing.assert_allclose(io.efforts[-1].effort,
                                    sd.rnea(model, *state, gravity=(0.0, -9.81, 0.0)),
                                    rtol=0, atol=1e-9)
