@@ -24,7 +24,8 @@ import time
 from typing import Optional, Sequence, Tuple
 
 from spatial_dynamics.driving import demo_urdf, node_command, rss_bytes, Sinusoids, start, stop
-from spatial_dynamics.latency import fill, joint_state_for, pace, prime, spin_until, Target
+from spatial_dynamics.latency import (fill, input_depth, joint_state_for, pace, prime, spin_until,
+                                      Target)
 
 MB = 1024.0 * 1024.0
 
@@ -59,6 +60,9 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser.add_argument('--max-growth-mb', type=float, default=5.0)
     parser.add_argument('--fixed-order', action='store_true',
                         help='publish the names in model order (default: shuffled)')
+    parser.add_argument('--input-depth', type=int, default=None,
+                        help='override the depth of the node\'s input subscription (QoS '
+                             'override parameter; default: keep last 1)')
     parser.add_argument('--urdf', default=None, help='robot (default: the demo arm)')
     parser.add_argument('--log', default=None, help='node log file (default: none)')
     return parser.parse_args(argv)
@@ -79,7 +83,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     trajectory = Sinusoids.for_model(model)
     namespace = f'/sd_soak_{os.getpid()}'
     proc = start(node_command('inverse_dynamics', 'spatial_dynamics.node'), namespace,
-                 {'robot_description_file': urdf}, args.log)
+                 {'robot_description_file': urdf, **input_depth(namespace, args.input_depth)},
+                 args.log)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     bench = rclpy.create_node('soak_bench')
     executor = SingleThreadedExecutor()
@@ -92,9 +97,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     status = 1
     try:
         prime(executor, target, msg, trajectory, timeout=60.0)
+        depth = 'keep last 1' if args.input_depth is None else f'depth {args.input_depth}'
         print(f'soak: {model.name}, {args.rate:g} Hz for {seconds:g} s '
-              f'({"model" if args.fixed_order else "shuffled"} name order), node pid '
-              f'{proc.pid}, warm-up {warmup:g} s, RSS every {args.sample:g} s')
+              f'({"model" if args.fixed_order else "shuffled"} name order, input {depth}), '
+              f'node pid {proc.pid}, warm-up {warmup:g} s, RSS every {args.sample:g} s')
         t0 = time.monotonic()
         samples = []   # (t, rss)
 
@@ -142,7 +148,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f'whole run incl. warm-up: published {target.published}, the node answered '
                   f'{answered} and rejected {rejected} (its diagnostics), this process received '
                   f'{target.answers} answers: {target.published - answered - rejected} inputs '
-                  f'never reached the node (best effort, keep last 1), {answered - target.answers}'
+                  f'never reached the node (best effort, {depth}), {answered - target.answers}'
                   ' answers were lost on the way back')
         ok = growth < args.max_growth_mb and missed == 0 and summary['sent'] > 0
         print('PASS' if ok else 'FAIL')
