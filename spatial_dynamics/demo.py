@@ -137,7 +137,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
           f'{args.node_log or "discarded"})', flush=True)
     node_proc = start(command, NAMESPACE, {'robot_description_file': urdf}, args.node_log)
 
-    # SIGTERM like Ctrl-C: stop, let the node exit, still write the plot.
+    # Ctrl-C (even when started with SIGINT ignored, as `cmd &` in a script does) and SIGTERM:
+    # stop, let the node exit, still write the plot.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     demo = rclpy.create_node('demo_publisher', namespace=NAMESPACE)

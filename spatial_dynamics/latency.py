@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import sys
 import time
 from typing import Callable, Dict, List, Optional, Sequence, Set
@@ -200,6 +201,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                                    **input_depth(f'{namespace}/node', args.input_depth)},
                                   logs and os.path.join(logs, 'inverse_dynamics.log')),
     }
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C even if ignored at start
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     bench = rclpy.create_node('latency_bench')
     executor = SingleThreadedExecutor()

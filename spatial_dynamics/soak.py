@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import random
 import sys
 import time
@@ -85,6 +86,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     proc = start(node_command('inverse_dynamics', 'spatial_dynamics.node'), namespace,
                  {'robot_description_file': urdf, **input_depth(namespace, args.input_depth)},
                  args.log)
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C even if ignored at start
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     bench = rclpy.create_node('soak_bench')
     executor = SingleThreadedExecutor()
