@@ -242,11 +242,12 @@ class InverseDynamicsNode(Node):
         self._efforts = JointState()
         subscribe(self, JointState, 'desired_joint_states', self._on_joint_state)
         subscribe(self, JointTrajectory, 'desired_trajectory', self._on_trajectory)
-        if self.output is None:
-            self.create_subscription(String, 'robot_description', self._on_description_topic,
-                                     DESCRIPTION_QOS)
         self.create_timer(1.0, self._publish_diagnostics)
         if self.output is None:
+            # rclpy's default QoS event handlers stay here: a volatile publisher of the
+            # description never reaches this transient-local subscription, worth a warning.
+            self.create_subscription(String, 'robot_description', self._on_description_topic,
+                                     DESCRIPTION_QOS)
             self._warn_waiting()
 
     # -- parameters ------------------------------------------------------------------------
