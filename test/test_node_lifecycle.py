@@ -41,7 +41,7 @@ def driver():
 def declared_parameters():
     """Names the node declares (read from its source, so this test needs no ROS)."""
     with open(os.path.join(ROOT, 'spatial_dynamics', 'node.py')) as f:
-        return set(re.findall(r"declare_parameter\(\s*'(\w+)'", f.read()))
+        return set(re.findall(r"declare_parameter\(\s*'([\w.]+)'", f.read()))
 
 
 def test_ros2_run_layout(install):
@@ -64,10 +64,20 @@ def test_yaml_documents_every_parameter():
         text = f.read()
     declared = declared_parameters()
     assert declared == {'robot_description', 'robot_description_file', 'joints', 'gravity',
-                        'acceleration_source', 'input_timeout'}
+                        'acceleration_source', 'input_timeout', 'locked_joints',
+                        'locked_positions', 'payload.link', 'payload.mass', 'payload.com',
+                        'payload.inertia', 'armature', 'friction_model',
+                        'friction_velocity_threshold', 'clamp_to_effort_limits',
+                        'external_wrench_timeout'}
     for name in declared:
-        assert re.search(rf'^\s*#?\s*{name}:', text, re.M), f'{name} missing in the yaml'
+        # payload.link is written nested: 'payload:' then 'link:'
+        *group, leaf = name.split('.')
+        for key in group + [leaf]:
+            assert re.search(rf'^\s*#?\s*{key}:', text, re.M), f'{name} missing in the yaml'
     params = yaml.safe_load(text)['inverse_dynamics']['ros__parameters']
+    assert params['payload'] == {'link': '', 'mass': 0.0, 'com': [0.0] * 3,
+                                 'inertia': [0.0] * 6}
+    assert params['friction_model'] == 'none' and params['clamp_to_effort_limits'] is False
     assert params['gravity'] == [0.0, 0.0, -9.81]
     assert params['acceleration_source'] == 'effort'
 
@@ -115,7 +125,10 @@ def test_bad_start_up_configuration_exits_1_with_reason(install, tmp_path):
                          ([good, 'gravity:=[0,0,-10]'], 'gravity'),
                          ([good, 'input_timeout:=0.0'], 'input_timeout'),
                          ([good, 'acceleration_source:=torque'], 'acceleration_source'),
-                         ([good, 'joints:=[joint1,gripper]'], "['gripper']")]:
+                         ([good, 'joints:=[joint1,gripper]'], "'gripper'"),
+                         ([good, 'payload.link:=gripper'], "payload.link: 'gripper'"),
+                         ([good, 'friction_model:=coulomb'], 'friction_model'),
+                         ([good, 'armature:=[0.1]'], 'armature')]:
         command = [install.executable, '--ros-args']
         for arg in args:
             command += ['-p', arg]
