@@ -868,6 +868,61 @@ def versions() -> str:
     return ', '.join(parts)
 
 
+def skipped_work_table(rounds: int = 9) -> str:
+    """Markdown table: single-call time of what the model and state let us skip.
+
+    Model reduction (one Talos arm of the 32-joint tree: the others locked and lumped, the
+    rest pruned) and the runtime fast paths (q̇ = 0 skips every velocity-product term; an
+    unchanged q reuses the joint transforms), for each backend, medians of ``rounds``.
+    """
+    try:
+        robot = load_robot('talos')
+    except Skip as err:
+        return f'(skipped-work table: {err})'
+    full = robot.model
+    arm = [j for j in full.joint_names if j.startswith('arm_left_')]
+    reduced = sd.Model.from_urdf(robot.xml, joints=arm)
+    rng = np.random.default_rng(11)
+    backends = ['numpy'] + (['compiled'] if _has_compiled() else [])
+    rows = ['| robot, case | backend | single call µs | vs whole Talos, new q each call |',
+            '|---|---|---|---|']
+    for backend in backends:
+        cases = []
+        for label, model in (('whole Talos (32 dof)', full),
+                             ('left arm only (7 dof, reduced)', reduced)):
+            states = [rng.uniform(-1, 1, (3, model.nq)) for _ in range(32)]
+            zero = np.zeros(model.nq)
+            cases += [
+                (label + ', new q each call', model,
+                 lambda s=states, m=model: [sd.rnea(m, *x, backend=backend) for x in s]),
+                (label + ', q̇ = 0 (gravity + inertia)', model,
+                 lambda s=states, m=model, z=zero:
+                 [sd.rnea(m, x[0], z, x[2], backend=backend) for x in s]),
+                (label + ', same q every call', model,
+                 lambda s=states, m=model: [sd.rnea(m, s[0][0], x[1], x[2], backend=backend)
+                                            for x in s]),
+            ]
+        times = {label: [] for label, _, _ in cases}
+        for _ in range(rounds):                      # interleaved rounds
+            for label, _, run in cases:
+                t0 = time.perf_counter()
+                run()
+                times[label].append((time.perf_counter() - t0) / 32 * 1e6)
+        base = statistics.median(times[cases[0][0]])
+        for label, _, _ in cases:
+            t = statistics.median(times[label])
+            rows.append(f'| {label} | {backend} | {t:.3g} | {t / base:.2f}× |')
+    return '\n'.join(rows)
+
+
+def _has_compiled() -> bool:
+    try:
+        from spatial_dynamics import backends
+        return backends.compiled('auto') is not None
+    except ImportError:
+        return False
+
+
 def main(argv: Optional[list] = None) -> int:
     """Command-line entry point."""
     parser = argparse.ArgumentParser(
@@ -906,7 +961,10 @@ def main(argv: Optional[list] = None) -> int:
             rows += robot_rows
             checks.append(check)
             write_csv(args.out / 'results.csv', rows, settings.sizes)
+        skipped = skipped_work_table(settings.rounds) if 'talos' in names else ''
     table = markdown(rows, checks, settings.sizes)
+    if skipped:
+        table += '\n\nWhat the code skips (single call, Talos):\n\n' + skipped
     paths = plot(rows, args.out, log, settings.sizes)
     print(f'Command: python -m spatial_dynamics.bench {" ".join(argv or sys.argv[1:])}')
     print(f'Setup: {setup}\n')
