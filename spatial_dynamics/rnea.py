@@ -62,7 +62,7 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         τ (N m or N), same shape and floating dtype as the broadcast inputs.
     """
     kernels = backends.compiled(backend)
-    if kernels is not None and not f_ext:
+    if kernels is not None and not f_ext and _plain_vectors(q, qd, qdd):
         # One C-contiguous float64 state of shape (n,) goes straight into the kernel; other
         # types match no overload (TypeError), other shapes return False: general path.
         K, n = kernels.kernel_arrays(model)
@@ -94,6 +94,13 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
         q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
     if kernels is not None and q.dtype == np.float64:
+        if not fb and q.size == q.shape[-1] > 0:
+            # One state with batch dimensions of 1: the single-state entry, not the batch's.
+            K, n = kernels.kernel_arrays(model)
+            tau = np.empty(n)
+            kernels.rnea_single(K, *(np.array(x.reshape(n)) for x in (q, qd, qdd)),
+                                *(float(x) for x in g), tau)
+            return tau.reshape(q.shape)
         return kernels.rnea(model, q, qd, qdd, g, fb)
     if q.dtype == np.float64 and q.size == q.shape[-1] > 0:
         # One state (maybe with batch dimensions of 1): plain floats beat the batch path's
@@ -112,6 +119,14 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     for k, t in enumerate(tau):
         out[:, k] = t
     return out.reshape(q.shape)
+
+
+def _plain_vectors(*arrays) -> bool:
+    """Tell whether all are 1-D float64 ndarrays (a failed numba overload match is slow)."""
+    for x in arrays:
+        if type(x) is not np.ndarray or x.ndim != 1 or x.dtype != np.float64:
+            return False
+    return True
 
 
 def _single_state(model: Model, *arrays) -> Optional[list]:
