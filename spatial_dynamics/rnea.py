@@ -62,7 +62,7 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         τ (N m or N), same shape and floating dtype as the broadcast inputs.
     """
     kernels = backends.compiled(backend)
-    if kernels is not None and not f_ext and _plain_vectors(q, qd, qdd):
+    if kernels is not None and not f_ext and type(q) is np.ndarray and q.ndim == 1:
         # One C-contiguous float64 state of shape (n,) goes straight into the kernel; other
         # types match no overload (TypeError), other shapes return False: general path.
         K, n = kernels.kernel_arrays(model)
@@ -119,14 +119,6 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     for k, t in enumerate(tau):
         out[:, k] = t
     return out.reshape(q.shape)
-
-
-def _plain_vectors(*arrays) -> bool:
-    """Tell whether all are 1-D float64 ndarrays (a failed numba overload match is slow)."""
-    for x in arrays:
-        if type(x) is not np.ndarray or x.ndim != 1 or x.dtype != np.float64:
-            return False
-    return True
 
 
 def _single_state(model: Model, *arrays) -> Optional[list]:
