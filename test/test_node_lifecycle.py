@@ -185,19 +185,17 @@ def test_description_from_topic_then_rejected_update(install, driver, tmp_path):
 
 @pytest.mark.ros
 def test_parameter_file_and_xacro(install, driver, tmp_path):
-    """The shipped yaml loads; a .xacro file is expanded when xacro is importable."""
-    try:
-        import xacro  # noqa: F401
-        description = tmp_path / 'arm.urdf.xacro'
-        with open(DEMO_URDF) as f:
-            text = f.read()
-        text = text.replace('<robot name="demo_arm">',
-                            '<robot name="demo_arm" xmlns:xacro="http://www.ros.org/wiki/xacro">'
-                            '<xacro:property name="hand_mass" value="0.6"/>')
-        text = text.replace('<mass value="0.6"/>', '<mass value="${hand_mass}"/>')
-        description.write_text(text)
-    except ImportError:
-        description = DEMO_URDF
+    """The shipped yaml loads; a .xacro file is expanded (xacro is a test requirement)."""
+    import xacro  # noqa: F401
+    description = tmp_path / 'arm.urdf.xacro'
+    with open(DEMO_URDF) as f:
+        text = f.read()
+    assert '<robot name="demo_arm">' in text and '<mass value="0.6"/>' in text
+    text = text.replace('<robot name="demo_arm">',
+                        '<robot name="demo_arm" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+                        '<xacro:property name="hand_mass" value="0.6"/>')
+    text = text.replace('<mass value="0.6"/>', '<mass value="${hand_mass}"/>')
+    description.write_text(text)
     node = NodeProcess(install, ['--params-file', YAML,
                                  '-p', f'robot_description_file:={description}',
                                  '-p', 'gravity:=[0.0, -9.81, 0.0]'], str(tmp_path))
