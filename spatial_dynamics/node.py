@@ -603,12 +603,11 @@ class InverseDynamicsNode(Node):
             tau, saturated = sd.clamp_to_effort_limits(output.model, tau)
             if saturated.any():
                 self._count_saturated(output, tau, saturated)
-        tau_out = tau
         t1 = time.monotonic_ns()
 
         # The two output messages are reused: publish() serialises them before it returns.
         commands = self._commands
-        commands.data = array('d', tau_out.tobytes())
+        commands.data = array('d', tau.tobytes())
         self.commands_pub.publish(commands)
         efforts = self._efforts
         efforts.header = msg.header
