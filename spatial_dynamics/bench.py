@@ -38,7 +38,6 @@ from dataclasses import dataclass, field
 import functools
 import gc
 import importlib.metadata
-import inspect
 import os
 from pathlib import Path
 import re
@@ -250,21 +249,19 @@ def _ours(dtype, single: bool, backend: str = 'numpy') -> Callable[[Robot], Call
     """Entry factory for ``sd.rnea`` on arrays of ``dtype`` with ``backend``."""
     def make(robot: Robot) -> Call:
         model = robot.model
-        rnea = sd.rnea
-        if 'backend' in inspect.signature(sd.rnea).parameters:
-            rnea = functools.partial(sd.rnea, backend=backend)
-        elif backend != 'numpy':
-            raise Skip(f'sd.rnea has no backend={backend!r} (yet)')
         z = np.zeros(model.nq if single else (2, model.nq), dtype=dtype)
         try:
-            rnea(model, z, z, z, GRAVITY)   # probe: the backend may not be importable
+            sd.rnea(model, z, z, z, GRAVITY, None, backend)   # probe: is the backend there?
         except (TypeError, ImportError, ValueError, NotImplementedError) as err:
             raise Skip(f'{type(err).__name__}: {err}') from None
 
         def prep(q, qd, qdd):
-            return (model, q.astype(dtype), qd.astype(dtype), qdd.astype(dtype), GRAVITY)
+            # sd.rnea(model, q, qd, qdd, gravity, f_ext, backend), all positional: the cost
+            # of a plain call (a keyword through functools.partial would add ~0.1 µs)
+            return (model, q.astype(dtype), qd.astype(dtype), qdd.astype(dtype), GRAVITY,
+                    None, backend)
 
-        return Call(prep, rnea, np.asarray)
+        return Call(prep, sd.rnea, np.asarray)
     return make
 
 
@@ -872,8 +869,9 @@ def skipped_work_table(rounds: int = 9) -> str:
     """Markdown table: single-call time of what the model and state let us skip.
 
     Model reduction (one Talos arm of the 32-joint tree: the others locked and lumped, the
-    rest pruned) and the runtime fast paths (q̇ = 0 skips every velocity-product term; an
-    unchanged q reuses the joint transforms), for each backend, medians of ``rounds``.
+    rest pruned) and the runtime fast paths (q̇ = 0 skips every velocity-product term,
+    q̇ = q̈ = 0 everything but gravity, zero gravity the base's acceleration; an unchanged q
+    reuses the joint transforms on the numpy path), for each backend, medians of ``rounds``.
     """
     try:
         robot = load_robot('talos')
@@ -886,28 +884,29 @@ def skipped_work_table(rounds: int = 9) -> str:
     backends = ['numpy'] + (['compiled'] if _has_compiled() else [])
     rows = ['| robot, case | backend | single call µs | vs whole Talos, new q each call |',
             '|---|---|---|---|']
+    no_g = (0.0, 0.0, 0.0)
     for backend in backends:
         cases = []
         for label, model in (('whole Talos (32 dof)', full),
                              ('left arm only (7 dof, reduced)', reduced)):
             states = [rng.uniform(-1, 1, (3, model.nq)) for _ in range(32)]
-            zero = np.zeros(model.nq)
-            cases += [
-                (label + ', new q each call', model,
-                 lambda s=states, m=model: [sd.rnea(m, *x, backend=backend) for x in s]),
-                (label + ', q̇ = 0 (gravity + inertia)', model,
-                 lambda s=states, m=model, z=zero:
-                 [sd.rnea(m, x[0], z, x[2], backend=backend) for x in s]),
-                (label + ', same q every call', model,
-                 lambda s=states, m=model: [sd.rnea(m, s[0][0], x[1], x[2], backend=backend)
-                                            for x in s]),
-            ]
+            z = np.zeros(model.nq)
+            for case, args in (
+                    ('new q each call', [(q, qd, qdd, GRAVITY) for q, qd, qdd in states]),
+                    ('q̇ = 0 (gravity + inertia)', [(q, z, qdd, GRAVITY) for q, _, qdd in states]),
+                    ('q̇ = q̈ = 0 (gravity only)', [(q, z, z, GRAVITY) for q, _, _ in states]),
+                    ('zero gravity', [(q, qd, qdd, no_g) for q, qd, qdd in states]),
+                    ('same q every call', [(states[0][0], qd, qdd, GRAVITY)
+                                           for _, qd, qdd in states])):
+                cases.append((f'{label}, {case}', model,
+                              [(model,) + a + (None, backend) for a in args]))
         times = {label: [] for label, _, _ in cases}
         for _ in range(rounds):                      # interleaved rounds
-            for label, _, run in cases:
+            for label, _, calls in cases:
                 t0 = time.perf_counter()
-                run()
-                times[label].append((time.perf_counter() - t0) / 32 * 1e6)
+                for a in calls:
+                    sd.rnea(*a)
+                times[label].append((time.perf_counter() - t0) / len(calls) * 1e6)
         base = statistics.median(times[cases[0][0]])
         for label, _, _ in cases:
             t = statistics.median(times[label])

@@ -61,18 +61,29 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     Returns:
         τ (N m or N), same shape and floating dtype as the broadcast inputs.
     """
-    kernels = backends.compiled(backend)
-    if kernels is not None and not f_ext and type(q) is np.ndarray and q.ndim == 1:
+    kernels = backends._kernels      # loaded already: skip the call in the common case
+    if kernels is None or backend != 'auto' and backend != 'compiled':
+        kernels = backends.compiled(backend)
+    if kernels is not None and not f_ext:
         # One C-contiguous float64 state of shape (n,) goes straight into the kernel; other
-        # types match no overload (TypeError), other shapes return False: general path.
-        K, n = kernels.kernel_arrays(model)
-        tau = np.empty(n)
+        # types (lists, other dtypes or shapes) match no overload (TypeError) and other
+        # lengths return False: the general path then validates and runs them.
         try:
+            tau = np.empty(len(q))
             gx, gy, gz = gravity
-            if kernels.rnea_single(K, q, qd, qdd, gx, gy, gz, tau):
+            if kernels.rnea_single(model._table, q, qd, qdd, gx, gy, gz, tau):
                 return tau
         except (TypeError, ValueError):
             pass
+    return _rnea(model, q, qd, qdd, gravity, f_ext, kernels)
+
+
+def _rnea(model: Model, q, qd, qdd, gravity, f_ext, kernels) -> np.ndarray:
+    """Run :func:`rnea` for all that its fast path leaves.
+
+    Kept apart from it: the comprehensions here would turn ``rnea``'s arguments into cell
+    variables, which costs ~0.1 µs per call.
+    """
     single = _single_state(model, q, qd, qdd) if kernels is None else None
     if single is not None and not f_ext:
         # One float64 state: plain Python floats, no per-term numpy call overhead.
@@ -95,12 +106,13 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
     if kernels is not None and q.dtype == np.float64:
         if not fb and q.size == q.shape[-1] > 0:
-            # One state with batch dimensions of 1: the single-state entry, not the batch's.
-            K, n = kernels.kernel_arrays(model)
+            # One state with batch dimensions of 1: the single-state entry, not the batch's
+            # (unless the model is too large for it).
+            n = model.nq
             tau = np.empty(n)
-            kernels.rnea_single(K, *(np.array(x.reshape(n)) for x in (q, qd, qdd)),
-                                *(float(x) for x in g), tau)
-            return tau.reshape(q.shape)
+            if kernels.rnea_single(model._table, *(np.array(x.reshape(n)) for x in (q, qd, qdd)),
+                                   *(float(x) for x in g), tau):
+                return tau.reshape(q.shape)
         return kernels.rnea(model, q, qd, qdd, g, fb)
     if q.dtype == np.float64 and q.size == q.shape[-1] > 0:
         # One state (maybe with batch dimensions of 1): plain floats beat the batch path's
@@ -179,13 +191,18 @@ def rnea_components(model: Model, q, qd, qdd, gravity, f_body=None, m=math,
     :func:`xup_components` returned for the same ``q``.
 
     Terms that cannot change the answer are skipped: with q̇ = 0 every body velocity and
-    velocity-product term is zero; a body on the fixed base sees only ``a_0 = -a_grav``.
+    velocity-product term is zero; with q̇ = q̈ = 0 (gravity only) every angular acceleration
+    is zero too, so ``a_i = (0, E_i l_λ(i))`` and ``f_i = (h × l_i, m l_i)``; with zero
+    gravity a body on the fixed base skips ``Xup a_0``. Each result is the full computation's
+    (the skipped products are exact zeros).
     """
     gx, gy, gz = gravity
     zero = 0.0 * gx
     if Xup is None:
         Xup = xup_components(model, q, m)
     moving = any(_nonzero(x) for x in qd)
+    static = not moving and not any(_nonzero(x) for x in qdd)
+    weightless = not (_nonzero(gx) or _nonzero(gy) or _nonzero(gz))
     NB = len(model._kernel)
     vel = [None] * (NB + 1)
     acc = [None] * (NB + 1)
@@ -198,77 +215,90 @@ def rnea_components(model: Model, q, qd, qdd, gravity, f_body=None, m=math,
     for i, row in enumerate(model._kernel, start=1):
         p, code, (ax, ay, az), _, _, mass, (hx, hy, hz), Ib, k, mul, _ = row
         e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
-        qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
-
-        # a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ
-        pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
-        u0 = pl0 - (ry * pa2 - rz * pa1)
-        u1 = pl1 - (rz * pa0 - rx * pa2)
-        u2 = pl2 - (rx * pa1 - ry * pa0)
-        a0 = e00 * pa0 + e01 * pa1 + e02 * pa2
-        a1 = e10 * pa0 + e11 * pa1 + e12 * pa2
-        a2 = e20 * pa0 + e21 * pa1 + e22 * pa2
-        l0 = e00 * u0 + e01 * u1 + e02 * u2
-        l1 = e10 * u0 + e11 * u1 + e12 * u2
-        l2 = e20 * u0 + e21 * u1 + e22 * u2
-        if code == PR:
-            l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
+        if static:
+            # Gravity only: a_i = (0, E_i l_λ(i)), f_i = I_i a_i = (h × l_i, m l_i).
+            _, _, _, pl0, pl1, pl2 = acc[p]
+            l0 = e00 * pl0 + e01 * pl1 + e02 * pl2
+            l1 = e10 * pl0 + e11 * pl1 + e12 * pl2
+            l2 = e20 * pl0 + e21 * pl1 + e22 * pl2
+            acc[i] = (zero, zero, zero, l0, l1, l2)
+            n0, n1, n2 = hy * l2 - hz * l1, hz * l0 - hx * l2, hx * l1 - hy * l0
+            f0, f1, f2 = mass * l0, mass * l1, mass * l2
         else:
-            a0, a1, a2 = a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi
+            qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
 
-        # f_i = I_i a_i + v_i ×* I_i v_i - f_ext_i, with I = [[Ibar, h×], [h×ᵀ, m 1]]
-        Ixx, Ixy, Ixz, Iyy, Iyz, Izz = Ib
-        if moving:
-            # v_i = Xup_i v_λ(i) + vJ,  vJ = S_i q̇_i
-            qdi = qd[k] if mul == 1.0 else mul * qd[k]
-            pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
-            u0 = pv0 - (ry * pw2 - rz * pw1)
-            u1 = pv1 - (rz * pw0 - rx * pw2)
-            u2 = pv2 - (rx * pw1 - ry * pw0)
-            w0 = e00 * pw0 + e01 * pw1 + e02 * pw2
-            w1 = e10 * pw0 + e11 * pw1 + e12 * pw2
-            w2 = e20 * pw0 + e21 * pw1 + e22 * pw2
-            v0 = e00 * u0 + e01 * u1 + e02 * u2
-            v1 = e10 * u0 + e11 * u1 + e12 * u2
-            v2 = e20 * u0 + e21 * u1 + e22 * u2
-            j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
-            if code == PR:
-                v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
-                l0 += w1 * j2 - w2 * j1
-                l1 += w2 * j0 - w0 * j2
-                l2 += w0 * j1 - w1 * j0
+            # a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ
+            if p == 0 and weightless:
+                a0 = a1 = a2 = l0 = l1 = l2 = zero      # a_0 = 0
             else:
-                w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
-                a0 += w1 * j2 - w2 * j1
-                a1 += w2 * j0 - w0 * j2
-                a2 += w0 * j1 - w1 * j0
-                l0 += v1 * j2 - v2 * j1
-                l1 += v2 * j0 - v0 * j2
-                l2 += v0 * j1 - v1 * j0
-            vel[i] = (w0, w1, w2, v0, v1, v2)
-        acc[i] = (a0, a1, a2, l0, l1, l2)
+                pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
+                u0 = pl0 - (ry * pa2 - rz * pa1)
+                u1 = pl1 - (rz * pa0 - rx * pa2)
+                u2 = pl2 - (rx * pa1 - ry * pa0)
+                a0 = e00 * pa0 + e01 * pa1 + e02 * pa2
+                a1 = e10 * pa0 + e11 * pa1 + e12 * pa2
+                a2 = e20 * pa0 + e21 * pa1 + e22 * pa2
+                l0 = e00 * u0 + e01 * u1 + e02 * u2
+                l1 = e10 * u0 + e11 * u1 + e12 * u2
+                l2 = e20 * u0 + e21 * u1 + e22 * u2
+            if code == PR:
+                l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
+            else:
+                a0, a1, a2 = a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi
 
-        # I_i a_i
-        n0 = Ixx * a0 + Ixy * a1 + Ixz * a2 + (hy * l2 - hz * l1)
-        n1 = Ixy * a0 + Iyy * a1 + Iyz * a2 + (hz * l0 - hx * l2)
-        n2 = Ixz * a0 + Iyz * a1 + Izz * a2 + (hx * l1 - hy * l0)
-        f0 = mass * l0 - (hy * a2 - hz * a1)
-        f1 = mass * l1 - (hz * a0 - hx * a2)
-        f2 = mass * l2 - (hx * a1 - hy * a0)
-        if moving:
-            # momentum I_i v_i, then v_i ×* (I_i v_i) = [w × hn + v × hf; w × hf]
-            m0 = Ixx * w0 + Ixy * w1 + Ixz * w2 + (hy * v2 - hz * v1)
-            m1 = Ixy * w0 + Iyy * w1 + Iyz * w2 + (hz * v0 - hx * v2)
-            m2 = Ixz * w0 + Iyz * w1 + Izz * w2 + (hx * v1 - hy * v0)
-            k0 = mass * v0 - (hy * w2 - hz * w1)
-            k1 = mass * v1 - (hz * w0 - hx * w2)
-            k2 = mass * v2 - (hx * w1 - hy * w0)
-            n0 += (w1 * m2 - w2 * m1) + (v1 * k2 - v2 * k1)
-            n1 += (w2 * m0 - w0 * m2) + (v2 * k0 - v0 * k2)
-            n2 += (w0 * m1 - w1 * m0) + (v0 * k1 - v1 * k0)
-            f0 += w1 * k2 - w2 * k1
-            f1 += w2 * k0 - w0 * k2
-            f2 += w0 * k1 - w1 * k0
+            # f_i = I_i a_i + v_i ×* I_i v_i - f_ext_i, with I = [[Ibar, h×], [h×ᵀ, m 1]]
+            Ixx, Ixy, Ixz, Iyy, Iyz, Izz = Ib
+            if moving:
+                # v_i = Xup_i v_λ(i) + vJ,  vJ = S_i q̇_i
+                qdi = qd[k] if mul == 1.0 else mul * qd[k]
+                pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
+                u0 = pv0 - (ry * pw2 - rz * pw1)
+                u1 = pv1 - (rz * pw0 - rx * pw2)
+                u2 = pv2 - (rx * pw1 - ry * pw0)
+                w0 = e00 * pw0 + e01 * pw1 + e02 * pw2
+                w1 = e10 * pw0 + e11 * pw1 + e12 * pw2
+                w2 = e20 * pw0 + e21 * pw1 + e22 * pw2
+                v0 = e00 * u0 + e01 * u1 + e02 * u2
+                v1 = e10 * u0 + e11 * u1 + e12 * u2
+                v2 = e20 * u0 + e21 * u1 + e22 * u2
+                j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
+                if code == PR:
+                    v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
+                    l0 += w1 * j2 - w2 * j1
+                    l1 += w2 * j0 - w0 * j2
+                    l2 += w0 * j1 - w1 * j0
+                else:
+                    w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
+                    a0 += w1 * j2 - w2 * j1
+                    a1 += w2 * j0 - w0 * j2
+                    a2 += w0 * j1 - w1 * j0
+                    l0 += v1 * j2 - v2 * j1
+                    l1 += v2 * j0 - v0 * j2
+                    l2 += v0 * j1 - v1 * j0
+                vel[i] = (w0, w1, w2, v0, v1, v2)
+            acc[i] = (a0, a1, a2, l0, l1, l2)
+
+            # I_i a_i
+            n0 = Ixx * a0 + Ixy * a1 + Ixz * a2 + (hy * l2 - hz * l1)
+            n1 = Ixy * a0 + Iyy * a1 + Iyz * a2 + (hz * l0 - hx * l2)
+            n2 = Ixz * a0 + Iyz * a1 + Izz * a2 + (hx * l1 - hy * l0)
+            f0 = mass * l0 - (hy * a2 - hz * a1)
+            f1 = mass * l1 - (hz * a0 - hx * a2)
+            f2 = mass * l2 - (hx * a1 - hy * a0)
+            if moving:
+                # momentum I_i v_i, then v_i ×* (I_i v_i) = [w × hn + v × hf; w × hf]
+                m0 = Ixx * w0 + Ixy * w1 + Ixz * w2 + (hy * v2 - hz * v1)
+                m1 = Ixy * w0 + Iyy * w1 + Iyz * w2 + (hz * v0 - hx * v2)
+                m2 = Ixz * w0 + Iyz * w1 + Izz * w2 + (hx * v1 - hy * v0)
+                k0 = mass * v0 - (hy * w2 - hz * w1)
+                k1 = mass * v1 - (hz * w0 - hx * w2)
+                k2 = mass * v2 - (hx * w1 - hy * w0)
+                n0 += (w1 * m2 - w2 * m1) + (v1 * k2 - v2 * k1)
+                n1 += (w2 * m0 - w0 * m2) + (v2 * k0 - v0 * k2)
+                n2 += (w0 * m1 - w1 * m0) + (v0 * k1 - v1 * k0)
+                f0 += w1 * k2 - w2 * k1
+                f1 += w2 * k0 - w0 * k2
+                f2 += w0 * k1 - w1 * k0
         fe = f_body.get(i)
         if fe is not None:
             n0, n1, n2 = n0 - fe[0], n1 - fe[1], n2 - fe[2]
@@ -319,14 +349,17 @@ def xup_components(model: Model, q, m=math) -> list:
             continue
         c, s = cos(qi), sin(qi)
         if code == RZ:
+            s = az * s     # about ±Z
             E = (c * t00 + s * t10, c * t01 + s * t11, c * t02 + s * t12,
                  c * t10 - s * t00, c * t11 - s * t01, c * t12 - s * t02,
                  t20, t21, t22)
         elif code == RX:
+            s = ax * s     # about ±X
             E = (t00, t01, t02,
                  c * t10 + s * t20, c * t11 + s * t21, c * t12 + s * t22,
                  c * t20 - s * t10, c * t21 - s * t11, c * t22 - s * t12)
         elif code == RY:
+            s = ay * s     # about ±Y
             E = (c * t00 - s * t20, c * t01 - s * t21, c * t02 - s * t22,
                  t10, t11, t12,
                  s * t00 + c * t20, s * t01 + c * t21, s * t02 + c * t22)

@@ -241,14 +241,34 @@ def test_other_float_dtypes_run_on_numpy(kernels, dtype, rng):
         np.testing.assert_array_equal(tau, sd.rnea(model, *args, backend='numpy'))
 
 
-def test_kernel_arrays_are_cached_read_only_tables(kernels):
+def test_kernel_table_is_built_with_the_model(kernels):
     model, _ = robot('panda')
     K, n = kernels.kernel_arrays(model)
-    assert kernels.kernel_arrays(model)[0] is K and n == model.nq
-    assert K.shape == (model.NB + 1, kernels.WIDTH) and not K.flags.writeable
+    assert kernels.kernel_arrays(model)[0] is K is model._table and n == model.nq
+    assert K.shape == (model.NB + 1, sd.model.TABLE_WIDTH)
+    assert K[0, kernels.QIDX] == n          # the length the single entry checks q against
     np.testing.assert_array_equal(K[1:, kernels.PARENT], model.parent[1:])
     np.testing.assert_array_equal(K[1:, kernels.QIDX], model.qidx[1:])
     np.testing.assert_array_equal(K[1:, kernels.MUL], model.qmul[1:])
+    # A derived model gets its own table; the original's is left as it was.
+    before = K.copy()
+    heavier = sd.with_payload(model, model.body_names[-1], 1.5, [0.0, 0.0, 0.1],
+                              [0.01, 0.0, 0.0, 0.01, 0.0, 0.01])
+    assert heavier._table is not K and K.flags.writeable
+    np.testing.assert_array_equal(K, before)
+    assert heavier._table[-1, kernels.MASS] == K[-1, kernels.MASS] + 1.5
+
+
+def test_single_entry_refuses_wrong_lengths(kernels):
+    model, _ = robot('panda')
+    n = model.nq
+    K = model._table
+    z, tau = np.zeros(n), np.full(n, 7.0)
+    for q, out in ((np.zeros(n - 1), tau), (z, np.full(n + 1, 7.0))):
+        assert not kernels.rnea_single(K, q, z, z, 0.0, 0.0, -9.81, out)
+    np.testing.assert_array_equal(tau, 7.0)    # nothing written
+    with pytest.raises(ValueError, match=rf'q must have shape \(\.\.\., {n}\)'):
+        sd.rnea(model, np.zeros(n - 1), np.zeros(n - 1), np.zeros(n - 1), backend='compiled')
 
 
 def test_warmup_and_describe(kernels):
