@@ -66,14 +66,16 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         kernels = backends.compiled(backend)
     if kernels is not None and not f_ext:
         # One C-contiguous float64 state of shape (n,) goes straight into the kernel; other
-        # types (lists, other dtypes or shapes) match no overload (TypeError) and other
-        # lengths return False: the general path then validates and runs them.
+        # dtypes, layouts or argument types match no overload (TypeError), other lengths
+        # return False: the general path then validates and runs them. Lists (no ndim) and
+        # batches never try: numba takes ~70 µs to explain a type mismatch.
         try:
-            tau = np.empty(len(q))
-            gx, gy, gz = gravity
-            if kernels.rnea_single(model._table, q, qd, qdd, gx, gy, gz, tau):
-                return tau
-        except (TypeError, ValueError):
+            if q.ndim == 1:
+                tau = np.empty(len(q))
+                gx, gy, gz = gravity
+                if kernels.rnea_single(model._table, q, qd, qdd, gx, gy, gz, tau):
+                    return tau
+        except (AttributeError, TypeError, ValueError):
             pass
     return _rnea(model, q, qd, qdd, gravity, f_ext, kernels)
 
