@@ -319,7 +319,7 @@ def rnea_single(K, q, qd, qdd, gx, gy, gz, tau):
     float64 array, gravity not three numbers) raises ``TypeError`` as no overload matches,
     and the caller falls back to the general path. Holds the GIL: a call is too short to
     gain from releasing it. The scratch is on the stack, so a model of more than
-    ``STACK_ROWS - 1`` bodies returns False too (the batch entry takes it).
+    ``STACK_ROWS - 1`` bodies returns False too (:func:`rnea_single_large` takes it).
     """
     n = int(K[0, QIDX])
     rows = K.shape[0]
@@ -328,6 +328,20 @@ def rnea_single(K, q, qd, qdd, gx, gy, gz, tau):
         return False
     work = _stack_doubles(rows * WORK)     # a raw pointer: no array (needs no NRT)
     _rnea_one(K, q, qd, qdd, gx, gy, gz, _NO_FEXT, -1, tau, work)
+    return True
+
+
+@numba.njit(_SINGLE, **_JIT)
+def rnea_single_large(K, q, qd, qdd, gx, gy, gz, tau):
+    """As :func:`rnea_single`, for models of any size: the scratch is allocated (with NRT).
+
+    ``rnea.rnea`` calls it when :func:`rnea_single` returned False, which for a model of
+    ``STACK_ROWS`` bodies or more means too large for the stack; False if not (n,).
+    """
+    n = int(K[0, QIDX])
+    if tau.shape[0] != n or q.shape[0] != n or qd.shape[0] != n or qdd.shape[0] != n:
+        return False
+    _rnea_one(K, q, qd, qdd, gx, gy, gz, _NO_FEXT, -1, tau, np.empty(K.shape[0] * WORK))
     return True
 
 
@@ -395,6 +409,7 @@ def warmup(model: Model) -> None:
     n = model.nq
     z1, z2 = np.zeros(n), np.zeros((PARALLEL_MIN, n))
     g = np.array([0.0, 0.0, -9.81])
-    rnea_single(kernel_arrays(model)[0], z1, z1, z1, *g, np.empty(n))
+    rnea_single(model._table, z1, z1, z1, *g, np.empty(n))
+    rnea_single_large(model._table, z1, z1, z1, *g, np.empty(n))
     rnea(model, z1, z1, z1, g, {})
     rnea(model, z2, z2, z2, g, {})

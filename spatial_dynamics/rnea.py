@@ -73,7 +73,9 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
             if q.ndim == 1:
                 tau = np.empty(len(q))
                 gx, gy, gz = gravity
-                if kernels.rnea_single(model._table, q, qd, qdd, gx, gy, gz, tau):
+                K = model._table
+                if (kernels.rnea_single(K, q, qd, qdd, gx, gy, gz, tau)
+                        or kernels.rnea_single_large(K, q, qd, qdd, gx, gy, gz, tau)):
                     return tau
         except (AttributeError, TypeError, ValueError):
             pass
@@ -108,13 +110,13 @@ def _rnea(model: Model, q, qd, qdd, gravity, f_ext, kernels) -> np.ndarray:
         q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
     if kernels is not None and q.dtype == np.float64:
         if not fb and q.size == q.shape[-1] > 0:
-            # One state with batch dimensions of 1: the single-state entry, not the batch's
-            # (unless the model is too large for it).
+            # One state with batch dimensions of 1: a single-state entry, not the batch's.
             n = model.nq
             tau = np.empty(n)
-            if kernels.rnea_single(model._table, *(np.array(x.reshape(n)) for x in (q, qd, qdd)),
-                                   *(float(x) for x in g), tau):
-                return tau.reshape(q.shape)
+            kernels.rnea_single_large(model._table,
+                                      *(np.array(x.reshape(n)) for x in (q, qd, qdd)),
+                                      *(float(x) for x in g), tau)
+            return tau.reshape(q.shape)
         return kernels.rnea(model, q, qd, qdd, g, fb)
     if q.dtype == np.float64 and q.size == q.shape[-1] > 0:
         # One state (maybe with batch dimensions of 1): plain floats beat the batch path's

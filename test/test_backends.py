@@ -259,6 +259,23 @@ def test_kernel_table_is_built_with_the_model(kernels):
     assert heavier._table[-1, kernels.MASS] == K[-1, kernels.MASS] + 1.5
 
 
+def test_model_too_large_for_the_stack(kernels, rng):
+    """Beyond STACK_ROWS bodies the stack entry declines and the allocating one answers."""
+    xml = random_tree_urdf(np.random.default_rng(2099), kernels.STACK_ROWS + 20,
+                           branching=True, joint_kinds=('revolute', 'prismatic'), mimic=True)
+    model, oracle = sd.Model.from_urdf(xml), PinOracle(xml)
+    assert model.NB + 1 > kernels.STACK_ROWS
+    q, qd, qdd = random_state(rng, (), model.nq)
+    tau = np.empty(model.nq)
+    assert not kernels.rnea_single(model._table, q, qd, qdd, 0.0, 0.0, -9.81, tau)
+    for shape in ((model.nq,), (1, model.nq)):
+        args = [x.reshape(shape) for x in (q, qd, qdd)]
+        tau = sd.rnea(model, *args, backend='compiled')
+        assert tau.shape == shape
+        assert_ulps_close(tau, sd.rnea(model, *args, backend='numpy'))
+        assert max_diff(tau, oracle.rnea(model.joint_names, *args)) <= TOL_PIN
+
+
 def test_single_entry_refuses_wrong_lengths(kernels):
     model, _ = robot('panda')
     n = model.nq
@@ -395,7 +412,8 @@ def test_read_only_install_caches_in_the_fallback_dir_and_reloads(tmp_path):
         from spatial_dynamics import kernels
         import numba
         print('cache dir:', numba.config.CACHE_DIR)
-        for f in (kernels.rnea_single, kernels._rnea_batch, kernels._rnea_batch_parallel):
+        for f in (kernels.rnea_single, kernels.rnea_single_large, kernels._rnea_batch,
+                  kernels._rnea_batch_parallel):
             print(f.__name__, 'hits', sum(f.stats.cache_hits.values()),
                   'misses', sum(f.stats.cache_misses.values()))
     '''
@@ -407,5 +425,5 @@ def test_read_only_install_caches_in_the_fallback_dir_and_reloads(tmp_path):
     assert 'misses 1' in first, first
     assert any(name.endswith('.nbi') for _, _, names in os.walk(fallback) for name in names)
     second = run_python(code, env)
-    for name in ('rnea_single', '_rnea_batch', '_rnea_batch_parallel'):
+    for name in ('rnea_single', 'rnea_single_large', '_rnea_batch', '_rnea_batch_parallel'):
         assert f'{name} hits 1 misses 0' in second, second
