@@ -21,6 +21,8 @@ import pytest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from urdf_gen import mimic_table, MOVABLE  # noqa: E402
+# The node tests' fixtures (install, driver, demo_model); importing them needs no ROS.
+from node_harness import demo_model, driver, install  # noqa: E402,F401
 
 ROBOT_FILES = {
     # Panda with its hand: two fixed sibling links (tcp, fingers) and a <mimic> finger.

@@ -335,3 +335,28 @@ def pin_oracle(urdf: str):
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from conftest import PinOracle
     return PinOracle(urdf)
+
+
+# Fixtures of the node tests; test/conftest.py imports them (it must import without ROS, and
+# so can this module: rclpy is imported only when a driver is made).
+
+
+@pytest.fixture(scope='module')
+def install() -> Install:
+    """Build and install the package with colcon (once per session)."""
+    return colcon_install()
+
+
+@pytest.fixture(scope='module')
+def driver():
+    """Yield a node in this process that talks to the node under test."""
+    d = Driver()
+    yield d
+    d.close()
+
+
+@pytest.fixture(scope='module')
+def demo_model():
+    """Return the library's model of the demo arm the node tests start the node with."""
+    import spatial_dynamics as sd
+    return sd.Model.from_urdf(DEMO_URDF)

@@ -21,8 +21,8 @@ import pytest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import (  # noqa: E402
-    colcon_install, DEMO_URDF, Driver, Io, joint_state, NodeProcess, PENDULUM_URDF,
-    random_states, stamp_key, TIMEOUT, values)
+    DEMO_URDF, Driver, Io, joint_state, NodeProcess, PENDULUM_URDF, random_states, stamp_key,
+    TIMEOUT, values)
 import spatial_dynamics as sd  # noqa: E402
 
 pytestmark = pytest.mark.ros
@@ -30,23 +30,6 @@ pytestmark = pytest.mark.ros
 TOL = 1e-9  # N m; the node computes with the same library
 PAYLOAD = dict(link='hand', mass=1.5, com=[0.01, -0.02, 0.08],
                inertia=[0.004, 0.0002, -0.0001, 0.005, 0.0003, 0.003])
-
-
-@pytest.fixture(scope='module')
-def install():
-    return colcon_install()
-
-
-@pytest.fixture(scope='module')
-def driver():
-    d = Driver()
-    yield d
-    d.close()
-
-
-@pytest.fixture(scope='module')
-def model():
-    return sd.Model.from_urdf(DEMO_URDF)
 
 
 @pytest.fixture
@@ -57,10 +40,10 @@ def node(install, tmp_path):
 
 
 @pytest.fixture
-def io(driver, node, model):
+def io(driver, node, demo_model):
     channels = Io(driver)
     channels.wait_connected()
-    channels.prime(model.joint_names)
+    channels.prime(demo_model.joint_names)
     yield channels
     channels.close()
 
@@ -92,15 +75,15 @@ def ok(results):
         assert result.successful, result.reason
 
 
-def test_payload_set_live_and_bad_payloads_rejected(driver, io, model, node):
+def test_payload_set_live_and_bad_payloads_rejected(driver, io, demo_model, node):
     ask = Asker(driver, io)
-    names = model.joint_names
+    names = demo_model.joint_names
     state = random_states(31, 1, len(names))[0]
     plain = ask(names, state)
-    np.testing.assert_allclose(plain, sd.rnea(model, *state), rtol=0, atol=TOL)
+    np.testing.assert_allclose(plain, sd.rnea(demo_model, *state), rtol=0, atol=TOL)
 
     ok(io.set_parameters(**{f'payload.{key}': value for key, value in PAYLOAD.items()}))
-    loaded = sd.with_payload(model, **PAYLOAD)
+    loaded = sd.with_payload(demo_model, **PAYLOAD)
     tau = sd.rnea(loaded, *state)
     assert np.abs(tau - plain).max() > 0.1, 'the payload should change the torques'
     np.testing.assert_allclose(ask(names, state), tau, rtol=0, atol=TOL)
@@ -132,9 +115,9 @@ def test_payload_set_live_and_bad_payloads_rejected(driver, io, model, node):
     np.testing.assert_allclose(ask(names, state), plain, rtol=0, atol=0)
 
 
-def test_armature_and_urdf_friction(driver, io, model, node):
+def test_armature_and_urdf_friction(driver, io, demo_model, node):
     ask = Asker(driver, io)
-    names = model.joint_names
+    names = demo_model.joint_names
     states = random_states(32, 3, len(names))
     armature = [0.3, 0.3, 0.2, 0.2, 0.05, 0.05, 0.02, 0.5]
     assert len(armature) == len(names)
@@ -142,15 +125,15 @@ def test_armature_and_urdf_friction(driver, io, model, node):
     for state in states:
         q, qd, qdd = state
         np.testing.assert_allclose(
-            ask(names, state), sd.rnea(model, q, qd, qdd) + sd.armature_torque(
+            ask(names, state), sd.rnea(demo_model, q, qd, qdd) + sd.armature_torque(
                 np.array(armature), qdd), rtol=0, atol=TOL)
     ok(io.set_parameters(friction_model='urdf', friction_velocity_threshold=0.05))
     slow = states[0].copy()
     slow[1] *= 0.01   # velocities near the threshold: the smooth sign matters
     for state in list(states) + [slow]:
         q, qd, qdd = state
-        want = (sd.rnea(model, q, qd, qdd) + sd.armature_torque(np.array(armature), qdd)
-                + sd.friction_torque(model, qd, 0.05))
+        want = (sd.rnea(demo_model, q, qd, qdd) + sd.armature_torque(np.array(armature), qdd)
+                + sd.friction_torque(demo_model, qd, 0.05))
         np.testing.assert_allclose(ask(names, state), want, rtol=0, atol=TOL)
 
     for name, value, word in [('armature', [0.1] * 3, 'armature'),
@@ -164,17 +147,17 @@ def test_armature_and_urdf_friction(driver, io, model, node):
     from rclpy.parameter import Parameter
     ok(io.set_parameters(friction_model='none',
                          armature=Parameter('armature', Parameter.Type.DOUBLE_ARRAY, [])))
-    np.testing.assert_allclose(ask(names, states[0]), sd.rnea(model, *states[0]),
+    np.testing.assert_allclose(ask(names, states[0]), sd.rnea(demo_model, *states[0]),
                                rtol=0, atol=TOL)
 
 
-def test_clamp_to_effort_limits_counts_saturation(driver, io, model, node):
+def test_clamp_to_effort_limits_counts_saturation(driver, io, demo_model, node):
     ask = Asker(driver, io)
-    names = model.joint_names
+    names = demo_model.joint_names
     state = random_states(33, 1, len(names))[0]
     state[2] = 200.0   # accelerations far beyond what joint5..7 (12 N m) can give
-    tau = sd.rnea(model, *state)
-    clamped, saturated = sd.clamp_to_effort_limits(model, tau)
+    tau = sd.rnea(demo_model, *state)
+    clamped, saturated = sd.clamp_to_effort_limits(demo_model, tau)
     assert saturated.any() and not saturated.all()
     np.testing.assert_allclose(ask(names, state), tau, rtol=0, atol=TOL)   # default: off
     ok(io.set_parameters(clamp_to_effort_limits=True))
@@ -197,20 +180,20 @@ def wrench_msg(link, torque, force):
     return msg
 
 
-def test_external_wrenches_applied_until_timeout(driver, io, model, node):
+def test_external_wrenches_applied_until_timeout(driver, io, demo_model, node):
     from geometry_msgs.msg import WrenchStamped
     ask = Asker(driver, io)
-    names = model.joint_names
+    names = demo_model.joint_names
     state = random_states(34, 1, len(names))[0]
-    plain = sd.rnea(model, *state)
+    plain = sd.rnea(demo_model, *state)
     wrenches = driver.node.create_publisher(WrenchStamped, 'external_wrenches', 10)
     driver.spin_until(lambda: wrenches.get_subscription_count() >= 1, what='wrench subscriber')
     ok(io.set_parameters(external_wrench_timeout=30.0))
     hand = ([0.2, -0.1, 0.3], [5.0, -3.0, 20.0])
     link4 = ([0.0, 0.5, 0.0], [0.0, 0.0, -8.0])
     f_ext = {'hand': np.r_[hand[0], hand[1]], 'link4': np.r_[link4[0], link4[1]]}
-    want_both = sd.rnea(model, *state, f_ext=f_ext)
-    want_hand = sd.rnea(model, *state, f_ext={'hand': f_ext['hand']})
+    want_both = sd.rnea(demo_model, *state, f_ext=f_ext)
+    want_hand = sd.rnea(demo_model, *state, f_ext={'hand': f_ext['hand']})
 
     def until(want, publish=()):
         deadline = time.monotonic() + TIMEOUT
@@ -250,10 +233,10 @@ def test_external_wrenches_applied_until_timeout(driver, io, model, node):
         driver.node.destroy_publisher(wrenches)
 
 
-def test_joints_reduce_the_model_with_locked_positions(driver, io, model, node):
+def test_joints_reduce_the_model_with_locked_positions(driver, io, demo_model, node):
     """Outputs on the kept joints equal the full model's with the others locked, at rest."""
     ask = Asker(driver, io)
-    names = model.joint_names
+    names = demo_model.joint_names
     kept = ['joint4', 'joint1', 'joint2', 'joint3']
     idx = [names.index(j) for j in kept]
     state = random_states(35, 1, len(names))[0]
@@ -266,7 +249,7 @@ def test_joints_reduce_the_model_with_locked_positions(driver, io, model, node):
         full[:, idx] = state[:, idx]
         for name, value in locked.items():
             full[0, names.index(name)] = value
-        want = sd.rnea(model, *full)[idx]
+        want = sd.rnea(demo_model, *full)[idx]
         # the message carries the kept joints only
         got = ask(kept, state[:, idx])
         np.testing.assert_allclose(got, want, rtol=0, atol=TOL)
@@ -282,9 +265,9 @@ def test_joints_reduce_the_model_with_locked_positions(driver, io, model, node):
         assert not result.successful and word in result.reason, result.reason
 
 
-def test_backend_warmed_up_and_summary_logged(driver, io, model, node):
+def test_backend_warmed_up_and_summary_logged(driver, io, demo_model, node):
     log = node.wait_for_log('backend: ')
-    assert f'model: {model.summary()}' in log
+    assert f'model: {demo_model.summary()}' in log
     kv = values(io.fresh_status('robot model'))
     assert kv['backend'] and kv['backend'].split()[0] in ('compiled', 'numpy')
-    assert kv['summary'] == model.summary()
+    assert kv['summary'] == demo_model.summary()

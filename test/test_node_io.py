@@ -19,8 +19,8 @@ import pytest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import (  # noqa: E402
-    colcon_install, DEMO_URDF, Driver, drive, Io, joint_state, NodeProcess, PENDULUM_URDF,
-    random_states, settle, stamp, stamp_key, values)
+    DEMO_URDF, drive, Io, joint_state, NodeProcess, PENDULUM_URDF, random_states, settle, stamp,
+    stamp_key, values)
 import spatial_dynamics as sd  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 
@@ -30,23 +30,6 @@ UNKNOWN = 'conveyor_joint'   # a joint the model doesn't have: ignored
 RATE = 500.0                 # Hz
 GRAVITY = (0.0, 0.0, -9.81)
 WALL = (0.0, -9.81, 0.0)     # wall mount: gravity along the base's -y
-
-
-@pytest.fixture(scope='module')
-def install():
-    return colcon_install()
-
-
-@pytest.fixture(scope='module')
-def driver():
-    d = Driver()
-    yield d
-    d.close()
-
-
-@pytest.fixture(scope='module')
-def model():
-    return sd.Model.from_urdf(DEMO_URDF)
 
 
 @pytest.fixture
@@ -66,8 +49,8 @@ def unprimed_io(driver, node):
 
 
 @pytest.fixture
-def io(unprimed_io, model):
-    unprimed_io.prime(model.joint_names)
+def io(unprimed_io, demo_model):
+    unprimed_io.prime(demo_model.joint_names)
     return unprimed_io
 
 
@@ -117,15 +100,16 @@ def answers_by_stamp(io):
     return {stamp_key(msg.header.stamp): msg for msg in io.efforts}
 
 
-def expected(model, states, gravity=GRAVITY):
+def expected(demo_model, states, gravity=GRAVITY):
     """Library torques for states of shape (count, 3, n)."""
-    return sd.rnea(model, states[:, 0], states[:, 1], states[:, 2], gravity=gravity)
+    return sd.rnea(demo_model, states[:, 0], states[:, 1], states[:, 2], gravity=gravity)
 
 
-def test_joint_states_answered_like_library_and_pinocchio_bad_ones_not(driver, io, model, node):
+def test_joint_states_answered_like_library_and_pinocchio_bad_ones_not(driver, io, demo_model,
+                                                                       node):
     """~500 Hz of shuffled JointStates, every 10th spoilt: good ones answered right, bad never."""
     from node_harness import pin_oracle
-    names = model.joint_names
+    names = demo_model.joint_names
     count = 2500
     states = random_states(1, count, len(names))
     rng = random.Random(2)
@@ -148,7 +132,7 @@ def test_joint_states_answered_like_library_and_pinocchio_bad_ones_not(driver, i
     assert len(answers) >= 0.5 * good
 
     ks = np.array(sorted(answers))
-    tau = expected(model, states[ks])
+    tau = expected(demo_model, states[ks])
     oracle = pin_oracle(DEMO_URDF)
     tau_pin = oracle.rnea(list(names), states[ks, 0], states[ks, 1], states[ks, 2])
     for row, k in enumerate(ks):
@@ -179,9 +163,9 @@ def test_joint_states_answered_like_library_and_pinocchio_bad_ones_not(driver, i
     assert log.count('message rejected') < count / 10 / 2, 'warnings are not throttled'
 
 
-def test_bad_messages_counted_by_reason_and_named_in_warnings(driver, io, model, node):
+def test_bad_messages_counted_by_reason_and_named_in_warnings(driver, io, demo_model, node):
     """Slow, one at a time: each bad message is counted under its reason, no answer."""
-    names = model.joint_names
+    names = demo_model.joint_names
     rng = random.Random(3)
     states = random_states(4, 10, len(names))
     sent = {}
@@ -205,8 +189,8 @@ def test_bad_messages_counted_by_reason_and_named_in_warnings(driver, io, model,
     assert 'message rejected (non_finite)' in log  # the first one; later ones are throttled
 
 
-def test_warning_names_the_missing_joint(driver, io, model, node):
-    names = model.joint_names
+def test_warning_names_the_missing_joint(driver, io, demo_model, node):
+    names = demo_model.joint_names
     msg = shuffled_message(names, random_states(5, 1, len(names))[0], 0, random.Random(5))
     spoil_joint = 'joint4'
     i = list(msg.name).index(spoil_joint)
@@ -224,9 +208,9 @@ def test_warning_names_the_missing_joint(driver, io, model, node):
     assert not io.efforts
 
 
-def test_gravity_changed_while_running(driver, io, model):
+def test_gravity_changed_while_running(driver, io, demo_model):
     """Answers switch from floor to wall gravity once, in order; bad gravity is rejected."""
-    names = model.joint_names
+    names = demo_model.joint_names
     count = 1000
     states = random_states(6, count, len(names))
     rng = random.Random(7)
@@ -244,8 +228,8 @@ def test_gravity_changed_while_running(driver, io, model):
 
     answers = answers_by_stamp(io)
     ks = np.array(sorted(answers))
-    floor = expected(model, states[ks], GRAVITY)
-    wall = expected(model, states[ks], WALL)
+    floor = expected(demo_model, states[ks], GRAVITY)
+    wall = expected(demo_model, states[ks], WALL)
     which = []
     for row, k in enumerate(ks):
         effort = np.array(answers[k].effort)
@@ -280,9 +264,9 @@ def heavier_hand(urdf_path, mass):
     return text[:at] + f'<mass value="{mass}"/>' + text[at + len(old):]
 
 
-def test_robot_description_swapped_while_running(driver, io, model, node):
+def test_robot_description_swapped_while_running(driver, io, demo_model, node):
     """A valid description is swapped in between two messages; an invalid one changes nothing."""
-    names = model.joint_names
+    names = demo_model.joint_names
     heavy_urdf = heavier_hand(DEMO_URDF, 3.6)
     heavy = sd.Model.from_urdf(heavy_urdf)
     count = 1000
@@ -302,7 +286,7 @@ def test_robot_description_swapped_while_running(driver, io, model, node):
 
     answers = answers_by_stamp(io)
     ks = np.array(sorted(answers))
-    light_tau = expected(model, states[ks])
+    light_tau = expected(demo_model, states[ks])
     heavy_tau = expected(heavy, states[ks])
     which = []
     for row, k in enumerate(ks):
@@ -339,9 +323,9 @@ def test_robot_description_swapped_while_running(driver, io, model, node):
     assert kv['source'] == 'parameter robot_description'
 
 
-def test_description_with_other_joints_and_output_joints(driver, io, model, node):
+def test_description_with_other_joints_and_output_joints(driver, io, demo_model, node):
     """``joints`` keeps and orders joints (model reduction: the others locked at 0)."""
-    names = model.joint_names
+    names = demo_model.joint_names
     rng = random.Random(11)
     result = io.set_parameters(joints=['joint3', 'joint1', 'finger_joint1'])
     assert result[0].successful, result[0].reason
@@ -354,7 +338,7 @@ def test_description_with_other_joints_and_output_joints(driver, io, model, node
     kept = [names.index(j) for j in ('joint3', 'joint1', 'finger_joint1')]
     locked = np.zeros_like(state)
     locked[:, kept] = state[:, kept]
-    tau = dict(zip(names, expected(model, locked[None])[0]))
+    tau = dict(zip(names, expected(demo_model, locked[None])[0]))
     assert tuple(io.efforts[-1].name) == ('joint3', 'joint1', 'finger_joint1')
     np.testing.assert_allclose(io.commands[-1].data,
                                [tau['joint3'], tau['joint1'], tau['finger_joint1']],
@@ -384,8 +368,8 @@ def test_description_with_other_joints_and_output_joints(driver, io, model, node
     assert answer.effort[0] == pytest.approx(1.001 * qdd + 9.81 * math.sin(q), abs=1e-9)
 
 
-def test_acceleration_source_none_ignores_effort(driver, io, model, node):
-    names = model.joint_names
+def test_acceleration_source_none_ignores_effort(driver, io, demo_model, node):
+    names = demo_model.joint_names
     rng = random.Random(13)
     state = random_states(14, 1, len(names))[0]
     assert io.set_parameters(acceleration_source='none')[0].successful
@@ -396,7 +380,7 @@ def test_acceleration_source_none_ignores_effort(driver, io, model, node):
     io.joint_states.publish(msg)
     driver.spin_until(lambda: io.efforts, what='an answer')
     zero_qdd = np.stack([state[0], state[1], np.zeros(len(names))])
-    np.testing.assert_allclose(io.efforts[-1].effort, expected(model, zero_qdd[None])[0],
+    np.testing.assert_allclose(io.efforts[-1].effort, expected(demo_model, zero_qdd[None])[0],
                                rtol=0, atol=1e-9)
     # velocity empty = zeros too
     msg = shuffled_message(names, state, 2, rng)
@@ -404,14 +388,14 @@ def test_acceleration_source_none_ignores_effort(driver, io, model, node):
     io.joint_states.publish(msg)
     driver.spin_until(lambda: len(io.efforts) >= 2, what='a second answer')
     static = np.stack([state[0], np.zeros(len(names)), np.zeros(len(names))])
-    np.testing.assert_allclose(io.efforts[-1].effort, expected(model, static[None])[0],
+    np.testing.assert_allclose(io.efforts[-1].effort, expected(demo_model, static[None])[0],
                                rtol=0, atol=1e-9)
 
 
-def test_joint_trajectory_input(driver, io, model, node):
+def test_joint_trajectory_input(driver, io, demo_model, node):
     """points[0] of a JointTrajectory, by name, with its stamp; no points = rejected."""
     from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
-    names = model.joint_names
+    names = demo_model.joint_names
     states = random_states(15, 20, len(names))
     rng = random.Random(16)
     for k in range(20):
@@ -431,7 +415,7 @@ def test_joint_trajectory_input(driver, io, model, node):
     answers = answers_by_stamp(io)
     assert set(answers) == {k for k in range(20) if k % 5 != 4}
     ks = np.array(sorted(answers))
-    tau = expected(model, states[ks])
+    tau = expected(demo_model, states[ks])
     for row, k in enumerate(ks):
         np.testing.assert_allclose(answers[k].effort, tau[row], rtol=0, atol=1e-9)
         np.testing.assert_array_equal(answers[k].position, states[k, 0])
@@ -439,19 +423,19 @@ def test_joint_trajectory_input(driver, io, model, node):
     assert kv['rejected no_points'] == '4'
 
 
-def test_diagnostics_model_rate_and_staleness(driver, unprimed_io, model, node):
+def test_diagnostics_model_rate_and_staleness(driver, unprimed_io, demo_model, node):
     """Model loaded, rate and compute time while fed; ERROR and no output once stale."""
     io = unprimed_io
     status = io.fresh_status('robot model')
     kv = values(status)
     assert status.level == DiagnosticStatus.OK
-    assert kv['robot name'] == 'demo_arm' and kv['dof'] == str(len(model.joint_names))
+    assert kv['robot name'] == 'demo_arm' and kv['dof'] == str(len(demo_model.joint_names))
     assert kv['source'] == f'file {DEMO_URDF}'
     status = io.fresh_status('feedforward')
     # before any input: WARN, not ERROR
     assert status.level == DiagnosticStatus.WARN and 'no input' in status.message
 
-    names = model.joint_names
+    names = demo_model.joint_names
     states = random_states(17, 1500, len(names))
     rng = random.Random(18)
     first = len(io.diagnostics)

@@ -18,24 +18,12 @@ import yaml
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import (  # noqa: E402
-    colcon_install, DEMO_URDF, DOMAIN_ID, Driver, Io, joint_state, NodeProcess, PACKAGE,
-    random_states, ROOT, TIMEOUT, values)
+    DEMO_URDF, DOMAIN_ID, Io, joint_state, NodeProcess, PACKAGE, random_states, ROOT, TIMEOUT,
+    values)
 import spatial_dynamics as sd  # noqa: E402
 
 YAML = os.path.join(ROOT, 'config', 'inverse_dynamics.yaml')
 LAUNCH = os.path.join(ROOT, 'launch', 'inverse_dynamics.launch.py')
-
-
-@pytest.fixture(scope='module')
-def install():
-    return colcon_install()
-
-
-@pytest.fixture(scope='module')
-def driver():
-    d = Driver()
-    yield d
-    d.close()
 
 
 def declared_parameters():
