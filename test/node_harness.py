@@ -309,16 +309,8 @@ def random_states(seed: int, count: int, n: int) -> np.ndarray:
 
 def drive(driver: Driver, publish: Callable[[int], None], count: int, rate: float) -> None:
     """Call ``publish(k)`` for k in range(count) at ``rate`` Hz, spinning in between."""
-    period = 1.0 / rate
-    start = time.monotonic()
-    for k in range(count):
-        publish(k)
-        next_time = start + (k + 1) * period
-        while True:
-            remaining = next_time - time.monotonic()
-            if remaining <= 0:
-                break
-            driver.executor.spin_once(timeout_sec=min(remaining, 0.002))
+    from spatial_dynamics.latency import pace     # the latency and soak tools' pacing
+    assert pace(driver.executor, rate, count / rate, publish) == count
 
 
 def settle(driver: Driver, io: Io, seconds: float = 0.5) -> None:
