@@ -38,7 +38,7 @@ import math
 import os
 import sys
 import time
-from typing import Optional, Sequence, Tuple
+from typing import Callable, Optional, Sequence, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
@@ -787,13 +787,17 @@ class InverseDynamicsNode(Node):
         self.diagnostics_pub.publish(diagnostics)
 
 
-def main(args: Optional[Sequence[str]] = None) -> int:
-    """Run the node until SIGINT/SIGTERM; 0 on a clean exit, 1 if the start-up config is bad."""
+def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
+         name: str = NODE_NAME) -> int:
+    """Make a node and spin it until SIGINT/SIGTERM; 0 on a clean exit, 1 on a bad start-up.
+
+    The node's and the latency baseline's (``relay.py``) process around them, one routine.
+    """
     rclpy.init(args=args)
     node = None
     status = 0
     try:
-        node = InverseDynamicsNode()
+        node = make_node()
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         executor.spin()
@@ -801,13 +805,18 @@ def main(args: Optional[Sequence[str]] = None) -> int:
         pass
     except (ConfigError, InvalidParameterTypeException, InvalidParameterValueException) as err:
         # e.g. -p gravity:=[0,0,-10] (integers) or -p input_timeout:=0.0 (out of range)
-        rclpy.logging.get_logger(NODE_NAME).fatal(f'cannot start: {err}')
+        rclpy.logging.get_logger(name).fatal(f'cannot start: {err}')
         status = 1
     finally:
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
     return status
+
+
+def main(args: Optional[Sequence[str]] = None) -> int:
+    """Run the node until SIGINT/SIGTERM; 0 on a clean exit, 1 if the start-up config is bad."""
+    return spin(InverseDynamicsNode, args)
 
 
 if __name__ == '__main__':

@@ -13,12 +13,10 @@ the relay's in the same run is the node's own cost.
 import sys
 from typing import Optional, Sequence
 
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
-from spatial_dynamics.node import advertise, subscribe
+from spatial_dynamics.node import advertise, spin, subscribe
 
 
 class Relay(Node):
@@ -32,20 +30,7 @@ class Relay(Node):
 
 def main(args: Optional[Sequence[str]] = None) -> int:
     """Run the relay until SIGINT/SIGTERM; 0 on a clean exit."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = Relay()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return spin(Relay, args, 'relay')
 
 
 if __name__ == '__main__':
