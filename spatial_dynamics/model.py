@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 import os
+import stat
+import warnings as _warnings
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Mapping, Optional, Sequence, Union
@@ -23,10 +25,38 @@ from .spatial import Eaxis, mcI, plux, plux_Er
 
 Source = Union[str, bytes, os.PathLike]
 
-#: Relative tolerance of the inertia checks (positive semi-definite, triangle inequality).
+#: Rounding noise allowed in the inertia checks (positive semi-definite, triangle inequality,
+#: inertia without mass): a principal moment may miss by INERTIA_RTOL of the largest one, or by
+#: INERTIA_ATOL kg m² however small the inertia (files write "0" as ±1e-20 after a rotation).
 INERTIA_RTOL = 1e-6
-#: Largest magnitude accepted for a URDF number (lengths, masses, inertias, angles).
+INERTIA_ATOL = 1e-12
+#: Largest magnitude accepted for a URDF number the dynamics uses (lengths, masses, inertias,
+#: angles): beyond it products overflow. Limits (``<limit>``) may be any size (±1e16 = none).
 MAX_ABS_VALUE = 1e12
+#: Largest URDF file read (bytes): a robot description is text of at most a few MB.
+MAX_FILE_BYTES = 64 * 1024 * 1024
+
+
+class URDFWarning(UserWarning):
+    """A URDF that loads as written but is physically inconsistent; the message names it.
+
+    Raised as ``ValueError`` instead by ``Model.from_urdf(..., strict=True)``. The messages of
+    a model are kept on ``Model.warnings``.
+    """
+
+
+class _Report:
+    """Collects what is physically wrong in a URDF: warnings, or errors when ``strict``."""
+
+    def __init__(self, strict: bool) -> None:
+        self.strict = strict
+        self.messages: list = []
+
+    def __call__(self, message: str) -> None:
+        if self.strict:
+            raise ValueError(f'{message} (strict mode)')
+        if message not in self.messages:
+            self.messages.append(message)
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,6 +92,9 @@ class Model:
         lumped: links merged into a moving body by fixed (or locked) joints.
         pruned: links fixed to the base, which no joint's torque depends on.
         locked: joints locked by model reduction and their values.
+        warnings: what is physically inconsistent in the URDF but loaded as written (each
+            message names the link or joint, the quantity and its values); see
+            :class:`URDFWarning`.
     """
 
     name: str
@@ -89,6 +122,7 @@ class Model:
     lumped: tuple = ()
     pruned: tuple = ()
     locked: Mapping[str, float] = field(default_factory=dict)
+    warnings: tuple = ()
     _kernel: tuple = field(default=(), repr=False)
     _table: np.ndarray = field(init=False, repr=False)
 
@@ -108,8 +142,12 @@ class Model:
 
     @classmethod
     def from_urdf(cls, source: Source, joints: Optional[Sequence[str]] = None,
-                  locked: Optional[Mapping[str, float]] = None) -> 'Model':
-        """Build a model from a URDF file path or an XML string (meshes are never loaded).
+                  locked: Optional[Mapping[str, float]] = None, strict: bool = False
+                  ) -> 'Model':
+        """Build a model from a URDF file path, an XML string or XML bytes (no meshes loaded).
+
+        A ``str`` starting with ``<`` is XML, any other ``str`` (or ``os.PathLike``) a path of
+        a regular file; ``bytes`` are always XML, never a path.
 
         Model reduction: with ``joints``, only those joints stay movable (in that order as
         ``joint_names``); every other movable joint is locked at ``locked[name]`` (rad or m,
@@ -117,10 +155,22 @@ class Model:
         cannot change any kept joint's torque and are pruned. Mimic joints follow their
         source: locked with it, or kept with it.
 
-        Raises ``ValueError`` naming the offending element for malformed or unphysical
-        descriptions, and naming the joint for a bad ``joints``/``locked`` entry.
+        What cannot be computed raises ``ValueError`` naming the element: malformed XML,
+        entities or a DTD, unknown links, cycles, several roots, a non-finite or absurd
+        (> ``MAX_ABS_VALUE``) number the dynamics uses, negative mass, a zero-length axis, a
+        mimic of a missing joint, unsupported joint types, a bad ``joints``/``locked`` entry.
+        What is physically inconsistent but computable (an inertia that is not positive
+        semi-definite or breaks the triangle inequality, inertia without mass, negative
+        damping or friction, no robot name) loads exactly as written, with a
+        :class:`URDFWarning` per problem, also kept in ``model.warnings``; ``strict=True``
+        raises ``ValueError`` for the first of them instead. Rounding noise (see
+        ``INERTIA_ATOL``) is neither.
         """
-        return _from_robot(_parse_urdf(source), joints, locked)
+        report = _Report(strict)
+        model = _from_robot(_parse_urdf(source), joints, locked, report)
+        for message in model.warnings:
+            _warnings.warn(message, URDFWarning, stacklevel=2)
+        return model
 
     def summary(self) -> str:
         """One line for logs: dof, bodies kept, links lumped and pruned, locked joints."""
@@ -148,11 +198,7 @@ def _parse_urdf(source: Source):
     elif isinstance(source, str) and source.lstrip().startswith('<'):
         text = source.encode('utf-8')
     elif isinstance(source, str):
-        try:
-            with open(source, 'rb') as fh:
-                text = fh.read()
-        except OSError as err:
-            raise ValueError(f'cannot read URDF file {source!r}: {err.strerror}') from None
+        text = read_urdf_file(source)
     else:
         raise ValueError(f'URDF source must be a path or an XML string, not {type(source)}')
 
@@ -174,8 +220,6 @@ def _parse_urdf(source: Source):
                          '(expand xacro/entities before loading)')
     if root.tag != 'robot':
         raise ValueError(f'URDF root element must be <robot>, not <{root.tag}>')
-    if not root.get('name'):
-        raise ValueError('the <robot> element has no name attribute')
 
     links, joints = [], []
     for el in root.findall('link'):
@@ -196,7 +240,33 @@ def _parse_urdf(source: Source):
             joints.append(yourdfpy.URDF._parse_joint(el))
         except (ValueError, TypeError, AttributeError, KeyError) as err:
             raise ValueError(f'joint {name!r}: cannot parse: {err}') from None
-    return root.get('name'), links, joints
+    return root.get('name') or '', links, joints
+
+
+def read_urdf_file(path: str, limit: int = MAX_FILE_BYTES) -> bytes:
+    """Return the bytes of a URDF file: a regular file of at most ``limit`` bytes.
+
+    Never blocks on a FIFO or reads a device: the file is opened non-blocking and checked to
+    be regular before anything is read. ``ValueError`` names the path and the reason.
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, 'O_NONBLOCK', 0))
+    except OSError as err:
+        raise ValueError(f'cannot read URDF file {path!r}: {err.strerror}') from None
+    with os.fdopen(fd, 'rb') as fh:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise ValueError(f'URDF file {path!r} is not a regular file')
+        if info.st_size > limit:
+            raise ValueError(f'URDF file {path!r} is too large ({info.st_size} bytes, limit '
+                             f'{limit})')
+        try:
+            text = fh.read(limit + 1)
+        except OSError as err:
+            raise ValueError(f'cannot read URDF file {path!r}: {err.strerror}') from None
+    if len(text) > limit:
+        raise ValueError(f'URDF file {path!r} is too large (more than {limit} bytes)')
+    return text
 
 
 def _finite(what: str, values) -> np.ndarray:
@@ -216,7 +286,7 @@ def _origin(what: str, T) -> tuple[np.ndarray, np.ndarray]:
     return T[:3, :3], T[:3, 3]
 
 
-def _link_inertia(link) -> np.ndarray:
+def _link_inertia(link, report: _Report) -> np.ndarray:
     """Spatial inertia (6×6) of a URDF link in its own frame; zero without ``<inertial>``."""
     inertial = link.inertial
     if inertial is None:
@@ -225,16 +295,19 @@ def _link_inertia(link) -> np.ndarray:
     R, c = _origin(what, inertial.origin)
     return rigid_body_inertia(what, 0.0 if inertial.mass is None else inertial.mass, c,
                               np.zeros((3, 3)) if inertial.inertia is None
-                              else inertial.inertia, R)
+                              else inertial.inertia, R, report)
 
 
-def rigid_body_inertia(what: str, mass, com, inertia, R: Optional[np.ndarray] = None
-                       ) -> np.ndarray:
-    """Return the validated spatial inertia (6×6) ``mcI(m, c, R Ic Rᵀ)`` of a rigid body.
+def rigid_body_inertia(what: str, mass, com, inertia, R: Optional[np.ndarray] = None,
+                       report: Optional[_Report] = None) -> np.ndarray:
+    """Return the spatial inertia (6×6) ``mcI(m, c, R Ic Rᵀ)`` of a rigid body (RBDA 2.63).
 
-    ``mass`` (kg) finite and non-negative; ``com`` (m, 3); ``inertia`` (kg m², 3×3 about the
-    centre of mass, in a frame rotated by ``R`` from the link frame) positive semi-definite
-    with principal moments obeying the triangle inequality. ``ValueError`` names ``what``.
+    ``mass`` (kg) finite and non-negative; ``com`` (m, 3); ``inertia`` (kg m², symmetric 3×3
+    about the centre of mass, in a frame rotated by ``R`` from the link frame). What cannot be
+    computed raises ``ValueError`` naming ``what``. A physically inconsistent inertia (not
+    positive semi-definite, principal moments breaking the triangle inequality, inertia
+    without mass) goes to ``report`` and is used as written; without a ``report`` it raises.
+    Rounding noise (:data:`INERTIA_RTOL`, :data:`INERTIA_ATOL`) is accepted silently.
     """
     m = float(_finite(f'{what} mass', mass))
     if m < 0.0:
@@ -245,17 +318,34 @@ def rigid_body_inertia(what: str, mass, com, inertia, R: Optional[np.ndarray] = 
         raise ValueError(f'{what}: centre of mass must be 3 numbers and inertia 3×3')
     if not np.allclose(Ii, Ii.T, rtol=0.0, atol=1e-12 * max(np.abs(Ii).max(), 1e-300)):
         raise ValueError(f'{what}: inertia matrix is not symmetric')
-    lam = np.linalg.eigvalsh(Ii)
-    tol = INERTIA_RTOL * max(float(np.abs(lam).max()), 1e-300)
-    if lam[0] < -tol:
-        raise ValueError(f'{what}: inertia is not positive semi-definite '
-                         f'(principal moments {lam.tolist()})')
-    if lam[0] + lam[1] < lam[2] - tol:
-        raise ValueError(f'{what}: inertia breaks the triangle inequality '
-                         f'(principal moments {lam.tolist()})')
+    for problem in inertia_problems(m, Ii):
+        if report is None:
+            raise ValueError(f'{what}: {problem}')
+        report(f'{what}: {problem}')
     if R is not None:
         Ii = R @ Ii @ R.T
     return mcI(m, c, Ii)
+
+
+def inertia_problems(mass: float, Ic: np.ndarray) -> list:
+    """List what is physically inconsistent in a rotational inertia ``Ic`` (kg m², at the com).
+
+    A rigid body's principal moments are non-negative and obey the triangle inequality
+    ``λ1 + λ2 ≥ λ3``; a body without mass has no inertia. Each is checked up to rounding noise:
+    ``max(INERTIA_RTOL · max|λ|, INERTIA_ATOL)``. Returns messages (empty when consistent).
+    """
+    lam = np.linalg.eigvalsh(Ic)
+    tol = max(INERTIA_RTOL * float(np.abs(lam).max()), INERTIA_ATOL)
+    moments = f'principal moments {[float(f"{x:.6g}") for x in lam]} kg m^2'
+    problems = []
+    if lam[0] < -tol:
+        problems.append(f'inertia is not positive semi-definite ({moments})')
+    elif lam[0] + lam[1] < lam[2] - tol:
+        problems.append(f'inertia breaks the triangle inequality ({moments}: '
+                        f'{lam[0]:.6g} + {lam[1]:.6g} < {lam[2]:.6g})')
+    if mass == 0.0 and lam[2] > tol:
+        problems.append(f'inertia on a massless link ({moments}, mass 0)')
+    return problems
 
 
 def with_payload(model: Model, link: str, mass: float, com=(0.0, 0.0, 0.0),
@@ -282,6 +372,7 @@ def with_payload(model: Model, link: str, mass: float, com=(0.0, 0.0, 0.0),
 
 
 def _joint_axis(joint) -> np.ndarray:
+    """Return the unit joint axis (normalised, as Pinocchio, KDL and MuJoCo do)."""
     axis = _finite(f'joint {joint.name!r} axis', joint.axis if joint.axis is not None
                    else (1.0, 0.0, 0.0))
     if axis.shape != (3,):
@@ -301,9 +392,29 @@ def _number(what: str, value, default: float = math.nan) -> float:
         raise ValueError(f'{what}: {err}') from None
 
 
+def _limit(what: str, value) -> float:
+    """Return a ``<limit>`` value: any magnitude (±1e16 or ±inf mean none), NaN refused."""
+    if value is None:
+        return math.nan
+    try:
+        x = float(value)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f'{what}: {err}') from None
+    if math.isnan(x):
+        raise ValueError(f'{what}: non-finite number {value!r} (a limit may be any size, '
+                         'or ±inf for none, but not NaN)')
+    return x
+
+
 def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
-                locked: Optional[Mapping[str, float]] = None) -> Model:
+                locked: Optional[Mapping[str, float]] = None,
+                report: Optional[_Report] = None) -> Model:
     robot_name, links, joints = parsed
+    report = report or _Report(strict=False)
+    if not robot_name:
+        robot_name = 'robot'
+        report("the <robot> element has no name attribute (urdfdom's parser refuses such a "
+               "file); the model is named 'robot'")
     link_by_name = {}
     for link in links:
         if link.name in link_by_name:
@@ -350,8 +461,11 @@ def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
         [np.zeros(3)], [np.eye(6)]
     pose = {roots[0]: (0, np.eye(3), np.zeros(3))}
     order = [roots[0]]
+    for joints_below in children.values():
+        # Pinocchio's (and urdfdom's, so KDL's) order: children by joint name, byte-wise.
+        joints_below.sort(key=lambda j: j.name.encode('utf-8'))
     stack = list(reversed(children[roots[0]]))
-    while stack:  # depth-first preorder, children in declaration order (as Pinocchio)
+    while stack:  # depth-first preorder
         joint = stack.pop()
         b, R_bl, p_bl = pose[joint.parent]
         R_o, p_o = _origin(f'joint {joint.name!r}', joint.origin)
@@ -386,7 +500,7 @@ def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
         lXb = plux(R.T, p)
         frames[name] = Frame(b, lXb)
         frames[name].lXb.setflags(write=False)
-        inertia[b] += lXb.T @ _link_inertia(link_by_name[name]) @ lXb
+        inertia[b] += lXb.T @ _link_inertia(link_by_name[name], report) @ lXb
 
     # Generalised coordinates: movable non-mimic joints in body order; mimic joints follow
     # their (transitively resolved) source: q_i = mult·q_src + offset.
@@ -404,13 +518,18 @@ def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
         return np.array([get(joint_by_name[j]) for j in joint_names], dtype=float)
 
     def limit(attr):
-        return per_joint(lambda j: _number(f'joint {j.name!r} <limit {attr}>',
-                                           getattr(j.limit, attr, None)))
+        return per_joint(lambda j: _limit(f'joint {j.name!r} <limit {attr}>',
+                                          getattr(j.limit, attr, None)))
 
     def dyn(attr, names=joint_names):
-        return np.array([_number(f'joint {j!r} <dynamics {attr}>',
-                                 getattr(joint_by_name[j].dynamics, attr, None), 0.0)
-                         for j in names])
+        values = []
+        for j in names:
+            what = f'joint {j!r} <dynamics {attr}>'
+            x = _number(what, getattr(joint_by_name[j].dynamics, attr, None), 0.0)
+            if x < 0.0 and names is not joint_names:   # reported once, for every body
+                report(f'{what}: negative ({x:g}), so the joint would gain energy')
+            values.append(x)
+        return np.array(values)
 
     return Model(
         name=robot_name, joint_names=joint_names, body_names=tuple(body_names),
@@ -424,7 +543,8 @@ def _from_robot(parsed, keep: Optional[Sequence[str]] = None,
         body_friction=np.r_[0.0, dyn('friction', body_joints[1:])],
         lumped=tuple(n for n in order if pose[n][0] > 0 and n not in body_names),
         pruned=tuple(n for n in order[1:] if pose[n][0] == 0),
-        locked={j: v for j, v in lock.items() if joint_by_name[j].mimic is None})
+        locked={j: v for j, v in lock.items() if joint_by_name[j].mimic is None},
+        warnings=tuple(report.messages))
 
 
 def _resolve_mimic(jname: str, joint_by_name: dict) -> tuple[str, float, float]:

@@ -293,16 +293,21 @@ DEGENERATE = [
     ('NaN limit', 'effort="10"', 'effort="nan"', r"joint 'shoulder'.*limit.*non-finite"),
     ('NaN mimic multiplier', 'multiplier="0.01"', 'multiplier="nan"',
      r"joint 'finger'.*mimic.*non-finite"),
-    ('negative principal moment', 'izz="0.01"', 'izz="-0.01"',
-     r"link 'upper'.*not positive semi-definite"),
-    ('indefinite products of inertia', 'ixy="0" ixz="0" iyy="0.02"', 'ixy="0.05" ixz="0" '
-     'iyy="0.02"', r"link 'upper'.*not positive semi-definite"),
-    ('triangle inequality', 'izz="0.004"', 'izz="0.006"', r"link 'fore'.*triangle inequality"),
     ('1e308 joint xyz', 'xyz="0 0 0.1"', 'xyz="0 0 1e308"', r"joint 'shoulder'.*absurd"),
     ('1e308 mass', '<mass value="0.8"/>', '<mass value="1e308"/>', r"link 'fore'.*absurd"),
     ('1e308 inertia', 'izz="0.01"', 'izz="1e308"', r"link 'upper'.*absurd"),
     ('1e308 axis', '<axis xyz="0 0 1"/>', '<axis xyz="0 0 1e308"/>', r"joint 'shoulder'.*absurd"),
     ('1e308 mimic offset', 'offset="0"', 'offset="1e308"', r"joint 'finger'.*mimic.*absurd"),
+]
+
+
+# Physically inconsistent but computable: refused in strict mode, else loaded with a warning.
+INCONSISTENT = [
+    ('negative principal moment', 'izz="0.01"', 'izz="-0.01"',
+     r"link 'upper'.*not positive semi-definite"),
+    ('indefinite products of inertia', 'ixy="0" ixz="0" iyy="0.02"', 'ixy="0.05" ixz="0" '
+     'iyy="0.02"', r"link 'upper'.*not positive semi-definite"),
+    ('triangle inequality', 'izz="0.004"', 'izz="0.006"', r"link 'fore'.*triangle inequality"),
 ]
 
 
@@ -318,3 +323,13 @@ def test_degenerate_urdf_fails_naming_the_element(case, old, new, message):
     assert ARM.count(old) == 1, case
     with pytest.raises(ValueError, match=message):
         sd.Model.from_urdf(ARM.replace(old, new))
+
+
+@pytest.mark.parametrize('case,old,new,message', INCONSISTENT, ids=[d[0] for d in INCONSISTENT])
+def test_inconsistent_urdf_fails_in_strict_mode_and_warns_otherwise(case, old, new, message):
+    assert ARM.count(old) == 1, case
+    with pytest.raises(ValueError, match=message):
+        sd.Model.from_urdf(ARM.replace(old, new), strict=True)
+    with pytest.warns(sd.URDFWarning, match=message):
+        model = sd.Model.from_urdf(ARM.replace(old, new))
+    assert np.all(np.isfinite(sd.rnea(model, np.ones(2), np.ones(2), np.ones(2))))

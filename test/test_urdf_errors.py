@@ -6,6 +6,7 @@ Also: missing meshes do not matter, and a string and a file give the same model.
 """
 
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -74,14 +75,6 @@ CASES = {
     'negative_mass': (arm(upper_body=inertial('-1.0')), 'upper_arm'),
     'nan_mass': (arm(upper_body=inertial('nan')), 'upper_arm'),
     'inf_mass': (arm(upper_body=inertial('inf')), 'upper_arm'),
-    'non_psd_inertia': (arm(upper_body=inertial(inertia='<inertia ixx="1" ixy="2" ixz="0" '
-                                                'iyy="1" iyz="0" izz="1"/>')), 'upper_arm'),
-    'negative_inertia': (arm(upper_body=inertial(inertia='<inertia ixx="-0.1" ixy="0" ixz="0" '
-                                                 'iyy="0.1" iyz="0" izz="0.1"/>')),
-                         'upper_arm'),
-    'triangle_inequality': (arm(upper_body=inertial(inertia='<inertia ixx="1" ixy="0" ixz="0" '
-                                                    'iyy="1" iyz="0" izz="3"/>')),
-                            'upper_arm'),
     'nan_inertia': (arm(upper_body=inertial(inertia='<inertia ixx="nan" ixy="0" ixz="0" '
                                             'iyy="1" iyz="0" izz="1"/>')), 'upper_arm'),
     'zero_axis': (arm(elbow_axis='0 0 0'), 'elbow'),
@@ -95,6 +88,36 @@ CASES = {
     'floating_joint': (arm(elbow_kind='floating', elbow_axis=None), 'elbow'),
     'planar_joint': (arm(elbow_kind='planar'), 'elbow'),
 }
+
+
+# Physically inconsistent but computable: loaded as written with a URDFWarning by default,
+# refused in strict mode; (URDF, the element and the problem the message must name).
+INCONSISTENT = {
+    'non_psd_inertia': (arm(upper_body=inertial(inertia='<inertia ixx="1" ixy="2" ixz="0" '
+                                                'iyy="1" iyz="0" izz="1"/>')),
+                        "link 'upper_arm'.*not positive semi-definite"),
+    'negative_inertia': (arm(upper_body=inertial(inertia='<inertia ixx="-0.1" ixy="0" ixz="0" '
+                                                 'iyy="0.1" iyz="0" izz="0.1"/>')),
+                         "link 'upper_arm'.*not positive semi-definite"),
+    'triangle_inequality': (arm(upper_body=inertial(inertia='<inertia ixx="1" ixy="0" ixz="0" '
+                                                    'iyy="1" iyz="0" izz="3"/>')),
+                            "link 'upper_arm'.*triangle inequality"),
+}
+
+
+@pytest.mark.parametrize('case', list(INCONSISTENT))
+def test_inconsistent_urdf_raises_in_strict_mode(case):
+    urdf, message = INCONSISTENT[case]
+    with pytest.raises(ValueError, match=message):
+        sd.Model.from_urdf(urdf, strict=True)
+
+
+@pytest.mark.parametrize('case', list(INCONSISTENT))
+def test_inconsistent_urdf_loads_with_a_warning_naming_it(case):
+    urdf, message = INCONSISTENT[case]
+    with pytest.warns(sd.URDFWarning, match=message):
+        model = sd.Model.from_urdf(urdf)
+    assert len(model.warnings) == 1 and re.search(message, model.warnings[0])
 
 
 @pytest.mark.parametrize('case', list(CASES))
