@@ -41,6 +41,7 @@ setup(
         'console_scripts': [
             'inverse_dynamics = spatial_dynamics.node:main',
             'demo = spatial_dynamics.demo:main',
+            'check_urdf = spatial_dynamics.check:main',
         ],
     },
 )

@@ -1,0 +1,197 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Check a robot description for dynamics: what the model computes with, and every warning.
+
+urdfdom's ``check_urdf`` checks the syntax; this prints what inverse dynamics will use: the
+joints in ``q`` order (type, axis, limits, the mimic joints that follow each one), the bodies
+after fixed joints are lumped and base links pruned, the total mass, and every
+:class:`URDFWarning` of the model (inconsistent inertias and the like, loaded as written).
+
+    python -m spatial_dynamics.check ROBOT.urdf [--strict] [--joints J ...] [--locked J=V ...]
+    ros2 run spatial_dynamics check_urdf ROBOT.urdf
+
+Exit status: 0 when the model loads, 1 when it is refused (or, with ``--strict``, when it has
+warnings), 2 for bad usage.
+"""
+
+import argparse
+import math
+import os
+import sys
+import textwrap
+from typing import Dict, List, Optional, Sequence, Tuple
+import warnings
+
+from lxml import etree
+import numpy as np
+
+from . import Model, URDFWarning
+from .joints import KIND_NAMES
+
+WIDTH = 99
+
+
+def read_description(path: str) -> bytes:
+    """Return the URDF XML of a file (a ``.xacro`` file is expanded); ``ValueError`` if not."""
+    if not os.path.exists(path):
+        raise ValueError(f'{path}: no such file')
+    if not os.path.isfile(path):
+        raise ValueError(f'{path}: not a regular file')
+    if path.endswith('.xacro'):
+        try:
+            import xacro
+        except ImportError:
+            raise ValueError(f'{path}: a .xacro file needs the xacro module '
+                             '(pip install xacro, or apt ros-jazzy-xacro)') from None
+        try:
+            return xacro.process_file(path).toxml().encode('utf-8')
+        except Exception as err:  # xacro raises many types; all mean "cannot expand"
+            raise ValueError(f'{path}: xacro failed: {err}') from None
+    try:
+        with open(path, 'rb') as f:
+            return f.read()
+    except OSError as err:
+        raise ValueError(f'{path}: {err.strerror}') from None
+
+
+def urdf_joint_types(xml: bytes) -> Dict[str, str]:
+    """Map joint name -> URDF ``type`` attribute ('continuous' is modelled as revolute)."""
+    parser = etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True)
+    root = etree.fromstring(xml, parser)
+    return {j.get('name'): j.get('type') for j in root.findall('joint')}
+
+
+def num(x: float) -> str:
+    """Format a number with ``%g``; '-' for ``nan`` (a value the URDF does not give)."""
+    return '-' if math.isnan(x) else f'{x + 0.0:g}'    # + 0.0: no '-0'
+
+
+def wrapped(label: str, names: Sequence[str], indent: int) -> List[str]:
+    """Wrap ``label name, name, ...`` to the terminal width."""
+    return textwrap.wrap(label + ', '.join(names), WIDTH, initial_indent=' ' * indent,
+                         subsequent_indent=' ' * (indent + len(label)), break_on_hyphens=False)
+
+
+def table(header: Sequence[str], rows: Sequence[tuple], left: Sequence[int]) -> List[str]:
+    """Align rows of cells (each row ``(cells, notes)``) in columns; notes follow their row.
+
+    Columns are as wide as their widest cell; those in ``left`` are left-aligned.
+    """
+    cells = [header] + [r[0] for r in rows]
+    widths = [max(len(c[k]) for c in cells) for k in range(len(header))]
+
+    def line(row) -> str:
+        return '  ' + '  '.join(c.ljust(w) if k in left else c.rjust(w)
+                                for k, (c, w) in enumerate(zip(row, widths))).rstrip()
+
+    lines = [line(header)]
+    for row, notes in rows:
+        lines.append(line(row))
+        lines += notes
+    return lines
+
+
+def joint_lines(model: Model, types: Dict[str, str]) -> List[str]:
+    """List the joints of ``q`` in order: type, axis, limits, the mimic joints they drive."""
+    body = {name: i for i, name in enumerate(model.body_joints)}
+    rows = []
+    for k, name in enumerate(model.joint_names):
+        i = body[name]
+        limits = (model.lower[k], model.upper[k], model.velocity_limit[k], model.effort_limit[k])
+        mimics = []
+        for m in range(1, model.NB + 1):
+            if model.qidx[m] == k and model.body_joints[m] != name:
+                off = float(model.qoff[m])
+                mimics.append(f'{"":7}mimic: {model.body_joints[m]} = {num(model.qmul[m])} * '
+                              f'{name} {"-" if off < 0 else "+"} {num(abs(off))}')
+        rows.append(([str(k), name, types.get(name, KIND_NAMES[int(model.jtype[i])]),
+                      ' '.join(num(a) for a in model.axis[i])] + [num(x) for x in limits],
+                     mimics))
+    return table(('q', 'name', 'type', 'axis', 'lower', 'upper', 'velocity', 'effort'), rows,
+                 left=(1, 2, 3))
+
+
+def body_lines(model: Model) -> List[str]:
+    """List the bodies after lumping and pruning: link, joint, parent, mass, links lumped in."""
+    links: List[List[str]] = [[] for _ in range(model.NB + 1)]
+    for link, frame in model.frames.items():
+        if link != model.body_names[frame.body]:
+            links[frame.body].append(link)
+    rows = []
+    for i in range(model.NB + 1):
+        label = 'pruned (fixed to the base): ' if i == 0 else 'lumped: '
+        rows.append(([str(i), model.body_names[i], model.body_joints[i] or '(fixed base)',
+                      '-' if i == 0 else str(int(model.parent[i])), num(model.inertia[i][3, 3])],
+                     wrapped(label, links[i], 8) if links[i] else []))
+    return table(('body', 'link', 'joint', 'parent', 'mass (kg)'), rows, left=(1, 2))
+
+
+def report(model: Model, types: Dict[str, str]) -> str:
+    """Return the whole check as text: robot, joints, bodies, mass and warnings."""
+    lines = [f'robot {model.name!r}: {model.nq} dof, {model.NB} moving bodies, '
+             f'{len(model.frames)} links', '',
+             f'joints in q order ({model.nq}); limits in rad or m, /s, N m or N, '
+             "'-' when not given:"]
+    lines += joint_lines(model, types)
+    if model.locked:
+        lines += wrapped('locked by model reduction: ',
+                         [f'{j}={num(model.locked[j])}' for j in types if j in model.locked],
+                         2)
+    lines += ['', f'bodies after lumping fixed joints ({model.NB} moving + the fixed base):']
+    lines += body_lines(model)
+    mass = model.inertia[:, 3, 3]
+    lines += ['', f'total mass: {num(float(np.sum(mass)))} kg '
+              f'({num(float(mass[0]))} kg on the fixed base, {num(float(np.sum(mass[1:])))} kg '
+              'moving)', '']
+    if model.warnings:
+        lines.append(f'warnings ({len(model.warnings)}):')
+        for w in model.warnings:
+            lines += textwrap.wrap(w, WIDTH, initial_indent='  - ', subsequent_indent='    ')
+    else:
+        lines.append('no warnings')
+    return '\n'.join(lines)
+
+
+def locked_item(item: str) -> Tuple[str, float]:
+    """Parse ``'name=value'`` to ``(name, value)``; ``ArgumentTypeError`` (usage) if not."""
+    name, sep, value = item.partition('=')
+    try:
+        if sep and name:
+            return name, float(value)
+    except ValueError:
+        pass
+    raise argparse.ArgumentTypeError(f'{item!r}: expected NAME=VALUE (rad or m)')
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Print the check of a robot description; return the exit status (0, 1 or 2)."""
+    parser = argparse.ArgumentParser(prog='check_urdf', description=__doc__.split('\n\n')[0])
+    parser.add_argument('urdf', help='URDF file (or .xacro, expanded when xacro is installed)')
+    parser.add_argument('--strict', action='store_true',
+                        help='exit 1 when the model has warnings (all are still printed)')
+    parser.add_argument('--joints', nargs='+', metavar='J',
+                        help='model reduction: keep only these joints, in this order; the '
+                        'others are locked at 0 or at their --locked value')
+    parser.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
+                        help='value (rad or m) of a joint locked by --joints')
+    args = parser.parse_args(argv)
+    locked = dict(args.locked)
+    if locked and not args.joints:
+        parser.error('--locked needs --joints (the joints kept movable)')
+    try:
+        xml = read_description(args.urdf)
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore', URDFWarning)    # printed below, from the model
+            model = Model.from_urdf(xml, joints=args.joints, locked=locked or None)
+    except ValueError as err:
+        print(f'error: {err}', file=sys.stderr)
+        return 1
+    print(report(model, urdf_joint_types(xml)))
+    if args.strict and model.warnings:
+        print(f'error: {len(model.warnings)} warning(s) with --strict', file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
