@@ -24,7 +24,7 @@ setup(
         ('share/' + package_name + '/launch', files('launch/*.launch.py')),
         ('share/' + package_name + '/config', files('config/*')),
     ],
-    install_requires=['numpy', 'yourdfpy'],
+    install_requires=['numpy', 'lxml'],
     extras_require={
         'test': ['pytest', 'pin', 'example-robot-data', 'hypothesis', 'mpmath', 'flake8',
                  'pydocstyle'],

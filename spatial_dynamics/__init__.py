@@ -10,9 +10,10 @@ imports rclpy; ``node`` is the ROS 2 shell around it.
     >>> tau = sd.rnea(model, q, qd, qdd)                  # doctest: +SKIP
 """
 
-from .model import Frame, Model, URDFWarning, with_payload
+from .model import Frame, Model, with_payload
 from .rnea import GRAVITY, rnea, rnea_components, rnea_spatial
 from .terms import armature_torque, clamp_to_effort_limits, friction_torque, per_joint
+from .urdf import URDFWarning
 
 __all__ = ['Frame', 'GRAVITY', 'Model', 'armature_torque', 'clamp_to_effort_limits',
            'friction_torque', 'per_joint', 'rnea', 'rnea_components', 'rnea_spatial',
