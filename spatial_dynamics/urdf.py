@@ -127,8 +127,6 @@ class _Joint:
     mimic: Optional[tuple]    # (source joint, multiplier, offset)
 
 
-# The version an XML declaration states does not change what a URDF means (some exporters
-# write "0.0", which urdfdom reads and libxml2 refuses).
 _XML_VERSION = re.compile(rb'^(\s*<\?xml\s+version\s*=\s*)(["\'])[^"\']*\2')
 
 
@@ -146,7 +144,9 @@ def _parse_urdf(source: Source, report: _Report) -> tuple:
         text = read_urdf_file(source)
     else:
         raise ValueError(f'URDF source must be a path or an XML string, not {type(source)}')
-    text = _XML_VERSION.sub(rb'\g<1>"1.0"', text, count=1)
+    # Whitespace before the XML declaration, or a version other than 1.0 in it, does not
+    # change what a URDF means (urdfdom reads both; libxml2 refuses them).
+    text = _XML_VERSION.sub(rb'\g<1>"1.0"', text.lstrip(b' \t\r\n'), count=1)
 
     # No DTD loading, no entity expansion, no network, no huge trees: an external entity
     # cannot leak a local file and an entity bomb cannot expand.

@@ -43,7 +43,7 @@ def load(path, **kwargs):
 def pinocchio_text(path):
     """Return the URDF text for Pinocchio, named if it is not (urdfdom refuses no name)."""
     with open(path, encoding='utf-8') as f:
-        text = f.read()
+        text = f.read().lstrip()     # (the oracle's own XML parser wants no leading space)
     return re.sub(r'<robot(?=[\s>/])(?![^>]*\bname=)', '<robot name="robot"', text,
                   count=1)
 
@@ -92,3 +92,48 @@ def test_strict_mode_refuses_exactly_the_files_with_warnings(name):
         return
     with pytest.raises(ValueError, match=re.escape(model.warnings[0])):
         sd.Model.from_urdf(path, strict=True)
+
+
+# -- another public collection on PyPI: pybullet's data (arms, quadrupeds, objects) ----------
+
+def pybullet_files():
+    """Return (directory, relative paths) of pybullet_data's URDFs, or skip without it."""
+    pybullet_data = pytest.importorskip('pybullet_data')
+    base = pybullet_data.getDataPath()
+    return base, sorted(os.path.relpath(p, base) for p in glob.glob(
+        os.path.join(base, '**', '*.urdf'), recursive=True))
+
+
+def test_every_pybullet_robot_pinocchio_loads_loads_with_its_torques():
+    """Wherever Pinocchio loads a file, so do we, in its order and with its torques."""
+    import pinocchio as pin
+    base, files = pybullet_files()
+    assert len(files) > 1000
+    rng = np.random.default_rng(7)
+    mismatches, compared = [], 0
+    for name in files:
+        path = os.path.join(base, name)
+        try:
+            pin.buildModelFromXML(pinocchio_text(path))
+        except (RuntimeError, ValueError):
+            continue              # Pinocchio refuses it (a spherical joint, a '$(optenv)')
+        try:
+            model, _ = load(path)
+        except ValueError as err:
+            mismatches.append(f'{name}: refused: {err}')
+            continue
+        oracle = PinOracle(pinocchio_text(path))
+        if list(model.joint_names) != [n for n in oracle.model.names[1:]
+                                       if n not in oracle.mimic]:
+            mismatches.append(f'{name}: joint order {model.joint_names}')
+            continue
+        if model.nq == 0:
+            continue
+        q, qd, qdd = random_state(rng, (2,), model.nq)
+        expected = oracle.rnea(model.joint_names, q, qd, qdd)
+        err = np.linalg.norm(sd.rnea(model, q, qd, qdd) - expected, axis=-1)
+        if np.any(err > TOLERANCE * np.maximum(1.0, np.linalg.norm(expected, axis=-1))):
+            mismatches.append(f'{name}: torque error {err.max():.3g}')
+        compared += 1
+    assert not mismatches, '\n'.join(mismatches)
+    assert compared >= 30       # robots with joints (arms, quadrupeds, hands, a humanoid)
