@@ -90,17 +90,25 @@ def read_urdf_file(path: str, limit: int = MAX_FILE_BYTES) -> bytes:
         fd = os.open(path, os.O_RDONLY | getattr(os, 'O_NONBLOCK', 0))
     except OSError as err:
         raise ValueError(f'cannot read URDF file {path!r}: {err.strerror}') from None
-    with os.fdopen(fd, 'rb') as fh:
+    try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
             raise ValueError(f'URDF file {path!r} is not a regular file')
         if info.st_size > limit:
             raise ValueError(f'URDF file {path!r} is too large ({info.st_size} bytes, limit '
                              f'{limit})')
-        try:
-            text = fh.read(limit + 1)
-        except OSError as err:
-            raise ValueError(f'cannot read URDF file {path!r}: {err.strerror}') from None
+        chunks, size = [], 0
+        while size <= limit:      # a file that grows while read stops at limit + 1 bytes
+            chunk = os.read(fd, limit + 1 - size)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as err:
+        raise ValueError(f'cannot read URDF file {path!r}: {err.strerror}') from None
+    finally:
+        os.close(fd)
+    text = b''.join(chunks)
     if len(text) > limit:
         raise ValueError(f'URDF file {path!r} is too large (more than {limit} bytes)')
     return text

@@ -306,3 +306,43 @@ def test_string_and_path_give_the_same_model(name, rng):
     assert bytes_model.joint_names == from_path.joint_names
     import pathlib
     assert sd.Model.from_urdf(pathlib.Path(path)).joint_names == from_path.joint_names
+
+
+# --------------------------------------------------------------------------------------------
+# Files: only regular files of bounded size are read; bytes are XML, never a path
+
+def test_a_fifo_is_refused_without_blocking(tmp_path):
+    fifo = tmp_path / 'robot.urdf'
+    os.mkfifo(fifo)       # no writer: an open() without O_NONBLOCK would hang here
+    with pytest.raises(ValueError, match='not a regular file'):
+        sd.Model.from_urdf(str(fifo))
+
+
+@pytest.mark.parametrize('path', ['/dev/zero', '/'])
+def test_devices_and_directories_are_refused(path):
+    with pytest.raises(ValueError, match=f"{path!r}.*not a regular file"):
+        sd.Model.from_urdf(path)
+
+
+def test_a_file_over_the_size_limit_is_refused(tmp_path):
+    from spatial_dynamics.urdf import read_urdf_file
+    path = tmp_path / 'big.urdf'
+    path.write_bytes(b' ' * 1001)
+    with pytest.raises(ValueError, match='too large'):
+        read_urdf_file(str(path), limit=1000)
+    assert read_urdf_file(str(path), limit=1001) == b' ' * 1001
+
+
+def test_bytes_are_xml_never_a_path(tmp_path):
+    path = tmp_path / 'arm.urdf'
+    path.write_text(arm())
+    with pytest.raises(ValueError, match='malformed URDF XML'):
+        sd.Model.from_urdf(str(path).encode())
+    assert sd.Model.from_urdf(arm().encode()).joint_names == ('shoulder', 'elbow')
+
+
+def test_a_file_that_is_not_utf8_is_a_value_error(tmp_path):
+    path = tmp_path / 'latin.urdf'
+    path.write_bytes(arm().replace('name="bad"', 'name="b\xe4d"').encode('latin-1'))
+    with pytest.raises(ValueError, match='malformed URDF XML'):
+        sd.Model.from_urdf(str(path))
