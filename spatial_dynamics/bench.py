@@ -15,8 +15,8 @@ Every implementation gets the same states of the same robot in one process:
   inverse dynamics gets them wrong) or with more than 128 DOF (wrong beyond)).
 
 Figures: the median single-call time, the median time per sample of a batch of N = 1, 100
-and 10,000 states, and the error against a high-precision reference: our RNEA
-(:func:`~spatial_dynamics.rnea.rnea_components`) evaluated in mpmath at 50 digits on our
+and 10,000 states, and the error against a high-precision reference: our RNEA (the component
+kernel of :mod:`spatial_dynamics.algorithms.rnea`) evaluated in mpmath at 50 digits on our
 float64 parameters, cross-checked against Pinocchio. Timings interleave the implementations
 round-robin, and the medians are also given as ratios to Pinocchio (these machines are noisy).
 
@@ -54,7 +54,8 @@ import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics.generate import chain_urdf, tree_urdf
-from spatial_dynamics.model import PR, RA
+from spatial_dynamics.algorithms.rnea import PR, RA
+from spatial_dynamics.backends import layout, python as python_backend
 
 GRAVITY = (0.0, 0.0, -9.81)
 SIZES = (1, 100, 10_000)
@@ -335,22 +336,23 @@ def _pin_parallel(threads: int) -> Callable[[Robot], Call]:
     return make
 
 
-def pinocchio_reference_model(robot: Robot, mp) -> SimpleNamespace:
-    """Return a stand-in Model with Pinocchio's own float64 parameters as exact mpmath numbers.
+def pinocchio_reference_rows(robot: Robot, mp) -> tuple:
+    """Return layout rows with Pinocchio's own float64 parameters as exact mpmath numbers.
 
-    ``rnea_components`` reads only ``model._kernel``; this builds those rows from Pinocchio's
-    joint placements ``(R, p)`` (E = Rᵀ, r = p), motion subspaces (the axes) and inertias
-    ``(m, c, Ic)``, with ``h = m c`` and ``Ibar = Ic + m c× c×ᵀ`` (RBDA eq. 2.63) formed in
-    mpmath. Evaluated in mpmath it gives the exact answer on Pinocchio's parameters, so
-    Pinocchio's error against it is its arithmetic error alone, without the rounding of the
-    URDF's decimal numbers into float64 parameters (which differs between libraries).
+    The component kernel reads only the rows of :mod:`spatial_dynamics.backends.layout`; this
+    builds them from Pinocchio's joint placements ``(R, p)`` (E = Rᵀ, r = p), motion
+    subspaces (the axes) and inertias ``(m, c, Ic)``, with ``h = m c`` and
+    ``Ibar = Ic + m c× c×ᵀ`` (RBDA eq. 2.63) formed in mpmath. Evaluated in mpmath it gives
+    the exact answer on Pinocchio's parameters, so Pinocchio's error against it is its
+    arithmetic error alone, without the rounding of the URDF's decimal numbers into float64
+    parameters (which differs between libraries).
     """
     P = _pin(robot)
     pm, f = P.model, mp.mpf
     q0 = P.pin.neutral(pm)
     joints, placements = list(pm.joints), list(pm.jointPlacements)
     inertias, parents = list(pm.inertias), list(pm.parents)
-    rows = []
+    rows = [(-1, 0, robot.model.nq) + (0.0,) * (layout.WIDTH - 3)]
     for j in range(1, pm.njoints):
         jm = joints[j]
         jd = jm.createData()
@@ -369,10 +371,11 @@ def pinocchio_reference_model(robot: Robot, mp) -> SimpleNamespace:
         Ib = [[Ic[a][b] + m * sum(cx[a][k] * cx[b][k] for k in range(3)) for b in range(3)]
               for a in range(3)]
         k, mult, off = P.K[j - 1], P.MUL[j - 1], P.OFF[j - 1]
-        rows.append((int(parents[j]), code, axis, Et, r, m, tuple(m * x for x in c),
-                     (Ib[0][0], Ib[0][1], Ib[0][2], Ib[1][1], Ib[1][2], Ib[2][2]),
-                     int(k), float(mult), float(off)))
-    return SimpleNamespace(_kernel=tuple(rows))
+        rows.append((int(parents[j]), code, int(k)) + axis + Et + r + (m,)
+                    + tuple(m * x for x in c)
+                    + (Ib[0][0], Ib[0][1], Ib[0][2], Ib[1][1], Ib[1][2], Ib[2][2],
+                       float(mult), float(off)))
+    return tuple(rows)
 
 
 # --------------------------------------------------------------------------------------------
@@ -508,7 +511,9 @@ def implementations() -> list:
 
 
 def reference(model, Q, QD, QDD, digits: int = DIGITS) -> np.ndarray:
-    """τ from ``rnea_components`` in mpmath at ``digits`` digits, as np.longdouble (K, n).
+    """τ from the component kernel in mpmath at ``digits`` digits, as np.longdouble (K, n).
+
+    ``model`` is a Model, or layout rows (:func:`pinocchio_reference_rows`).
 
     Python floats convert to mpf exactly, so this is the exact RNEA of the float64 inputs on
     the model's float64 parameters, up to 10^-digits (then rounded to long double, so that
@@ -517,12 +522,13 @@ def reference(model, Q, QD, QDD, digits: int = DIGITS) -> np.ndarray:
     import mpmath
     with mpmath.workdps(digits):
         mpf = mpmath.mpf
+        rows = layout.of(model).rows if isinstance(model, sd.Model) else model
         out = []
         for q, qd, qdd in zip(Q, QD, QDD):
-            tau = sd.rnea_components(model, [mpf(float(x)) for x in q],
-                                     [mpf(float(x)) for x in qd],
-                                     [mpf(float(x)) for x in qdd],
-                                     [mpf(g) for g in GRAVITY], None, mpmath)
+            tau = python_backend.rnea_rows(rows, [mpf(float(x)) for x in q],
+                                           [mpf(float(x)) for x in qd],
+                                           [mpf(float(x)) for x in qdd],
+                                           [mpf(g) for g in GRAVITY], None, mpmath)
             out.append([np.longdouble(mpmath.nstr(t, 25, strip_zeros=False)) for t in tau])
     return np.array(out, dtype=np.longdouble)
 
@@ -640,7 +646,7 @@ def bench_robot(robot: Robot, impls: list, settings: Settings, log: Progress,
                 log(f'{robot.name}: {name}: {row["note"]}')
         if REFERENCE in singles:
             import mpmath
-            pin_ref = reference(pinocchio_reference_model(robot, mpmath), Q[:K], QD[:K], QDD[:K])
+            pin_ref = reference(pinocchio_reference_rows(robot, mpmath), Q[:K], QD[:K], QDD[:K])
             c = singles[REFERENCE]
             out = [c.tau(c.run(*c.prep(Q[k], QD[k], QDD[k]))) for k in range(K)]
             check.update(ref_vs_pin=_max_err(out, ref) / scale,
@@ -870,8 +876,8 @@ def skipped_work_table(rounds: int = 9) -> str:
 
     Model reduction (one Talos arm of the 32-joint tree: the others locked and lumped, the
     rest pruned) and the runtime fast paths (q̇ = 0 skips every velocity-product term,
-    q̇ = q̈ = 0 everything but gravity, zero gravity the base's acceleration; an unchanged q
-    reuses the joint transforms on the numpy path), for each backend, medians of ``rounds``.
+    q̇ = q̈ = 0 everything but gravity, zero gravity the base's acceleration), for each
+    backend, medians of ``rounds``.
     """
     try:
         robot = load_robot('talos')
@@ -895,9 +901,7 @@ def skipped_work_table(rounds: int = 9) -> str:
                     ('new q each call', [(q, qd, qdd, GRAVITY) for q, qd, qdd in states]),
                     ('q̇ = 0 (gravity + inertia)', [(q, z, qdd, GRAVITY) for q, _, qdd in states]),
                     ('q̇ = q̈ = 0 (gravity only)', [(q, z, z, GRAVITY) for q, _, _ in states]),
-                    ('zero gravity', [(q, qd, qdd, no_g) for q, qd, qdd in states]),
-                    ('same q every call', [(states[0][0], qd, qdd, GRAVITY)
-                                           for _, qd, qdd in states])):
+                    ('zero gravity', [(q, qd, qdd, no_g) for q, qd, qdd in states])):
                 cases.append((f'{label}, {case}', model,
                               [(model,) + a + (None, backend) for a in args]))
         times = {label: [] for label, _, _ in cases}

@@ -18,8 +18,7 @@ from typing import Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from .joints import PRISMATIC, REVOLUTE
-from .spatial import mcI, plux_Er
+from .spatial import mcI
 
 Source = Union[str, bytes, os.PathLike]
 
@@ -97,8 +96,6 @@ class Model:
     pruned: tuple = ()
     locked: Mapping[str, float] = field(default_factory=dict)
     warnings: tuple = ()
-    _kernel: tuple = field(default=(), repr=False)
-    _table: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():
@@ -106,8 +103,6 @@ class Model:
                 value.setflags(write=False)
         object.__setattr__(self, 'frames', MappingProxyType(dict(self.frames)))
         object.__setattr__(self, 'locked', MappingProxyType(dict(self.locked)))
-        object.__setattr__(self, '_kernel', _kernel_data(self))
-        object.__setattr__(self, '_table', _kernel_table(self.nq, self._kernel))   # writable
 
     @property
     def nq(self) -> int:
@@ -238,63 +233,3 @@ def with_payload(model: Model, link: str, mass: float, com=(0.0, 0.0, 0.0),
     inertia6 = np.array(model.inertia)
     inertia6[frame.body] += frame.lXb.T @ Ip @ frame.lXb
     return replace(model, inertia=inertia6)
-
-
-# --------------------------------------------------------------------------------------------
-# Flat per-body data for the component-wise RNEA kernel (plain floats, see rnea.py)
-
-#: Kernel joint codes: revolute about ±x, ±y, ±z (the axis keeps its sign) or a general axis;
-#: prismatic.
-RX, RY, RZ, RA, PR = 0, 1, 2, 3, 4
-
-
-def _kernel_data(model: Model) -> tuple:
-    rows = []
-    for i in range(1, model.NB + 1):
-        E, r = plux_Er(model.Xtree[i])
-        ax = model.axis[i]
-        if model.jtype[i] == REVOLUTE:
-            code = RA
-            for k in range(3):
-                if abs(ax[k]) == 1.0 and ax[(k + 1) % 3] == 0.0 and ax[(k + 2) % 3] == 0.0:
-                    code = k    # about ±x, ±y or ±z: the cheaper form (sin times ±1)
-        elif model.jtype[i] == PRISMATIC:
-            code = PR
-        else:  # pragma: no cover - bodies always hang on movable joints
-            raise AssertionError('body without a movable joint')
-        Ii = model.inertia[i]
-        m = float(Ii[3, 3])
-        # I = [[Ibar, h×], [h×ᵀ, m 1]] with h = m c (RBDA eq. 2.63): read h off I[:3, 3:].
-        h = (float(Ii[2, 4]), float(Ii[0, 5]), float(Ii[1, 3]))
-        Ibar = (float(Ii[0, 0]), float(Ii[0, 1]), float(Ii[0, 2]),
-                float(Ii[1, 1]), float(Ii[1, 2]), float(Ii[2, 2]))
-        rows.append((int(model.parent[i]), code, tuple(float(x) for x in ax),
-                     tuple(float(x) for x in E.ravel()), tuple(float(x) for x in r),
-                     m, h, Ibar, int(model.qidx[i]), float(model.qmul[i]),
-                     float(model.qoff[i])))
-    return tuple(rows)
-
-
-# The same rows as one float64 table (NB+1, TABLE_WIDTH) for the compiled kernel (one array
-# is one argument to unbox per call): row ``i`` = body ``i``; columns below. Small integers
-# (parent, joint code, index into q) are exact in float64. Row 0 (the fixed base) holds
-# parent -1, and ``n = len(q)`` in its QIDX column, which the kernel checks lengths against.
-# Private and, alone among the model's arrays, left writable: numba types a read-only array
-# on its slow path, which costs ~30 ns of a ~1 µs call. Nothing writes to it.
-(T_PARENT, T_CODE, T_QIDX, T_AXIS, T_E, T_R, T_MASS, T_H, T_IBAR, T_MUL, T_OFF,
- TABLE_WIDTH) = 0, 1, 2, 3, 6, 15, 18, 19, 22, 28, 29, 30
-
-
-def _kernel_table(n: int, rows: tuple) -> np.ndarray:
-    K = np.zeros((len(rows) + 1, TABLE_WIDTH))
-    K[0, T_PARENT], K[0, T_QIDX] = -1, n
-    for i, (p, code, axis, Et, r, mass, h, Ib, k, mul, off) in enumerate(rows, start=1):
-        K[i, T_PARENT], K[i, T_CODE], K[i, T_QIDX] = p, code, k
-        K[i, T_AXIS:T_AXIS + 3] = axis
-        K[i, T_E:T_E + 9] = Et
-        K[i, T_R:T_R + 3] = r
-        K[i, T_MASS] = mass
-        K[i, T_H:T_H + 3] = h
-        K[i, T_IBAR:T_IBAR + 6] = Ib
-        K[i, T_MUL], K[i, T_OFF] = mul, off
-    return K

@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 import spatial_dynamics as sd
 from spatial_dynamics import backends
+from spatial_dynamics.backends import layout
 from urdf_gen import random_tree_urdf
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -241,22 +242,33 @@ def test_other_float_dtypes_run_on_numpy(kernels, dtype, rng):
         np.testing.assert_array_equal(tau, sd.rnea(model, *args, backend='numpy'))
 
 
-def test_kernel_table_is_built_with_the_model(kernels):
+def test_the_layout_is_the_backends_not_the_models(kernels):
+    """The backend derives its table from the Model, keeps it while the model lives."""
+    import gc
     model, _ = robot('panda')
-    K, n = kernels.kernel_arrays(model)
-    assert kernels.kernel_arrays(model)[0] is K is model._table and n == model.nq
-    assert K.shape == (model.NB + 1, sd.model.TABLE_WIDTH)
-    assert K[0, kernels.QIDX] == n          # the length the single entry checks q against
-    np.testing.assert_array_equal(K[1:, kernels.PARENT], model.parent[1:])
-    np.testing.assert_array_equal(K[1:, kernels.QIDX], model.qidx[1:])
-    np.testing.assert_array_equal(K[1:, kernels.MUL], model.qmul[1:])
-    # A derived model gets its own table; the original's is left as it was.
+    assert not any(name.startswith('_') for name in vars(model))   # a plain record
+    lay = layout.of(model)
+    K, C = lay.table, layout.COLUMN
+    assert layout.of(model) is lay and lay.n == model.nq
+    assert K.shape == (model.NB + 1, layout.WIDTH) and K.flags.writeable
+    assert K[0, C['qidx']] == model.nq      # the length the single entry checks q against
+    np.testing.assert_array_equal(K[1:, C['parent']], model.parent[1:])
+    np.testing.assert_array_equal(K[1:, C['qidx']], model.qidx[1:])
+    np.testing.assert_array_equal(K[1:, C['mul']], model.qmul[1:])
+    np.testing.assert_array_equal(K[1:, C['mass']], model.inertia[1:, 3, 3])
+    assert [tuple(row) for row in K.tolist()] == [tuple(map(float, r)) for r in lay.rows]
+    # A derived model gets its own layout; the original's is left as it was.
     before = K.copy()
     heavier = sd.with_payload(model, model.body_names[-1], 1.5, [0.0, 0.0, 0.1],
                               [0.01, 0.0, 0.0, 0.01, 0.0, 0.01])
-    assert heavier._table is not K and K.flags.writeable
+    assert layout.of(heavier).table is not K
     np.testing.assert_array_equal(K, before)
-    assert heavier._table[-1, kernels.MASS] == K[-1, kernels.MASS] + 1.5
+    assert layout.of(heavier).table[-1, C['mass']] == K[-1, C['mass']] + 1.5
+    key = id(heavier)
+    assert key in layout.LAYOUTS
+    del heavier
+    gc.collect()
+    assert key not in layout.LAYOUTS         # dropped with its model
 
 
 def test_model_too_large_for_the_stack(kernels, rng):
@@ -267,7 +279,7 @@ def test_model_too_large_for_the_stack(kernels, rng):
     assert model.NB + 1 > kernels.STACK_ROWS
     q, qd, qdd = random_state(rng, (), model.nq)
     tau = np.empty(model.nq)
-    assert not kernels.rnea_single(model._table, q, qd, qdd, 0.0, 0.0, -9.81, tau)
+    assert not kernels.rnea_single(layout.of(model).table, q, qd, qdd, 0.0, 0.0, -9.81, tau)
     for shape in ((model.nq,), (1, model.nq)):
         args = [x.reshape(shape) for x in (q, qd, qdd)]
         tau = sd.rnea(model, *args, backend='compiled')
@@ -279,7 +291,7 @@ def test_model_too_large_for_the_stack(kernels, rng):
 def test_single_entry_refuses_wrong_lengths(kernels):
     model, _ = robot('panda')
     n = model.nq
-    K = model._table
+    K = layout.of(model).table
     z, tau = np.zeros(n), np.full(n, 7.0)
     for q, out in ((np.zeros(n - 1), tau), (z, np.full(n + 1, 7.0))):
         assert not kernels.rnea_single(K, q, z, z, 0.0, 0.0, -9.81, out)
@@ -353,7 +365,7 @@ def test_without_numba_auto_runs_on_numpy():
             sd.rnea(m, np.zeros(1), np.zeros(1), np.zeros(1), backend='compiled')
         except ImportError as err:
             print('error:', type(err).__name__, err)
-        print('kernels imported:', 'spatial_dynamics.kernels' in sys.modules)
+        print('kernels imported:', 'spatial_dynamics.backends.jit' in sys.modules)
     ''')
     assert 'describe: numpy (numba unavailable: ' in out, out
     assert 'warmup: numpy (numba unavailable' in out, out
@@ -409,7 +421,7 @@ def test_read_only_install_caches_in_the_fallback_dir_and_reloads(tmp_path):
                                               else access(path, mode, **kw))
         m = sd.Model.from_urdf({URDF!r})
         backends.warmup(m)
-        from spatial_dynamics import kernels
+        from spatial_dynamics.backends import jit as kernels
         import numba
         print('cache dir:', numba.config.CACHE_DIR)
         for f in (kernels.rnea_single, kernels.rnea_single_large, kernels._rnea_batch,

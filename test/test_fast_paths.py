@@ -2,31 +2,28 @@
 # SPDX-License-Identifier: Apache-2.0
 """The runtime fast paths, each against the full computation.
 
-RNEA skips what cannot change the answer (``rnea.rnea_components`` and ``kernels._rnea_one``):
+RNEA skips what cannot change the answer (``algorithms.rnea.rnea_kernel``, which the Python
+backends run and the compiled one runs as generated code):
 
 - q̇ = 0: every body velocity and velocity-product term;
 - q̇ = q̈ = 0 (gravity only): every angular acceleration too, so ``a_i = (0, E_i l_λ(i))``
   and ``f_i = (h × l_i, m l_i)``: the rotational inertia is never read;
-- zero gravity: ``Xup a_0`` for the bodies on the fixed base;
-- an unchanged q: the joint transforms (numpy single-state path).
+- zero gravity: ``Xup a_0`` for the bodies on the fixed base.
 
 Each is checked on both backends, single states and batches, against the literal 6×6 RNEA
 (``rnea_spatial``, which skips nothing) and Pinocchio. That a shortcut is really taken is
 shown by poisoning, with NaN, what it must not read: a path that read it would return NaN.
 """
 
-import dataclasses
 import functools
-import math
 import os
-import sys
 
 from conftest import PinOracle, random_state, robot_urdf_path
 import numpy as np
 import pytest
 import spatial_dynamics as sd
 from spatial_dynamics import backends
-from spatial_dynamics.model import T_IBAR, T_R
+from spatial_dynamics.backends import layout, python as python_backend
 from urdf_gen import random_tree_urdf
 
 TOL = 1e-10                   # Nm or N, against Pinocchio (as test_oracle_pinocchio.py)
@@ -122,15 +119,18 @@ def test_static_and_weightless_is_exactly_zero(name, backend, rng):
 # The shortcuts are taken: what they must not read is poisoned with NaN
 
 
-def poisoned_rows(model, poison):
-    """``model._kernel`` with ``poison(i, row) -> row`` applied to each body's row."""
-    return tuple(poison(i, row) for i, row in enumerate(model._kernel, start=1))
+def poisoned(model, column, width, bodies):
+    """Rows and table of the model's layout with ``column`` (``width`` wide) of ``bodies`` NaN."""
+    table = layout.derive(model).table.copy()
+    table[bodies, column:column + width] = np.nan
+    rows = tuple(tuple(int(x) if j in layout.INTEGER_COLUMNS else x for j, x in enumerate(row))
+                 for row in table.tolist())
+    return rows, table
 
 
 def numpy_tau(model, rows, args, gravity):
     """τ of the component kernel (the numpy backend's) on the given rows, one state."""
-    shim = dataclasses.make_dataclass('Rows', ['_kernel'])(rows)
-    return np.array(sd.rnea_components(shim, *(list(x) for x in args), list(gravity)))
+    return np.array(python_backend.rnea_rows(rows, *(list(x) for x in args), list(gravity)))
 
 
 def compiled_tau(model, table, args, gravity):
@@ -143,20 +143,12 @@ def compiled_tau(model, table, args, gravity):
 
 def nan_inertia(model):
     """Rows and table with every rotational inertia (Ibar) NaN."""
-    def poison(i, row):
-        return row[:7] + ((math.nan,) * 6,) + row[8:]
-    table = model._table.copy()
-    table[1:, T_IBAR:T_IBAR + 6] = np.nan
-    return poisoned_rows(model, poison), table
+    return poisoned(model, layout.COLUMN['Ibar'], 6, slice(1, None))
 
 
 def nan_root_offsets(model):
     """Rows and table with the tree offset r of every body on the fixed base NaN."""
-    def poison(i, row):
-        return row[:4] + ((math.nan,) * 3,) + row[5:] if row[0] == 0 else row
-    table = model._table.copy()
-    table[model.parent == 0, T_R:T_R + 3] = np.nan
-    return poisoned_rows(model, poison), table
+    return poisoned(model, layout.COLUMN['r'], 3, np.flatnonzero(model.parent == 0))
 
 
 @pytest.mark.parametrize('name', CASES)
@@ -188,21 +180,3 @@ def test_zero_gravity_skips_the_base_acceleration(name, backend, rng):
                                   sd.rnea(model, *args, gravity=GRAVITIES['no_g'],
                                           backend=backend))
     assert np.isnan(run(GRAVITIES['g'])).any()
-
-
-def test_unchanged_q_reuses_the_transforms(rng):
-    """The numpy single path keeps the last q's transforms; a new q recomputes them."""
-    rnea_module = sys.modules['spatial_dynamics.rnea']    # (the package exports the function)
-    model, _ = case('panda')
-    q, qd, qdd = states(rng, model.nq)['full']
-    first = sd.rnea(model, q, qd, qdd, backend='numpy')
-    cached_q, Xup = rnea_module._LAST_XUP[model]
-    assert cached_q == q.tolist()
-    again = sd.rnea(model, q.copy(), -qd, qdd, backend='numpy')
-    assert rnea_module._LAST_XUP[model][1] is Xup          # reused
-    q2 = q.copy()
-    q2[0] += 1e-3
-    moved = sd.rnea(model, q2, qd, qdd, backend='numpy')
-    assert rnea_module._LAST_XUP[model][1] is not Xup      # recomputed
-    for args, tau in (((q, qd, qdd), first), ((q, -qd, qdd), again), ((q2, qd, qdd), moved)):
-        np.testing.assert_allclose(tau, sd.rnea_spatial(model, *args), rtol=0, atol=1e-12)

@@ -149,7 +149,7 @@ def growth_errors(xml, rng, extreme):
     scale = float(np.abs(ref).max())
     err = float(np.abs(sd.rnea(model, q, qd, qdd).astype(np.longdouble) - ref).max()) / scale
     robot = bench.Robot('chain', xml, model, 'chain')
-    ref_pin = bench.reference(bench.pinocchio_reference_model(robot, mpmath), q, qd, qdd)
+    ref_pin = bench.reference(bench.pinocchio_reference_rows(robot, mpmath), q, qd, qdd)
     tau_pin = PinOracle(xml).rnea(model.joint_names, q, qd, qdd)
     return model.NB, err, float(np.abs(tau_pin.astype(np.longdouble) - ref_pin).max()) / scale
 

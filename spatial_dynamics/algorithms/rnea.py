@@ -1,0 +1,301 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Recursive Newton-Euler inverse dynamics (RBDA table 5.1, ``ID.m`` of spatial_v2): one source.
+
+Forward pass, for i = 1..NB (body 0 is the fixed base, ``v_0 = 0``, ``a_0 = -a_grav``)::
+
+    XJ, S_i = jcalc(jtype_i, q_i);  Xup_i = XJ Xtree_i;  vJ = S_i q̇_i
+    v_i = Xup_i v_λ(i) + vJ
+    a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ
+    f_i = I_i a_i + v_i ×* I_i v_i - f_ext_i
+
+Backward pass, for i = NB..1::
+
+    τ_i = S_iᵀ f_i;   f_λ(i) += Xup_iᵀ f_i
+
+Two texts of the same equations:
+
+* :func:`rnea_spatial` writes them literally with 6×6 matrices (``crm``, ``crf``, ``jcalc``)
+  and einsum over leading batch dimensions: the executable specification.
+* :func:`xup_kernel` and :func:`rnea_kernel` write them on 3-vector components, with
+  ``Xup = (E, r)`` kept as a rotation and a translation (RBDA §2.12), so no 6×6 product is
+  formed. **They are the one source every backend runs**: on Python floats (one state, no
+  numpy call overhead), on numpy arrays of shape (N,) (a batch, one numpy operation per term
+  for all N states), on ``mpmath.mpf`` (the high-precision reference), and — translated
+  statement for statement by :mod:`spatial_dynamics.backends.codegen` into
+  ``backends/_kernels_generated.py`` — compiled by numba. A change to an equation is made
+  here, once; the generated file is regenerated (a test fails until it is).
+
+The kernels' text keeps to what the translation understands: per-body rows unpacked whole
+from ``rows[i]`` (the layout of :mod:`spatial_dynamics.backends.layout`), spatial vectors
+stored whole as tuples in ``Xup``, ``vel``, ``acc``, ``frc`` and read whole (or an element of
+``frc[p]`` updated in place), ``nonzero(x)`` for "not identically zero", ``m.sin``/``m.cos``
+for the sine and cosine of the number type.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Optional, Sequence
+
+import numpy as np
+
+from ..joints import jcalc
+from ..model import Model
+from ..spatial import crf, crm
+
+#: Joint codes of the component kernels: revolute about ±x, ±y, ±z (the axis keeps its sign)
+#: or a general axis; prismatic.
+RX, RY, RZ, RA, PR = 0, 1, 2, 3, 4
+
+
+def nonzero(x) -> bool:
+    """Tell whether a scalar or array component is not identically zero."""
+    return bool(x != 0) if not isinstance(x, np.ndarray) else bool(x.any())
+
+
+def xup_kernel(rows, q, m, Xup) -> None:
+    """Body transforms ``Xup_i = XJ(q_i) Xtree_i`` as ``(E (9 scalars), r (3))`` into ``Xup``.
+
+    RBDA table 4.1 for ``XJ`` and eq. 2.27 for the product ``(E_J, 0)(E_t, r_t)`` (revolute:
+    ``E = E_J E_t``, ``r = r_t``) or ``(1, axis q)(E_t, r_t)`` (prismatic: ``E = E_t``,
+    ``r = r_t + E_tᵀ axis q``). ``m`` provides ``sin`` and ``cos`` for the scalars of ``q``.
+    """
+    for i in range(1, len(rows)):
+        (_, code, k, ax, ay, az, t00, t01, t02, t10, t11, t12, t20, t21, t22, rx, ry, rz,
+         _, _, _, _, _, _, _, _, _, _, mul, off) = rows[i]
+        qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
+        if code == PR:
+            Xup[i] = (t00, t01, t02, t10, t11, t12, t20, t21, t22,
+                      rx + (t00 * ax + t10 * ay + t20 * az) * qi,
+                      ry + (t01 * ax + t11 * ay + t21 * az) * qi,
+                      rz + (t02 * ax + t12 * ay + t22 * az) * qi)
+            continue
+        c, s = m.cos(qi), m.sin(qi)
+        if code == RZ:
+            s = az * s     # about ±Z
+            Xup[i] = (c * t00 + s * t10, c * t01 + s * t11, c * t02 + s * t12,
+                      c * t10 - s * t00, c * t11 - s * t01, c * t12 - s * t02,
+                      t20, t21, t22, rx, ry, rz)
+        elif code == RX:
+            s = ax * s     # about ±X
+            Xup[i] = (t00, t01, t02,
+                      c * t10 + s * t20, c * t11 + s * t21, c * t12 + s * t22,
+                      c * t20 - s * t10, c * t21 - s * t11, c * t22 - s * t12,
+                      rx, ry, rz)
+        elif code == RY:
+            s = ay * s     # about ±Y
+            Xup[i] = (c * t00 - s * t20, c * t01 - s * t21, c * t02 - s * t22,
+                      t10, t11, t12,
+                      s * t00 + c * t20, s * t01 + c * t21, s * t02 + c * t22,
+                      rx, ry, rz)
+        else:  # general axis: E_J = R(axis, q)ᵀ = c 1 - s axis× + (1 - c) axis axisᵀ
+            C = 1.0 - c
+            j00, j11, j22 = c + C * ax * ax, c + C * ay * ay, c + C * az * az
+            cxy, cxz, cyz = C * ax * ay, C * ax * az, C * ay * az
+            sx, sy, sz = s * ax, s * ay, s * az
+            j01, j02, j10 = cxy + sz, cxz - sy, cxy - sz
+            j12, j20, j21 = cyz + sx, cxz + sy, cyz - sx
+            Xup[i] = (j00 * t00 + j01 * t10 + j02 * t20,
+                      j00 * t01 + j01 * t11 + j02 * t21,
+                      j00 * t02 + j01 * t12 + j02 * t22,
+                      j10 * t00 + j11 * t10 + j12 * t20,
+                      j10 * t01 + j11 * t11 + j12 * t21,
+                      j10 * t02 + j11 * t12 + j12 * t22,
+                      j20 * t00 + j21 * t10 + j22 * t20,
+                      j20 * t01 + j21 * t11 + j22 * t21,
+                      j20 * t02 + j21 * t12 + j22 * t22,
+                      rx, ry, rz)
+
+
+def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, acc,
+                frc) -> None:
+    """RNEA on scalar components into ``tau`` (``model.nq`` scalars, any kind: see above).
+
+    ``rows`` are the per-body rows of :mod:`~spatial_dynamics.backends.layout` (row 0 the
+    base), ``Xup`` the transforms of :func:`xup_kernel` for the same ``q``; ``vel``, ``acc``
+    and ``frc`` are scratch with a slot per body. With ``has_fext``, ``f_body[i]`` is the
+    external force ``[n; f]`` on body ``i`` in body coordinates (6 scalars, zeros if none).
+
+    Terms that cannot change the answer are skipped: with q̇ = 0 every body velocity and
+    velocity-product term is zero; with q̇ = q̈ = 0 (gravity only) every angular acceleration
+    is zero too, so ``a_i = (0, E_i l_λ(i))`` and ``f_i = (h × l_i, m l_i)``; with zero
+    gravity a body on the fixed base skips ``Xup a_0``. Each result is the full computation's
+    (the skipped products are exact zeros).
+    """
+    NB = len(rows) - 1
+    zero = 0.0 * gx
+    moving = False
+    for x in qd:
+        if nonzero(x):
+            moving = True
+            break
+    static = not moving
+    if static:
+        for x in qdd:
+            if nonzero(x):
+                static = False
+                break
+    weightless = not (nonzero(gx) or nonzero(gy) or nonzero(gz))
+    vel[0] = (zero, zero, zero, zero, zero, zero)
+    acc[0] = (zero, zero, zero, -gx, -gy, -gz)      # a_0 = -a_grav
+    for k in range(len(tau)):
+        tau[k] = zero
+
+    for i in range(1, NB + 1):
+        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+         mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, mul, _) = rows[i]
+        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
+        if static:
+            # Gravity only: a_i = (0, E_i l_λ(i)), f_i = I_i a_i = (h × l_i, m l_i).
+            _, _, _, pl0, pl1, pl2 = acc[p]
+            l0 = e00 * pl0 + e01 * pl1 + e02 * pl2
+            l1 = e10 * pl0 + e11 * pl1 + e12 * pl2
+            l2 = e20 * pl0 + e21 * pl1 + e22 * pl2
+            acc[i] = (zero, zero, zero, l0, l1, l2)
+            n0, n1, n2 = hy * l2 - hz * l1, hz * l0 - hx * l2, hx * l1 - hy * l0
+            f0, f1, f2 = mass * l0, mass * l1, mass * l2
+        else:
+            qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
+
+            # a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ
+            if p == 0 and weightless:
+                a0 = a1 = a2 = l0 = l1 = l2 = zero      # a_0 = 0
+            else:
+                pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
+                u0 = pl0 - (ry * pa2 - rz * pa1)
+                u1 = pl1 - (rz * pa0 - rx * pa2)
+                u2 = pl2 - (rx * pa1 - ry * pa0)
+                a0 = e00 * pa0 + e01 * pa1 + e02 * pa2
+                a1 = e10 * pa0 + e11 * pa1 + e12 * pa2
+                a2 = e20 * pa0 + e21 * pa1 + e22 * pa2
+                l0 = e00 * u0 + e01 * u1 + e02 * u2
+                l1 = e10 * u0 + e11 * u1 + e12 * u2
+                l2 = e20 * u0 + e21 * u1 + e22 * u2
+            if code == PR:
+                l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
+            else:
+                a0, a1, a2 = a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi
+
+            # f_i = I_i a_i + v_i ×* I_i v_i - f_ext_i, with I = [[Ibar, h×], [h×ᵀ, m 1]]
+            w0 = w1 = w2 = v0 = v1 = v2 = zero
+            if moving:
+                # v_i = Xup_i v_λ(i) + vJ,  vJ = S_i q̇_i
+                qdi = qd[k] if mul == 1.0 else mul * qd[k]
+                pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
+                u0 = pv0 - (ry * pw2 - rz * pw1)
+                u1 = pv1 - (rz * pw0 - rx * pw2)
+                u2 = pv2 - (rx * pw1 - ry * pw0)
+                w0 = e00 * pw0 + e01 * pw1 + e02 * pw2
+                w1 = e10 * pw0 + e11 * pw1 + e12 * pw2
+                w2 = e20 * pw0 + e21 * pw1 + e22 * pw2
+                v0 = e00 * u0 + e01 * u1 + e02 * u2
+                v1 = e10 * u0 + e11 * u1 + e12 * u2
+                v2 = e20 * u0 + e21 * u1 + e22 * u2
+                j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
+                if code == PR:
+                    v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
+                    l0 += w1 * j2 - w2 * j1
+                    l1 += w2 * j0 - w0 * j2
+                    l2 += w0 * j1 - w1 * j0
+                else:
+                    w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
+                    a0 += w1 * j2 - w2 * j1
+                    a1 += w2 * j0 - w0 * j2
+                    a2 += w0 * j1 - w1 * j0
+                    l0 += v1 * j2 - v2 * j1
+                    l1 += v2 * j0 - v0 * j2
+                    l2 += v0 * j1 - v1 * j0
+                vel[i] = (w0, w1, w2, v0, v1, v2)
+            acc[i] = (a0, a1, a2, l0, l1, l2)
+
+            # I_i a_i
+            n0 = Ixx * a0 + Ixy * a1 + Ixz * a2 + (hy * l2 - hz * l1)
+            n1 = Ixy * a0 + Iyy * a1 + Iyz * a2 + (hz * l0 - hx * l2)
+            n2 = Ixz * a0 + Iyz * a1 + Izz * a2 + (hx * l1 - hy * l0)
+            f0 = mass * l0 - (hy * a2 - hz * a1)
+            f1 = mass * l1 - (hz * a0 - hx * a2)
+            f2 = mass * l2 - (hx * a1 - hy * a0)
+            if moving:
+                # momentum I_i v_i, then v_i ×* (I_i v_i) = [w × hn + v × hf; w × hf]
+                m0 = Ixx * w0 + Ixy * w1 + Ixz * w2 + (hy * v2 - hz * v1)
+                m1 = Ixy * w0 + Iyy * w1 + Iyz * w2 + (hz * v0 - hx * v2)
+                m2 = Ixz * w0 + Iyz * w1 + Izz * w2 + (hx * v1 - hy * v0)
+                k0 = mass * v0 - (hy * w2 - hz * w1)
+                k1 = mass * v1 - (hz * w0 - hx * w2)
+                k2 = mass * v2 - (hx * w1 - hy * w0)
+                n0 += (w1 * m2 - w2 * m1) + (v1 * k2 - v2 * k1)
+                n1 += (w2 * m0 - w0 * m2) + (v2 * k0 - v0 * k2)
+                n2 += (w0 * m1 - w1 * m0) + (v0 * k1 - v1 * k0)
+                f0 += w1 * k2 - w2 * k1
+                f1 += w2 * k0 - w0 * k2
+                f2 += w0 * k1 - w1 * k0
+        if has_fext:
+            fe0, fe1, fe2, fe3, fe4, fe5 = f_body[i]
+            n0, n1, n2 = n0 - fe0, n1 - fe1, n2 - fe2
+            f0, f1, f2 = f0 - fe3, f1 - fe4, f2 - fe5
+        frc[i] = [n0, n1, n2, f0, f1, f2]
+
+    # Backward pass: τ_i = S_iᵀ f_i, f_λ(i) += Xup_iᵀ f_i
+    for i in range(NB, 0, -1):
+        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+         _, _, _, _, _, _, _, _, _, _, mul, _) = rows[i]
+        n0, n1, n2, f0, f1, f2 = frc[i]
+        if code == PR:
+            t = ax * f0 + ay * f1 + az * f2
+        else:
+            t = ax * n0 + ay * n1 + az * n2
+        tau[k] = tau[k] + (t if mul == 1.0 else mul * t)
+        if p == 0:
+            continue
+        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
+        F0 = e00 * f0 + e10 * f1 + e20 * f2
+        F1 = e01 * f0 + e11 * f1 + e21 * f2
+        F2 = e02 * f0 + e12 * f1 + e22 * f2
+        fp = frc[p]
+        fp[0] += e00 * n0 + e10 * n1 + e20 * n2 + (ry * F2 - rz * F1)
+        fp[1] += e01 * n0 + e11 * n1 + e21 * n2 + (rz * F0 - rx * F2)
+        fp[2] += e02 * n0 + e12 * n1 + e22 * n2 + (rx * F1 - ry * F0)
+        fp[3] += F0
+        fp[4] += F1
+        fp[5] += F2
+
+
+# --------------------------------------------------------------------------------------------
+# The executable specification: the same equations on 6×6 matrices
+
+def rnea_spatial(model: Model, q, qd, qdd, gravity: Sequence[float] = (0.0, 0.0, -9.81),
+                 f_ext: Optional[Mapping[str, np.ndarray]] = None) -> np.ndarray:
+    """RNEA written literally on 6×6 spatial matrices (reference; same contract as rnea)."""
+    from ..backends.inputs import as_joint_arrays, as_vector, f_ext_in_bodies
+    q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
+    a_grav = np.concatenate([np.zeros(3), as_vector('gravity', gravity, 3)])
+    fb = f_ext_in_bodies(model, f_ext)
+    batch = q.shape[:-1]
+    NB = model.NB
+    Xup, v, a, f = [None] * (NB + 1), [None] * (NB + 1), [None] * (NB + 1), [None] * (NB + 1)
+    v[0] = np.zeros(batch + (6,))
+    a[0] = np.broadcast_to(-a_grav, batch + (6,))
+    S = [None] * (NB + 1)
+    for i in range(1, NB + 1):
+        k, mul, off = model.qidx[i], model.qmul[i], model.qoff[i]
+        XJ, S[i] = jcalc(model.jtype[i], model.axis[i], mul * q[..., k] + off)
+        vJ = S[i] * (mul * qd[..., k])[..., None]
+        Xup[i] = XJ @ model.Xtree[i]
+        p = model.parent[i]
+        v[i] = _mv(Xup[i], v[p]) + vJ
+        a[i] = _mv(Xup[i], a[p]) + S[i] * (mul * qdd[..., k])[..., None] + _mv(crm(v[i]), vJ)
+        Iv = _mv(model.inertia[i], v[i])
+        f[i] = _mv(model.inertia[i], a[i]) + _mv(crf(v[i]), Iv) - fb.get(i, 0.0)
+    tau = np.zeros(q.shape)
+    for i in range(NB, 0, -1):
+        k = model.qidx[i]
+        tau[..., k] += model.qmul[i] * (f[i] @ S[i])
+        p = model.parent[i]
+        if p > 0:
+            f[p] = f[p] + _mv(np.swapaxes(Xup[i], -1, -2), f[i])
+    return tau
+
+
+def _mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Batched matrix-vector product ``A x`` over leading dimensions."""
+    return np.einsum('...ij,...j->...i', A, x)

@@ -1,0 +1,216 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""How an algorithm runs: :func:`rnea` checks its arguments and picks a backend explicitly.
+
+``rnea(..., backend=...)`` takes one of :data:`BACKENDS`:
+
+* ``'numpy'``: the one source of :mod:`spatial_dynamics.algorithms.rnea` on Python floats
+  (one state) or numpy arrays (a batch, any float dtype) — :mod:`.python`;
+* ``'compiled'``: the numba kernels generated from the same source, for float64 inputs
+  (other dtypes run on numpy) — :mod:`.jit`; :class:`CompiledBackendUnavailable` when
+  numba cannot be imported;
+* ``'auto'``: compiled when numba is importable, else numpy.
+
+numba is imported on first use, not by ``import spatial_dynamics``, and the attempt is made
+once per process. Compiled code is cached on disk by numba; when the package directory is
+read-only (an installed tree) and ``NUMBA_CACHE_DIR`` is unset, the cache goes to
+``$XDG_CACHE_HOME/spatial_dynamics/numba`` (default ``~/.cache/...``), set in numba's own
+configuration (the process environment is never written).
+"""
+
+from __future__ import annotations
+
+import os
+from types import ModuleType
+from typing import Mapping, Optional, Sequence
+
+import numpy as np
+
+from . import layout, python
+from .layout import LAYOUTS
+from .inputs import as_joint_arrays, as_vector, f_ext_in_bodies
+from ..model import Model
+
+BACKENDS = ('auto', 'numpy', 'compiled')
+#: Default gravity (m/s², root-link coordinates).
+GRAVITY = (0.0, 0.0, -9.81)
+
+_compiled: Optional[ModuleType] = None   # .jit once imported
+_failure: Optional[str] = None           # why numba could not be imported
+_tried = False                           # numba import attempted
+_F8 = np.dtype(np.float64)
+_ndarray = np.ndarray
+
+
+class CompiledBackendUnavailable(ImportError):
+    """``backend='compiled'`` was asked for, but numba cannot be imported."""
+
+
+def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
+         f_ext: Optional[Mapping[str, np.ndarray]] = None, backend: str = 'auto') -> np.ndarray:
+    """Joint torques/forces ``τ = M(q) q̈ + C(q, q̇) q̇ + g(q) - Σ Jᵀ f_ext`` (RBDA table 5.1).
+
+    Args:
+        model: the robot.
+        q, qd, qdd: joint positions (rad, m), velocities and accelerations in the order of
+            ``model.joint_names``; shape (n,) or (..., n), broadcast against each other;
+            arrays, lists or tuples of any real type.
+        gravity: gravitational acceleration (m/s²) in root-link coordinates, 3 numbers.
+        f_ext: link name → spatial force ``[n; f]`` (N m, N), angular first, acting on that
+            link and expressed in that link's frame; shape (6,) or broadcastable to (..., 6).
+        backend: ``'auto'`` (compiled when numba is importable), ``'numpy'`` or
+            ``'compiled'`` (float64 inputs; other dtypes run on numpy).
+
+    Returns:
+        τ (N m or N), same shape as the broadcast inputs; float64, or the inputs' floating
+        dtype.
+    """
+    kernels = _compiled if backend == 'auto' and _tried else compiled(backend)
+    if not f_ext:
+        # The fast path: one float64 state (arrays, or lists/tuples converted once).
+        lay = LAYOUTS.get(id(model)) or layout.of(model)
+        if type(q) is not _ndarray:
+            q = _vector(q, lay.n)
+        if type(qd) is not _ndarray:
+            qd = _vector(qd, lay.n)
+        if type(qdd) is not _ndarray:
+            qdd = _vector(qdd, lay.n)
+        if (q.dtype is _F8 and qd.dtype is _F8 and qdd.dtype is _F8
+                and q.ndim == 1 and qd.ndim == 1 and qdd.ndim == 1):
+            g = GRAVITY if gravity is GRAVITY else _gravity(gravity)
+            if g is not None:
+                gx, gy, gz = g
+                if kernels is None:
+                    if q.shape[0] == qd.shape[0] == qdd.shape[0] == lay.n:
+                        return np.array(python.rnea_rows(
+                            lay.rows, q.tolist(), qd.tolist(), qdd.tolist(), g))
+                else:
+                    tau = np.empty(lay.n)
+                    if (kernels.single(lay.table, q, qd, qdd, gx, gy, gz, tau)
+                            or kernels.single_large(lay.table, q, qd, qdd, gx, gy, gz, tau)):
+                        return tau
+    return _rnea(model, q, qd, qdd, gravity, f_ext, kernels)
+
+
+def _vector(x, n: int):
+    """A list or tuple of ``n`` numbers as a float64 array; anything else as it is."""
+    if (type(x) is list or type(x) is tuple) and len(x) == n:
+        try:
+            return np.array(x, dtype=_F8)
+        except (TypeError, ValueError):
+            pass        # not numbers: the general path names the argument
+    return np.asarray(x)
+
+
+def _gravity(gravity) -> Optional[tuple]:
+    """``gravity`` as three Python floats, or None (the general path validates it)."""
+    if type(gravity) is _ndarray:
+        if gravity.shape == (3,) and gravity.dtype.kind in 'fiu':
+            gx, gy, gz = gravity.tolist()
+            return float(gx), float(gy), float(gz)
+        return None
+    if (type(gravity) is tuple or type(gravity) is list) and len(gravity) == 3:
+        gx, gy, gz = gravity
+        if type(gx) is float and type(gy) is float and type(gz) is float:
+            return gravity
+        try:
+            return float(gx), float(gy), float(gz)
+        except (TypeError, ValueError):
+            return None
+    return None
+
+
+def _rnea(model: Model, q, qd, qdd, gravity, f_ext, kernels) -> np.ndarray:
+    """Run :func:`rnea` for all its fast path leaves: validation, wrenches, batches."""
+    q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
+    g = tuple(as_vector('gravity', gravity, 3).tolist())
+    fb = f_ext_in_bodies(model, f_ext)
+    if fb:  # batched wrenches broadcast against the batch of states
+        batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
+        q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
+    lay = layout.of(model)
+    if kernels is not None and q.dtype == np.float64:
+        if not fb and q.size == q.shape[-1] > 0:
+            # One state with batch dimensions of 1: a single-state entry, not the batch's.
+            tau = np.empty(lay.n)
+            kernels.rnea_single_large(lay.table, *(np.array(x.reshape(lay.n))
+                                                   for x in (q, qd, qdd)), *g, tau)
+            return tau.reshape(q.shape)
+        return kernels.rnea(lay, q, qd, qdd, g, fb)
+    return python.rnea(lay.rows, q, qd, qdd, g, fb)
+
+
+# --------------------------------------------------------------------------------------------
+# The compiled backend: loaded on first use
+
+def compiled(backend: str = 'auto') -> Optional[ModuleType]:
+    """Return the compiled backend (:mod:`.jit`) if ``backend`` selects it, else ``None``.
+
+    Raises ``ValueError`` for an unknown backend and :class:`CompiledBackendUnavailable` for
+    ``'compiled'`` without numba.
+    """
+    if backend == 'numpy':
+        return None
+    if backend not in BACKENDS:
+        raise ValueError(f'backend must be one of {BACKENDS}, got {backend!r}')
+    if not _tried:
+        _load()
+    if _compiled is None and backend == 'compiled':
+        raise CompiledBackendUnavailable(
+            f"backend='compiled' needs numba, which cannot be imported ({_failure}); "
+            "install it with `pip install numba` (or the extra: "
+            "`pip install spatial_dynamics[fast]`), or use backend='auto' or 'numpy'")
+    return _compiled
+
+
+def describe(backend: str = 'auto') -> str:
+    """Name the backend that ``backend`` selects, for logs: e.g. ``'compiled (numba 0.61)'``."""
+    if compiled(backend) is None:
+        return 'numpy' if backend == 'numpy' else f'numpy (numba unavailable: {_failure})'
+    import numba
+    return f'compiled (numba {numba.__version__}, {numba.get_num_threads()} threads)'
+
+
+def warmup(model: Model, backend: str = 'auto') -> str:
+    """Load (or compile) the compiled kernels and run each entry once on ``model``.
+
+    Call it before the first time-critical ``rnea`` call: afterwards no call pays for
+    importing numba, compiling, loading the cache or starting the worker threads. Returns
+    :func:`describe` of the backend.
+    """
+    kernels = compiled(backend)
+    if kernels is not None:
+        kernels.warmup(layout.of(model))
+    return describe(backend)
+
+
+def cache_dir_fallback() -> Optional[str]:
+    """Return the numba cache directory to use, or ``None`` to keep numba's choice.
+
+    ``None`` when ``NUMBA_CACHE_DIR`` is set or numba can write next to this package
+    (``__pycache__``); else ``$XDG_CACHE_HOME/spatial_dynamics/numba`` (``~/.cache/...``).
+    """
+    if os.environ.get('NUMBA_CACHE_DIR'):
+        return None
+    here = os.path.dirname(os.path.abspath(__file__))
+    pycache = os.path.join(here, '__pycache__')
+    if os.access(pycache if os.path.isdir(pycache) else here, os.W_OK):
+        return None
+    base = os.environ.get('XDG_CACHE_HOME') or os.path.join(os.path.expanduser('~'), '.cache')
+    return os.path.join(base, 'spatial_dynamics', 'numba')
+
+
+def _load() -> None:
+    """Import numba (once) and then :mod:`.jit`; remember why numba failed, if it did."""
+    global _compiled, _failure, _tried
+    _tried = True
+    try:
+        import numba
+    except Exception as err:  # ImportError, or numba refusing this numpy version
+        _failure = f'{type(err).__name__}: {err}'
+        return
+    fallback = cache_dir_fallback()
+    if fallback is not None:
+        numba.config.CACHE_DIR = fallback     # read when the kernels' caches are opened
+    from . import jit   # an error in the kernels themselves is a bug: let it raise
+    _compiled = jit

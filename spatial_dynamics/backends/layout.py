@@ -1,0 +1,90 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The per-body rows the component kernels read, derived from a Model (never stored on it).
+
+Row ``i`` describes body ``i`` (row 0 is the fixed base) in :data:`COLUMNS` order: parent
+``λ(i)``, joint code (``RX RY RZ RA PR`` of :mod:`~spatial_dynamics.algorithms.rnea`), index
+into ``q``, joint axis (3), ``E_tree`` row-major (9) and ``r_tree`` (3) of ``Xtree = (E, r)``,
+mass, ``h = m c`` (3), ``Ibar`` (xx xy xz yy yz zz), mimic multiplier and offset. The Python
+backends read the rows as tuples; the compiled one as one float64 table (the small integers
+are exact in float64; row 0 holds ``n = len(q)`` in its index column).
+
+:func:`of` derives a model's :class:`Layout` once and keeps it for as long as the model
+lives: a cache of a pure function of an immutable record, which never changes a result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import weakref
+
+import numpy as np
+
+from ..algorithms.rnea import PR, RA
+from ..joints import PRISMATIC, REVOLUTE
+from ..model import Model
+from ..spatial import plux_Er
+
+#: Column names and widths of a row, in order.
+COLUMNS = (('parent', 1), ('code', 1), ('qidx', 1), ('axis', 3), ('E', 9), ('r', 3),
+           ('mass', 1), ('h', 3), ('Ibar', 6), ('mul', 1), ('off', 1))
+#: First column of each field, e.g. ``COLUMN['mass']``; ``WIDTH`` columns in all.
+COLUMN = {}
+_c = 0
+for _name, _width in COLUMNS:
+    COLUMN[_name] = _c
+    _c += _width
+WIDTH = _c
+#: Columns holding integers (cast back to int by the compiled kernels).
+INTEGER_COLUMNS = (COLUMN['parent'], COLUMN['code'], COLUMN['qidx'])
+
+
+@dataclass(frozen=True, eq=False)
+class Layout:
+    """A model's rows: ``rows`` (tuples, ints where integer) and ``table`` (NB+1, WIDTH)."""
+
+    n: int
+    rows: tuple
+    table: np.ndarray     # writable: numba types a read-only array on its slow path
+
+
+def joint_code(jtype: int, axis: np.ndarray) -> int:
+    """Kernel joint code: revolute about ±x/±y/±z (the cheaper form), a general axis, or PR."""
+    if jtype == PRISMATIC:
+        return PR
+    if jtype != REVOLUTE:  # pragma: no cover - bodies always hang on movable joints
+        raise AssertionError('body without a movable joint')
+    for k in range(3):
+        if abs(axis[k]) == 1.0 and axis[(k + 1) % 3] == 0.0 and axis[(k + 2) % 3] == 0.0:
+            return k
+    return RA
+
+
+def derive(model: Model) -> Layout:
+    """Build the rows and the table of ``model`` (see the module docstring)."""
+    rows = [(-1, 0, model.nq) + (0.0,) * (WIDTH - 3)]
+    for i in range(1, model.NB + 1):
+        E, r = plux_Er(model.Xtree[i])
+        Ii = model.inertia[i]
+        # I = [[Ibar, h×], [h×ᵀ, m 1]] with h = m c (RBDA eq. 2.63): read h off I[:3, 3:].
+        h = (Ii[2, 4], Ii[0, 5], Ii[1, 3])
+        Ibar = (Ii[0, 0], Ii[0, 1], Ii[0, 2], Ii[1, 1], Ii[1, 2], Ii[2, 2])
+        rows.append((int(model.parent[i]), joint_code(model.jtype[i], model.axis[i]),
+                     int(model.qidx[i]))
+                    + tuple(float(x) for x in (*model.axis[i], *E.ravel(), *r, Ii[3, 3], *h,
+                                               *Ibar, model.qmul[i], model.qoff[i])))
+    table = np.array(rows, dtype=np.float64)
+    return Layout(model.nq, tuple(rows), table)
+
+
+#: id(model) -> Layout, each removed when its model is collected.
+LAYOUTS: dict = {}
+
+
+def of(model: Model) -> Layout:
+    """Return the :class:`Layout` of ``model``, derived on first use."""
+    layout = LAYOUTS.get(id(model))
+    if layout is None:
+        layout = LAYOUTS[id(model)] = derive(model)
+        weakref.finalize(model, LAYOUTS.pop, id(model), None)
+    return layout

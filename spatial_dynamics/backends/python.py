@@ -1,0 +1,62 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Python backend: the one RNEA source run on Python floats, numpy arrays or mpmath numbers.
+
+One float64 state runs on plain floats (no per-term numpy call overhead); a batch runs on
+numpy arrays of shape (N,), one numpy operation per term for all N states (any float
+dtype); ``mpmath.mpf`` scalars give the high-precision reference of the benchmark.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..algorithms.rnea import rnea_kernel, xup_kernel
+
+
+def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
+    """τ as a list of ``n`` scalars from the per-body ``rows`` of :mod:`.layout`.
+
+    ``q, qd, qdd`` are sequences of ``n`` scalars of one kind (floats, (N,) arrays or
+    ``mpmath.mpf``), ``gravity`` three of them; ``m`` provides their ``sin`` and ``cos``
+    (``math``, ``numpy`` or ``mpmath``). ``f_body`` maps a body index to its external force
+    ``[n; f]`` in body coordinates as 6 scalars.
+    """
+    gx, gy, gz = gravity
+    slots = len(rows)
+    Xup, vel, acc, frc = [None] * slots, [None] * slots, [None] * slots, [None] * slots
+    xup_kernel(rows, q, m, Xup)
+    zero = 0.0 * gx
+    tau = [zero] * rows[0][2]
+    fb = None
+    if f_body:
+        fb = [(zero,) * 6] * slots
+        for b, f in f_body.items():
+            fb[b] = f
+    rnea_kernel(rows, q, qd, qdd, gx, gy, gz, fb, fb is not None, tau, Xup, vel, acc, frc)
+    return tau
+
+
+def rnea(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: np.ndarray,
+         f_body: dict) -> np.ndarray:
+    """τ from validated arrays of one float dtype and broadcast shape (..., n)."""
+    if q.dtype == np.float64 and q.size == q.shape[-1] > 0:
+        # One state (maybe with batch dimensions of 1): plain floats beat the batch path's
+        # fixed cost of one numpy call per term.
+        fl = {b: np.reshape(f, -1)[-6:].tolist() for b, f in f_body.items()}
+        tau = rnea_rows(rows, *(x.reshape(-1).tolist() for x in (q, qd, qdd)),
+                        [float(x) for x in gravity], fl)
+        return np.array(tau).reshape(q.shape)
+    n = q.shape[-1]
+    batch = q.shape[:-1]
+    N = int(np.prod(batch, dtype=np.intp))
+    cols = [np.ascontiguousarray(x.reshape(N, n).T) for x in (q, qd, qdd)]
+    fl = {b: list(np.broadcast_to(f, batch + (6,)).reshape(N, 6).T.astype(q.dtype))
+          for b, f in f_body.items()}
+    tau = rnea_rows(rows, *cols, [q.dtype.type(x) for x in gravity], fl, np)
+    out = np.empty((N, n), dtype=q.dtype)
+    for k, t in enumerate(tau):
+        out[:, k] = t
+    return out.reshape(q.shape)
