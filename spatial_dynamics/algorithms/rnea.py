@@ -39,6 +39,7 @@ from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
+from .arguments import as_joint_arrays, as_vector, f_ext_in_bodies
 from ..joints import jcalc
 from ..model import Model
 from ..spatial import crf, crm
@@ -266,7 +267,6 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
 def rnea_spatial(model: Model, q, qd, qdd, gravity: Sequence[float] = (0.0, 0.0, -9.81),
                  f_ext: Optional[Mapping[str, np.ndarray]] = None) -> np.ndarray:
     """RNEA written literally on 6×6 spatial matrices (reference; same contract as rnea)."""
-    from ..backends.inputs import as_joint_arrays, as_vector, f_ext_in_bodies
     q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
     a_grav = np.concatenate([np.zeros(3), as_vector('gravity', gravity, 3)])
     fb = f_ext_in_bodies(model, f_ext)

@@ -28,7 +28,7 @@ import numpy as np
 
 from . import layout, python
 from .layout import LAYOUTS
-from .inputs import as_joint_arrays, as_vector, f_ext_in_bodies
+from ..algorithms.arguments import as_joint_arrays, as_vector, f_ext_in_bodies
 from ..model import Model
 
 BACKENDS = ('auto', 'numpy', 'compiled')

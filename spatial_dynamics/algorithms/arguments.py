@@ -1,6 +1,6 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Validation of what a user passes to an algorithm: joint arrays, vectors, external wrenches."""
+"""What a user passes to an algorithm, checked: joint arrays, vectors, external wrenches."""
 
 from __future__ import annotations
 
