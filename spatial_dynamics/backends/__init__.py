@@ -40,6 +40,8 @@ _failure: Optional[str] = None           # why numba could not be imported
 _tried = False                           # numba import attempted
 _F8 = np.dtype(np.float64)
 _ndarray = np.ndarray
+_NO_GRAVITY = (None, None, None)
+_layout_of, _empty = LAYOUTS.get, np.empty      # bound once: the fast path is ~1 µs
 
 
 class CompiledBackendUnavailable(ImportError):
@@ -67,33 +69,28 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     """
     kernels = _compiled if backend == 'auto' and _tried else compiled(backend)
     if not f_ext:
-        # The fast path: one float64 state (arrays, or lists/tuples converted once).
-        lay = LAYOUTS.get(id(model)) or layout.of(model)
-        if type(q) is not _ndarray:
-            q = _vector(q, lay.n)
-        if type(qd) is not _ndarray:
-            qd = _vector(qd, lay.n)
-        if type(qdd) is not _ndarray:
-            qdd = _vector(qdd, lay.n)
-        if (q.dtype is _F8 and qd.dtype is _F8 and qdd.dtype is _F8
-                and q.ndim == 1 and qd.ndim == 1 and qdd.ndim == 1):
-            g = GRAVITY if gravity is GRAVITY else _gravity(gravity)
-            if g is not None:
-                gx, gy, gz = g
-                if kernels is None:
-                    if q.shape[0] == qd.shape[0] == qdd.shape[0] == lay.n:
-                        return np.array(python.rnea_rows(
-                            lay.rows, q.tolist(), qd.tolist(), qdd.tolist(), g))
-                else:
-                    tau = np.empty(lay.n)
+        # The fast path: one float64 state (arrays; lists and tuples are converted once).
+        lay = _layout_of(id(model)) or layout.of(model)
+        if not (type(q) is type(qd) is type(qdd) is _ndarray):
+            q, qd, qdd = _vector(q, lay.n), _vector(qd, lay.n), _vector(qdd, lay.n)
+        if (q.dtype is qd.dtype is qdd.dtype is _F8) and q.ndim == qd.ndim == qdd.ndim == 1:
+            gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
+            if gx is not None:
+                if kernels is not None:
+                    tau = _empty(lay.n)
                     if (kernels.single(lay.table, q, qd, qdd, gx, gy, gz, tau)
                             or kernels.single_large(lay.table, q, qd, qdd, gx, gy, gz, tau)):
                         return tau
+                elif len(q) == len(qd) == len(qdd) == lay.n:
+                    return np.array(python.rnea_rows(lay.rows, q.tolist(), qd.tolist(),
+                                                     qdd.tolist(), (gx, gy, gz)))
     return _rnea(model, q, qd, qdd, gravity, f_ext, kernels)
 
 
 def _vector(x, n: int):
-    """A list or tuple of ``n`` numbers as a float64 array; anything else as it is."""
+    """A list or tuple of ``n`` numbers as a float64 array; anything else as an array."""
+    if type(x) is _ndarray:
+        return x
     if (type(x) is list or type(x) is tuple) and len(x) == n:
         try:
             return np.array(x, dtype=_F8)
@@ -102,13 +99,8 @@ def _vector(x, n: int):
     return np.asarray(x)
 
 
-def _gravity(gravity) -> Optional[tuple]:
-    """``gravity`` as three Python floats, or None (the general path validates it)."""
-    if type(gravity) is _ndarray:
-        if gravity.shape == (3,) and gravity.dtype.kind in 'fiu':
-            gx, gy, gz = gravity.tolist()
-            return float(gx), float(gy), float(gz)
-        return None
+def _gravity(gravity):
+    """``gravity`` as three Python floats, or three Nones (the general path validates it)."""
     if (type(gravity) is tuple or type(gravity) is list) and len(gravity) == 3:
         gx, gy, gz = gravity
         if type(gx) is float and type(gy) is float and type(gz) is float:
@@ -116,8 +108,10 @@ def _gravity(gravity) -> Optional[tuple]:
         try:
             return float(gx), float(gy), float(gz)
         except (TypeError, ValueError):
-            return None
-    return None
+            return _NO_GRAVITY
+    if type(gravity) is _ndarray and gravity.shape == (3,) and gravity.dtype.kind in 'fiu':
+        return (gravity if gravity.dtype is _F8 else gravity.astype(_F8)).tolist()
+    return _NO_GRAVITY
 
 
 def _rnea(model: Model, q, qd, qdd, gravity, f_ext, kernels) -> np.ndarray:

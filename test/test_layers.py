@@ -1,0 +1,102 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Imports run one way: spatial <- joints <- model <- urdf, algorithms <- backends <- the API
+<- ros <- tools. Checked on the source of every module (imports inside functions too)."""
+
+import ast
+import os
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PACKAGE = os.path.join(ROOT, 'spatial_dynamics')
+
+# Rank of each layer: a module may import modules of its own rank or below, never above.
+RANKS = {
+    'spatial': 0, 'joints': 1, 'model': 2,
+    'urdf': 3, 'terms': 3, 'algorithms': 3,
+    'backends': 4,
+    '': 5,                  # the package itself: the public API (spatial_dynamics/__init__.py)
+    'check': 6,             # a command on the library
+    'ros': 7,               # the node and its pure configuration
+    'tools': 8,             # bench, demo, latency, soak, sim, ...: use everything, used by none
+}
+# The one import against the direction: Model.from_urdf, the public entry point, hands the
+# work to the parser (inside the method, so importing model never imports urdf).
+ALLOWED_UPWARD = {('model', 'urdf')}
+ROS = ('rclpy', 'rcl_interfaces', 'sensor_msgs', 'std_msgs', 'trajectory_msgs', 'geometry_msgs',
+       'diagnostic_msgs', 'builtin_interfaces', 'ament_index_python')
+
+
+def modules():
+    """Yield (dotted name inside the package, path) of every module of the package."""
+    for dirpath, _, filenames in os.walk(PACKAGE):
+        for filename in sorted(filenames):
+            if filename.endswith('.py'):
+                path = os.path.join(dirpath, filename)
+                rel = os.path.relpath(path, PACKAGE)[:-3].replace(os.sep, '.')
+                yield ('' if rel == '__init__' else rel.removesuffix('.__init__')), path
+
+
+def layer(name: str) -> str:
+    """Return the layer of a module (its first name inside the package)."""
+    return name.split('.')[0]
+
+
+def imports(name: str, path: str):
+    """Yield the absolute module names ``path`` imports, at any depth of its code."""
+    is_package = path.endswith('__init__.py')
+    with open(path, encoding='utf-8') as f:
+        tree = ast.parse(f.read())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name
+        elif isinstance(node, ast.ImportFrom):
+            if node.level == 0:
+                base = node.module
+            else:
+                parts = ['spatial_dynamics'] + (name.split('.') if name else [])
+                parts = parts[:len(parts) - node.level + (1 if is_package else 0)]
+                base = '.'.join(parts + ([node.module] if node.module else []))
+            yield base
+            for alias in node.names:    # `from . import layout` imports a module too
+                yield f'{base}.{alias.name}'
+
+
+def inside(module: str):
+    """Return the module's name inside the package, or None for other modules."""
+    if module == 'spatial_dynamics':
+        return ''
+    if module.startswith('spatial_dynamics.'):
+        return module[len('spatial_dynamics.'):]
+    return None
+
+
+LAYERS = [(name, path) for name, path in modules() if layer(name) in RANKS]
+UNKNOWN = [name for name, _ in modules() if layer(name) not in RANKS]
+
+
+def test_every_module_has_a_layer():
+    assert not UNKNOWN, f'modules outside the layers {sorted(RANKS)}: {UNKNOWN}'
+
+
+@pytest.mark.parametrize('name,path', LAYERS, ids=[n or '__init__' for n, _ in LAYERS])
+def test_imports_run_one_way(name, path):
+    here = layer(name)
+    wrong = []
+    for module in imports(name, path):
+        target = inside(module)
+        if target is None:
+            top = module.split('.')[0]
+            if top in ROS and RANKS[here] < RANKS['ros']:
+                wrong.append(f'{module} (ROS, below the ros layer)')
+            if top in ('numba', 'llvmlite') and not name.startswith('backends'):
+                wrong.append(f'{module} (numba outside the backends)')
+            continue
+        there = layer(target)
+        if there not in RANKS or (here, there) in ALLOWED_UPWARD:
+            continue   # an attribute imported from a module (`from .x import name`)
+        if RANKS[there] > RANKS[here]:
+            wrong.append(f'{module} (layer {there!r} is above {here!r})')
+    assert not wrong, f'{name or "spatial_dynamics"} imports: {wrong}'
