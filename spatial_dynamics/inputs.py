@@ -23,8 +23,9 @@ counter key) and whose message names the offending joint or field.
 
 from __future__ import annotations
 
-from functools import lru_cache
-from typing import Optional, Sequence, Tuple
+import sys
+import threading
+from typing import Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -54,23 +55,79 @@ def _listed(names: Sequence[str]) -> str:
     return shown + (', ...' if len(names) > _MAX_LISTED else '')
 
 
-@lru_cache(maxsize=256)
+NAME_CACHE_BYTES = 1024 * 1024
+"""Budget of the name-order cache of :func:`name_index`: the names it keeps, in bytes."""
+
+NAME_CACHE_ENTRY_BYTES = NAME_CACHE_BYTES // 8
+"""A name list larger than this (~1,500 names of 20 characters) is mapped on every message."""
+
+NAME_CACHE_ENTRIES = 256
+"""At most this many name orders are cached (a publisher shuffling its order churns no more)."""
+
+_STR_OVERHEAD = sys.getsizeof('') + 8   # a str object and its slot in the tuple
+
+# (model joint names, message names) -> (index, estimated bytes); insertion order = age.
+_cache: Dict[Tuple[Tuple[str, ...], Tuple[str, ...]], Tuple[np.ndarray, int]] = {}
+_cache_bytes = 0
+_cache_lock = threading.Lock()
+
+
 def name_index(joint_names: Tuple[str, ...], names: Tuple[str, ...]) -> np.ndarray:
     """Return indices ``idx`` such that ``values[idx]`` is in the order of ``joint_names``.
 
     ``joint_names`` is the model's order, ``names`` the message's. Cached per pair of tuples, so
-    a publisher that keeps its name order costs one dict build, not one per message; the
-    returned array is read-only and shared.
+    a publisher that keeps its name order costs one dict look-up per message, not a rebuild; the
+    returned array is read-only and shared. The cache is bounded by the size of the names it
+    holds (:data:`NAME_CACHE_BYTES`) as well as by their count (:data:`NAME_CACHE_ENTRIES`),
+    oldest entries dropped first: a message may carry any number of extra names.
 
     Raises :class:`InputError` (``duplicate_joint``, ``missing_joint``).
     """
+    key = (joint_names, names)
+    hit = _cache.get(key)
+    if hit is not None:
+        return hit[0]
+    idx = _build_index(joint_names, names)
+    size = sum(map(len, names)) + _STR_OVERHEAD * len(names) + idx.nbytes
+    if size <= NAME_CACHE_ENTRY_BYTES:
+        _remember(key, idx, size)
+    return idx
+
+
+def _remember(key, idx: np.ndarray, size: int) -> None:
+    global _cache_bytes
+    with _cache_lock:
+        if key in _cache:
+            return
+        while _cache and (_cache_bytes + size > NAME_CACHE_BYTES
+                          or len(_cache) >= NAME_CACHE_ENTRIES):
+            _cache_bytes -= _cache.pop(next(iter(_cache)))[1]
+        _cache[key] = (idx, size)
+        _cache_bytes += size
+
+
+def name_cache_info() -> Tuple[int, int]:
+    """Return ``(entries, estimated bytes)`` of the cache of :func:`name_index`."""
+    with _cache_lock:
+        return len(_cache), _cache_bytes
+
+
+def name_cache_clear() -> None:
+    """Empty the cache of :func:`name_index`."""
+    global _cache_bytes
+    with _cache_lock:
+        _cache.clear()
+        _cache_bytes = 0
+
+
+def _build_index(joint_names: Tuple[str, ...], names: Tuple[str, ...]) -> np.ndarray:
     position = {}
-    duplicated = []
+    repeated = set()
     for i, name in enumerate(names):
-        if name in position and name not in duplicated:
-            duplicated.append(name)
+        if name in position:
+            repeated.add(name)
         position[name] = i
-    duplicated = [name for name in joint_names if name in duplicated]
+    duplicated = [name for name in joint_names if name in repeated]
     if duplicated:
         raise InputError('duplicate_joint',
                          f'joint(s) named more than once: {_listed(duplicated)}')

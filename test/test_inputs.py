@@ -127,14 +127,72 @@ def test_non_finite_names_field_and_joint(field, index, bad):
 
 
 def test_mapping_is_cached_per_name_tuple():
-    inputs.name_index.cache_clear()
+    """A publisher that repeats its name order gets the same (read-only) index, not a rebuild."""
+    inputs.name_cache_clear()
+    names = tuple(reversed(JOINTS))
+    idx = inputs.name_index(JOINTS, names)
+    assert not idx.flags.writeable
+    # a new tuple with equal names (as each message brings) finds the same entry
+    assert inputs.name_index(JOINTS, tuple(list(names))) is idx
+    assert inputs.name_index(JOINTS, JOINTS) is not idx
+    assert inputs.name_cache_info()[0] == 2
     for _ in range(3):
         joint_state_arrays(JOINTS, *state(reversed(JOINTS)))
         joint_state_arrays(JOINTS, *state(JOINTS))
-    info = inputs.name_index.cache_info()
-    assert info.misses == 2 and info.hits == 4
-    idx = inputs.name_index(JOINTS, tuple(reversed(JOINTS)))
-    assert not idx.flags.writeable
+    assert inputs.name_cache_info()[0] == 2
+
+
+def test_name_cache_is_bounded_by_size_not_count():
+    """Many distinct, long name lists (valid: extra names are ignored) keep bounded memory.
+
+    The last 256 lists were all kept before, whatever their size (~3 GB with long lists; here
+    ~20 MB); the cache now holds at most NAME_CACHE_BYTES of names, and mapping still works
+    for every list.
+    """
+    import gc
+    import tracemalloc
+    inputs.name_cache_clear()
+    gc.collect()
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        for k in range(300):
+            names = [f'extra_{k}_{i}' for i in range(1000)] + list(JOINTS)
+            q, _, _ = joint_state_arrays(JOINTS, names, [0.0] * 1000 + [Q[n] for n in JOINTS],
+                                         [], [])
+            np.testing.assert_array_equal(q, [Q[n] for n in JOINTS])
+            del names
+        gc.collect()
+        held = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    entries, size = inputs.name_cache_info()
+    print(f'cache: {entries} entries, {size} bytes estimated; {held / 1e6:.1f} MB held')
+    assert 1 < entries and size <= inputs.NAME_CACHE_BYTES
+    # what stays allocated is the cache (within 2x of its own estimate) and nothing more
+    assert held < 2 * inputs.NAME_CACHE_BYTES, held
+    # the common case is still cached after the flood
+    idx = inputs.name_index(JOINTS, JOINTS)
+    assert inputs.name_index(JOINTS, tuple(JOINTS)) is idx
+
+
+def test_name_cache_count_is_bounded_for_shuffled_orders():
+    """A publisher that shuffles its name order fills at most NAME_CACHE_ENTRIES entries."""
+    import itertools
+    inputs.name_cache_clear()
+    names = JOINTS + ('a', 'b')
+    for order in itertools.islice(itertools.permutations(names), 600):
+        q, _, _ = joint_state_arrays(JOINTS, *state(order))
+        np.testing.assert_array_equal(q, [Q[n] for n in JOINTS])
+    assert inputs.name_cache_info()[0] == inputs.NAME_CACHE_ENTRIES
+
+
+def test_name_list_larger_than_an_entry_is_mapped_but_not_cached():
+    inputs.name_cache_clear()
+    many = tuple(f'n{i}' for i in range(inputs.NAME_CACHE_BYTES // 64)) + JOINTS
+    idx = inputs.name_index(JOINTS, many)
+    np.testing.assert_array_equal(idx, len(many) - 4 + np.arange(4))
+    assert inputs.name_cache_info() == (0, 0)
 
 
 def point(positions, velocities=(), accelerations=()):
