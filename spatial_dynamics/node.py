@@ -17,8 +17,9 @@ Topics (relative, so they can be remapped):
 ``desired_joint_states``    sensor_msgs/JointState, in            best effort, keep last 1
 ``desired_trajectory``      trajectory_msgs/JointTrajectory, in   best effort, keep last 1
 ``external_wrenches``       geometry_msgs/WrenchStamped, in       best effort, keep last 10
-``robot_description``       std_msgs/String, in (only when no     reliable, transient local, 1
-                            description parameter is set)
+``robot_description``       std_msgs/String, in (subscribed only  reliable, transient local, 1
+                            while no description parameter is
+                            set; parsed off the answering path)
 ``feedforward_efforts``     sensor_msgs/JointState, out           reliable
 ``effort_commands``         std_msgs/Float64MultiArray, out       reliable
 ``/diagnostics``            diagnostic_msgs/DiagnosticArray, out  ~1 Hz
@@ -27,6 +28,16 @@ Topics (relative, so they can be remapped):
 Parameters are listed in ``config/inverse_dynamics.yaml``. Every message is answered or
 rejected on its own: a rejected message (reason counted in diagnostics) produces no output, and
 nothing is published without fresh input, so a stale input means no output (never zeros).
+
+The robot description comes from, in this order of precedence: the ``robot_description``
+parameter (URDF XML), the ``robot_description_file`` parameter (a path: a regular UTF-8 file of
+at most :data:`MAX_DESCRIPTION_BYTES`), the ``robot_description`` topic (URDF XML). A
+description is XML text and never opened as a path. A new one is parsed completely and swapped
+in between two messages (one reference assignment) only if it loads; otherwise the old model
+stays. Descriptions from the topic are parsed in a worker thread, so answers keep coming while a
+large one parses; parameter changes are validated in the parameter service's callback (its
+answer says whether the change was accepted), so a description set by parameter is parsed
+there, synchronously.
 """
 
 from __future__ import annotations
@@ -36,9 +47,13 @@ from collections import Counter
 from dataclasses import dataclass
 import math
 import os
+import signal
+import stat
 import sys
+import threading
 import time
-from typing import Callable, Optional, Sequence, Tuple
+from typing import Callable, List, Optional, Sequence, Tuple
+import warnings
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
@@ -68,6 +83,18 @@ FRICTION_MODELS = ('none', 'urdf')
 DEFAULT_FRICTION_THRESHOLD = 0.01   # rad/s or m/s
 DEFAULT_WRENCH_TIMEOUT = 0.5        # s
 WRENCH_DEPTH = 10                   # several links may publish in one burst
+
+# Bounds beyond which a value cannot be physical: refused with the bound named, instead of
+# being accepted and then making every answer non-finite.
+MAX_DESCRIPTION_BYTES = 32 * 1024 * 1024   # robot_description_file (the largest URDF of
+#                                            example-robot-data is < 1 MiB)
+MAX_GRAVITY = 1e3                   # m/s², norm of `gravity` (100 g)
+MAX_ARMATURE = 1e6                  # kg m² (or kg), per joint
+MAX_PAYLOAD_MASS = 1e6              # kg
+MAX_PAYLOAD_COM = 1e3               # m, per component
+MAX_PAYLOAD_INERTIA = 1e6           # kg m², per component
+MAX_LOCKED_POSITION = 1e4           # rad or m
+URDF_WARNINGS_LISTED = 5            # URDF warnings listed one by one in /diagnostics
 
 # Rejection reasons the node adds to those of the input mapping.
 NODE_REASONS = ('no_model', 'compute_error', 'non_finite_output')
@@ -123,49 +150,99 @@ class ConfigError(ValueError):
     """A parameter value or robot description that cannot be used; the message says why."""
 
 
+_FILE_KINDS = ((stat.S_ISDIR, 'directory'), (stat.S_ISFIFO, 'named pipe'),
+               (stat.S_ISCHR, 'character device'), (stat.S_ISBLK, 'block device'),
+               (stat.S_ISSOCK, 'socket'))
+
+
+def _check_regular_file(where: str, info: os.stat_result) -> None:
+    """Refuse anything but a regular file of at most :data:`MAX_DESCRIPTION_BYTES`."""
+    if not stat.S_ISREG(info.st_mode):
+        kind = next((name for test, name in _FILE_KINDS if test(info.st_mode)), 'special file')
+        raise ConfigError(f'{where}: not a regular file (a {kind})')
+    if info.st_size > MAX_DESCRIPTION_BYTES:
+        raise ConfigError(f'{where}: {info.st_size} bytes, more than the limit of '
+                          f'{MAX_DESCRIPTION_BYTES >> 20} MiB for a robot description')
+
+
 def read_description(path: str) -> str:
-    """URDF text from ``path``; a ``.xacro`` file is expanded when ``xacro`` is importable."""
-    if not os.path.isfile(path):
-        raise ConfigError(f'robot_description_file {path!r}: no such file')
-    if path.endswith('.xacro'):
-        try:
-            import xacro
-        except ImportError:
-            raise ConfigError(f'robot_description_file {path!r}: a .xacro file needs the '
-                              'xacro module (pip install xacro, or apt ros-jazzy-xacro)')
-        try:
-            return xacro.process_file(path).toxml()
-        except Exception as err:  # xacro raises many types; all mean "cannot expand"
-            raise ConfigError(f'robot_description_file {path!r}: xacro failed: {err}')
+    """URDF text of the file ``path``; a ``.xacro`` file is expanded when ``xacro`` is importable.
+
+    Only a regular file (symbolic links followed) of at most :data:`MAX_DESCRIPTION_BYTES`,
+    UTF-8 (a byte order mark is dropped). Nothing else is opened: a named pipe, a device or a
+    directory is refused after ``stat``, and the file is opened non-blocking and checked again
+    (the path may have changed in between), so reading never blocks or runs away.
+    """
+    where = f'robot_description_file {path!r}'
     try:
-        with open(path, encoding='utf-8') as f:
-            return f.read()
+        _check_regular_file(where, os.stat(path))
+        if path.endswith('.xacro'):
+            return _expand_xacro(where, path)
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+        with open(fd, 'rb') as f:
+            _check_regular_file(where, os.fstat(f.fileno()))
+            data = f.read(MAX_DESCRIPTION_BYTES + 1)
+    except FileNotFoundError:
+        raise ConfigError(f'{where}: no such file') from None
     except OSError as err:
-        raise ConfigError(f'robot_description_file {path!r}: {err.strerror}')
+        raise ConfigError(f'{where}: {err.strerror or err}') from None
+    if len(data) > MAX_DESCRIPTION_BYTES:   # it grew after the check
+        raise ConfigError(f'{where}: more than the limit of {MAX_DESCRIPTION_BYTES >> 20} MiB '
+                          'for a robot description')
+    try:
+        return data.decode('utf-8-sig')
+    except UnicodeDecodeError as err:
+        raise ConfigError(f'{where}: not UTF-8 text (byte 0x{data[err.start]:02x} at offset '
+                          f'{err.start}); a URDF file must be UTF-8') from None
+
+
+def _expand_xacro(where: str, path: str) -> str:
+    try:
+        import xacro
+    except ImportError:
+        raise ConfigError(f'{where}: a .xacro file needs the xacro module (pip install xacro, '
+                          'or apt ros-jazzy-xacro)') from None
+    try:
+        text = xacro.process_file(path).toxml()
+    except Exception as err:  # xacro raises many types; all mean "cannot expand"
+        raise ConfigError(f'{where}: xacro failed: {err}') from None
+    if len(text) > MAX_DESCRIPTION_BYTES:
+        raise ConfigError(f'{where}: expands to more than the limit of '
+                          f'{MAX_DESCRIPTION_BYTES >> 20} MiB for a robot description')
+    return text
 
 
 def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = None,
-                      locked: Optional[dict] = None) -> 'sd.Model':
+                      locked: Optional[dict] = None, strict: bool = False) -> 'sd.Model':
     """Build the (reduced) model from URDF text; ``source`` names where it came from.
 
-    With ``joints``, model reduction (:meth:`~spatial_dynamics.Model.from_urdf`): the other
-    joints are locked at ``locked[name]`` (default 0), lumped, and branches that cannot move
-    a kept joint's torque are pruned; ``model.joint_names == joints``.
+    ``urdf`` is XML text, never a path (a path goes in ``robot_description_file``): it is
+    handed to the parser as bytes, which :meth:`~spatial_dynamics.Model.from_urdf` never
+    opens. With ``joints``, model reduction (:meth:`~spatial_dynamics.Model.from_urdf`): the
+    other joints are locked at ``locked[name]`` (default 0), lumped, and branches that cannot
+    move a kept joint's torque are pruned; ``model.joint_names == joints``. ``strict``: a
+    physically inconsistent but computable description (a :class:`~spatial_dynamics.URDFWarning`)
+    is refused; otherwise it loads and its warnings are in ``model.warnings``.
 
     One inverse-dynamics call at q = qd = qdd = 0 follows, before the model is used: it proves
     the model computes, and any one-time cost of the first call (imports, compilation, caches)
     is paid here, at load time, not by the first live message.
     """
-    if not urdf.strip():
+    text = urdf.lstrip('\ufeff \t\r\n')
+    if not text:
         raise ConfigError(f'{source}: empty robot description')
+    if not text.startswith('<'):
+        raise ConfigError(f'{source}: not URDF XML (it starts with {text[:200]!r}): a robot '
+                          'description is XML text, never a path; give a file in the '
+                          'robot_description_file parameter')
     where = source
     if joints:
         where = f'{source} reduced to joints {list(joints)}'
         if locked:
             where += f' (locked {locked})'
     try:
-        model = sd.Model.from_urdf(urdf, joints=list(joints) if joints else None,
-                                   locked=locked or None)
+        model = sd.Model.from_urdf(text.encode('utf-8'), joints=list(joints) if joints else None,
+                                   locked=locked or None, strict=strict)
         zeros = np.zeros(len(model.joint_names))
         tau = sd.rnea(model, zeros, zeros, zeros)
     except Exception as err:  # a bad description must never take the node down
@@ -200,19 +277,29 @@ class Payload:
             raise ConfigError(f'parameter payload.*: {err}')
 
 
+def _within(values: Sequence[float], bound: float) -> bool:
+    return all(math.isfinite(x) and abs(x) <= bound for x in values)
+
+
 def check_payload(link, mass, com, inertia) -> Payload:
-    """Shape and finiteness of the ``payload.*`` parameters (the physics: :meth:`apply`)."""
+    """Shape, finiteness and bounds of the ``payload.*`` parameters (the physics: :meth:`apply`).
+
+    Bounds (what no payload can exceed): :data:`MAX_PAYLOAD_MASS`, :data:`MAX_PAYLOAD_COM` per
+    com component, :data:`MAX_PAYLOAD_INERTIA` per inertia component.
+    """
     mass = float(mass)
-    if not math.isfinite(mass) or mass < 0.0:
-        raise ConfigError(f'parameter payload.mass: need a finite mass >= 0 kg, got {mass}')
+    if not (math.isfinite(mass) and 0.0 <= mass <= MAX_PAYLOAD_MASS):
+        raise ConfigError(f'parameter payload.mass: need a mass from 0 to '
+                          f'{MAX_PAYLOAD_MASS:g} kg, got {mass}')
     com = tuple(float(x) for x in com)
-    if len(com) != 3 or not all(math.isfinite(x) for x in com):
-        raise ConfigError(f'parameter payload.com: need 3 finite values (m, link frame), '
-                          f'got {list(com)}')
+    if len(com) != 3 or not _within(com, MAX_PAYLOAD_COM):
+        raise ConfigError(f'parameter payload.com: need 3 finite values within '
+                          f'±{MAX_PAYLOAD_COM:g} m (link frame), got {list(com)}')
     inertia = tuple(float(x) for x in inertia)
-    if len(inertia) != 6 or not all(math.isfinite(x) for x in inertia):
+    if len(inertia) != 6 or not _within(inertia, MAX_PAYLOAD_INERTIA):
         raise ConfigError('parameter payload.inertia: need 6 finite values (ixx ixy ixz iyy '
-                          f'iyz izz, kg m^2 about the com), got {list(inertia)}')
+                          f'iyz izz, kg m^2 about the com) within ±{MAX_PAYLOAD_INERTIA:g} '
+                          f'kg m^2, got {list(inertia)}')
     return Payload(str(link), mass, com, inertia)
 
 
@@ -228,8 +315,9 @@ def check_locked(joints: Optional[Sequence[str]], positions: Optional[Sequence[f
     if len(set(joints)) != len(joints):
         raise ConfigError(f'parameter locked_joints: names repeated in {joints}')
     values = positions or [0.0] * len(joints)
-    if not all(math.isfinite(v) for v in values):
-        raise ConfigError(f'parameter locked_positions: not finite: {values}')
+    if not _within(values, MAX_LOCKED_POSITION):
+        raise ConfigError(f'parameter locked_positions: need finite values within '
+                          f'±{MAX_LOCKED_POSITION:g} rad or m, got {values}')
     return dict(zip(joints, (float(v) for v in values)))
 
 
@@ -253,11 +341,12 @@ class Output:
     armature: Optional[np.ndarray] = None
     friction_threshold: Optional[float] = None
     clamp: bool = False
+    backend: str = ''
 
 
 def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
                    ) -> Optional[np.ndarray]:
-    """``armature`` (kg m² or kg): empty = none, else one value >= 0 per model joint."""
+    """``armature`` (kg m² or kg): empty = none, else one value in [0, MAX_ARMATURE] per joint."""
     if not values:
         return None
     try:
@@ -265,15 +354,23 @@ def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
     except ValueError as err:
         raise ConfigError(f'{err} (order of the joints parameter, or the URDF order '
                           'when it is unset)')
+    for name, value in zip(model.joint_names, armature):
+        if value > MAX_ARMATURE:
+            raise ConfigError(f'parameter armature: joint {name!r} has {value:g}, more than '
+                              f'{MAX_ARMATURE:g} kg m^2 (or kg) cannot be a rotor inertia')
     armature.setflags(write=False)
     return None if not armature.any() else armature
 
 
 def check_gravity(value: Sequence[float]) -> Tuple[float, float, float]:
-    """Gravity ``[gx, gy, gz]`` in m/s², base frame."""
+    """Gravity ``[gx, gy, gz]`` in m/s², base frame, of norm at most :data:`MAX_GRAVITY`."""
     g = tuple(float(x) for x in value)
     if len(g) != 3 or not all(math.isfinite(x) for x in g):
         raise ConfigError(f'parameter gravity: need 3 finite values in m/s², got {list(value)}')
+    norm = math.hypot(*g)
+    if norm > MAX_GRAVITY:
+        raise ConfigError(f'parameter gravity: |g| = {norm:g} m/s² in {list(g)}, more than '
+                          f'{MAX_GRAVITY:g} m/s² (100 g) cannot be a mounting')
     return g
 
 
@@ -299,6 +396,102 @@ def check_positive(name: str, value: float, unit: str = 'seconds') -> float:
 def check_input_timeout(value: float) -> float:
     """Return a valid ``input_timeout``."""
     return check_positive('input_timeout', value)
+
+
+def description_source(params: dict) -> str:
+    """Where the description comes from: ``'parameter'``, ``'file'`` or ``'topic'`` (precedence).
+
+    The ``robot_description`` parameter when it is set (non-empty), else
+    ``robot_description_file`` when it is set, else the topic.
+    """
+    if params.get('robot_description'):
+        return 'parameter'
+    if params.get('robot_description_file'):
+        return 'file'
+    return 'topic'
+
+
+@dataclass(frozen=True)
+class ParseRequest:
+    """A description from the topic to build an :class:`Output` from, with its context.
+
+    ``generation`` identifies the request: the node applies the result only if no other
+    description came (or a parameter took precedence) since; ``params`` and ``current`` are
+    the node's parameters and output when the message arrived.
+    """
+
+    generation: int
+    urdf: str
+    params: dict
+    current: Optional[Output]
+
+
+class DescriptionParser:
+    """One worker thread that builds outputs from topic descriptions, off the answering path.
+
+    ``submit`` replaces any request not yet started (only the newest description matters);
+    each finished request is queued with its result (an :class:`Output` or a
+    :class:`ConfigError`) and ``notify()`` is called, from the worker thread, so the node can
+    pick it up in its executor (a guard condition). The thread starts with the first request.
+    """
+
+    def __init__(self, build: Callable[[ParseRequest], Output], notify: Callable[[], None]
+                 ) -> None:
+        self._build = build
+        self._notify = notify
+        self._wake = threading.Condition()
+        self._request: Optional[ParseRequest] = None
+        self._done: List[Tuple[ParseRequest, object]] = []
+        self._stopped = False
+        self._thread: Optional[threading.Thread] = None
+
+    def submit(self, request: ParseRequest) -> None:
+        """Parse ``request`` next (dropping a request that has not started yet)."""
+        with self._wake:
+            if self._stopped:
+                return
+            self._request = request
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, daemon=True,
+                                                name='robot_description parser')
+                self._thread.start()
+            self._wake.notify()
+
+    def finished(self) -> List[Tuple[ParseRequest, object]]:
+        """Return (and forget) the finished requests with their results, oldest first."""
+        with self._wake:
+            done, self._done = self._done, []
+        return done
+
+    def stop(self) -> None:
+        """Let the worker end after the request it is on (it is a daemon: never waited for)."""
+        with self._wake:
+            self._stopped = True
+            self._request = None
+            self._wake.notify()
+
+    def _run(self) -> None:
+        while True:
+            with self._wake:
+                while self._request is None and not self._stopped:
+                    self._wake.wait()
+                if self._stopped:
+                    return
+                request, self._request = self._request, None
+            try:
+                result = self._build(request)
+            except ConfigError as err:
+                result = err
+            except Exception as err:  # never lose the worker: report it as a rejection
+                result = ConfigError(f'topic robot_description: {err!r}')
+            with self._wake:
+                if self._stopped:
+                    return
+                self._done.append((request, result))
+            try:
+                self._notify()
+            except Exception:  # the context is gone: the node is shutting down
+                return
 
 
 class Window:
@@ -339,6 +532,12 @@ class InverseDynamicsNode(Node):
         self.answered = 0
         self.last_input_ns: Optional[int] = None
         self.window = Window()
+        # Topic descriptions: parsed by a worker; the result is applied in the executor only
+        # if its generation is still the newest (a parameter or a newer message supersedes).
+        self._description_generation = 0
+        self._description_sub = None
+        self._parsed = self.create_guard_condition(self._on_parsed)
+        self._parser = DescriptionParser(self._build_from_topic, self._parsed.trigger)
         self._configure({name: self._value(name) for name in self._PARAMETERS})
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
@@ -354,18 +553,19 @@ class InverseDynamicsNode(Node):
         subscribe(self, WrenchStamped, 'external_wrenches', self._on_wrench, WRENCH_DEPTH)
         self.create_timer(1.0, self._publish_diagnostics)
         if self.output is None:
-            # rclpy's default QoS event handlers stay here: a volatile publisher of the
-            # description never reaches this transient-local subscription, worth a warning.
-            self.create_subscription(String, 'robot_description', self._on_description_topic,
-                                     DESCRIPTION_QOS)
             self._warn_waiting()
+
+    def destroy_node(self) -> None:
+        """Stop the description parser, then destroy the node."""
+        self._parser.stop()
+        super().destroy_node()
 
     # -- parameters ------------------------------------------------------------------------
 
-    _PARAMETERS = ('robot_description', 'robot_description_file', 'joints', 'locked_joints',
-                   'locked_positions', 'gravity', 'acceleration_source', 'input_timeout',
-                   'payload.link', 'payload.mass', 'payload.com', 'payload.inertia',
-                   'armature', 'friction_model', 'friction_velocity_threshold',
+    _PARAMETERS = ('robot_description', 'robot_description_file', 'strict_urdf', 'joints',
+                   'locked_joints', 'locked_positions', 'gravity', 'acceleration_source',
+                   'input_timeout', 'payload.link', 'payload.mass', 'payload.com',
+                   'payload.inertia', 'armature', 'friction_model', 'friction_velocity_threshold',
                    'clamp_to_effort_limits', 'external_wrench_timeout')
     _MODEL_PARAMETERS = ('joints', 'locked_joints', 'locked_positions')
     _PAYLOAD_PARAMETERS = ('payload.link', 'payload.mass', 'payload.com', 'payload.inertia')
@@ -375,12 +575,22 @@ class InverseDynamicsNode(Node):
             return ParameterDescriptor(description=text, **kwargs)
 
         self.declare_parameter('robot_description', '', describe(
-            'URDF XML of the robot. Takes precedence over robot_description_file and the '
-            'robot_description topic. A new value is parsed completely and swapped in only if '
-            'it parses; otherwise it is rejected with the reason and the old model stays.'))
+            'URDF XML of the robot (XML text, never a path). Takes precedence over '
+            'robot_description_file and the robot_description topic. A new value is parsed '
+            'completely and swapped in only if it parses; otherwise it is rejected with the '
+            "reason and the old model stays. Set to '' to fall back to robot_description_file "
+            '(or, when that is empty too, to the topic).'))
         self.declare_parameter('robot_description_file', '', describe(
-            'Path of a URDF (or .xacro, expanded when the xacro module is importable), used '
-            'when robot_description is empty.'))
+            'Path of a URDF (or .xacro, expanded when the xacro module is importable): a '
+            f'regular UTF-8 file of at most {MAX_DESCRIPTION_BYTES >> 20} MiB. Used when '
+            'robot_description is empty; set while robot_description is set, it is checked '
+            'and kept for later, and the model stays that of robot_description.'))
+        self.declare_parameter('strict_urdf', False, describe(
+            'Refuse a description with URDF warnings (physically inconsistent but computable: '
+            'an inertia that is not positive semi-definite or breaks the triangle inequality, '
+            'inertia on a massless link...) like any bad description. Off: it loads as written '
+            'and each warning is logged and listed in /diagnostics. Cannot be switched on '
+            'while the loaded description has warnings.'))
         self.declare_parameter('joints', Parameter.Type.STRING_ARRAY, describe(
             'Joints the model keeps, in the output order of effort_commands and '
             "feedforward_efforts: a subset of the URDF's movable, non-mimic joints. The "
@@ -445,7 +655,9 @@ class InverseDynamicsNode(Node):
         if changes:
             try:
                 self._configure(changes)
-            except ConfigError as err:
+            except Exception as err:  # ConfigError; anything else must not take the node down
+                if not isinstance(err, ConfigError):
+                    err = ConfigError(f'{", ".join(changes)}: {err!r}')
                 self.get_logger().warn(f'parameter change rejected: {err}')
                 if {'robot_description', 'robot_description_file'} & changes.keys():
                     self._count_description_rejected(str(err))
@@ -453,17 +665,16 @@ class InverseDynamicsNode(Node):
         return SetParametersResult(successful=True)
 
     def _configure(self, changes: dict) -> None:
-        """Validate ``changes`` against the current state, then apply all of them at once."""
+        """Validate ``changes`` against the current state, then apply all of them at once.
+
+        Raises :class:`ConfigError` and changes nothing when a value cannot be used.
+        """
         params = {**self.params, **changes}
-        urdf = source = None
-        if changes.get('robot_description'):
-            urdf, source = changes['robot_description'], 'parameter robot_description'
-        elif changes.get('robot_description_file'):
-            path = changes['robot_description_file']
-            urdf, source = read_description(path), f'file {path}'
-        output = self.output
-        if urdf is not None or output is not None:
-            output = self._build_output(params, urdf, source)
+        urdf, source, kept_file = self._description_change(params, changes)
+        current = self.output
+        output = current
+        if urdf is not None or current is not None:
+            output = self._build_output(params, current, urdf, source)
         else:  # no model yet: check what needs none; the rest is checked when one arrives
             check_payload(params['payload.link'], params['payload.mass'],
                           params['payload.com'], params['payload.inertia'])
@@ -477,26 +688,54 @@ class InverseDynamicsNode(Node):
         wrench_timeout = check_positive('external_wrench_timeout',
                                         params['external_wrench_timeout'])
         # Everything parsed: swap in.
-        model_changed = output is not None and (
-            self.output is None or output.base is not self.output.base)
         self.output = output
         self.params = params
         self.gravity = gravity
         self.acceleration_source = acceleration_source
         self.input_timeout = input_timeout
         self.wrench_timeout_ns = int(wrench_timeout * 1e9)
-        if model_changed:
-            self._log_model()
+        if urdf is not None:
+            self._description_generation += 1   # a topic description still parsing is stale
+        if output is not None and (current is None or output.base is not current.base):
+            self._log_model(output, current)
         elif output is not None and set(self._PAYLOAD_PARAMETERS) & changes.keys():
             self.get_logger().info(f'payload: {output.payload}')
+        if kept_file:
+            self.get_logger().info(
+                f'robot_description_file {kept_file!r} checked and kept: robot_description is '
+                'set and takes precedence; the file is used once robot_description is cleared')
+        self._follow_topic()
 
-    def _build_output(self, params: dict, urdf: Optional[str] = None,
+    def _description_change(self, params: dict, changes: dict
+                            ) -> Tuple[Optional[str], Optional[str], str]:
+        """Return ``(urdf, source, kept)``: the description ``changes`` make current.
+
+        By precedence (:func:`description_source`); ``urdf`` is None when the model's
+        description does not change. ``kept`` is the path of a ``robot_description_file`` that
+        was set (and read, so it is known to be readable) while ``robot_description`` is set:
+        kept for later, not used.
+        """
+        text, path = params['robot_description'], params['robot_description_file']
+        if text:
+            kept = ''
+            if path and 'robot_description_file' in changes:
+                read_description(path)
+                kept = path
+            if 'robot_description' in changes:
+                return text, 'parameter robot_description', kept
+            return None, None, kept
+        if path and ('robot_description_file' in changes
+                     or self.params.get('robot_description')):  # set, or string cleared
+            return read_description(path), f'file {path}', ''
+        return None, None, ''
+
+    def _build_output(self, params: dict, current: Optional[Output], urdf: Optional[str] = None,
                       source: Optional[str] = None) -> Output:
         """Build the :class:`Output` for ``params``; the URDF is re-parsed only when needed.
 
-        ``urdf`` None keeps the current description. Raises :class:`ConfigError`.
+        ``urdf`` None keeps the description of ``current``. Reads nothing else of the node, so
+        the description parser's thread may call it. Raises :class:`ConfigError`.
         """
-        current = self.output
         if urdf is None:
             urdf, source = current.urdf, current.source
         # the four payload parameters are checked first: they need no model
@@ -504,6 +743,7 @@ class InverseDynamicsNode(Node):
                                 params['payload.com'], params['payload.inertia'])
         locked = check_locked(params['locked_joints'], params['locked_positions'])
         joints = tuple(params['joints'] or ())
+        strict = bool(params['strict_urdf'])
         if (current is not None and urdf is current.urdf and joints == current.joints_param
                 and tuple(locked.items()) == current.locked):
             base = current.base
@@ -511,7 +751,11 @@ class InverseDynamicsNode(Node):
             if locked and not joints:
                 raise ConfigError(f'parameter locked_joints: {list(locked)} lock joints only '
                                   'when the joints parameter lists the joints to keep')
-            base = parse_description(urdf, source, joints, locked)
+            base = parse_description(urdf, source, joints, locked, strict)
+        if strict and base.warnings:
+            raise ConfigError(
+                f'parameter strict_urdf: {source} has {len(base.warnings)} URDF warning(s) '
+                f'(strict_urdf refuses them), the first: {base.warnings[0]}')
         if payload.link and payload.link not in base.frames:
             raise ConfigError(
                 f'parameter payload.link: {payload.link!r} is not a link of robot '
@@ -522,37 +766,92 @@ class InverseDynamicsNode(Node):
                                       FRICTION_MODELS)
         threshold = check_positive('friction_velocity_threshold',
                                    params['friction_velocity_threshold'], 'rad/s or m/s')
+        armature = check_armature(base, params['armature'])
+        if current is not None and base is current.base:
+            backend = current.backend
+        else:   # a new model: load (or compile) the backend for it now, not at a message
+            backend = backends.warmup(model)
         return Output(
             urdf=urdf, source=source, base=base, model=model, joints=tuple(base.joint_names),
             joints_param=joints, locked=tuple(locked.items()), payload=payload,
-            armature=check_armature(base, params['armature']),
-            friction_threshold=threshold if friction_model == 'urdf' else None,
-            clamp=bool(params['clamp_to_effort_limits']))
+            armature=armature, friction_threshold=threshold if friction_model == 'urdf' else None,
+            clamp=bool(params['clamp_to_effort_limits']), backend=backend)
+
+    # -- the robot_description topic --------------------------------------------------------
+
+    def _follow_topic(self) -> None:
+        """Subscribe to the description topic while no description parameter is set, only."""
+        wanted = description_source(self.params) == 'topic'
+        if wanted and self._description_sub is None:
+            # rclpy's default QoS event handlers stay here: a volatile publisher of the
+            # description never reaches this transient-local subscription, worth a warning.
+            self._description_sub = self.create_subscription(
+                String, 'robot_description', self._on_description_topic, DESCRIPTION_QOS)
+        elif not wanted and self._description_sub is not None:
+            self.destroy_subscription(self._description_sub)
+            self._description_sub = None
+            self._description_generation += 1   # drop a topic description still parsing
+            self.get_logger().info(
+                'robot_description topic: unsubscribed, a description parameter is set and '
+                'takes precedence')
 
     def _on_description_topic(self, msg: String) -> None:
-        try:
-            output = self._build_output(self.params, msg.data, 'topic robot_description')
-        except ConfigError as err:
-            self.get_logger().error(
-                f'robot description rejected, keeping the current model: {err}')
-            self._count_description_rejected(str(err))
+        if description_source(self.params) != 'topic':   # taken just before unsubscribing
+            self.get_logger().info(
+                'robot_description topic: message ignored, a description parameter is set '
+                'and takes precedence', throttle_duration_sec=5.0)
             return
-        self.output = output
-        self._log_model()
+        self._submit_topic(msg.data)
+
+    def _submit_topic(self, urdf: str) -> None:
+        self._description_generation += 1
+        self._parser.submit(ParseRequest(self._description_generation, urdf, self.params,
+                                         self.output))
+
+    def _build_from_topic(self, request: ParseRequest) -> Output:
+        """Worker thread: the :class:`Output` of a topic description (ConfigError if bad)."""
+        return self._build_output(request.params, request.current, request.urdf,
+                                  'topic robot_description')
+
+    def _on_parsed(self) -> None:
+        """Executor: swap in a parsed topic description, unless something newer came since."""
+        for request, result in self._parser.finished():
+            if (request.generation != self._description_generation
+                    or description_source(self.params) != 'topic'):
+                continue   # superseded by a newer message or by a description parameter
+            if request.params is not self.params:   # parameters changed while it parsed
+                model_params = self._MODEL_PARAMETERS + ('strict_urdf',)
+                if isinstance(result, ConfigError) or any(
+                        request.params[k] != self.params[k] for k in model_params):
+                    self._submit_topic(request.urdf)   # again, with the current parameters
+                    continue
+                try:   # the same model: only the cheap parts again
+                    result = self._build_output(self.params, result)
+                except ConfigError as err:
+                    result = err
+            if isinstance(result, ConfigError):
+                self.get_logger().error(
+                    f'robot description rejected, keeping the current model: {result}')
+                self._count_description_rejected(str(result))
+                continue
+            current, self.output = self.output, result
+            self._log_model(result, current)
 
     def _count_description_rejected(self, reason: str) -> None:
         self.descriptions_rejected += 1
         self.last_description_error = reason
 
-    def _log_model(self) -> None:
-        """Warm the backend up for the new model and log what was loaded."""
-        out = self.output
-        self.backend = backends.warmup(out.model)
+    def _log_model(self, out: Output, previous: Optional[Output]) -> None:
+        """Log what was loaded; each URDF warning once per new description text."""
+        self.backend = out.backend
         self.get_logger().info(
             f'robot {out.model.name!r} from {out.source}: {len(out.model.joint_names)} DOF; '
             f'output joints {list(out.joints)}')
         self.get_logger().info(f'model: {out.base.summary()}; backend: {self.backend}; '
                                f'payload: {out.payload}')
+        if previous is None or out.urdf != previous.urdf:
+            for warning in out.base.warnings:
+                self.get_logger().warn(f'URDF warning ({out.source}): {warning}')
 
     def _warn_waiting(self) -> None:
         self.get_logger().warn(
@@ -703,10 +1002,15 @@ class InverseDynamicsNode(Node):
                                      value=str(self.descriptions_rejected)),
                             KeyValue(key='last rejection', value=self.last_description_error)]
         else:
-            model.level = DiagnosticStatus.OK
+            # WARN while the loaded description has URDF warnings: the torques are those of the
+            # file as written, but the file is physically inconsistent somewhere.
+            urdf_warnings = output.base.warnings
+            model.level = DiagnosticStatus.WARN if urdf_warnings else DiagnosticStatus.OK
             model.hardware_id = output.model.name
             model.message = (f'robot {output.model.name!r} loaded, '
                              f'{len(output.model.joint_names)} DOF')
+            if urdf_warnings:
+                model.message += f', {len(urdf_warnings)} URDF warning(s)'
             model.values = [
                 KeyValue(key='robot name', value=output.model.name),
                 KeyValue(key='dof', value=str(len(output.model.joint_names))),
@@ -717,7 +1021,10 @@ class InverseDynamicsNode(Node):
                 KeyValue(key='backend', value=self.backend),
                 KeyValue(key='descriptions rejected', value=str(self.descriptions_rejected)),
                 KeyValue(key='last rejection', value=self.last_description_error),
-            ]
+                KeyValue(key='strict urdf', value=str(bool(self.params['strict_urdf']))),
+                KeyValue(key='urdf warnings', value=str(len(urdf_warnings))),
+            ] + [KeyValue(key=f'urdf warning {i}', value=text) for i, text
+                 in enumerate(urdf_warnings[:URDF_WARNINGS_LISTED], 1)]
 
         age = None if self.last_input_ns is None else (now_ns - self.last_input_ns) * 1e-9
         stale = age is None or age > self.input_timeout
@@ -787,12 +1094,29 @@ class InverseDynamicsNode(Node):
         self.diagnostics_pub.publish(diagnostics)
 
 
+def _context_shut_down(grace: float = 1.0) -> bool:
+    """Whether the default context is shut down, or is within ``grace`` s (signal thread)."""
+    deadline = time.monotonic() + grace
+    while rclpy.ok():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
+
+
 def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
          name: str = NODE_NAME) -> int:
     """Make a node and spin it until SIGINT/SIGTERM; 0 on a clean exit, 1 on a bad start-up.
 
     The node's and the latency baseline's (``relay.py``) process around them, one routine.
+
+    SIGINT is handled as SIGTERM is: rclpy's handler shuts the context down and wakes the
+    executor, which returns between two callbacks. Python's own SIGINT handler is not chained
+    to it: its KeyboardInterrupt would fire at any bytecode, inside rclpy's bookkeeping too
+    (half-built tasks, a taken message lost in pybind11's conversion).
     """
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
     rclpy.init(args=args)
     node = None
     status = 0
@@ -807,6 +1131,15 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
         # e.g. -p gravity:=[0,0,-10] (integers) or -p input_timeout:=0.0 (out of range)
         rclpy.logging.get_logger(name).fatal(f'cannot start: {err}')
         status = 1
+    except Exception:
+        # SIGINT/SIGTERM shut the context down from rclpy's signal thread, wherever the
+        # executor is: between two waits it raises RCLError ("failed to initialize wait set:
+        # the given context is not valid"); in a take, the KeyboardInterrupt of SIGINT inside
+        # pybind11's message conversion surfaces as RuntimeError ("Unable to convert call
+        # argument"). Those are the requested shutdown; with the context still valid, an
+        # exception is a real error and is raised.
+        if not _context_shut_down():
+            raise
     finally:
         if node is not None:
             node.destroy_node()
@@ -816,6 +1149,9 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
 
 def main(args: Optional[Sequence[str]] = None) -> int:
     """Run the node until SIGINT/SIGTERM; 0 on a clean exit, 1 if the start-up config is bad."""
+    # The node logs each URDF warning itself (once per description) and lists them in
+    # /diagnostics: Python's own printing of them would repeat each one on stderr.
+    warnings.filterwarnings('ignore', category=sd.URDFWarning)
     return spin(InverseDynamicsNode, args)
 
 

@@ -168,10 +168,11 @@ class Io:
         self.driver = driver
         node = driver.node
         self.efforts: List = []
+        self.arrivals: List[float] = []   # time.monotonic() at which each effort arrived
         self.commands: List = []
         self.diagnostics: List = []
         self.subscriptions = [
-            node.create_subscription(JointState, 'feedforward_efforts', self.efforts.append,
+            node.create_subscription(JointState, 'feedforward_efforts', self._on_efforts,
                                      1000),
             node.create_subscription(Float64MultiArray, 'effort_commands',
                                      self.commands.append, 1000),
@@ -186,6 +187,10 @@ class Io:
                        durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self.parameters = node.create_client(SetParameters, f'/{node_name}/set_parameters')
         self.node_name = node_name
+
+    def _on_efforts(self, msg) -> None:
+        self.arrivals.append(time.monotonic())
+        self.efforts.append(msg)
 
     def _on_diagnostics(self, msg) -> None:
         if any(s.name.startswith(self.node_name + ':') for s in msg.status):

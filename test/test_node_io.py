@@ -298,15 +298,9 @@ def test_robot_description_swapped_while_running(driver, io, demo_model, node):
     assert which[0] is False and which[-1] is True and which == sorted(which)
 
     # invalid descriptions are rejected with a reason; the heavy model keeps answering
-    for bad_urdf, reason in [('<robot name="broken"><link name="a">', ''),
-                             (heavy_urdf.replace('<child link="link3"/>',
-                                                 '<child link="no_such_link"/>'), ''),
-                             ('', 'empty')]:
+    for bad_urdf in ['<robot name="broken"><link name="a">',
+                     heavy_urdf.replace('<child link="link3"/>', '<child link="no_such_link"/>')]:
         result = io.set_parameters(robot_description=bad_urdf)
-        if reason == 'empty':
-            # an empty string is "no change", not an error
-            assert result[0].successful
-            continue
         assert not result[0].successful and result[0].reason, result[0]
         assert 'robot_description' in result[0].reason
     result = io.set_parameters(robot_description_file='/nonexistent/robot.urdf')
@@ -321,6 +315,17 @@ def test_robot_description_swapped_while_running(driver, io, demo_model, node):
     kv = values(io.fresh_status('robot model'))
     assert kv['descriptions rejected'] == '3'
     assert kv['source'] == 'parameter robot_description'
+
+    # an empty string is not an error: robot_description_file (the demo arm) applies again
+    result = io.set_parameters(robot_description='')
+    assert result[0].successful, result[0].reason
+    before = len(io.efforts)
+    io.joint_states.publish(shuffled_message(names, state, 5001, rng))
+    driver.spin_until(lambda: len(io.efforts) > before, what='an answer after the fallback')
+    np.testing.assert_allclose(io.efforts[-1].effort, expected(demo_model, state[None])[0],
+                               rtol=0, atol=1e-9)
+    kv = values(io.fresh_status('robot model'))
+    assert kv['descriptions rejected'] == '3' and kv['source'] == f'file {DEMO_URDF}'
 
 
 def test_description_with_other_joints_and_output_joints(driver, io, demo_model, node):
