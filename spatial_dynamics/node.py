@@ -398,6 +398,20 @@ def check_input_timeout(value: float) -> float:
     return check_positive('input_timeout', value)
 
 
+@dataclass(frozen=True)
+class Config:
+    """A validated parameter change, ready to be swapped in (see ``InverseDynamicsNode``)."""
+
+    params: dict
+    output: Optional[Output]
+    new_description: bool
+    kept_file: str
+    gravity: Tuple[float, float, float]
+    acceleration_source: str
+    input_timeout: float
+    wrench_timeout: float
+
+
 def description_source(params: dict) -> str:
     """Where the description comes from: ``'parameter'``, ``'file'`` or ``'topic'`` (precedence).
 
@@ -536,6 +550,7 @@ class InverseDynamicsNode(Node):
         # if its generation is still the newest (a parameter or a newer message supersedes).
         self._description_generation = 0
         self._description_sub = None
+        self._inputs: list = []   # input subscriptions, served while a parameter change parses
         self._parsed = self.create_guard_condition(self._on_parsed)
         self._parser = DescriptionParser(self._build_from_topic, self._parsed.trigger)
         self._configure({name: self._value(name) for name in self._PARAMETERS})
@@ -548,9 +563,10 @@ class InverseDynamicsNode(Node):
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self._commands = Float64MultiArray()
         self._efforts = JointState()
-        subscribe(self, JointState, 'desired_joint_states', self._on_joint_state)
-        subscribe(self, JointTrajectory, 'desired_trajectory', self._on_trajectory)
-        subscribe(self, WrenchStamped, 'external_wrenches', self._on_wrench, WRENCH_DEPTH)
+        self._inputs = [
+            subscribe(self, JointState, 'desired_joint_states', self._on_joint_state),
+            subscribe(self, JointTrajectory, 'desired_trajectory', self._on_trajectory),
+            subscribe(self, WrenchStamped, 'external_wrenches', self._on_wrench, WRENCH_DEPTH)]
         self.create_timer(1.0, self._publish_diagnostics)
         if self.output is None:
             self._warn_waiting()
@@ -568,6 +584,8 @@ class InverseDynamicsNode(Node):
                    'payload.inertia', 'armature', 'friction_model', 'friction_velocity_threshold',
                    'clamp_to_effort_limits', 'external_wrench_timeout')
     _MODEL_PARAMETERS = ('joints', 'locked_joints', 'locked_positions')
+    # Changes that may parse a description (slow for a large one).
+    _SLOW_PARAMETERS = {'robot_description', 'robot_description_file', *_MODEL_PARAMETERS}
     _PAYLOAD_PARAMETERS = ('payload.link', 'payload.mass', 'payload.com', 'payload.inertia')
 
     def _declare_parameters(self) -> None:
@@ -654,7 +672,11 @@ class InverseDynamicsNode(Node):
         changes = {p.name: p.value for p in parameters if p.name in self._PARAMETERS}
         if changes:
             try:
-                self._configure(changes)
+                if self._SLOW_PARAMETERS & changes.keys():   # may parse a description
+                    config = self._while_answering(lambda: self._prepare(changes))
+                else:
+                    config = self._prepare(changes)
+                self._apply(config, changes)
             except Exception as err:  # ConfigError; anything else must not take the node down
                 if not isinstance(err, ConfigError):
                     err = ConfigError(f'{", ".join(changes)}: {err!r}')
@@ -664,10 +686,58 @@ class InverseDynamicsNode(Node):
                 return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
 
-    def _configure(self, changes: dict) -> None:
-        """Validate ``changes`` against the current state, then apply all of them at once.
+    def _while_answering(self, prepare: Callable[[], 'Config']) -> 'Config':
+        """Run ``prepare`` in a thread; meanwhile, answer the inputs from this one.
 
-        Raises :class:`ConfigError` and changes nothing when a value cannot be used.
+        The parameter service's callback runs in the executor that answers the inputs, and its
+        reply must say whether the change was accepted, so it has to wait for the parse; the
+        inputs are taken and answered here in the meantime (as the executor would), so a large
+        description set by parameter does not silence the node either. ``prepare`` changes
+        nothing of the node; its exception is raised here.
+        """
+        done = threading.Event()
+        box: dict = {}
+
+        def run() -> None:
+            try:
+                box['config'] = prepare()
+            except BaseException as err:  # handed to the caller
+                box['error'] = err
+            finally:
+                done.set()
+
+        threading.Thread(target=run, daemon=True, name='parameter change').start()
+        serve = True
+        while not done.wait(0.001 if serve else 0.1):
+            serve = serve and self._serve_inputs()
+        if 'error' in box:
+            raise box['error']
+        return box['config']
+
+    def _serve_inputs(self) -> bool:
+        """Take and handle the waiting input messages; False if they cannot be taken here.
+
+        Uses the take of rclpy's executor (``handle.take_message``); should it be unavailable,
+        parameter changes simply wait for the parse, as the executor would.
+        """
+        for sub in self._inputs:
+            try:
+                with sub.handle:
+                    taken = sub.handle.take_message(sub.msg_type, sub.raw)
+            except Exception:
+                return False
+            if taken is not None:
+                sub.callback(taken[0])
+        return True
+
+    def _configure(self, changes: dict) -> None:
+        """Validate ``changes`` against the current state, then apply all of them at once."""
+        self._apply(self._prepare(changes), changes)
+
+    def _prepare(self, changes: dict) -> 'Config':
+        """Validate ``changes`` against the current state; changes nothing of the node.
+
+        Raises :class:`ConfigError` when a value cannot be used.
         """
         params = {**self.params, **changes}
         urdf, source, kept_file = self._description_change(params, changes)
@@ -682,28 +752,34 @@ class InverseDynamicsNode(Node):
             check_choice('friction_model', params['friction_model'], FRICTION_MODELS)
             check_positive('friction_velocity_threshold',
                            params['friction_velocity_threshold'], 'rad/s or m/s')
-        gravity = check_gravity(params['gravity'])
-        acceleration_source = check_acceleration_source(params['acceleration_source'])
-        input_timeout = check_input_timeout(params['input_timeout'])
-        wrench_timeout = check_positive('external_wrench_timeout',
-                                        params['external_wrench_timeout'])
-        # Everything parsed: swap in.
+        return Config(
+            params=params, output=output, new_description=urdf is not None,
+            kept_file=kept_file, gravity=check_gravity(params['gravity']),
+            acceleration_source=check_acceleration_source(params['acceleration_source']),
+            input_timeout=check_input_timeout(params['input_timeout']),
+            wrench_timeout=check_positive('external_wrench_timeout',
+                                          params['external_wrench_timeout']))
+
+    def _apply(self, config: 'Config', changes: dict) -> None:
+        """Swap in a prepared configuration (between two messages), log what changed."""
+        current, output = self.output, config.output
         self.output = output
-        self.params = params
-        self.gravity = gravity
-        self.acceleration_source = acceleration_source
-        self.input_timeout = input_timeout
-        self.wrench_timeout_ns = int(wrench_timeout * 1e9)
-        if urdf is not None:
+        self.params = config.params
+        self.gravity = config.gravity
+        self.acceleration_source = config.acceleration_source
+        self.input_timeout = config.input_timeout
+        self.wrench_timeout_ns = int(config.wrench_timeout * 1e9)
+        if config.new_description:
             self._description_generation += 1   # a topic description still parsing is stale
         if output is not None and (current is None or output.base is not current.base):
             self._log_model(output, current)
         elif output is not None and set(self._PAYLOAD_PARAMETERS) & changes.keys():
             self.get_logger().info(f'payload: {output.payload}')
-        if kept_file:
+        if config.kept_file:
             self.get_logger().info(
-                f'robot_description_file {kept_file!r} checked and kept: robot_description is '
-                'set and takes precedence; the file is used once robot_description is cleared')
+                f'robot_description_file {config.kept_file!r} checked and kept: '
+                'robot_description is set and takes precedence; the file is used once '
+                'robot_description is cleared')
         self._follow_topic()
 
     def _description_change(self, params: dict, changes: dict

@@ -241,13 +241,17 @@ def big_description(links: int) -> str:
     return text.replace('</robot>', '\n'.join(parts) + '\n</robot>')
 
 
-def test_big_description_on_topic_does_not_stall_answers(install, driver, tmp_path):
-    """2000 links arrive on the topic while inputs stream at 200 Hz: answers keep coming.
+@pytest.mark.parametrize('via', ['topic', 'parameter'])
+def test_big_description_does_not_stall_answers(install, driver, tmp_path, via):
+    """2000 links arrive (topic or parameter) while inputs stream at 200 Hz: answers go on.
 
-    Before, the description was parsed in the answering callback, and the node went silent for
-    the whole parse (1.2 s measured, more than input_timeout). Now no gap between two answers
-    may reach input_timeout, and the new model is swapped in between two answers.
+    Before, the description was parsed in the executor's callback (the topic's, or the
+    parameter service's), and the node went silent for the whole parse (1.2 s measured, more
+    than input_timeout). Now no gap between two answers may reach input_timeout, and the new
+    model is swapped in between two answers.
     """
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
     from spatial_dynamics.latency import pace
     from std_msgs.msg import String
     demo = sd.Model.from_urdf(DEMO_URDF)
@@ -263,7 +267,8 @@ def test_big_description_on_topic_does_not_stall_answers(install, driver, tmp_pa
         io.prime(names)
         states = random_states(32, 1, len(names))
         expected = sd.rnea(demo, *states[0])
-        big = String(data=big_description(2000))
+        big = big_description(2000)
+        loaded = f"robot 'demo_arm_big' from {via}"
         marks = {}
 
         def publish(k):
@@ -271,9 +276,13 @@ def test_big_description_on_topic_does_not_stall_answers(install, driver, tmp_pa
             now = time.monotonic()
             if k == 200:
                 marks['sent'] = now
-                io.description.publish(big)
+                if via == 'topic':
+                    io.description.publish(String(data=big))
+                else:
+                    marks['set'] = io.parameters.call_async(SetParameters.Request(parameters=[
+                        Parameter('robot_description', value=big).to_parameter_msg()]))
             if k % 20 == 0 and 'sent' in marks and 'loaded' not in marks:
-                if "robot 'demo_arm_big' from topic" in node.log():
+                if loaded in node.log():
                     marks['loaded'] = now
 
         def done():
@@ -283,11 +292,13 @@ def test_big_description_on_topic_does_not_stall_answers(install, driver, tmp_pa
         pace(driver.executor, 200.0, 120.0, publish, done)
         settle(driver, io)
         assert 'loaded' in marks, node.log()
+        if via == 'parameter':
+            assert marks['set'].result().results[0].successful
         arrivals = np.array(io.arrivals)
         during = arrivals[(arrivals > marks['sent'] - 0.5) & (arrivals < marks['loaded'] + 1.0)]
         gaps = np.diff(during)
-        print(f'description loaded {marks["loaded"] - marks["sent"]:.2f} s after it was sent; '
-              f'{len(during)} answers meanwhile, longest gap {gaps.max() * 1e3:.0f} ms')
+        print(f'{via}: description loaded {marks["loaded"] - marks["sent"]:.2f} s after it was '
+              f'sent; {len(during)} answers meanwhile, longest gap {gaps.max() * 1e3:.0f} ms')
         assert gaps.max() < timeout, f'no answer for {gaps.max():.2f} s'
         for answer in io.efforts:
             np.testing.assert_allclose(answer.effort, expected, rtol=0, atol=1e-9)
