@@ -1,7 +1,9 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Imports run one way: spatial <- joints <- model <- urdf, algorithms <- backends <- the API
-<- ros <- tools. Checked on the source of every module (imports inside functions too)."""
+"""Imports run one way, checked on the source of every module (inside functions too).
+
+spatial <- joints <- model <- urdf, algorithms <- backends <- the API <- ros <- tools.
+"""
 
 import ast
 import os

@@ -88,7 +88,7 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
 
 
 def _vector(x, n: int):
-    """A list or tuple of ``n`` numbers as a float64 array; anything else as an array."""
+    """Return a list or tuple of ``n`` numbers as a float64 array, anything else as an array."""
     if type(x) is _ndarray:
         return x
     if (type(x) is list or type(x) is tuple) and len(x) == n:

@@ -126,7 +126,7 @@ def _rnea_batch_parallel(K, q, qd, qdd, gx, gy, gz, fext, has_fext, tau, chunks)
 
 
 def _entry(dispatcher):
-    """The compiled function of a one-signature ``dispatcher``, without numba's dispatch.
+    """Return the compiled function of a one-signature ``dispatcher`` (no numba dispatch).
 
     numba's dispatcher works out each argument's numba type to pick an overload (~0.2 µs of a
     ~1 µs single call); with one signature and arguments :func:`rnea` has already checked to
