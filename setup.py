@@ -39,8 +39,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'inverse_dynamics = spatial_dynamics.node:main',
-            'demo = spatial_dynamics.demo:main',
+            'inverse_dynamics = spatial_dynamics.ros.node:main',
+            'demo = spatial_dynamics.tools.demo:main',
             'check_urdf = spatial_dynamics.check:main',
         ],
     },

@@ -23,7 +23,7 @@ from typing import Callable, Dict, List, Sequence
 
 import numpy as np
 import pytest
-from spatial_dynamics.driving import die_with_parent
+from spatial_dynamics.tools.driving import die_with_parent
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGE = 'spatial_dynamics'
@@ -314,7 +314,7 @@ def random_states(seed: int, count: int, n: int) -> np.ndarray:
 
 def drive(driver: Driver, publish: Callable[[int], None], count: int, rate: float) -> None:
     """Call ``publish(k)`` for k in range(count) at ``rate`` Hz, spinning in between."""
-    from spatial_dynamics.latency import pace     # the latency and soak tools' pacing
+    from spatial_dynamics.tools.latency import pace     # the latency and soak tools' pacing
     assert pace(driver.executor, rate, count / rate, publish) == count
 
 

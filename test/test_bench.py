@@ -12,7 +12,7 @@ from conftest import PinOracle, robot_urdf_path
 import numpy as np
 import pytest
 import spatial_dynamics as sd
-from spatial_dynamics import bench
+from spatial_dynamics.tools import bench
 
 TINY = bench.Settings(ref_states=2, rounds=1, rounds_big=1, block_s=0.0005, states=4,
                       sizes=(1, 10))

@@ -27,7 +27,7 @@ SCRIPT = textwrap.dedent('''\
                  if name.split('.')[0] in ('rclpy', 'rcl_interfaces', 'sensor_msgs',
                                            'std_msgs', 'trajectory_msgs', 'rosidl_runtime_py'))
     print('ROS MODULES:', ros)
-    print('node imported:', 'spatial_dynamics.node' in sys.modules)
+    print('node imported:', 'spatial_dynamics.ros.node' in sys.modules)
 ''')
 
 

@@ -11,8 +11,8 @@ from hypothesis import given, strategies as st
 import numpy as np
 import pytest
 
-from spatial_dynamics import inputs
-from spatial_dynamics.inputs import InputError, joint_state_arrays, trajectory_arrays
+from spatial_dynamics.ros import inputs
+from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
 
 JOINTS = ('j1', 'j2', 'j3', 'j4')
 Q = {'j1': 0.1, 'j2': -0.2, 'j3': 0.3, 'j4': 1.5}
@@ -227,6 +227,6 @@ def test_trajectory_errors():
 
 
 def test_no_ros_import():
-    code = ('import sys, spatial_dynamics.inputs; '
+    code = ('import sys, spatial_dynamics.ros.inputs; '
             "assert 'rclpy' not in sys.modules, 'inputs imported rclpy'")
     subprocess.run([sys.executable, '-c', code], check=True)

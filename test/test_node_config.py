@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """The node's pure validation: descriptions, description files and parameter bounds.
 
-These functions of ``spatial_dynamics.node`` need rclpy importable but no ROS graph: they are
+These functions of ``spatial_dynamics.ros.node`` need rclpy importable but no ROS graph: they are
 called directly, without a node.
 """
 
@@ -18,7 +18,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_harness import DEMO_URDF  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 
-node = pytest.importorskip('spatial_dynamics.node')
+node = pytest.importorskip('spatial_dynamics.ros.node')
 ConfigError = node.ConfigError
 
 

@@ -28,7 +28,7 @@ LAUNCH = os.path.join(ROOT, 'launch', 'inverse_dynamics.launch.py')
 
 def declared_parameters():
     """Names the node declares (read from its source, so this test needs no ROS)."""
-    with open(os.path.join(ROOT, 'spatial_dynamics', 'node.py')) as f:
+    with open(os.path.join(ROOT, 'spatial_dynamics', 'ros', 'node.py')) as f:
         return set(re.findall(r"declare_parameter\(\s*'([\w.]+)'", f.read()))
 
 
@@ -275,7 +275,7 @@ def test_qos_override_changes_its_own_topic_only():
     """qos_overrides.<topic>... reach that subscription, and only that one."""
     import rclpy
     from rclpy.qos import ReliabilityPolicy
-    from spatial_dynamics.node import InverseDynamicsNode
+    from spatial_dynamics.ros.node import InverseDynamicsNode
     context = rclpy.Context()
     rclpy.init(context=context, domain_id=DOMAIN_ID, args=[
         '--ros-args', '-r', '__ns:=/qos_test', '-p', f'robot_description_file:={DEMO_URDF}',

@@ -13,8 +13,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import colcon_install, DEMO_URDF, TIMEOUT  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics import demo  # noqa: E402
-from spatial_dynamics.driving import node_command, Sinusoids  # noqa: E402
+from spatial_dynamics.tools import demo  # noqa: E402
+from spatial_dynamics.tools.driving import node_command, Sinusoids  # noqa: E402
 
 
 def test_sinusoids_are_consistent_and_within_limits():
@@ -35,11 +35,11 @@ def test_sinusoids_are_consistent_and_within_limits():
 
 def test_node_command_prefers_the_installed_executable(monkeypatch):
     monkeypatch.delenv('AMENT_PREFIX_PATH', raising=False)
-    assert node_command('inverse_dynamics', 'spatial_dynamics.node') == \
-        [sys.executable, '-m', 'spatial_dynamics.node']
+    assert node_command('inverse_dynamics', 'spatial_dynamics.ros.node') == \
+        [sys.executable, '-m', 'spatial_dynamics.ros.node']
     install = colcon_install()
     monkeypatch.setenv('AMENT_PREFIX_PATH', install.prefix)
-    assert node_command('inverse_dynamics', 'spatial_dynamics.node') == [install.executable]
+    assert node_command('inverse_dynamics', 'spatial_dynamics.ros.node') == [install.executable]
 
 
 def test_plot_skipped_with_a_note_without_matplotlib(monkeypatch, tmp_path):
@@ -56,8 +56,8 @@ def test_demo_runs_the_installed_node_and_writes_the_plot(tmp_path):
     install = colcon_install()
     png = tmp_path / 'torques.png'
     proc = subprocess.run(
-        [sys.executable, '-m', 'spatial_dynamics.demo', '--duration', '12', '--plot', str(png),
-         '--node-log', str(tmp_path / 'node.log')],
+        [sys.executable, '-m', 'spatial_dynamics.tools.demo', '--duration', '12', '--plot',
+         str(png), '--node-log', str(tmp_path / 'node.log')],
         env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 30, cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert f'starting {install.executable}' in proc.stdout
@@ -70,7 +70,7 @@ def test_demo_runs_the_installed_node_and_writes_the_plot(tmp_path):
 def test_latency_benchmark_runs(tmp_path):
     install = colcon_install()
     proc = subprocess.run(
-        [sys.executable, '-m', 'spatial_dynamics.latency', '--rate', '200', '--seconds', '1',
+        [sys.executable, '-m', 'spatial_dynamics.tools.latency', '--rate', '200', '--seconds', '1',
          '--block', '0.5', '--warmup', '0.2', '--json', str(tmp_path / 'latency.json')],
         env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 60, cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -89,7 +89,7 @@ def test_short_soak_memory_flat_and_every_message_answered(tmp_path):
     """
     install = colcon_install()
     proc = subprocess.run(
-        [sys.executable, '-m', 'spatial_dynamics.soak', '--minutes', '0.5', '--rate', '500',
+        [sys.executable, '-m', 'spatial_dynamics.tools.soak', '--minutes', '0.5', '--rate', '500',
          '--sample', '2', '--input-depth', '50'],
         env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 120, cwd=tmp_path)
     assert proc.returncode == 0 and 'PASS' in proc.stdout, proc.stdout + proc.stderr

@@ -2,10 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """Latency benchmark: ``inverse_dynamics`` against a trivial relay, in the same run.
 
-    python -m spatial_dynamics.latency [--rate 1000] [--seconds 10] [--json out/latency.json]
+    python -m spatial_dynamics.tools.latency [--rate 1000] [--seconds 10] [--json out/lat.json]
 
-Starts the node (on the demo robot) and :mod:`spatial_dynamics.relay` as two processes, each in
-its own namespace, and publishes the same smooth trajectory (sensor_msgs/JointState, model
+Starts the node (on the demo robot) and :mod:`spatial_dynamics.tools.relay` as two processes,
+each in its own namespace, and publishes the same smooth trajectory (sensor_msgs/JointState, model
 order) to each at ``--rate`` Hz, alternating between them in blocks of ``--block`` seconds until
 each got ``--seconds``. Latency is input publish -> ``feedforward_efforts`` received, in this
 process, matched by the header stamp (wall time at publish, unique per message). Reported per
@@ -27,8 +27,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Set
 
 import numpy as np
 
-from spatial_dynamics.driving import (cpu_seconds, demo_urdf, node_command, Sinusoids, start,
-                                      stop)
+from .driving import cpu_seconds, demo_urdf, node_command, Sinusoids, start, stop
 
 
 class Target:
@@ -159,7 +158,7 @@ def format_table(rows: List[Dict[str, float]]) -> str:
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
-        prog='python -m spatial_dynamics.latency', description=__doc__.split('\n\n')[0])
+        prog='python -m spatial_dynamics.tools.latency', description=__doc__.split('\n\n')[0])
     parser.add_argument('--rate', type=float, default=1000.0, help='Hz (default 1000)')
     parser.add_argument('--seconds', type=float, default=10.0,
                         help='measured seconds per target (default 10)')
@@ -192,10 +191,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if logs:
         os.makedirs(logs, exist_ok=True)
     procs = {
-        'relay': start(node_command('relay', 'spatial_dynamics.relay'), f'{namespace}/relay',
+        'relay': start(node_command('relay', 'spatial_dynamics.tools.relay'), f'{namespace}/relay',
                        input_depth(f'{namespace}/relay', args.input_depth),
                        logs and os.path.join(logs, 'relay.log')),
-        'inverse_dynamics': start(node_command('inverse_dynamics', 'spatial_dynamics.node'),
+        'inverse_dynamics': start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'),
                                   f'{namespace}/node',
                                   {'robot_description_file': urdf,
                                    **input_depth(f'{namespace}/node', args.input_depth)},

@@ -7,7 +7,7 @@ Same endpoints as the node, made by the node's own ``subscribe`` and ``advertise
 computation: every message received is published as is. Whatever the node's latency exceeds
 the relay's in the same run is the node's own cost.
 
-    python -m spatial_dynamics.relay --ros-args -r __ns:=/baseline
+    python -m spatial_dynamics.tools.relay --ros-args -r __ns:=/baseline
 """
 
 import sys
@@ -16,7 +16,7 @@ from typing import Optional, Sequence
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
-from spatial_dynamics.node import advertise, spin, subscribe
+from spatial_dynamics.ros.node import advertise, spin, subscribe
 
 
 class Relay(Node):

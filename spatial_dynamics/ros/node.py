@@ -4,7 +4,7 @@
 
 The only module that imports rclpy: a thin shell that declares and validates parameters, builds
 the :class:`~spatial_dynamics.Model`, maps messages to ``(q, qd, qdd)`` by joint name
-(:mod:`spatial_dynamics.inputs`), calls :func:`~spatial_dynamics.rnea` and publishes
+(:mod:`spatial_dynamics.ros.inputs`), calls :func:`~spatial_dynamics.rnea` and publishes
 
     tau = ID(model, q, qd, qdd, f_ext) + armature·qdd + friction(qd)   (RBDA §5.3)
 
@@ -71,7 +71,7 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import JointState
 import spatial_dynamics as sd
 from spatial_dynamics import backends
-from spatial_dynamics.inputs import InputError, joint_state_arrays, REASONS, trajectory_arrays
+from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, REASONS, trajectory_arrays
 from std_msgs.msg import Float64MultiArray, String
 from trajectory_msgs.msg import JointTrajectory
 

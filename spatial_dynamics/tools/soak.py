@@ -2,8 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Soak test of ``inverse_dynamics``: 1 kHz for N minutes, resident memory flat, all answered.
 
-    python -m spatial_dynamics.soak --minutes 2        # by hand: --minutes 60
-    python -m spatial_dynamics.soak --minutes 0.5      # short, for CI
+    python -m spatial_dynamics.tools.soak --minutes 2        # by hand: --minutes 60
+    python -m spatial_dynamics.tools.soak --minutes 0.5      # short, for CI
 
 Starts the node on the demo robot, publishes the smooth demo trajectory at ``--rate`` Hz with
 the joint names in a new random order every message (by default: this churns the node's
@@ -24,9 +24,8 @@ import sys
 import time
 from typing import Optional, Sequence, Tuple
 
-from spatial_dynamics.driving import demo_urdf, node_command, rss_bytes, Sinusoids, start, stop
-from spatial_dynamics.latency import (fill, input_depth, joint_state_for, pace, prime, spin_until,
-                                      Target)
+from .driving import demo_urdf, node_command, rss_bytes, Sinusoids, start, stop
+from .latency import fill, input_depth, joint_state_for, pace, prime, spin_until, Target
 
 MB = 1024.0 * 1024.0
 
@@ -51,7 +50,7 @@ class NodeCounts:
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
-        prog='python -m spatial_dynamics.soak', description=__doc__.split('\n\n')[0])
+        prog='python -m spatial_dynamics.tools.soak', description=__doc__.split('\n\n')[0])
     parser.add_argument('--minutes', type=float, default=2.0, help='length (default 2)')
     parser.add_argument('--rate', type=float, default=1000.0, help='Hz (default 1000)')
     parser.add_argument('--warmup', type=float, default=None,
@@ -83,7 +82,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     model = sd.Model.from_urdf(urdf)
     trajectory = Sinusoids.for_model(model)
     namespace = f'/sd_soak_{os.getpid()}'
-    proc = start(node_command('inverse_dynamics', 'spatial_dynamics.node'), namespace,
+    proc = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace,
                  {'robot_description_file': urdf, **input_depth(namespace, args.input_depth)},
                  args.log)
     signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C even if ignored at start

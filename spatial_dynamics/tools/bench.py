@@ -1,6 +1,6 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Run time against error: ``python -m spatial_dynamics.bench [--quick] [--out DIR] [--robots]``.
+"""Run time against error: ``python -m spatial_dynamics.tools.bench [--quick] [--out DIR]``.
 
 Every implementation gets the same states of the same robot in one process:
 
@@ -53,7 +53,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 import spatial_dynamics as sd
-from spatial_dynamics.generate import chain_urdf, tree_urdf
+from spatial_dynamics.tools.generate import chain_urdf, tree_urdf
 from spatial_dynamics.algorithms.rnea import PR, RA
 from spatial_dynamics.backends import layout, python as python_backend
 
@@ -929,7 +929,7 @@ def _has_compiled() -> bool:
 def main(argv: Optional[list] = None) -> int:
     """Command-line entry point."""
     parser = argparse.ArgumentParser(
-        prog='python -m spatial_dynamics.bench', description=__doc__.split('\n')[0])
+        prog='python -m spatial_dynamics.tools.bench', description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true',
                         help='fewer robots, states and rounds (under 2 minutes)')
     parser.add_argument('--out', default='out/bench', type=Path,
@@ -969,7 +969,7 @@ def main(argv: Optional[list] = None) -> int:
     if skipped:
         table += '\n\nWhat the code skips (single call, Talos):\n\n' + skipped
     paths = plot(rows, args.out, log, settings.sizes)
-    print(f'Command: python -m spatial_dynamics.bench {" ".join(argv or sys.argv[1:])}')
+    print(f'Command: python -m spatial_dynamics.tools.bench {" ".join(argv or sys.argv[1:])}')
     print(f'Setup: {setup}\n')
     print(table)
     print(f'\nWrote {args.out / "results.csv"}' + ''.join(f', {p}' for p in paths)

@@ -2,11 +2,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """Demo: the ``inverse_dynamics`` node on the embedded demo arm, torques live, then a plot.
 
-    python -m spatial_dynamics.demo [--duration 10] [--rate 100] [--plot out/demo_torques.png]
+    python -m spatial_dynamics.tools.demo [--duration 10] [--rate 100] [--plot out/demo.png]
 
 Starts the node as its own process (the installed ``lib/spatial_dynamics/inverse_dynamics``
 when the package is found on ``AMENT_PREFIX_PATH``, as ``ros2 run`` would, else
-``python -m spatial_dynamics.node``) on ``config/demo_arm.urdf`` in the namespace
+``python -m spatial_dynamics.ros.node``) on ``config/demo_arm.urdf`` in the namespace
 ``/spatial_dynamics_demo``, and publishes a smooth trajectory there: q, q̇ and q̈ of sinusoids
 (consistent: q̇ = dq/dt, q̈ = dq̇/dt) as sensor_msgs/JointState with q̈ in the effort field (the
 node's default ``acceleration_source: effort``). The torques the node answers on
@@ -24,13 +24,13 @@ import sys
 import time
 from typing import List, Optional, Sequence, Tuple
 
-from spatial_dynamics.driving import demo_urdf, node_command, Sinusoids, start, stop
+from .driving import demo_urdf, node_command, Sinusoids, start, stop
 
 NAMESPACE = '/spatial_dynamics_demo'
 
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog='python -m spatial_dynamics.demo',
+    parser = argparse.ArgumentParser(prog='python -m spatial_dynamics.tools.demo',
                                      description=__doc__.split('\n\n')[0])
     parser.add_argument('--duration', type=float, default=None,
                         help='seconds to run (default: until Ctrl-C)')
@@ -130,7 +130,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     model = sd.Model.from_urdf(urdf)
     names = model.joint_names
     trajectory = Sinusoids.for_model(model)
-    command = node_command('inverse_dynamics', 'spatial_dynamics.node')
+    command = node_command('inverse_dynamics', 'spatial_dynamics.ros.node')
     if args.node_log:
         os.makedirs(os.path.dirname(os.path.abspath(args.node_log)), exist_ok=True)
     print(f'starting {" ".join(command)} on {urdf} in {NAMESPACE} (its output: '
