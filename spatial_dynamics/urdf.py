@@ -80,23 +80,38 @@ def model_from_urdf(source: Source, joints: Optional[Sequence[str]] = None,
 # --------------------------------------------------------------------------------------------
 # Reading and parsing
 
+_FILE_KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
+               (stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),
+               (stat.S_ISSOCK, 'a socket'))
+
+
+def _size(limit: int) -> str:
+    """``limit`` bytes for a message: ``'32 MiB'`` when it is a whole number of MiB."""
+    return f'{limit >> 20} MiB' if limit and not limit % (1 << 20) else f'{limit} bytes'
+
+
 def read_urdf_file(path: str, limit: int = MAX_FILE_BYTES) -> bytes:
     """Return the bytes of a URDF file: a regular file of at most ``limit`` bytes.
 
     Never blocks on a FIFO or reads a device: the file is opened non-blocking and checked to
-    be regular before anything is read. ``ValueError`` names the path and the reason.
+    be regular before anything is read. ``ValueError`` names the path and the reason (what
+    the path is when it is not a regular file, the limit when it is too large).
     """
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, 'O_NONBLOCK', 0))
+    except FileNotFoundError:
+        raise ValueError(f'URDF file {path!r}: no such file') from None
     except OSError as err:
         raise ValueError(f'cannot read URDF file {path!r}: {err.strerror}') from None
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
-            raise ValueError(f'URDF file {path!r} is not a regular file')
+            kind = next((name for test, name in _FILE_KINDS if test(info.st_mode)),
+                        'a special file')
+            raise ValueError(f'URDF file {path!r} is not a regular file ({kind})')
         if info.st_size > limit:
             raise ValueError(f'URDF file {path!r} is too large ({info.st_size} bytes, limit '
-                             f'{limit})')
+                             f'{_size(limit)})')
         chunks, size = [], 0
         while size <= limit:      # a file that grows while read stops at limit + 1 bytes
             chunk = os.read(fd, limit + 1 - size)
@@ -110,7 +125,7 @@ def read_urdf_file(path: str, limit: int = MAX_FILE_BYTES) -> bytes:
         os.close(fd)
     text = b''.join(chunks)
     if len(text) > limit:
-        raise ValueError(f'URDF file {path!r} is too large (more than {limit} bytes)')
+        raise ValueError(f'URDF file {path!r} is too large (more than {_size(limit)})')
     return text
 
 
