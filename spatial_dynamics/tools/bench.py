@@ -53,6 +53,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 import spatial_dynamics as sd
+from spatial_dynamics.tools.driving import demo_urdf
 from spatial_dynamics.tools.generate import chain_urdf, tree_urdf
 from spatial_dynamics.algorithms.rnea import PR, RA
 from spatial_dynamics.backends import layout, python as python_backend
@@ -152,19 +153,6 @@ def _erd_dir() -> Optional[Path]:
         return None
 
 
-def _demo_urdf() -> Optional[Path]:
-    """config/demo_arm.urdf from the source tree, else from the installed ament share."""
-    path = Path(__file__).resolve().parents[1] / 'config' / 'demo_arm.urdf'
-    if path.is_file():
-        return path
-    try:
-        from ament_index_python.packages import get_package_share_directory
-        path = Path(get_package_share_directory('spatial_dynamics'), 'config', 'demo_arm.urdf')
-    except Exception:
-        return None
-    return path if path.is_file() else None
-
-
 def load_robot(name: str) -> Robot:
     """Return a benchmark robot by name (see ROBOTS); raises Skip when it is not installed."""
     if name.startswith('chain'):
@@ -172,8 +160,8 @@ def load_robot(name: str) -> Robot:
     elif name.startswith('tree'):
         xml, family = tree_urdf(int(name[4:])), 'tree'
     elif name == 'demo_arm':
-        path = _demo_urdf()
-        if path is None:
+        path = Path(demo_urdf())
+        if not path.is_file():
             raise Skip('config/demo_arm.urdf not found')
         xml, family = path.read_text(encoding='utf-8'), 'robot'
     elif name in ERD_FILES:

@@ -16,6 +16,8 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 PACKAGE = 'spatial_dynamics'
+#: The source tree (or the package's parent directory when installed): tools/ -> package -> root.
+SOURCE_ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def package_prefix() -> Optional[str]:
@@ -52,7 +54,7 @@ def share_file(*parts: str) -> str:
         path = os.path.join(prefix, 'share', PACKAGE, *parts)
         if os.path.exists(path):
             return path
-    return os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), *parts)
+    return os.path.join(SOURCE_ROOT, *parts)
 
 
 def demo_urdf() -> str:
