@@ -22,16 +22,16 @@ def test_every_arithmetic_statement_of_the_source_is_in_the_generated_kernels():
     generated = codegen.generate()
     storage = set(codegen.STORES) | {'rows', 'f_body', 'm', 'nonzero', 'fp'}
     checked = 0
-    for fn in (source.xup_kernel, source.rnea_kernel):
+    for fn in (source.X_motion, source.I_motion, source.xup_kernel, source.rnea_kernel):
         tree = ast.parse(inspect.getsource(fn))
         for node in ast.walk(tree):
-            if not isinstance(node, (ast.Assign, ast.AugAssign)):
+            if not isinstance(node, (ast.Assign, ast.AugAssign, ast.Return)):
                 continue
             if {n.id for n in ast.walk(node) if isinstance(n, ast.Name)} & storage:
                 continue
             assert ast.unparse(node) in generated, ast.unparse(node)
             checked += 1
-    assert checked > 80
+    assert checked > 60      # every arithmetic statement of the four functions
 
 
 @pytest.mark.parametrize('body,message', [

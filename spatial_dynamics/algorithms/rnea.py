@@ -17,12 +17,12 @@ Two texts of the same equations:
 
 * :func:`rnea_spatial` writes them literally with 6×6 matrices (``crm``, ``crf``, ``jcalc``)
   and einsum over leading batch dimensions: the executable specification.
-* :func:`xup_kernel` and :func:`rnea_kernel` write them on 3-vector components, with
-  ``Xup = (E, r)`` kept as a rotation and a translation (RBDA §2.12), so no 6×6 product is
-  formed. **They are the one source every backend runs**: on Python floats (one state, no
-  numpy call overhead), on numpy arrays of shape (N,) (a batch, one numpy operation per term
-  for all N states), on ``mpmath.mpf`` (the high-precision reference), and — translated
-  statement for statement by :mod:`spatial_dynamics.backends.codegen` into
+* :func:`xup_kernel` and :func:`rnea_kernel` (with :func:`X_motion`, :func:`I_motion`) on 3-vector
+  components, with ``Xup = (E, r)`` kept as a rotation and a translation (RBDA §2.12), so no
+  6×6 product is formed. **They are the one source every backend runs**: on Python floats
+  (one state, no numpy call overhead), on numpy arrays of shape (N,) (a batch, one numpy
+  operation per term for all N states), on ``mpmath.mpf`` (the high-precision reference),
+  and — translated statement for statement by :mod:`spatial_dynamics.backends.codegen` into
   ``backends/_kernels_generated.py`` — compiled by numba. A change to an equation is made
   here, once; the generated file is regenerated (a test fails until it is).
 
@@ -52,6 +52,29 @@ RX, RY, RZ, RA, PR = 0, 1, 2, 3, 4
 def nonzero(x) -> bool:
     """Tell whether a scalar or array component is not identically zero."""
     return bool(x != 0) if not isinstance(x, np.ndarray) else bool(x.any())
+
+
+def X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1, m2, m3, m4, m5):
+    """Apply ``X = (E, r)`` to a motion vector ``[ω; v]``: ``[E ω; E (v - r × ω)]`` (RBDA 2.24)."""
+    u0 = m3 - (ry * m2 - rz * m1)
+    u1 = m4 - (rz * m0 - rx * m2)
+    u2 = m5 - (rx * m1 - ry * m0)
+    return (e00 * m0 + e01 * m1 + e02 * m2, e10 * m0 + e11 * m1 + e12 * m2,
+            e20 * m0 + e21 * m1 + e22 * m2, e00 * u0 + e01 * u1 + e02 * u2,
+            e10 * u0 + e11 * u1 + e12 * u2, e20 * u0 + e21 * u1 + e22 * u2)
+
+
+def I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, m0, m1, m2, m3, m4, m5):
+    """Apply a spatial inertia to a motion vector ``[ω; v]`` (RBDA eq. 2.63).
+
+    ``I = [[Ibar, h×], [h×ᵀ, m 1]]``, ``h = m c``: ``I [ω; v] = [Ibar ω + h × v; m v - h × ω]``.
+    """
+    return (Ixx * m0 + Ixy * m1 + Ixz * m2 + (hy * m5 - hz * m4),
+            Ixy * m0 + Iyy * m1 + Iyz * m2 + (hz * m3 - hx * m5),
+            Ixz * m0 + Iyz * m1 + Izz * m2 + (hx * m4 - hy * m3),
+            mass * m3 - (hy * m2 - hz * m1),
+            mass * m4 - (hz * m0 - hx * m2),
+            mass * m5 - (hx * m1 - hy * m0))
 
 
 def xup_kernel(rows, q, m, Xup) -> None:
@@ -163,15 +186,8 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
                 a0 = a1 = a2 = l0 = l1 = l2 = zero      # a_0 = 0
             else:
                 pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
-                u0 = pl0 - (ry * pa2 - rz * pa1)
-                u1 = pl1 - (rz * pa0 - rx * pa2)
-                u2 = pl2 - (rx * pa1 - ry * pa0)
-                a0 = e00 * pa0 + e01 * pa1 + e02 * pa2
-                a1 = e10 * pa0 + e11 * pa1 + e12 * pa2
-                a2 = e20 * pa0 + e21 * pa1 + e22 * pa2
-                l0 = e00 * u0 + e01 * u1 + e02 * u2
-                l1 = e10 * u0 + e11 * u1 + e12 * u2
-                l2 = e20 * u0 + e21 * u1 + e22 * u2
+                a0, a1, a2, l0, l1, l2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                                  rx, ry, rz, pa0, pa1, pa2, pl0, pl1, pl2)
             if code == PR:
                 l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
             else:
@@ -183,15 +199,8 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
                 # v_i = Xup_i v_λ(i) + vJ,  vJ = S_i q̇_i
                 qdi = qd[k] if mul == 1.0 else mul * qd[k]
                 pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
-                u0 = pv0 - (ry * pw2 - rz * pw1)
-                u1 = pv1 - (rz * pw0 - rx * pw2)
-                u2 = pv2 - (rx * pw1 - ry * pw0)
-                w0 = e00 * pw0 + e01 * pw1 + e02 * pw2
-                w1 = e10 * pw0 + e11 * pw1 + e12 * pw2
-                w2 = e20 * pw0 + e21 * pw1 + e22 * pw2
-                v0 = e00 * u0 + e01 * u1 + e02 * u2
-                v1 = e10 * u0 + e11 * u1 + e12 * u2
-                v2 = e20 * u0 + e21 * u1 + e22 * u2
+                w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                                  rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2)
                 j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
                 if code == PR:
                     v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
@@ -209,21 +218,12 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
                 vel[i] = (w0, w1, w2, v0, v1, v2)
             acc[i] = (a0, a1, a2, l0, l1, l2)
 
-            # I_i a_i
-            n0 = Ixx * a0 + Ixy * a1 + Ixz * a2 + (hy * l2 - hz * l1)
-            n1 = Ixy * a0 + Iyy * a1 + Iyz * a2 + (hz * l0 - hx * l2)
-            n2 = Ixz * a0 + Iyz * a1 + Izz * a2 + (hx * l1 - hy * l0)
-            f0 = mass * l0 - (hy * a2 - hz * a1)
-            f1 = mass * l1 - (hz * a0 - hx * a2)
-            f2 = mass * l2 - (hx * a1 - hy * a0)
+            n0, n1, n2, f0, f1, f2 = I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz,
+                                              a0, a1, a2, l0, l1, l2)      # I_i a_i
             if moving:
                 # momentum I_i v_i, then v_i ×* (I_i v_i) = [w × hn + v × hf; w × hf]
-                m0 = Ixx * w0 + Ixy * w1 + Ixz * w2 + (hy * v2 - hz * v1)
-                m1 = Ixy * w0 + Iyy * w1 + Iyz * w2 + (hz * v0 - hx * v2)
-                m2 = Ixz * w0 + Iyz * w1 + Izz * w2 + (hx * v1 - hy * v0)
-                k0 = mass * v0 - (hy * w2 - hz * w1)
-                k1 = mass * v1 - (hz * w0 - hx * w2)
-                k2 = mass * v2 - (hx * w1 - hy * w0)
+                m0, m1, m2, k0, k1, k2 = I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz,
+                                                  Izz, w0, w1, w2, v0, v1, v2)
                 n0 += (w1 * m2 - w2 * m1) + (v1 * k2 - v2 * k1)
                 n1 += (w2 * m0 - w0 * m2) + (v2 * k0 - v0 * k2)
                 n2 += (w0 * m1 - w1 * m0) + (v0 * k1 - v1 * k0)

@@ -179,7 +179,8 @@ def _kernel_source(fn) -> str:
     func.body = [s for s in func.body if not (isinstance(s, ast.Expr)
                                               and isinstance(s.value, ast.Constant))]
     func.returns = None
-    func.args = ast.parse(f'def f({SIGNATURES[fn.__name__]}): pass').body[0].args
+    if fn.__name__ in SIGNATURES:
+        func.args = ast.parse(f'def f({SIGNATURES[fn.__name__]}): pass').body[0].args
     func.decorator_list = [ast.parse('numba.njit(inline="always", **JIT)').body[0].value]
     func = _ToFlat().visit(func)
     ast.fix_missing_locations(func)
@@ -207,7 +208,8 @@ JIT = dict(cache=True, fastmath=False, error_model='numpy')
 WORK = {WORK}
 {chr(10).join(f'{const} = {offset}' for const, offset, _ in STORES.values())}
 '''
-    body = '\n\n\n'.join(_kernel_source(fn) for fn in (source.xup_kernel, source.rnea_kernel))
+    body = '\n\n\n'.join(_kernel_source(fn) for fn in (source.X_motion, source.I_motion,
+                                                         source.xup_kernel, source.rnea_kernel))
     return header + '\n\n' + body + '\n'
 
 
