@@ -19,7 +19,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from typing import Callable, Dict, List, Sequence
+from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 import pytest
@@ -79,11 +79,13 @@ def colcon_install() -> Install:
 class NodeProcess:
     """The installed ``inverse_dynamics`` executable running as a child process."""
 
-    def __init__(self, install: Install, args: Sequence[str] = (), log_dir: str = '') -> None:
+    def __init__(self, install: Install, args: Sequence[str] = (), log_dir: str = '',
+                 env: Optional[Dict[str, str]] = None) -> None:
+        """Start the node with ``--ros-args *args``; ``env`` adds to :meth:`Install.env`."""
         self.log_path = os.path.join(log_dir or install.base, f'node_{time.monotonic_ns()}.log')
         self._log = open(self.log_path, 'w')
         self.proc = subprocess.Popen([install.executable, '--ros-args', *args],
-                                     env=install.env(), stdout=self._log,
+                                     env={**install.env(), **(env or {})}, stdout=self._log,
                                      stderr=subprocess.STDOUT, preexec_fn=die_with_parent)
 
     def log(self) -> str:

@@ -27,9 +27,9 @@ LAUNCH = os.path.join(ROOT, 'launch', 'inverse_dynamics.launch.py')
 
 
 def declared_parameters():
-    """Names the node declares (read from its source, so this test needs no ROS)."""
-    with open(os.path.join(ROOT, 'spatial_dynamics', 'ros', 'node.py')) as f:
-        return set(re.findall(r"declare_parameter\(\s*'([\w.]+)'", f.read()))
+    """Names the node declares: those of ``ros.config.PARAMETERS`` (a module without ROS)."""
+    from spatial_dynamics.ros.config import PARAMETERS
+    return {spec.name for spec in PARAMETERS}
 
 
 def test_ros2_run_layout(install):
@@ -57,7 +57,7 @@ def test_yaml_documents_every_parameter():
                         'locked_positions', 'payload.link', 'payload.mass', 'payload.com',
                         'payload.inertia', 'armature', 'friction_model',
                         'friction_velocity_threshold', 'clamp_to_effort_limits',
-                        'external_wrench_timeout'}
+                        'external_wrench_timeout', 'backend'}
     for name in declared:
         # payload.link is written nested: 'payload:' then 'link:'
         *group, leaf = name.split('.')
@@ -70,6 +70,7 @@ def test_yaml_documents_every_parameter():
     assert params['gravity'] == [0.0, 0.0, -9.81]
     assert params['acceleration_source'] == 'effort'
     assert params['strict_urdf'] is False
+    assert params['backend'] == 'auto'
 
 
 def test_launch_file_compiles():

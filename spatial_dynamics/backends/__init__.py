@@ -20,7 +20,10 @@ configuration (the process environment is never written).
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import subprocess
+import sys
 from types import ModuleType
 from typing import Mapping, Optional, Sequence
 
@@ -176,6 +179,50 @@ def warmup(model: Model, backend: str = 'auto') -> str:
     if kernels is not None:
         kernels.warmup(layout.of(model))
     return describe(backend)
+
+
+#: What the child of :func:`prepare_compiled` runs: the import that compiles (or loads).
+#: On Linux it asks for SIGTERM when its parent goes (prctl PR_SET_PDEATHSIG), so a node
+#: stopped while the kernels compile leaves no compiler running.
+_PREPARE = '\n'.join([
+    'import ctypes, signal',
+    'try:',
+    '    ctypes.CDLL(None).prctl(1, signal.SIGTERM)',
+    'except (OSError, AttributeError):',
+    '    pass',
+    'from spatial_dynamics import backends',
+    'backends.compiled("compiled")'])
+
+
+def prepare_compiled(timeout: Optional[float] = None) -> None:
+    """Fill numba's on-disk cache with the compiled kernels, in a child process.
+
+    Importing :mod:`.jit` compiles every kernel (about 13 s) unless numba's cache holds them
+    (then it loads them, < 1 s). This runs that import in a child Python (this interpreter,
+    this environment, this package first on its path), so the cache it fills is the one this
+    process reads (``NUMBA_CACHE_DIR`` or :func:`cache_dir_fallback`), and returns when the
+    child is done: a :func:`warmup` here afterwards only loads. Nothing of this process
+    changes, and the compilation never holds its interpreter. Returns at once when the
+    kernels are loaded here already. Raises :class:`CompiledBackendUnavailable` when numba is
+    not installed or the child fails (with the child's last error line), and
+    ``subprocess.TimeoutExpired`` after ``timeout`` s.
+    """
+    if _compiled is not None:
+        return
+    if importlib.util.find_spec('numba') is None:
+        raise CompiledBackendUnavailable('numba is not installed (pip install numba)')
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    env = dict(os.environ)
+    env['PYTHONPATH'] = os.pathsep.join([root] + [p for p in env.get('PYTHONPATH', '')
+                                                  .split(os.pathsep) if p])
+    proc = subprocess.run([sys.executable, '-c', _PREPARE], env=env, stdin=subprocess.DEVNULL,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                          timeout=timeout)
+    if proc.returncode != 0:
+        lines = proc.stderr.strip().splitlines()
+        raise CompiledBackendUnavailable(
+            f'compiling the kernels failed (exit status {proc.returncode}): '
+            + (lines[-1] if lines else 'no error output'))
 
 
 def cache_dir_fallback() -> Optional[str]:

@@ -1,0 +1,910 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The node's configuration, without ROS: parameters, descriptions, backend, counters.
+
+Pure Python + numpy + the library (no rclpy import), so all of it is tested without a ROS
+graph (``test/test_ros_config.py``, ``test/test_node_config.py``). The node
+(:mod:`spatial_dynamics.ros.node`) declares the parameters of :data:`PARAMETERS`, calls
+:func:`prepare` to validate a change (its on-set callback) and swaps in the resulting
+:class:`Config` (its post-set callback); everything an answer needs is one :class:`Output`.
+
+Robot descriptions, by precedence (:func:`description_source`): the ``robot_description``
+parameter (URDF XML text, never a path), the ``robot_description_file`` parameter (a regular
+UTF-8 file of at most :data:`MAX_DESCRIPTION_BYTES`, read with
+:func:`spatial_dynamics.urdf.read_urdf_file`), the ``robot_description`` topic (parsed by
+:class:`DescriptionParser`'s worker thread).
+
+Backends (parameter ``backend``, :data:`BACKEND_SETTINGS`): ``numpy`` runs the plain-float
+RNEA and never imports numba; ``compiled`` answers on numpy at once and switches to the
+compiled kernels when :class:`CompiledKernels` has them ready (compiled in a child process
+when numba's cache is cold, loaded in a thread); ``auto`` is ``compiled`` for a model whose
+plain-float call takes more than :data:`AUTO_COMPILED_ABOVE_S`, else ``numpy``.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, replace
+import math
+import threading
+import time
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+import spatial_dynamics as sd
+from spatial_dynamics import backends
+from spatial_dynamics.ros.inputs import REASONS
+from spatial_dynamics.urdf import read_urdf_file
+
+NODE_NAME = 'inverse_dynamics'
+ACCELERATION_SOURCES = ('effort', 'none')
+FRICTION_MODELS = ('none', 'urdf')
+#: Values of the read-only ``backend`` parameter.
+BACKEND_SETTINGS = ('auto', 'numpy', 'compiled')
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+DEFAULT_INPUT_TIMEOUT = 0.5         # s
+DEFAULT_FRICTION_THRESHOLD = 0.01   # rad/s or m/s
+DEFAULT_WRENCH_TIMEOUT = 0.5        # s
+
+#: ``backend: auto`` runs a model on the compiled kernels when one plain-float RNEA call
+#: (backend 'numpy', the median of :data:`TIMED_CALLS` on the zero state at load) takes
+#: longer than this, in s. Measured on a laptop-class x86: 15-20 µs for a 6-DOF arm (UR5),
+#: 22-28 µs for the 8-DOF demo arm, 65-70 µs for Talos (32 DOF), 1.4 ms for a 300-link
+#: chain; compiled 1-2 µs. Below the budget the float call is a small part of an answer
+#: (rclpy's take and two publications cost ~100 µs), and numba (+0.8 s, +135 MB resident)
+#: is never imported.
+AUTO_COMPILED_ABOVE_S = 50e-6
+TIMED_CALLS = 7
+
+# Bounds beyond which a value cannot be physical: refused with the bound named, instead of
+# being accepted and then making every answer non-finite.
+MAX_DESCRIPTION_BYTES = 32 * 1024 * 1024   # robot_description_file (the largest URDF of
+#                                            example-robot-data is < 1 MiB)
+MAX_GRAVITY = 1e3                   # m/s², norm of `gravity` (100 g)
+MAX_ARMATURE = 1e6                  # kg m² (or kg), per joint
+MAX_PAYLOAD_MASS = 1e6              # kg
+MAX_PAYLOAD_COM = 1e3               # m, per component
+MAX_PAYLOAD_INERTIA = 1e6           # kg m², per component
+MAX_LOCKED_POSITION = 1e4           # rad or m
+URDF_WARNINGS_LISTED = 5            # URDF warnings listed one by one in /diagnostics
+
+# Rejection reasons the node adds to those of the input mapping.
+NODE_REASONS = ('no_model', 'compute_error', 'non_finite_output')
+# Rejection reasons of external_wrenches messages.
+WRENCH_REASONS = ('no_model', 'unknown_link', 'non_finite')
+
+
+class ConfigError(ValueError):
+    """A parameter value or robot description that cannot be used; the message says why."""
+
+
+# --------------------------------------------------------------------------------------------
+# Parameters
+
+@dataclass(frozen=True)
+class Spec:
+    """One parameter of the node, as declared: ``unset`` names the type of an unset array."""
+
+    name: str
+    default: object
+    description: str
+    unset: str = ''                     # '' (default is the value), 'string[]' or 'double[]'
+    range: Optional[Tuple[float, float]] = None    # floating-point range, inclusive
+    choices: Tuple[str, ...] = ()
+    read_only: bool = False
+
+
+PARAMETERS = (
+    Spec('robot_description', '', (
+        'URDF XML of the robot (XML text, never a path). Takes precedence over '
+        'robot_description_file and the robot_description topic. A new value is parsed '
+        'completely and swapped in only if it parses; otherwise it is rejected with the '
+        "reason and the old model stays. Set to '' to fall back to robot_description_file "
+        '(or, when that is empty too, to the topic).')),
+    Spec('robot_description_file', '', (
+        'Path of a URDF (or .xacro, expanded when the xacro module is importable): a '
+        f'regular UTF-8 file of at most {MAX_DESCRIPTION_BYTES >> 20} MiB. Used when '
+        'robot_description is empty; set while robot_description is set, it is checked '
+        'and kept for later, and the model stays that of robot_description.')),
+    Spec('strict_urdf', False, (
+        'Refuse a description with URDF warnings (physically inconsistent but computable: '
+        'an inertia that is not positive semi-definite or breaks the triangle inequality, '
+        'inertia on a massless link...) like any bad description. Off: it loads as written '
+        'and each warning is logged and listed in /diagnostics. Cannot be switched on '
+        'while the loaded description has warnings.')),
+    Spec('joints', None, (
+        'Joints the model keeps, in the output order of effort_commands and '
+        "feedforward_efforts: a subset of the URDF's movable, non-mimic joints. The "
+        'others are locked (locked_joints/locked_positions, default 0) and lumped, and '
+        'branches that cannot affect the kept joints are pruned (model reduction); inputs '
+        'need only the kept joints. Unset or empty: all joints, in URDF order.'),
+        unset='string[]'),
+    Spec('locked_joints', None, (
+        'Joints locked at a non-zero position when joints is set (others lock at 0); '
+        'values in locked_positions, same order.'), unset='string[]'),
+    Spec('locked_positions', None, (
+        'Positions (rad or m) of locked_joints, same length; unset or empty = all 0.'),
+        unset='double[]'),
+    Spec('gravity', list(DEFAULT_GRAVITY), (
+        'Gravity [gx, gy, gz] in the base frame, m/s² (tilted or wall mounts). Live.')),
+    Spec('acceleration_source', 'effort', (
+        'Where desired_joint_states carries qdd: "effort" (the effort array holds desired '
+        'accelerations, rad/s² or m/s²; empty = zeros) or "none" (qdd = 0: gravity and '
+        'Coriolis compensation, safe with measured /joint_states).'),
+        choices=ACCELERATION_SOURCES),
+    Spec('input_timeout', DEFAULT_INPUT_TIMEOUT, (
+        'Seconds without a good input after which diagnostics report ERROR (stale). The '
+        'node publishes only in answer to input, so stale input means no output, never '
+        'zeros.'), range=(1e-3, 3600.0)),
+    Spec('payload.link', '', (
+        "Link carrying a rigid payload (tool, grasped object); '' = no payload. Live: "
+        'applied from the next message. A new robot_description lacking this link is '
+        'rejected.')),
+    Spec('payload.mass', 0.0, 'Payload mass, kg (>= 0).'),
+    Spec('payload.com', [0.0, 0.0, 0.0], (
+        "Payload centre of mass [x, y, z] in payload.link's frame, m.")),
+    Spec('payload.inertia', [0.0] * 6, (
+        'Payload inertia [ixx, ixy, ixz, iyy, iyz, izz] about its centre of mass, axes of '
+        "payload.link's frame, kg m^2 (positive semi-definite, triangle inequality).")),
+    Spec('armature', None, (
+        'Rotor inertia reflected through the gear (kg m^2 or kg), one value >= 0 per '
+        'model joint in the order of the joints parameter (URDF order when unset): '
+        'tau += armature * qdd. Unset or empty: none.'), unset='double[]'),
+    Spec('friction_model', 'none', (
+        '"none", or "urdf": tau += damping * qd + friction * tanh(qd / '
+        "friction_velocity_threshold) from each joint's URDF <dynamics>."),
+        choices=FRICTION_MODELS),
+    Spec('friction_velocity_threshold', DEFAULT_FRICTION_THRESHOLD, (
+        'Velocity (rad/s or m/s) at which the smooth Coulomb sign reaches tanh(1) = 76 %.'),
+        range=(1e-9, 1e3)),
+    Spec('clamp_to_effort_limits', False, (
+        'Clamp tau to the URDF <limit effort> (joints without a positive limit are left '
+        'alone); a throttled warning names the saturated joints.')),
+    Spec('external_wrench_timeout', DEFAULT_WRENCH_TIMEOUT, (
+        'Seconds after its receipt that an external_wrenches message stops applying.'),
+        range=(1e-3, 3600.0)),
+    Spec('backend', 'auto', (
+        'How tau is computed. "numpy": plain Python floats (no numba import; ~20-70 µs per '
+        'call for 6-32 joints). "compiled": numba kernels (~1-2 µs), prepared off the '
+        'answering path (compiled in a child process when the cache is cold); the node '
+        'answers on numpy until they are ready. "auto": compiled when one plain-float call '
+        f'of the loaded model takes more than {AUTO_COMPILED_ABOVE_S * 1e6:g} µs, else '
+        'numpy. Read-only.'), choices=BACKEND_SETTINGS, read_only=True),
+)
+#: Every parameter, by name.
+PARAMETER_NAMES = tuple(spec.name for spec in PARAMETERS)
+#: Parameters that shape the model (a change re-parses the description).
+MODEL_PARAMETERS = ('joints', 'locked_joints', 'locked_positions')
+#: Changes that may parse a description (slow for a large one).
+SLOW_PARAMETERS = frozenset({'robot_description', 'robot_description_file', *MODEL_PARAMETERS})
+PAYLOAD_PARAMETERS = ('payload.link', 'payload.mass', 'payload.com', 'payload.inertia')
+DESCRIPTION_PARAMETERS = ('robot_description', 'robot_description_file')
+
+
+# --------------------------------------------------------------------------------------------
+# Robot descriptions
+
+def read_description(path: str) -> str:
+    """URDF text of the file ``path``; a ``.xacro`` file is expanded when ``xacro`` is importable.
+
+    Only a regular file (symbolic links followed) of at most :data:`MAX_DESCRIPTION_BYTES`,
+    UTF-8 (a byte order mark is dropped), read by :func:`~spatial_dynamics.urdf.read_urdf_file`:
+    a named pipe, a device or a directory is refused without blocking, and reading never runs
+    away. A ``.xacro`` file passes the same check before xacro opens it.
+    """
+    where = f'robot_description_file {path!r}'
+    try:
+        data = read_urdf_file(path, MAX_DESCRIPTION_BYTES)
+    except ValueError as err:
+        raise ConfigError(f'robot_description_file: {err} (a robot description)') from None
+    if path.endswith('.xacro'):
+        return _expand_xacro(where, path)
+    try:
+        return data.decode('utf-8-sig')
+    except UnicodeDecodeError as err:
+        raise ConfigError(f'{where}: not UTF-8 text (byte 0x{data[err.start]:02x} at offset '
+                          f'{err.start}); a URDF file must be UTF-8') from None
+
+
+def _expand_xacro(where: str, path: str) -> str:
+    try:
+        import xacro
+    except ImportError:
+        raise ConfigError(f'{where}: a .xacro file needs the xacro module (pip install xacro, '
+                          'or apt ros-jazzy-xacro)') from None
+    try:
+        text = xacro.process_file(path).toxml()
+    except Exception as err:  # xacro raises many types; all mean "cannot expand"
+        raise ConfigError(f'{where}: xacro failed: {err}') from None
+    if len(text) > MAX_DESCRIPTION_BYTES:
+        raise ConfigError(f'{where}: expands to more than the limit of '
+                          f'{MAX_DESCRIPTION_BYTES >> 20} MiB for a robot description')
+    return text
+
+
+def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = None,
+                      locked: Optional[dict] = None, strict: bool = False) -> 'sd.Model':
+    """Build the (reduced) model from URDF text; ``source`` names where it came from.
+
+    ``urdf`` is XML text, never a path (a path goes in ``robot_description_file``): it is
+    handed to the parser as bytes, which :meth:`~spatial_dynamics.Model.from_urdf` never
+    opens. With ``joints``, model reduction (:meth:`~spatial_dynamics.Model.from_urdf`): the
+    other joints are locked at ``locked[name]`` (default 0), lumped, and branches that cannot
+    move a kept joint's torque are pruned; ``model.joint_names == joints``. ``strict``: a
+    physically inconsistent but computable description (a :class:`~spatial_dynamics.URDFWarning`)
+    is refused; otherwise it loads and its warnings are in ``model.warnings``.
+
+    One plain-float inverse-dynamics call at q = qd = qdd = 0 follows, before the model is
+    used: it proves the model computes (finite torques), and derives the backend's layout at
+    load time, not at the first live message. It never imports numba.
+    """
+    text = urdf.lstrip('\ufeff \t\r\n')
+    if not text:
+        raise ConfigError(f'{source}: empty robot description')
+    if not text.startswith('<'):
+        raise ConfigError(f'{source}: not URDF XML (it starts with {text[:200]!r}): a robot '
+                          'description is XML text, never a path; give a file in the '
+                          'robot_description_file parameter')
+    where = source
+    if joints:
+        where = f'{source} reduced to joints {list(joints)}'
+        if locked:
+            where += f' (locked {locked})'
+    try:
+        model = sd.Model.from_urdf(text.encode('utf-8'), joints=list(joints) if joints else None,
+                                   locked=locked or None, strict=strict)
+        zeros = np.zeros(len(model.joint_names))
+        tau = sd.rnea(model, zeros, zeros, zeros, backend='numpy')
+    except Exception as err:  # a bad description must never take the node down
+        raise ConfigError(f'{where}: {err}')
+    if not np.isfinite(tau).all():
+        raise ConfigError(f'{source}: the model gives non-finite torques at rest')
+    return model
+
+
+def description_source(params: dict) -> str:
+    """Where the description comes from: ``'parameter'``, ``'file'`` or ``'topic'`` (precedence).
+
+    The ``robot_description`` parameter when it is set (non-empty), else
+    ``robot_description_file`` when it is set, else the topic.
+    """
+    if params.get('robot_description'):
+        return 'parameter'
+    if params.get('robot_description_file'):
+        return 'file'
+    return 'topic'
+
+
+def description_change(previous: dict, params: dict, changes: dict
+                       ) -> Tuple[Optional[str], Optional[str], str]:
+    """Return ``(urdf, source, kept)``: the description ``changes`` make current.
+
+    ``previous`` are the parameters before the change, ``params`` after it. By precedence
+    (:func:`description_source`); ``urdf`` is None when the model's description does not
+    change. ``kept`` is the path of a ``robot_description_file`` that was set (and read, so
+    it is known to be readable) while ``robot_description`` is set: kept for later, not used.
+    """
+    text, path = params['robot_description'], params['robot_description_file']
+    if text:
+        kept = ''
+        if path and 'robot_description_file' in changes:
+            read_description(path)
+            kept = path
+        if 'robot_description' in changes:
+            return text, 'parameter robot_description', kept
+        return None, None, kept
+    if path and ('robot_description_file' in changes
+                 or previous.get('robot_description')):  # set, or the string cleared
+        return read_description(path), f'file {path}', ''
+    return None, None, ''
+
+
+# --------------------------------------------------------------------------------------------
+# Validators: each returns the usable value or raises ConfigError naming the parameter
+
+@dataclass(frozen=True)
+class Payload:
+    """A rigid payload on ``link`` (``''`` = none): kg, m (link frame), kg m² about the com."""
+
+    link: str = ''
+    mass: float = 0.0
+    com: Tuple[float, ...] = (0.0, 0.0, 0.0)
+    inertia: Tuple[float, ...] = (0.0,) * 6
+
+    def __str__(self) -> str:
+        if not self.link:
+            return 'none'
+        return (f'{self.mass:g} kg on {self.link!r}, com {list(self.com)} m, inertia '
+                f'{list(self.inertia)} kg m^2')
+
+    def apply(self, model: 'sd.Model') -> 'sd.Model':
+        """Return ``model`` with the payload (:func:`~spatial_dynamics.with_payload`)."""
+        if not self.link:
+            return model
+        try:
+            return sd.with_payload(model, self.link, self.mass, self.com, self.inertia)
+        except ValueError as err:
+            raise ConfigError(f'parameter payload.*: {err}')
+
+
+def _within(values: Sequence[float], bound: float) -> bool:
+    return all(math.isfinite(x) and abs(x) <= bound for x in values)
+
+
+def check_payload(link, mass, com, inertia) -> Payload:
+    """Shape, finiteness and bounds of the ``payload.*`` parameters (the physics: :meth:`apply`).
+
+    Bounds (what no payload can exceed): :data:`MAX_PAYLOAD_MASS`, :data:`MAX_PAYLOAD_COM` per
+    com component, :data:`MAX_PAYLOAD_INERTIA` per inertia component.
+    """
+    mass = float(mass)
+    if not (math.isfinite(mass) and 0.0 <= mass <= MAX_PAYLOAD_MASS):
+        raise ConfigError(f'parameter payload.mass: need a mass from 0 to '
+                          f'{MAX_PAYLOAD_MASS:g} kg, got {mass}')
+    com = tuple(float(x) for x in com)
+    if len(com) != 3 or not _within(com, MAX_PAYLOAD_COM):
+        raise ConfigError(f'parameter payload.com: need 3 finite values within '
+                          f'±{MAX_PAYLOAD_COM:g} m (link frame), got {list(com)}')
+    inertia = tuple(float(x) for x in inertia)
+    if len(inertia) != 6 or not _within(inertia, MAX_PAYLOAD_INERTIA):
+        raise ConfigError('parameter payload.inertia: need 6 finite values (ixx ixy ixz iyy '
+                          f'iyz izz, kg m^2 about the com) within ±{MAX_PAYLOAD_INERTIA:g} '
+                          f'kg m^2, got {list(inertia)}')
+    return Payload(str(link), mass, com, inertia)
+
+
+def check_locked(joints: Optional[Sequence[str]], positions: Optional[Sequence[float]]
+                 ) -> dict:
+    """``locked_joints`` + ``locked_positions`` (empty = all 0) as {name: value}."""
+    joints = list(joints or [])
+    positions = list(positions or [])
+    if positions and len(positions) != len(joints):
+        raise ConfigError(f'parameter locked_positions: {len(positions)} values for '
+                          f'{len(joints)} locked_joints {joints} (need the same number, or '
+                          'none for all 0)')
+    if len(set(joints)) != len(joints):
+        raise ConfigError(f'parameter locked_joints: names repeated in {joints}')
+    values = positions or [0.0] * len(joints)
+    if not _within(values, MAX_LOCKED_POSITION):
+        raise ConfigError(f'parameter locked_positions: need finite values within '
+                          f'±{MAX_LOCKED_POSITION:g} rad or m, got {values}')
+    return dict(zip(joints, (float(v) for v in values)))
+
+
+def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
+                   ) -> Optional[np.ndarray]:
+    """``armature`` (kg m² or kg): empty = none, else one value in [0, MAX_ARMATURE] per joint."""
+    if not values:
+        return None
+    try:
+        armature = sd.per_joint(model, 'parameter armature', list(values), nonnegative=True)
+    except ValueError as err:
+        raise ConfigError(f'{err} (order of the joints parameter, or the URDF order '
+                          'when it is unset)')
+    for name, value in zip(model.joint_names, armature):
+        if value > MAX_ARMATURE:
+            raise ConfigError(f'parameter armature: joint {name!r} has {value:g}, more than '
+                              f'{MAX_ARMATURE:g} kg m^2 (or kg) cannot be a rotor inertia')
+    armature.setflags(write=False)
+    return None if not armature.any() else armature
+
+
+def check_gravity(value: Sequence[float]) -> Tuple[float, float, float]:
+    """Gravity ``[gx, gy, gz]`` in m/s², base frame, of norm at most :data:`MAX_GRAVITY`."""
+    g = tuple(float(x) for x in value)
+    if len(g) != 3 or not all(math.isfinite(x) for x in g):
+        raise ConfigError(f'parameter gravity: need 3 finite values in m/s², got {list(value)}')
+    norm = math.hypot(*g)
+    if norm > MAX_GRAVITY:
+        raise ConfigError(f'parameter gravity: |g| = {norm:g} m/s² in {list(g)}, more than '
+                          f'{MAX_GRAVITY:g} m/s² (100 g) cannot be a mounting')
+    return g
+
+
+def check_choice(name: str, value: str, choices: Sequence[str]) -> str:
+    """Return ``value`` if it is one of ``choices``."""
+    if value not in choices:
+        raise ConfigError(f'parameter {name}: {value!r} is not one of {list(choices)}')
+    return value
+
+
+def check_acceleration_source(value: str) -> str:
+    """Return a valid ``acceleration_source``."""
+    return check_choice('acceleration_source', value, ACCELERATION_SOURCES)
+
+
+def check_positive(name: str, value: float, unit: str = 'seconds') -> float:
+    """Return ``value`` if it is a finite number > 0."""
+    if not (math.isfinite(value) and value > 0.0):
+        raise ConfigError(f'parameter {name}: need a positive number of {unit}, got {value}')
+    return float(value)
+
+
+def check_input_timeout(value: float) -> float:
+    """Return a valid ``input_timeout``."""
+    return check_positive('input_timeout', value)
+
+
+# --------------------------------------------------------------------------------------------
+# Backend choice
+
+def plain_call_seconds(model: 'sd.Model', calls: int = TIMED_CALLS) -> float:
+    """Median time (s) of one plain-float RNEA call (backend 'numpy') on the zero state."""
+    z = np.zeros(len(model.joint_names))
+    sd.rnea(model, z, z, z, backend='numpy')       # derives the layout: not timed
+    times = []
+    for _ in range(calls):
+        t0 = time.perf_counter()
+        sd.rnea(model, z, z, z, backend='numpy')
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def preferred_backend(setting: str, plain_call_s: float) -> str:
+    """``'numpy'`` or ``'compiled'``: what ``backend`` = ``setting`` asks for this model.
+
+    ``auto`` is ``compiled`` only when a plain-float call takes more than
+    :data:`AUTO_COMPILED_ABOVE_S`.
+    """
+    if setting == 'auto':
+        return 'compiled' if plain_call_s > AUTO_COMPILED_ABOVE_S else 'numpy'
+    return check_choice('backend', setting, BACKEND_SETTINGS)
+
+
+class CompiledKernels:
+    """The compiled backend of this process, made ready once, off the answering path.
+
+    :meth:`request` starts one daemon thread (the first time only) that runs ``prepare``
+    (:func:`spatial_dynamics.backends.prepare_compiled`: a child process compiles the kernels
+    into numba's on-disk cache when it is cold) and then ``load(model, 'compiled')``
+    (:func:`spatial_dynamics.backends.warmup`: imports numba here and loads the kernels from
+    that cache), then calls ``notify()`` from that thread. ``state`` goes ``'idle'`` →
+    ``'preparing'`` → ``'ready'`` (``description`` names the backend) or ``'failed'``
+    (``error`` says why: numba missing, or its error). Answers never wait for it.
+    """
+
+    def __init__(self, notify: Callable[[], None],
+                 prepare: Callable[[], None] = backends.prepare_compiled,
+                 load: Callable[['sd.Model', str], str] = backends.warmup) -> None:
+        self._notify = notify
+        self._prepare = prepare
+        self._load = load
+        self._lock = threading.Lock()
+        self.state = 'idle'
+        self.description = ''
+        self.error = ''
+        self.seconds = 0.0       # from request to ready (or failed)
+
+    @property
+    def ready(self) -> bool:
+        """Whether the compiled kernels are loaded in this process."""
+        return self.state == 'ready'
+
+    def request(self, model: 'sd.Model') -> bool:
+        """Start preparing the kernels (warmed up on ``model``) unless started; True if now."""
+        with self._lock:
+            if self.state != 'idle':
+                return False
+            self.state = 'preparing'
+        threading.Thread(target=self._run, args=(model,), daemon=True,
+                         name='compiled kernels').start()
+        return True
+
+    def _run(self, model: 'sd.Model') -> None:
+        start = time.monotonic()
+        try:
+            self._prepare()
+            self.description = self._load(model, 'compiled')
+            self.state = 'ready'
+        except Exception as err:  # numba missing or failing: stay on numpy, say why
+            self.error = str(err) or type(err).__name__
+            self.state = 'failed'
+        self.seconds = time.monotonic() - start
+        try:
+            self._notify()
+        except Exception:  # the context is gone: the node is shutting down
+            pass
+
+
+# --------------------------------------------------------------------------------------------
+# What an answer needs, and how a parameter change produces it
+
+@dataclass(frozen=True)
+class Output:
+    """Everything an answer needs, swapped as one object between two messages.
+
+    ``base`` is the (reduced) model of the URDF, ``model`` the same with the payload; ``tau``
+    is in the order of ``joints`` (= ``model.joint_names``). ``armature`` is ``None`` or (n,),
+    ``friction_threshold`` is ``None`` (friction_model none) or the smooth-sign velocity.
+    ``backend`` is what the answers run on now (``'numpy'`` or ``'compiled'``), ``preferred``
+    what the ``backend`` setting asks for this model; they differ while the compiled kernels
+    are prepared. ``plain_call_s``: one plain-float call of ``base``, measured at load.
+    """
+
+    urdf: str
+    source: str
+    base: 'sd.Model'
+    model: 'sd.Model'
+    joints: Tuple[str, ...]
+    joints_param: Tuple[str, ...]
+    locked: Tuple[Tuple[str, float], ...]
+    payload: Payload
+    armature: Optional[np.ndarray] = None
+    friction_threshold: Optional[float] = None
+    clamp: bool = False
+    backend: str = 'numpy'
+    preferred: str = 'numpy'
+    setting: str = 'auto'
+    plain_call_s: float = 0.0
+
+    @property
+    def waits_for_compiled(self) -> bool:
+        """Whether it prefers the compiled kernels but runs on numpy (until they are ready)."""
+        return self.preferred == 'compiled' and self.backend != 'compiled'
+
+    def upgraded(self) -> 'Output':
+        """Return this output on the compiled kernels (loaded already), warmed up on its model."""
+        backends.warmup(self.model, 'compiled')
+        return replace(self, backend='compiled')
+
+
+@dataclass(frozen=True)
+class Config:
+    """A validated parameter change, ready to be swapped in (see :func:`prepare`)."""
+
+    params: dict
+    output: Optional[Output]
+    new_description: bool
+    kept_file: str
+    gravity: Tuple[float, float, float]
+    acceleration_source: str
+    input_timeout: float
+    wrench_timeout: float
+
+
+def _base_model(params: dict, current: Optional[Output], urdf: str, source: str,
+                joints: Tuple[str, ...], locked: dict) -> Tuple['sd.Model', float]:
+    """Return the (reduced) model of ``urdf`` and its plain-float call time (reused if same)."""
+    if (current is not None and urdf is current.urdf and joints == current.joints_param
+            and tuple(locked.items()) == current.locked):
+        return current.base, current.plain_call_s
+    if locked and not joints:
+        raise ConfigError(f'parameter locked_joints: {list(locked)} lock joints only '
+                          'when the joints parameter lists the joints to keep')
+    base = parse_description(urdf, source, joints, locked, bool(params['strict_urdf']))
+    return base, plain_call_seconds(base)
+
+
+def build_output(params: dict, current: Optional[Output], urdf: Optional[str] = None,
+                 source: Optional[str] = None, kernels: Optional[CompiledKernels] = None
+                 ) -> Output:
+    """Build the :class:`Output` for ``params``; the URDF is re-parsed only when needed.
+
+    ``urdf`` None keeps the description of ``current``. Reads nothing of the node, so the
+    description parser's thread may call it. The output runs on the compiled kernels when
+    its model prefers them and ``kernels`` has them ready, else on numpy. Raises
+    :class:`ConfigError`.
+    """
+    if urdf is None:
+        urdf, source = current.urdf, current.source
+    # the four payload parameters are checked first: they need no model
+    payload = check_payload(params['payload.link'], params['payload.mass'],
+                            params['payload.com'], params['payload.inertia'])
+    locked = check_locked(params['locked_joints'], params['locked_positions'])
+    joints = tuple(params['joints'] or ())
+    base, plain_call_s = _base_model(params, current, urdf, source, joints, locked)
+    if params['strict_urdf'] and base.warnings:
+        raise ConfigError(
+            f'parameter strict_urdf: {source} has {len(base.warnings)} URDF warning(s) '
+            f'(strict_urdf refuses them), the first: {base.warnings[0]}')
+    if payload.link and payload.link not in base.frames:
+        raise ConfigError(
+            f'parameter payload.link: {payload.link!r} is not a link of robot '
+            f'{base.name!r} ({source}); set payload.link to an existing link or \'\' '
+            'first, or together with the new description')
+    friction_model = check_choice('friction_model', params['friction_model'], FRICTION_MODELS)
+    threshold = check_positive('friction_velocity_threshold',
+                               params['friction_velocity_threshold'], 'rad/s or m/s')
+    setting = params.get('backend') or 'auto'
+    output = Output(
+        urdf=urdf, source=source, base=base, model=payload.apply(base),
+        joints=tuple(base.joint_names), joints_param=joints, locked=tuple(locked.items()),
+        payload=payload, armature=check_armature(base, params['armature']),
+        friction_threshold=threshold if friction_model == 'urdf' else None,
+        clamp=bool(params['clamp_to_effort_limits']), setting=setting,
+        preferred=preferred_backend(setting, plain_call_s), plain_call_s=plain_call_s)
+    if output.waits_for_compiled and kernels is not None and kernels.ready:
+        return output.upgraded()
+    return output
+
+
+def _check_without_model(params: dict) -> None:
+    """Check what needs no model (the rest is checked when one arrives)."""
+    check_payload(params['payload.link'], params['payload.mass'], params['payload.com'],
+                  params['payload.inertia'])
+    check_locked(params['locked_joints'], params['locked_positions'])
+    check_choice('friction_model', params['friction_model'], FRICTION_MODELS)
+    check_positive('friction_velocity_threshold', params['friction_velocity_threshold'],
+                   'rad/s or m/s')
+    check_choice('backend', params.get('backend') or 'auto', BACKEND_SETTINGS)
+
+
+def prepare(previous: dict, changes: dict, current: Optional[Output],
+            kernels: Optional[CompiledKernels] = None) -> Config:
+    """Validate ``changes`` to the parameters ``previous``; the result is swapped in as a whole.
+
+    ``current`` is the output in use (None: no model yet). Parses a new description when
+    the changes make one current (:func:`description_change`) or change the model's
+    parameters. Changes nothing; raises :class:`ConfigError` when a value cannot be used.
+    """
+    params = {**previous, **changes}
+    urdf, source, kept_file = description_change(previous, params, changes)
+    output = current
+    if urdf is not None or current is not None:
+        output = build_output(params, current, urdf, source, kernels)
+    else:
+        _check_without_model(params)
+    return Config(
+        params=params, output=output, new_description=urdf is not None,
+        kept_file=kept_file, gravity=check_gravity(params['gravity']),
+        acceleration_source=check_acceleration_source(params['acceleration_source']),
+        input_timeout=check_input_timeout(params['input_timeout']),
+        wrench_timeout=check_positive('external_wrench_timeout',
+                                      params['external_wrench_timeout']))
+
+
+def reparse_needed(requested: dict, params: dict) -> bool:
+    """Whether a description parsed with parameters ``requested`` must be parsed again now."""
+    return any(requested[k] != params[k] for k in MODEL_PARAMETERS + ('strict_urdf',))
+
+
+# --------------------------------------------------------------------------------------------
+# Descriptions from the topic: parsed by a worker thread
+
+@dataclass(frozen=True)
+class ParseRequest:
+    """A description from the topic to build an :class:`Output` from, with its context.
+
+    ``generation`` identifies the request: the node applies the result only if no other
+    description came (or a parameter took precedence) since; ``params`` and ``current`` are
+    the node's parameters and output when the message arrived.
+    """
+
+    generation: int
+    urdf: str
+    params: dict
+    current: Optional[Output]
+
+
+class DescriptionParser:
+    """One worker thread that builds outputs from topic descriptions, off the answering path.
+
+    ``submit`` replaces any request not yet started (only the newest description matters);
+    each finished request is queued with its result (an :class:`Output` or a
+    :class:`ConfigError`) and ``notify()`` is called, from the worker thread, so the node can
+    pick it up in its executor (a guard condition). The thread starts with the first request.
+    """
+
+    def __init__(self, build: Callable[[ParseRequest], Output], notify: Callable[[], None]
+                 ) -> None:
+        self._build = build
+        self._notify = notify
+        self._wake = threading.Condition()
+        self._request: Optional[ParseRequest] = None
+        self._done: List[Tuple[ParseRequest, object]] = []
+        self._stopped = False
+        self._thread: Optional[threading.Thread] = None
+
+    def submit(self, request: ParseRequest) -> None:
+        """Parse ``request`` next (dropping a request that has not started yet)."""
+        with self._wake:
+            if self._stopped:
+                return
+            self._request = request
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, daemon=True,
+                                                name='robot_description parser')
+                self._thread.start()
+            self._wake.notify()
+
+    def finished(self) -> List[Tuple[ParseRequest, object]]:
+        """Return (and forget) the finished requests with their results, oldest first."""
+        with self._wake:
+            done, self._done = self._done, []
+        return done
+
+    def stop(self) -> None:
+        """Let the worker end after the request it is on (it is a daemon: never waited for)."""
+        with self._wake:
+            self._stopped = True
+            self._request = None
+            self._wake.notify()
+
+    def _run(self) -> None:
+        while True:
+            with self._wake:
+                while self._request is None and not self._stopped:
+                    self._wake.wait()
+                if self._stopped:
+                    return
+                request, self._request = self._request, None
+            try:
+                result = self._build(request)
+            except ConfigError as err:
+                result = err
+            except Exception as err:  # never lose the worker: report it as a rejection
+                result = ConfigError(f'topic robot_description: {err!r}')
+            with self._wake:
+                if self._stopped:
+                    return
+                self._done.append((request, result))
+            try:
+                self._notify()
+            except Exception:  # the context is gone: the node is shutting down
+                return
+
+
+# --------------------------------------------------------------------------------------------
+# Counters and what /diagnostics says about them
+
+class Window:
+    """Counts and compute times over one diagnostics period."""
+
+    def __init__(self) -> None:
+        self.start_ns = time.monotonic_ns()
+        self.received = 0
+        self.answered = 0
+        self.compute_ns = 0
+        self.compute_max_ns = 0
+        self.delay_ns = 0
+        self.delay_count = 0
+        self.delay_max_ns = 0
+
+
+class Totals:
+    """Counters since the start: answers, rejections by reason, saturation, wrenches, models."""
+
+    def __init__(self) -> None:
+        self.answered = 0
+        self.last_input_ns: Optional[int] = None     # monotonic ns of the last answered input
+        self.rejected: Counter = Counter({reason: 0 for reason in REASONS + NODE_REASONS})
+        self.saturated = 0                  # answers with at least one clamped joint
+        self.saturated_joints: Counter = Counter()
+        self.wrenches_received = 0
+        self.wrenches_rejected: Counter = Counter({reason: 0 for reason in WRENCH_REASONS})
+        self.descriptions_rejected = 0
+        self.last_description_error = ''
+
+    def description_rejected(self, reason: str) -> None:
+        """Count a rejected description and remember why."""
+        self.descriptions_rejected += 1
+        self.last_description_error = reason
+
+
+#: A diagnostics status without ROS: level ('OK', 'WARN', 'ERROR'), message, key-values.
+Status = Tuple[str, str, List[Tuple[str, str]]]
+
+
+def backend_text(output: Output, kernels: Optional[CompiledKernels]) -> str:
+    """Name what the answers run on, for logs and diagnostics (the backend's name first)."""
+    if output.backend == 'compiled':
+        return kernels.description if kernels is not None and kernels.description \
+            else 'compiled'
+    if output.preferred == 'compiled':
+        if kernels is not None and kernels.state == 'failed':
+            return f'numpy (compiled kernels unavailable: {kernels.error})'
+        return 'numpy (preparing compiled kernels)'
+    if output.setting == 'auto':
+        return (f'numpy (auto: {output.plain_call_s * 1e6:.0f} us per call, within the '
+                f'{AUTO_COMPILED_ABOVE_S * 1e6:g} us budget)')
+    return 'numpy'
+
+
+def model_status(output: Optional[Output], totals: Totals, strict: bool,
+                 backend: str) -> Status:
+    """Return the ``robot model`` status: what is loaded, from where, backend, warnings."""
+    rejections = [('descriptions rejected', str(totals.descriptions_rejected)),
+                  ('last rejection', totals.last_description_error)]
+    if output is None:
+        return 'ERROR', 'waiting for robot_description', rejections
+    # WARN while the loaded description has URDF warnings: the torques are those of the
+    # file as written, but the file is physically inconsistent somewhere.
+    model, urdf_warnings = output.model, output.base.warnings
+    message = f'robot {model.name!r} loaded, {len(model.joint_names)} DOF'
+    if urdf_warnings:
+        message += f', {len(urdf_warnings)} URDF warning(s)'
+    values = [('robot name', model.name), ('dof', str(len(model.joint_names))),
+              ('model joints', ', '.join(model.joint_names)),
+              ('output joints', ', '.join(output.joints)), ('source', output.source),
+              ('summary', output.base.summary()), ('backend', backend),
+              ('backend setting', output.setting),
+              ('plain call time [us]', f'{output.plain_call_s * 1e6:.1f}')]
+    values += rejections + [('strict urdf', str(bool(strict))),
+                            ('urdf warnings', str(len(urdf_warnings)))]
+    values += [(f'urdf warning {i}', text)
+               for i, text in enumerate(urdf_warnings[:URDF_WARNINGS_LISTED], 1)]
+    return ('WARN' if urdf_warnings else 'OK'), message, values
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The live settings an answer uses besides the :class:`Output` (diagnostics show them)."""
+
+    gravity: Tuple[float, float, float] = DEFAULT_GRAVITY
+    acceleration_source: str = 'effort'
+    input_timeout: float = DEFAULT_INPUT_TIMEOUT
+
+
+def _us(ns: float) -> str:
+    return f'{ns * 1e-3:.1f}'
+
+
+def _input_state(output: Optional[Output], window: Window, settings: Settings, period: float,
+                 age: Optional[float]) -> Tuple[str, str]:
+    """Level and message of the ``feedforward`` status."""
+    rejected_now = window.received - window.answered
+    if output is None:
+        return 'ERROR', 'no robot model'
+    if age is None:
+        return 'WARN', 'no input received yet'
+    if age > settings.input_timeout:
+        return 'ERROR', (f'input stale: no good input for {age:.2f} s '
+                         f'(input_timeout {settings.input_timeout} s); not publishing')
+    if rejected_now:
+        return 'WARN', f'{window.answered / period:.1f} Hz, {rejected_now} rejected'
+    return 'OK', f'{window.answered / period:.1f} Hz'
+
+
+def _window_values(window: Window, period: float) -> List[Tuple[str, str]]:
+    answered, delays = window.answered, window.delay_count
+    return [
+        ('input rate [Hz]', f'{window.received / period:.1f}'),
+        ('output rate [Hz]', f'{answered / period:.1f}'),
+        ('compute time mean [us]', _us(window.compute_ns / answered) if answered else ''),
+        ('compute time max [us]', _us(window.compute_max_ns) if answered else ''),
+        ('input delay mean [ms]', f'{window.delay_ns / delays * 1e-6:.3f}' if delays else ''),
+        ('input delay max [ms]', f'{window.delay_max_ns * 1e-6:.3f}' if delays else ''),
+    ]
+
+
+def _terms_values(output: Output) -> List[Tuple[str, str]]:
+    return [('payload', str(output.payload)),
+            ('armature', 'none' if output.armature is None else str(output.armature.tolist())),
+            ('friction model', 'none' if output.friction_threshold is None
+             else f'urdf (threshold {output.friction_threshold:g})'),
+            ('clamp to effort limits', str(output.clamp))]
+
+
+def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
+                       settings: Settings, wrenches: Dict[str, tuple], now_ns: int) -> Status:
+    """Return the ``feedforward`` status: rates, compute time, delays, staleness, rejections.
+
+    ``window`` is the period that ends at ``now_ns`` (monotonic); ``wrenches`` maps a link to
+    ``(wrench, expiry ns)``.
+    """
+    period = max((now_ns - window.start_ns) * 1e-9, 1e-9)
+    last = totals.last_input_ns
+    age = None if last is None else (now_ns - last) * 1e-9
+    level, message = _input_state(output, window, settings, period, age)
+    values = _window_values(window, period) + [
+        ('last input age [s]', '' if age is None else f'{age:.3f}'),
+        ('input timeout [s]', str(settings.input_timeout)),
+        ('stale', str(age is None or age > settings.input_timeout)),
+        ('answered', str(totals.answered)),
+        ('rejected', str(sum(totals.rejected.values())))]
+    values += [(f'rejected {reason}', str(count)) for reason, count in totals.rejected.items()]
+    values += [('gravity [m/s^2]', str(list(settings.gravity))),
+               ('acceleration source', settings.acceleration_source)]
+    if output is not None:
+        values += _terms_values(output)
+    values += [
+        ('saturated', str(totals.saturated)),
+        ('saturated joints', ', '.join(f'{name}: {count}' for name, count
+                                       in sorted(totals.saturated_joints.items()))),
+        ('external wrenches active', ', '.join(sorted(
+            link for link, (_, expiry) in wrenches.items() if expiry >= now_ns))),
+        ('external wrenches received', str(totals.wrenches_received)),
+        ('external wrenches rejected', str(sum(totals.wrenches_rejected.values())))]
+    values += [(f'external wrenches rejected {reason}', str(count))
+               for reason, count in totals.wrenches_rejected.items()]
+    return level, message, values

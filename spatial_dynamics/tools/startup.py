@@ -1,0 +1,349 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Start-up of the node: process start -> first correct answer, with inputs already flowing.
+
+    python -m spatial_dynamics.tools.startup [--urdf PATH] [--runs 3]
+        [--backend auto numpy compiled] [--rate 100] [--hold 3] [--json out/startup.json]
+
+For each run and backend, this process publishes ``desired_joint_states`` (a smooth
+trajectory of the robot, model order, ``--rate`` Hz) **before** it starts the installed node
+(``ros2 run spatial_dynamics inverse_dynamics``, else ``python -m spatial_dynamics.ros.node``)
+in a namespace of its own, and measures:
+
+* **first answer**: from just before the process starts to the first ``feedforward_efforts``
+  whose efforts equal the library's τ for that message's state (to 1e-9);
+* **RSS at first answer** (``VmRSS`` of the node's process then) and **peak** (``VmHWM`` at
+  the end: at least ``--hold`` s after the first answer, and after the switch to the compiled
+  kernels when the node prepares them);
+* **compiled at**: when ``/diagnostics`` first shows the compiled backend (if it does);
+* **max gap**: the longest time between two answers after the first (inputs come every
+  1/rate s: a compilation that held the node up would show here); **wrong**: answers that
+  differ from the library's τ (must be 0).
+
+Each run measures **cold** (a fresh, empty ``NUMBA_CACHE_DIR`` for the node: what a fresh
+install or a new container sees) and then **warm** (the same directory again). The table
+gives min / median / max over the runs. The default robot is the UR5 of example-robot-data
+(``config/demo_arm.urdf`` when that is not installed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import shutil
+import signal
+import sys
+import sysconfig
+import tempfile
+import time
+from typing import Dict, Iterator, List, Optional, Sequence
+
+import numpy as np
+
+from .driving import demo_urdf, node_command, rss_bytes, Sinusoids, start, stop
+
+BACKENDS = ('auto', 'numpy', 'compiled')
+TOLERANCE = 1e-9       # N m: an answer is correct when every effort is this close to τ
+UR5 = ('ur_description', 'urdf', 'ur5_robot.urdf')
+MB = 1024 * 1024
+
+
+def example_robot(*parts: str) -> Optional[str]:
+    """Path of a file of example-robot-data's ``robots`` directory, or None if not installed.
+
+    Looked up where the pip wheel (``cmeel.prefix``), a conda/robotpkg prefix or a ROS
+    package (``AMENT_PREFIX_PATH``) puts it.
+    """
+    prefixes = [os.path.join(sysconfig.get_paths()[key], 'cmeel.prefix')
+                for key in ('purelib', 'platlib')]
+    prefixes += [sys.prefix, '/opt/openrobots', '/usr']
+    prefixes += [p for p in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep) if p]
+    for prefix in prefixes:
+        path = os.path.join(prefix, 'share', 'example-robot-data', 'robots', *parts)
+        if os.path.isfile(path):
+            return path
+    return None
+
+
+def proc_status_bytes(pid: int, key: str) -> int:
+    """Return a size field (``VmRSS``, ``VmHWM``...) of ``/proc/<pid>/status``, bytes."""
+    if key == 'VmRSS':
+        return rss_bytes(pid)
+    with open(f'/proc/{pid}/status') as f:
+        for line in f:
+            if line.startswith(key + ':'):
+                return int(line.split()[1]) * 1024
+    raise RuntimeError(f'no {key} for pid {pid}')
+
+
+def numba_loaded(pid: int) -> bool:
+    """Whether the process ``pid`` has llvmlite (numba's compiler) mapped: numba imported."""
+    try:
+        with open(f'/proc/{pid}/maps') as f:
+            return any('llvmlite' in line for line in f)
+    except OSError:
+        return False
+
+
+@contextlib.contextmanager
+def numba_cache(path: str) -> Iterator[None]:
+    """Set ``NUMBA_CACHE_DIR`` for the processes started inside (this one imports no numba)."""
+    old = os.environ.get('NUMBA_CACHE_DIR')
+    os.environ['NUMBA_CACHE_DIR'] = path
+    try:
+        yield
+    finally:
+        if old is None:
+            del os.environ['NUMBA_CACHE_DIR']
+        else:
+            os.environ['NUMBA_CACHE_DIR'] = old
+
+
+class Probe:
+    """Inputs to and answers of one node: the states sent by stamp, answers checked on arrival."""
+
+    def __init__(self, bench, namespace: str, model) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import JointState
+        self.bench = bench
+        self.model = model
+        self.status_name = namespace.lstrip('/') + '/inverse_dynamics: robot model'
+        self.states: Dict[int, tuple] = {}
+        self.sent = 0
+        self.answers = 0
+        self.wrong = 0
+        self.first: Optional[float] = None     # monotonic time of the first correct answer
+        self.last: Optional[float] = None
+        self.max_gap = 0.0
+        self.backend = ''                      # latest 'backend' of /diagnostics
+        self.compiled_at: Optional[float] = None
+        self.on_first = None                   # called at the first correct answer
+        self.publisher = bench.create_publisher(JointState, f'{namespace}/desired_joint_states',
+                                                10)
+        self.subscriptions = [
+            bench.create_subscription(
+                JointState, f'{namespace}/feedforward_efforts', self._on_answer,
+                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)),
+            bench.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics,
+                                      10)]
+        self.msg = JointState(name=list(model.joint_names))
+
+    def publish(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> None:
+        """Publish one state with a unique stamp (the message count) and remember it."""
+        k = self.sent = self.sent + 1
+        self.msg.header.stamp.sec, self.msg.header.stamp.nanosec = divmod(k, 1000)
+        self.msg.position, self.msg.velocity, self.msg.effort = q.tolist(), qd.tolist(), \
+            qdd.tolist()
+        self.states[k] = (q, qd, qdd)
+        self.states.pop(k - 5000, None)
+        self.publisher.publish(self.msg)
+
+    def _on_answer(self, msg) -> None:
+        import spatial_dynamics as sd
+        now = time.monotonic()
+        state = self.states.get(msg.header.stamp.sec * 1000 + msg.header.stamp.nanosec)
+        ok = state is not None and len(msg.effort) == len(state[0]) and np.allclose(
+            msg.effort, sd.rnea(self.model, *state, backend='numpy'), rtol=0.0, atol=TOLERANCE)
+        self.answers += 1
+        if not ok:
+            self.wrong += 1
+            return
+        if self.first is None:
+            self.first = now
+            if self.on_first is not None:
+                self.on_first()
+        else:
+            self.max_gap = max(self.max_gap, now - self.last)
+        self.last = now
+
+    def _on_diagnostics(self, msg) -> None:
+        for status in msg.status:
+            if status.name == self.status_name:
+                for kv in status.values:
+                    if kv.key == 'backend':
+                        self.backend = kv.value
+                        if kv.value.startswith('compiled') and self.compiled_at is None:
+                            self.compiled_at = time.monotonic()
+
+    def close(self) -> None:
+        """Remove the publisher and subscriptions."""
+        for sub in self.subscriptions:
+            self.bench.destroy_subscription(sub)
+        self.bench.destroy_publisher(self.publisher)
+
+
+def run_once(executor, bench, model, urdf: str, backend: str, cache_dir: str, label: str,
+             args: argparse.Namespace, index: int) -> Dict[str, object]:
+    """Start one node with inputs flowing; measure until it is settled; stop it."""
+    namespace = f'/sd_startup_{os.getpid()}_{index}'
+    probe = Probe(bench, namespace, model)
+    trajectory = Sinusoids.for_model(model)
+    period = 1.0 / args.rate
+    t0 = time.monotonic()
+
+    def tick(until) -> None:
+        """Publish on the period's grid and spin until ``until()`` (or the timeout)."""
+        while not until():
+            now = time.monotonic()
+            if now - t0 > args.timeout:
+                raise RuntimeError(f'{label}: no settled answer within {args.timeout:g} s '
+                                   f'(answers {probe.answers}, wrong {probe.wrong})')
+            if now >= t0 + probe.sent * period:
+                probe.publish(*trajectory(now - t0))
+            executor.spin_once(timeout_sec=max(0.0, t0 + probe.sent * period
+                                               - time.monotonic()))
+
+    tick(lambda: time.monotonic() - t0 > args.lead)     # inputs flowing before the start
+    log = args.log_dir and os.path.join(args.log_dir, f'{label.replace(" ", "_")}_{index}.log')
+    with numba_cache(cache_dir):
+        started = time.monotonic()
+        proc = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace,
+                     {'robot_description_file': urdf, 'backend': backend}, log)
+    rss_first: List[int] = []
+    probe.on_first = lambda: rss_first.append(proc_status_bytes(proc.pid, 'VmRSS'))
+    try:
+        matched: List[float] = []
+
+        def answered() -> bool:
+            if not matched and probe.publisher.get_subscription_count():
+                matched.append(time.monotonic() - started)
+            return probe.first is not None or proc.poll() is not None
+
+        tick(answered)
+        if probe.first is None:
+            raise RuntimeError(f'{label}: the node exited with status {proc.returncode}')
+        tick(lambda: time.monotonic() - probe.first > args.hold and probe.backend
+             and 'preparing' not in probe.backend)
+        row = {
+            'backend': backend, 'cache': label.split()[-1],
+            'first_answer_s': probe.first - started,
+            'matched_s': matched[0] if matched else None,
+            'rss_first_mb': rss_first[0] / MB,
+            'peak_mb': proc_status_bytes(proc.pid, 'VmHWM') / MB,
+            'rss_end_mb': proc_status_bytes(proc.pid, 'VmRSS') / MB,
+            'compiled_at_s': None if probe.compiled_at is None else probe.compiled_at - started,
+            'max_gap_ms': probe.max_gap * 1e3, 'answers': probe.answers,
+            'wrong': probe.wrong, 'backend_in_use': probe.backend,
+            'numba_loaded': numba_loaded(proc.pid)}
+    finally:
+        row_exit = stop(proc)
+        probe.close()
+    row['exit_status'] = row_exit
+    return row
+
+
+def _stats(values: Sequence[Optional[float]], fmt: str) -> str:
+    values = [v for v in values if v is not None]
+    if not values:
+        return '-'
+    low, mid, high = min(values), float(np.median(values)), max(values)
+    return ' / '.join(format(v, fmt) for v in (low, mid, high))
+
+
+def format_table(rows: List[Dict[str, object]]) -> str:
+    """One line per (backend, cache): min / median / max over the runs."""
+    header = (f'{"backend":<9}{"cache":<6}{"runs":>5}  {"first answer s":<20}'
+              f'{"RSS at first MB":<18}{"peak MB":<18}{"compiled at s":<20}'
+              f'{"max gap ms":<20}{"wrong":>5}')
+    lines = [header]
+    keys = []
+    for row in rows:
+        key = (row['backend'], row['cache'])
+        if key not in keys:
+            keys.append(key)
+    for backend, cache in keys:
+        group = [r for r in rows if (r['backend'], r['cache']) == (backend, cache)]
+        lines.append(
+            f'{backend:<9}{cache:<6}{len(group):>5}  '
+            f'{_stats([r["first_answer_s"] for r in group], ".2f"):<20}'
+            f'{_stats([r["rss_first_mb"] for r in group], ".0f"):<18}'
+            f'{_stats([r["peak_mb"] for r in group], ".0f"):<18}'
+            f'{_stats([r["compiled_at_s"] for r in group], ".1f"):<20}'
+            f'{_stats([r["max_gap_ms"] for r in group], ".0f"):<20}'
+            f'{sum(r["wrong"] for r in group):>5}')
+    return '\n'.join(lines)
+
+
+def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog='python -m spatial_dynamics.tools.startup', description=__doc__.split('\n\n')[0])
+    parser.add_argument('--urdf', default=None,
+                        help='robot (default: the UR5 of example-robot-data, else the demo arm)')
+    parser.add_argument('--runs', type=int, default=3, help='cold + warm pairs (default 3)')
+    parser.add_argument('--backend', nargs='+', choices=BACKENDS, default=['auto'],
+                        help="the node's backend parameter, one or more (default auto)")
+    parser.add_argument('--rate', type=float, default=100.0, help='input Hz (default 100)')
+    parser.add_argument('--lead', type=float, default=0.5,
+                        help='seconds of input before the node starts (default 0.5)')
+    parser.add_argument('--hold', type=float, default=3.0,
+                        help='seconds after the first answer before the peak is read '
+                             '(default 3; longer while compiled kernels are prepared)')
+    parser.add_argument('--timeout', type=float, default=300.0,
+                        help='give up on a node after this many seconds (default 300)')
+    parser.add_argument('--json', default=None, help='also write the rows here')
+    parser.add_argument('--log-dir', default=None, help='node logs (default: none)')
+    return parser.parse_args(argv)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Measure; print the table; 0 if every run answered correctly."""
+    args = parse_args(argv)
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
+
+    import spatial_dynamics as sd
+    urdf = os.path.abspath(args.urdf or example_robot(*UR5) or demo_urdf())
+    model = sd.Model.from_urdf(urdf)
+    if args.log_dir:
+        os.makedirs(args.log_dir, exist_ok=True)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    bench = rclpy.create_node('startup_bench')
+    executor = SingleThreadedExecutor()
+    executor.add_node(bench)
+    rows: List[Dict[str, object]] = []
+    index = 0
+    try:
+        for run in range(args.runs):
+            for backend in args.backend:
+                cache_dir = tempfile.mkdtemp(prefix='sd_numba_cache_')
+                try:
+                    for cache in ('cold', 'warm'):
+                        rows.append(run_once(executor, bench, model, urdf, backend, cache_dir,
+                                             f'{backend} {cache}', args, index))
+                        index += 1
+                        print(_row_line(rows[-1]), flush=True)
+                finally:
+                    shutil.rmtree(cache_dir, ignore_errors=True)
+    except KeyboardInterrupt:
+        return 130
+    finally:
+        bench.destroy_node()
+        rclpy.try_shutdown()
+    print(f'start-up: {model.name} ({len(model.joint_names)} joints, {urdf}), inputs at '
+          f'{args.rate:g} Hz from before the start; min / median / max of {args.runs} run(s)')
+    print(format_table(rows))
+    if args.json:
+        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+        with open(args.json, 'w') as f:
+            json.dump({'robot': model.name, 'urdf': urdf, 'rate_hz': args.rate, 'rows': rows},
+                      f, indent=2)
+    return 0 if all(r['wrong'] == 0 and r['exit_status'] == 0 for r in rows) else 1
+
+
+def _row_line(row: Dict[str, object]) -> str:
+    compiled = row['compiled_at_s']
+    return (f'  {row["backend"]} {row["cache"]}: first answer {row["first_answer_s"]:.2f} s '
+            f'(subscription seen at {row["matched_s"] or float("nan"):.2f} s), '
+            f'RSS {row["rss_first_mb"]:.0f} MB, peak {row["peak_mb"]:.0f} MB, '
+            + (f'compiled at {compiled:.1f} s, ' if compiled is not None else '')
+            + f'max gap {row["max_gap_ms"]:.0f} ms, backend {row["backend_in_use"]!r}, '
+            f'exit {row["exit_status"]}')
+
+
+if __name__ == '__main__':
+    sys.exit(main())

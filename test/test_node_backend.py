@@ -1,0 +1,269 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The ``backend`` parameter: numpy never loads numba, compiled answers at once and switches.
+
+Also: the on-set callback only validates and the post-set callback applies (in process), and
+the start-up tool measures a correct first answer.
+"""
+
+import glob
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from node_harness import (  # noqa: E402
+    DEMO_URDF, DOMAIN_ID, Io, joint_state, NodeProcess, PENDULUM_URDF, random_states, stamp_key,
+    TIMEOUT, values)
+import spatial_dynamics as sd  # noqa: E402
+
+TOL = 1e-9
+COMPILE_TIMEOUT = 300.0    # a cold compile takes 10-20 s here; bounds a broken run only
+
+
+def numba_mapped(pid: int) -> bool:
+    """Whether llvmlite (numba's compiler) is mapped into process ``pid``."""
+    with open(f'/proc/{pid}/maps') as f:
+        return any('llvmlite' in line for line in f)
+
+
+class Feed:
+    """Publishes random states of the demo arm by stamp and checks every answer against τ."""
+
+    def __init__(self, io: Io, seed: int) -> None:
+        self.io = io
+        self.model = sd.Model.from_urdf(DEMO_URDF)
+        self.states = random_states(seed, 64, len(self.model.joint_names))
+        self.k = 0
+
+    def publish(self) -> None:
+        names = self.model.joint_names
+        self.io.joint_states.publish(joint_state(names, *self.states[self.k % 64], self.k))
+        self.k += 1
+
+    def run(self, seconds: float, period: float = 0.02) -> None:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.publish()
+            self.io.driver.spin_for(period)
+
+    def until(self, predicate, timeout: float, what: str) -> None:
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            assert time.monotonic() < deadline, f'timed out waiting for {what}'
+            self.run(0.1)
+
+    def check(self, efforts) -> int:
+        """Assert each answer equals the library's τ for its state; return how many."""
+        for msg in efforts:
+            state = self.states[stamp_key(msg.header.stamp) % 64]
+            np.testing.assert_allclose(msg.effort, sd.rnea(self.model, *state, backend='numpy'),
+                                       rtol=0, atol=TOL)
+        return len(efforts)
+
+
+def backends_seen(io: Io):
+    """Return the 'backend' values of the robot model status, in order, without repeats."""
+    seen = []
+    for msg in io.diagnostics:
+        for status in msg.status:
+            if status.name == f'{io.node_name}: robot model':
+                value = values(status).get('backend')
+                if value and (not seen or seen[-1] != value):
+                    seen.append(value)
+    return seen
+
+
+@pytest.mark.ros
+def test_numpy_backend_never_loads_numba(install, driver, tmp_path):
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
+                                 '-p', 'backend:=numpy'], str(tmp_path))
+    io = Io(driver)
+    feed = Feed(io, 51)
+    try:
+        io.wait_connected()
+        feed.until(lambda: len(io.efforts) >= 20 and len(io.diagnostics) >= 2, TIMEOUT,
+                   'answers and diagnostics')
+        assert feed.check(io.efforts) >= 20
+        kv = values(io.status('robot model'))
+        assert kv['backend'] == 'numpy' and kv['backend setting'] == 'numpy'
+        assert backends_seen(io) == ['numpy']
+        assert not numba_mapped(node.proc.pid)
+        assert 'backend: numpy' in node.log()
+    finally:
+        io.close()
+        assert node.stop() == 0, node.log()
+
+
+@pytest.mark.ros
+def test_compiled_answers_on_numpy_at_once_then_switches(install, driver, tmp_path):
+    """A cold numba cache: correct answers throughout, numpy while compiling, then compiled."""
+    pytest.importorskip('numba')
+    cache = tmp_path / 'numba_cache'
+    cache.mkdir()
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
+                                 '-p', 'backend:=compiled'], str(tmp_path),
+                       env={'NUMBA_CACHE_DIR': str(cache)})
+    io = Io(driver)
+    feed = Feed(io, 52)
+    try:
+        io.wait_connected()
+        feed.until(lambda: io.efforts and io.diagnostics, TIMEOUT, 'the first answer')
+        assert backends_seen(io)[0] == 'numpy (preparing compiled kernels)', backends_seen(io)
+        assert not numba_mapped(node.proc.pid)    # compiling happens in another process
+        feed.until(lambda: backends_seen(io)[-1].startswith('compiled'), COMPILE_TIMEOUT,
+                   'the switch to the compiled kernels')
+        before = len(io.efforts)
+        feed.run(1.0)
+        assert len(io.efforts) > before   # answers after the switch
+        assert feed.check(io.efforts) == len(io.efforts)
+        seen = backends_seen(io)
+        assert seen[0] == 'numpy (preparing compiled kernels)' and len(seen) == 2, seen
+        assert seen[1].startswith('compiled (numba ')
+        assert numba_mapped(node.proc.pid)
+        assert glob.glob(str(cache / '**' / '*.nbi'), recursive=True)   # the child filled it
+        log = node.log()
+        assert 'compiled kernels ready after' in log and 'Traceback' not in log
+    finally:
+        io.close()
+        assert node.stop() == 0, node.log()
+
+
+@pytest.mark.ros
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
+def test_stopped_while_compiling_exits_0_and_leaves_no_compiler(
+        install, driver, tmp_path, sig):
+    pytest.importorskip('numba')
+    cache = tmp_path / 'numba_cache'
+    cache.mkdir()
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
+                                 '-p', 'backend:=compiled'], str(tmp_path),
+                       env={'NUMBA_CACHE_DIR': str(cache)})
+    io = Io(driver)
+    feed = Feed(io, 53)
+    try:
+        io.wait_connected()
+        feed.until(lambda: io.efforts and io.diagnostics, TIMEOUT, 'the first answer')
+        children = subprocess.run(['ps', '-o', 'pid=', '--ppid', str(node.proc.pid)],
+                                  capture_output=True, text=True).stdout.split()
+        assert children, 'no compiling child'   # the compile takes 10-20 s
+        assert node.stop(sig) == 0, node.log()
+        assert 'Traceback' not in node.log()
+        deadline = time.monotonic() + 10.0
+        while any(os.path.exists(f'/proc/{pid}') for pid in children):
+            assert time.monotonic() < deadline, f'compiler {children} still running'
+            time.sleep(0.05)
+    finally:
+        io.close()
+        node.stop(signal.SIGKILL)
+
+
+@pytest.mark.ros
+def test_without_numba_the_node_stays_on_numpy_and_says_why(install, driver, tmp_path):
+    fake = tmp_path / 'no_numba' / 'numba'
+    fake.mkdir(parents=True)
+    (fake / '__init__.py').write_text("raise ImportError('numba disabled for this test')\n")
+    env = {'PYTHONPATH': os.pathsep.join([str(fake.parent), install.env()['PYTHONPATH']])}
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
+                                 '-p', 'backend:=compiled'], str(tmp_path), env=env)
+    io = Io(driver)
+    feed = Feed(io, 54)
+    try:
+        io.wait_connected()
+        feed.until(lambda: backends_seen(io) and 'unavailable' in backends_seen(io)[-1],
+                   TIMEOUT, 'the compiled kernels to be refused')
+        feed.run(0.5)
+        assert feed.check(io.efforts) > 0
+        assert backends_seen(io)[-1].startswith('numpy (compiled kernels unavailable')
+        assert 'numba disabled for this test' in backends_seen(io)[-1]
+        assert 'compiled kernels unavailable, answering on numpy' in node.log()
+    finally:
+        io.close()
+        assert node.stop() == 0, node.log()
+
+
+@pytest.mark.ros
+def test_backend_is_read_only_and_checked_at_start(install, driver, tmp_path):
+    proc = subprocess.run([install.executable, '--ros-args', '-p',
+                           f'robot_description_file:={DEMO_URDF}', '-p', 'backend:=cuda'],
+                          env=install.env(), capture_output=True, text=True, timeout=TIMEOUT)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 1 and 'cannot start' in out and "backend: 'cuda'" in out, out
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}'], str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        result = io.set_parameters(backend='numpy')[0]
+        assert not result.successful and 'read-only' in result.reason, result.reason
+    finally:
+        io.close()
+        assert node.stop() == 0, node.log()
+
+
+@pytest.mark.ros
+def test_on_set_only_validates_and_post_set_applies():
+    """In process: the on-set callback changes nothing; the post-set callback swaps."""
+    import rclpy
+    from rclpy.parameter import Parameter
+    from spatial_dynamics.ros.config import PARAMETER_NAMES
+    from spatial_dynamics.ros.node import InverseDynamicsNode
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=DOMAIN_ID, args=[
+        '--ros-args', '-r', '__ns:=/post_set_test', '-p',
+        f'robot_description_file:={DEMO_URDF}', '-p', 'backend:=numpy'])
+    node = InverseDynamicsNode(context=context)
+    try:
+        assert set(PARAMETER_NAMES) <= set(node._parameters)
+        output = node.output
+        gravity = [Parameter('gravity', value=[0.0, -9.81, 0.0])]
+        assert node._on_set_parameters(gravity).successful
+        assert node.gravity == (0.0, 0.0, -9.81) and node.params['gravity'] == [0.0, 0.0, -9.81]
+        node._on_parameters_set([Parameter('gravity', value=[0.0, -9.81, 0.0])])  # not it
+        assert node.gravity == (0.0, 0.0, -9.81)
+        node._on_parameters_set(gravity)
+        assert node.gravity == (0.0, -9.81, 0.0) and node.output.base is output.base
+        # a description by parameter: validated (parsed) in on-set, swapped in post-set
+        with open(PENDULUM_URDF) as f:
+            text = f.read()
+        change = [Parameter('robot_description', value=text)]
+        output = node.output
+        assert node._on_set_parameters(change).successful
+        assert node.output is output and node.params['robot_description'] == ''
+        node._on_parameters_set(change)
+        assert node.output.model.name == 'pendulum' and node.output.source == \
+            'parameter robot_description'
+        # through rclpy: both callbacks, in order; a refused change leaves all as it was
+        output = node.output
+        assert not node.set_parameters([Parameter('payload.mass', value=-1.0)])[0].successful
+        assert node.output is output and node._pending is None
+        assert node.set_parameters([Parameter('gravity', value=[0.0, 0.0, -1.0])])[0].successful
+        assert node.gravity == (0.0, 0.0, -1.0) and node._pending is None
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
+
+
+@pytest.mark.ros
+def test_startup_tool_measures_a_correct_first_answer(install, tmp_path):
+    out = tmp_path / 'startup.json'
+    proc = subprocess.run(
+        [sys.executable, '-m', 'spatial_dynamics.tools.startup', '--urdf', DEMO_URDF,
+         '--runs', '1', '--backend', 'numpy', '--hold', '0.5', '--json', str(out)],
+        env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 60, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rows = json.loads(out.read_text())['rows']
+    assert [(r['backend'], r['cache']) for r in rows] == [('numpy', 'cold'), ('numpy', 'warm')]
+    for row in rows:
+        assert row['wrong'] == 0 and row['answers'] > 0 and row['exit_status'] == 0
+        assert 0.0 < row['first_answer_s'] < TIMEOUT
+        assert 10.0 < row['rss_first_mb'] <= row['peak_mb'] < 10_000.0
+        assert row['backend_in_use'] == 'numpy' and not row['numba_loaded']
+        assert row['compiled_at_s'] is None
+    assert 'first answer s' in proc.stdout and 'numpy    cold' in proc.stdout

@@ -1,0 +1,484 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The node's configuration without ROS: ``spatial_dynamics.ros.config``.
+
+Descriptions and description files, parameter bounds, precedence, validation that changes
+nothing, the backend choice and the compiled kernels' preparation, the counters and what
+/diagnostics says. No ROS graph and no rclpy: the module is checked not to import it.
+"""
+
+import ast
+import math
+import os
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from node_harness import DEMO_URDF, PENDULUM_URDF  # noqa: E402
+import spatial_dynamics as sd  # noqa: E402
+from spatial_dynamics.ros import config  # noqa: E402
+from spatial_dynamics.ros.config import ConfigError  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+@pytest.fixture(scope='module')
+def demo_text():
+    with open(DEMO_URDF) as f:
+        return f.read()
+
+
+def defaults(**changes) -> dict:
+    """Every parameter at its declared default (unset arrays as None), then ``changes``."""
+    params = {spec.name: (None if spec.unset else spec.default) for spec in config.PARAMETERS}
+    params.update(changes)
+    return params
+
+
+# --------------------------------------------------------------------------------------------
+# The module is pure, and the shell around it thin
+
+def test_config_never_imports_rclpy():
+    script = textwrap.dedent('''\
+        import sys
+        from spatial_dynamics.ros import config
+        params = {s.name: (None if s.unset else s.default) for s in config.PARAMETERS}
+        out = config.prepare({}, params, None)
+        assert out.output is None and out.gravity == (0.0, 0.0, -9.81)
+        print('ROS:', sorted(m for m in sys.modules if m.split('.')[0] in
+                             ('rclpy', 'rcl_interfaces', 'sensor_msgs', 'std_msgs',
+                              'diagnostic_msgs', 'geometry_msgs')))
+        print('numba:', 'numba' in sys.modules)
+    ''')
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [ROOT] + [p for p in os.environ.get('PYTHONPATH', '').split(os.pathsep) if p]))
+    proc = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          cwd=ROOT, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert 'ROS: []' in proc.stdout and 'numba: False' in proc.stdout, proc.stdout
+
+
+def _functions(path):
+    with open(path, encoding='utf-8') as f:
+        tree = ast.parse(f.read())
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            yield node.name, node.end_lineno - node.lineno + 1
+
+
+@pytest.mark.parametrize('module', ['node.py', 'config.py', 'inputs.py'])
+def test_no_function_of_the_ros_layer_is_longer_than_60_lines(module):
+    path = os.path.join(ROOT, 'spatial_dynamics', 'ros', module)
+    long = [(name, lines) for name, lines in _functions(path) if lines > 60]
+    assert not long, f'{module}: {long}'
+
+
+def test_every_parameter_is_in_the_params_file():
+    with open(os.path.join(ROOT, 'config', 'inverse_dynamics.yaml')) as f:
+        text = f.read()
+    for spec in config.PARAMETERS:
+        key = spec.name.split('.')[-1]
+        assert f'{key}:' in text, f'{spec.name} is not described in inverse_dynamics.yaml'
+    assert {s.name for s in config.PARAMETERS if s.read_only} == {'backend'}
+    assert set(config.SLOW_PARAMETERS) <= set(config.PARAMETER_NAMES)
+
+
+# --------------------------------------------------------------------------------------------
+# Descriptions: text, files, precedence
+
+def test_description_text_is_never_opened_as_a_path(tmp_path, monkeypatch):
+    """robot_description (parameter or topic) is XML text: a path is refused, never read."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / 'robot.urdf').write_text(open(DEMO_URDF).read())
+    for text in (DEMO_URDF, 'robot.urdf', f'  {DEMO_URDF}\n'):
+        with pytest.raises(ConfigError) as info:
+            config.parse_description(text, 'topic robot_description')
+        message = str(info.value)
+        assert 'topic robot_description' in message and 'robot_description_file' in message
+        assert 'not URDF XML' in message
+    # a named pipe and a device would block or exhaust memory if they were opened
+    fifo = tmp_path / 'pipe'
+    os.mkfifo(fifo)
+    for text in (str(fifo), '/dev/zero'):
+        start = time.monotonic()
+        with pytest.raises(ConfigError, match='not URDF XML'):
+            config.parse_description(text, 'parameter robot_description')
+        assert time.monotonic() - start < 5.0
+
+
+def test_description_text_with_bom_or_blank_lines_loads(demo_text):
+    for text in ('\ufeff' + demo_text, '\n\n  ' + demo_text):
+        model = config.parse_description(text, 'parameter robot_description')
+        assert model.joint_names == sd.Model.from_urdf(DEMO_URDF).joint_names
+
+
+def test_description_file_must_be_a_regular_file(tmp_path):
+    fifo = tmp_path / 'pipe'
+    os.mkfifo(fifo)
+    link = tmp_path / 'link_to_pipe.urdf'
+    link.symlink_to(fifo)
+    for path, kind in [(fifo, 'named pipe'), (link, 'named pipe'), (tmp_path, 'directory'),
+                       ('/dev/null', 'character device')]:
+        start = time.monotonic()
+        with pytest.raises(ConfigError) as info:
+            config.read_description(str(path))
+        assert time.monotonic() - start < 5.0
+        message = str(info.value)
+        assert repr(str(path)) in message and 'not a regular file' in message
+        assert kind in message, message
+        assert 'robot_description_file' in message
+    with pytest.raises(ConfigError, match='no such file'):
+        config.read_description(str(tmp_path / 'none.urdf'))
+
+
+def test_description_file_size_is_limited(tmp_path, demo_text):
+    """A file larger than MAX_DESCRIPTION_BYTES is refused before it is read, limit named."""
+    big = tmp_path / 'big.urdf'
+    with open(big, 'wb') as f:
+        f.truncate(32 * 1024 * 1024 + 1)   # sparse: costs no disk
+    with pytest.raises(ConfigError) as info:
+        config.read_description(str(big))
+    message = str(info.value)
+    assert 'big.urdf' in message and '32 MiB' in message and 'limit' in message
+    assert config.MAX_DESCRIPTION_BYTES == 32 * 1024 * 1024
+    ok = tmp_path / 'ok.urdf'
+    ok.write_text(demo_text)
+    assert config.read_description(str(ok)) == demo_text
+
+
+def test_description_file_not_utf8_named(tmp_path, demo_text):
+    """A file that is not UTF-8 gives a ConfigError naming the file and the byte."""
+    bad = tmp_path / 'latin1.urdf'
+    bad.write_bytes(demo_text.replace('demo_arm', 'd\xe9mo_arm').encode('latin-1'))
+    with pytest.raises(ConfigError) as info:
+        config.read_description(str(bad))
+    message = str(info.value)
+    assert repr(str(bad)) in message and 'UTF-8' in message
+    bom = tmp_path / 'bom.urdf'
+    bom.write_bytes(b'\xef\xbb\xbf' + demo_text.encode())
+    assert config.read_description(str(bom)) == demo_text
+
+
+def test_a_xacro_file_is_checked_like_any_file_before_xacro_opens_it(tmp_path):
+    fifo = tmp_path / 'robot.urdf.xacro'
+    os.mkfifo(fifo)
+    start = time.monotonic()
+    with pytest.raises(ConfigError, match='named pipe'):
+        config.read_description(str(fifo))
+    assert time.monotonic() - start < 5.0
+
+
+def test_description_precedence_parameter_file_topic():
+    assert config.description_source(defaults()) == 'topic'
+    assert config.description_source(defaults(robot_description_file=DEMO_URDF)) == 'file'
+    assert config.description_source(defaults(robot_description='<robot/>',
+                                              robot_description_file=DEMO_URDF)) == 'parameter'
+
+
+def test_description_change_reads_the_file_set_while_the_string_wins(demo_text):
+    previous = defaults(robot_description=demo_text)
+    changes = {'robot_description_file': PENDULUM_URDF}
+    urdf, source, kept = config.description_change(previous, {**previous, **changes}, changes)
+    assert (urdf, source, kept) == (None, None, PENDULUM_URDF)
+    # clearing the string falls back to the file
+    previous = {**previous, **changes}
+    changes = {'robot_description': ''}
+    urdf, source, kept = config.description_change(previous, {**previous, **changes}, changes)
+    assert source == f'file {PENDULUM_URDF}' and 'pendulum' in urdf and kept == ''
+    # a bad file set while the string wins is refused all the same
+    changes = {'robot_description_file': '/nonexistent/robot.urdf'}
+    with pytest.raises(ConfigError, match='no such file'):
+        config.description_change(defaults(robot_description=demo_text),
+                                  defaults(robot_description=demo_text, **changes), changes)
+
+
+# --------------------------------------------------------------------------------------------
+# Bounds of absurd values
+
+@pytest.mark.parametrize('gravity', [[0.0, 0.0, -1e308], [1e4, 0.0, 0.0],
+                                     [-800.0, 800.0, 0.0]])
+def test_absurd_gravity_refused_with_the_bound(gravity):
+    with pytest.raises(ConfigError) as info:
+        config.check_gravity(gravity)
+    message = str(info.value)
+    assert 'parameter gravity' in message and f'{config.MAX_GRAVITY:g} m/s²' in message
+
+
+def test_physical_gravity_accepted():
+    assert config.check_gravity([0.0, 0.0, -9.81]) == (0.0, 0.0, -9.81)
+    # a centrifuge or a test rig may exceed 1 g by far; the bound is 100 g
+    assert config.MAX_GRAVITY == 1e3
+    assert config.check_gravity([0.0, 0.0, -1e3]) == (0.0, 0.0, -1e3)
+
+
+def test_absurd_armature_refused_with_the_bound():
+    model = sd.Model.from_urdf(DEMO_URDF)
+    n = len(model.joint_names)
+    for bad in (1e308, 2e6):
+        values = [0.1] * n
+        values[2] = bad
+        with pytest.raises(ConfigError) as info:
+            config.check_armature(model, values)
+        message = str(info.value)
+        assert 'parameter armature' in message and repr(model.joint_names[2]) in message
+        assert f'{config.MAX_ARMATURE:g}' in message
+    assert config.check_armature(model, [config.MAX_ARMATURE] * n).max() == config.MAX_ARMATURE
+
+
+@pytest.mark.parametrize('field, value, bound', [
+    ('mass', 1e308, 'MAX_PAYLOAD_MASS'),
+    ('mass', 2e6, 'MAX_PAYLOAD_MASS'),
+    ('com', [0.0, 1e308, 0.0], 'MAX_PAYLOAD_COM'),
+    ('com', [0.0, 0.0, -2e3], 'MAX_PAYLOAD_COM'),
+    ('inertia', [1e308, 0.0, 0.0, 1e308, 0.0, 1e308], 'MAX_PAYLOAD_INERTIA'),
+    ('inertia', [1.0, 2e6, 0.0, 1.0, 0.0, 1.0], 'MAX_PAYLOAD_INERTIA'),
+])
+def test_absurd_payload_refused_with_the_bound(field, value, bound):
+    args = dict(link='hand', mass=1.0, com=[0.0] * 3, inertia=[0.01, 0, 0, 0.01, 0, 0.01])
+    args[field] = value
+    with pytest.raises(ConfigError) as info:
+        config.check_payload(**args)
+    message = str(info.value)
+    assert f'parameter payload.{field}' in message
+    assert f'{getattr(config, bound):g}' in message
+
+
+def test_absurd_locked_position_refused_with_the_bound():
+    with pytest.raises(ConfigError) as info:
+        config.check_locked(['joint2'], [1e300])
+    message = str(info.value)
+    assert 'parameter locked_positions' in message and f'{config.MAX_LOCKED_POSITION:g}' in message
+    assert config.check_locked(['joint2'], [-math.pi]) == {'joint2': -math.pi}
+
+
+def test_locked_joints_need_the_same_number_of_positions_and_distinct_names():
+    with pytest.raises(ConfigError, match='1 values for 2 locked_joints'):
+        config.check_locked(['a', 'b'], [0.1])
+    with pytest.raises(ConfigError, match='names repeated'):
+        config.check_locked(['a', 'a'], [])
+    assert config.check_locked(['a', 'b'], []) == {'a': 0.0, 'b': 0.0}
+
+
+# --------------------------------------------------------------------------------------------
+# prepare(): validation that changes nothing; build_output(): what an answer needs
+
+def test_prepare_validates_without_changing_its_inputs(demo_text):
+    previous = defaults()
+    first = config.prepare({}, defaults(robot_description=demo_text), None)
+    assert first.new_description and first.output.model.name == 'demo_arm'
+    assert previous == defaults()    # the dict passed in is not touched
+    # a payload change reuses the parsed model, applies the payload to a copy
+    hand = first.output.model.body_names[-1]
+    change = {'payload.link': hand, 'payload.mass': 2.0}
+    second = config.prepare(first.params, change, first.output)
+    assert second.output.base is first.output.base and not second.new_description
+    assert second.output.model is not first.output.model
+    assert first.params['payload.link'] == ''   # the accepted parameters stay as they were
+    q = np.linspace(-1.0, 1.0, len(first.output.joints))
+    with_payload = sd.with_payload(first.output.base, hand, 2.0)
+    np.testing.assert_allclose(sd.rnea(second.output.model, q, q, q),
+                               sd.rnea(with_payload, q, q, q), rtol=0, atol=1e-12)
+    # a bad value is refused with its name, and nothing is produced
+    with pytest.raises(ConfigError, match='parameter gravity'):
+        config.prepare(second.params, {'gravity': [0.0, 0.0, float('nan')]}, second.output)
+
+
+def test_without_a_model_what_needs_none_is_checked():
+    with pytest.raises(ConfigError, match='parameter payload.mass'):
+        config.prepare({}, defaults(**{'payload.mass': -1.0}), None)
+    with pytest.raises(ConfigError, match='parameter friction_model'):
+        config.prepare({}, defaults(friction_model='coulomb'), None)
+    with pytest.raises(ConfigError, match='parameter backend'):
+        config.prepare({}, defaults(backend='cuda'), None)
+    assert config.prepare({}, defaults(), None).output is None
+
+
+def test_reduction_and_strict_are_reparse_triggers(demo_text):
+    params = defaults(robot_description=demo_text)
+    assert not config.reparse_needed(params, {**params, 'gravity': [0.0, 0.0, -1.0]})
+    for name, value in (('joints', ['joint1']), ('locked_joints', ['joint2']),
+                        ('locked_positions', [0.5]), ('strict_urdf', True)):
+        assert config.reparse_needed(params, {**params, name: value}), name
+
+
+# --------------------------------------------------------------------------------------------
+# Backend: the choice, and the preparation of the compiled kernels
+
+def test_auto_compiles_only_models_slower_than_the_budget():
+    budget = config.AUTO_COMPILED_ABOVE_S
+    assert config.preferred_backend('auto', 0.5 * budget) == 'numpy'
+    assert config.preferred_backend('auto', 2.0 * budget) == 'compiled'
+    for setting in ('numpy', 'compiled'):
+        for seconds in (0.0, 0.5 * budget, 2.0 * budget):
+            assert config.preferred_backend(setting, seconds) == setting
+    with pytest.raises(ConfigError, match="parameter backend: 'fast'"):
+        config.preferred_backend('fast', 0.0)
+
+
+def test_plain_call_time_is_measured_on_the_model():
+    small = sd.Model.from_urdf(PENDULUM_URDF)
+    demo = sd.Model.from_urdf(DEMO_URDF)
+    t_small, t_demo = config.plain_call_seconds(small), config.plain_call_seconds(demo)
+    assert 0.0 < t_small < 1.0 and 0.0 < t_demo < 1.0
+
+
+def test_numpy_never_touches_the_compiled_kernels(demo_text):
+    """With backend numpy, nothing asks for the compiled kernels; the output runs on numpy."""
+    calls = []
+    kernels = config.CompiledKernels(lambda: calls.append('notify'),
+                                     prepare=lambda: calls.append('prepare'),
+                                     load=lambda model, backend: calls.append('load'))
+    out = config.prepare({}, defaults(robot_description=demo_text, backend='numpy'), None,
+                         kernels).output
+    assert (out.backend, out.preferred, out.setting) == ('numpy', 'numpy', 'numpy')
+    assert not out.waits_for_compiled and kernels.state == 'idle' and calls == []
+    assert out.plain_call_s > 0.0
+    assert config.backend_text(out, kernels) == 'numpy'
+
+
+def test_compiled_waits_on_numpy_until_the_kernels_are_ready(demo_text):
+    done = threading.Event()
+    loaded = []
+    kernels = config.CompiledKernels(done.set, prepare=lambda: None,
+                                     load=lambda model, backend: loaded.append(
+                                         (model, backend)) or 'compiled (test)')
+    out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
+                         kernels).output
+    assert (out.backend, out.preferred) == ('numpy', 'compiled') and out.waits_for_compiled
+    assert config.backend_text(out, kernels) == 'numpy (preparing compiled kernels)'
+    assert kernels.request(out.model) and not kernels.request(out.model)   # started once
+    assert done.wait(30.0)
+    assert kernels.ready and kernels.description == 'compiled (test)'
+    assert loaded == [(out.model, 'compiled')] and kernels.seconds >= 0.0
+
+
+def test_kernels_that_cannot_be_had_leave_numpy_with_the_reason(demo_text):
+    done = threading.Event()
+
+    def missing():
+        raise sd.backends.CompiledBackendUnavailable('numba is not installed (test)')
+
+    kernels = config.CompiledKernels(done.set, prepare=missing,
+                                     load=lambda model, backend: pytest.fail('loaded'))
+    out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
+                         kernels).output
+    kernels.request(out.model)
+    assert done.wait(30.0)
+    assert kernels.state == 'failed' and 'numba is not installed (test)' in kernels.error
+    text = config.backend_text(out, kernels)
+    assert text.startswith('numpy (compiled kernels unavailable') and 'test' in text
+    assert not kernels.request(out.model)   # never retried
+
+
+def test_an_output_built_once_the_kernels_are_ready_runs_compiled(demo_text):
+    """With the kernels loaded, a new model that prefers them starts on them (warmed up)."""
+    pytest.importorskip('numba')
+    sd.backends.warmup(sd.Model.from_urdf(PENDULUM_URDF), 'compiled')
+    kernels = config.CompiledKernels(lambda: None)
+    kernels.state, kernels.description = 'ready', sd.backends.describe('compiled')
+    out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
+                         kernels).output
+    assert out.backend == 'compiled' and not out.waits_for_compiled
+    assert config.backend_text(out, kernels).startswith('compiled (numba')
+    q = np.linspace(-1.0, 1.0, len(out.joints))
+    np.testing.assert_allclose(sd.rnea(out.model, q, q, q, backend=out.backend),
+                               sd.rnea(out.model, q, q, q, backend='numpy'),
+                               rtol=1e-12, atol=1e-12)
+
+
+def test_auto_text_names_the_measured_time_and_the_budget(demo_text):
+    out = config.prepare({}, defaults(robot_description=demo_text, backend='auto'), None).output
+    text = config.backend_text(out, None)
+    if out.preferred == 'numpy':
+        assert text.startswith('numpy (auto: ') and f'{out.plain_call_s * 1e6:.0f} us' in text
+        assert f'{config.AUTO_COMPILED_ABOVE_S * 1e6:g} us budget' in text
+    else:   # a slow machine: the demo arm is above the budget there
+        assert text == 'numpy (preparing compiled kernels)'
+
+
+# --------------------------------------------------------------------------------------------
+# The topic's description parser
+
+def test_parser_keeps_only_the_newest_waiting_request_and_reports_errors():
+    started, release = threading.Event(), threading.Event()
+    notified = []
+    built = []
+
+    def build(request):
+        started.set()
+        release.wait(10.0)
+        built.append(request.generation)
+        if request.urdf == 'bad':
+            raise ConfigError('topic robot_description: bad')
+        if request.urdf == 'crash':
+            raise RuntimeError('boom')
+        return request.urdf
+
+    parser = config.DescriptionParser(build, lambda: notified.append(1))
+    parser.submit(config.ParseRequest(1, 'first', {}, None))
+    assert started.wait(10.0)
+    for generation, urdf in ((2, 'dropped'), (3, 'bad'), (4, 'crash')):
+        parser.submit(config.ParseRequest(generation, urdf, {}, None))
+    release.set()
+    deadline = time.monotonic() + 10.0
+    results = []
+    while len(results) < 2 and time.monotonic() < deadline:
+        results += parser.finished()
+        time.sleep(0.01)
+    parser.stop()
+    assert [r.generation for r, _ in results] == [1, 4] and built == [1, 4]
+    assert results[0][1] == 'first'
+    assert isinstance(results[1][1], ConfigError) and 'boom' in str(results[1][1])
+    assert len(notified) == 2
+
+
+# --------------------------------------------------------------------------------------------
+# Counters and diagnostics
+
+def test_model_status_levels_and_the_backend(demo_text):
+    totals = config.Totals()
+    level, message, values = config.model_status(None, totals, False, '')
+    assert (level, message) == ('ERROR', 'waiting for robot_description')
+    totals.description_rejected('bad XML')
+    out = config.prepare({}, defaults(robot_description=demo_text, backend='numpy'),
+                         None).output
+    level, message, values = config.model_status(out, totals, False, 'numpy')
+    kv = dict(values)
+    assert level == 'OK' and message == "robot 'demo_arm' loaded, 8 DOF"
+    assert kv['backend'] == 'numpy' and kv['backend setting'] == 'numpy'
+    assert float(kv['plain call time [us]']) > 0.0
+    assert kv['descriptions rejected'] == '1' and kv['last rejection'] == 'bad XML'
+    assert kv['model joints'] == ', '.join(out.model.joint_names)
+
+
+def test_feedforward_status_rates_staleness_and_rejections(demo_text):
+    out = config.prepare({}, defaults(robot_description=demo_text), None).output
+    totals, window, settings = config.Totals(), config.Window(), config.Settings()
+    now = window.start_ns + 2_000_000_000                 # a 2 s period
+    assert config.feedforward_status(out, window, totals, settings, {}, now)[:2] == \
+        ('WARN', 'no input received yet')
+    assert config.feedforward_status(None, window, totals, settings, {}, now)[0] == 'ERROR'
+    window.received, window.answered = 10, 8
+    window.compute_ns, window.compute_max_ns = 8 * 30_000, 50_000
+    totals.answered, totals.last_input_ns = 8, now - 100_000_000
+    totals.rejected['missing_joint'] += 2
+    level, message, values = config.feedforward_status(
+        out, window, totals, settings, {'hand': (np.ones(6), now + 1), 'old': (None, now - 1)},
+        now)
+    kv = dict(values)
+    assert (level, message) == ('WARN', '4.0 Hz, 2 rejected')
+    assert kv['input rate [Hz]'] == '5.0' and kv['compute time mean [us]'] == '30.0'
+    assert kv['compute time max [us]'] == '50.0' and kv['stale'] == 'False'
+    assert kv['rejected'] == '2' and kv['rejected missing_joint'] == '2'
+    assert kv['external wrenches active'] == 'hand'
+    totals.last_input_ns = now - int(1e9)                # older than input_timeout 0.5 s
+    level, message, values = config.feedforward_status(out, window, totals, settings, {}, now)
+    assert level == 'ERROR' and message.startswith('input stale') and dict(values)['stale'] \
+        == 'True'
