@@ -7,20 +7,22 @@ Peers are only checked when importable.
 """
 
 import csv
+import os
 
 from conftest import PinOracle, robot_urdf_path
 import numpy as np
 import pytest
 import spatial_dynamics as sd
 from spatial_dynamics.tools import bench
+from spatial_dynamics.tools.driving import demo_urdf
 
 TINY = bench.Settings(ref_states=2, rounds=1, rounds_big=1, block_s=0.0005, states=4,
                       sizes=(1, 10))
 
 
 def demo_arm():
-    path = bench._demo_urdf()
-    if path is None:
+    path = demo_urdf()
+    if not os.path.isfile(path):
         pytest.skip('config/demo_arm.urdf not found')
     return path
 
@@ -74,7 +76,8 @@ def test_pybullet_is_left_out_where_it_models_another_robot():
     pytest.importorskip('pybullet')
     with pytest.raises(bench.Skip, match='DOF'):
         bench._pybullet_single(bench.load_robot('chain300'))
-    robot = bench.load_robot('demo_arm') if bench._demo_urdf() else pytest.skip('no demo')
+    demo_arm()
+    robot = bench.load_robot('demo_arm')
     with pytest.raises(bench.Skip, match='inertial'):
         bench._pybullet_single(robot)
 
