@@ -47,13 +47,14 @@ DEFAULT_FRICTION_THRESHOLD = 0.01   # rad/s or m/s
 DEFAULT_WRENCH_TIMEOUT = 0.5        # s
 
 #: ``backend: auto`` runs a model on the compiled kernels when one plain-float RNEA call
-#: (backend 'numpy', the median of :data:`TIMED_CALLS` on the zero state at load) takes
-#: longer than this, in s. Measured on a laptop-class x86: 15-20 µs for a 6-DOF arm (UR5),
-#: 22-28 µs for the 8-DOF demo arm, 65-70 µs for Talos (32 DOF), 1.4 ms for a 300-link
-#: chain; compiled 1-2 µs. Below the budget the float call is a small part of an answer
-#: (rclpy's take and two publications cost ~100 µs), and numba (+0.8 s, +135 MB resident)
-#: is never imported.
-AUTO_COMPILED_ABOVE_S = 50e-6
+#: (backend 'numpy', the median of :data:`TIMED_CALLS` on a moving state, see
+#: :func:`plain_call_seconds`) takes longer than this, in s; else on numpy, and numba
+#: (+0.8 s, +130 MB resident) is never imported. Measured on a laptop-class x86: UR5 (6 DOF)
+#: 30 µs, Panda and the demo arm (8 DOF) 43 µs, Solo-12 54 µs, Talos (32 DOF) 145 µs; the
+#: compiled call 1-2 µs. The budget sits between arms and humanoids with a margin of about
+#: 2x either way: below it the call is well under the ~100 µs an answer costs anyway
+#: (mapping the message, two publications).
+AUTO_COMPILED_ABOVE_S = 80e-6
 TIMED_CALLS = 7
 
 # Bounds beyond which a value cannot be physical: refused with the bound named, instead of
@@ -164,7 +165,7 @@ PARAMETERS = (
         'Seconds after its receipt that an external_wrenches message stops applying.'),
         range=(1e-3, 3600.0)),
     Spec('backend', 'auto', (
-        'How tau is computed. "numpy": plain Python floats (no numba import; ~20-70 µs per '
+        'How tau is computed. "numpy": plain Python floats (no numba import; ~30-150 µs per '
         'call for 6-32 joints). "compiled": numba kernels (~1-2 µs), prepared off the '
         'answering path (compiled in a child process when the cache is cold); the node '
         'answers on numpy until they are ready. "auto": compiled when one plain-float call '
@@ -429,13 +430,17 @@ def check_input_timeout(value: float) -> float:
 # Backend choice
 
 def plain_call_seconds(model: 'sd.Model', calls: int = TIMED_CALLS) -> float:
-    """Median time (s) of one plain-float RNEA call (backend 'numpy') on the zero state."""
-    z = np.zeros(len(model.joint_names))
-    sd.rnea(model, z, z, z, backend='numpy')       # derives the layout: not timed
+    """Median time (s) of one plain-float RNEA call (backend 'numpy') on a moving state.
+
+    ``q = qd = qdd = 0.5`` (rad, rad/s, rad/s², or m...): a state at rest (``qd = 0``) takes
+    the algorithm's static shortcut and costs half as much, which is not what answers cost.
+    """
+    x = np.full(len(model.joint_names), 0.5)
+    sd.rnea(model, x, x, x, backend='numpy')       # derives the layout: not timed
     times = []
     for _ in range(calls):
         t0 = time.perf_counter()
-        sd.rnea(model, z, z, z, backend='numpy')
+        sd.rnea(model, x, x, x, backend='numpy')
         times.append(time.perf_counter() - t0)
     return float(np.median(times))
 

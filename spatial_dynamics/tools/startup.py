@@ -243,28 +243,27 @@ def _stats(values: Sequence[Optional[float]], fmt: str) -> str:
     return ' / '.join(format(v, fmt) for v in (low, mid, high))
 
 
+COLUMNS = (('first answer s', 'first_answer_s', '.2f'), ('discovered s', 'matched_s', '.2f'),
+           ('RSS at first MB', 'rss_first_mb', '.0f'), ('peak MB', 'peak_mb', '.0f'),
+           ('compiled at s', 'compiled_at_s', '.1f'), ('max gap ms', 'max_gap_ms', '.0f'))
+
+
 def format_table(rows: List[Dict[str, object]]) -> str:
-    """One line per (backend, cache): min / median / max over the runs."""
-    header = (f'{"backend":<9}{"cache":<6}{"runs":>5}  {"first answer s":<20}'
-              f'{"RSS at first MB":<18}{"peak MB":<18}{"compiled at s":<20}'
-              f'{"max gap ms":<20}{"wrong":>5}')
-    lines = [header]
-    keys = []
-    for row in rows:
-        key = (row['backend'], row['cache'])
-        if key not in keys:
-            keys.append(key)
+    """One line per (backend, cache): min / median / max over the runs of each column.
+
+    ``discovered s`` is when this process saw the node's input subscription (DDS discovery,
+    part of the first answer's time).
+    """
+    keys = list(dict.fromkeys((row['backend'], row['cache']) for row in rows))
+    cells = [['backend', 'cache', 'runs'] + [title for title, _, _ in COLUMNS] + ['wrong']]
     for backend, cache in keys:
         group = [r for r in rows if (r['backend'], r['cache']) == (backend, cache)]
-        lines.append(
-            f'{backend:<9}{cache:<6}{len(group):>5}  '
-            f'{_stats([r["first_answer_s"] for r in group], ".2f"):<20}'
-            f'{_stats([r["rss_first_mb"] for r in group], ".0f"):<18}'
-            f'{_stats([r["peak_mb"] for r in group], ".0f"):<18}'
-            f'{_stats([r["compiled_at_s"] for r in group], ".1f"):<20}'
-            f'{_stats([r["max_gap_ms"] for r in group], ".0f"):<20}'
-            f'{sum(r["wrong"] for r in group):>5}')
-    return '\n'.join(lines)
+        cells.append([backend, cache, str(len(group))]
+                     + [_stats([r[key] for r in group], fmt) for _, key, fmt in COLUMNS]
+                     + [str(sum(r['wrong'] for r in group))])
+    widths = [max(len(row[i]) for row in cells) for i in range(len(cells[0]))]
+    return '\n'.join('  '.join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip()
+                     for row in cells)
 
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
