@@ -8,6 +8,7 @@ nothing, the backend choice and the compiled kernels' preparation, the counters 
 """
 
 import ast
+import gc
 import math
 import os
 import subprocess
@@ -346,17 +347,27 @@ def test_numpy_never_touches_the_compiled_kernels(demo_text):
 def test_compiled_waits_on_numpy_until_the_kernels_are_ready(demo_text):
     done = threading.Event()
     loaded = []
-    kernels = config.CompiledKernels(done.set, prepare=lambda: None,
-                                     load=lambda model, backend: loaded.append(
-                                         (model, backend)) or 'compiled (test)')
+
+    def load(model, backend):
+        loaded.append((model, backend, gc.isenabled()))
+        return 'compiled (test)'
+
+    kernels = config.CompiledKernels(done.set, prepare=lambda: None, load=load)
     out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
                          kernels).output
     assert (out.backend, out.preferred) == ('numpy', 'compiled') and out.waits_for_compiled
     assert config.backend_text(out, kernels) == 'numpy (preparing compiled kernels)'
     assert kernels.request(out.model) and not kernels.request(out.model)   # started once
-    assert done.wait(30.0)
-    assert kernels.ready and kernels.description == 'compiled (test)'
-    assert loaded == [(out.model, 'compiled')] and kernels.seconds >= 0.0
+    try:
+        assert done.wait(30.0)
+        assert kernels.ready and kernels.description == 'compiled (test)'
+        assert kernels.seconds >= 0.0
+        # loaded with the collector paused (no pause of the answers mid-import), then what
+        # was loaded frozen, and the collector running again
+        assert loaded == [(out.model, 'compiled', False)]
+        assert gc.isenabled() and gc.get_freeze_count() > 0
+    finally:
+        gc.unfreeze()
 
 
 def test_kernels_that_cannot_be_had_leave_numpy_with_the_reason(demo_text):

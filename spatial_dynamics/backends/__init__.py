@@ -181,12 +181,14 @@ def warmup(model: Model, backend: str = 'auto') -> str:
     return describe(backend)
 
 
-#: What the child of :func:`prepare_compiled` runs: the import that compiles (or loads).
-#: On Linux it asks for SIGTERM when its parent goes (prctl PR_SET_PDEATHSIG), so a node
-#: stopped while the kernels compile leaves no compiler running.
+#: What the child of :func:`prepare_compiled` runs: the import that compiles (or loads), at a
+#: lower CPU priority (nice +10: the caller's own work comes first). On Linux it asks for
+#: SIGTERM when its parent goes (prctl PR_SET_PDEATHSIG), so a node stopped while the kernels
+#: compile leaves no compiler running.
 _PREPARE = '\n'.join([
-    'import ctypes, signal',
+    'import ctypes, os, signal',
     'try:',
+    '    os.nice(10)',
     '    ctypes.CDLL(None).prctl(1, signal.SIGTERM)',
     'except (OSError, AttributeError):',
     '    pass',

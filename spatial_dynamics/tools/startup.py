@@ -118,6 +118,7 @@ class Probe:
         self.first: Optional[float] = None     # monotonic time of the first correct answer
         self.last: Optional[float] = None
         self.max_gap = 0.0
+        self.max_gap_at = 0.0                  # monotonic time at which it ended
         self.backend = ''                      # latest 'backend' of /diagnostics
         self.compiled_at: Optional[float] = None
         self.on_first = None                   # called at the first correct answer
@@ -155,8 +156,8 @@ class Probe:
             self.first = now
             if self.on_first is not None:
                 self.on_first()
-        else:
-            self.max_gap = max(self.max_gap, now - self.last)
+        elif now - self.last > self.max_gap:
+            self.max_gap, self.max_gap_at = now - self.last, now
         self.last = now
 
     def _on_diagnostics(self, msg) -> None:
@@ -225,7 +226,9 @@ def run_once(executor, bench, model, urdf: str, backend: str, cache_dir: str, la
             'peak_mb': proc_status_bytes(proc.pid, 'VmHWM') / MB,
             'rss_end_mb': proc_status_bytes(proc.pid, 'VmRSS') / MB,
             'compiled_at_s': None if probe.compiled_at is None else probe.compiled_at - started,
-            'max_gap_ms': probe.max_gap * 1e3, 'answers': probe.answers,
+            'max_gap_ms': probe.max_gap * 1e3,
+            'max_gap_end_s': probe.max_gap_at - started if probe.max_gap else None,
+            'answers': probe.answers,
             'wrong': probe.wrong, 'backend_in_use': probe.backend,
             'numba_loaded': numba_loaded(proc.pid)}
     finally:
@@ -340,7 +343,8 @@ def _row_line(row: Dict[str, object]) -> str:
             f'(subscription seen at {row["matched_s"] or float("nan"):.2f} s), '
             f'RSS {row["rss_first_mb"]:.0f} MB, peak {row["peak_mb"]:.0f} MB, '
             + (f'compiled at {compiled:.1f} s, ' if compiled is not None else '')
-            + f'max gap {row["max_gap_ms"]:.0f} ms, backend {row["backend_in_use"]!r}, '
+            + f'max gap {row["max_gap_ms"]:.0f} ms (ending at {row["max_gap_end_s"] or 0:.1f} s), '
+            f'backend {row["backend_in_use"]!r}, '
             f'exit {row["exit_status"]}')
 
 
