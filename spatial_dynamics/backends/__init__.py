@@ -181,19 +181,22 @@ def warmup(model: Model, backend: str = 'auto') -> str:
     return describe(backend)
 
 
-#: What the child of :func:`prepare_compiled` runs: the import that compiles (or loads), at a
-#: lower CPU priority (nice +10: the caller's own work comes first). On Linux it asks for
-#: SIGTERM when its parent goes (prctl PR_SET_PDEATHSIG), so a node stopped while the kernels
-#: compile leaves no compiler running.
+#: What the child of :func:`prepare_compiled` runs: the import that compiles (or loads) the
+#: kernels of the package in ``sys.argv[1]`` (first on the path, before the working
+#: directory), at a lower CPU priority (nice +10: the caller's own work comes first); it
+#: prints the file it compiled. On Linux it asks for SIGTERM when its parent goes (prctl
+#: PR_SET_PDEATHSIG), so a node stopped while the kernels compile leaves no compiler running.
 _PREPARE = '\n'.join([
-    'import ctypes, os, signal',
+    'import ctypes, os, signal, sys',
+    'sys.path.insert(0, sys.argv[1])',
     'try:',
     '    os.nice(10)',
     '    ctypes.CDLL(None).prctl(1, signal.SIGTERM)',
     'except (OSError, AttributeError):',
     '    pass',
     'from spatial_dynamics import backends',
-    'backends.compiled("compiled")'])
+    'backends.compiled("compiled")',
+    'print(backends.jit.__file__)'])
 
 
 def prepare_compiled(timeout: Optional[float] = None) -> None:
@@ -201,30 +204,33 @@ def prepare_compiled(timeout: Optional[float] = None) -> None:
 
     Importing :mod:`.jit` compiles every kernel (about 13 s) unless numba's cache holds them
     (then it loads them, < 1 s). This runs that import in a child Python (this interpreter,
-    this environment, this package first on its path), so the cache it fills is the one this
-    process reads (``NUMBA_CACHE_DIR`` or :func:`cache_dir_fallback`), and returns when the
-    child is done: a :func:`warmup` here afterwards only loads. Nothing of this process
+    this environment, this very package first on its path, whatever the working directory),
+    so the cache it fills is the one this process reads (``NUMBA_CACHE_DIR`` or
+    :func:`cache_dir_fallback`, entries keyed by the kernels' source file), and returns when
+    the child is done: a :func:`warmup` here afterwards only loads. Nothing of this process
     changes, and the compilation never holds its interpreter. Returns at once when the
     kernels are loaded here already. Raises :class:`CompiledBackendUnavailable` when numba is
-    not installed or the child fails (with the child's last error line), and
-    ``subprocess.TimeoutExpired`` after ``timeout`` s.
+    not installed, the child fails (with the child's last error line) or compiled another
+    file than this process would load, and ``subprocess.TimeoutExpired`` after ``timeout`` s.
     """
     if _compiled is not None:
         return
     if importlib.util.find_spec('numba') is None:
         raise CompiledBackendUnavailable('numba is not installed (pip install numba)')
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    env = dict(os.environ)
-    env['PYTHONPATH'] = os.pathsep.join([root] + [p for p in env.get('PYTHONPATH', '')
-                                                  .split(os.pathsep) if p])
-    proc = subprocess.run([sys.executable, '-c', _PREPARE], env=env, stdin=subprocess.DEVNULL,
-                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                          timeout=timeout)
+    here = os.path.dirname(os.path.abspath(__file__))
+    root = os.path.dirname(os.path.dirname(here))
+    proc = subprocess.run([sys.executable, '-c', _PREPARE, root], stdin=subprocess.DEVNULL,
+                          capture_output=True, text=True, timeout=timeout)
     if proc.returncode != 0:
         lines = proc.stderr.strip().splitlines()
         raise CompiledBackendUnavailable(
             f'compiling the kernels failed (exit status {proc.returncode}): '
             + (lines[-1] if lines else 'no error output'))
+    compiled_file = (proc.stdout.strip().splitlines() or [''])[-1]
+    expected = os.path.join(here, 'jit.py')
+    if not (compiled_file and os.path.samefile(compiled_file, expected)):
+        raise CompiledBackendUnavailable(
+            f'the compiling process compiled {compiled_file!r}, not {expected!r}')
 
 
 def cache_dir_fallback() -> Optional[str]:
