@@ -90,6 +90,44 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     return _rnea(model, q, qd, qdd, gravity, f_ext, kernels)
 
 
+def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
+                   backend: str = 'auto') -> np.ndarray:
+    """Generalized gravity ``g(q)``: the torque that holds the robot still at ``q``.
+
+    ``rnea(model, q, 0, 0, gravity)``; the kernels then skip every velocity and acceleration
+    product (see :func:`~spatial_dynamics.algorithms.rnea.rnea_kernel`). ``q`` of shape (n,)
+    or (..., n); returns τ of the same shape. Arguments as for :func:`rnea`.
+    """
+    q = _vector(q, layout.of(model).n)
+    zero = np.zeros(np.shape(q), dtype=q.dtype if q.dtype.kind == 'f' else np.float64)
+    return rnea(model, q, zero, zero, gravity, backend=backend)
+
+
+def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
+                backend: str = 'auto') -> np.ndarray:
+    """Bias forces ``C(q, q̇) q̇ + g(q)`` (Pinocchio's ``nonLinearEffects``): RNEA at q̈ = 0.
+
+    ``q``, ``qd`` of shape (n,) or (..., n), broadcast; returns τ of the broadcast shape.
+    Arguments as for :func:`rnea`.
+    """
+    n = layout.of(model).n
+    q, qd = _vector(q, n), _vector(qd, n)
+    dtype = np.result_type(q, qd)
+    zero = np.zeros(np.broadcast_shapes(np.shape(q), np.shape(qd)),
+                    dtype=dtype if dtype.kind == 'f' else np.float64)
+    return rnea(model, q, qd, zero, gravity, backend=backend)
+
+
+def mass_matrix(model: Model, q, backend: str = 'auto') -> np.ndarray:
+    """Joint-space inertia ``M(q)``, shape (..., n, n) for ``q`` of shape (..., n)."""
+    q = np.asarray(_vector(q, layout.of(model).n), dtype=float)
+    n = q.shape[-1]
+    eye = np.broadcast_to(np.eye(n), q.shape[:-1] + (n, n))
+    qn = np.broadcast_to(q[..., None, :], eye.shape)
+    return np.swapaxes(rnea(model, qn, np.zeros(eye.shape), eye, (0.0, 0.0, 0.0),
+                            backend=backend), -1, -2)
+
+
 def _vector(x, n: int):
     """Return a list or tuple of ``n`` numbers as a float64 array, anything else as an array."""
     if type(x) is _ndarray:
