@@ -17,7 +17,7 @@ Two texts of the same equations:
 
 * :func:`rnea_spatial` writes them literally with 6×6 matrices (``crm``, ``crf``, ``jcalc``)
   and einsum over leading batch dimensions: the executable specification.
-* :func:`xup_kernel` and :func:`rnea_kernel` (with :func:`X_motion`, :func:`I_motion`) on 3-vector
+* :func:`xup_kernel` and :func:`rnea_kernel` (with the products of :mod:`.components`) on 3-vector
   components, with ``Xup = (E, r)`` kept as a rotation and a translation (RBDA §2.12), so no
   6×6 product is formed. **They are the one source every backend runs**: on Python floats
   (one state, no numpy call overhead), on numpy arrays of shape (N,) (a batch, one numpy
@@ -40,6 +40,7 @@ from typing import Mapping, Optional, Sequence
 import numpy as np
 
 from .arguments import as_joint_arrays, as_vector, f_ext_in_bodies
+from .components import I_motion, X_motion, XT_force
 from ..joints import jcalc
 from ..model import Model
 from ..spatial import crf, crm
@@ -52,29 +53,6 @@ RX, RY, RZ, RA, PR = 0, 1, 2, 3, 4
 def nonzero(x) -> bool:
     """Tell whether a scalar or array component is not identically zero."""
     return bool(x != 0) if not isinstance(x, np.ndarray) else bool(x.any())
-
-
-def X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1, m2, m3, m4, m5):
-    """Apply ``X = (E, r)`` to a motion vector ``[ω; v]``: ``[E ω; E (v - r × ω)]`` (RBDA 2.24)."""
-    u0 = m3 - (ry * m2 - rz * m1)
-    u1 = m4 - (rz * m0 - rx * m2)
-    u2 = m5 - (rx * m1 - ry * m0)
-    return (e00 * m0 + e01 * m1 + e02 * m2, e10 * m0 + e11 * m1 + e12 * m2,
-            e20 * m0 + e21 * m1 + e22 * m2, e00 * u0 + e01 * u1 + e02 * u2,
-            e10 * u0 + e11 * u1 + e12 * u2, e20 * u0 + e21 * u1 + e22 * u2)
-
-
-def I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, m0, m1, m2, m3, m4, m5):
-    """Apply a spatial inertia to a motion vector ``[ω; v]`` (RBDA eq. 2.63).
-
-    ``I = [[Ibar, h×], [h×ᵀ, m 1]]``, ``h = m c``: ``I [ω; v] = [Ibar ω + h × v; m v - h × ω]``.
-    """
-    return (Ixx * m0 + Ixy * m1 + Ixz * m2 + (hy * m5 - hz * m4),
-            Ixy * m0 + Iyy * m1 + Iyz * m2 + (hz * m3 - hx * m5),
-            Ixz * m0 + Iyz * m1 + Izz * m2 + (hx * m4 - hy * m3),
-            mass * m3 - (hy * m2 - hz * m1),
-            mass * m4 - (hz * m0 - hx * m2),
-            mass * m5 - (hx * m1 - hy * m0))
 
 
 def xup_kernel(rows, q, m, Xup) -> None:
@@ -249,16 +227,15 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
         if p == 0:
             continue
         e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
-        F0 = e00 * f0 + e10 * f1 + e20 * f2
-        F1 = e01 * f0 + e11 * f1 + e21 * f2
-        F2 = e02 * f0 + e12 * f1 + e22 * f2
+        g0, g1, g2, g3, g4, g5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                          rx, ry, rz, n0, n1, n2, f0, f1, f2)
         fp = frc[p]
-        fp[0] += e00 * n0 + e10 * n1 + e20 * n2 + (ry * F2 - rz * F1)
-        fp[1] += e01 * n0 + e11 * n1 + e21 * n2 + (rz * F0 - rx * F2)
-        fp[2] += e02 * n0 + e12 * n1 + e22 * n2 + (rx * F1 - ry * F0)
-        fp[3] += F0
-        fp[4] += F1
-        fp[5] += F2
+        fp[0] += g0
+        fp[1] += g1
+        fp[2] += g2
+        fp[3] += g3
+        fp[4] += g4
+        fp[5] += g5
 
 
 # --------------------------------------------------------------------------------------------

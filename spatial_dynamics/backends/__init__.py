@@ -119,13 +119,24 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
 
 
 def mass_matrix(model: Model, q, backend: str = 'auto') -> np.ndarray:
-    """Joint-space inertia ``M(q)``, shape (..., n, n) for ``q`` of shape (..., n)."""
-    q = np.asarray(_vector(q, layout.of(model).n), dtype=float)
-    n = q.shape[-1]
-    eye = np.broadcast_to(np.eye(n), q.shape[:-1] + (n, n))
-    qn = np.broadcast_to(q[..., None, :], eye.shape)
-    return np.swapaxes(rnea(model, qn, np.zeros(eye.shape), eye, (0.0, 0.0, 0.0),
-                            backend=backend), -1, -2)
+    """Joint-space inertia ``M(q)`` by the composite rigid body algorithm (RBDA table 6.2).
+
+    ``M`` is symmetric positive definite (for a model whose every joint moves some mass);
+    ``τ = M(q) q̈ + bias_torque(q, q̇)``. ``q`` of shape (n,) or (..., n), arrays, lists or
+    tuples; returns an array of shape (..., n, n), float64 or ``q``'s floating dtype.
+    """
+    kernels = _compiled if backend == 'auto' and _tried else compiled(backend)
+    lay = _layout_of(id(model)) or layout.of(model)
+    q = _vector(q, lay.n)
+    n = lay.n
+    if kernels is not None and type(q) is _ndarray and q.dtype is _F8 and q.shape == (n,):
+        H = _empty(n * n)
+        if kernels.mass_single(lay.table, q, H) or kernels.mass_single_large(lay.table, q, H):
+            return H.reshape(n, n)
+    (q,) = as_joint_arrays(model, q)
+    if kernels is not None and q.dtype == np.float64:
+        return kernels.mass_matrix(lay, q)
+    return python.mass_matrix(lay.rows, q)
 
 
 def _vector(x, n: int):

@@ -1,7 +1,7 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
 # flake8: noqa
-"""Kernels generated from :mod:`spatial_dynamics.algorithms.rnea`: do not edit.
+"""Kernels generated from :mod:`spatial_dynamics.algorithms`: do not edit.
 
 Change the source and run ``python -m spatial_dynamics.backends.codegen``.
 """
@@ -14,16 +14,17 @@ RY = 1
 RZ = 2
 RA = 3
 PR = 4
-WORK = 30
+WORK = 40
 XUP = 0
 VEL = 12
 ACC = 18
 FRC = 24
+ICS = 30
 
 
 @numba.njit(inline='always', **JIT)
 def X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1, m2, m3, m4, m5):
-    """Run the kernel of the same name in algorithms.rnea, generated from it."""
+    """Run components.X_motion of the algorithms, generated from it."""
     u0 = m3 - (ry * m2 - rz * m1)
     u1 = m4 - (rz * m0 - rx * m2)
     u2 = m5 - (rx * m1 - ry * m0)
@@ -31,14 +32,49 @@ def X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1, m2
 
 
 @numba.njit(inline='always', **JIT)
+def XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, n0, n1, n2, f0, f1, f2):
+    """Run components.XT_force of the algorithms, generated from it."""
+    F0 = e00 * f0 + e10 * f1 + e20 * f2
+    F1 = e01 * f0 + e11 * f1 + e21 * f2
+    F2 = e02 * f0 + e12 * f1 + e22 * f2
+    return (e00 * n0 + e10 * n1 + e20 * n2 + (ry * F2 - rz * F1), e01 * n0 + e11 * n1 + e21 * n2 + (rz * F0 - rx * F2), e02 * n0 + e12 * n1 + e22 * n2 + (rx * F1 - ry * F0), F0, F1, F2)
+
+
+@numba.njit(inline='always', **JIT)
 def I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, m0, m1, m2, m3, m4, m5):
-    """Run the kernel of the same name in algorithms.rnea, generated from it."""
+    """Run components.I_motion of the algorithms, generated from it."""
     return (Ixx * m0 + Ixy * m1 + Ixz * m2 + (hy * m5 - hz * m4), Ixy * m0 + Iyy * m1 + Iyz * m2 + (hz * m3 - hx * m5), Ixz * m0 + Iyz * m1 + Izz * m2 + (hx * m4 - hy * m3), mass * m3 - (hy * m2 - hz * m1), mass * m4 - (hz * m0 - hx * m2), mass * m5 - (hx * m1 - hy * m0))
 
 
 @numba.njit(inline='always', **JIT)
+def XT_I_X(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz):
+    """Run components.XT_I_X of the algorithms, generated from it."""
+    y0 = e00 * hx + e10 * hy + e20 * hz
+    y1 = e01 * hx + e11 * hy + e21 * hz
+    y2 = e02 * hx + e12 * hy + e22 * hz
+    t00 = Ixx * e00 + Ixy * e10 + Ixz * e20
+    t01 = Ixx * e01 + Ixy * e11 + Ixz * e21
+    t02 = Ixx * e02 + Ixy * e12 + Ixz * e22
+    t10 = Ixy * e00 + Iyy * e10 + Iyz * e20
+    t11 = Ixy * e01 + Iyy * e11 + Iyz * e21
+    t12 = Ixy * e02 + Iyy * e12 + Iyz * e22
+    t20 = Ixz * e00 + Iyz * e10 + Izz * e20
+    t21 = Ixz * e01 + Iyz * e11 + Izz * e21
+    t22 = Ixz * e02 + Iyz * e12 + Izz * e22
+    b00 = e00 * t00 + e10 * t10 + e20 * t20
+    b01 = e00 * t01 + e10 * t11 + e20 * t21
+    b02 = e00 * t02 + e10 * t12 + e20 * t22
+    b11 = e01 * t01 + e11 * t11 + e21 * t21
+    b12 = e01 * t02 + e11 * t12 + e21 * t22
+    b22 = e02 * t02 + e12 * t12 + e22 * t22
+    mr0, mr1, mr2 = (mass * rx, mass * ry, mass * rz)
+    d = 2.0 * (rx * y0 + ry * y1 + rz * y2) + (mr0 * rx + mr1 * ry + mr2 * rz)
+    return (mass, y0 + mr0, y1 + mr1, y2 + mr2, b00 - (2.0 * y0 * rx + mr0 * rx) + d, b01 - (y0 * ry + rx * y1 + mr0 * ry), b02 - (y0 * rz + rx * y2 + mr0 * rz), b11 - (2.0 * y1 * ry + mr1 * ry) + d, b12 - (y1 * rz + ry * y2 + mr1 * rz), b22 - (2.0 * y2 * rz + mr2 * rz) + d)
+
+
+@numba.njit(inline='always', **JIT)
 def xup_kernel(K, q, work):
-    """Run the kernel of the same name in algorithms.rnea, generated from it."""
+    """Run rnea.xup_kernel of the algorithms, generated from it."""
     for i in range(1, K.shape[0]):
         code = int(K[i, 1])
         k = int(K[i, 2])
@@ -140,7 +176,7 @@ def xup_kernel(K, q, work):
 
 @numba.njit(inline='always', **JIT)
 def rnea_kernel(K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work):
-    """Run the kernel of the same name in algorithms.rnea, generated from it."""
+    """Run rnea.rnea_kernel of the algorithms, generated from it."""
     NB = K.shape[0] - 1
     zero = 0.0 * gx
     moving = False
@@ -323,12 +359,132 @@ def rnea_kernel(K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work):
         rx = work[i * WORK + XUP + 9]
         ry = work[i * WORK + XUP + 10]
         rz = work[i * WORK + XUP + 11]
-        F0 = e00 * f0 + e10 * f1 + e20 * f2
-        F1 = e01 * f0 + e11 * f1 + e21 * f2
-        F2 = e02 * f0 + e12 * f1 + e22 * f2
-        work[p * WORK + FRC + 0] += e00 * n0 + e10 * n1 + e20 * n2 + (ry * F2 - rz * F1)
-        work[p * WORK + FRC + 1] += e01 * n0 + e11 * n1 + e21 * n2 + (rz * F0 - rx * F2)
-        work[p * WORK + FRC + 2] += e02 * n0 + e12 * n1 + e22 * n2 + (rx * F1 - ry * F0)
-        work[p * WORK + FRC + 3] += F0
-        work[p * WORK + FRC + 4] += F1
-        work[p * WORK + FRC + 5] += F2
+        g0, g1, g2, g3, g4, g5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, n0, n1, n2, f0, f1, f2)
+        work[p * WORK + FRC + 0] += g0
+        work[p * WORK + FRC + 1] += g1
+        work[p * WORK + FRC + 2] += g2
+        work[p * WORK + FRC + 3] += g3
+        work[p * WORK + FRC + 4] += g4
+        work[p * WORK + FRC + 5] += g5
+
+
+@numba.njit(inline='always', **JIT)
+def crba_kernel(K, work, H):
+    """Run crba.crba_kernel of the algorithms, generated from it."""
+    NB = K.shape[0] - 1
+    for a in range(len(H)):
+        H[a] = 0.0
+    for i in range(1, NB + 1):
+        mass = K[i, 18]
+        hx = K[i, 19]
+        hy = K[i, 20]
+        hz = K[i, 21]
+        Ixx = K[i, 22]
+        Ixy = K[i, 23]
+        Ixz = K[i, 24]
+        Iyy = K[i, 25]
+        Iyz = K[i, 26]
+        Izz = K[i, 27]
+        work[i * WORK + ICS + 0] = mass
+        work[i * WORK + ICS + 1] = hx
+        work[i * WORK + ICS + 2] = hy
+        work[i * WORK + ICS + 3] = hz
+        work[i * WORK + ICS + 4] = Ixx
+        work[i * WORK + ICS + 5] = Ixy
+        work[i * WORK + ICS + 6] = Ixz
+        work[i * WORK + ICS + 7] = Iyy
+        work[i * WORK + ICS + 8] = Iyz
+        work[i * WORK + ICS + 9] = Izz
+    for i in range(NB, 0, -1):
+        p = int(K[i, 0])
+        if p == 0:
+            continue
+        e00 = work[i * WORK + XUP + 0]
+        e01 = work[i * WORK + XUP + 1]
+        e02 = work[i * WORK + XUP + 2]
+        e10 = work[i * WORK + XUP + 3]
+        e11 = work[i * WORK + XUP + 4]
+        e12 = work[i * WORK + XUP + 5]
+        e20 = work[i * WORK + XUP + 6]
+        e21 = work[i * WORK + XUP + 7]
+        e22 = work[i * WORK + XUP + 8]
+        rx = work[i * WORK + XUP + 9]
+        ry = work[i * WORK + XUP + 10]
+        rz = work[i * WORK + XUP + 11]
+        cm = work[i * WORK + ICS + 0]
+        chx = work[i * WORK + ICS + 1]
+        chy = work[i * WORK + ICS + 2]
+        chz = work[i * WORK + ICS + 3]
+        cxx = work[i * WORK + ICS + 4]
+        cxy = work[i * WORK + ICS + 5]
+        cxz = work[i * WORK + ICS + 6]
+        cyy = work[i * WORK + ICS + 7]
+        cyz = work[i * WORK + ICS + 8]
+        czz = work[i * WORK + ICS + 9]
+        d0, d1, d2, d3, d4, d5, d6, d7, d8, d9 = XT_I_X(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz)
+        work[p * WORK + ICS + 0] += d0
+        work[p * WORK + ICS + 1] += d1
+        work[p * WORK + ICS + 2] += d2
+        work[p * WORK + ICS + 3] += d3
+        work[p * WORK + ICS + 4] += d4
+        work[p * WORK + ICS + 5] += d5
+        work[p * WORK + ICS + 6] += d6
+        work[p * WORK + ICS + 7] += d7
+        work[p * WORK + ICS + 8] += d8
+        work[p * WORK + ICS + 9] += d9
+    n = int(K[0, 2])
+    for i in range(1, NB + 1):
+        p = int(K[i, 0])
+        code = int(K[i, 1])
+        k = int(K[i, 2])
+        ax = K[i, 3]
+        ay = K[i, 4]
+        az = K[i, 5]
+        mul = K[i, 28]
+        cm = work[i * WORK + ICS + 0]
+        chx = work[i * WORK + ICS + 1]
+        chy = work[i * WORK + ICS + 2]
+        chz = work[i * WORK + ICS + 3]
+        cxx = work[i * WORK + ICS + 4]
+        cxy = work[i * WORK + ICS + 5]
+        cxz = work[i * WORK + ICS + 6]
+        cyy = work[i * WORK + ICS + 7]
+        cyz = work[i * WORK + ICS + 8]
+        czz = work[i * WORK + ICS + 9]
+        if code == PR:
+            F0, F1, F2, F3, F4, F5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz, 0.0, 0.0, 0.0, ax, ay, az)
+            Hii = ax * F3 + ay * F4 + az * F5
+        else:
+            F0, F1, F2, F3, F4, F5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz, ax, ay, az, 0.0, 0.0, 0.0)
+            Hii = ax * F0 + ay * F1 + az * F2
+        H[k * n + k] = H[k * n + k] + mul * mul * Hii
+        j = i
+        pj = p
+        while pj != 0:
+            e00 = work[j * WORK + XUP + 0]
+            e01 = work[j * WORK + XUP + 1]
+            e02 = work[j * WORK + XUP + 2]
+            e10 = work[j * WORK + XUP + 3]
+            e11 = work[j * WORK + XUP + 4]
+            e12 = work[j * WORK + XUP + 5]
+            e20 = work[j * WORK + XUP + 6]
+            e21 = work[j * WORK + XUP + 7]
+            e22 = work[j * WORK + XUP + 8]
+            rx = work[j * WORK + XUP + 9]
+            ry = work[j * WORK + XUP + 10]
+            rz = work[j * WORK + XUP + 11]
+            F0, F1, F2, F3, F4, F5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, F0, F1, F2, F3, F4, F5)
+            j = pj
+            pj = int(K[j, 0])
+            cj = int(K[j, 1])
+            kj = int(K[j, 2])
+            bx = K[j, 3]
+            by = K[j, 4]
+            bz = K[j, 5]
+            mj = K[j, 28]
+            if cj == PR:
+                Hij = mul * mj * (bx * F3 + by * F4 + bz * F5)
+            else:
+                Hij = mul * mj * (bx * F0 + by * F1 + bz * F2)
+            H[k * n + kj] = H[k * n + kj] + Hij
+            H[kj * n + k] = H[kj * n + k] + Hij

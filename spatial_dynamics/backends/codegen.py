@@ -1,8 +1,10 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Generate the numba kernels from the one source in :mod:`spatial_dynamics.algorithms.rnea`.
+"""Generate the numba kernels from the one source of each algorithm in :mod:`..algorithms`.
 
-The component kernels there are plain Python over tuples and lists. numba compiles such code
+The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
+:mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`) are plain
+Python over tuples and lists. numba compiles such code
 only slowly and with allocations, so this module rewrites their syntax tree statement for
 statement onto flat float64 arrays and writes ``_kernels_generated.py``; nothing of the
 arithmetic changes (same expressions, same order), so every backend computes the same
@@ -13,9 +15,10 @@ source (Python backends)                        generated (numba)
 ==============================================  ==============================================
 ``a, b, … = rows[i]`` (the whole row)           ``a = K[i, 0]; b = K[i, 1]; …`` (``int()`` for
                                                 the integer columns; ``_`` skipped)
-``x0, …, x5 = vel[p]`` (``Xup acc vel frc``)    ``x0 = work[p * WORK + VEL + 0]; …``
+``x0, …, x5 = vel[p]`` (``Xup acc vel frc IC``) ``x0 = work[p * WORK + VEL + 0]; …``
 ``vel[i] = (x0, …, x5)``                        ``work[i * WORK + VEL + 0] = x0; …``
 ``fp = frc[p]`` then ``fp[j] += e``             ``work[p * WORK + FRC + j] += e``
+``H[…] = …`` (any other array argument)         unchanged
 ``fe0, …, fe5 = f_body[i]``                     ``fe0 = f_body[i, 0]; …``
 ``nonzero(x)``, ``m.sin``, ``len(rows)``        ``x != 0.0``, ``np.sin``, ``K.shape[0]``
 ==============================================  ==============================================
@@ -33,15 +36,20 @@ import sys
 import textwrap
 
 from . import layout
-from ..algorithms import rnea as source
+from ..algorithms import components, crba, rnea
 
-#: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6) per body, flat.
+#: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
+#: (m, h, Ibar) (10) per body, flat.
 STORES = {'Xup': ('XUP', 0, 12), 'vel': ('VEL', 12, 6), 'acc': ('ACC', 18, 6),
-          'frc': ('FRC', 24, 6)}
-WORK = 30
+          'frc': ('FRC', 24, 6), 'IC': ('ICS', 30, 10)}
+WORK = 40
+#: The functions translated, in order (a function is generated after those it calls).
+SOURCES = (components.X_motion, components.XT_force, components.I_motion, components.XT_I_X,
+           rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
-              'rnea_kernel': 'K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work'}
+              'rnea_kernel': 'K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work',
+              'crba_kernel': 'K, work, H'}
 TARGET = os.path.join(os.path.dirname(os.path.abspath(__file__)), '_kernels_generated.py')
 
 
@@ -185,18 +193,18 @@ def _kernel_source(fn) -> str:
     func = _ToFlat().visit(func)
     ast.fix_missing_locations(func)
     func.body.insert(0, ast.Expr(ast.Constant(
-        f'Run the kernel of the same name in algorithms.rnea, generated from it.')))
+        f'Run {fn.__module__.split(".")[-1]}.{fn.__name__} of the algorithms, generated from it.')))
     return ast.unparse(func)
 
 
 def generate() -> str:
     """Return the text of ``_kernels_generated.py``."""
-    consts = {name: getattr(source, name) for name in ('RX', 'RY', 'RZ', 'RA', 'PR')}
+    consts = {name: getattr(rnea, name) for name in ('RX', 'RY', 'RZ', 'RA', 'PR')}
     header = f'''\
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
 # flake8: noqa
-"""Kernels generated from :mod:`spatial_dynamics.algorithms.rnea`: do not edit.
+"""Kernels generated from :mod:`spatial_dynamics.algorithms`: do not edit.
 
 Change the source and run ``python -m spatial_dynamics.backends.codegen``.
 """
@@ -208,8 +216,7 @@ JIT = dict(cache=True, fastmath=False, error_model='numpy')
 WORK = {WORK}
 {chr(10).join(f'{const} = {offset}' for const, offset, _ in STORES.values())}
 '''
-    body = '\n\n\n'.join(_kernel_source(fn) for fn in (source.X_motion, source.I_motion,
-                                                         source.xup_kernel, source.rnea_kernel))
+    body = '\n\n\n'.join(_kernel_source(fn) for fn in SOURCES)
     return header + '\n\n' + body + '\n'
 
 

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ..algorithms.crba import crba_kernel
 from ..algorithms.rnea import rnea_kernel, xup_kernel
 
 
@@ -60,3 +61,33 @@ def rnea(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: np.ndarr
     for k, t in enumerate(tau):
         out[:, k] = t
     return out.reshape(q.shape)
+
+
+def mass_matrix_rows(rows, q, m=math) -> list:
+    """M(q) as a list of ``n * n`` scalars (row-major) from the per-body ``rows``.
+
+    ``q`` is a sequence of ``n`` scalars of one kind (floats or (N,) arrays); ``m`` provides
+    their ``sin`` and ``cos``.
+    """
+    slots = len(rows)
+    Xup, IC = [None] * slots, [None] * slots
+    xup_kernel(rows, q, m, Xup)
+    H = [0.0] * (rows[0][2] ** 2)
+    crba_kernel(rows, Xup, IC, H)
+    return H
+
+
+def mass_matrix(rows, q: np.ndarray) -> np.ndarray:
+    """M(q) of shape (..., n, n) from a validated float array ``q`` of shape (..., n)."""
+    n = q.shape[-1]
+    if q.dtype == np.float64 and q.size == n:
+        return np.array(mass_matrix_rows(rows, q.reshape(-1).tolist())).reshape(
+            q.shape[:-1] + (n, n))
+    batch = q.shape[:-1]
+    N = int(np.prod(batch, dtype=np.intp))
+    cols = list(np.ascontiguousarray(q.reshape(N, n).T))
+    H = mass_matrix_rows(rows, cols, np)
+    out = np.empty((N, n * n), dtype=q.dtype)
+    for k, h in enumerate(H):
+        out[:, k] = h
+    return out.reshape(batch + (n, n))

@@ -1,0 +1,86 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Spatial algebra on scalar components: the products every component kernel shares.
+
+A transform ``X = (E, r)`` is kept as its rotation (9 scalars, row-major) and translation (3)
+(RBDA §2.12), a spatial inertia as ``(m, h, Ibar)`` with ``h = m c`` and ``Ibar`` the
+rotational inertia about the body origin (xx xy xz yy yz zz) (RBDA eq. 2.63), motion and force
+vectors as 6 scalars, angular first. Each product is written once here; the kernels of
+:mod:`.rnea` and :mod:`.crba` call these, and the compiled backend inlines the same text
+(:mod:`spatial_dynamics.backends.codegen`). They run on any scalar kind (floats, numpy arrays,
+mpmath numbers).
+"""
+
+from __future__ import annotations
+
+
+def X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1, m2, m3, m4, m5):
+    """Apply ``X = (E, r)`` to a motion vector ``[ω; v]``: ``[E ω; E (v - r × ω)]`` (RBDA 2.24)."""
+    u0 = m3 - (ry * m2 - rz * m1)
+    u1 = m4 - (rz * m0 - rx * m2)
+    u2 = m5 - (rx * m1 - ry * m0)
+    return (e00 * m0 + e01 * m1 + e02 * m2, e10 * m0 + e11 * m1 + e12 * m2,
+            e20 * m0 + e21 * m1 + e22 * m2, e00 * u0 + e01 * u1 + e02 * u2,
+            e10 * u0 + e11 * u1 + e12 * u2, e20 * u0 + e21 * u1 + e22 * u2)
+
+
+def XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, n0, n1, n2, f0, f1, f2):
+    """Apply ``Xᵀ`` to a force ``[n; f]`` (child to parent): ``[Eᵀ n + r × Eᵀ f; Eᵀ f]``."""
+    F0 = e00 * f0 + e10 * f1 + e20 * f2
+    F1 = e01 * f0 + e11 * f1 + e21 * f2
+    F2 = e02 * f0 + e12 * f1 + e22 * f2
+    return (e00 * n0 + e10 * n1 + e20 * n2 + (ry * F2 - rz * F1),
+            e01 * n0 + e11 * n1 + e21 * n2 + (rz * F0 - rx * F2),
+            e02 * n0 + e12 * n1 + e22 * n2 + (rx * F1 - ry * F0),
+            F0, F1, F2)
+
+
+def I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, m0, m1, m2, m3, m4, m5):
+    """Apply a spatial inertia to a motion vector ``[ω; v]`` (RBDA eq. 2.63).
+
+    ``I = [[Ibar, h×], [h×ᵀ, m 1]]``, ``h = m c``: ``I [ω; v] = [Ibar ω + h × v; m v - h × ω]``.
+    """
+    return (Ixx * m0 + Ixy * m1 + Ixz * m2 + (hy * m5 - hz * m4),
+            Ixy * m0 + Iyy * m1 + Iyz * m2 + (hz * m3 - hx * m5),
+            Ixz * m0 + Iyz * m1 + Izz * m2 + (hx * m4 - hy * m3),
+            mass * m3 - (hy * m2 - hz * m1),
+            mass * m4 - (hz * m0 - hx * m2),
+            mass * m5 - (hx * m1 - hy * m0))
+
+
+def XT_I_X(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
+           mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz):
+    """Express a spatial inertia in the parent's coordinates: ``Xᵀ I X`` (RBDA table 2.8).
+
+    With ``y = Eᵀ h``: ``m' = m``, ``h' = y + m r``,
+    ``Ibar' = Eᵀ Ibar E - r× y× - h'× r×``
+    ``      = Eᵀ Ibar E - (y rᵀ + r yᵀ + m r rᵀ) + (2 r·y + m r·r) 1``.
+    """
+    y0 = e00 * hx + e10 * hy + e20 * hz
+    y1 = e01 * hx + e11 * hy + e21 * hz
+    y2 = e02 * hx + e12 * hy + e22 * hz
+    # T = Ibar E, then B = Eᵀ T (symmetric: six entries)
+    t00 = Ixx * e00 + Ixy * e10 + Ixz * e20
+    t01 = Ixx * e01 + Ixy * e11 + Ixz * e21
+    t02 = Ixx * e02 + Ixy * e12 + Ixz * e22
+    t10 = Ixy * e00 + Iyy * e10 + Iyz * e20
+    t11 = Ixy * e01 + Iyy * e11 + Iyz * e21
+    t12 = Ixy * e02 + Iyy * e12 + Iyz * e22
+    t20 = Ixz * e00 + Iyz * e10 + Izz * e20
+    t21 = Ixz * e01 + Iyz * e11 + Izz * e21
+    t22 = Ixz * e02 + Iyz * e12 + Izz * e22
+    b00 = e00 * t00 + e10 * t10 + e20 * t20
+    b01 = e00 * t01 + e10 * t11 + e20 * t21
+    b02 = e00 * t02 + e10 * t12 + e20 * t22
+    b11 = e01 * t01 + e11 * t11 + e21 * t21
+    b12 = e01 * t02 + e11 * t12 + e21 * t22
+    b22 = e02 * t02 + e12 * t12 + e22 * t22
+    mr0, mr1, mr2 = mass * rx, mass * ry, mass * rz
+    d = 2.0 * (rx * y0 + ry * y1 + rz * y2) + (mr0 * rx + mr1 * ry + mr2 * rz)
+    return (mass, y0 + mr0, y1 + mr1, y2 + mr2,
+            b00 - (2.0 * y0 * rx + mr0 * rx) + d,
+            b01 - (y0 * ry + rx * y1 + mr0 * ry),
+            b02 - (y0 * rz + rx * y2 + mr0 * rz),
+            b11 - (2.0 * y1 * ry + mr1 * ry) + d,
+            b12 - (y1 * rz + ry * y2 + mr1 * rz),
+            b22 - (2.0 * y2 * rz + mr2 * rz) + d)
