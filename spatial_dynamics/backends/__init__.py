@@ -98,7 +98,10 @@ def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
     product (see :func:`~spatial_dynamics.algorithms.rnea.rnea_kernel`). ``q`` of shape (n,)
     or (..., n); returns τ of the same shape. Arguments as for :func:`rnea`.
     """
-    q = _vector(q, layout.of(model).n)
+    lay = _layout_of(id(model)) or layout.of(model)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == lay.zeros.shape:
+        return rnea(model, q, lay.zeros, lay.zeros, gravity, backend=backend)
+    q = _vector(q, lay.n)
     zero = np.zeros(np.shape(q), dtype=q.dtype if q.dtype.kind == 'f' else np.float64)
     return rnea(model, q, zero, zero, gravity, backend=backend)
 
@@ -110,8 +113,11 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     ``q``, ``qd`` of shape (n,) or (..., n), broadcast; returns τ of the broadcast shape.
     Arguments as for :func:`rnea`.
     """
-    n = layout.of(model).n
-    q, qd = _vector(q, n), _vector(qd, n)
+    lay = _layout_of(id(model)) or layout.of(model)
+    if (type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
+            and q.shape == qd.shape == lay.zeros.shape):
+        return rnea(model, q, qd, lay.zeros, gravity, backend=backend)
+    q, qd = _vector(q, lay.n), _vector(qd, lay.n)
     dtype = np.result_type(q, qd)
     zero = np.zeros(np.broadcast_shapes(np.shape(q), np.shape(qd)),
                     dtype=dtype if dtype.kind == 'f' else np.float64)

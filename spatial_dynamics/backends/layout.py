@@ -46,6 +46,7 @@ class Layout:
     n: int
     rows: tuple
     table: np.ndarray     # writable: numba types a read-only array on its slow path
+    zeros: np.ndarray     # (n,) read-only zeros: q̇ or q̈ of the terms at rest
 
 
 def joint_code(jtype: int, axis: np.ndarray) -> int:
@@ -74,7 +75,9 @@ def derive(model: Model) -> Layout:
                     + tuple(float(x) for x in (*model.axis[i], *E.ravel(), *r, Ii[3, 3], *h,
                                                *Ibar, model.qmul[i], model.qoff[i])))
     table = np.array(rows, dtype=np.float64)
-    return Layout(model.nq, tuple(rows), table)
+    zeros = np.zeros(model.nq)
+    zeros.flags.writeable = False
+    return Layout(model.nq, tuple(rows), table, zeros)
 
 
 #: id(model) -> Layout, each removed when its model is collected.
