@@ -34,6 +34,10 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
+from spatial_dynamics.ros.control import (
+    check_gains, check_gains_without_model, check_mode, continuous_joints, CONTROL_MODES,
+    ControlError, FEEDBACK_MODES, FEEDBACK_REASONS, GAIN_UNITS, Gains, MAX_KD, MAX_KP,
+    MAX_MEASURED_POSITION, MAX_MEASURED_VELOCITY, MEASURED_REASONS, OUTPUTS)
 from spatial_dynamics.ros.inputs import REASONS
 from spatial_dynamics.urdf import read_urdf_file
 
@@ -46,6 +50,7 @@ DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 DEFAULT_INPUT_TIMEOUT = 0.5         # s
 DEFAULT_FRICTION_THRESHOLD = 0.01   # rad/s or m/s
 DEFAULT_WRENCH_TIMEOUT = 0.5        # s
+DEFAULT_MEASURED_TIMEOUT = 0.5      # s
 
 #: ``backend: auto`` runs a model on the compiled kernels when one plain-float RNEA call
 #: (backend 'numpy', the median of :data:`TIMED_CALLS` on a moving state, see
@@ -71,7 +76,7 @@ MAX_LOCKED_POSITION = 1e4           # rad or m
 URDF_WARNINGS_LISTED = 5            # URDF warnings listed one by one in /diagnostics
 
 # Rejection reasons the node adds to those of the input mapping.
-NODE_REASONS = ('no_model', 'compute_error', 'non_finite_output')
+NODE_REASONS = ('no_model', 'compute_error', 'non_finite_output') + FEEDBACK_REASONS
 # Rejection reasons of external_wrenches messages.
 WRENCH_REASONS = ('no_model', 'unknown_link', 'non_finite')
 
@@ -138,6 +143,36 @@ PARAMETERS = (
         'Seconds without a good input after which diagnostics report ERROR (stale). The '
         'node publishes only in answer to input, so stale input means no output, never '
         'zeros.'), range=(1e-3, 3600.0)),
+    Spec('output', 'full', (
+        'What effort_commands and feedforward_efforts carry besides the feedback term: '
+        '"full" (tau = ID + armature + friction - external: simulators, drives that add '
+        'nothing), "without_gravity" (tau - g(q): drives that compensate gravity '
+        'themselves, e.g. UR direct torque, Franka, KUKA FRI), "gravity_only" (g(q): hold '
+        'an arm), "none" (no model term, only the feedback term: the PD-alone baseline; '
+        'refused with control_mode feedforward, where it would publish zeros). Live.'),
+        choices=OUTPUTS),
+    Spec('control_mode', 'feedforward', (
+        '"feedforward": answer each desired message with the model part at the desired '
+        'state (joint_states unused). "pd_feedforward": answer each measured joint_states '
+        'message with model(q_d, qd_d, qdd_d) + kp (q_d - q) + kd (qd_d - qd), the desired '
+        'state held from the last desired message. "computed_torque": answer each '
+        'measured message with model(q, qd, qdd_d + kp e + kd ed), the model part at the '
+        'measured state. Position errors of continuous joints wrap to (-pi, pi]. Live.'),
+        choices=CONTROL_MODES),
+    Spec('kp', [0.0], (
+        'Proportional gains, one value for all joints or one per model joint (order of '
+        f'the joints parameter, or the URDF order when it is unset), 0 .. {MAX_KP:g}: '
+        f'{GAIN_UNITS["kp"]}. Live.')),
+    Spec('kd', [0.0], (
+        'Derivative gains, one value for all joints or one per model joint (order of '
+        f'the joints parameter, or the URDF order when it is unset), 0 .. {MAX_KD:g}: '
+        f'{GAIN_UNITS["kd"]}. Live.')),
+    Spec('measured_timeout', DEFAULT_MEASURED_TIMEOUT, (
+        'Seconds (since receipt) after which the measured state on joint_states is stale: '
+        'in the feedback modes diagnostics then report ERROR and nothing is published '
+        '(answers come only in reply to a measured message), never zeros. Measured '
+        f'values beyond ±{MAX_MEASURED_POSITION:g} rad (m) or ±{MAX_MEASURED_VELOCITY:g} '
+        'rad/s (m/s) are refused.'), range=(1e-3, 3600.0)),
     Spec('payload.link', '', (
         "Link carrying a rigid payload (tool, grasped object); '' = no payload. Live: "
         'applied from the next message. A new robot_description lacking this link is '
@@ -560,6 +595,7 @@ class Output:
     preferred: str = 'numpy'
     setting: str = 'auto'
     plain_call_s: float = 0.0
+    gains: Optional[Gains] = None
 
     @property
     def waits_for_compiled(self) -> bool:
@@ -584,6 +620,9 @@ class Config:
     acceleration_source: str
     input_timeout: float
     wrench_timeout: float
+    control_mode: str = 'feedforward'
+    output_choice: str = 'full'
+    measured_timeout: float = DEFAULT_MEASURED_TIMEOUT
 
 
 def _base_model(params: dict, current: Optional[Output], urdf: str, source: str,
@@ -630,13 +669,15 @@ def build_output(params: dict, current: Optional[Output], urdf: Optional[str] = 
     threshold = check_positive('friction_velocity_threshold',
                                params['friction_velocity_threshold'], 'rad/s or m/s')
     setting = params.get('backend') or 'auto'
+    gains = model_gains(base, params)
     output = Output(
         urdf=urdf, source=source, base=base, model=payload.apply(base),
         joints=tuple(base.joint_names), joints_param=joints, locked=tuple(locked.items()),
         payload=payload, armature=check_armature(base, params['armature']),
         friction_threshold=threshold if friction_model == 'urdf' else None,
         clamp=bool(params['clamp_to_effort_limits']), setting=setting,
-        preferred=preferred_backend(setting, plain_call_s), plain_call_s=plain_call_s)
+        preferred=preferred_backend(setting, plain_call_s), plain_call_s=plain_call_s,
+        gains=gains)
     if output.waits_for_compiled and kernels is not None and kernels.ready:
         return output.upgraded()
     return output
@@ -651,6 +692,30 @@ def _check_without_model(params: dict) -> None:
     check_positive('friction_velocity_threshold', params['friction_velocity_threshold'],
                    'rad/s or m/s')
     check_choice('backend', params.get('backend') or 'auto', BACKEND_SETTINGS)
+    try:
+        for name in ('kp', 'kd'):
+            check_gains_without_model(name, params.get(name))
+    except ControlError as err:
+        raise ConfigError(str(err)) from None
+
+
+def model_gains(model: 'sd.Model', params: dict) -> Gains:
+    """``kp``, ``kd`` of ``params`` for ``model`` (:func:`~.control.check_gains`)."""
+    try:
+        return Gains(check_gains(model, 'kp', params.get('kp')),
+                     check_gains(model, 'kd', params.get('kd')), continuous_joints(model))
+    except ControlError as err:
+        raise ConfigError(f'{err} (order of the joints parameter, or the URDF order when it '
+                          'is unset)') from None
+
+
+def check_control(params: dict) -> Tuple[str, str]:
+    """``(control_mode, output)`` of ``params`` (:func:`~.control.check_mode`)."""
+    try:
+        return check_mode(params.get('control_mode', 'feedforward'),
+                          params.get('output', 'full'))
+    except ControlError as err:
+        raise ConfigError(str(err)) from None
 
 
 def prepare(previous: dict, changes: dict, current: Optional[Output],
@@ -668,13 +733,18 @@ def prepare(previous: dict, changes: dict, current: Optional[Output],
         output = build_output(params, current, urdf, source, kernels)
     else:
         _check_without_model(params)
+    control_mode, output_choice = check_control(params)
     return Config(
         params=params, output=output, new_description=urdf is not None,
         kept_file=kept_file, gravity=check_gravity(params['gravity']),
         acceleration_source=check_acceleration_source(params['acceleration_source']),
         input_timeout=check_input_timeout(params['input_timeout']),
         wrench_timeout=check_positive('external_wrench_timeout',
-                                      params['external_wrench_timeout']))
+                                      params['external_wrench_timeout']),
+        control_mode=control_mode, output_choice=output_choice,
+        measured_timeout=check_positive('measured_timeout',
+                                        params.get('measured_timeout',
+                                                   DEFAULT_MEASURED_TIMEOUT)))
 
 
 def reparse_needed(requested: dict, params: dict) -> bool:
@@ -783,6 +853,7 @@ class Window:
         self.delay_ns = 0
         self.delay_count = 0
         self.delay_max_ns = 0
+        self.measured = 0          # good measured states (joint_states)
 
 
 class Totals:
@@ -791,6 +862,10 @@ class Totals:
     def __init__(self) -> None:
         self.answered = 0
         self.last_input_ns: Optional[int] = None     # monotonic ns of the last answered input
+        self.last_desired_ns: Optional[int] = None   # receipt of the last good desired state
+        self.last_measured_ns: Optional[int] = None  # receipt of the last good measured state
+        self.measured_received = 0
+        self.measured_rejected: Counter = Counter({reason: 0 for reason in MEASURED_REASONS})
         self.rejected: Counter = Counter({reason: 0 for reason in REASONS + NODE_REASONS})
         self.saturated = 0                  # answers with at least one clamped joint
         self.saturated_joints: Counter = Counter()
@@ -857,21 +932,54 @@ class Settings:
     gravity: Tuple[float, float, float] = DEFAULT_GRAVITY
     acceleration_source: str = 'effort'
     input_timeout: float = DEFAULT_INPUT_TIMEOUT
+    control_mode: str = 'feedforward'
+    output: str = 'full'
+    measured_timeout: float = DEFAULT_MEASURED_TIMEOUT
 
 
 def _us(ns: float) -> str:
     return f'{ns * 1e-3:.1f}'
 
 
+def _age(last_ns: Optional[int], now_ns: int) -> Optional[float]:
+    return None if last_ns is None else (now_ns - last_ns) * 1e-9
+
+
+def _feedback_state(settings: Settings, totals: Totals, now_ns: int
+                    ) -> Optional[Tuple[str, str]]:
+    """Level and message when a feedback mode cannot answer (stale or missing state)."""
+    measured, desired = (_age(totals.last_measured_ns, now_ns),
+                         _age(totals.last_desired_ns, now_ns))
+    mode = settings.control_mode
+    if measured is None:
+        return 'ERROR', f'no measured state on joint_states yet ({mode}); not publishing'
+    if measured > settings.measured_timeout:
+        return 'ERROR', (f'measured state stale: no good joint_states for {measured:.2f} s '
+                         f'(measured_timeout {settings.measured_timeout} s, {mode}); '
+                         'not publishing')
+    if desired is None:
+        return 'ERROR', f'no desired state yet ({mode}); not publishing'
+    if desired > settings.input_timeout:
+        return 'ERROR', (f'desired state stale: no good desired input for {desired:.2f} s '
+                         f'(input_timeout {settings.input_timeout} s, {mode}); '
+                         'not publishing')
+    return None
+
+
 def _input_state(output: Optional[Output], window: Window, settings: Settings, period: float,
-                 age: Optional[float]) -> Tuple[str, str]:
+                 age: Optional[float], totals: Optional[Totals] = None, now_ns: int = 0
+                 ) -> Tuple[str, str]:
     """Level and message of the ``feedforward`` status."""
     rejected_now = window.received - window.answered
     if output is None:
         return 'ERROR', 'no robot model'
-    if age is None:
+    if settings.control_mode in FEEDBACK_MODES and totals is not None:
+        stale = _feedback_state(settings, totals, now_ns)
+        if stale is not None:
+            return stale
+    elif age is None:
         return 'WARN', 'no input received yet'
-    if age > settings.input_timeout:
+    elif age > settings.input_timeout:
         return 'ERROR', (f'input stale: no good input for {age:.2f} s '
                          f'(input_timeout {settings.input_timeout} s); not publishing')
     if rejected_now:
@@ -896,7 +1004,11 @@ def _terms_values(output: Output) -> List[Tuple[str, str]]:
             ('armature', 'none' if output.armature is None else str(output.armature.tolist())),
             ('friction model', 'none' if output.friction_threshold is None
              else f'urdf (threshold {output.friction_threshold:g})'),
-            ('clamp to effort limits', str(output.clamp))]
+            ('clamp to effort limits', str(output.clamp))] + (
+        [] if output.gains is None else
+        [('kp', str(output.gains.kp.tolist())), ('kd', str(output.gains.kd.tolist())),
+         ('continuous joints', ', '.join(name for name, c in zip(
+             output.joints, output.gains.continuous) if c))])
 
 
 def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
@@ -909,7 +1021,8 @@ def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
     period = max((now_ns - window.start_ns) * 1e-9, 1e-9)
     last = totals.last_input_ns
     age = None if last is None else (now_ns - last) * 1e-9
-    level, message = _input_state(output, window, settings, period, age)
+    level, message = _input_state(output, window, settings, period, age, totals, now_ns)
+    measured_age = _age(totals.last_measured_ns, now_ns)
     values = _window_values(window, period) + [
         ('last input age [s]', '' if age is None else f'{age:.3f}'),
         ('input timeout [s]', str(settings.input_timeout)),
@@ -917,6 +1030,17 @@ def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
         ('answered', str(totals.answered)),
         ('rejected', str(sum(totals.rejected.values())))]
     values += [(f'rejected {reason}', str(count)) for reason, count in totals.rejected.items()]
+    values += [
+        ('control mode', settings.control_mode), ('output', settings.output),
+        ('measured state rate [Hz]', f'{window.measured / period:.1f}'),
+        ('measured state age [s]', '' if measured_age is None else f'{measured_age:.3f}'),
+        ('measured timeout [s]', str(settings.measured_timeout)),
+        ('measured state stale', str(measured_age is None
+                                     or measured_age > settings.measured_timeout)),
+        ('measured states received', str(totals.measured_received)),
+        ('measured states rejected', str(sum(totals.measured_rejected.values())))]
+    values += [(f'measured states rejected {reason}', str(count))
+               for reason, count in totals.measured_rejected.items()]
     values += [('gravity [m/s^2]', str(list(settings.gravity))),
                ('acceleration source', settings.acceleration_source)]
     if output is not None:

@@ -1,16 +1,25 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""ROS 2 node ``inverse_dynamics``: desired joint states in, feed-forward efforts out.
+"""ROS 2 node ``inverse_dynamics``: desired (and measured) joint states in, efforts out.
 
 The only module that imports rclpy: a thin shell that declares the parameters of
 :mod:`spatial_dynamics.ros.config`, validates a change there (the on-set callback) and swaps
 the result in (the post-set callback), maps messages to ``(q, qd, qdd)`` by joint name
-(:mod:`spatial_dynamics.ros.inputs`), calls :func:`~spatial_dynamics.rnea` and publishes
+(:mod:`spatial_dynamics.ros.inputs`), has :func:`spatial_dynamics.ros.control.answer` compute
+the answer and publishes it. With the defaults (``control_mode: feedforward``,
+``output: full``) that is
 
     tau = ID(model, q, qd, qdd, f_ext) + armature·qdd + friction(qd)   (RBDA §5.3)
 
-clamped to the URDF effort limits when asked (N or N·m per joint). Every extra term is off by
-default (:mod:`spatial_dynamics.terms`).
+of each desired state, clamped to the URDF effort limits when asked (N or N·m per joint).
+Every extra term is off by default (:mod:`spatial_dynamics.terms`). ``output`` selects the
+model part (``full``, ``without_gravity`` = tau − g(q), ``gravity_only`` = g(q), ``none``);
+``control_mode`` ``pd_feedforward`` adds kp (q_d − q) + kd (qd_d − qd) to the model part at
+the desired state, ``computed_torque`` evaluates the model part at the measured state with
+qdd_d + kp e + kd ė (:mod:`spatial_dynamics.ros.control`). In ``feedforward`` each desired
+message is answered; in the feedback modes each measured ``joint_states`` message is
+answered, with the last desired state held (zero-order hold), so a controller updates at its
+sensor rate and a simulator in lockstep gets one command per measured state.
 
 Topics (relative, so they can be remapped):
 
@@ -18,17 +27,32 @@ Topics (relative, so they can be remapped):
 ``desired_joint_states``    sensor_msgs/JointState, in            best effort, keep last 1
 ``desired_trajectory``      trajectory_msgs/JointTrajectory, in   best effort, keep last 1
 ``external_wrenches``       geometry_msgs/WrenchStamped, in       best effort, keep last 10
+``joint_states``            sensor_msgs/JointState, in: the       best effort, keep last 1
+                            MEASURED state (position; velocity
+                            in the feedback modes; effort unused)
 ``robot_description``       std_msgs/String, in (subscribed only  reliable, transient local, 1
                             while no description parameter is
                             set; parsed off the answering path)
 ``feedforward_efforts``     sensor_msgs/JointState, out           reliable
 ``effort_commands``         std_msgs/Float64MultiArray, out       reliable
+``feedforward_terms``       sensor_msgs/JointState, out: name     reliable; published only
+                            ``<joint>/<term>``, effort = value    while subscribed
 ``/diagnostics``            diagnostic_msgs/DiagnosticArray, out  ~1 Hz
 ==========================  ====================================  ============================
 
 Parameters are listed in ``config/inverse_dynamics.yaml``. Every message is answered or
 rejected on its own: a rejected message (reason counted in diagnostics) produces no output, and
-nothing is published without fresh input, so a stale input means no output (never zeros).
+nothing is published without fresh input, so a stale input means no output (never zeros). In
+the feedback modes a measured state is answered only while the held desired state is younger
+than ``input_timeout``; with no measured state for ``measured_timeout`` nothing is published
+(diagnostics ERROR naming the measured state). ``feedforward_efforts`` carries the desired
+``q_d``, ``qd_d`` in position/velocity (what an MIT-mode drive takes with the torque).
+
+``joint_states`` is subscribed best effort, keep last 1, like the desired inputs: that
+matches drivers' reliable publishers and sensor-data best-effort ones alike (a reliable
+subscription never connects to a best-effort publisher), and keep last 1 answers the newest
+state. A simulator in lockstep may override it to reliable
+(``qos_overrides./joint_states.subscription.reliability``).
 
 The robot description comes from, in this order of precedence: the ``robot_description``
 parameter (URDF XML), the ``robot_description_file`` parameter (a path: a regular UTF-8 file of
@@ -52,7 +76,7 @@ import signal
 import sys
 import threading
 import time
-from typing import Callable, Optional, Sequence
+from typing import Callable, NamedTuple, Optional, Sequence, Tuple
 import warnings
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -72,10 +96,13 @@ from sensor_msgs.msg import JointState
 import spatial_dynamics as sd
 from spatial_dynamics.ros.config import (
     backend_text, build_output, CompiledKernels, Config, ConfigError, DEFAULT_GRAVITY,
-    DEFAULT_INPUT_TIMEOUT, DEFAULT_WRENCH_TIMEOUT, description_source, DescriptionParser,
+    DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT, DEFAULT_WRENCH_TIMEOUT,
+    description_source, DescriptionParser,
     feedforward_status, model_status, NODE_NAME, Output, PARAMETER_NAMES, PARAMETERS,
     ParseRequest, PAYLOAD_PARAMETERS, prepare, reparse_needed, Settings, SLOW_PARAMETERS,
     Totals, Window)
+from spatial_dynamics.ros.control import (answer, Dynamics, FEEDBACK_MODES, measured_arrays,
+                                          terms_names)
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
 from std_msgs.msg import Float64MultiArray, String
 from trajectory_msgs.msg import JointTrajectory
@@ -144,6 +171,14 @@ def descriptor(spec) -> ParameterDescriptor:
     return result
 
 
+class Held(NamedTuple):
+    """A good state kept between messages: model joints, arrays, receipt (monotonic ns)."""
+
+    joints: Tuple[str, ...]
+    state: tuple
+    receipt_ns: int
+
+
 class InverseDynamicsNode(Node):
     """Publishes tau = ID(q, qd, qdd) for every good desired state it receives."""
 
@@ -156,6 +191,11 @@ class InverseDynamicsNode(Node):
         self.gravity = DEFAULT_GRAVITY
         self.acceleration_source = 'effort'
         self.input_timeout = DEFAULT_INPUT_TIMEOUT
+        self.control_mode = 'feedforward'
+        self.output_choice = 'full'
+        self.measured_timeout = DEFAULT_MEASURED_TIMEOUT
+        self.desired: Optional[Held] = None    # the last good desired state (zero-order hold)
+        self.measured: Optional[Held] = None   # the last good measured state
         self.wrench_timeout_ns = int(DEFAULT_WRENCH_TIMEOUT * 1e9)
         self.params: dict = {}   # the last accepted value of every parameter of PARAMETERS
         self.totals = Totals()
@@ -184,11 +224,14 @@ class InverseDynamicsNode(Node):
         self.diagnostics_pub = self.create_publisher(
             DiagnosticArray, '/diagnostics', 10,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
+        self.terms_pub = advertise(self, JointState, 'feedforward_terms')
         self._commands = Float64MultiArray()
         self._efforts = JointState()
+        self._terms = JointState()
         self._inputs = [
             subscribe(self, JointState, 'desired_joint_states', self._on_joint_state),
             subscribe(self, JointTrajectory, 'desired_trajectory', self._on_trajectory),
+            subscribe(self, JointState, 'joint_states', self._on_measured),
             subscribe(self, WrenchStamped, 'external_wrenches', self._on_wrench, WRENCH_DEPTH)]
         self.create_timer(1.0, self._publish_diagnostics)
 
@@ -290,6 +333,12 @@ class InverseDynamicsNode(Node):
         self.acceleration_source = config.acceleration_source
         self.input_timeout = config.input_timeout
         self.wrench_timeout_ns = int(config.wrench_timeout * 1e9)
+        if config.control_mode != self.control_mode or config.output_choice != self.output_choice:
+            self.get_logger().info(f'control_mode {config.control_mode}, output '
+                                   f'{config.output_choice}')
+        self.control_mode = config.control_mode
+        self.output_choice = config.output_choice
+        self.measured_timeout = config.measured_timeout
         if config.new_description:
             self._description_generation += 1   # a topic description still parsing is stale
         self._set_output(config.output, bool(set(PAYLOAD_PARAMETERS) & changes.keys()))
@@ -412,57 +461,95 @@ class InverseDynamicsNode(Node):
     # -- hot path ---------------------------------------------------------------------------
 
     def _on_joint_state(self, msg: JointState) -> None:
-        self._answer(msg, 'desired_joint_states', joint_state_arrays,
-                     (msg.name, msg.position, msg.velocity,
-                      msg.effort if self.acceleration_source == 'effort' else None))
+        self._on_desired(msg, 'desired_joint_states', joint_state_arrays,
+                         (msg.name, msg.position, msg.velocity,
+                          msg.effort if self.acceleration_source == 'effort' else None))
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
-        self._answer(msg, 'desired_trajectory', trajectory_arrays,
-                     (msg.joint_names, msg.points))
+        self._on_desired(msg, 'desired_trajectory', trajectory_arrays,
+                         (msg.joint_names, msg.points))
 
-    def _answer(self, msg, topic: str, to_arrays, fields: tuple) -> None:
-        """Validate, compute and publish both outputs for one message, or reject it whole."""
+    def _on_desired(self, msg, topic: str, to_arrays, fields: tuple) -> None:
+        """Hold a good desired state; in feedforward mode, answer it (or reject it whole)."""
         t0 = time.monotonic_ns()
-        window = self.window
-        window.received += 1
+        answers = self.control_mode not in FEEDBACK_MODES
+        if answers:
+            self.window.received += 1
         output = self.output
         if output is None:
             self._reject(topic, 'no_model', 'no robot model loaded yet')
             return
         try:
-            q, qd, qdd = to_arrays(output.model.joint_names, *fields)
+            desired = to_arrays(output.model.joint_names, *fields)
         except InputError as err:
             self._reject(topic, err.reason, str(err))
             return
-        tau = self._tau(output, topic, q, qd, qdd, t0)
-        if tau is None:
-            return
-        t1 = time.monotonic_ns()
-        self._publish(msg.header, output, q, qd, tau)
-        self._count_answer(window, msg.header.stamp, t0, t1)
+        self.desired = Held(output.joints, desired, t0)
+        self.totals.last_desired_ns = t0
+        if answers:
+            self._respond(msg.header, output, topic, desired, None, t0)
 
-    def _tau(self, output: Output, topic: str, q: np.ndarray, qd: np.ndarray,
-             qdd: np.ndarray, now_ns: int) -> Optional[np.ndarray]:
-        """Return the torques of one state on ``output``'s backend, or None (rejected)."""
+    def _on_measured(self, msg: JointState) -> None:
+        """Keep a good measured state; in a feedback mode, answer it with the held desired."""
+        t0 = time.monotonic_ns()
+        feedback = self.control_mode in FEEDBACK_MODES
+        totals = self.totals
+        totals.measured_received += 1
+        if feedback:
+            self.window.received += 1
+        output = self.output
+        if output is None:
+            self._reject_measured('no_model', 'no robot model loaded yet')
+            return
         try:
-            f_ext = self._active_wrenches(output, now_ns) if self.wrenches else None
-            tau = sd.rnea(output.model, q, qd, qdd, gravity=self.gravity, f_ext=f_ext,
-                          backend=output.backend)
-            if output.armature is not None:
-                tau += output.armature * qdd
-            if output.friction_threshold is not None:
-                tau += sd.friction_torque(output.model, qd, output.friction_threshold)
+            measured = measured_arrays(output.joints, msg.name, msg.position, msg.velocity,
+                                       feedback)
+        except InputError as err:
+            self._reject_measured(err.reason, str(err))
+            return
+        self.measured = Held(output.joints, measured, t0)
+        totals.last_measured_ns = t0
+        self.window.measured += 1
+        if not feedback:
+            return
+        held = self.desired
+        if held is None or held.joints != output.joints:
+            self._reject('joint_states', 'no_desired',
+                         f'{self.control_mode}: no desired state for the model\'s joints yet')
+            return
+        age = (t0 - held.receipt_ns) * 1e-9
+        if age > self.input_timeout:
+            self._reject('joint_states', 'desired_stale',
+                         f'{self.control_mode}: the held desired state is {age:.3f} s old '
+                         f'(input_timeout {self.input_timeout} s); not publishing')
+            return
+        self._respond(msg.header, output, 'joint_states', held.state, measured, t0)
+
+    def _respond(self, header, output: Output, topic: str, desired: tuple,
+                 measured: Optional[tuple], t0: int) -> None:
+        """Compute and publish one answer (and its terms while subscribed), or reject it."""
+        with_terms = self.terms_pub.get_subscription_count() > 0
+        try:
+            f_ext = self._active_wrenches(output, t0) if self.wrenches else None
+            dynamics = Dynamics(output.model, self.gravity, output.backend, output.armature,
+                                output.friction_threshold, f_ext)
+            tau, terms = answer(dynamics, self.control_mode, self.output_choice, desired,
+                                measured, output.gains, with_terms)
         except Exception as err:  # never die on one message
             self._reject(topic, 'compute_error', f'rnea failed: {err!r}')
-            return None
+            return
         if not np.isfinite(tau).all():
             self._reject(topic, 'non_finite_output', 'torque is not finite (extreme input?)')
-            return None
+            return
         if output.clamp:
             tau, saturated = sd.clamp_to_effort_limits(output.model, tau)
             if saturated.any():
                 self._count_saturated(output, tau, saturated)
-        return tau
+        t1 = time.monotonic_ns()
+        self._publish(header, output, desired[0], desired[1], tau)
+        if terms is not None:
+            self._publish_terms(header, output, terms)
+        self._count_answer(self.window, header.stamp, t0, t1)
 
     def _publish(self, header, output: Output, q: np.ndarray, qd: np.ndarray,
                  tau: np.ndarray) -> None:
@@ -478,6 +565,18 @@ class InverseDynamicsNode(Node):
         efforts.velocity = array('d', qd.tobytes())
         efforts.effort = commands.data
         self.efforts_pub.publish(efforts)
+
+    def _publish_terms(self, header, output: Output, terms: dict) -> None:
+        """Publish ``feedforward_terms``: ``<joint>/<term>``, effort = the term's value.
+
+        The terms sum to the answer before clamping.
+        """
+        msg = self._terms
+        msg.header = header
+        msg.name = terms_names(output.joints, tuple(terms))
+        values = np.concatenate(list(terms.values())) if terms else np.zeros(0)
+        msg.effort = array('d', values.tobytes())
+        self.terms_pub.publish(msg)
 
     def _count_answer(self, window: Window, stamp, t0: int, t1: int) -> None:
         totals = self.totals
@@ -541,6 +640,11 @@ class InverseDynamicsNode(Node):
         self.get_logger().warn(f'external_wrenches: message rejected ({reason}): {text}',
                                throttle_duration_sec=1.0)
 
+    def _reject_measured(self, reason: str, text: str) -> None:
+        self.totals.measured_rejected[reason] += 1
+        self.get_logger().warn(f'joint_states: measured state rejected ({reason}): {text}',
+                               throttle_duration_sec=1.0)
+
     def _reject(self, topic: str, reason: str, text: str) -> None:
         self.totals.rejected[reason] += 1
         self.get_logger().warn(f'{topic}: message rejected ({reason}): {text}',
@@ -556,7 +660,8 @@ class InverseDynamicsNode(Node):
         if output is None:
             self._warn_waiting()
         backend = '' if output is None else backend_text(output, self.kernels)
-        settings = Settings(self.gravity, self.acceleration_source, self.input_timeout)
+        settings = Settings(self.gravity, self.acceleration_source, self.input_timeout,
+                            self.control_mode, self.output_choice, self.measured_timeout)
         statuses = [
             ('robot model', model_status(output, self.totals, self.params['strict_urdf'],
                                          backend)),

@@ -1,0 +1,338 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""What one answer of the node is, without ROS: output choice, control law, term split.
+
+Pure Python + numpy + the library (no rclpy import), tested in ``test/test_ros_control.py``.
+
+**Model part** (parameter ``output``), joint-space, SI units, order of ``model.joint_names``:
+
+=====================  =========================================  ==========================
+``output``             model part                                 for
+=====================  =========================================  ==========================
+``full``               g + C q̇ + M q̈ + armature·q̈ + friction(q̇)   simulators, drives that add
+                       − Σ Jᵀ f_ext   (= ID + joint-space terms)   nothing (ros2_control
+                                                                  effort interfaces)
+``without_gravity``    full − g(q)                                drives that compensate
+                                                                  gravity themselves (UR
+                                                                  direct torque, Franka, KUKA)
+``gravity_only``       g(q)                                       holding an arm still
+``none``               0                                          the "PD alone" baseline
+=====================  =========================================  ==========================
+
+**Control law** (parameter ``control_mode``), with e = q_d − q (wrapped to (−π, π] on
+continuous joints), ė = q̇_d − q̇ and u = Kp e + Kd ė:
+
+===================  ===================================================  ===================
+``control_mode``     τ                                                    model part at
+===================  ===================================================  ===================
+``feedforward``      model(q_d, q̇_d, q̈_d)                                 desired state
+``pd_feedforward``   model(q_d, q̇_d, q̈_d) + u            (Kp N·m/rad,      desired state
+                                                         Kd N·m·s/rad)
+``computed_torque``  model(q, q̇, q̈_d) + (M(q) + armature) u               measured state
+                     (= ID(q, q̇, q̈_d + u) + terms, for ``full``;
+                     Kp 1/s², Kd 1/s)
+===================  ===================================================  ===================
+
+The **terms** (:data:`TERMS`) are computed with RNEA calls only, never by multiplying M:
+``gravity`` = RNEA(q, 0, 0), ``velocity_product`` = RNEA(q, q̇, 0) − gravity (C q̇),
+``inertial`` = RNEA(q, q̇, q̈) − RNEA(q, q̇, 0) (M q̈), ``external`` = RNEA with the wrenches −
+RNEA without (−Σ Jᵀ f_ext), ``armature`` = armature·q̈, ``friction`` = friction(q̇) and
+``feedback`` = u (pd_feedforward) or RNEA(q, 0, u, gravity 0) + armature·u (computed_torque).
+Only the terms of the answer are listed; they sum to its τ (to rounding).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Dict, Mapping, Optional, Sequence, Tuple
+
+import numpy as np
+import spatial_dynamics as sd
+from spatial_dynamics.joints import REVOLUTE
+from spatial_dynamics.ros.inputs import InputError, joint_state_arrays
+
+#: Values of the ``output`` parameter: which model part is published.
+OUTPUTS = ('full', 'without_gravity', 'gravity_only', 'none')
+#: Values of the ``control_mode`` parameter.
+CONTROL_MODES = ('feedforward', 'pd_feedforward', 'computed_torque')
+#: The modes that close a loop on the measured state (``joint_states``).
+FEEDBACK_MODES = ('pd_feedforward', 'computed_torque')
+#: Every term of the ``feedforward_terms`` topic, in the order they are listed and summed.
+TERMS = ('gravity', 'velocity_product', 'inertial', 'armature', 'friction', 'external',
+         'feedback')
+#: The model terms each ``output`` publishes.
+OUTPUT_TERMS = {
+    'full': TERMS[:6],
+    'without_gravity': TERMS[1:6],
+    'gravity_only': ('gravity',),
+    'none': (),
+}
+
+# Bounds beyond which a gain or a measured value cannot be meant: refused, the bound named.
+#: Kp: 1e6 N·m/rad is stiffer than any joint servo; 1e6 1/s² is a natural frequency of
+#: 1000 rad/s (160 Hz), beyond the bandwidth of any loop this node can close.
+MAX_KP = 1e6
+#: Kd: 1e4 N·m·s/rad, or 1e4 1/s (2ζω for ζ = 1 at ω = 5000 rad/s).
+MAX_KD = 1e4
+#: |q| of a measured joint, rad or m: 1e5 rad is 16 000 turns of a continuous joint.
+MAX_MEASURED_POSITION = 1e5
+#: |q̇| of a measured joint, rad/s or m/s: 1e4 rad/s is 95 000 rpm.
+MAX_MEASURED_VELOCITY = 1e4
+
+GAIN_UNITS = {'kp': 'N·m/rad (N/m) in pd_feedforward, 1/s² in computed_torque',
+              'kd': 'N·m·s/rad (N·s/m) in pd_feedforward, 1/s in computed_torque'}
+GAIN_BOUNDS = {'kp': MAX_KP, 'kd': MAX_KD}
+
+#: Why a measured ``joint_states`` message is refused (diagnostics counter keys).
+MEASURED_REASONS = ('no_model', 'empty', 'length_mismatch', 'duplicate_joint',
+                    'missing_joint', 'non_finite', 'no_velocity', 'out_of_bounds')
+#: Why a good measured state gets no answer in a feedback mode.
+FEEDBACK_REASONS = ('no_desired', 'desired_stale')
+
+
+class ControlError(ValueError):
+    """A gain or a mode that cannot be used; the message names the parameter."""
+
+
+# --------------------------------------------------------------------------------------------
+# Parameters
+
+def check_choice(name: str, value: str, choices: Sequence[str]) -> str:
+    """Return ``value`` if it is one of ``choices``."""
+    if value not in choices:
+        raise ControlError(f'parameter {name}: {value!r} is not one of {list(choices)}')
+    return value
+
+
+def check_mode(control_mode: str, output: str) -> Tuple[str, str]:
+    """Return ``(control_mode, output)`` if each is valid and they make sense together.
+
+    ``output: none`` leaves only the feedback term, which ``feedforward`` does not have:
+    every answer would be zeros (a loaded arm would drop), so the pair is refused.
+    """
+    check_choice('control_mode', control_mode, CONTROL_MODES)
+    check_choice('output', output, OUTPUTS)
+    if output == 'none' and control_mode == 'feedforward':
+        raise ControlError(
+            "parameters output 'none' and control_mode 'feedforward': output none publishes "
+            'only the feedback term, and feedforward has none, so every answer would be '
+            "zeros; set control_mode to 'pd_feedforward' or 'computed_torque' first (or "
+            'in the same call), or choose another output')
+    return control_mode, output
+
+
+def check_gains(model: 'sd.Model', name: str, values: Optional[Sequence[float]]) -> np.ndarray:
+    """``kp`` or ``kd``: one value for all joints, or one per model joint; finite, in [0, bound].
+
+    Empty or unset: 0 for every joint. Returns a read-only (n,) array in the order of
+    ``model.joint_names`` (the ``joints`` parameter's order).
+    """
+    values = [] if values is None else list(values)
+    n = len(model.joint_names)
+    if len(values) not in (0, 1, n):
+        raise ControlError(
+            f'parameter {name}: {len(values)} values for the {n} joints '
+            f'{list(model.joint_names)} (need one value for all, or one per joint in this '
+            'order)')
+    gains = np.zeros(n) if not values else np.array(
+        values * n if len(values) == 1 else values, dtype=float)
+    bound = GAIN_BOUNDS[name]
+    for joint, value in zip(model.joint_names, gains):
+        if not (math.isfinite(value) and 0.0 <= value <= bound):
+            raise ControlError(
+                f'parameter {name}: joint {joint!r} has {value}, need a finite value from 0 '
+                f'to {bound:g} ({GAIN_UNITS[name]})')
+    gains.setflags(write=False)
+    return gains
+
+
+def check_gains_without_model(name: str, values: Optional[Sequence[float]]) -> None:
+    """Check what needs no model: finite, in [0, bound] (the length is checked with one)."""
+    bound = GAIN_BOUNDS[name]
+    for value in [] if values is None else values:
+        if not (math.isfinite(value) and 0.0 <= value <= bound):
+            raise ControlError(f'parameter {name}: {value} is not a finite value from 0 to '
+                               f'{bound:g} ({GAIN_UNITS[name]})')
+
+
+def continuous_joints(model: 'sd.Model') -> np.ndarray:
+    """Mask (n,) of the continuous joints: revolute without URDF position limits.
+
+    The parser gives a URDF ``continuous`` joint the kind ``REVOLUTE`` and no ``lower`` /
+    ``upper`` (nan); a revolute joint with limits has both.
+    """
+    body_of = {joint: i for i, joint in enumerate(model.body_joints)}
+    mask = np.array([model.jtype[body_of[name]] == REVOLUTE
+                     and not (np.isfinite(model.lower[k]) or np.isfinite(model.upper[k]))
+                     for k, name in enumerate(model.joint_names)], dtype=bool)
+    mask.setflags(write=False)
+    return mask
+
+
+# --------------------------------------------------------------------------------------------
+# The measured state
+
+def measured_arrays(joint_names: Tuple[str, ...], name: Sequence[str],
+                    position: Sequence[float], velocity: Sequence[float],
+                    need_velocity: bool) -> Tuple[np.ndarray, Optional[np.ndarray]]:
+    """``(q, q̇)`` in ``joint_names`` order from a measured ``sensor_msgs/JointState``.
+
+    By name, any order, extra joints ignored; ``position`` required; ``velocity`` required
+    when ``need_velocity`` (a feedback mode), else may be empty (then ``q̇`` is None);
+    ``effort`` is not read. Raises :class:`~spatial_dynamics.ros.inputs.InputError` with a
+    reason of :data:`MEASURED_REASONS`; beyond :data:`MAX_MEASURED_POSITION` or
+    :data:`MAX_MEASURED_VELOCITY` it is ``out_of_bounds``.
+    """
+    if need_velocity and len(velocity) == 0 and len(name) > 0:
+        raise InputError('no_velocity', "field 'velocity' is empty: the feedback modes need "
+                         'the measured velocity of every model joint')
+    q, qd, _ = joint_state_arrays(joint_names, name, position, velocity, None)
+    for field, values, bound, unit in (('position', q, MAX_MEASURED_POSITION, 'rad or m'),
+                                       ('velocity', qd, MAX_MEASURED_VELOCITY,
+                                        'rad/s or m/s')):
+        beyond = np.flatnonzero(np.abs(values) > bound)
+        if beyond.size:
+            joint = joint_names[beyond[0]]
+            raise InputError('out_of_bounds', f"field '{field}' of joint {joint!r} is "
+                             f'{values[beyond[0]]:g}, beyond ±{bound:g} {unit}')
+    return q, (qd if len(velocity) else None)
+
+
+def position_error(q_d: np.ndarray, q: np.ndarray, continuous: np.ndarray) -> np.ndarray:
+    """``e = q_d − q``; on continuous joints wrapped to (−π, π] (the short way round)."""
+    e = q_d - q
+    if continuous.any():
+        wrapped = e - 2.0 * math.pi * np.ceil((e - math.pi) / (2.0 * math.pi))
+        e = np.where(continuous, wrapped, e)
+    return e
+
+
+# --------------------------------------------------------------------------------------------
+# One answer
+
+@dataclass(frozen=True)
+class Dynamics:
+    """The model and the settings the model part is computed with (one answer).
+
+    ``gravity`` m/s² in the base frame; ``armature`` None or (n,); ``friction_threshold``
+    None (no friction) or the smooth-sign velocity; ``f_ext`` None or link → ``[n; f]``
+    in the link frame (N m, N).
+    """
+
+    model: 'sd.Model'
+    gravity: Tuple[float, float, float] = (0.0, 0.0, -9.81)
+    backend: str = 'numpy'
+    armature: Optional[np.ndarray] = None
+    friction_threshold: Optional[float] = None
+    f_ext: Optional[Mapping[str, np.ndarray]] = None
+
+    def full(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """``ID(q, q̇, q̈, f_ext) + armature·q̈ + friction(q̇)``: one RNEA call."""
+        tau = sd.rnea(self.model, q, qd, qdd, gravity=self.gravity, f_ext=self.f_ext,
+                      backend=self.backend)
+        if self.armature is not None:
+            tau += self.armature * qdd
+        if self.friction_threshold is not None:
+            tau += sd.friction_torque(self.model, qd, self.friction_threshold)
+        return tau
+
+    def gravity_torque(self, q: np.ndarray) -> np.ndarray:
+        """``g(q)``: RNEA at q̇ = q̈ = 0."""
+        return sd.gravity_torque(self.model, q, self.gravity, backend=self.backend)
+
+    def inertia_times(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """``(M(q) + armature) u``: RNEA at q̇ = 0, q̈ = u, without gravity."""
+        tau = sd.rnea(self.model, q, np.zeros_like(u), u, gravity=(0.0, 0.0, 0.0),
+                      backend=self.backend)
+        if self.armature is not None:
+            tau += self.armature * u
+        return tau
+
+    def model_part(self, output: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray
+                   ) -> np.ndarray:
+        """The model part ``output`` selects, with the fewest RNEA calls (0 to 2)."""
+        if output == 'full':
+            return self.full(q, qd, qdd)
+        if output == 'without_gravity':
+            return self.full(q, qd, qdd) - self.gravity_torque(q)
+        if output == 'gravity_only':
+            return self.gravity_torque(q)
+        return np.zeros(len(q))
+
+    def terms(self, output: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray
+              ) -> Dict[str, np.ndarray]:
+        """The model terms of ``output`` (:data:`OUTPUT_TERMS`), each from RNEA calls."""
+        wanted = OUTPUT_TERMS[output]
+        if not wanted:
+            return {}
+        n = len(q)
+        g = self.gravity_torque(q)
+        result = {'gravity': g}
+        if len(wanted) > 1:
+            bias = sd.bias_torque(self.model, q, qd, self.gravity, backend=self.backend)
+            tau = sd.rnea(self.model, q, qd, qdd, gravity=self.gravity, backend=self.backend)
+            result['velocity_product'] = bias - g
+            result['inertial'] = tau - bias
+            result['armature'] = (np.zeros(n) if self.armature is None
+                                  else self.armature * qdd)
+            result['friction'] = (
+                np.zeros(n) if self.friction_threshold is None
+                else sd.friction_torque(self.model, qd, self.friction_threshold))
+            result['external'] = np.zeros(n) if not self.f_ext else sd.rnea(
+                self.model, q, qd, qdd, gravity=self.gravity, f_ext=self.f_ext,
+                backend=self.backend) - tau
+        return {term: result[term] for term in wanted}
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Per-joint ``kp``, ``kd`` (n,) and the continuous-joint mask (n,) of one model."""
+
+    kp: np.ndarray
+    kd: np.ndarray
+    continuous: np.ndarray
+
+
+State = Tuple[np.ndarray, ...]
+
+
+def answer(dynamics: Dynamics, control_mode: str, output: str, desired: State,
+           measured: Optional[State] = None, gains: Optional[Gains] = None,
+           with_terms: bool = False) -> Tuple[np.ndarray, Optional[Dict[str, np.ndarray]]]:
+    """Return ``(τ, terms)`` of one answer (module docstring); ``terms`` None unless asked.
+
+    ``desired`` is ``(q_d, q̇_d, q̈_d)``; ``measured`` ``(q, q̇)``, needed in the feedback
+    modes (with ``gains``). With ``with_terms``, τ is the sum of the terms, in the order of
+    :data:`TERMS`; without, τ takes the fewest RNEA calls (the same value to rounding).
+    """
+    q_d, qd_d, qdd_d = desired
+    if control_mode == 'feedforward':
+        q, qd, u = q_d, qd_d, None
+    else:
+        q, qd = measured
+        u = (gains.kp * position_error(q_d, q, gains.continuous)
+             + gains.kd * (qd_d - qd))
+        if control_mode == 'pd_feedforward':
+            q, qd = q_d, qd_d        # the model part at the desired state
+    if with_terms:
+        terms = dynamics.terms(output, q, qd, qdd_d)
+        if u is not None:
+            terms['feedback'] = (u if control_mode == 'pd_feedforward'
+                                 else dynamics.inertia_times(q, u))
+        tau = np.zeros(len(q_d))
+        for value in terms.values():
+            tau = tau + value
+        return tau, terms
+    if u is None:
+        return dynamics.model_part(output, q, qd, qdd_d), None
+    if control_mode == 'pd_feedforward':
+        return dynamics.model_part(output, q, qd, qdd_d) + u, None
+    if output in ('full', 'without_gravity'):   # ID(q, q̇, q̈_d + u): one call for both
+        return dynamics.model_part(output, q, qd, qdd_d + u), None
+    return dynamics.model_part(output, q, qd, qdd_d) + dynamics.inertia_times(q, u), None
+
+
+def terms_names(joints: Sequence[str], terms: Sequence[str]) -> list:
+    """``<joint>/<term>`` names of the ``feedforward_terms`` message, term by term."""
+    return [f'{joint}/{term}' for term in terms for joint in joints]
