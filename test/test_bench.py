@@ -95,3 +95,14 @@ def test_command_line_writes_results(tmp_path, capsys):
     pytest.importorskip('matplotlib')
     assert (tmp_path / 'runtime_vs_error.png').stat().st_size > 0
     assert (tmp_path / 'scaling.png').stat().st_size > 0
+
+
+def test_terms_table_compares_each_term_with_pinocchio():
+    """The benchmark's g, C q̇ + g and M rows state agreement with Pinocchio to ~1e-15."""
+    table = bench.terms_table(['ur5', 'panda'], rounds=1)
+    rows = [line.split('|')[1:-1] for line in table.splitlines()[2:]]
+    assert [(r[0].strip(), r[1].strip()) for r in rows] == [
+        (robot, term) for robot in ('ur5 (6 dof)', 'panda (8 dof)')
+        for term in ('g(q)', 'C q̇ + g', 'M(q)')]
+    for row in rows:
+        assert float(row[5]) < 1e-13, row
