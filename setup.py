@@ -30,6 +30,7 @@ setup(
                  'pydocstyle'],
         'plot': ['matplotlib'],
         'fast': ['numba'],
+        'sim': ['mujoco'],
     },
     zip_safe=True,
     maintainer='spatial_dynamics maintainers',
@@ -42,6 +43,7 @@ setup(
             'inverse_dynamics = spatial_dynamics.ros.node:main',
             'demo = spatial_dynamics.tools.demo:main',
             'check_urdf = spatial_dynamics.check:main',
+            'sim = spatial_dynamics.sim.node:main',
         ],
     },
 )

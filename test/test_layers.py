@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Imports run one way, checked on the source of every module (inside functions too).
 
-spatial <- joints <- model <- urdf, algorithms <- backends <- the API <- ros <- tools.
+spatial <- joints <- model <- urdf, algorithms <- backends <- the API <- ros <- sim <- tools.
 """
 
 import ast
@@ -21,7 +21,10 @@ RANKS = {
     '': 5,                  # the package itself: the public API (spatial_dynamics/__init__.py)
     'check': 6,             # a command on the library
     'ros': 7,               # the node and its pure configuration
-    'tools': 8,             # bench, demo, latency, soak, sim, ...: use everything, used by none
+    'sim': 8,               # the simulated robot: robot.py pure (MuJoCo), node.py on ros/;
+    #                         above ros (it reuses the node's readers and spin), below tools
+    #                         (bench takes MuJoCo's URDF preparation from sim.robot)
+    'tools': 9,             # bench, demo, latency, soak, ...: use everything, used by none
 }
 # The one import against the direction: Model.from_urdf, the public entry point, hands the
 # work to the parser (inside the method, so importing model never imports urdf).

@@ -57,6 +57,7 @@ from spatial_dynamics.tools.driving import demo_urdf
 from spatial_dynamics.tools.generate import chain_urdf, tree_urdf
 from spatial_dynamics.algorithms.rnea import PR, RA
 from spatial_dynamics.backends import layout, python as python_backend
+from spatial_dynamics.sim.robot import dynamics_only, mujoco_model
 
 GRAVITY = (0.0, 0.0, -9.81)
 SIZES = (1, 100, 10_000)
@@ -225,9 +226,7 @@ def _fold(K: np.ndarray, MUL: np.ndarray, n: int, tau_peer: np.ndarray) -> np.nd
     return out
 
 
-def _dynamics_only(xml: str) -> str:
-    """Drop ``<visual>`` and ``<collision>`` from a URDF (meshes a peer would try to load)."""
-    return re.sub(r'<(visual|collision)\b.*?</\1\s*>', '', xml, flags=re.S)
+_dynamics_only = dynamics_only   # no <visual>, <collision>: meshes a peer would load
 
 
 # --------------------------------------------------------------------------------------------
@@ -376,14 +375,9 @@ def _mujoco_single(robot: Robot) -> Call:
     except ImportError:
         raise Skip('mujoco is not installed') from None
     try:
-        m = mujoco.MjModel.from_xml_string(_dynamics_only(robot.xml))
+        m = mujoco_model(robot.xml, GRAVITY)     # the URDF's rigid-body robot (sim.robot)
     except ValueError as err:
-        raise Skip(f'MuJoCo cannot load it: {str(err).splitlines()[0]}') from None
-    m.dof_damping[:] = 0.0
-    m.dof_armature[:] = 0.0
-    m.dof_frictionloss[:] = 0.0
-    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
-    m.opt.gravity[:] = GRAVITY
+        raise Skip(str(err)) from None
     d = mujoco.MjData(m)
     joints = [m.joint(j) for j in range(m.njnt)]
     if m.nq != m.njnt or m.nv != m.njnt:

@@ -1,0 +1,235 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""ROS 2 node ``sim``: the URDF's robot simulated by MuJoCo, driven by effort commands.
+
+``python -m spatial_dynamics.sim`` or ``ros2 run spatial_dynamics sim``. The robot is a
+:class:`~spatial_dynamics.sim.robot.SimulatedRobot`: the URDF's rigid-body robot exactly (no
+joint limits, contacts, damping or friction; mimic joints follow their source).
+
+Topics (relative, so they follow the namespace and can be remapped):
+
+=====================  ====================================  =================================
+``effort_commands``    std_msgs/Float64MultiArray, in        reliable, keep last 10; one
+                                                             torque (N m or N) per joint of
+                                                             ``joints``, in that order (as a
+                                                             ros2_control forward command
+                                                             controller with interface effort)
+``joint_states``       sensor_msgs/JointState, out           reliable; position, velocity and
+                                                             effort = the applied command
+``/clock``             rosgraph_msgs/Clock, out              with ``publish_clock``: sim time
+=====================  ====================================  =================================
+
+Modes (parameter ``mode``):
+
+* ``realtime``: the physics runs against the wall clock; a state is published each physics
+  step (if the process falls behind, the steps due run at once and the last state is
+  published). The last good command is held for ``command_timeout`` s, then the torque drops
+  to zero with a throttled warning: without commands the drive goes limp and the robot falls.
+  Stamps are wall-clock time.
+* ``lockstep``: the state of step k is published, then the node waits for exactly one good
+  command, applies it for one step and publishes step k+1. While it waits, it republishes the
+  current state every 0.1 s of wall time, so a controller that starts late or a lost message
+  cannot deadlock it (a controller must therefore answer each state once, within 0.1 s, or
+  its extra answers drive the next steps). Stamps are sim time, from 0.
+
+A bad command (wrong length, NaN or infinite, magnitude above 1e6) is refused with the
+reason logged and is not applied; in lockstep it does not count as the step's command.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from typing import Optional, Sequence
+
+from builtin_interfaces.msg import Time
+import numpy as np
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import HistoryPolicy, QoSProfile, QoSReliabilityPolicy
+from sensor_msgs.msg import JointState
+from spatial_dynamics.ros.config import ConfigError, read_description
+from spatial_dynamics.ros.node import advertise, spin
+from spatial_dynamics.sim.robot import import_mujoco, MujocoMissing, SimulatedRobot
+from std_msgs.msg import Float64MultiArray
+
+NODE_NAME = 'sim'
+MODES = ('realtime', 'lockstep')
+MAX_COMMAND = 1e6             # N m or N: beyond it a command is refused
+REPUBLISH_PERIOD = 0.1        # s of wall time, lockstep: the state is sent again while waiting
+MAX_CATCH_UP_STEPS = 100      # realtime: steps run in one go when the process fell behind
+WARN_PERIOD = 1.0             # s between two warnings of one kind
+
+PARAMETERS = (
+    # name, default (or a parameter type when unset), description
+    ('robot_description', '', 'URDF XML text (takes precedence over the file)'),
+    ('robot_description_file', '', 'path of a URDF (or .xacro) file'),
+    ('joints', Parameter.Type.STRING_ARRAY,
+     'joints simulated and order of the commands (default: all, in the model order); the '
+     'others are locked at 0, as with the inverse_dynamics node\'s joints'),
+    ('command_topic', 'effort_commands', 'std_msgs/Float64MultiArray of joint torques'),
+    ('state_topic', 'joint_states', 'sensor_msgs/JointState published each step'),
+    ('timestep', 0.001, 'physics step (s)'),
+    ('mode', 'realtime', 'realtime | lockstep'),
+    ('initial_positions', Parameter.Type.DOUBLE_ARRAY, 'per joint of joints (default 0)'),
+    ('command_timeout', 0.1, 'realtime: a command older than this (s) gives zero torque'),
+    ('publish_clock', False, 'publish /clock (rosgraph_msgs/Clock) with the sim time'),
+    ('integrator', 'auto', 'auto | rk4 | euler'),
+)
+
+
+def command_qos() -> QoSProfile:
+    """Command QoS: reliable, keep last 10 (a ros2_control forward command controller's)."""
+    return QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
+                      history=HistoryPolicy.KEEP_LAST, depth=10)
+
+
+def check_command(data: Sequence[float], n: int) -> Optional[str]:
+    """Why a command cannot be applied to ``n`` joints, or None when it can."""
+    if len(data) != n:
+        return f'{len(data)} values for {n} joints'
+    tau = np.asarray(data, dtype=float)
+    if not np.isfinite(tau).all():
+        return f'non-finite value at index {int(np.argmin(np.isfinite(tau)))}'
+    if np.abs(tau).max(initial=0.0) > MAX_COMMAND:
+        return f'value above {MAX_COMMAND:g} at index {int(np.argmax(np.abs(tau)))}'
+    return None
+
+
+def to_time(seconds: float) -> Time:
+    """A builtin_interfaces/Time of ``seconds`` (≥ 0)."""
+    sec = math.floor(seconds)
+    nanosec = min(int(round((seconds - sec) * 1e9)), 999_999_999)
+    return Time(sec=int(sec), nanosec=nanosec)
+
+
+class SimNode(Node):
+    """Steps a :class:`SimulatedRobot` with the commanded torques and publishes its state."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__(NODE_NAME, **kwargs)
+        for name, default, text in PARAMETERS:
+            self.declare_parameter(name, default, ParameterDescriptor(description=text,
+                                                                      read_only=True))
+        p = {name: self.get_parameter_or(name, Parameter(name)).value
+             for name, _, _ in PARAMETERS}   # unset arrays are None
+        if p['mode'] not in MODES:
+            raise ConfigError(f'mode {p["mode"]!r}: one of {", ".join(MODES)}')
+        for name in ('timestep', 'command_timeout'):
+            if not (math.isfinite(p[name]) and p[name] > 0.0):
+                raise ConfigError(f'{name}: a positive number of seconds, got {p[name]}')
+        if p['robot_description']:
+            urdf, source = p['robot_description'], 'robot_description'
+        elif p['robot_description_file']:
+            urdf = read_description(p['robot_description_file'])
+            source = f'robot_description_file {p["robot_description_file"]!r}'
+        else:
+            raise ConfigError('no robot: set robot_description (URDF XML) or '
+                              'robot_description_file (a path)')
+        try:
+            self.robot = SimulatedRobot(urdf, joints=p['joints'] or None,
+                                        timestep=p['timestep'], integrator=p['integrator'])
+            n = self.robot.model.nq
+            q0 = np.zeros(n) if not p['initial_positions'] else p['initial_positions']
+            self.robot.set_state(q0, np.zeros(n))
+        except ValueError as err:
+            raise ConfigError(f'{source}: {err}') from None
+        self.mode = p['mode']
+        self.timestep = p['timestep']
+        self.command_timeout = p['command_timeout']
+        self.tau = np.zeros(n)                 # the applied command
+        self.command_at: Optional[float] = None
+        self.steps = 0
+        self.refused = 0
+        self.last_publish = time.monotonic()
+        self._warned = {}
+        self.state_pub = advertise(self, JointState, p['state_topic'])
+        self.clock_pub = None
+        if p['publish_clock']:
+            from rosgraph_msgs.msg import Clock
+            self.clock_pub = self.create_publisher(Clock, '/clock', 10)
+            self._clock = Clock
+        self.create_subscription(Float64MultiArray, p['command_topic'], self._on_command,
+                                 command_qos())
+        self.msg = JointState(name=list(self.robot.joint_names))
+        self.get_logger().info(
+            f'{self.robot.model.summary()}; {self.mode}, step {self.timestep:g} s '
+            f'({self.robot.integrator}); commands on {self.resolve_topic_name(p["command_topic"])}'
+            f' for {list(self.robot.joint_names)}')
+        if self.mode == 'lockstep':
+            self.create_timer(REPUBLISH_PERIOD, self._republish)
+        else:
+            self.start = time.monotonic()
+            self.create_timer(self.timestep, self._realtime_tick)
+        self._publish()
+
+    def _warn(self, kind: str, text: str) -> None:
+        now = time.monotonic()
+        if now - self._warned.get(kind, -math.inf) >= WARN_PERIOD:
+            self._warned[kind] = now
+            self.get_logger().warning(text)
+
+    def _on_command(self, msg: Float64MultiArray) -> None:
+        why = check_command(msg.data, len(self.tau))
+        if why is not None:
+            self.refused += 1
+            self._warn('refused', f'command refused ({self.refused} so far): {why}; '
+                       f'expected {len(self.tau)} finite torques for {self.msg.name}')
+            return
+        self.tau = np.array(msg.data, dtype=float)
+        self.command_at = time.monotonic()
+        if self.mode == 'lockstep':
+            self.robot.step(self.tau)
+            self.steps += 1
+            self._publish()
+
+    def _republish(self) -> None:
+        if time.monotonic() - self.last_publish >= REPUBLISH_PERIOD:
+            self._publish()
+
+    def _realtime_tick(self) -> None:
+        now = time.monotonic()
+        due = int((now - self.start) / self.timestep) - self.steps
+        if due <= 0:
+            return
+        if self.command_at is not None and now - self.command_at > self.command_timeout:
+            self._warn('timeout', f'no command for {now - self.command_at:.3f} s (timeout '
+                       f'{self.command_timeout:g} s): zero torque, the robot goes limp')
+            self.tau = np.zeros_like(self.tau)
+            self.command_at = None
+        if due > MAX_CATCH_UP_STEPS:       # fell far behind: the sim slows down instead
+            self.start += (due - MAX_CATCH_UP_STEPS) * self.timestep
+            due = MAX_CATCH_UP_STEPS
+        self.robot.step(self.tau, due)
+        self.steps += due
+        self._publish()
+
+    def _publish(self) -> None:
+        msg = self.msg
+        if self.mode == 'lockstep':
+            msg.header.stamp = to_time(self.robot.time)
+        else:
+            msg.header.stamp = self.get_clock().now().to_msg()
+        msg.position = self.robot.q.tolist()
+        msg.velocity = self.robot.qd.tolist()
+        msg.effort = self.tau.tolist()
+        self.state_pub.publish(msg)
+        if self.clock_pub is not None:
+            self.clock_pub.publish(self._clock(clock=to_time(self.robot.time)))
+        self.last_publish = time.monotonic()
+
+
+def main(args: Optional[Sequence[str]] = None) -> int:
+    """Run the simulator until SIGINT/SIGTERM; 0 on a clean exit, 1 on a bad start-up."""
+    try:
+        import_mujoco()
+    except MujocoMissing as err:
+        print(f'{NODE_NAME}: {err}', file=sys.stderr)
+        return 1
+    return spin(SimNode, args, name=NODE_NAME)
+
+
+if __name__ == '__main__':
+    sys.exit(main())
