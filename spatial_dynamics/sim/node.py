@@ -99,7 +99,7 @@ def check_command(data: Sequence[float], n: int) -> Optional[str]:
 
 
 def to_time(seconds: float) -> Time:
-    """A builtin_interfaces/Time of ``seconds`` (≥ 0)."""
+    """Convert ``seconds`` (≥ 0) to a builtin_interfaces/Time."""
     sec = math.floor(seconds)
     nanosec = min(int(round((seconds - sec) * 1e9)), 999_999_999)
     return Time(sec=int(sec), nanosec=nanosec)
