@@ -12,12 +12,14 @@ imports rclpy; ``node`` is the ROS 2 shell around it.
 
 from .model import Frame, Model, with_payload
 from .algorithms.rnea import rnea_spatial
-from .backends import bias_torque, GRAVITY, gravity_torque, mass_matrix, rnea
+from .backends import (bias_torque, generalized_momentum, GRAVITY, gravity_torque,
+                       mass_matrix, rnea)
 from .terms import armature_torque, clamp_to_effort_limits, friction_torque, per_joint
 from .urdf import URDFWarning
 
 __all__ = ['Frame', 'GRAVITY', 'Model', 'armature_torque', 'bias_torque',
-           'clamp_to_effort_limits', 'friction_torque', 'gravity_torque', 'mass_matrix',
+           'clamp_to_effort_limits', 'friction_torque', 'generalized_momentum',
+           'gravity_torque', 'mass_matrix',
            'per_joint', 'rnea', 'rnea_spatial',
            'URDFWarning', 'with_payload']
 __version__ = '0.1.0'

@@ -161,3 +161,41 @@ def test_arguments(rng):
         sd.mass_matrix(model, np.zeros(5))
     with pytest.raises(ValueError, match='q must have shape'):
         sd.gravity_torque(model, [0.0] * 7)
+
+
+def test_generalized_momentum_is_m_qdot(robot, backend, rng):
+    model, oracle = robot
+    Q, QD, _ = random_state(rng, (6,), model.nq)
+    p, _ = sd.generalized_momentum(model, Q, QD, backend=backend)
+    M = sd.mass_matrix(model, Q, backend=backend)
+    expected = np.einsum('sij,sj->si', M, QD)
+    assert np.abs(p - expected).max() <= 1e-13 * max(1.0, np.abs(expected).max())
+    p1, _ = sd.generalized_momentum(model, Q[2], QD[2], backend=backend)
+    assert np.abs(p1 - expected[2]).max() <= 1e-13 * max(1.0, np.abs(expected).max())
+
+
+def test_coriolis_transpose_against_pinocchio(robot, backend, rng):
+    """Cᵀ q̇ against Pinocchio's Coriolis matrix (computeCoriolisMatrix, Ṁ = C + Cᵀ)."""
+    model, oracle = robot
+    pin = oracle.pin
+    Q, QD, _ = random_state(rng, (4,), model.nq)
+    _, ctq = sd.generalized_momentum(model, Q, QD, backend=backend)
+    for s in range(4):
+        q_pin, P = expansion(model, oracle, Q[s])
+        C = pin.computeCoriolisMatrix(oracle.model, oracle.data, q_pin, P @ QD[s])
+        expected = P.T @ (C.T @ (P @ QD[s]))
+        assert np.abs(ctq[s] - expected).max() <= 1e-12 * max(1.0, np.abs(expected).max())
+        _, one = sd.generalized_momentum(model, Q[s], QD[s], backend=backend)
+        assert np.abs(one - expected).max() <= 1e-12 * max(1.0, np.abs(expected).max())
+
+
+def test_coriolis_transpose_is_the_gradient_of_kinetic_energy(robot, rng):
+    """Cᵀ q̇ = ∂T/∂q with T = ½ q̇ᵀ M(q) q̇, by central differences of the CRBA."""
+    model, _ = robot
+    q, qd, _ = random_state(rng, (), model.nq)
+    _, ctq = sd.generalized_momentum(model, q, qd)
+    h = 1e-6
+    grad = np.array([(qd @ sd.mass_matrix(model, q + h * e) @ qd
+                      - qd @ sd.mass_matrix(model, q - h * e) @ qd) / (4 * h)
+                     for e in np.eye(model.nq)])
+    assert np.abs(ctq - grad).max() <= 1e-7 * max(1.0, np.abs(grad).max())

@@ -145,6 +145,31 @@ def mass_matrix(model: Model, q, backend: str = 'auto') -> np.ndarray:
     return python.mass_matrix(lay.rows, q)
 
 
+def generalized_momentum(model: Model, q, qd, backend: str = 'auto') -> tuple:
+    """``(p, Cᵀ q̇)``: the generalized momentum ``p = M(q) q̇`` and ``Cᵀ(q, q̇) q̇``, in O(n).
+
+    What a momentum observer of external torques integrates (``ṗ = τ + Cᵀ q̇ - g + τ_ext``);
+    ``Cᵀ q̇ = ∂T/∂q`` for the kinetic energy ``T = ½ q̇ᵀ M q̇``, and ``Ṁ q̇ = C q̇ + Cᵀ q̇``
+    (see :mod:`spatial_dynamics.algorithms.momentum`). ``q``, ``qd`` of shape (n,) or
+    (..., n), broadcast; returns two arrays of the broadcast shape.
+    """
+    kernels = _compiled if backend == 'auto' and _tried else compiled(backend)
+    lay = _layout_of(id(model)) or layout.of(model)
+    q, qd = as_joint_arrays(model, q, qd)
+    if kernels is not None and q.dtype == np.float64:
+        batch, n = q.shape[:-1], lay.n
+        if q.ndim == 1:
+            mom, ctq = np.empty(n), np.empty(n)
+            kernels.momentum_single(lay.table, q, qd, mom, ctq)
+            return mom, ctq
+        N = int(np.prod(batch, dtype=np.intp))
+        mom, ctq = np.empty((N, n)), np.empty((N, n))
+        kernels.momentum_batch(lay.table, *(np.ascontiguousarray(x.reshape(N, n))
+                                            for x in (q, qd)), mom, ctq)
+        return mom.reshape(q.shape), ctq.reshape(q.shape)
+    return python.momentum(lay.rows, q, qd)
+
+
 def _vector(x, n: int):
     """Return a list or tuple of ``n`` numbers as a float64 array, anything else as an array."""
     if type(x) is _ndarray:

@@ -488,3 +488,123 @@ def crba_kernel(K, work, H):
                 Hij = mul * mj * (bx * F0 + by * F1 + bz * F2)
             H[k * n + kj] = H[k * n + kj] + Hij
             H[kj * n + k] = H[kj * n + k] + Hij
+
+
+@numba.njit(inline='always', **JIT)
+def momentum_kernel(K, q, qd, mom, ctq, work):
+    """Run momentum.momentum_kernel of the algorithms, generated from it."""
+    NB = K.shape[0] - 1
+    work[0 * WORK + VEL + 0] = 0.0
+    work[0 * WORK + VEL + 1] = 0.0
+    work[0 * WORK + VEL + 2] = 0.0
+    work[0 * WORK + VEL + 3] = 0.0
+    work[0 * WORK + VEL + 4] = 0.0
+    work[0 * WORK + VEL + 5] = 0.0
+    for k in range(len(mom)):
+        mom[k] = 0.0
+        ctq[k] = 0.0
+    for i in range(1, NB + 1):
+        p = int(K[i, 0])
+        code = int(K[i, 1])
+        k = int(K[i, 2])
+        ax = K[i, 3]
+        ay = K[i, 4]
+        az = K[i, 5]
+        mass = K[i, 18]
+        hx = K[i, 19]
+        hy = K[i, 20]
+        hz = K[i, 21]
+        Ixx = K[i, 22]
+        Ixy = K[i, 23]
+        Ixz = K[i, 24]
+        Iyy = K[i, 25]
+        Iyz = K[i, 26]
+        Izz = K[i, 27]
+        mul = K[i, 28]
+        e00 = work[i * WORK + XUP + 0]
+        e01 = work[i * WORK + XUP + 1]
+        e02 = work[i * WORK + XUP + 2]
+        e10 = work[i * WORK + XUP + 3]
+        e11 = work[i * WORK + XUP + 4]
+        e12 = work[i * WORK + XUP + 5]
+        e20 = work[i * WORK + XUP + 6]
+        e21 = work[i * WORK + XUP + 7]
+        e22 = work[i * WORK + XUP + 8]
+        rx = work[i * WORK + XUP + 9]
+        ry = work[i * WORK + XUP + 10]
+        rz = work[i * WORK + XUP + 11]
+        qdi = qd[k] if mul == 1.0 else mul * qd[k]
+        pw0 = work[p * WORK + VEL + 0]
+        pw1 = work[p * WORK + VEL + 1]
+        pw2 = work[p * WORK + VEL + 2]
+        pv0 = work[p * WORK + VEL + 3]
+        pv1 = work[p * WORK + VEL + 4]
+        pv2 = work[p * WORK + VEL + 5]
+        w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2)
+        if code == PR:
+            v0, v1, v2 = (v0 + ax * qdi, v1 + ay * qdi, v2 + az * qdi)
+        else:
+            w0, w1, w2 = (w0 + ax * qdi, w1 + ay * qdi, w2 + az * qdi)
+        work[i * WORK + VEL + 0] = w0
+        work[i * WORK + VEL + 1] = w1
+        work[i * WORK + VEL + 2] = w2
+        work[i * WORK + VEL + 3] = v0
+        work[i * WORK + VEL + 4] = v1
+        work[i * WORK + VEL + 5] = v2
+        m0, m1, m2, k0, k1, k2 = I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, w0, w1, w2, v0, v1, v2)
+        work[i * WORK + FRC + 0] = m0
+        work[i * WORK + FRC + 1] = m1
+        work[i * WORK + FRC + 2] = m2
+        work[i * WORK + FRC + 3] = k0
+        work[i * WORK + FRC + 4] = k1
+        work[i * WORK + FRC + 5] = k2
+    for i in range(NB, 0, -1):
+        p = int(K[i, 0])
+        code = int(K[i, 1])
+        k = int(K[i, 2])
+        ax = K[i, 3]
+        ay = K[i, 4]
+        az = K[i, 5]
+        mul = K[i, 28]
+        n0 = work[i * WORK + FRC + 0]
+        n1 = work[i * WORK + FRC + 1]
+        n2 = work[i * WORK + FRC + 2]
+        f0 = work[i * WORK + FRC + 3]
+        f1 = work[i * WORK + FRC + 4]
+        f2 = work[i * WORK + FRC + 5]
+        w0 = work[i * WORK + VEL + 0]
+        w1 = work[i * WORK + VEL + 1]
+        w2 = work[i * WORK + VEL + 2]
+        v0 = work[i * WORK + VEL + 3]
+        v1 = work[i * WORK + VEL + 4]
+        v2 = work[i * WORK + VEL + 5]
+        c0, c1, c2 = (w1 * az - w2 * ay, w2 * ax - w0 * az, w0 * ay - w1 * ax)
+        if code == PR:
+            t = ax * f0 + ay * f1 + az * f2
+            c = c0 * f0 + c1 * f1 + c2 * f2
+        else:
+            t = ax * n0 + ay * n1 + az * n2
+            c = c0 * n0 + c1 * n1 + c2 * n2 + (v1 * az - v2 * ay) * f0 + (v2 * ax - v0 * az) * f1 + (v0 * ay - v1 * ax) * f2
+        mom[k] = mom[k] + (t if mul == 1.0 else mul * t)
+        ctq[k] = ctq[k] + (c if mul == 1.0 else mul * c)
+        if p == 0:
+            continue
+        e00 = work[i * WORK + XUP + 0]
+        e01 = work[i * WORK + XUP + 1]
+        e02 = work[i * WORK + XUP + 2]
+        e10 = work[i * WORK + XUP + 3]
+        e11 = work[i * WORK + XUP + 4]
+        e12 = work[i * WORK + XUP + 5]
+        e20 = work[i * WORK + XUP + 6]
+        e21 = work[i * WORK + XUP + 7]
+        e22 = work[i * WORK + XUP + 8]
+        rx = work[i * WORK + XUP + 9]
+        ry = work[i * WORK + XUP + 10]
+        rz = work[i * WORK + XUP + 11]
+        g0, g1, g2, g3, g4, g5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, n0, n1, n2, f0, f1, f2)
+        work[p * WORK + FRC + 0] += g0
+        work[p * WORK + FRC + 1] += g1
+        work[p * WORK + FRC + 2] += g2
+        work[p * WORK + FRC + 3] += g3
+        work[p * WORK + FRC + 4] += g4
+        work[p * WORK + FRC + 5] += g5

@@ -3,7 +3,8 @@
 """Generate the numba kernels from the one source of each algorithm in :mod:`..algorithms`.
 
 The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
-:mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`) are plain
+:mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`,
+:mod:`~spatial_dynamics.algorithms.momentum`) are plain
 Python over tuples and lists. numba compiles such code
 only slowly and with allocations, so this module rewrites their syntax tree statement for
 statement onto flat float64 arrays and writes ``_kernels_generated.py``; nothing of the
@@ -36,7 +37,7 @@ import sys
 import textwrap
 
 from . import layout
-from ..algorithms import components, crba, rnea
+from ..algorithms import components, crba, momentum, rnea
 
 #: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
 #: (m, h, Ibar) (10) per body, flat.
@@ -45,11 +46,12 @@ STORES = {'Xup': ('XUP', 0, 12), 'vel': ('VEL', 12, 6), 'acc': ('ACC', 18, 6),
 WORK = 40
 #: The functions translated, in order (a function is generated after those it calls).
 SOURCES = (components.X_motion, components.XT_force, components.I_motion, components.XT_I_X,
-           rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel)
+           rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
               'rnea_kernel': 'K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work',
-              'crba_kernel': 'K, work, H'}
+              'crba_kernel': 'K, work, H',
+              'momentum_kernel': 'K, q, qd, mom, ctq, work'}
 TARGET = os.path.join(os.path.dirname(os.path.abspath(__file__)), '_kernels_generated.py')
 
 

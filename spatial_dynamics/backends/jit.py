@@ -24,7 +24,7 @@ from numba.extending import intrinsic
 import numpy as np
 
 from . import layout
-from ._kernels_generated import crba_kernel, rnea_kernel, WORK, xup_kernel
+from ._kernels_generated import crba_kernel, momentum_kernel, rnea_kernel, WORK, xup_kernel
 
 QIDX = layout.COLUMN['qidx']
 #: Smallest batch handed to the parallel entry (below it the thread launch costs more).
@@ -44,6 +44,8 @@ _PARALLEL = types.void(_in2, _in2, _in2, _in2, _f8, _f8, _f8, _in3, types.boolea
 _CRBA_SINGLE = types.boolean(_in2, _in1, _out1)
 _CRBA_BATCH = types.void(_in2, _in2, _out2)
 _CRBA_PARALLEL = types.void(_in2, _in2, _out2, types.int64)
+_MOMENTUM_SINGLE = types.boolean(_in2, _in1, _in1, _out1, _out1)
+_MOMENTUM_BATCH = types.void(_in2, _in2, _in2, _out2, _out2)
 _JIT = dict(cache=True, fastmath=False, error_model='numpy')
 #: f_ext of the single-state entries: none (a compile-time constant, never read).
 _NO_FEXT = np.zeros((1, 6))
@@ -175,6 +177,27 @@ def _crba_batch_parallel(K, q, H, chunks):
         _crba_batch(K, q[lo:hi], H[lo:hi])
 
 
+@numba.njit(_MOMENTUM_SINGLE, **_JIT)
+def momentum_single(K, q, qd, mom, ctq):
+    """One state: q, qd (n,) → M q̇ into ``mom``, Cᵀ q̇ into ``ctq``; False if not (n,)."""
+    n = int(K[0, QIDX])
+    if q.shape[0] != n or qd.shape[0] != n or mom.shape[0] != n or ctq.shape[0] != n:
+        return False
+    work = np.empty(K.shape[0] * WORK)
+    xup_kernel(K, q, work)
+    momentum_kernel(K, q, qd, mom, ctq, work)
+    return True
+
+
+@numba.njit(_MOMENTUM_BATCH, nogil=True, **_JIT)
+def momentum_batch(K, q, qd, mom, ctq):
+    """N states, one thread: q, qd (N, n) → mom, ctq (N, n)."""
+    work = np.empty(K.shape[0] * WORK)
+    for s in range(q.shape[0]):
+        xup_kernel(K, q[s], work)
+        momentum_kernel(K, q[s], qd[s], mom[s], ctq[s], work)
+
+
 def _entry(dispatcher):
     """Return the compiled function of a one-signature ``dispatcher`` (no numba dispatch).
 
@@ -262,3 +285,4 @@ def warmup(lay: layout.Layout) -> None:
     crba_single(lay.table, z1, np.empty(n * n))
     crba_single_large(lay.table, z1, np.empty(n * n))
     mass_matrix(lay, z2)
+    momentum_single(lay.table, z1, z1, np.empty(n), np.empty(n))

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from ..algorithms.crba import crba_kernel
+from ..algorithms.momentum import momentum_kernel
 from ..algorithms.rnea import rnea_kernel, xup_kernel
 
 
@@ -91,3 +92,32 @@ def mass_matrix(rows, q: np.ndarray) -> np.ndarray:
     for k, h in enumerate(H):
         out[:, k] = h
     return out.reshape(batch + (n, n))
+
+
+def momentum_rows(rows, q, qd, m=math) -> tuple:
+    """``(M(q) q̇, Cᵀ(q, q̇) q̇)`` as two lists of ``n`` scalars from the per-body ``rows``."""
+    slots = len(rows)
+    Xup, vel, frc = [None] * slots, [None] * slots, [None] * slots
+    xup_kernel(rows, q, m, Xup)
+    n = rows[0][2]
+    mom, ctq = [0.0] * n, [0.0] * n
+    momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc)
+    return mom, ctq
+
+
+def momentum(rows, q: np.ndarray, qd: np.ndarray) -> tuple:
+    """``(M q̇, Cᵀ q̇)``, each of shape (..., n), from validated arrays of shape (..., n)."""
+    n = q.shape[-1]
+    if q.dtype == np.float64 and q.size == n:
+        mom, ctq = momentum_rows(rows, q.reshape(-1).tolist(), qd.reshape(-1).tolist())
+        return np.array(mom).reshape(q.shape), np.array(ctq).reshape(q.shape)
+    batch = q.shape[:-1]
+    N = int(np.prod(batch, dtype=np.intp))
+    cols = [list(np.ascontiguousarray(x.reshape(N, n).T)) for x in (q, qd)]
+    out = []
+    for part in momentum_rows(rows, *cols, np):
+        a = np.empty((N, n), dtype=q.dtype)
+        for k, x in enumerate(part):
+            a[:, k] = x
+        out.append(a.reshape(q.shape))
+    return tuple(out)

@@ -1,0 +1,86 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Generalized momentum ``p = M(q) q̇`` and ``Cᵀ(q, q̇) q̇``, in one O(n) pass: one source.
+
+What a momentum observer needs (``ṗ = τ + Cᵀ q̇ - g + τ_ext``, De Luca and Mattone 2003).
+With the body velocities ``v_i`` and momenta ``h_i = I_i v_i`` of the RNEA forward pass, and
+``H_i`` the momentum of the subtree of body i (the RNEA backward pass with ``h_i`` for ``f_i``):
+
+    p_i = S_iᵀ H_i
+    (Cᵀ q̇)_i = ∂T/∂q_i = (v_i × S_i)ᵀ H_i
+
+The second line: turning joint i by dq moves the subtree's velocities and inertias with it,
+so the kinetic energy T = ½ Σ v_jᵀ I_j v_j changes by ``-h_jᵀ (S_i × v_i) dq`` for each body j
+of the subtree; and ``Cᵀ q̇ = ∂T/∂q`` follows from Lagrange's equations
+(``d/dt ∂T/∂q̇ = ṗ``) and ``Ṁ = C + Cᵀ``. A mimic body adds ``mul`` times its part to its
+source joint, as in the RNEA.
+
+Written on scalar components under the rules of :mod:`.rnea` (the compiled backend is
+generated from it).
+"""
+
+from __future__ import annotations
+
+from .components import I_motion, X_motion, XT_force
+from .rnea import PR
+
+
+def momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc) -> None:
+    """``M(q) q̇`` into ``mom`` and ``Cᵀ(q, q̇) q̇`` into ``ctq`` (``n`` scalars each).
+
+    ``Xup`` are the transforms of :func:`~.rnea.xup_kernel` for ``q``; ``vel`` and ``frc``
+    scratch with a slot per body.
+    """
+    NB = len(rows) - 1
+    vel[0] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    for k in range(len(mom)):
+        mom[k] = 0.0
+        ctq[k] = 0.0
+    for i in range(1, NB + 1):
+        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+         mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, mul, _) = rows[i]
+        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
+        qdi = qd[k] if mul == 1.0 else mul * qd[k]
+        # v_i = Xup_i v_λ(i) + S_i q̇_i
+        pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
+        w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                          rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2)
+        if code == PR:
+            v0, v1, v2 = v0 + ax * qdi, v1 + ay * qdi, v2 + az * qdi
+        else:
+            w0, w1, w2 = w0 + ax * qdi, w1 + ay * qdi, w2 + az * qdi
+        vel[i] = (w0, w1, w2, v0, v1, v2)
+        # h_i = I_i v_i
+        m0, m1, m2, k0, k1, k2 = I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz,
+                                          w0, w1, w2, v0, v1, v2)
+        frc[i] = [m0, m1, m2, k0, k1, k2]
+
+    # Backward pass: H_λ(i) += Xup_iᵀ H_i; p_i = S_iᵀ H_i, (Cᵀ q̇)_i = (v_i × S_i)ᵀ H_i
+    for i in range(NB, 0, -1):
+        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+         _, _, _, _, _, _, _, _, _, _, mul, _) = rows[i]
+        n0, n1, n2, f0, f1, f2 = frc[i]
+        w0, w1, w2, v0, v1, v2 = vel[i]
+        # v × S = [w × s_ω; w × s_v + v × s_ω] with S = [a; 0] (revolute) or [0; a]
+        c0, c1, c2 = w1 * az - w2 * ay, w2 * ax - w0 * az, w0 * ay - w1 * ax
+        if code == PR:
+            t = ax * f0 + ay * f1 + az * f2
+            c = c0 * f0 + c1 * f1 + c2 * f2
+        else:
+            t = ax * n0 + ay * n1 + az * n2
+            c = (c0 * n0 + c1 * n1 + c2 * n2 + (v1 * az - v2 * ay) * f0
+                 + (v2 * ax - v0 * az) * f1 + (v0 * ay - v1 * ax) * f2)
+        mom[k] = mom[k] + (t if mul == 1.0 else mul * t)
+        ctq[k] = ctq[k] + (c if mul == 1.0 else mul * c)
+        if p == 0:
+            continue
+        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
+        g0, g1, g2, g3, g4, g5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                          rx, ry, rz, n0, n1, n2, f0, f1, f2)
+        fp = frc[p]
+        fp[0] += g0
+        fp[1] += g1
+        fp[2] += g2
+        fp[3] += g3
+        fp[4] += g4
+        fp[5] += g5
