@@ -118,7 +118,7 @@ def check_mode(control_mode: str, output: str) -> Tuple[str, str]:
             "parameters output 'none' and control_mode 'feedforward': output none publishes "
             'only the feedback term, and feedforward has none, so every answer would be '
             "zeros; set control_mode to 'pd_feedforward' or 'computed_torque' first (or "
-            'in the same call), or choose another output')
+            'both atomically), or choose another output')
     return control_mode, output
 
 

@@ -1,0 +1,401 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Output choice, feed-forward terms and feedback on the measured state, over real DDS.
+
+The installed node runs as a process; its answers are compared with Pinocchio
+(computeGeneralizedGravity, nonLinearEffects, crba, rnea) on the same URDF: the terms on
+``feedforward_terms`` sum to the published torque and each equals its part of the dynamics
+(UR5); ``without_gravity`` and ``gravity_only`` equal τ − g(q) and g(q); ``pd_feedforward``
+and ``computed_torque`` equal their formulas for a desired + measured pair, with the position
+error of a continuous joint wrapped (the demo arm's joint7). Each measured message is answered
+once, desired messages only update the held setpoint; a stale measured state stops the
+output with diagnostics ERROR; bad gains and bad measured messages are refused with the
+reason and change nothing. Waits are generous bounds, never timing assertions.
+"""
+
+import math
+import os
+import sys
+import time
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from conftest import robot_urdf_path  # noqa: E402
+from node_harness import (  # noqa: E402
+    DEMO_URDF, Driver, Io, joint_state, NodeProcess, pin_oracle, stamp, stamp_key, TIMEOUT,
+    values)
+
+pytestmark = pytest.mark.ros
+
+TOL = 1e-9   # N m: against Pinocchio (RNEA vs RNEA/CRBA, double precision)
+ERROR = b'\x02'   # diagnostic_msgs/DiagnosticStatus.ERROR as rclpy gives a byte field
+
+
+def ok(results):
+    """Assert every SetParametersResult succeeded."""
+    for result in results:
+        assert result.successful, result.reason
+
+
+def refused(results, *words):
+    """Assert the one result failed and its reason names every word."""
+    (result,) = results
+    assert not result.successful
+    for word in words:
+        assert word in result.reason, (word, result.reason)
+    return result.reason
+
+
+class Loop:
+    """Desired and measured states to the node; its answers (efforts, terms) by stamp."""
+
+    def __init__(self, driver: Driver, io: Io, names) -> None:
+        from sensor_msgs.msg import JointState
+        self.driver, self.io, self.names = driver, io, tuple(names)
+        self.k = 1000    # stamps of this test's messages
+        self.terms = []
+        self.measured = driver.node.create_publisher(JointState, 'joint_states', 10)
+        self.terms_sub = None
+        driver.spin_until(lambda: self.measured.get_subscription_count() >= 1,
+                          what='the node to subscribe joint_states')
+
+    def subscribe_terms(self) -> None:
+        from sensor_msgs.msg import JointState
+        self.terms_sub = self.driver.node.create_subscription(
+            JointState, 'feedforward_terms', self.terms.append, 100)
+        self.driver.spin_until(lambda: self.terms_sub.get_publisher_count() >= 1,
+                               what='feedforward_terms')
+
+    def close(self) -> None:
+        self.driver.node.destroy_publisher(self.measured)
+        if self.terms_sub is not None:
+            self.driver.node.destroy_subscription(self.terms_sub)
+
+    def answers(self, k):
+        return [m for m in self.io.efforts if stamp_key(m.header.stamp) == k]
+
+    def _ask(self, publisher, msg, k, with_terms=False):
+        deadline = time.monotonic() + TIMEOUT
+        while True:
+            answers = self.answers(k)
+            terms = [m for m in self.terms if stamp_key(m.header.stamp) == k]
+            if answers and (terms or not with_terms):
+                assert tuple(answers[0].name) == self.names
+                effort = np.array(answers[0].effort)
+                return (effort, terms[0]) if with_terms else effort
+            assert time.monotonic() < deadline, f'no answer to message {k}'
+            publisher.publish(msg)
+            self.driver.spin_for(0.05)
+
+    def desired(self, state, with_terms=False):
+        """Publish a desired (q, qd, qdd) until answered (feedforward mode)."""
+        self.k += 1
+        return self._ask(self.io.joint_states, joint_state(self.names, *state, self.k),
+                         self.k, with_terms)
+
+    def measured_msg(self, q, qd, k):
+        msg = joint_state(self.names, q, qd, [], k)
+        msg.effort = [123.0] * len(self.names)    # a measured torque: never read
+        return msg
+
+    def measure(self, q, qd, with_terms=False):
+        """Publish a measured (q, qd) until answered (feedback modes)."""
+        self.k += 1
+        return self._ask(self.measured, self.measured_msg(q, qd, self.k), self.k, with_terms)
+
+
+@pytest.fixture
+def demo(install, tmp_path):
+    proc = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
+                                 '-p', 'input_timeout:=60.0'], str(tmp_path))
+    yield proc
+    assert proc.stop() == 0, proc.log()
+
+
+def connect(driver, names):
+    io = Io(driver)
+    io.wait_connected()
+    io.prime(names)
+    return io, Loop(driver, io, names)
+
+
+def pin_parts(oracle, names, q, qd, qdd):
+    """Pinocchio's g(q), C q̇, M q̈ and RNEA in our joint order (mimic torques folded)."""
+    pin = oracle.pin
+    q_pin, v_pin, a_pin = oracle.expand(names, q, qd, qdd)
+    g = pin.computeGeneralizedGravity(oracle.model, oracle.data, q_pin).copy()
+    nle = pin.nonLinearEffects(oracle.model, oracle.data, q_pin, v_pin).copy()
+    M = pin.crba(oracle.model, oracle.data, q_pin).copy()
+    M = np.triu(M) + np.triu(M, 1).T
+    tau = pin.rnea(oracle.model, oracle.data, q_pin, v_pin, a_pin).copy()
+    fold = oracle.fold
+    return dict(gravity=fold(names, g), velocity_product=fold(names, nle - g),
+                inertial=fold(names, M @ a_pin), rnea=fold(names, tau))
+
+
+def split(msg, names):
+    """Term -> (n,) of a feedforward_terms message; checks its ``<joint>/<term>`` names."""
+    terms = {}
+    for name, value in zip(msg.name, msg.effort):
+        joint, term = name.rsplit('/', 1)
+        terms.setdefault(term, {})[joint] = value
+    for term, by_joint in terms.items():
+        assert set(by_joint) == set(names), term
+    assert len(msg.effort) == len(msg.name) == len(terms) * len(names)
+    return {term: np.array([by_joint[j] for j in names]) for term, by_joint in terms.items()}
+
+
+def test_terms_and_outputs_against_pinocchio_ur5(install, driver, tmp_path):
+    urdf = robot_urdf_path('ur5')
+    oracle = pin_oracle(urdf)
+    import spatial_dynamics as sd
+    names = sd.Model.from_urdf(urdf).joint_names
+    node = NodeProcess(install, ['-p', f'robot_description_file:={urdf}'], str(tmp_path))
+    io, loop = connect(driver, names)
+    try:
+        rng = np.random.default_rng(61)
+        state = tuple(rng.uniform(-1.0, 1.0, len(names)) * s for s in (2.0, 1.5, 4.0))
+        pin = pin_parts(oracle, names, *state)
+        # nobody subscribed: no terms computed; then subscribed: the terms of each answer
+        tau = loop.desired(state)
+        np.testing.assert_allclose(tau, pin['rnea'], rtol=0, atol=TOL)
+        loop.subscribe_terms()
+        tau, msg = loop.desired(state, with_terms=True)
+        terms = split(msg, names)
+        assert list(terms) == ['gravity', 'velocity_product', 'inertial', 'armature',
+                               'friction', 'external']
+        np.testing.assert_allclose(sum(terms.values()), tau, rtol=0, atol=1e-12)
+        for term in ('gravity', 'velocity_product', 'inertial'):
+            np.testing.assert_allclose(terms[term], pin[term], rtol=0, atol=TOL, err_msg=term)
+        for term in ('armature', 'friction', 'external'):   # all off by default
+            np.testing.assert_array_equal(terms[term], 0.0)
+        assert stamp_key(msg.header.stamp) == loop.k   # the answer's header
+
+        ok(io.set_parameters(output='without_gravity'))
+        tau, msg = loop.desired(state, with_terms=True)
+        np.testing.assert_allclose(tau, pin['rnea'] - pin['gravity'], rtol=0, atol=TOL)
+        terms = split(msg, names)
+        assert 'gravity' not in terms
+        np.testing.assert_allclose(sum(terms.values()), tau, rtol=0, atol=1e-12)
+
+        ok(io.set_parameters(output='gravity_only'))
+        tau, msg = loop.desired(state, with_terms=True)
+        np.testing.assert_allclose(tau, pin['gravity'], rtol=0, atol=TOL)
+        assert list(split(msg, names)) == ['gravity']
+
+        # output none has nothing to publish in feedforward mode: refused, output unchanged
+        refused(io.set_parameters(output='none'), 'none', 'feedforward', 'zeros')
+        refused(io.set_parameters(output='all'), 'output', "'all'")
+        np.testing.assert_allclose(loop.desired(state), pin['gravity'], rtol=0, atol=TOL)
+        kv = values(io.fresh_status('feedforward'))
+        assert kv['output'] == 'gravity_only' and kv['control mode'] == 'feedforward'
+    finally:
+        loop.close()
+        io.close()
+        assert node.stop() == 0, node.log()
+
+
+def wrapped_pair(names, seed):
+    """A desired state and a measured one; joint7 (continuous) measured a turn away."""
+    rng = np.random.default_rng(seed)
+    n = len(names)
+    desired = tuple(rng.uniform(-1.0, 1.0, n) * s for s in (1.5, 1.0, 3.0))
+    q = desired[0] + rng.uniform(-0.2, 0.2, n)
+    qd = desired[1] + rng.uniform(-0.5, 0.5, n)
+    j7 = names.index('joint7')
+    q[j7] = desired[0][j7] - 0.3 + 2.0 * math.pi     # naive error 0.3 - 2 pi, wrapped 0.3
+    e = desired[0] - q
+    e[j7] = 0.3
+    return desired, (q, qd), e
+
+
+def test_pd_feedforward_and_computed_torque_against_pinocchio(driver, demo, demo_model):
+    names = demo_model.joint_names
+    oracle = pin_oracle(DEMO_URDF)
+    io, loop = connect(driver, names)
+    try:
+        n = len(names)
+        kp, kd = np.linspace(20.0, 90.0, n), np.linspace(2.0, 9.0, n)
+        ok(io.set_parameters(kp=kp.tolist(), kd=kd.tolist()))
+        desired, (q, qd), e = wrapped_pair(names, 62)
+        u = kp * e + kd * (desired[1] - qd)
+        # the desired state is answered in feedforward mode (so it is known to be held) ...
+        np.testing.assert_allclose(loop.desired(desired), oracle.rnea(names, *desired),
+                                   rtol=0, atol=TOL)
+        # ... and held when the measured state triggers the answers
+        ok(io.set_parameters(control_mode='pd_feedforward'))
+        loop.subscribe_terms()
+        tau, msg = loop.measure(q, qd, with_terms=True)
+        np.testing.assert_allclose(tau, oracle.rnea(names, *desired) + u, rtol=0, atol=TOL)
+        terms = split(msg, names)
+        np.testing.assert_allclose(terms['feedback'], u, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(sum(terms.values()), tau, rtol=0, atol=1e-12)
+        answered = io.efforts[-1]
+        np.testing.assert_array_equal(answered.position, desired[0])   # the setpoint
+        np.testing.assert_array_equal(answered.velocity, desired[1])
+
+        ok(io.set_parameters(control_mode='computed_torque'))
+        pin = pin_parts(oracle, names, q, qd, desired[2])
+        tau, msg = loop.measure(q, qd, with_terms=True)
+        M_u = pin_parts(oracle, names, q, np.zeros(n), u)['inertial']
+        np.testing.assert_allclose(tau, oracle.rnea(names, q, qd, desired[2] + u), rtol=0,
+                                   atol=TOL)
+        terms = split(msg, names)
+        for term in ('gravity', 'velocity_product', 'inertial'):   # at the MEASURED state
+            np.testing.assert_allclose(terms[term], pin[term], rtol=0, atol=TOL, err_msg=term)
+        np.testing.assert_allclose(terms['feedback'], M_u, rtol=0, atol=TOL)
+        np.testing.assert_allclose(sum(terms.values()), tau, rtol=0, atol=1e-12)
+
+        ok(io.set_parameters(output='without_gravity'))
+        np.testing.assert_allclose(loop.measure(q, qd), oracle.rnea(
+            names, q, qd, desired[2] + u) - pin['gravity'], rtol=0, atol=TOL)
+        ok(io.set_parameters(output='none'))
+        np.testing.assert_allclose(loop.measure(q, qd), M_u, rtol=0, atol=TOL)
+        # PD alone: output none in pd_feedforward is the feedback term only
+        ok(io.set_parameters(control_mode='pd_feedforward'))
+        np.testing.assert_allclose(loop.measure(q, qd), u, rtol=0, atol=1e-12)
+        refused(io.set_parameters(control_mode='feedforward'), 'none', 'feedforward')
+        kv = values(io.fresh_status('feedforward'))
+        assert kv['control mode'] == 'pd_feedforward' and kv['output'] == 'none'
+        assert kv['continuous joints'] == 'joint7'
+    finally:
+        loop.close()
+        io.close()
+
+
+def test_each_measured_state_answered_once_desired_only_held(driver, demo, demo_model):
+    names = demo_model.joint_names
+    n = len(names)
+    io, loop = connect(driver, names)
+    try:
+        ok(io.set_parameters(kp=[10.0], kd=[1.0], control_mode='pd_feedforward'))
+        ok(io.set_parameters(output='none'))
+        zeros = np.zeros(n)
+        q = np.linspace(-0.1, 0.1, n)
+        # held from the priming message (zeros): PD towards it
+        np.testing.assert_allclose(loop.measure(q, zeros), -10.0 * q, rtol=0, atol=1e-12)
+        # lockstep: each measured message published once, answered once
+        for step in range(5):
+            k = 4000 + step
+            loop.measured.publish(loop.measured_msg(q * step, zeros, k))
+            driver.spin_until(lambda: loop.answers(k), what=f'the answer to {k}')
+        driver.spin_for(0.5)
+        for step in range(5):
+            (answer,) = loop.answers(4000 + step)
+            np.testing.assert_allclose(answer.effort, -10.0 * q * step, rtol=0, atol=1e-12)
+        # desired messages are not answered in a feedback mode, they move the setpoint
+        q_d = np.full(n, 0.2)
+        before = len(io.efforts)
+        for k in range(5):
+            io.joint_states.publish(joint_state(names, q_d, zeros, zeros, 5000 + k))
+            driver.spin_for(0.05)
+        driver.spin_for(0.5)
+        assert len(io.efforts) == before, 'a desired message was answered in pd_feedforward'
+        deadline = time.monotonic() + TIMEOUT
+        while not np.allclose(loop.measure(q, zeros), 10.0 * (q_d - q), rtol=0, atol=1e-12):
+            assert time.monotonic() < deadline, 'the new desired state was never held'
+            io.joint_states.publish(joint_state(names, q_d, zeros, zeros, 5000))
+        keys = [stamp_key(m.header.stamp) for m in io.efforts]
+        assert not any(5000 <= k < 5005 for k in keys)
+    finally:
+        loop.close()
+        io.close()
+
+
+def test_stale_measured_or_desired_state_stops_the_output(driver, demo, demo_model):
+    names = demo_model.joint_names
+    n = len(names)
+    io, loop = connect(driver, names)
+    zeros = np.zeros(n)
+    try:
+        ok(io.set_parameters(control_mode='pd_feedforward', kp=[5.0], measured_timeout=0.2))
+        ok(io.set_parameters(output='none'))    # the PD alone: -5 * 0.1 below
+        loop.measure(zeros + 0.1, zeros)
+        # no measured state any more, desired still coming: nothing is published
+        driver.spin_until(lambda: 'measured state stale' in io.fresh_status('feedforward')
+                          .message, what='diagnostics to report the stale measured state')
+        status = io.fresh_status('feedforward')
+        assert status.level == ERROR and 'joint_states' in status.message, status.message
+        before = len(io.efforts)
+        for k in range(10):
+            io.joint_states.publish(joint_state(names, zeros, zeros, zeros, 6000 + k))
+            driver.spin_for(0.05)
+        driver.spin_for(0.3)
+        assert len(io.efforts) == before, 'published without a fresh measured state'
+        assert values(status)['measured state stale'] == 'True'
+
+        # a desired state older than input_timeout: measured states are not answered
+        ok(io.set_parameters(input_timeout=0.2, measured_timeout=60.0))
+        driver.spin_for(0.5)
+        before = len(io.efforts)
+        for k in range(10):
+            loop.measured.publish(loop.measured_msg(zeros, zeros, 7000 + k))
+            driver.spin_for(0.05)
+        driver.spin_until(lambda: int(values(io.fresh_status('feedforward'))
+                                      ['rejected desired_stale']) >= 1,
+                          what='stale desired states to be counted')
+        assert len(io.efforts) == before, 'answered with a stale desired state'
+        status = io.fresh_status('feedforward')
+        assert status.level == ERROR and 'desired state stale' in status.message, status.message
+        # fresh again: answers resume
+        ok(io.set_parameters(input_timeout=60.0))
+        io.joint_states.publish(joint_state(names, zeros, zeros, zeros, 8000))
+        driver.spin_for(0.2)
+        np.testing.assert_allclose(loop.measure(zeros + 0.1, zeros), -0.5, rtol=0, atol=1e-9)
+    finally:
+        loop.close()
+        io.close()
+
+
+def test_bad_gains_and_bad_measured_states_change_nothing(driver, demo, demo_model):
+    names = demo_model.joint_names
+    n = len(names)
+    io, loop = connect(driver, names)
+    try:
+        ok(io.set_parameters(kp=np.linspace(1.0, 8.0, n).tolist(), kd=[2.0]))
+        desired, (q, qd), _ = wrapped_pair(names, 63)
+        loop.desired(desired)    # answered in feedforward mode, so held from now on
+        ok(io.set_parameters(control_mode='computed_torque'))
+        first = loop.measure(q, qd)
+
+        for change, words in [
+                (dict(kp=[-1.0]), ['kp', 'joint1', '-1.0']),
+                (dict(kp=[1.0, 2.0]), ['kp', '2 values', '8 joints']),
+                (dict(kd=[math.nan]), ['kd', 'nan']),
+                (dict(kp=[1e7]), ['kp', '1e+06', '1/s²']),
+                (dict(kd=[1e5] * n), ['kd', '10000', '1/s']),
+                (dict(control_mode='pid'), ['control_mode', "'pid'"])]:
+            refused(io.set_parameters(**change), *words)
+
+        bad = []
+        for field, value in [('position', [math.nan] + list(q[1:])),
+                             ('position', list(q[:-1])),
+                             ('velocity', []),
+                             ('velocity', [1e6] * n),
+                             ('name', list(names[:-1]) + ['no_such_joint'])]:
+            msg = loop.measured_msg(q, qd, 0)
+            setattr(msg, field, value)
+            bad.append(msg)
+        for k, msg in enumerate(bad):
+            msg.header.stamp = stamp(9100 + k)
+            for _ in range(3):
+                loop.measured.publish(msg)
+                driver.spin_for(0.05)
+        reasons = ('non_finite', 'length_mismatch', 'no_velocity', 'out_of_bounds',
+                   'missing_joint')
+
+        def counted():
+            kv = values(io.fresh_status('feedforward'))
+            return all(int(kv[f'measured states rejected {r}']) >= 1 for r in reasons)
+
+        driver.spin_until(counted, what='every bad measured state counted with its reason')
+        keys = [stamp_key(m.header.stamp) for m in io.efforts]
+        assert not any(9100 <= k < 9100 + len(bad) for k in keys), 'a bad state was answered'
+        demo.wait_for_log('joint_states: measured state rejected')
+        np.testing.assert_array_equal(loop.measure(q, qd), first)   # identical to before
+    finally:
+        loop.close()
+        io.close()
