@@ -150,7 +150,7 @@ class SimNode(Node):
         if p['publish_clock']:
             from rosgraph_msgs.msg import Clock
             self.clock_pub = self.create_publisher(Clock, '/clock', 10)
-            self._clock = Clock
+            self._clock_msg = Clock
         self.create_subscription(Float64MultiArray, p['command_topic'], self._on_command,
                                  command_qos())
         self.msg = JointState(name=list(self.robot.joint_names))
@@ -217,7 +217,7 @@ class SimNode(Node):
         msg.effort = self.tau.tolist()
         self.state_pub.publish(msg)
         if self.clock_pub is not None:
-            self.clock_pub.publish(self._clock(clock=to_time(self.robot.time)))
+            self.clock_pub.publish(self._clock_msg(clock=to_time(self.robot.time)))
         self.last_publish = time.monotonic()
 
 
