@@ -193,7 +193,7 @@ def test_damping_and_armature_are_the_terms_of_terms_py(rng):
 
 
 def test_friction_loss_is_a_bounded_constraint_not_tanh(rng):
-    """MuJoCo's friction loss is a dry-friction constraint force of at most ``friction``.
+    """Check friction loss: in MuJoCo a dry-friction constraint force of at most ``friction``.
 
     In mj_inverse, once the joint slides (|q̇| well above the constraint's softness) it is
     exactly friction·sign(q̇); at rest with q̈ = 0 it is 0; it never exceeds friction (terms.py's
