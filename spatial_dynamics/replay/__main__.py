@@ -1,0 +1,426 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Inverse dynamics over a recording: measured effort against the model, and a trajectory check.
+
+    python -m spatial_dynamics.replay BAG --urdf URDF [--topic /joint_states] [--out DIR]
+                                      [--identify] [--threshold 0.01] [--window 0.05]
+    python -m spatial_dynamics.replay --urdf URDF --trajectory FILE.yaml [--rate 1000]
+    python -m spatial_dynamics.replay BAG --urdf URDF --trajectory-topic /arm/joint_trajectory
+    ros2 run spatial_dynamics replay ...
+
+A bag (rosbag2, sqlite3 or MCAP; no ROS installation needed) gives q, q̇ and the measured
+effort by joint name; q̈ comes from a zero-phase Savitzky-Golay derivative of q̇ (of q when
+the bag has no velocities). The model torque is the rigid-body RNEA for the whole bag in one
+batched call. Written to DIR: summary.csv (per joint), residual.csv (per sample: t, measured
+- model per joint), measured_vs_model.png, residual.png. ``--identify`` fits per-joint
+damping, Coulomb friction (tanh(q̇/threshold), as the node) and armature to the residual.
+
+A trajectory (``--trajectory`` YAML or ``--trajectory-topic``) is sampled like
+joint_trajectory_controller's splines at ``--rate`` and τ compared with the URDF effort limits.
+
+Exit status: 0 done (samples skipped are listed with the reason), 1 refused (no such bag,
+topic or joint, nothing usable, rosbags missing; a trajectory exceeding an effort limit),
+2 bad usage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from typing import Dict, List, Optional, Sequence
+import warnings
+
+import numpy as np
+
+from .. import friction_torque, Model, rnea, URDFWarning
+from ..check import locked_item, read_description
+from . import bags, differentiate, identify, report, splines
+
+#: The node's default ``friction_velocity_threshold`` (config/inverse_dynamics.yaml).
+NODE_THRESHOLD = 0.01
+
+
+class Refused(Exception):
+    """The input cannot be used; the message says why (exit status 1)."""
+
+
+class Progress:
+    """A one-line progress bar on stderr, drawn only when stderr is a terminal."""
+
+    def __init__(self, label: str, stream=None) -> None:
+        """Draw on ``stream`` (stderr) if it is a terminal."""
+        self.label = label
+        self.stream = stream or sys.stderr
+        self.on = self.stream.isatty()
+        self.last = 0.0
+
+    def __call__(self, done: int, total: int) -> None:
+        """Redraw at most 10 times a second."""
+        now = time.monotonic()
+        if not self.on or (now - self.last < 0.1 and done < total):
+            return
+        self.last = now
+        frac = min(1.0, done / total) if total else 1.0
+        bar = '#' * int(30 * frac)
+        self.stream.write(f'\r{self.label} [{bar:<30}] {done}/{total}')
+        self.stream.flush()
+
+    def close(self) -> None:
+        """End the line."""
+        if self.on:
+            self.stream.write('\n')
+
+
+class Stages:
+    """Wall-clock time of each stage of the command (``--timings``)."""
+
+    def __init__(self) -> None:
+        """Start the clock."""
+        self.times: Dict[str, float] = {}
+        self.start = time.perf_counter()
+
+    def done(self, stage: str) -> None:
+        """Record the time since the previous stage ended."""
+        now = time.perf_counter()
+        self.times[stage] = self.times.get(stage, 0.0) + now - self.start
+        self.start = now
+
+    def text(self) -> str:
+        """Return the stages and their sum, one per line."""
+        lines = [f'  {k:<16} {v:8.3f} s' for k, v in self.times.items()]
+        return '\n'.join(lines + [f'  {"total":<16} {sum(self.times.values()):8.3f} s'])
+
+
+def load_model(args, joints: Optional[Sequence[str]] = None) -> Model:
+    """Build the model from ``--urdf`` with ``--joints``/``--locked``; :class:`Refused` if not."""
+    try:
+        xml = read_description(args.urdf)
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore', URDFWarning)
+            return Model.from_urdf(xml, joints=joints or args.joints,
+                                   locked=dict(args.locked) or None)
+    except ValueError as err:
+        raise Refused(str(err)) from None
+
+
+def mimic_notes(model: Model) -> List[str]:
+    """Say which joints of ``q`` drive mimic joints (their fitted terms include those)."""
+    notes = []
+    for k, name in enumerate(model.joint_names):
+        followers = [model.body_joints[i] for i in range(1, model.NB + 1)
+                     if model.qidx[i] == k and model.body_joints[i] != name]
+        if followers:
+            notes.append(f'{name} drives mimic joint(s) {", ".join(followers)}: its fitted '
+                         'terms include theirs (set their <dynamics> to 0)')
+    return notes
+
+
+# --------------------------------------------------------------------------------------------
+# Samples: from the bag to clean, sorted arrays
+
+def clean(js: bags.JointStates, window: float) -> Dict:
+    """Drop what cannot be used, sort by stamp, cut at gaps; return arrays and the reasons.
+
+    Returns ``{t, q, qd (or None), effort, skipped: {reason: count}, segments}``.
+    ``Refused`` when a joint is never present, the bag has no effort, or nothing is left.
+    """
+    skipped = dict(js.skipped)
+    names = js.names
+    if len(js.stamp) == 0:
+        raise Refused('no JointState messages could be read' + (
+            f' ({"; ".join(f"{v} {k}" for k, v in skipped.items())})' if skipped else ''))
+    have_q = np.isfinite(js.position)
+    never = [n for n, seen in zip(names, have_q.any(axis=0)) if not seen]
+    if never:
+        raise Refused(f'joint(s) {", ".join(never)} never have a position in the topic; keep '
+                      'only the recorded joints with --joints (the others are locked)')
+    if not np.isfinite(js.effort).any():
+        raise Refused('the topic has no measured effort (JointState.effort is empty)')
+    has_velocity = bool(np.isfinite(js.velocity).any())
+    fields = [('position', js.position), ('effort', js.effort)]
+    if has_velocity:
+        fields.insert(1, ('velocity', js.velocity))
+    keep = np.ones(len(js.stamp), dtype=bool)
+    for what, a in fields:
+        bad = ~np.isfinite(a)
+        for j, name in enumerate(names):
+            rows = bad[:, j] & keep
+            if rows.any():
+                reason = f'{name}: no finite {what} (joint missing from the message, or NaN)'
+                skipped[reason] = skipped.get(reason, 0) + int(rows.sum())
+                keep &= ~rows
+    t = js.stamp[keep]
+    order = np.argsort(t, kind='stable')
+    backwards = int(np.sum(np.diff(t) < 0))
+    t = t[order]
+    idx = np.flatnonzero(keep)[order]
+    repeated = np.concatenate(([False], np.diff(t) <= 0))
+    if repeated.any():
+        skipped['repeated stamp (first kept)'] = int(repeated.sum())
+        t, idx = t[~repeated], idx[~repeated]
+    if len(t) < 5:
+        raise Refused(f'only {len(t)} usable samples: ' + '; '.join(
+            f'{v} skipped, {k}' for k, v in skipped.items()))
+    seg = differentiate.segments(t, window)
+    if seg.dropped:
+        skipped['in a stretch between gaps shorter than the window'] = seg.dropped
+    if not seg.spans:
+        raise Refused('no stretch of samples without gaps is as long as the window '
+                      f'({window} s); lower --window')
+    inside = np.zeros(len(t), dtype=bool)
+    for a, b in seg.spans:
+        inside[a:b] = True
+    # Renumber the spans onto the samples kept.
+    starts = np.cumsum(np.concatenate(([0], inside[:-1])))
+    spans = [(int(starts[a]), int(starts[a]) + (b - a)) for a, b in seg.spans]
+    rows = idx[inside]
+    return {'t': t[inside], 'q': js.position[rows], 'qd': js.velocity[rows] if has_velocity
+            else None, 'effort': js.effort[rows], 'skipped': skipped, 'spans': spans,
+            'period': seg.period, 'out_of_order': backwards}
+
+
+# --------------------------------------------------------------------------------------------
+# The bag command
+
+def run_bag(args) -> int:
+    """Compare measured efforts with the model over a bag; write the files; return 0."""
+    stages = Stages()
+    model = load_model(args)
+    names = model.joint_names
+    stages.done('model')
+    bar = Progress('reading')
+    try:
+        js = bags.read_joint_states(args.bag, args.topic, names, fast=not args.generic,
+                                    progress=bar)
+    finally:
+        bar.close()
+    stages.done('read+decode')
+    s = clean(js, args.window)
+    t, q, effort, spans = s['t'], s['q'], s['effort'], s['spans']
+    stages.done('clean+sort')
+    if s['qd'] is not None:
+        qd = differentiate.derivatives(t, s['qd'], args.window, args.order, 0, spans)[0]
+        qdd, resampled = differentiate.derivatives(t, s['qd'], args.window, args.order, 1,
+                                                   spans)
+        source = 'velocity'
+    else:
+        qd, resampled = differentiate.derivatives(t, q, args.window, args.order, 1, spans)
+        qdd = differentiate.derivatives(t, q, args.window, args.order, 2, spans)[0]
+        source = 'position (the bag has no velocities)'
+    stages.done('differentiate')
+    tau = rnea(model, q, qd, qdd, args.gravity)
+    residual = effort - tau
+    stages.done('rnea')
+    rms_measured = np.sqrt(np.mean(effort ** 2, axis=0))
+    rms_residual = np.sqrt(np.mean(residual ** 2, axis=0))
+    fit = None
+    if args.identify:
+        fit = identify.identify(residual, qd, qdd, args.threshold, names)
+        stages.done('identify')
+    report.ensure_dir(args.out)
+    header = ['joint', 'samples', 'rms_measured', 'rms_residual']
+    rows = [[n, len(t), rms_measured[j], rms_residual[j]] for j, n in enumerate(names)]
+    if fit is not None:
+        header += ['damping', 'friction', 'armature', 'rms_residual_identified']
+        for j, r in enumerate(rows):
+            r += [fit.damping[j], fit.friction[j], fit.armature[j], fit.rms_after[j]]
+    report.write_summary(os.path.join(args.out, 'summary.csv'), rows, header)
+    if args.residual == 'csv':
+        report.write_csv(os.path.join(args.out, 'residual.csv'), ['t'] + list(names),
+                         [t - t[0]] + [residual[:, j] for j in range(len(names))],
+                         [6] + [4] * len(names))
+    elif args.residual == 'npy':
+        np.save(os.path.join(args.out, 'residual.npy'), np.column_stack((t - t[0], residual)))
+    stages.done('write residual')
+    if not args.no_plots:
+        report.plot_joints(os.path.join(args.out, 'measured_vs_model.png'), t - t[0], names,
+                           {'measured': effort, 'model (RNEA)': tau},
+                           f'{args.topic}: measured effort and model torque (N m or N)')
+        report.plot_joints(os.path.join(args.out, 'residual.png'), t - t[0], names,
+                           {'measured - model': residual}, 'residual (N m or N)')
+        stages.done('plots')
+
+    window = differentiate.window_samples(args.window, s['period'])
+    rate = 1.0 / s['period']
+    print(f'{args.bag} {args.topic}: {len(js.stamp) + sum(js.skipped.values())} messages, '
+          f'{len(t)} samples used over {t[-1] - t[0]:.3f} s at {rate:.6g} Hz '
+          f'(median period), {len(spans)} stretch(es) between gaps')
+    print(f'model: {model.summary()}; torque = rigid-body RNEA only (no URDF <dynamics>, no '
+          'armature)')
+    print(f'q_dd from the {source}: Savitzky-Golay order {args.order}, window {window} '
+          f'samples ({window / rate:.3g} s), cut-off about '
+          f'{differentiate.cutoff(window, args.order, rate):.3g} Hz, zero phase'
+          + (f'; {resampled} stretch(es) with uneven stamps resampled' if resampled else ''))
+    if s['out_of_order']:
+        print(f'{s["out_of_order"]} stamp(s) earlier than the one before: samples sorted by '
+              'header stamp')
+    if s['skipped']:
+        print('skipped:')
+        for reason, count in s['skipped'].items():
+            print(f'  {count} sample(s): {reason}')
+    if js.generic:
+        print(f'{js.generic} message(s) of a different layout read by rosbags\' deserialiser')
+    table_rows = [[n, f'{rms_measured[j]:.4g}', f'{rms_residual[j]:.4g}']
+                  for j, n in enumerate(names)]
+    head = ['joint', 'rms measured', 'rms residual']
+    if fit is not None:
+        head += ['damping', 'friction', 'armature', 'rms identified', 'drop']
+        for j, r in enumerate(table_rows):
+            drop = 1.0 - fit.rms_after[j] / fit.rms_before[j] if fit.rms_before[j] else 0.0
+            r += [f'{fit.damping[j]:.4g}', f'{fit.friction[j]:.4g}', f'{fit.armature[j]:.4g}',
+                  f'{fit.rms_after[j]:.4g}', f'{100 * drop:.0f} %']
+    print(report.table(head, table_rows))
+    if fit is not None:
+        print(f'\nidentified with friction threshold {args.threshold:g} rad/s (m/s):')
+        for note in fit.notes + mimic_notes(model):
+            print(f'  note: {note}')
+        print('\n# node parameters (config/*.yaml):')
+        print(report.node_parameters(names, fit.armature, args.threshold))
+        print('\n<!-- URDF: each joint\'s <dynamics> (read by friction_model: urdf) -->')
+        print(report.urdf_dynamics(names, fit.damping, fit.friction))
+    print(f'\nwritten to {args.out}: summary.csv'
+          + {'csv': ', residual.csv', 'npy': ', residual.npy', 'none': ''}[args.residual]
+          + ('' if args.no_plots else ', measured_vs_model.png, residual.png'))
+    if args.timings:
+        print('stages:\n' + stages.text(), file=sys.stderr)
+    return 0
+
+
+# --------------------------------------------------------------------------------------------
+# The trajectory command
+
+def run_trajectory(args) -> int:
+    """Check trajectories against the effort limits; 1 when one is exceeded."""
+    if args.trajectory:
+        try:
+            trajectories = [splines.from_yaml(args.trajectory)]
+        except OSError as err:
+            raise Refused(f'{args.trajectory}: {err.strerror}') from None
+        labels = [os.path.basename(args.trajectory)]
+    else:
+        msgs = bags.read_messages(args.bag, args.trajectory_topic, bags.JOINT_TRAJECTORY)
+        if not msgs:
+            raise Refused(f'no messages on {args.trajectory_topic}')
+        trajectories = [splines.from_message(m) for m in msgs]
+        labels = [f'{args.trajectory_topic} #{k}' for k in range(len(msgs))]
+    exceeded = False
+    report.ensure_dir(args.out)
+    for k, (traj, label) in enumerate(zip(trajectories, labels)):
+        model = load_model(args, args.joints or list(traj.joint_names))
+        unknown = [j for j in model.joint_names if j not in traj.joint_names]
+        if unknown:
+            raise Refused(f'{label}: joint(s) {", ".join(unknown)} not in the trajectory')
+        cols = [traj.joint_names.index(j) for j in model.joint_names]
+        t, q, qd, qdd = splines.sample(traj, args.rate)
+        q, qd, qdd = q[:, cols], qd[:, cols], qdd[:, cols]
+        tau = rnea(model, q, qd, qdd, args.gravity)
+        if args.friction_model == 'urdf':
+            tau = tau + friction_torque(model, qd, args.threshold)
+        limit = model.effort_limit
+        peak = np.max(np.abs(tau), axis=0)
+        at = t[np.argmax(np.abs(tau), axis=0)]
+        rows = []
+        for j, name in enumerate(model.joint_names):
+            has = limit[j] > 0
+            use = peak[j] / limit[j] if has else np.nan
+            over = has and use > 1.0
+            exceeded |= bool(over)
+            rows.append([name, f'{peak[j]:.4g}', f'{at[j]:.3f}',
+                         f'{limit[j]:g}' if has else '-',
+                         f'{100 * use:.1f} %' if has else '-', 'EXCEEDED' if over else ''])
+        print(f'{label}: {len(traj.time)} points, {traj.kind} interpolation, '
+              f'{t[-1] - t[0]:.3f} s sampled at {args.rate:g} Hz ({len(t)} samples); '
+              'torque = RNEA' + (' + URDF friction' if args.friction_model == 'urdf' else ''))
+        if model.locked:
+            print(f'  joints not in the trajectory, locked: '
+                  f'{", ".join(f"{j}={v:g}" for j, v in model.locked.items())}')
+        print(report.table(['joint', 'peak |tau|', 'at (s)', 'limit', 'use', ''], rows))
+        base = os.path.join(args.out, 'trajectory' + (f'_{k}' if len(trajectories) > 1 else ''))
+        report.write_csv(base + '.csv', ['t'] + [f'tau_{n}' for n in model.joint_names],
+                         [t] + [tau[:, j] for j in range(model.nq)], [6] + [4] * model.nq)
+        if not args.no_plots:
+            report.plot_joints(base + '.png', t, model.joint_names, {'tau': tau},
+                               f'{label}: torque along the trajectory (N m or N), limits dashed',
+                               limits=limit)
+    if exceeded:
+        print('error: an effort limit is exceeded', file=sys.stderr)
+        return 1
+    return 0
+
+
+def parser() -> argparse.ArgumentParser:
+    """Return the command's argument parser."""
+    p = argparse.ArgumentParser(prog='replay', description=__doc__.split('\n\n')[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog='Exit status: 0 done, 1 refused (or an effort limit '
+                                'exceeded), 2 bad usage.')
+    p.add_argument('bag', nargs='?', help='rosbag2 directory, or a .db3 / .mcap file')
+    p.add_argument('--urdf', required=True, help='URDF file (or .xacro)')
+    p.add_argument('--topic', default='/joint_states', help='sensor_msgs/JointState topic')
+    p.add_argument('--out', default='replay_out', help='output directory (created)')
+    p.add_argument('--identify', action='store_true',
+                   help='fit damping, friction and armature per joint to the residual')
+    p.add_argument('--threshold', type=positive, default=NODE_THRESHOLD,
+                   help='friction velocity threshold, rad/s or m/s (default: the node\'s, '
+                   '%(default)g)')
+    p.add_argument('--window', type=positive, default=0.05,
+                   help='Savitzky-Golay window, s (default %(default)g)')
+    p.add_argument('--order', type=int, choices=range(2, 7), default=3,
+                   help='Savitzky-Golay polynomial order (default %(default)d)')
+    p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv',
+                   help='per-sample residual file (default %(default)s)')
+    p.add_argument('--no-plots', action='store_true', help='write no PNG files')
+    p.add_argument('--gravity', type=float, nargs=3, default=(0.0, 0.0, -9.81),
+                   metavar=('GX', 'GY', 'GZ'), help='m/s^2 in the base frame')
+    p.add_argument('--joints', nargs='+', metavar='J',
+                   help='model reduction: keep only these joints (the others are locked)')
+    p.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
+                   help='value (rad or m) of a joint locked by --joints')
+    p.add_argument('--trajectory', metavar='FILE.yaml',
+                   help='check a trajectory_msgs/JointTrajectory (YAML) against effort limits')
+    p.add_argument('--trajectory-topic', metavar='TOPIC',
+                   help='check every JointTrajectory of this topic of BAG')
+    p.add_argument('--rate', type=positive, default=1000.0,
+                   help='trajectory sampling rate, Hz (default %(default)g)')
+    p.add_argument('--friction-model', choices=('none', 'urdf'), default='none',
+                   help='trajectory check: add the URDF <dynamics> friction (as the node)')
+    p.add_argument('--generic', action='store_true',
+                   help='read every message through rosbags (no numpy fast path)')
+    p.add_argument('--timings', action='store_true', help='print stage times to stderr')
+    return p
+
+
+def positive(text: str) -> float:
+    """Parse a finite number > 0 (argparse type)."""
+    try:
+        x = float(text)
+    except ValueError:
+        x = float('nan')
+    if not (x > 0.0 and np.isfinite(x)):
+        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number > 0')
+    return x
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the command; return the exit status (0, 1 or 2)."""
+    p = parser()
+    args = p.parse_args(argv)
+    if args.trajectory and args.trajectory_topic:
+        p.error('--trajectory and --trajectory-topic exclude each other')
+    if not args.trajectory and not args.bag:
+        p.error('a BAG is needed (or --trajectory FILE.yaml)')
+    if args.locked and not args.joints:
+        p.error('--locked needs --joints (the joints kept movable)')
+    try:
+        if args.trajectory or args.trajectory_topic:
+            return run_trajectory(args)
+        return run_bag(args)
+    except (Refused, bags.BagError, bags.MissingDependency, ValueError) as err:
+        print(f'error: {err}', file=sys.stderr)
+        return 1
+
+
+if __name__ == '__main__':
+    sys.exit(main())
