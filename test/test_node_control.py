@@ -91,7 +91,7 @@ class Loop:
             self.driver.spin_for(0.05)
 
     def desired(self, state, with_terms=False):
-        """Publish a desired (q, qd, qdd) until answered (feedforward mode)."""
+        """Publish a desired state (q, qd, qdd) until answered (feedforward mode)."""
         self.k += 1
         return self._ask(self.io.joint_states, joint_state(self.names, *state, self.k),
                          self.k, with_terms)
@@ -199,7 +199,7 @@ def test_terms_and_outputs_against_pinocchio_ur5(install, driver, tmp_path):
 
 
 def wrapped_pair(names, seed):
-    """A desired state and a measured one; joint7 (continuous) measured a turn away."""
+    """Return a desired state, a measured one and e; joint7 (continuous) a turn away."""
     rng = np.random.default_rng(seed)
     n = len(names)
     desired = tuple(rng.uniform(-1.0, 1.0, n) * s for s in (1.5, 1.0, 3.0))

@@ -57,7 +57,8 @@ def test_yaml_documents_every_parameter():
                         'locked_positions', 'payload.link', 'payload.mass', 'payload.com',
                         'payload.inertia', 'armature', 'friction_model',
                         'friction_velocity_threshold', 'clamp_to_effort_limits',
-                        'external_wrench_timeout', 'backend'}
+                        'external_wrench_timeout', 'backend', 'output', 'control_mode',
+                        'kp', 'kd', 'measured_timeout'}
     for name in declared:
         # payload.link is written nested: 'payload:' then 'link:'
         *group, leaf = name.split('.')
@@ -71,6 +72,9 @@ def test_yaml_documents_every_parameter():
     assert params['acceleration_source'] == 'effort'
     assert params['strict_urdf'] is False
     assert params['backend'] == 'auto'
+    assert params['output'] == 'full' and params['control_mode'] == 'feedforward'
+    assert params['kp'] == [0.0] and params['kd'] == [0.0]
+    assert params['measured_timeout'] == 0.5
 
 
 def test_launch_file_compiles():

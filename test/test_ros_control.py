@@ -272,7 +272,7 @@ def test_computed_torque_full_is_inverse_dynamics_of_the_commanded_acceleration(
 
 
 def test_each_term_is_its_part_of_the_dynamics(model):
-    """gravity = g(q), velocity_product = C q̇, inertial = M q̈, external = −Σ Jᵀ f."""
+    """Check gravity = g(q), velocity_product = C q̇, inertial = M q̈, external = −Σ Jᵀ f."""
     dyn, desired, measured, gains = _setup(model, 4)
     q, qd, qdd = desired
     _, terms = answer(dyn, 'pd_feedforward', 'full', desired, measured, gains, True)

@@ -251,7 +251,7 @@ class Dynamics:
 
     def model_part(self, output: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray
                    ) -> np.ndarray:
-        """The model part ``output`` selects, with the fewest RNEA calls (0 to 2)."""
+        """Return the model part ``output`` selects, with the fewest RNEA calls (0 to 2)."""
         if output == 'full':
             return self.full(q, qd, qdd)
         if output == 'without_gravity':
@@ -262,7 +262,7 @@ class Dynamics:
 
     def terms(self, output: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray
               ) -> Dict[str, np.ndarray]:
-        """The model terms of ``output`` (:data:`OUTPUT_TERMS`), each from RNEA calls."""
+        """Return the model terms of ``output`` (:data:`OUTPUT_TERMS`), each from RNEA calls."""
         wanted = OUTPUT_TERMS[output]
         if not wanted:
             return {}
@@ -300,7 +300,7 @@ State = Tuple[np.ndarray, ...]
 def answer(dynamics: Dynamics, control_mode: str, output: str, desired: State,
            measured: Optional[State] = None, gains: Optional[Gains] = None,
            with_terms: bool = False) -> Tuple[np.ndarray, Optional[Dict[str, np.ndarray]]]:
-    """Return ``(τ, terms)`` of one answer (module docstring); ``terms`` None unless asked.
+    """Compute τ of one reply, and its terms when asked (else None); see the module docstring.
 
     ``desired`` is ``(q_d, q̇_d, q̈_d)``; ``measured`` ``(q, q̇)``, needed in the feedback
     modes (with ``gains``). With ``with_terms``, τ is the sum of the terms, in the order of
