@@ -120,7 +120,7 @@ def hermite(T, q0, v0, a0, q1, v1, a1) -> np.ndarray:
 
 
 def coefficients(traj: Trajectory) -> np.ndarray:
-    """Return the polynomial coefficients (m-1, 6, n) of every segment: ``q = Σ c_p s^p``."""
+    """Return every segment's polynomial coefficients, (m-1, 6, n): ``q = Σ c_p s^p``."""
     T = np.diff(traj.time)[:, None]
     q0, q1 = traj.positions[:-1], traj.positions[1:]
     c = np.zeros((len(T), 6, traj.positions.shape[1]))
