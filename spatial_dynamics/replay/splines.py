@@ -115,7 +115,7 @@ def hermite(T, q0, v0, a0, q1, v1, a1) -> np.ndarray:
     dq = q1 - q0
     c3 = (20 * dq - (8 * v1 + 12 * v0) * T - (3 * a0 - a1) * T2) / (2 * T3)
     c4 = (-30 * dq + (14 * v1 + 16 * v0) * T + (3 * a0 - 2 * a1) * T2) / (2 * T3 * T)
-    c5 = (12 * dq - 6 * (v1 + v0) * T - (a1 - a0) * T2) / (2 * T3 * T2)
+    c5 = (12 * dq - 6 * (v1 + v0) * T + (a1 - a0) * T2) / (2 * T3 * T2)
     return np.array([q0, v0, a0 / 2, c3, c4, c5])
 
 
@@ -156,9 +156,8 @@ def sample(traj: Trajectory, rate: float) -> Samples:
     seg = np.clip(np.searchsorted(traj.time, t, side='right') - 1, 0, len(c) - 1)
     s = (t - traj.time[seg])[:, None]
     cs = c[seg]                                            # (N, 6, n)
-    q = cs[:, 0] + s * (cs[:, 1] + s * (cs[:, 2] + s * (cs[:, 3] + s * (cs[:, 4]
-                                                                     + s * cs[:, 5]))))
-    qd = cs[:, 1] + s * (2 * cs[:, 2] + s * (3 * cs[:, 3] + s * (4 * cs[:, 4]
-                                                                 + s * 5 * cs[:, 5])))
-    qdd = 2 * cs[:, 2] + s * (6 * cs[:, 3] + s * (12 * cs[:, 4] + s * 20 * cs[:, 5]))
+    c0, c1, c2, c3, c4, c5 = (cs[:, p] for p in range(6))
+    q = c0 + s * (c1 + s * (c2 + s * (c3 + s * (c4 + s * c5))))
+    qd = c1 + s * (2 * c2 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))
+    qdd = 2 * c2 + s * (6 * c3 + s * (12 * c4 + s * 20 * c5))
     return t, q, qd, qdd
