@@ -145,21 +145,27 @@ def clean(js: bags.JointStates, window: float) -> Dict:
     keep = np.ones(len(js.stamp), dtype=bool)
     for what, a in fields:
         bad = ~np.isfinite(a)
+        if not bad.any():
+            continue
         for j, name in enumerate(names):
             rows = bad[:, j] & keep
             if rows.any():
                 reason = f'{name}: no finite {what} (joint missing from the message, or NaN)'
                 skipped[reason] = skipped.get(reason, 0) + int(rows.sum())
                 keep &= ~rows
-    t = js.stamp[keep]
-    order = np.argsort(t, kind='stable')
+    everything = bool(keep.all())
+    t = js.stamp if everything else js.stamp[keep]
     backwards = int(np.sum(np.diff(t) < 0))
-    t = t[order]
-    idx = np.flatnonzero(keep)[order]
+    idx = None if everything else np.flatnonzero(keep)
+    if backwards:
+        order = np.argsort(t, kind='stable')
+        t = t[order]
+        idx = order if idx is None else idx[order]
     repeated = np.concatenate(([False], np.diff(t) <= 0))
     if repeated.any():
         skipped['repeated stamp (first kept)'] = int(repeated.sum())
-        t, idx = t[~repeated], idx[~repeated]
+        t = t[~repeated]
+        idx = np.flatnonzero(~repeated) if idx is None else idx[~repeated]
     if len(t) < 5:
         raise Refused(f'only {len(t)} usable samples: ' + '; '.join(
             f'{v} skipped, {k}' for k, v in skipped.items()))
@@ -175,8 +181,12 @@ def clean(js: bags.JointStates, window: float) -> Dict:
     # Renumber the spans onto the samples kept.
     starts = np.cumsum(np.concatenate(([0], inside[:-1])))
     spans = [(int(starts[a]), int(starts[a]) + (b - a)) for a, b in seg.spans]
-    rows = idx[inside]
-    return {'t': t[inside], 'q': js.position[rows], 'qd': js.velocity[rows] if has_velocity
+    if inside.all():
+        rows = idx if idx is not None else slice(None)     # a slice: no copies
+    else:
+        rows = (idx if idx is not None else np.arange(len(t)))[inside]
+        t = t[inside]
+    return {'t': t, 'q': js.position[rows], 'qd': js.velocity[rows] if has_velocity
             else None, 'effort': js.effort[rows], 'skipped': skipped, 'spans': spans,
             'period': seg.period, 'out_of_order': backwards}
 
@@ -201,6 +211,8 @@ def run_bag(args) -> int:
     t, q, effort, spans = s['t'], s['q'], s['effort'], s['spans']
     stages.done('clean+sort')
     if s['qd'] is not None:
+        # the same zero-phase smoother on the measured velocity: without it the velocity
+        # noise stays in the residual (test_replay: 0.08 instead of 0.05 N m)
         qd = differentiate.derivatives(t, s['qd'], args.window, args.order, 0, spans)[0]
         qdd, resampled = differentiate.derivatives(t, s['qd'], args.window, args.order, 1,
                                                    spans)

@@ -166,18 +166,23 @@ def joint_states_from_raw(raw: Sequence[bytes], stamps_ns: np.ndarray, names: Se
 
 
 def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bool = True,
-                        progress: Optional[Callable[[int], None]] = None) -> JointStates:
+                        progress: Optional[Callable[[int], None]] = None,
+                        expected: int = 0) -> JointStates:
     """Decode batches ``(bag times ns, messages)`` of JointStates into arrays by joint name.
 
     ``messages`` is a list of CDR byte strings or a (k, L) uint8 block of k messages of L
     bytes each. A message that cannot be decoded, or whose position/velocity/effort length
     is neither 0 nor its number of names, is skipped and counted in ``skipped``; a joint a
-    message does not carry is ``nan`` in its row.
+    message does not carry is ``nan`` in its row. ``expected``: the number of messages if
+    known (the arrays are then allocated once, not joined from the batches).
     """
     names = tuple(names)
     want = {name: k for k, name in enumerate(names)}
     skipped: Dict[str, int] = {}
-    parts: List[List[np.ndarray]] = []
+    width = len(names)
+    size = max(int(expected), 1)
+    columns = [np.full(size, np.nan)] + [np.full((size, width), np.nan) for _ in FIELDS]
+    used = 0            # rows of ``columns`` filled
     counts = {'fast': 0, 'generic': 0}
     store = None
     done = 0
@@ -234,8 +239,12 @@ def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bo
 
     for times, messages in batches:
         N = len(times)
-        stamp = np.full(N, np.nan)
-        out = [np.full((N, len(names)), np.nan) for _ in FIELDS]
+        if used + N > len(columns[0]):      # more than expected: grow by half at least
+            grow = max(used + N, len(columns[0]) * 3 // 2)
+            columns = [np.concatenate((c[:used], np.full((grow - used,) + c.shape[1:],
+                                                         np.nan))) for c in columns]
+        stamp = columns[0][used:used + N]
+        out = [c[used:used + N] for c in columns[1:]]
         keep = np.ones(N, dtype=bool)
         if isinstance(messages, np.ndarray):
             block_run(messages, times, 0, stamp, out, keep)
@@ -245,16 +254,17 @@ def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bo
                 block = np.frombuffer(b''.join(messages[start:stop]), dtype=np.uint8)
                 block_run(block.reshape(stop - start, -1), times[start:stop], start, stamp,
                           out, keep)
+        kept = N
         if not keep.all():
-            stamp, out = stamp[keep], [a[keep] for a in out]
-        parts.append([stamp] + out)
+            kept = int(keep.sum())
+            for c in columns:
+                c[used:used + kept] = c[used:used + N][keep]
+                c[used + kept:used + N] = np.nan
+        used += kept
         done += N
         if progress is not None:
             progress(done)
-    if not parts:
-        parts = [[np.zeros(0)] + [np.zeros((0, len(names))) for _ in FIELDS]]
-    joined = [np.concatenate(p) for p in zip(*parts)]
-    return JointStates(names, *joined, skipped=skipped, **counts)
+    return JointStates(names, *(c[:used] for c in columns), skipped=skipped, **counts)
 
 
 def verify_layout(data: bytes) -> bool:
@@ -489,7 +499,7 @@ def read_joint_states(path: str, topic: str, names: Sequence[str], fast: bool = 
     try:
         total = topics(reader).get(topic, ('', 0))[1]
         return decode_joint_states(raw_batches(reader, topic, JOINT_STATE, fast), names, fast,
-                                   progress and (lambda k: progress(k, total)))
+                                   progress and (lambda k: progress(k, total)), total)
     finally:
         reader.close()
 
