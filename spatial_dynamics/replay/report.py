@@ -3,8 +3,10 @@
 """What the replay writes: CSV files, PNG plots, tables and parameter snippets.
 
 :func:`write_csv` formats numbers with numpy instead of ``np.savetxt`` (which formats every
-row in Python: ~15 s for 3.6 M rows of 8 columns): each column is written in fixed-point
-with a given number of decimals, as integer digits computed on whole columns at once.
+row in Python): each column is written in fixed-point with a given number of decimals, as
+integer digits computed on whole columns at once. Measured on 360 000 rows of 8 columns (2
+shared cores): ``np.savetxt(fmt='%.4f')`` 0.81 s, this 0.48 s; an hour at 1 kHz takes
+3-5 s, which is why the command also offers ``--residual npy`` (~1.3 s) and ``none``.
 """
 
 from __future__ import annotations
