@@ -6,7 +6,6 @@ import ast
 import inspect
 
 import pytest
-from spatial_dynamics.algorithms import rnea as source
 from spatial_dynamics.backends import codegen
 
 

@@ -399,3 +399,30 @@ def test_bad_gains_and_bad_measured_states_change_nothing(driver, demo, demo_mod
     finally:
         loop.close()
         io.close()
+
+
+def test_a_measured_state_is_answered_once_even_if_sent_again(driver, demo, demo_model):
+    """A lockstep simulator republishes the state it waits on: one command per measurement."""
+    names = demo_model.joint_names
+    n = len(names)
+    io, loop = connect(driver, names)
+    try:
+        ok(io.set_parameters(kp=[10.0], kd=[1.0], control_mode='pd_feedforward'))
+        zeros = np.zeros(n)
+        q = np.linspace(-0.1, 0.1, n)
+        loop.measure(q, zeros)                        # the loop is up
+        before = int(values(io.fresh_status('feedforward'))['rejected repeated'])
+        msg = loop.measured_msg(q, zeros, 6000)
+        for _ in range(4):
+            loop.measured.publish(msg)
+            driver.spin_for(0.1)
+        driver.spin_until(lambda: int(values(io.fresh_status('feedforward'))
+                                      ['rejected repeated']) >= before + 3,
+                          what='three repeats counted')
+        assert len(loop.answers(6000)) == 1
+        # the next measurement is answered again
+        loop.measured.publish(loop.measured_msg(q, zeros, 6001))
+        driver.spin_until(lambda: loop.answers(6001), what='the answer to 6001')
+    finally:
+        loop.close()
+        io.close()

@@ -87,8 +87,10 @@ GAIN_BOUNDS = {'kp': MAX_KP, 'kd': MAX_KD}
 #: Why a measured ``joint_states`` message is refused (diagnostics counter keys).
 MEASURED_REASONS = ('no_model', 'empty', 'length_mismatch', 'duplicate_joint',
                     'missing_joint', 'non_finite', 'no_velocity', 'out_of_bounds')
-#: Why a good measured state gets no answer in a feedback mode.
-FEEDBACK_REASONS = ('no_desired', 'desired_stale')
+#: Why a good measured state gets no answer in a feedback mode. ``repeated``: the stamp of the
+#: measured state answered last, again (a simulator in lockstep republishing the state it
+#: waits on, a driver sending a sample twice): a controller answers each measurement once.
+FEEDBACK_REASONS = ('no_desired', 'desired_stale', 'repeated')
 
 
 class ControlError(ValueError):

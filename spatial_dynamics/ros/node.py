@@ -19,7 +19,9 @@ the desired state, ``computed_torque`` evaluates the model part at the measured 
 qdd_d + kp e + kd ė (:mod:`spatial_dynamics.ros.control`). In ``feedforward`` each desired
 message is answered; in the feedback modes each measured ``joint_states`` message is
 answered, with the last desired state held (zero-order hold), so a controller updates at its
-sensor rate and a simulator in lockstep gets one command per measured state.
+sensor rate and a simulator in lockstep gets one command per measured state. A measured state
+with the (non-zero) stamp of the one answered last is not answered again (a lockstep
+simulator republishing the state it waits on must not get two commands for it).
 
 Topics (relative, so they can be remapped):
 
@@ -196,6 +198,7 @@ class InverseDynamicsNode(Node):
         self.measured_timeout = DEFAULT_MEASURED_TIMEOUT
         self.desired: Optional[Held] = None    # the last good desired state (zero-order hold)
         self.measured: Optional[Held] = None   # the last good measured state
+        self._answered_stamp = 0               # stamp (ns) of the measured state answered last
         self.wrench_timeout_ns = int(DEFAULT_WRENCH_TIMEOUT * 1e9)
         self.params: dict = {}   # the last accepted value of every parameter of PARAMETERS
         self.totals = Totals()
@@ -523,6 +526,13 @@ class InverseDynamicsNode(Node):
                          f'{self.control_mode}: the held desired state is {age:.3f} s old '
                          f'(input_timeout {self.input_timeout} s); not publishing')
             return
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        if stamp != 0 and stamp == self._answered_stamp:
+            self._reject('joint_states', 'repeated',
+                         f'{self.control_mode}: the measured state stamped {stamp * 1e-9:.9f} '
+                         's was answered already (one answer per measurement)')
+            return
+        self._answered_stamp = stamp
         self._respond(msg.header, output, 'joint_states', held.state, measured, t0)
 
     def _respond(self, header, output: Output, topic: str, desired: tuple,
