@@ -1,0 +1,315 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Closed-loop demo: the simulated robot tracks a trajectory under three control laws.
+
+    python -m spatial_dynamics.tools.closed_loop [--urdf ROBOT.urdf] [--seconds 6]
+        [--frequency 5] [--plot out/closed_loop.png] [--json out/closed_loop.json]
+
+For each control law the MuJoCo robot (``python -m spatial_dynamics.sim``, lockstep, 1 ms
+steps) and the ``inverse_dynamics`` node start in a namespace of their own; this process
+publishes the desired trajectory and records the tracking error ``q_d(t) - q(t)`` of every
+measured state:
+
+* ``PD alone``: ``control_mode: pd_feedforward``, ``output: none`` — τ = Kp e + Kd ė;
+* ``PD + feed-forward``: ``pd_feedforward``, ``output: full`` — τ = ID(q_d, q̇_d, q̈_d) + Kp e +
+  Kd ė;
+* ``computed torque``: ``computed_torque`` — τ = ID(q, q̇, q̈_d + Kp e + Kd ė).
+
+Gains: a critically damped loop of natural frequency ``--frequency`` (Hz), ω = 2π f; for the
+PD laws scaled by the inertia each joint moves when the others are free, m_i = 1/(M⁻¹)_ii at
+the start (M_ii, the inertia with the others held, can be 20× larger on a coupled arm, and a
+loop tuned to it is unstable at 1 ms): Kp = m_i ω², Kd = 2 m_i ω (N m/rad, N m s/rad); for
+computed torque Kp = ω², Kd = 2ω (1/s², 1/s). The trajectory starts
+at rest, ``q_d(t) = q0 + A (1 - cos(w t))`` per joint (periods 2..4 s), so the robot starts
+on it.
+
+Timing: the simulator publishes ``joint_states`` at step k and waits for one effort command;
+the node answers each measured state with the desired state it holds. On each measured state
+at time t_k this process publishes the desired state of t_{k+1}, which reaches the node (one
+hop) before the simulator's next state does (two hops and a physics step), so the command for
+step k+1 is computed from the desired state of t_{k+1}.
+
+A table of the tracking error per joint is shown live; at the end a PNG plots |e| per joint
+over time (log scale) for the three laws, and ``--json`` writes the figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import signal
+import sys
+import time
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from .driving import demo_urdf, node_command, start, stop
+
+LAWS = (('PD alone', {'control_mode': 'pd_feedforward', 'output': 'none'}),
+        ('PD + feed-forward', {'control_mode': 'pd_feedforward', 'output': 'full'}),
+        ('computed torque', {'control_mode': 'computed_torque', 'output': 'full'}))
+TIMESTEP = 0.001
+
+
+def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog='python -m spatial_dynamics.tools.closed_loop',
+                                     description=__doc__.split('\n\n')[0])
+    parser.add_argument('--urdf', default=None, help='robot (default: the embedded demo arm)')
+    parser.add_argument('--seconds', type=float, default=6.0,
+                        help='simulated seconds per control law (default 6)')
+    parser.add_argument('--frequency', type=float, default=5.0,
+                        help='natural frequency of the feedback loop, Hz (default 5)')
+    parser.add_argument('--amplitude', type=float, default=0.4,
+                        help='amplitude A of each joint (rad or m; default 0.4)')
+    parser.add_argument('--laws', default='all',
+                        help='comma-separated subset of: pd, pd_ff, ct (default all)')
+    parser.add_argument('--plot', default=os.path.join('out', 'closed_loop.png'),
+                        help="PNG of |e| over time (default out/closed_loop.png; '' for none)")
+    parser.add_argument('--json', default='', help='write the figures to this JSON file')
+    parser.add_argument('--log-dir', default='out',
+                        help="directory for the nodes' output (default out)")
+    parser.add_argument('--timeout', type=float, default=120.0,
+                        help='wall-clock seconds allowed per law before giving up (default 120)')
+    return parser.parse_args(argv)
+
+
+class Trajectory:
+    """``q_d(t) = q0 + A (1 - cos(w t))``: at rest at t = 0, smooth, periods 2..4 s."""
+
+    def __init__(self, q0: np.ndarray, amplitude: float) -> None:
+        n = len(q0)
+        self.q0 = np.asarray(q0, dtype=float)
+        self.A = amplitude * np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
+        self.w = 2.0 * np.pi / np.linspace(2.0, 4.0, n)
+
+    def __call__(self, t: float):
+        """``(q, q̇, q̈)`` at time ``t``."""
+        c, s = np.cos(self.w * t), np.sin(self.w * t)
+        return (self.q0 + self.A * (1.0 - c), self.A * self.w * s, self.A * self.w ** 2 * c)
+
+
+def start_point(model) -> np.ndarray:
+    """Middle of each joint's limits when it has finite ones, else 0; offset off singularities."""
+    lo, hi = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
+    bounded = np.isfinite(lo) & np.isfinite(hi) & (hi > lo)
+    q0 = np.where(bounded, 0.5 * (lo + hi), 0.0)
+    return q0 + 0.3
+
+
+def gains(model, q0: np.ndarray, law: str, frequency: float):
+    """``(kp, kd)`` per joint for ``law`` (see the module docstring)."""
+    import spatial_dynamics as sd
+    w = 2.0 * math.pi * frequency
+    if law == 'computed_torque':
+        return np.full(model.nq, w * w), np.full(model.nq, 2.0 * w)
+    m = 1.0 / np.diag(np.linalg.inv(sd.mass_matrix(model, q0)))
+    return m * w * w, 2.0 * m * w
+
+
+class Run:
+    """One law: the error of every measured state, by simulated time."""
+
+    def __init__(self, name: str, names: Sequence[str]) -> None:
+        self.name = name
+        self.names = list(names)
+        self.t: List[float] = []
+        self.e: List[np.ndarray] = []
+
+    def summary(self) -> Dict[str, object]:
+        e = np.abs(np.array(self.e)) if self.e else np.zeros((0, len(self.names)))
+        return {'law': self.name, 'samples': len(self.t),
+                'simulated_s': self.t[-1] if self.t else 0.0,
+                'rms': float(np.sqrt(np.mean(e ** 2))) if e.size else float('nan'),
+                'max': float(e.max()) if e.size else float('nan'),
+                'rms_per_joint': dict(zip(self.names, np.sqrt(np.mean(e ** 2, axis=0)).tolist()
+                                          if e.size else [float('nan')] * len(self.names)))}
+
+
+def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_mods,
+            show) -> Run:
+    """Start the sim and the node for one law, drive the trajectory, return the errors."""
+    rclpy, JointState = rclpy_mods
+    names = model.joint_names
+    q0 = start_point(model)
+    trajectory = Trajectory(q0, args.amplitude)
+    kp, kd = gains(model, q0, settings['control_mode'], args.frequency)
+    namespace = '/closed_loop_' + settings['control_mode'] + '_' + settings['output']
+    fmt = '[' + ','.join(repr(float(x)) for x in q0) + ']'
+    logs = args.log_dir
+    os.makedirs(logs, exist_ok=True)
+    slug = namespace.strip('/')
+    sim = start(node_command('sim', 'spatial_dynamics.sim'), namespace, {
+        'robot_description_file': urdf, 'mode': 'lockstep', 'timestep': str(TIMESTEP),
+        'initial_positions': fmt}, os.path.join(logs, f'{slug}_sim.log'))
+    node = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace, {
+        'robot_description_file': urdf, 'control_mode': settings['control_mode'],
+        'output': settings['output'],
+        'kp': '[' + ','.join(repr(float(x)) for x in kp) + ']',
+        'kd': '[' + ','.join(repr(float(x)) for x in kd) + ']'},
+        os.path.join(logs, f'{slug}_node.log'))
+    run = Run(name, names)
+    driver = rclpy.create_node('closed_loop_driver', namespace=namespace)
+    desired = driver.create_publisher(JointState, 'desired_joint_states', 10)
+    msg = JointState()
+    msg.name = list(names)
+
+    def publish_desired(t: float) -> None:
+        q, qd, qdd = trajectory(t)
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(int(round(t * 1e9)), 10 ** 9)
+        msg.position, msg.velocity, msg.effort = q.tolist(), qd.tolist(), qdd.tolist()
+        desired.publish(msg)
+
+    index = None
+
+    def on_state(state) -> None:
+        nonlocal index
+        if index is None:
+            index = [list(state.name).index(j) for j in names]
+        t = state.header.stamp.sec + state.header.stamp.nanosec * 1e-9
+        q = np.array(state.position)[index]
+        if not run.t or t > run.t[-1]:
+            run.t.append(t)
+            run.e.append(trajectory(t)[0] - q)
+        publish_desired(t + TIMESTEP)
+
+    # deep: a state missed here is a step whose desired state is one step old
+    driver.create_subscription(JointState, 'joint_states', on_state, 1000)
+    wall0 = time.monotonic()
+    next_show = wall0
+    try:
+        while not run.t or run.t[-1] < args.seconds:
+            if sim.poll() is not None or node.poll() is not None:
+                raise RuntimeError(f'{name}: the {"sim" if sim.poll() is not None else "node"} '
+                                   f'exited (see {logs}/)')
+            if time.monotonic() - wall0 > args.timeout:
+                raise RuntimeError(f'{name}: {args.timeout:g} s without finishing '
+                                   f'({run.t[-1] if run.t else 0:.3f} s simulated)')
+            if not run.t and driver.count_publishers('joint_states') > 0:
+                # until the first measured state arrives, once the simulator is discovered
+                publish_desired(0.0)
+            rclpy.spin_once(driver, timeout_sec=0.05)
+            if time.monotonic() >= next_show:
+                show(run)
+                next_show += 0.25
+    finally:
+        driver.destroy_node()
+        stop(sim)
+        stop(node)
+    show(run)
+    return run
+
+
+def table(runs: List[Run], names: Sequence[str]) -> List[str]:
+    """Rows: each law, its simulated time and the latest |e| per joint (rad or m)."""
+    head = f'{"law":<20}{"t [s]":>7}' + ''.join(f'{n[:11]:>12}' for n in names) + f'{"rms":>11}'
+    lines = [head]
+    for run in runs:
+        if not run.e:
+            lines.append(f'{run.name:<20}{"-":>7}')
+            continue
+        recent = np.abs(np.array(run.e[-200:]))
+        lines.append(f'{run.name:<20}{run.t[-1]:7.2f}'
+                     + ''.join(f'{x:12.2e}' for x in recent[-1])
+                     + f'{np.sqrt(np.mean(np.array(run.e) ** 2)):11.2e}')
+    return lines
+
+
+def plot(runs: List[Run], path: str, robot: str, frequency: float) -> str:
+    """Write |e| per joint over time (log scale), one panel per joint; returns a note."""
+    try:
+        import matplotlib
+        matplotlib.use('Agg')
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return 'matplotlib is not installed: plot skipped (pip install matplotlib)'
+    names = runs[0].names
+    cols = 2 if len(names) > 3 else 1
+    rows = math.ceil(len(names) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(11, 2.2 * rows + 0.8), dpi=100,
+                             sharex=True, squeeze=False)
+    for j, name in enumerate(names):
+        ax = axes[j // cols][j % cols]
+        for run in runs:
+            e = np.abs(np.array(run.e)[:, j])
+            ax.semilogy(run.t, np.maximum(e, 1e-12), label=run.name, linewidth=1.0)
+        ax.set_title(name, fontsize='small')
+        ax.grid(True, which='both', alpha=0.3)
+        ax.set_ylabel('|q_d - q|')
+    for j in range(len(names), rows * cols):
+        axes[j // cols][j % cols].axis('off')
+    for ax in axes[-1]:
+        ax.set_xlabel('simulated time [s]')
+    axes[0][0].legend(fontsize='small', loc='lower right')
+    fig.suptitle(f'tracking error, {robot}, MuJoCo lockstep 1 ms, feedback {frequency:g} Hz')
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return f'plot written to {path}'
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the laws one after the other; 0 when every run finished."""
+    args = parse_args(argv)
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+    from sensor_msgs.msg import JointState
+
+    import spatial_dynamics as sd
+    urdf = os.path.abspath(args.urdf or demo_urdf())
+    model = sd.Model.from_urdf(urdf)
+    chosen = {'pd': 0, 'pd_ff': 1, 'ct': 2}
+    picks = range(3) if args.laws == 'all' else [chosen[x] for x in args.laws.split(',')]
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    live = sys.stdout.isatty()
+    runs: List[Run] = []
+    shown = 0
+
+    def show(current: Run) -> None:
+        nonlocal shown
+        lines = table(runs + [current], model.joint_names)
+        if live:
+            sys.stdout.write((f'\x1b[{shown}F' if shown else '')
+                             + ''.join(f'\x1b[2K{line}\n' for line in lines))
+            shown = len(lines)
+            sys.stdout.flush()
+
+    print(f'closed loop on {urdf}: {args.seconds:g} s per law, feedback {args.frequency:g} Hz\n'
+          f'simulator: {" ".join(node_command("sim", "spatial_dynamics.sim"))}\n'
+          f'controller: {" ".join(node_command("inverse_dynamics", "spatial_dynamics.ros.node"))}'
+          f'\n(their output in {args.log_dir}/)', flush=True)
+    status = 0
+    try:
+        for k in picks:
+            name, settings = LAWS[k]
+            runs.append(run_law(name, settings, urdf, model, args, (rclpy, JointState), show))
+            if not live:
+                print(table(runs, model.joint_names)[-1], flush=True)
+    except KeyboardInterrupt:
+        print('interrupted')
+        status = 1
+    except RuntimeError as err:
+        print(f'closed loop: {err}', file=sys.stderr)
+        status = 1
+    finally:
+        rclpy.try_shutdown()
+    summaries = [run.summary() for run in runs]
+    for s in summaries:
+        print(f'{s["law"]:<20} rms {s["rms"]:.3e}  max {s["max"]:.3e}  '
+              f'({s["samples"]} states, {s["simulated_s"]:.2f} s)')
+    if args.json:
+        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+        with open(args.json, 'w') as f:
+            json.dump({'robot': model.name, 'urdf': urdf, 'frequency_hz': args.frequency,
+                       'timestep_s': TIMESTEP, 'laws': summaries}, f, indent=1)
+    if args.plot and runs:
+        print(plot(runs, args.plot, model.name, args.frequency))
+    return status
+
+
+if __name__ == '__main__':
+    sys.exit(main())
