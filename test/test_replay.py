@@ -233,3 +233,15 @@ def test_help_works_without_rclpy(tmp_path):
                        timeout=60)
     assert r.returncode == 0, r.stderr
     assert 'Exit status' in r.stdout
+
+
+def test_node_parameters_are_doubles_the_node_accepts():
+    """The printed YAML holds doubles: a ROS double[] parameter refuses ``[0, 0]``."""
+    import yaml
+    from spatial_dynamics.replay.report import node_parameters
+    text = node_parameters(['a', 'b', 'c'], np.array([0.0, -1e-5, 0.25]), 1.0)
+    params = yaml.safe_load(text)['inverse_dynamics']['ros__parameters']
+    assert params['armature'] == [0.0, 0.0, 0.25]
+    assert all(type(x) is float for x in params['armature'])
+    assert type(params['friction_velocity_threshold']) is float
+    assert params['joints'] == ['a', 'b', 'c']

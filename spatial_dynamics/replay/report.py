@@ -94,16 +94,25 @@ def table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
                      for row in cells)
 
 
+def yaml_double(x: float) -> str:
+    """``x`` with 6 significant digits, always read back as a double (``0.0``, not ``0``).
+
+    A ROS parameter declared double (or double[]) refuses an integer value.
+    """
+    text = f'{x:.6g}'
+    return text if any(c in text for c in '.einf') else text + '.0'
+
+
 def node_parameters(names: Sequence[str], armature: np.ndarray, threshold: float) -> str:
     """Node parameter YAML for the identified armature, with the URDF friction switched on."""
-    arm = ', '.join(f'{0.0 if math.isnan(a) else max(a, 0.0):.6g}' for a in armature)
+    arm = ', '.join(yaml_double(0.0 if math.isnan(a) else max(a, 0.0)) for a in armature)
     return '\n'.join([
         'inverse_dynamics:',
         '  ros__parameters:',
         f'    joints: [{", ".join(repr(n).replace(chr(39), chr(34)) for n in names)}]',
         f'    armature: [{arm}]',
         '    friction_model: "urdf"',
-        f'    friction_velocity_threshold: {threshold:g}'])
+        f'    friction_velocity_threshold: {yaml_double(threshold)}'])
 
 
 def urdf_dynamics(names: Sequence[str], damping: np.ndarray, friction: np.ndarray) -> str:
