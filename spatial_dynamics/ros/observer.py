@@ -1,0 +1,237 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""External joint torques from measured effort: the generalized-momentum observer (no ROS).
+
+Pure Python + numpy + the library (no rclpy import), tested in ``test/test_ros_observer.py``
+on a simulated robot. The robot, as the node models it (SI units, order of
+``model.joint_names``)::
+
+    (M(q) + A) q̈ + C(q, q̇) q̇ + g(q) + friction(q̇) = τ_m + τ_ext
+
+with ``A = diag(armature)``, ``τ_m`` the measured joint torque and ``τ_ext = Jᵀ w`` the joint
+torque of the wrenches the environment applies to the robot. The generalized momentum
+``p = (M(q) + A) q̇`` obeys (``Ṁ = C + Cᵀ``)::
+
+    ṗ = τ_m + β(q, q̇) + τ_ext,    β = Cᵀ(q, q̇) q̇ − g(q) − friction(q̇)
+
+and De Luca's observer (De Luca & Mattone, ICRA 2005)::
+
+    r(t) = K_O [p(t) − p(t0) − ∫_{t0}^{t} (τ_m + β + r) ds]
+
+gives ``ṙ = K_O (τ_ext − r)``: ``r`` is ``τ_ext`` through a first-order low pass of time
+constant ``1/K_O``, computed from ``q``, ``q̇`` and ``τ_m`` only (no acceleration, no
+differentiated velocity). ``p`` and ``Cᵀ q̇`` come from one O(n) pass
+(:func:`spatial_dynamics.generalized_momentum`).
+
+Discrete form, sample k at time ``t_k`` (``Δt = t_k − t_{k−1}``): the momentum balance over
+the step gives the mean external torque ``ȳ_k = (p_k − p_{k−1})/Δt − ½(w_k + w_{k−1})``
+with ``w = τ_m + β`` (trapezoidal rule), and ``r`` is the exact solution of
+``ṙ = K_O (ȳ_k − r)`` over the step::
+
+    r_k = e^{−K_O Δt} r_{k−1} + (1 − e^{−K_O Δt}) ȳ_k
+
+(for ``K_O Δt ≪ 1`` this is the Euler step of the integral form above; unlike it, it is
+stable and exactly first order for any sample interval). A step of ``τ_ext`` at a sample
+gives ``r = (1 − e^{−K_O t}) τ_ext`` at the samples after it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable, Optional, Sequence, Tuple
+
+import numpy as np
+import spatial_dynamics as sd
+from spatial_dynamics.ros.inputs import InputError, name_index
+
+#: ``observer_gain`` K_O (1/s) at most: a time constant of 1 ms, one sample at 1 kHz. Beyond
+#: it the estimate is the raw difference quotient of the momentum (differentiated
+#: velocities, all their noise) at any joint_states rate a node can take.
+MAX_OBSERVER_GAIN = 1000.0
+#: ``external_torque_warn`` (N m or N, per-joint RMS) at most.
+MAX_EXTERNAL_TORQUE_WARN = 1e6
+#: Why a good measured state does not update the observer (diagnostics counter keys).
+#: ``no_effort`` (empty effort: not an error, the observer just waits), ``length_mismatch``
+#: (effort and name differ in length), ``non_finite`` (NaN/Inf effort of a model joint),
+#: ``no_velocity`` (the observer needs q̇), ``repeated`` (the stamp of the previous sample).
+SKIP_REASONS = ('no_effort', 'length_mismatch', 'non_finite', 'no_velocity', 'repeated')
+
+Friction = Callable[[np.ndarray], np.ndarray]
+
+
+class ObserverError(ValueError):
+    """An observer parameter that cannot be used; the message names it."""
+
+
+def check_observer_gain(value: float) -> float:
+    """``observer_gain`` K_O in 1/s: finite, from 0 (off) to :data:`MAX_OBSERVER_GAIN`."""
+    if not (math.isfinite(value) and 0.0 <= value <= MAX_OBSERVER_GAIN):
+        raise ObserverError(
+            f'parameter observer_gain: {value} is not a finite value from 0 (off) to '
+            f'{MAX_OBSERVER_GAIN:g} 1/s (a time constant of at least 1 ms; beyond it the '
+            'estimate is the differentiated momentum)')
+    return float(value)
+
+
+def check_warn(joint_names: Optional[Sequence[str]], values: Sequence[float]) -> np.ndarray:
+    """``external_torque_warn``: one value for all joints or one per joint; > 0, bounded.
+
+    N m (N for prismatic joints), compared with the RMS of the estimate per joint over a
+    diagnostics period. ``joint_names`` None checks the values only (no model yet). Returns
+    a read-only (n,) array (or the values as given when there is no model).
+    """
+    values = [float(v) for v in values or ()]
+    for value in values:
+        if not (math.isfinite(value) and 0.0 < value <= MAX_EXTERNAL_TORQUE_WARN):
+            raise ObserverError(
+                f'parameter external_torque_warn: {value} is not a finite value above 0 and '
+                f'at most {MAX_EXTERNAL_TORQUE_WARN:g} (N m, or N for a prismatic joint)')
+    if joint_names is None:
+        return np.array(values)
+    n = len(joint_names)
+    if len(values) not in (1, n):
+        raise ObserverError(
+            f'parameter external_torque_warn: {len(values)} values for the {n} joints '
+            f'{list(joint_names)} (need one value for all, or one per joint in this order)')
+    warn = np.array(values * n if len(values) == 1 else values)
+    warn.setflags(write=False)
+    return warn
+
+
+def measured_effort(joint_names: Tuple[str, ...], name: Sequence[str],
+                    effort: Sequence[float]) -> np.ndarray:
+    """``τ_m`` (n,) in ``joint_names`` order from a measured JointState's ``effort``, by name.
+
+    Raises :class:`~spatial_dynamics.ros.inputs.InputError` with a reason of
+    :data:`SKIP_REASONS`: ``no_effort`` when ``effort`` is empty.
+    """
+    if len(effort) == 0:
+        raise InputError('no_effort', "field 'effort' is empty")
+    if len(effort) != len(name):
+        raise InputError('length_mismatch', f"field 'effort' has {len(effort)} values for "
+                         f'{len(name)} names')
+    tau = np.asarray(effort, dtype=np.float64)[name_index(joint_names, tuple(name))]
+    if not np.isfinite(tau).all():
+        bad = [joint_names[i] for i in np.flatnonzero(~np.isfinite(tau))]
+        raise InputError('non_finite', f"field 'effort' is not finite for joint(s) {bad}")
+    return tau
+
+
+def sample_time(stamp_ns: int, receipt_ns: int) -> Tuple[float, str]:
+    """``(t, clock)`` of a measurement: its header stamp, or its receipt when the stamp is 0.
+
+    A zero stamp means "not stamped" (a driver that leaves the header empty); the receipt
+    time (monotonic) stands in for it. The clock is named so that a stream switching
+    between the two resets the observer instead of integrating across two time bases.
+    """
+    if stamp_ns:
+        return stamp_ns * 1e-9, 'stamp'
+    return receipt_ns * 1e-9, 'receipt'
+
+
+class MomentumObserver:
+    """Generalized-momentum observer of the external joint torques (see the module doc).
+
+    Args:
+        model: the robot (with its payload), order of ``model.joint_names``.
+        gain: K_O in 1/s (> 0): time constant ``1/K_O``.
+        armature: None or (n,) rotor inertia, kg m² (kg): added to ``M``.
+        friction: None or ``friction(q̇) -> (n,)`` torque the joints lose (N m, N), e.g. the
+            node's ``friction_model``.
+        gravity: m/s² in the root-link frame.
+        max_gap: a sample more than this many seconds after the previous one restarts the
+            observer (the integral across a gap means nothing).
+        backend: of the library calls (``'auto'``, ``'numpy'``, ``'compiled'``).
+
+    :meth:`update` takes one sample and returns ``r`` (n,), N m or N; zeros on the first
+    sample after a (re)start. ``resets`` counts the restarts, ``reset_reason`` says why the
+    last one happened, ``samples`` counts the samples since it.
+    """
+
+    def __init__(self, model: 'sd.Model', gain: float, armature: Optional[np.ndarray] = None,
+                 friction: Optional[Friction] = None,
+                 gravity: Sequence[float] = sd.GRAVITY, max_gap: float = math.inf,
+                 backend: str = 'auto') -> None:
+        if not (math.isfinite(gain) and gain > 0.0):
+            raise ObserverError(f'observer gain must be a positive number of 1/s, got {gain}')
+        self.model = model
+        self.gain = float(gain)
+        self.armature = None if armature is None else np.asarray(armature, dtype=float)
+        self.friction = friction
+        self.gravity = tuple(float(g) for g in gravity)
+        self.max_gap = float(max_gap)
+        self.backend = backend
+        self.resets = 0
+        self.reset_reason = ''
+        self.reset()
+
+    def reset(self, reason: str = '') -> None:
+        """Forget the past: the next sample starts the observer again (``r`` = 0)."""
+        if reason:
+            self.resets += 1
+            self.reset_reason = reason
+        self.samples = 0
+        self._t: Optional[float] = None
+        self._clock = ''
+        self._p: Optional[np.ndarray] = None
+        self._w: Optional[np.ndarray] = None
+        self.r = np.zeros(len(self.model.joint_names))
+
+    def momentum(self, q: np.ndarray, qd: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """``(p, β)``: ``p = (M + A) q̇`` and ``β = Cᵀ q̇ − g − friction(q̇)``."""
+        p, ctq = sd.generalized_momentum(self.model, q, qd, backend=self.backend)
+        beta = ctq - sd.gravity_torque(self.model, q, self.gravity, backend=self.backend)
+        if self.armature is not None:
+            p = p + self.armature * qd
+        if self.friction is not None:
+            beta -= self.friction(qd)
+        return p, beta
+
+    def update(self, t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray,
+               clock: str = '') -> Optional[np.ndarray]:
+        """Take the sample ``(q, q̇, τ_m)`` of time ``t`` (s); return ``r`` (n,).
+
+        None when ``t`` equals the previous sample's time (the same measurement again:
+        nothing new). A time before the previous one, more than ``max_gap`` after it, or
+        of another ``clock`` (see :func:`sample_time`) restarts the observer at this sample.
+        """
+        if self._t is not None:
+            dt = t - self._t
+            if dt == 0.0 and clock == self._clock:
+                return None
+            if clock != self._clock:
+                self.reset(f'time base changed from {self._clock} to {clock}')
+            elif dt < 0.0:
+                self.reset(f'time went backwards by {-dt:.6f} s')
+            elif dt > self.max_gap:
+                self.reset(f'gap of {dt:.3f} s between samples (more than {self.max_gap:g} s)')
+        p, beta = self.momentum(q, qd)
+        w = tau + beta
+        if self._t is not None:
+            dt = t - self._t
+            y = (p - self._p) / dt - 0.5 * (w + self._w)   # mean τ_ext over the step
+            decay = math.exp(-self.gain * dt)
+            self.r = decay * self.r + (1.0 - decay) * y
+        self._t, self._clock, self._p, self._w = t, clock, p, w
+        self.samples += 1
+        return self.r
+
+
+class EstimateWindow:
+    """The estimates of one diagnostics period: count and per-joint sum of squares."""
+
+    def __init__(self, n: int = 0) -> None:
+        self.count = 0
+        self.sum_squares = np.zeros(n)
+        self.skipped = {reason: 0 for reason in SKIP_REASONS}
+
+    def add(self, r: np.ndarray) -> None:
+        """Count one published estimate."""
+        if self.sum_squares.shape != r.shape:   # first estimate, or a model with other joints
+            self.count, self.sum_squares = 0, np.zeros(r.shape)
+        self.count += 1
+        self.sum_squares += r * r
+
+    def rms(self) -> Optional[np.ndarray]:
+        """RMS per joint of the period's estimates, or None when there were none."""
+        return np.sqrt(self.sum_squares / self.count) if self.count else None
