@@ -245,3 +245,20 @@ def test_node_parameters_are_doubles_the_node_accepts():
     assert all(type(x) is float for x in params['armature'])
     assert type(params['friction_velocity_threshold']) is float
     assert params['joints'] == ['a', 'b', 'c']
+
+
+def test_plots_and_residual_file_are_written(recording, tmp_path):
+    """The plots (drawn in a forked child) and one residual row per sample."""
+    urdf, names, t_ns, q, qd, effort = recording
+    m = 2000
+    bag = write(tmp_path / 'bag', names, t_ns[:m], q[:m], qd[:m], effort[:m], 'mcap')
+    out = str(tmp_path / 'out')
+    assert main([bag, '--urdf', urdf, '--out', out]) == 0
+    for name in ('measured_vs_model.png', 'residual.png'):
+        with open(os.path.join(out, name), 'rb') as f:
+            assert f.read(8) == b'\x89PNG\r\n\x1a\n', name
+    with open(os.path.join(out, 'residual.csv')) as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == ['t'] + list(names)
+    assert len(rows) == 1 + m
+    assert float(rows[1][0]) == 0.0

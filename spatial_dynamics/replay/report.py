@@ -151,6 +151,27 @@ def plot_joints(path: str, t: np.ndarray, names: Sequence[str], series: dict,
     plt.close(fig)
 
 
+def in_child(fn, *args):
+    """Start ``fn(*args)`` in a forked child process, or run it here where fork is missing.
+
+    Returns the process (for :func:`join_child`), or ``None`` when ``fn`` already ran. The
+    child shares this process's arrays without copying them (fork is copy-on-write).
+    """
+    import multiprocessing
+    if 'fork' not in multiprocessing.get_all_start_methods():
+        fn(*args)
+        return None
+    proc = multiprocessing.get_context('fork').Process(target=fn, args=args, daemon=True)
+    proc.start()
+    return proc
+
+
+def join_child(proc) -> bool:
+    """Wait for a process of :func:`in_child`; ``True`` when it succeeded."""
+    proc.join()
+    return proc.exitcode == 0
+
+
 def ensure_dir(path: str) -> str:
     """Create the output directory (and parents) if needed; return it."""
     os.makedirs(path, exist_ok=True)
