@@ -80,6 +80,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                        ['--identify'] if args.identify else [])
             env = dict(os.environ, PYTHONPATH=os.pathsep.join(
                 [ROOT] + ([os.environ['PYTHONPATH']] if 'PYTHONPATH' in os.environ else [])))
+            print(f'{storage}: timing {" ".join(cmd[1:])}', flush=True)
             start = time.perf_counter()
             r = subprocess.run(cmd, capture_output=True, text=True, env=env)
             wall = time.perf_counter() - start
