@@ -187,3 +187,61 @@ def test_bad_start_up_exits_1_naming_the_problem(install, tmp_path):
     assert proc.proc.wait(TIMEOUT) == 1
     assert "mode 'fast'" in proc.log()
     proc.stop()
+
+
+def test_applied_wrench_pushes_the_robot_as_apply_wrench_does(lockstep):
+    from geometry_msgs.msg import WrenchStamped
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    proc, io = lockstep
+    oracle = SimulatedRobot(DEMO_URDF, timestep=H)
+    n = oracle.model.nq
+    pub = io.driver.node.create_publisher(
+        WrenchStamped, 'applied_wrench', QoSProfile(depth=10,
+                                                    reliability=ReliabilityPolicy.RELIABLE))
+
+    def wrench(link, values):
+        msg = WrenchStamped()
+        msg.header.frame_id = link
+        t, f = msg.wrench.torque, msg.wrench.force
+        t.x, t.y, t.z, f.x, f.y, f.z = (float(v) for v in values)
+        return msg
+
+    def wait_log(text):
+        io.driver.spin_until(lambda: text in proc.log(), what=f'{text!r} in the sim log')
+
+    try:
+        io.driver.spin_until(lambda: pub.get_subscription_count() >= 1, what='applied_wrench')
+        for bad, why in ((wrench('no_such_link', [1.0] * 6), "'no_such_link' is not a link"),
+                         (wrench('tcp', [0.0, math.nan, 0, 0, 0, 0]), 'torque.y')):
+            pub.publish(bad)
+            wait_log(why)
+        w = [0.5, -0.3, 0.2, 10.0, -5.0, 8.0]
+        pub.publish(wrench('tcp', w))
+        wait_log("applied_wrench on 'tcp'")
+        oracle.apply_wrench('tcp', w)
+        tau = np.zeros(n)
+        for k in range(1, 11):
+            count = len(io.states)
+            io.command(tau)
+            io.driver.spin_until(lambda: any(math.isclose(sim_time(s), k * H, abs_tol=1e-9)
+                                             for s in io.states[count:]), what=f'step {k}')
+            oracle.step(tau)
+        state = io.states[-1]
+        assert np.allclose(state.position, oracle.q, rtol=0, atol=1e-12)
+        assert np.allclose(state.velocity, oracle.qd, rtol=0, atol=1e-12)
+        free = SimulatedRobot(DEMO_URDF, timestep=H)     # without the push: elsewhere
+        free.step(tau, 10)
+        assert np.abs(free.qd - oracle.qd).max() > 1e-3
+        assert list(state.effort) == [0.0] * n   # the effort is the command, not the push
+    finally:
+        io.driver.node.destroy_publisher(pub)
+
+
+def test_check_wrench_names_the_link_or_the_component():
+    from spatial_dynamics.sim.node import check_wrench
+    links = ['base', 'tcp']
+    assert check_wrench('tcp', [0.0] * 6, links) is None
+    assert "'hand' is not a link" in check_wrench('hand', [0.0] * 6, links)
+    assert 'force.z' in check_wrench('tcp', [0, 0, 0, 0, 0, math.inf], links)
+    assert 'torque.x' in check_wrench('tcp', [math.nan, 0, 0, 0, 0, 0], links)
+    assert 'force.x above' in check_wrench('tcp', [0, 0, 0, 2e6, 0, 0], links)

@@ -14,6 +14,12 @@ Topics (relative, so they follow the namespace and can be remapped):
                                                              ``joints``, in that order (as a
                                                              ros2_control forward command
                                                              controller with interface effort)
+``applied_wrench``     geometry_msgs/WrenchStamped, in       reliable, keep last 10; a push
+                                                             on link ``header.frame_id``:
+                                                             torque, force (N m, N) in that
+                                                             link's frame, at its origin;
+                                                             held (turning with the link)
+                                                             until replaced, zero removes it
 ``joint_states``       sensor_msgs/JointState, out           reliable; position, velocity and
                                                              effort = the applied command
 ``/clock``             rosgraph_msgs/Clock, out              with ``publish_clock``: sim time
@@ -34,6 +40,10 @@ Modes (parameter ``mode``):
 
 A bad command (wrong length, NaN or infinite, magnitude above 1e6) is refused with the
 reason logged and is not applied; in lockstep it does not count as the step's command.
+A wrench on an unknown link, or with a NaN, infinite or larger than 1e6 component, is
+refused the same way. An applied wrench acts from the next physics step on (the effort in
+``joint_states`` stays the command: the wrench is the environment's push, what an
+external-torque observer should find).
 """
 
 from __future__ import annotations
@@ -44,6 +54,7 @@ import time
 from typing import Optional, Sequence
 
 from builtin_interfaces.msg import Time
+from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
@@ -61,6 +72,7 @@ MAX_COMMAND = 1e6             # N m or N: beyond it a command is refused
 REPUBLISH_PERIOD = 0.1        # s of wall time, lockstep: the state is sent again while waiting
 MAX_CATCH_UP_STEPS = 100      # realtime: steps run in one go when the process fell behind
 WARN_PERIOD = 1.0             # s between two warnings of one kind
+WRENCH_FIELDS = ('torque.x', 'torque.y', 'torque.z', 'force.x', 'force.y', 'force.z')
 
 PARAMETERS = (
     # name, default (or a parameter type when unset), description
@@ -95,6 +107,19 @@ def check_command(data: Sequence[float], n: int) -> Optional[str]:
         return f'non-finite value at index {int(np.argmin(np.isfinite(tau)))}'
     if np.abs(tau).max(initial=0.0) > MAX_COMMAND:
         return f'value above {MAX_COMMAND:g} at index {int(np.argmax(np.abs(tau)))}'
+    return None
+
+
+def check_wrench(link: str, wrench: Sequence[float], links) -> Optional[str]:
+    """Why a wrench ``[n; f]`` cannot be applied to ``link`` (one of ``links``), or None."""
+    if link not in links:
+        return (f'header.frame_id {link!r} is not a link of the robot (links: '
+                f'{", ".join(links)})')
+    w = np.asarray(wrench, dtype=float)
+    if not np.isfinite(w).all():
+        return f'non-finite component {WRENCH_FIELDS[int(np.argmin(np.isfinite(w)))]}'
+    if np.abs(w).max(initial=0.0) > MAX_COMMAND:
+        return f'component {WRENCH_FIELDS[int(np.argmax(np.abs(w)))]} above {MAX_COMMAND:g}'
     return None
 
 
@@ -153,6 +178,8 @@ class SimNode(Node):
             self._clock_msg = Clock
         self.create_subscription(Float64MultiArray, p['command_topic'], self._on_command,
                                  command_qos())
+        self.create_subscription(WrenchStamped, 'applied_wrench', self._on_wrench,
+                                 command_qos())
         self.msg = JointState(name=list(self.robot.joint_names))
         self.get_logger().info(
             f'{self.robot.model.summary()}; {self.mode}, step {self.timestep:g} s '
@@ -184,6 +211,22 @@ class SimNode(Node):
             self.robot.step(self.tau)
             self.steps += 1
             self._publish()
+
+    def _on_wrench(self, msg: WrenchStamped) -> None:
+        """Apply (or, when zero, remove) the wrench on link ``header.frame_id``."""
+        link = msg.header.frame_id
+        t, f = msg.wrench.torque, msg.wrench.force
+        wrench = [t.x, t.y, t.z, f.x, f.y, f.z]          # [n; f], angular first
+        why = check_wrench(link, wrench, list(self.robot.model.frames))
+        if why is not None:
+            self.refused += 1
+            kind = 'wrench link' if link not in self.robot.model.frames else 'wrench value'
+            self._warn(kind, f'applied_wrench refused ({self.refused} refused so far): {why}')
+            return
+        self.robot.apply_wrench(link, wrench if any(wrench) else None)
+        self.get_logger().info(f'applied_wrench on {link!r}: '
+                               + ('removed' if not any(wrench) else f'[n; f] = {wrench}'),
+                               throttle_duration_sec=WARN_PERIOD)
 
     def _republish(self) -> None:
         if time.monotonic() - self.last_publish >= REPUBLISH_PERIOD:
