@@ -39,6 +39,9 @@ from spatial_dynamics.ros.control import (
     ControlError, FEEDBACK_MODES, FEEDBACK_REASONS, GAIN_UNITS, Gains, MAX_KD, MAX_KP,
     MAX_MEASURED_POSITION, MAX_MEASURED_VELOCITY, MEASURED_REASONS, OUTPUTS)
 from spatial_dynamics.ros.inputs import REASONS
+from spatial_dynamics.ros.observer import (
+    check_observer_gain, check_warn, EstimateWindow, MAX_EXTERNAL_TORQUE_WARN,
+    MAX_OBSERVER_GAIN, MomentumObserver, ObserverError)
 from spatial_dynamics.urdf import read_urdf_file
 
 NODE_NAME = 'inverse_dynamics'
@@ -51,6 +54,16 @@ DEFAULT_INPUT_TIMEOUT = 0.5         # s
 DEFAULT_FRICTION_THRESHOLD = 0.01   # rad/s or m/s
 DEFAULT_WRENCH_TIMEOUT = 0.5        # s
 DEFAULT_MEASURED_TIMEOUT = 0.5      # s
+#: ``observer_gain`` K_O, 1/s: a 50 ms time constant (3.2 Hz bandwidth). A collision or a
+#: wrong payload shows within ~0.15 s (3 time constants), while effort noise and the half
+#: sample of timing between a drive's torque and its state pass at K_O times their size
+#: (their rate of change over K_O): low enough to keep a 1 kHz state stream's noise out,
+#: high enough that the estimate follows a contact as it happens.
+DEFAULT_OBSERVER_GAIN = 20.0
+#: ``external_torque_warn``, N m (N): RMS of the estimate per joint over a diagnostics
+#: period above which diagnostics WARN. 5 N m is 1 kg at 0.5 m, a payload an arm's model
+#: should know about; set it per joint for a robot with small wrist joints.
+DEFAULT_EXTERNAL_TORQUE_WARN = 5.0
 
 #: ``backend: auto`` runs a model on the compiled kernels when one plain-float RNEA call
 #: (backend 'numpy', the median of :data:`TIMED_CALLS` on a moving state, see
@@ -200,6 +213,18 @@ PARAMETERS = (
     Spec('external_wrench_timeout', DEFAULT_WRENCH_TIMEOUT, (
         'Seconds after its receipt that an external_wrenches message stops applying.'),
         range=(1e-3, 3600.0)),
+    Spec('observer_gain', DEFAULT_OBSERVER_GAIN, (
+        'Gain K_O (1/s) of the generalized-momentum observer of external joint torques: '
+        'each measured joint_states message with effort for every model joint updates it '
+        'and external_torque_estimate is published (time constant 1/K_O; the model '
+        'includes payload, armature, friction_model and gravity). 0 = off. At most '
+        f'{MAX_OBSERVER_GAIN:g} 1/s (1 ms: beyond it the estimate is the differentiated '
+        'momentum). Live; a change restarts the observer.'), range=(0.0, MAX_OBSERVER_GAIN)),
+    Spec('external_torque_warn', [DEFAULT_EXTERNAL_TORQUE_WARN], (
+        'Diagnostics WARN, naming the joints, when the RMS of external_torque_estimate over '
+        'a diagnostics period exceeds this (N m, or N for prismatic joints): one value for '
+        'all joints or one per model joint (order of the joints parameter), above 0 and at '
+        f'most {MAX_EXTERNAL_TORQUE_WARN:g}. Live.')),
     Spec('backend', 'auto', (
         'How tau is computed. "numpy": plain Python floats (no numba import; ~30-150 µs per '
         'call for 6-32 joints). "compiled": numba kernels (~1-2 µs), prepared off the '
@@ -596,6 +621,7 @@ class Output:
     setting: str = 'auto'
     plain_call_s: float = 0.0
     gains: Optional[Gains] = None
+    external_torque_warn: Optional[np.ndarray] = None
 
     @property
     def waits_for_compiled(self) -> bool:
@@ -623,6 +649,7 @@ class Config:
     control_mode: str = 'feedforward'
     output_choice: str = 'full'
     measured_timeout: float = DEFAULT_MEASURED_TIMEOUT
+    observer_gain: float = DEFAULT_OBSERVER_GAIN
 
 
 def _base_model(params: dict, current: Optional[Output], urdf: str, source: str,
@@ -670,6 +697,8 @@ def build_output(params: dict, current: Optional[Output], urdf: Optional[str] = 
                                params['friction_velocity_threshold'], 'rad/s or m/s')
     setting = params.get('backend') or 'auto'
     gains = model_gains(base, params)
+    warn = _observer_check(check_warn, base.joint_names,
+                           params.get('external_torque_warn', [DEFAULT_EXTERNAL_TORQUE_WARN]))
     output = Output(
         urdf=urdf, source=source, base=base, model=payload.apply(base),
         joints=tuple(base.joint_names), joints_param=joints, locked=tuple(locked.items()),
@@ -677,7 +706,7 @@ def build_output(params: dict, current: Optional[Output], urdf: Optional[str] = 
         friction_threshold=threshold if friction_model == 'urdf' else None,
         clamp=bool(params['clamp_to_effort_limits']), setting=setting,
         preferred=preferred_backend(setting, plain_call_s), plain_call_s=plain_call_s,
-        gains=gains)
+        gains=gains, external_torque_warn=warn)
     if output.waits_for_compiled and kernels is not None and kernels.ready:
         return output.upgraded()
     return output
@@ -696,6 +725,16 @@ def _check_without_model(params: dict) -> None:
         for name in ('kp', 'kd'):
             check_gains_without_model(name, params.get(name))
     except ControlError as err:
+        raise ConfigError(str(err)) from None
+    _observer_check(check_warn, None,
+                    params.get('external_torque_warn', [DEFAULT_EXTERNAL_TORQUE_WARN]))
+
+
+def _observer_check(check: Callable, *args):
+    """Run an observer parameter check; its :class:`ObserverError` as a ConfigError."""
+    try:
+        return check(*args)
+    except ObserverError as err:
         raise ConfigError(str(err)) from None
 
 
@@ -742,6 +781,8 @@ def prepare(previous: dict, changes: dict, current: Optional[Output],
         wrench_timeout=check_positive('external_wrench_timeout',
                                       params['external_wrench_timeout']),
         control_mode=control_mode, output_choice=output_choice,
+        observer_gain=_observer_check(check_observer_gain,
+                                      params.get('observer_gain', DEFAULT_OBSERVER_GAIN)),
         measured_timeout=check_positive('measured_timeout',
                                         params.get('measured_timeout',
                                                    DEFAULT_MEASURED_TIMEOUT)))
@@ -1056,3 +1097,62 @@ def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
     values += [(f'external wrenches rejected {reason}', str(count))
                for reason, count in totals.wrenches_rejected.items()]
     return level, message, values
+
+
+# --------------------------------------------------------------------------------------------
+# The external-torque observer: what it depends on, and its diagnostics status
+
+def observer_key(output: Output, gravity: Sequence[float], gain: float,
+                 max_gap: float) -> tuple:
+    """What the estimate depends on; the node restarts the observer when this changes.
+
+    The model (the base, by identity: a parameter change that does not re-parse keeps it),
+    payload, armature, friction model, gravity, gain and the gap that restarts it; not the
+    backend (the compiled kernels compute the same numbers).
+    """
+    armature = None if output.armature is None else output.armature.tobytes()
+    return (id(output.base), output.payload, armature, output.friction_threshold,
+            tuple(gravity), gain, max_gap)
+
+
+def make_observer(output: Output, gravity: Sequence[float], gain: float,
+                  max_gap: float) -> MomentumObserver:
+    """Return the observer of ``output``'s model (payload included) with the node's terms."""
+    model, threshold = output.model, output.friction_threshold
+    friction = None if threshold is None else (
+        lambda qd: sd.friction_torque(model, qd, threshold))
+    return MomentumObserver(model, gain, output.armature, friction, gravity, max_gap,
+                            output.backend)
+
+
+def observer_status(output: Optional[Output], gain: float,
+                    observer: Optional[MomentumObserver], window: EstimateWindow) -> Status:
+    """Return the ``external torque`` status: RMS of the estimate per joint over the period.
+
+    WARN, naming the joints, when a joint's RMS exceeds ``external_torque_warn``.
+    """
+    values = [('observer gain [1/s]', f'{gain:g}'),
+              ('time constant [ms]', f'{1e3 / gain:.1f}' if gain > 0.0 else '')]
+    if gain <= 0.0:
+        return 'OK', 'observer off (observer_gain 0)', values
+    if output is None:
+        return 'OK', 'no robot model', values
+    values += [('estimates', str(window.count))]
+    values += [(f'skipped {reason}', str(count)) for reason, count in window.skipped.items()]
+    if observer is not None:
+        values += [('samples since restart', str(observer.samples)),
+                   ('restarts', str(observer.resets)),
+                   ('last restart', observer.reset_reason)]
+    rms = window.rms()
+    if rms is None or len(rms) != len(output.joints):
+        return 'OK', 'no measured effort in this period (observer waiting)', values
+    warn = output.external_torque_warn
+    values += [(f'rms {joint}', f'{value:.4g}') for joint, value in zip(output.joints, rms)]
+    values += [('warn above', ', '.join(f'{x:g}' for x in warn))]
+    over = np.flatnonzero(rms > warn)
+    worst = int(np.argmax(rms / warn))
+    if over.size:
+        return 'WARN', ('external torque above external_torque_warn: ' + ', '.join(
+            f'{output.joints[i]} {rms[i]:.3g} (RMS) > {warn[i]:g}' for i in over)), values
+    return 'OK', (f'largest RMS {rms[worst]:.3g} on {output.joints[worst]} '
+                  f'(warn above {warn[worst]:g})'), values

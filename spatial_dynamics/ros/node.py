@@ -25,22 +25,27 @@ simulator republishing the state it waits on must not get two commands for it).
 
 Topics (relative, so they can be remapped):
 
-==========================  ====================================  ============================
-``desired_joint_states``    sensor_msgs/JointState, in            best effort, keep last 1
-``desired_trajectory``      trajectory_msgs/JointTrajectory, in   best effort, keep last 1
-``external_wrenches``       geometry_msgs/WrenchStamped, in       best effort, keep last 10
-``joint_states``            sensor_msgs/JointState, in: the       best effort, keep last 1
-                            MEASURED state (position; velocity
-                            in the feedback modes; effort unused)
-``robot_description``       std_msgs/String, in (subscribed only  reliable, transient local, 1
-                            while no description parameter is
-                            set; parsed off the answering path)
-``feedforward_efforts``     sensor_msgs/JointState, out           reliable
-``effort_commands``         std_msgs/Float64MultiArray, out       reliable
-``feedforward_terms``       sensor_msgs/JointState, out: name     reliable; published only
-                            ``<joint>/<term>``, effort = value    while subscribed
-``/diagnostics``            diagnostic_msgs/DiagnosticArray, out  ~1 Hz
-==========================  ====================================  ============================
+============================  ====================================  ============================
+``desired_joint_states``      sensor_msgs/JointState, in            best effort, keep last 1
+``desired_trajectory``        trajectory_msgs/JointTrajectory, in   best effort, keep last 1
+``external_wrenches``         geometry_msgs/WrenchStamped, in       best effort, keep last 10
+``joint_states``              sensor_msgs/JointState, in: the       best effort, keep last 1
+                              MEASURED state (position; velocity
+                              in the feedback modes; effort:
+                              measured torque, for the observer)
+``robot_description``         std_msgs/String, in (subscribed only  reliable, transient local, 1
+                              while no description parameter is
+                              set; parsed off the answering path)
+``feedforward_efforts``       sensor_msgs/JointState, out           reliable
+``effort_commands``           std_msgs/Float64MultiArray, out       reliable
+``feedforward_terms``         sensor_msgs/JointState, out: name     reliable; published only
+                              ``<joint>/<term>``, effort = value    while subscribed
+``external_torque_estimate``  sensor_msgs/JointState, out: the      reliable; one per measured
+                              observer's τ_ext per model joint in   message with velocity and
+                              effort (N m, N), the measurement's    effort for every model
+                              header                                joint (observer_gain > 0)
+``/diagnostics``              diagnostic_msgs/DiagnosticArray, out  ~1 Hz
+============================  ====================================  ============================
 
 Parameters are listed in ``config/inverse_dynamics.yaml``. Every message is answered or
 rejected on its own: a rejected message (reason counted in diagnostics) produces no output, and
@@ -49,6 +54,16 @@ the feedback modes a measured state is answered only while the held desired stat
 than ``input_timeout``; with no measured state for ``measured_timeout`` nothing is published
 (diagnostics ERROR naming the measured state). ``feedforward_efforts`` carries the desired
 ``q_d``, ``qd_d`` in position/velocity (what an MIT-mode drive takes with the torque).
+
+External torques (any ``control_mode``): each measured state whose ``effort`` holds the
+measured torque of every model joint updates a generalized-momentum observer
+(:mod:`spatial_dynamics.ros.observer`, gain ``observer_gain``, the node's model with payload,
+armature, friction and gravity), integrated over the header stamps (a message stamped 0 or with
+the stamp of the previous one is skipped; a stamp going back, a gap above ``measured_timeout``
+or a change of the model or of a parameter it uses restarts it at zero), and its estimate of
+τ_ext = Jᵀw is published on ``external_torque_estimate``. Diagnostics (status ``external
+torque``) give its RMS per joint over the period and WARN, naming the joints, above
+``external_torque_warn``.
 
 ``joint_states`` is subscribed best effort, keep last 1, like the desired inputs: that
 matches drivers' reliable publishers and sensor-data best-effort ones alike (a reliable
@@ -98,14 +113,15 @@ from sensor_msgs.msg import JointState
 import spatial_dynamics as sd
 from spatial_dynamics.ros.config import (
     backend_text, build_output, CompiledKernels, Config, ConfigError, DEFAULT_GRAVITY,
-    DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT, DEFAULT_WRENCH_TIMEOUT,
-    description_source, DescriptionParser,
-    feedforward_status, model_status, NODE_NAME, Output, PARAMETER_NAMES, PARAMETERS,
-    ParseRequest, PAYLOAD_PARAMETERS, prepare, reparse_needed, Settings, SLOW_PARAMETERS,
-    Totals, Window)
+    DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT, DEFAULT_OBSERVER_GAIN,
+    DEFAULT_WRENCH_TIMEOUT, description_source, DescriptionParser, feedforward_status,
+    make_observer, model_status, NODE_NAME, observer_key, observer_status, Output,
+    PARAMETER_NAMES, PARAMETERS, ParseRequest, PAYLOAD_PARAMETERS, prepare, reparse_needed,
+    Settings, SLOW_PARAMETERS, Totals, Window)
 from spatial_dynamics.ros.control import (answer, Dynamics, FEEDBACK_MODES, measured_arrays,
                                           terms_names)
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
+from spatial_dynamics.ros.observer import EstimateWindow, measured_effort, sample_time
 from std_msgs.msg import Float64MultiArray, String
 from trajectory_msgs.msg import JointTrajectory
 
@@ -196,6 +212,11 @@ class InverseDynamicsNode(Node):
         self.control_mode = 'feedforward'
         self.output_choice = 'full'
         self.measured_timeout = DEFAULT_MEASURED_TIMEOUT
+        self.observer_gain = DEFAULT_OBSERVER_GAIN
+        self.observer = None              # MomentumObserver of the current model, when on
+        self._observed: Optional[Output] = None   # the output the observer was made for
+        self._observer_key: Optional[tuple] = None
+        self.estimates = EstimateWindow()   # external_torque_estimate of the period
         self.desired: Optional[Held] = None    # the last good desired state (zero-order hold)
         self.measured: Optional[Held] = None   # the last good measured state
         self._answered_stamp = 0               # stamp (ns) of the measured state answered last
@@ -228,6 +249,8 @@ class InverseDynamicsNode(Node):
             DiagnosticArray, '/diagnostics', 10,
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
         self.terms_pub = advertise(self, JointState, 'feedforward_terms')
+        self.estimate_pub = advertise(self, JointState, 'external_torque_estimate')
+        self._estimate = JointState()
         self._commands = Float64MultiArray()
         self._efforts = JointState()
         self._terms = JointState()
@@ -342,6 +365,10 @@ class InverseDynamicsNode(Node):
         self.control_mode = config.control_mode
         self.output_choice = config.output_choice
         self.measured_timeout = config.measured_timeout
+        self.observer_gain = config.observer_gain
+        self._observed = None   # the observer's settings are checked again at the next sample
+        if config.observer_gain <= 0.0:
+            self.observer = None
         if config.new_description:
             self._description_generation += 1   # a topic description still parsing is stale
         self._set_output(config.output, bool(set(PAYLOAD_PARAMETERS) & changes.keys()))
@@ -513,8 +540,14 @@ class InverseDynamicsNode(Node):
         self.measured = Held(output.joints, measured, t0)
         totals.last_measured_ns = t0
         self.window.measured += 1
-        if not feedback:
-            return
+        if feedback:
+            self._answer_measured(msg, output, measured, t0)
+        if self.observer_gain > 0.0:   # after the answer: it never delays a command
+            self._observe(msg, output, measured)
+
+    def _answer_measured(self, msg: JointState, output: Output, measured: tuple,
+                         t0: int) -> None:
+        """Answer a good measured state with the held desired state (a feedback mode)."""
         held = self.desired
         if held is None or held.joints != output.joints:
             self._reject('joint_states', 'no_desired',
@@ -534,6 +567,54 @@ class InverseDynamicsNode(Node):
             return
         self._answered_stamp = stamp
         self._respond(msg.header, output, 'joint_states', held.state, measured, t0)
+
+    def _observe(self, msg: JointState, output: Output, measured: tuple) -> None:
+        """Update the external-torque observer with a measured state; publish its estimate.
+
+        A message without effort (or velocity) for every model joint only skips the update
+        (counted in diagnostics): not an error. The observer restarts when the model or a
+        parameter it depends on changes (:func:`~.config.observer_key`).
+        """
+        skipped = self.estimates.skipped
+        q, qd = measured
+        if qd is None:
+            skipped['no_velocity'] += 1
+            return
+        try:
+            tau = measured_effort(output.joints, msg.name, msg.effort)
+        except InputError as err:
+            skipped[err.reason if err.reason in skipped else 'no_effort'] += 1
+            return
+        observer = self.observer
+        if output is not self._observed:
+            key = observer_key(output, self.gravity, self.observer_gain, self.measured_timeout)
+            if observer is None or key != self._observer_key:
+                observer = self.observer = make_observer(output, self.gravity,
+                                                         self.observer_gain,
+                                                         self.measured_timeout)
+                self._observer_key = key
+            observer.backend = output.backend
+            self._observed = output
+        t = sample_time(msg.header.stamp.sec, msg.header.stamp.nanosec)
+        if t is None:
+            skipped['unstamped'] += 1
+            return
+        try:
+            r = observer.update(t, q, qd, tau)
+        except Exception as err:  # never die on one message
+            self.get_logger().warn(f'external torque observer failed: {err!r}',
+                                   throttle_duration_sec=1.0)
+            observer.reset('compute error')
+            return
+        if r is None:
+            skipped['repeated'] += 1
+            return
+        estimate = self._estimate
+        estimate.header = msg.header
+        estimate.name = output.joints
+        estimate.effort = array('d', r.tobytes())
+        self.estimate_pub.publish(estimate)
+        self.estimates.add(r)
 
     def _respond(self, header, output: Output, topic: str, desired: tuple,
                  measured: Optional[tuple], t0: int) -> None:
@@ -672,11 +753,14 @@ class InverseDynamicsNode(Node):
         backend = '' if output is None else backend_text(output, self.kernels)
         settings = Settings(self.gravity, self.acceleration_source, self.input_timeout,
                             self.control_mode, self.output_choice, self.measured_timeout)
+        estimates, self.estimates = self.estimates, EstimateWindow()
         statuses = [
             ('robot model', model_status(output, self.totals, self.params['strict_urdf'],
                                          backend)),
             ('feedforward', feedforward_status(output, window, self.totals, settings,
-                                               self.wrenches, now_ns))]
+                                               self.wrenches, now_ns)),
+            ('external torque', observer_status(output, self.observer_gain, self.observer,
+                                                estimates))]
         name = self.get_fully_qualified_name().lstrip('/')  # 'inverse_dynamics' in the root ns
         hardware_id = '' if output is None else output.model.name
         diagnostics = DiagnosticArray(status=[

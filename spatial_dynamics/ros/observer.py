@@ -53,8 +53,10 @@ MAX_EXTERNAL_TORQUE_WARN = 1e6
 #: Why a good measured state does not update the observer (diagnostics counter keys).
 #: ``no_effort`` (empty effort: not an error, the observer just waits), ``length_mismatch``
 #: (effort and name differ in length), ``non_finite`` (NaN/Inf effort of a model joint),
-#: ``no_velocity`` (the observer needs q̇), ``repeated`` (the stamp of the previous sample).
-SKIP_REASONS = ('no_effort', 'length_mismatch', 'non_finite', 'no_velocity', 'repeated')
+#: ``no_velocity`` (the observer needs q̇), ``unstamped`` (header stamp 0, see
+#: :func:`sample_time`), ``repeated`` (the stamp of the previous sample).
+SKIP_REASONS = ('no_effort', 'length_mismatch', 'non_finite', 'no_velocity', 'unstamped',
+                'repeated')
 
 Friction = Callable[[np.ndarray], np.ndarray]
 
@@ -117,16 +119,19 @@ def measured_effort(joint_names: Tuple[str, ...], name: Sequence[str],
     return tau
 
 
-def sample_time(stamp_ns: int, receipt_ns: int) -> Tuple[float, str]:
-    """``(t, clock)`` of a measurement: its header stamp, or its receipt when the stamp is 0.
+def sample_time(sec: int, nanosec: int) -> Optional[float]:
+    """Time (s) of a measurement from its header stamp; None for a zero stamp.
 
-    A zero stamp means "not stamped" (a driver that leaves the header empty); the receipt
-    time (monotonic) stands in for it. The clock is named so that a stream switching
-    between the two resets the observer instead of integrating across two time bases.
+    The observer integrates over the time the state was measured, never over its receipt:
+    transport jitter (a millisecond is common) is as large as a 1 kHz sample interval and
+    would enter ``Δp/Δt`` in full. A zero stamp is "not stamped" (joint_state_broadcaster
+    always stamps): such a message does not update the observer (``unstamped``). A lockstep
+    simulator's state at time 0, republished while it waits for the first command, is
+    skipped the same way; its first step starts the observer.
     """
-    if stamp_ns:
-        return stamp_ns * 1e-9, 'stamp'
-    return receipt_ns * 1e-9, 'receipt'
+    if sec == 0 and nanosec == 0:
+        return None
+    return sec + nanosec * 1e-9
 
 
 class MomentumObserver:
@@ -172,7 +177,6 @@ class MomentumObserver:
             self.reset_reason = reason
         self.samples = 0
         self._t: Optional[float] = None
-        self._clock = ''
         self._p: Optional[np.ndarray] = None
         self._w: Optional[np.ndarray] = None
         self.r = np.zeros(len(self.model.joint_names))
@@ -187,21 +191,19 @@ class MomentumObserver:
             beta -= self.friction(qd)
         return p, beta
 
-    def update(self, t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray,
-               clock: str = '') -> Optional[np.ndarray]:
-        """Take the sample ``(q, q̇, τ_m)`` of time ``t`` (s); return ``r`` (n,).
+    def update(self, t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray
+               ) -> Optional[np.ndarray]:
+        """Take the sample ``(q, q̇, τ_m)`` measured at time ``t`` (s); return ``r`` (n,).
 
         None when ``t`` equals the previous sample's time (the same measurement again:
-        nothing new). A time before the previous one, more than ``max_gap`` after it, or
-        of another ``clock`` (see :func:`sample_time`) restarts the observer at this sample.
+        nothing new). A time before the previous one, or more than ``max_gap`` after it,
+        restarts the observer at this sample.
         """
         if self._t is not None:
             dt = t - self._t
-            if dt == 0.0 and clock == self._clock:
+            if dt == 0.0:
                 return None
-            if clock != self._clock:
-                self.reset(f'time base changed from {self._clock} to {clock}')
-            elif dt < 0.0:
+            if dt < 0.0:
                 self.reset(f'time went backwards by {-dt:.6f} s')
             elif dt > self.max_gap:
                 self.reset(f'gap of {dt:.3f} s between samples (more than {self.max_gap:g} s)')
@@ -212,7 +214,7 @@ class MomentumObserver:
             y = (p - self._p) / dt - 0.5 * (w + self._w)   # mean τ_ext over the step
             decay = math.exp(-self.gain * dt)
             self.r = decay * self.r + (1.0 - decay) * y
-        self._t, self._clock, self._p, self._w = t, clock, p, w
+        self._t, self._p, self._w = t, p, w
         self.samples += 1
         return self.r
 
