@@ -58,7 +58,8 @@ def test_yaml_documents_every_parameter():
                         'payload.inertia', 'armature', 'friction_model',
                         'friction_velocity_threshold', 'clamp_to_effort_limits',
                         'external_wrench_timeout', 'backend', 'output', 'control_mode',
-                        'kp', 'kd', 'measured_timeout'}
+                        'kp', 'kd', 'measured_timeout', 'observer_gain',
+                        'external_torque_warn'}
     for name in declared:
         # payload.link is written nested: 'payload:' then 'link:'
         *group, leaf = name.split('.')
@@ -75,6 +76,7 @@ def test_yaml_documents_every_parameter():
     assert params['output'] == 'full' and params['control_mode'] == 'feedforward'
     assert params['kp'] == [0.0] and params['kd'] == [0.0]
     assert params['measured_timeout'] == 0.5
+    assert params['observer_gain'] == 20.0 and params['external_torque_warn'] == [5.0]
 
 
 def test_launch_file_compiles():

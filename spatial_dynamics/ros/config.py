@@ -1104,7 +1104,7 @@ def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
 
 def observer_key(output: Output, gravity: Sequence[float], gain: float,
                  max_gap: float) -> tuple:
-    """What the estimate depends on; the node restarts the observer when this changes.
+    """Return what the estimate depends on; the node restarts the observer when it changes.
 
     The model (the base, by identity: a parameter change that does not re-parse keeps it),
     payload, armature, friction model, gravity, gain and the gap that restarts it; not the
