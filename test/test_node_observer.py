@@ -151,13 +151,13 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     # step before the state, so the trapezoidal rule is half a step off, and over DDS a
     # desired state now and then a step late makes the command jump more between steps
     tracking = [t for t in times if 5 / GAIN <= t <= TRACK_UNTIL]
-    assert len(tracking) > 1000
+    assert len(tracking) > 1000, (len(tracking), len(states), len(estimates))
     level = max(np.abs(r[t]).max() for t in tracking)
     assert level < 5e-3 * torque, (level, torque)
     # pushed for 10 to 20 time constants: Jᵀw at the measured q, within 3 % (in-process:
     # 7e-5 after 0.5 s, 3e-9 after 1 s)
     late = [t for t in times if t >= pushed_at[0][0] + 10 / GAIN]
-    assert late
+    assert late, (pushed_at, times[-1])
     for t in late:
         ref = contact_torque(model, np.array(by_stamp[t].position))
         error = np.linalg.norm(r[t] - ref) / np.linalg.norm(ref)
