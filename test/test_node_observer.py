@@ -146,14 +146,20 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     times = sorted(r)
     torque = max(np.abs(s.effort).max() for s in states
                  if seconds(s.header.stamp) <= TRACK_UNTIL)
-    # tracking the fast trajectory, untouched: near zero. Measured: 0.13-0.15 N m of 49 N m
-    # (3e-3; in-process 0.062 N m): the simulator's effort is the command held over the
-    # step before the state, so the trapezoidal rule is half a step off, and over DDS a
-    # desired state now and then a step late makes the command jump more between steps
+    # tracking the fast trajectory, untouched: near zero. The simulator's effort is the
+    # command held over the step before the state, so the trapezoidal rule is off by half a
+    # step of the command, |r| <= max |tau_k - tau_k-1| / 2 on every sample; typically
+    # (95 %) under 2.5e-3 of the largest torque (measured over DDS: max 0.13-0.15 N m of
+    # 49 N m; in-process 0.062 N m). A driver that falls behind under CPU load leaves the
+    # node a stale setpoint for a few steps and the command jumps: the max follows the jump.
     tracking = [t for t in times if 5 / GAIN <= t <= TRACK_UNTIL]
     assert len(tracking) > 1000, (len(tracking), len(states), len(estimates))
-    level = max(np.abs(r[t]).max() for t in tracking)
-    assert level < 5e-3 * torque, (level, torque)
+    level = np.array([np.abs(r[t]).max() for t in tracking])
+    tau = {seconds(s.header.stamp): np.array(s.effort) for s in states}
+    jump = max(np.abs(tau[t] - tau[u]).max() for u, t in zip(times, times[1:])
+               if u in tau and t in tau and t <= TRACK_UNTIL)
+    assert level.max() <= 0.5 * jump + 1e-2, (level.max(), jump)
+    assert np.percentile(level, 95) < 2.5e-3 * torque, (np.percentile(level, 95), torque)
     # pushed for 10 to 20 time constants: Jᵀw at the measured q, within 3 % (in-process:
     # 7e-5 after 0.5 s, 3e-9 after 1 s)
     late = [t for t in times if t >= pushed_at[0][0] + 10 / GAIN]
