@@ -219,7 +219,9 @@ class Io:
 
         Discovery is asymmetric: our publisher may see the node's subscription before the node
         sees our publisher, and what is published in between is lost. Two answers (stamp -1)
-        prove both directions work; they count in the node's ``answered``.
+        prove both directions work; they count in the node's ``answered``, and so does every
+        priming message answered after the next was sent (a busy node answers slower than
+        one publish period): ``self.primed`` is how many were answered.
         """
         from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
         zeros = [0.0] * len(names)
@@ -235,6 +237,7 @@ class Io:
                 publisher.publish(msg)
                 self.driver.spin_for(0.05)
         self.driver.spin_for(0.2)
+        self.primed = len(self.efforts)
         self.efforts.clear()
         self.commands.clear()
 

@@ -24,10 +24,10 @@ at rest, ``q_d(t) = q0 + A (1 - cos(w t))`` per joint (periods 2..4 s), so the r
 on it.
 
 Timing: the simulator publishes ``joint_states`` at step k and waits for one effort command;
-the node answers each measured state with the desired state it holds. On each measured state
-at time t_k this process publishes the desired state of t_{k+1}, which reaches the node (one
-hop) before the simulator's next state does (two hops and a physics step), so the command for
-step k+1 is computed from the desired state of t_{k+1}.
+the node answers each measured state with the desired state it holds. This process relays the
+node's commands to the simulator and, before it forwards the command of step k, publishes the
+desired state of step k + 1 (:class:`Lockstep`), so every command is computed from the
+desired state of its own step, whatever the load on the machine.
 
 A table of the tracking error per joint is shown live; at the end a PNG plots |e| per joint
 over time (log scale) for the three laws, and ``--json`` writes the figures.
@@ -52,6 +52,8 @@ LAWS = (('PD alone', {'control_mode': 'pd_feedforward', 'output': 'none'}),
         ('PD + feed-forward', {'control_mode': 'pd_feedforward', 'output': 'full'}),
         ('computed torque', {'control_mode': 'computed_torque', 'output': 'full'}))
 TIMESTEP = 0.001
+#: The simulator's command topic: the relay (:class:`Lockstep`) forwards the node's commands.
+SIM_COMMANDS = 'sim_effort_commands'
 
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
@@ -117,6 +119,8 @@ class Run:
         self.names = list(names)
         self.t: List[float] = []
         self.e: List[np.ndarray] = []
+        self.answers = 0        # answers of the node seen
+        self.stale = 0          # of them computed from another step's desired state
 
     def summary(self) -> Dict[str, object]:
         e = np.abs(np.array(self.e)) if self.e else np.zeros((0, len(self.names)))
@@ -124,8 +128,80 @@ class Run:
                 'simulated_s': self.t[-1] if self.t else 0.0,
                 'rms': float(np.sqrt(np.mean(e ** 2))) if e.size else float('nan'),
                 'max': float(e.max()) if e.size else float('nan'),
+                'answers': self.answers, 'stale_desired': self.stale,
                 'rms_per_joint': dict(zip(self.names, np.sqrt(np.mean(e ** 2, axis=0)).tolist()
                                           if e.size else [float('nan')] * len(self.names)))}
+
+
+class Lockstep:
+    """Feed a controller in lockstep with a simulator: the desired state of every step in time.
+
+    The simulator (``command_topic: sim_effort_commands``) publishes the state of step k and
+    waits for a command; the controller answers each measured state with the desired state it
+    holds. This relay sits between them: for each command on ``effort_commands`` (the answer
+    to step k) it first publishes the desired state of step k + 1, then forwards the command
+    to the simulator. The desired state is on its way before the simulator can even step, so
+    the controller holds it when the state of step k + 1 arrives, however slowly this process
+    runs. (Publishing it when the state of step k arrives races the controller's answer.)
+    ``desired(t)`` returns ``(q, q̇, q̈)``; :meth:`kick` sends the first desired state.
+    """
+
+    def __init__(self, node, names: Sequence[str], desired, timestep: float,
+                 prefix: str = '') -> None:
+        """Create the endpoints on ``node``, topics under ``prefix`` (or its namespace)."""
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import JointState
+        from std_msgs.msg import Float64MultiArray
+        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        self.node, self.desired, self.timestep = node, desired, timestep
+        self.prefix = prefix
+        self.steps = 0                  # commands relayed: the simulator is at step `steps`
+        self.msg = JointState(name=list(names))
+        self.desired_pub = node.create_publisher(JointState, prefix + 'desired_joint_states',
+                                                 reliable)
+        self.relay = node.create_publisher(Float64MultiArray, prefix + SIM_COMMANDS, reliable)
+        self.commands = node.create_subscription(Float64MultiArray, prefix + 'effort_commands',
+                                                 self._on_command, reliable)
+        # the node echoes the desired q it used in feedforward_efforts: count the answers
+        # computed from another step's desired state
+        self.answers = self.stale = 0
+        self.sent = {}                  # step -> desired q published for it
+        self.answered = node.create_subscription(JointState, prefix + 'feedforward_efforts',
+                                                 self._on_answer, reliable)
+
+    def publish_desired(self, t: float) -> None:
+        """Publish the desired state at time ``t`` (stamped ``t``)."""
+        q, qd, qdd = self.desired(t)
+        msg = self.msg
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(int(round(t * 1e9)), 10 ** 9)
+        msg.position, msg.velocity, msg.effort = list(map(float, q)), list(map(float, qd)), \
+            list(map(float, qdd))
+        self.sent[round(t / self.timestep)] = list(msg.position)
+        self.desired_pub.publish(msg)
+
+    def kick(self) -> None:
+        """Before the first command: send the desired state of step 0, once both are up."""
+        if (self.steps == 0 and self.desired_pub.get_subscription_count() > 0
+                and self.relay.get_subscription_count() > 0):
+            self.publish_desired(0.0)
+
+    def _on_answer(self, msg) -> None:
+        step = round((msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9) / self.timestep)
+        self.answers += 1
+        if list(msg.position) != self.sent.get(step):
+            self.stale += 1
+
+    def _on_command(self, msg) -> None:
+        self.steps += 1
+        self.publish_desired(self.steps * self.timestep)
+        self.relay.publish(msg)
+
+    def close(self) -> None:
+        """Destroy the endpoints."""
+        self.node.destroy_subscription(self.commands)
+        self.node.destroy_subscription(self.answered)
+        self.node.destroy_publisher(self.relay)
+        self.node.destroy_publisher(self.desired_pub)
 
 
 def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_mods,
@@ -143,7 +219,8 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
     slug = namespace.strip('/')
     sim = start(node_command('sim', 'spatial_dynamics.sim'), namespace, {
         'robot_description_file': urdf, 'mode': 'lockstep', 'timestep': str(TIMESTEP),
-        'initial_positions': fmt}, os.path.join(logs, f'{slug}_sim.log'))
+        'initial_positions': fmt, 'command_topic': SIM_COMMANDS},
+        os.path.join(logs, f'{slug}_sim.log'))
     node = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace, {
         'robot_description_file': urdf, 'control_mode': settings['control_mode'],
         'output': settings['output'],
@@ -152,16 +229,6 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
         os.path.join(logs, f'{slug}_node.log'))
     run = Run(name, names)
     driver = rclpy.create_node('closed_loop_driver', namespace=namespace)
-    desired = driver.create_publisher(JointState, 'desired_joint_states', 10)
-    msg = JointState()
-    msg.name = list(names)
-
-    def publish_desired(t: float) -> None:
-        q, qd, qdd = trajectory(t)
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(int(round(t * 1e9)), 10 ** 9)
-        msg.position, msg.velocity, msg.effort = q.tolist(), qd.tolist(), qdd.tolist()
-        desired.publish(msg)
-
     index = None
 
     def on_state(state) -> None:
@@ -173,9 +240,8 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
         if not run.t or t > run.t[-1]:
             run.t.append(t)
             run.e.append(trajectory(t)[0] - q)
-        publish_desired(t + TIMESTEP)
 
-    # deep: a state missed here is a step whose desired state is one step old
+    lockstep = Lockstep(driver, names, trajectory, TIMESTEP)
     driver.create_subscription(JointState, 'joint_states', on_state, 1000)
     wall0 = time.monotonic()
     next_show = wall0
@@ -187,14 +253,13 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
             if time.monotonic() - wall0 > args.timeout:
                 raise RuntimeError(f'{name}: {args.timeout:g} s without finishing '
                                    f'({run.t[-1] if run.t else 0:.3f} s simulated)')
-            if not run.t and driver.count_publishers('joint_states') > 0:
-                # until the first measured state arrives, once the simulator is discovered
-                publish_desired(0.0)
+            lockstep.kick()
             rclpy.spin_once(driver, timeout_sec=0.05)
             if time.monotonic() >= next_show:
                 show(run)
                 next_show += 0.25
     finally:
+        run.answers, run.stale = lockstep.answers, lockstep.stale
         driver.destroy_node()
         stop(sim)
         stop(node)
@@ -300,7 +365,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     summaries = [run.summary() for run in runs]
     for s in summaries:
         print(f'{s["law"]:<20} rms {s["rms"]:.3e}  max {s["max"]:.3e}  '
-              f'({s["samples"]} states, {s["simulated_s"]:.2f} s)')
+              f'({s["samples"]} states, {s["simulated_s"]:.2f} s; {s["answers"]} answers, '
+              f'{s["stale_desired"]} from another step\'s desired state)')
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, 'w') as f:
