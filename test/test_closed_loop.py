@@ -37,9 +37,11 @@ def test_feedforward_tracks_20x_better_than_pd_alone(install, tmp_path, robot):
     assert set(laws) == {'PD alone', 'PD + feed-forward', 'computed torque'}
     for law in laws.values():
         assert law['simulated_s'] >= 1.5 and law['samples'] >= 1400, law
-        # every answer was computed from the desired state of its own step (the node echoes
-        # the q_d it used): the lockstep relay leaves no race, whatever the machine's load
-        assert law['answers'] >= 1400 and law['stale_desired'] == 0, law
+        # the answers were computed from the desired state of their own step (the node echoes
+        # the q_d it used), all but the rare one DDS delivers after the next state (messages
+        # of two topics are not ordered): seen 0-1 in 6000 with two CPU burners
+        assert law['answers'] >= 1400 and law['stale_desired'] <= law['answers'] // 100, law
+        assert law['repeated_answers'] == 0, law
     pd = laws['PD alone']['rms']
     assert pd > 1e-3, 'PD alone should visibly lag a loaded arm'
     assert laws['PD + feed-forward']['rms'] * RATIO <= pd, laws

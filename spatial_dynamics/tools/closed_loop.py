@@ -25,7 +25,7 @@ on it.
 
 Timing: the simulator publishes ``joint_states`` at step k and waits for one effort command;
 the node answers each measured state with the desired state it holds. This process relays the
-node's commands to the simulator and, before it forwards the command of step k, publishes the
+node's answers to the simulator and, before it forwards the torque of step k, publishes the
 desired state of step k + 1 (:class:`Lockstep`), so every command is computed from the
 desired state of its own step, whatever the load on the machine.
 
@@ -121,6 +121,7 @@ class Run:
         self.e: List[np.ndarray] = []
         self.answers = 0        # answers of the node seen
         self.stale = 0          # of them computed from another step's desired state
+        self.repeated = 0       # of them answering a state answered already (not forwarded)
 
     def summary(self) -> Dict[str, object]:
         e = np.abs(np.array(self.e)) if self.e else np.zeros((0, len(self.names)))
@@ -129,6 +130,7 @@ class Run:
                 'rms': float(np.sqrt(np.mean(e ** 2))) if e.size else float('nan'),
                 'max': float(e.max()) if e.size else float('nan'),
                 'answers': self.answers, 'stale_desired': self.stale,
+                'repeated_answers': self.repeated,
                 'rms_per_joint': dict(zip(self.names, np.sqrt(np.mean(e ** 2, axis=0)).tolist()
                                           if e.size else [float('nan')] * len(self.names)))}
 
@@ -138,11 +140,17 @@ class Lockstep:
 
     The simulator (``command_topic: sim_effort_commands``) publishes the state of step k and
     waits for a command; the controller answers each measured state with the desired state it
-    holds. This relay sits between them: for each command on ``effort_commands`` (the answer
-    to step k) it first publishes the desired state of step k + 1, then forwards the command
-    to the simulator. The desired state is on its way before the simulator can even step, so
-    the controller holds it when the state of step k + 1 arrives, however slowly this process
-    runs. (Publishing it when the state of step k arrives races the controller's answer.)
+    holds. This relay sits between them: for the answer to the state of step k (on
+    ``feedforward_efforts``, stamped with that state's time, with the q_d it used) it first
+    publishes the desired state of step k + 1, then forwards the torque to the simulator. The
+    desired state is on its way before the simulator can even step, so the controller holds
+    it when the state of step k + 1 arrives, however slowly this process runs (publishing it
+    when the state of step k arrives races the controller's answer: under load, hundreds of
+    answers per 1000 steps used an older setpoint). DDS does not order messages of two topics,
+    so on a loaded machine an answer may still, rarely, come from the setpoint before (seen: 1
+    in 6000 with two CPU burners): :attr:`stale` counts them from the q_d the node echoes.
+    An answer to a state answered already (the simulator republishes the state it waits on)
+    is not forwarded.
     ``desired(t)`` returns ``(q, q̇, q̈)``; :meth:`kick` sends the first desired state.
     """
 
@@ -154,18 +162,16 @@ class Lockstep:
         from std_msgs.msg import Float64MultiArray
         reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self.node, self.desired, self.timestep = node, desired, timestep
-        self.prefix = prefix
-        self.steps = 0                  # commands relayed: the simulator is at step `steps`
+        self.steps = 0                  # torques forwarded: the simulator is at step `steps`
+        self.answers = 0                # answers seen
+        self.stale = 0                  # of them computed from another step's desired state
+        self.repeated = 0               # of them answering a state answered already
+        self.sent = {}                  # step -> desired q published for it
         self.msg = JointState(name=list(names))
+        self.command = Float64MultiArray()
         self.desired_pub = node.create_publisher(JointState, prefix + 'desired_joint_states',
                                                  reliable)
         self.relay = node.create_publisher(Float64MultiArray, prefix + SIM_COMMANDS, reliable)
-        self.commands = node.create_subscription(Float64MultiArray, prefix + 'effort_commands',
-                                                 self._on_command, reliable)
-        # the node echoes the desired q it used in feedforward_efforts: count the answers
-        # computed from another step's desired state
-        self.answers = self.stale = 0
-        self.sent = {}                  # step -> desired q published for it
         self.answered = node.create_subscription(JointState, prefix + 'feedforward_efforts',
                                                  self._on_answer, reliable)
 
@@ -180,7 +186,7 @@ class Lockstep:
         self.desired_pub.publish(msg)
 
     def kick(self) -> None:
-        """Before the first command: send the desired state of step 0, once both are up."""
+        """Before the first answer: send the desired state of step 0, once both are up."""
         if (self.steps == 0 and self.desired_pub.get_subscription_count() > 0
                 and self.relay.get_subscription_count() > 0):
             self.publish_desired(0.0)
@@ -188,17 +194,18 @@ class Lockstep:
     def _on_answer(self, msg) -> None:
         step = round((msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9) / self.timestep)
         self.answers += 1
+        if step != self.steps:
+            self.repeated += 1
+            return
         if list(msg.position) != self.sent.get(step):
             self.stale += 1
-
-    def _on_command(self, msg) -> None:
         self.steps += 1
         self.publish_desired(self.steps * self.timestep)
-        self.relay.publish(msg)
+        self.command.data = msg.effort
+        self.relay.publish(self.command)
 
     def close(self) -> None:
         """Destroy the endpoints."""
-        self.node.destroy_subscription(self.commands)
         self.node.destroy_subscription(self.answered)
         self.node.destroy_publisher(self.relay)
         self.node.destroy_publisher(self.desired_pub)
@@ -259,7 +266,7 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
                 show(run)
                 next_show += 0.25
     finally:
-        run.answers, run.stale = lockstep.answers, lockstep.stale
+        run.answers, run.stale, run.repeated = lockstep.answers, lockstep.stale, lockstep.repeated
         driver.destroy_node()
         stop(sim)
         stop(node)
@@ -366,7 +373,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     for s in summaries:
         print(f'{s["law"]:<20} rms {s["rms"]:.3e}  max {s["max"]:.3e}  '
               f'({s["samples"]} states, {s["simulated_s"]:.2f} s; {s["answers"]} answers, '
-              f'{s["stale_desired"]} from another step\'s desired state)')
+              f'{s["stale_desired"]} from another step\'s desired state, '
+              f'{s["repeated_answers"]} to a state answered already)')
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, 'w') as f:
