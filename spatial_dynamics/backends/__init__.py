@@ -39,6 +39,7 @@ BACKENDS = ('auto', 'numpy', 'compiled')
 GRAVITY = (0.0, 0.0, -9.81)
 
 _compiled: Optional[ModuleType] = None   # .jit once imported
+_crba: Optional[ModuleType] = None       # .jit_crba once imported (by mass_matrix)
 _failure: Optional[str] = None           # why numba could not be imported
 _tried = False                           # numba import attempted
 _F8 = np.dtype(np.float64)
@@ -132,12 +133,18 @@ def mass_matrix(model: Model, q, backend: str = 'auto') -> np.ndarray:
     tuples; returns an array of shape (..., n, n), float64 or ``q``'s floating dtype.
     """
     kernels = _compiled if backend == 'auto' and _tried else compiled(backend)
+    if kernels is not None:
+        global _crba
+        if _crba is None:
+            from . import jit_crba       # compiled on first use (the node never needs it)
+            _crba = jit_crba
+        kernels = _crba
     lay = _layout_of(id(model)) or layout.of(model)
     q = _vector(q, lay.n)
     n = lay.n
     if kernels is not None and type(q) is _ndarray and q.dtype is _F8 and q.shape == (n,):
         H = _empty(n * n)
-        if kernels.mass_single(lay.table, q, H) or kernels.mass_single_large(lay.table, q, H):
+        if kernels.single(lay.table, q, H) or kernels.single_large(lay.table, q, H):
             return H.reshape(n, n)
     (q,) = as_joint_arrays(model, q)
     if kernels is not None and q.dtype == np.float64:

@@ -24,7 +24,7 @@ from numba.extending import intrinsic
 import numpy as np
 
 from . import layout
-from ._kernels_generated import crba_kernel, momentum_kernel, rnea_kernel, WORK, xup_kernel
+from ._kernels_generated import momentum_kernel, rnea_kernel, WORK, xup_kernel
 
 QIDX = layout.COLUMN['qidx']
 #: Smallest batch handed to the parallel entry (below it the thread launch costs more).
@@ -41,9 +41,6 @@ _SINGLE = types.boolean(_in2, _in1, _in1, _in1, _f8, _f8, _f8, _out1)
 _BATCH = types.void(_in2, _in2, _in2, _in2, _f8, _f8, _f8, _in3, types.boolean, _out2)
 _PARALLEL = types.void(_in2, _in2, _in2, _in2, _f8, _f8, _f8, _in3, types.boolean, _out2,
                        types.int64)
-_CRBA_SINGLE = types.boolean(_in2, _in1, _out1)
-_CRBA_BATCH = types.void(_in2, _in2, _out2)
-_CRBA_PARALLEL = types.void(_in2, _in2, _out2, types.int64)
 _MOMENTUM_SINGLE = types.boolean(_in2, _in1, _in1, _out1, _out1)
 _MOMENTUM_BATCH = types.void(_in2, _in2, _in2, _out2, _out2)
 _JIT = dict(cache=True, fastmath=False, error_model='numpy')
@@ -130,53 +127,6 @@ def _rnea_batch_parallel(K, q, qd, qdd, gx, gy, gz, fext, has_fext, tau, chunks)
                     fext[lo:hi] if per_state else fext, has_fext, tau[lo:hi])
 
 
-@_without_nrt(_CRBA_SINGLE)
-def crba_single(K, q, H):
-    """One state: q (n,) → M(q) into H (n * n, row-major); False if the sizes do not fit.
-
-    Scratch on the stack as in :func:`rnea_single` (False for more than ``STACK_ROWS - 1``
-    bodies: :func:`crba_single_large` takes it).
-    """
-    n = int(K[0, QIDX])
-    rows = K.shape[0]
-    if q.shape[0] != n or H.shape[0] != n * n or rows > STACK_ROWS:
-        return False
-    work = _stack_doubles(rows * WORK)
-    xup_kernel(K, q, work)
-    crba_kernel(K, work, H)
-    return True
-
-
-@numba.njit(_CRBA_SINGLE, **_JIT)
-def crba_single_large(K, q, H):
-    """As :func:`crba_single`, for models of any size (the scratch is allocated)."""
-    n = int(K[0, QIDX])
-    if q.shape[0] != n or H.shape[0] != n * n:
-        return False
-    work = np.empty(K.shape[0] * WORK)
-    xup_kernel(K, q, work)
-    crba_kernel(K, work, H)
-    return True
-
-
-@numba.njit(_CRBA_BATCH, nogil=True, **_JIT)
-def _crba_batch(K, q, H):
-    """N states, one thread: q (N, n) → H (N, n * n)."""
-    work = np.empty(K.shape[0] * WORK)
-    for s in range(q.shape[0]):
-        xup_kernel(K, q[s], work)
-        crba_kernel(K, work, H[s])
-
-
-@numba.njit(_CRBA_PARALLEL, nogil=True, parallel=True, **_JIT)
-def _crba_batch_parallel(K, q, H, chunks):
-    """As :func:`_crba_batch`, on ``chunks`` contiguous slices of the batch in numba's threads."""
-    N = q.shape[0]
-    for c in prange(chunks):
-        lo, hi = c * N // chunks, (c + 1) * N // chunks
-        _crba_batch(K, q[lo:hi], H[lo:hi])
-
-
 @numba.njit(_MOMENTUM_SINGLE, **_JIT)
 def momentum_single(K, q, qd, mom, ctq):
     """One state: q, qd (n,) → M q̇ into ``mom``, Cᵀ q̇ into ``ctq``; False if not (n,)."""
@@ -218,8 +168,6 @@ def _entry(dispatcher):
 #: The single-state entries for arguments checked by the caller (see :func:`_entry`).
 single = _entry(rnea_single)
 single_large = _entry(rnea_single_large)
-mass_single = _entry(crba_single)
-mass_single_large = _entry(crba_single_large)
 
 
 # The workqueue threading layer (used when neither TBB nor OpenMP is available) must not be
@@ -257,22 +205,6 @@ def rnea(lay: layout.Layout, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gra
     return tau.reshape(batch + (n,))
 
 
-def mass_matrix(lay: layout.Layout, q: np.ndarray) -> np.ndarray:
-    """M(q) of shape (..., n, n) from a validated float64 array ``q`` of shape (..., n)."""
-    n = lay.n
-    batch = q.shape[:-1]
-    N = int(np.prod(batch, dtype=np.intp))
-    qs = np.ascontiguousarray(q.reshape(N, n), dtype=np.float64)
-    H = np.empty((N, n * n))
-    threads = numba.get_num_threads()
-    if N >= PARALLEL_MIN and threads > 1:
-        with _parallel_lock:
-            _crba_batch_parallel(lay.table, qs, H, min(N, 4 * threads))
-    else:
-        _crba_batch(lay.table, qs, H)
-    return H.reshape(batch + (n, n))
-
-
 def warmup(lay: layout.Layout) -> None:
     """Run every entry once on a zero state (loads the code, starts the threads)."""
     n = lay.n
@@ -282,7 +214,4 @@ def warmup(lay: layout.Layout) -> None:
     rnea_single_large(lay.table, z1, z1, z1, *g, np.empty(n))
     rnea(lay, z1, z1, z1, g, {})
     rnea(lay, z2, z2, z2, g, {})
-    crba_single(lay.table, z1, np.empty(n * n))
-    crba_single_large(lay.table, z1, np.empty(n * n))
-    mass_matrix(lay, z2)
     momentum_single(lay.table, z1, z1, np.empty(n), np.empty(n))
