@@ -46,7 +46,7 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-from .driving import demo_urdf, node_command, start, stop
+from .driving import demo_urdf, node_command, pyplot, redraw, start, stop
 
 LAWS = (('PD alone', {'control_mode': 'pd_feedforward', 'output': 'none'}),
         ('PD + feed-forward', {'control_mode': 'pd_feedforward', 'output': 'full'}),
@@ -291,11 +291,8 @@ def table(runs: List[Run], names: Sequence[str]) -> List[str]:
 
 def plot(runs: List[Run], path: str, robot: str, frequency: float) -> str:
     """Write |e| per joint over time (log scale), one panel per joint; returns a note."""
-    try:
-        import matplotlib
-        matplotlib.use('Agg')
-        import matplotlib.pyplot as plt
-    except ImportError:
+    plt = pyplot()
+    if plt is None:
         return 'matplotlib is not installed: plot skipped (pip install matplotlib)'
     names = runs[0].names
     cols = 2 if len(names) > 3 else 1
@@ -343,12 +340,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
     def show(current: Run) -> None:
         nonlocal shown
-        lines = table(runs + [current], model.joint_names)
         if live:
-            sys.stdout.write((f'\x1b[{shown}F' if shown else '')
-                             + ''.join(f'\x1b[2K{line}\n' for line in lines))
-            shown = len(lines)
-            sys.stdout.flush()
+            shown = redraw(table(runs + [current], model.joint_names), shown)
 
     print(f'closed loop on {urdf}: {args.seconds:g} s per law, feedback {args.frequency:g} Hz\n'
           f'simulator: {" ".join(node_command("sim", "spatial_dynamics.sim"))}\n'

@@ -24,7 +24,7 @@ import sys
 import time
 from typing import List, Optional, Sequence, Tuple
 
-from .driving import demo_urdf, node_command, Sinusoids, start, stop
+from .driving import demo_urdf, node_command, pyplot, redraw, Sinusoids, start, stop
 
 NAMESPACE = '/spatial_dynamics_demo'
 
@@ -94,11 +94,8 @@ def plot(recorder: Recorder, path: str, robot: str) -> str:
     """Write τ(t) per joint to ``path``; returns a note of what was done."""
     if not recorder.t:
         return 'no answers received: no plot'
-    try:
-        import matplotlib
-        matplotlib.use('Agg')
-        import matplotlib.pyplot as plt
-    except ImportError:
+    plt = pyplot()
+    if plt is None:
         return 'matplotlib is not installed: plot skipped (pip install matplotlib)'
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig, ax = plt.subplots(figsize=(10, 5.5), dpi=100)
@@ -174,9 +171,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             if time.monotonic() >= next_show:
                 lines = table(recorder, q, qd, qdd, names, args.rate)
                 if live:
-                    sys.stdout.write((f'\x1b[{shown}F' if shown else '')
-                                     + ''.join(f'\x1b[2K{line}\n' for line in lines))
-                    shown = len(lines)
+                    shown = redraw(lines, shown)
                 else:
                     print(lines[0].split(':', 1)[1].strip()
                           + ('  tau: ' + ' '.join(f'{x:.2f}' for x in recorder.tau[-1])

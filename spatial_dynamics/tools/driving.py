@@ -158,3 +158,25 @@ class Sinusoids:
         angle = self.w * t + self.phi
         s = np.sin(angle)
         return self.c + self.a * s, self.a * self.w * np.cos(angle), -self.a * self.w ** 2 * s
+
+
+def redraw(lines: Sequence[str], shown: int) -> int:
+    """Write ``lines`` over the ``shown`` lines written last (a table refreshed in place).
+
+    Returns how many lines are now shown; for a terminal only (ANSI cursor movement).
+    """
+    sys.stdout.write((f'\x1b[{shown}F' if shown else '')
+                     + ''.join(f'\x1b[2K{line}\n' for line in lines))
+    sys.stdout.flush()
+    return len(lines)
+
+
+def pyplot():
+    """Return matplotlib's pyplot on the file-only Agg backend, or None when not installed."""
+    try:
+        import matplotlib
+        matplotlib.use('Agg')
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return None
+    return plt
