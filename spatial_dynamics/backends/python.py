@@ -10,6 +10,7 @@ dtype); ``mpmath.mpf`` scalars give the high-precision reference of the benchmar
 from __future__ import annotations
 
 import math
+from typing import Sequence
 
 import numpy as np
 
@@ -41,6 +42,20 @@ def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
     return tau
 
 
+def _columns(x: np.ndarray) -> list:
+    """Split a batch (..., n) into ``n`` contiguous (N,) columns, the kernels' joint scalars."""
+    n = x.shape[-1]
+    return list(np.ascontiguousarray(x.reshape(-1, n).T))
+
+
+def _stacked(values: Sequence, N: int, dtype, shape: tuple) -> np.ndarray:
+    """Gather the kernels' outputs (each a scalar or an (N,) array) into one array."""
+    out = np.empty((N, len(values)), dtype=dtype)
+    for k, v in enumerate(values):
+        out[:, k] = v
+    return out.reshape(shape)
+
+
 def rnea(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: np.ndarray,
          f_body: dict) -> np.ndarray:
     """τ from validated arrays of one float dtype and broadcast shape (..., n)."""
@@ -51,17 +66,13 @@ def rnea(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: np.ndarr
         tau = rnea_rows(rows, *(x.reshape(-1).tolist() for x in (q, qd, qdd)),
                         [float(x) for x in gravity], fl)
         return np.array(tau).reshape(q.shape)
-    n = q.shape[-1]
     batch = q.shape[:-1]
     N = int(np.prod(batch, dtype=np.intp))
-    cols = [np.ascontiguousarray(x.reshape(N, n).T) for x in (q, qd, qdd)]
     fl = {b: list(np.broadcast_to(f, batch + (6,)).reshape(N, 6).T.astype(q.dtype))
           for b, f in f_body.items()}
-    tau = rnea_rows(rows, *cols, [q.dtype.type(x) for x in gravity], fl, np)
-    out = np.empty((N, n), dtype=q.dtype)
-    for k, t in enumerate(tau):
-        out[:, k] = t
-    return out.reshape(q.shape)
+    tau = rnea_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
+                    [q.dtype.type(x) for x in gravity], fl, np)
+    return _stacked(tau, N, q.dtype, q.shape)
 
 
 def mass_matrix_rows(rows, q, m=math) -> list:
@@ -85,13 +96,8 @@ def mass_matrix(rows, q: np.ndarray) -> np.ndarray:
         return np.array(mass_matrix_rows(rows, q.reshape(-1).tolist())).reshape(
             q.shape[:-1] + (n, n))
     batch = q.shape[:-1]
-    N = int(np.prod(batch, dtype=np.intp))
-    cols = list(np.ascontiguousarray(q.reshape(N, n).T))
-    H = mass_matrix_rows(rows, cols, np)
-    out = np.empty((N, n * n), dtype=q.dtype)
-    for k, h in enumerate(H):
-        out[:, k] = h
-    return out.reshape(batch + (n, n))
+    H = mass_matrix_rows(rows, _columns(q), np)
+    return _stacked(H, int(np.prod(batch, dtype=np.intp)), q.dtype, batch + (n, n))
 
 
 def momentum_rows(rows, q, qd, m=math) -> tuple:
@@ -111,13 +117,6 @@ def momentum(rows, q: np.ndarray, qd: np.ndarray) -> tuple:
     if q.dtype == np.float64 and q.size == n:
         mom, ctq = momentum_rows(rows, q.reshape(-1).tolist(), qd.reshape(-1).tolist())
         return np.array(mom).reshape(q.shape), np.array(ctq).reshape(q.shape)
-    batch = q.shape[:-1]
-    N = int(np.prod(batch, dtype=np.intp))
-    cols = [list(np.ascontiguousarray(x.reshape(N, n).T)) for x in (q, qd)]
-    out = []
-    for part in momentum_rows(rows, *cols, np):
-        a = np.empty((N, n), dtype=q.dtype)
-        for k, x in enumerate(part):
-            a[:, k] = x
-        out.append(a.reshape(q.shape))
-    return tuple(out)
+    N = int(np.prod(q.shape[:-1], dtype=np.intp))
+    return tuple(_stacked(part, N, q.dtype, q.shape)
+                 for part in momentum_rows(rows, _columns(q), _columns(qd), np))
