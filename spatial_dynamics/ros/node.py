@@ -218,7 +218,6 @@ class InverseDynamicsNode(Node):
         self._observer_key: Optional[tuple] = None
         self.estimates = EstimateWindow()   # external_torque_estimate of the period
         self.desired: Optional[Held] = None    # the last good desired state (zero-order hold)
-        self.measured: Optional[Held] = None   # the last good measured state
         self._answered_stamp = 0               # stamp (ns) of the measured state answered last
         self.wrench_timeout_ns = int(DEFAULT_WRENCH_TIMEOUT * 1e9)
         self.params: dict = {}   # the last accepted value of every parameter of PARAMETERS
@@ -520,7 +519,7 @@ class InverseDynamicsNode(Node):
             self._respond(msg.header, output, topic, desired, None, t0)
 
     def _on_measured(self, msg: JointState) -> None:
-        """Keep a good measured state; in a feedback mode, answer it with the held desired."""
+        """Check a measured state; in a feedback mode, answer it with the held desired one."""
         t0 = time.monotonic_ns()
         feedback = self.control_mode in FEEDBACK_MODES
         totals = self.totals
@@ -537,7 +536,6 @@ class InverseDynamicsNode(Node):
         except InputError as err:
             self._reject_measured(err.reason, str(err))
             return
-        self.measured = Held(output.joints, measured, t0)
         totals.last_measured_ns = t0
         self.window.measured += 1
         if feedback:
