@@ -13,6 +13,7 @@ output with diagnostics ERROR; bad gains and bad measured messages are refused w
 reason and change nothing. Waits are generous bounds, never timing assertions.
 """
 
+import contextlib
 import math
 import os
 import sys
@@ -115,11 +116,20 @@ def demo(install, tmp_path):
     assert proc.stop() == 0, proc.log()
 
 
-def connect(driver, names):
+@contextlib.contextmanager
+def connected(driver, names):
+    """Yield ``(io, loop)`` talking to the node, primed; close both afterwards."""
     io = Io(driver)
-    io.wait_connected()
-    io.prime(names)
-    return io, Loop(driver, io, names)
+    loop = None
+    try:
+        io.wait_connected()
+        io.prime(names)
+        loop = Loop(driver, io, names)
+        yield io, loop
+    finally:
+        if loop is not None:
+            loop.close()
+        io.close()
 
 
 def pin_parts(oracle, names, q, qd, qdd):
@@ -154,8 +164,7 @@ def test_terms_and_outputs_against_pinocchio_ur5(install, driver, tmp_path):
     import spatial_dynamics as sd
     names = sd.Model.from_urdf(urdf).joint_names
     node = NodeProcess(install, ['-p', f'robot_description_file:={urdf}'], str(tmp_path))
-    io, loop = connect(driver, names)
-    try:
+    with connected(driver, names) as (io, loop):
         rng = np.random.default_rng(61)
         state = tuple(rng.uniform(-1.0, 1.0, len(names)) * s for s in (2.0, 1.5, 4.0))
         pin = pin_parts(oracle, names, *state)
@@ -192,9 +201,6 @@ def test_terms_and_outputs_against_pinocchio_ur5(install, driver, tmp_path):
         np.testing.assert_allclose(loop.desired(state), pin['gravity'], rtol=0, atol=TOL)
         kv = values(io.fresh_status('feedforward'))
         assert kv['output'] == 'gravity_only' and kv['control mode'] == 'feedforward'
-    finally:
-        loop.close()
-        io.close()
         assert node.stop() == 0, node.log()
 
 
@@ -215,8 +221,7 @@ def wrapped_pair(names, seed):
 def test_pd_feedforward_and_computed_torque_against_pinocchio(driver, demo, demo_model):
     names = demo_model.joint_names
     oracle = pin_oracle(DEMO_URDF)
-    io, loop = connect(driver, names)
-    try:
+    with connected(driver, names) as (io, loop):
         n = len(names)
         kp, kd = np.linspace(20.0, 90.0, n), np.linspace(2.0, 9.0, n)
         ok(io.set_parameters(kp=kp.tolist(), kd=kd.tolist()))
@@ -261,16 +266,12 @@ def test_pd_feedforward_and_computed_torque_against_pinocchio(driver, demo, demo
         kv = values(io.fresh_status('feedforward'))
         assert kv['control mode'] == 'pd_feedforward' and kv['output'] == 'none'
         assert kv['continuous joints'] == 'joint7'
-    finally:
-        loop.close()
-        io.close()
 
 
 def test_each_measured_state_answered_once_desired_only_held(driver, demo, demo_model):
     names = demo_model.joint_names
     n = len(names)
-    io, loop = connect(driver, names)
-    try:
+    with connected(driver, names) as (io, loop):
         ok(io.set_parameters(kp=[10.0], kd=[1.0], control_mode='pd_feedforward'))
         ok(io.set_parameters(output='none'))
         zeros = np.zeros(n)
@@ -300,17 +301,13 @@ def test_each_measured_state_answered_once_desired_only_held(driver, demo, demo_
             io.joint_states.publish(joint_state(names, q_d, zeros, zeros, 5000))
         keys = [stamp_key(m.header.stamp) for m in io.efforts]
         assert not any(5000 <= k < 5005 for k in keys)
-    finally:
-        loop.close()
-        io.close()
 
 
 def test_stale_measured_or_desired_state_stops_the_output(driver, demo, demo_model):
     names = demo_model.joint_names
     n = len(names)
-    io, loop = connect(driver, names)
     zeros = np.zeros(n)
-    try:
+    with connected(driver, names) as (io, loop):
         ok(io.set_parameters(control_mode='pd_feedforward', kp=[5.0], measured_timeout=0.2))
         ok(io.set_parameters(output='none'))    # the PD alone: -5 * 0.1 below
         loop.measure(zeros + 0.1, zeros)
@@ -345,16 +342,12 @@ def test_stale_measured_or_desired_state_stops_the_output(driver, demo, demo_mod
         io.joint_states.publish(joint_state(names, zeros, zeros, zeros, 8000))
         driver.spin_for(0.2)
         np.testing.assert_allclose(loop.measure(zeros + 0.1, zeros), -0.5, rtol=0, atol=1e-9)
-    finally:
-        loop.close()
-        io.close()
 
 
 def test_bad_gains_and_bad_measured_states_change_nothing(driver, demo, demo_model):
     names = demo_model.joint_names
     n = len(names)
-    io, loop = connect(driver, names)
-    try:
+    with connected(driver, names) as (io, loop):
         ok(io.set_parameters(kp=np.linspace(1.0, 8.0, n).tolist(), kd=[2.0]))
         desired, (q, qd), _ = wrapped_pair(names, 63)
         loop.desired(desired)    # answered in feedforward mode, so held from now on
@@ -396,17 +389,13 @@ def test_bad_gains_and_bad_measured_states_change_nothing(driver, demo, demo_mod
         assert not any(9100 <= k < 9100 + len(bad) for k in keys), 'a bad state was answered'
         demo.wait_for_log('joint_states: measured state rejected')
         np.testing.assert_array_equal(loop.measure(q, qd), first)   # identical to before
-    finally:
-        loop.close()
-        io.close()
 
 
 def test_a_measured_state_is_answered_once_even_if_sent_again(driver, demo, demo_model):
     """A lockstep simulator republishes the state it waits on: one command per measurement."""
     names = demo_model.joint_names
     n = len(names)
-    io, loop = connect(driver, names)
-    try:
+    with connected(driver, names) as (io, loop):
         ok(io.set_parameters(kp=[10.0], kd=[1.0], control_mode='pd_feedforward'))
         zeros = np.zeros(n)
         q = np.linspace(-0.1, 0.1, n)
@@ -423,6 +412,3 @@ def test_a_measured_state_is_answered_once_even_if_sent_again(driver, demo, demo
         # the next measurement is answered again
         loop.measured.publish(loop.measured_msg(q, zeros, 6001))
         driver.spin_until(lambda: loop.answers(6001), what='the answer to 6001')
-    finally:
-        loop.close()
-        io.close()
