@@ -103,15 +103,21 @@ def test_numpy_backend_never_loads_numba(install, driver, tmp_path):
         assert node.stop() == 0, node.log()
 
 
-@pytest.mark.ros
-def test_compiled_answers_on_numpy_at_once_then_switches(install, driver, tmp_path):
-    """A cold numba cache: correct answers throughout, numpy while compiling, then compiled."""
-    pytest.importorskip('numba')
+def compiled_with_cold_cache(install, tmp_path):
+    """Start the node on the demo arm with ``backend: compiled`` and an empty numba cache."""
     cache = tmp_path / 'numba_cache'
     cache.mkdir()
     node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
                                  '-p', 'backend:=compiled'], str(tmp_path),
                        env={'NUMBA_CACHE_DIR': str(cache)})
+    return node, cache
+
+
+@pytest.mark.ros
+def test_compiled_answers_on_numpy_at_once_then_switches(install, driver, tmp_path):
+    """A cold numba cache: correct answers throughout, numpy while compiling, then compiled."""
+    pytest.importorskip('numba')
+    node, cache = compiled_with_cold_cache(install, tmp_path)
     io = Io(driver)
     feed = Feed(io, 52)
     try:
@@ -145,11 +151,7 @@ def test_compiled_answers_on_numpy_at_once_then_switches(install, driver, tmp_pa
 def test_stopped_while_compiling_exits_0_and_leaves_no_compiler(
         install, driver, tmp_path, sig):
     pytest.importorskip('numba')
-    cache = tmp_path / 'numba_cache'
-    cache.mkdir()
-    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
-                                 '-p', 'backend:=compiled'], str(tmp_path),
-                       env={'NUMBA_CACHE_DIR': str(cache)})
+    node, _ = compiled_with_cold_cache(install, tmp_path)
     io = Io(driver)
     feed = Feed(io, 53)
     try:
