@@ -77,14 +77,17 @@ def colcon_install() -> Install:
 
 
 class NodeProcess:
-    """The installed ``inverse_dynamics`` executable running as a child process."""
+    """An installed executable (``inverse_dynamics`` unless told) running as a child process."""
 
     def __init__(self, install: Install, args: Sequence[str] = (), log_dir: str = '',
-                 env: Optional[Dict[str, str]] = None) -> None:
-        """Start the node with ``--ros-args *args``; ``env`` adds to :meth:`Install.env`."""
-        self.log_path = os.path.join(log_dir or install.base, f'node_{time.monotonic_ns()}.log')
+                 env: Optional[Dict[str, str]] = None,
+                 executable: str = 'inverse_dynamics') -> None:
+        """Start it with ``--ros-args *args``; ``env`` adds to :meth:`Install.env`."""
+        self.log_path = os.path.join(log_dir or install.base,
+                                     f'{executable}_{time.monotonic_ns()}.log')
         self._log = open(self.log_path, 'w')
-        self.proc = subprocess.Popen([install.executable, '--ros-args', *args],
+        path = os.path.join(install.prefix, 'lib', PACKAGE, executable)
+        self.proc = subprocess.Popen([path, '--ros-args', *args],
                                      env={**install.env(), **(env or {})}, stdout=self._log,
                                      stderr=subprocess.STDOUT, preexec_fn=die_with_parent)
 

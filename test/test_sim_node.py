@@ -13,14 +13,13 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from node_harness import DEMO_URDF, TIMEOUT  # noqa: E402
+from node_harness import DEMO_URDF, NodeProcess, TIMEOUT  # noqa: E402
 from spatial_dynamics.sim.robot import MUJOCO_MISSING, SimulatedRobot  # noqa: E402
 
 pytestmark = pytest.mark.ros
@@ -29,32 +28,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 H = 0.002                      # s, the node's timestep in these tests
 
 
-class SimProcess:
+class SimProcess(NodeProcess):
     """The installed ``sim`` executable as a child process, its output in a log file."""
 
     def __init__(self, install, args, log_dir):
-        from spatial_dynamics.tools.driving import die_with_parent
-        self.log_path = os.path.join(log_dir, f'sim_{time.monotonic_ns()}.log')
-        self._log = open(self.log_path, 'w')
-        executable = os.path.join(install.prefix, 'lib', 'spatial_dynamics', 'sim')
-        self.proc = subprocess.Popen([executable, '--ros-args', *args], env=install.env(),
-                                     stdout=self._log, stderr=subprocess.STDOUT,
-                                     preexec_fn=die_with_parent)
-
-    def log(self):
-        with open(self.log_path) as f:
-            return f.read()
-
-    def stop(self, sig=signal.SIGINT):
-        if self.proc.poll() is None:
-            self.proc.send_signal(sig)
-            try:
-                self.proc.wait(TIMEOUT)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self._log.close()
-        return self.proc.returncode
+        super().__init__(install, args, log_dir, executable='sim')
 
 
 class Channels:
