@@ -114,6 +114,17 @@ class PinOracle:
                         and j.get('name') not in self.mimic]
         assert set(self.movable) | set(self.mimic) == set(self.joints)
 
+    def velocity_map(self, joint_names, q):
+        """Return Pinocchio's q at our ``q`` and ``P`` with ``v_pin = P q̇`` (mimic joints).
+
+        Our inertia is then ``Pᵀ M_pin P`` and our generalized forces ``Pᵀ τ_pin``.
+        """
+        n = len(joint_names)
+        q_pin, _, _ = self.expand(joint_names, q, np.zeros(n), np.zeros(n))
+        P = np.stack([self.expand(joint_names, q, e, np.zeros(n))[1] for e in np.eye(n)],
+                     axis=1)
+        return q_pin, P
+
     def expand(self, joint_names, q, qd, qdd):
         """Return Pinocchio's (q, v, a) for one state given in our joint order."""
         value = {}

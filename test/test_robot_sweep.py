@@ -4,7 +4,8 @@
 
 Each one loads (as written: physically inconsistent inertias give a URDFWarning, never an
 error) unless the policy refuses it for a reason named below; its joints come in Pinocchio's
-order; its torques equal Pinocchio's on random states, single and batched, on each backend.
+order; its torques equal Pinocchio's on random states, single and batched, on each backend,
+and so do its M(q), M q̇ and Cᵀ q̇.
 """
 
 import glob
@@ -81,6 +82,31 @@ def test_loads_in_pinocchio_order_with_pinocchio_torques(name, rng):
             err = np.linalg.norm(tau - expected, axis=-1)
             scale = np.maximum(1.0, np.linalg.norm(expected, axis=-1))
             assert np.all(err <= TOLERANCE * scale), (backend, shape, err.max())
+
+
+@pytest.mark.parametrize('name', [f for f in FILES if f not in REFUSED])
+def test_mass_matrix_and_momentum_equal_pinocchio(name, rng):
+    """M(q) (CRBA), M q̇ and Cᵀ q̇ against Pinocchio's crba and Coriolis matrix, both backends."""
+    path = os.path.join(BASE, name)
+    model, _ = load(path)
+    n = model.nq
+    if n == 0:
+        return
+    oracle = PinOracle(pinocchio_text(path))
+    pin = oracle.pin
+    q, qd, _ = random_state(rng, (), n)
+    q_pin, P = oracle.velocity_map(model.joint_names, q)
+    M = pin.crba(oracle.model, oracle.data, q_pin).copy()
+    M = P.T @ (np.triu(M) + np.triu(M, 1).T) @ P
+    C = pin.computeCoriolisMatrix(oracle.model, oracle.data, q_pin, P @ qd).copy()
+    ctq = P.T @ (C.T @ (P @ qd))
+    for backend in ('numpy', 'compiled'):
+        ours = sd.mass_matrix(model, q, backend=backend)
+        assert np.linalg.norm(ours - M) <= TOLERANCE * max(1.0, np.linalg.norm(M)), backend
+        mom, ct = sd.generalized_momentum(model, q, qd, backend=backend)
+        for value, expected in ((mom, M @ qd), (ct, ctq)):
+            err = np.linalg.norm(value - expected)
+            assert err <= TOLERANCE * max(1.0, np.linalg.norm(expected)), (backend, err)
 
 
 @pytest.mark.parametrize('name', [f for f in FILES if f not in REFUSED])
