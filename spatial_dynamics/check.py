@@ -16,7 +16,6 @@ warnings), 2 for bad usage.
 
 import argparse
 import math
-import os
 import sys
 import textwrap
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -25,33 +24,15 @@ import warnings
 from lxml import etree
 import numpy as np
 
-from . import Model, URDFWarning
+from . import Model, urdf, URDFWarning
 from .joints import KIND_NAMES
 
 WIDTH = 99
 
 
 def read_description(path: str) -> bytes:
-    """Return the URDF XML of a file (a ``.xacro`` file is expanded); ``ValueError`` if not."""
-    if not os.path.exists(path):
-        raise ValueError(f'{path}: no such file')
-    if not os.path.isfile(path):
-        raise ValueError(f'{path}: not a regular file')
-    if path.endswith('.xacro'):
-        try:
-            import xacro
-        except ImportError:
-            raise ValueError(f'{path}: a .xacro file needs the xacro module '
-                             '(pip install xacro, or apt ros-jazzy-xacro)') from None
-        try:
-            return xacro.process_file(path).toxml().encode('utf-8')
-        except Exception as err:  # xacro raises many types; all mean "cannot expand"
-            raise ValueError(f'{path}: xacro failed: {err}') from None
-    try:
-        with open(path, 'rb') as f:
-            return f.read()
-    except OSError as err:
-        raise ValueError(f'{path}: {err.strerror}') from None
+    """Return the URDF XML of a file (:func:`spatial_dynamics.urdf.read_description`)."""
+    return urdf.read_description(path, urdf.MAX_FILE_BYTES, path).encode('utf-8')
 
 
 def urdf_joint_types(xml: bytes) -> Dict[str, str]:

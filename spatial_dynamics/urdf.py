@@ -26,12 +26,12 @@ from dataclasses import dataclass
 import math
 import os
 import re
-import stat
 from typing import Mapping, Optional, Sequence, Union
 import warnings
 
 import numpy as np
 
+from .files import read_regular, size_text
 from .joints import FIXED, PRISMATIC, URDF_KINDS
 from .model import finite, Frame, Model, rigid_body_inertia
 from .spatial import Eaxis, plux, rpy_to_R
@@ -41,7 +41,8 @@ Source = Union[str, bytes, os.PathLike]
 #: Largest URDF file read (bytes): a robot description is text of at most a few MB.
 MAX_FILE_BYTES = 64 * 1024 * 1024
 
-__all__ = ['MAX_FILE_BYTES', 'model_from_urdf', 'read_urdf_file', 'URDFWarning']
+__all__ = ['MAX_FILE_BYTES', 'model_from_urdf', 'read_description', 'read_urdf_file',
+           'URDFWarning']
 
 
 class URDFWarning(UserWarning):
@@ -80,53 +81,45 @@ def model_from_urdf(source: Source, joints: Optional[Sequence[str]] = None,
 # --------------------------------------------------------------------------------------------
 # Reading and parsing
 
-_FILE_KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
-               (stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),
-               (stat.S_ISSOCK, 'a socket'))
-
-
-def _size(limit: int) -> str:
-    """``limit`` bytes for a message: ``'32 MiB'`` when it is a whole number of MiB."""
-    return f'{limit >> 20} MiB' if limit and not limit % (1 << 20) else f'{limit} bytes'
-
-
 def read_urdf_file(path: str, limit: int = MAX_FILE_BYTES) -> bytes:
     """Return the bytes of a URDF file: a regular file of at most ``limit`` bytes.
 
-    Never blocks on a FIFO or reads a device: the file is opened non-blocking and checked to
-    be regular before anything is read. ``ValueError`` names the path and the reason (what
-    the path is when it is not a regular file, the limit when it is too large).
+    Read by :func:`spatial_dynamics.files.read_regular`: never blocks on a FIFO or reads a
+    device. ``ValueError`` names the path and the reason.
     """
+    return read_regular(path, f'URDF file {path!r}', limit)
+
+
+def read_description(path: str, limit: int = MAX_FILE_BYTES, what: str = '') -> str:
+    """Return the URDF text of a file; a ``.xacro`` file is expanded when xacro is importable.
+
+    The one reader of description files (library, node, ``check_urdf``, sim, replay): the file
+    is read by :func:`read_urdf_file` (a regular file of at most ``limit`` bytes, never a
+    FIFO or a device; a ``.xacro`` file passes the same check before xacro opens it), decoded
+    as UTF-8 (a byte order mark is dropped); the expansion of a ``.xacro`` file is held to the
+    same limit. ``ValueError`` names the file as ``what`` (default ``URDF file 'path'``).
+    """
+    what = what or f'URDF file {path!r}'
+    data = read_regular(path, what, limit)
+    if str(path).endswith('.xacro'):
+        try:
+            import xacro
+        except ImportError:
+            raise ValueError(f'{what}: a .xacro file needs the xacro module (pip install '
+                             'xacro, or apt ros-jazzy-xacro)') from None
+        try:
+            text = xacro.process_file(path).toxml()
+        except Exception as err:  # xacro raises many types; all mean "cannot expand"
+            raise ValueError(f'{what}: xacro failed: {err}') from None
+        if len(text) > limit:
+            raise ValueError(f'{what}: expands to more than the limit of {size_text(limit)} '
+                             'for a robot description')
+        return text
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, 'O_NONBLOCK', 0))
-    except FileNotFoundError:
-        raise ValueError(f'URDF file {path!r}: no such file') from None
-    except OSError as err:
-        raise ValueError(f'cannot read URDF file {path!r}: {err.strerror}') from None
-    try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            kind = next((name for test, name in _FILE_KINDS if test(info.st_mode)),
-                        'a special file')
-            raise ValueError(f'URDF file {path!r} is not a regular file ({kind})')
-        if info.st_size > limit:
-            raise ValueError(f'URDF file {path!r} is too large ({info.st_size} bytes, limit '
-                             f'{_size(limit)})')
-        chunks, size = [], 0
-        while size <= limit:      # a file that grows while read stops at limit + 1 bytes
-            chunk = os.read(fd, limit + 1 - size)
-            if not chunk:
-                break
-            chunks.append(chunk)
-            size += len(chunk)
-    except OSError as err:
-        raise ValueError(f'cannot read URDF file {path!r}: {err.strerror}') from None
-    finally:
-        os.close(fd)
-    text = b''.join(chunks)
-    if len(text) > limit:
-        raise ValueError(f'URDF file {path!r} is too large (more than {_size(limit)})')
-    return text
+        return data.decode('utf-8-sig')
+    except UnicodeDecodeError as err:
+        raise ValueError(f'{what}: not UTF-8 text (byte 0x{data[err.start]:02x} at offset '
+                         f'{err.start}); a URDF file must be UTF-8') from None
 
 
 @dataclass(frozen=True)

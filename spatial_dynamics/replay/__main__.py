@@ -35,6 +35,7 @@ import warnings
 import numpy as np
 
 from .. import friction_torque, Model, rnea, URDFWarning
+from ..bounds import JOINT_BOUNDS, MAX_GRAVITY
 from ..check import locked_item, read_description
 from . import bags, differentiate, identify, report, splines
 
@@ -155,14 +156,19 @@ def clean(js: bags.JointStates, window: float) -> Dict:
     keep = np.ones(len(js.stamp), dtype=bool)
     for what, a in fields:
         bad = ~np.isfinite(a)
-        if not bad.any():
+        bound, unit = JOINT_BOUNDS[what]
+        with np.errstate(invalid='ignore'):
+            huge = np.abs(a) > bound
+        if not (bad.any() or huge.any()):
             continue
         for j, name in enumerate(names):
-            rows = bad[:, j] & keep
-            if rows.any():
-                reason = f'{name}: no finite {what} (joint missing from the message, or NaN)'
-                skipped[reason] = skipped.get(reason, 0) + int(rows.sum())
-                keep &= ~rows
+            for rows, reason in (
+                    (bad[:, j] & keep,
+                     f'{name}: no finite {what} (joint missing from the message, or NaN)'),
+                    (huge[:, j] & keep, f'{name}: {what} beyond ±{bound:g} {unit}')):
+                if rows.any():
+                    skipped[reason] = skipped.get(reason, 0) + int(rows.sum())
+                    keep &= ~rows
     everything = bool(keep.all())
     t = js.stamp if everything else js.stamp[keep]
     backwards = int(np.sum(np.diff(t) < 0))
@@ -324,6 +330,8 @@ def run_trajectory(args) -> int:
             trajectories = [splines.from_yaml(args.trajectory)]
         except OSError as err:
             raise Refused(f'{args.trajectory}: {err.strerror}') from None
+        except ValueError as err:
+            raise Refused(str(err)) from None
         labels = [os.path.basename(args.trajectory)]
     else:
         msgs = bags.read_messages(args.bag, args.trajectory_topic, bags.JOINT_TRAJECTORY)
@@ -332,7 +340,6 @@ def run_trajectory(args) -> int:
         trajectories = [splines.from_message(m) for m in msgs]
         labels = [f'{args.trajectory_topic} #{k}' for k in range(len(msgs))]
     exceeded = False
-    report.ensure_dir(args.out)
     for k, (traj, label) in enumerate(zip(trajectories, labels)):
         model = load_model(args, args.joints or list(traj.joint_names))
         unknown = [j for j in model.joint_names if j not in traj.joint_names]
@@ -345,11 +352,18 @@ def run_trajectory(args) -> int:
         if args.friction_model == 'urdf':
             tau = tau + friction_torque(model, qd, args.threshold)
         limit = model.effort_limit
-        peak = np.max(np.abs(tau), axis=0)
-        at = t[np.argmax(np.abs(tau), axis=0)]
+        finite = np.isfinite(tau)
+        magnitude = np.where(finite, np.abs(tau), np.inf)     # a non-finite torque is no peak
+        peak = np.max(magnitude, axis=0)
+        at = t[np.argmax(magnitude, axis=0)]
         rows = []
         for j, name in enumerate(model.joint_names):
             has = limit[j] > 0
+            if not finite[:, j].all():
+                exceeded = True
+                rows.append([name, 'non-finite', f'{at[j]:.3f}', f'{limit[j]:g}' if has else '-',
+                             '-', 'NOT FINITE'])
+                continue
             use = peak[j] / limit[j] if has else np.nan
             over = has and use > 1.0
             exceeded |= bool(over)
@@ -371,7 +385,7 @@ def run_trajectory(args) -> int:
                                f'{label}: torque along the trajectory (N m or N), limits dashed',
                                limits=limit)
     if exceeded:
-        print('error: an effort limit is exceeded', file=sys.stderr)
+        print('error: an effort limit is exceeded (or a torque is not finite)', file=sys.stderr)
         return 1
     return 0
 
@@ -398,7 +412,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv',
                    help='per-sample residual file (default %(default)s)')
     p.add_argument('--no-plots', action='store_true', help='write no PNG files')
-    p.add_argument('--gravity', type=float, nargs=3, default=(0.0, 0.0, -9.81),
+    p.add_argument('--gravity', type=finite, nargs=3, default=(0.0, 0.0, -9.81),
                    metavar=('GX', 'GY', 'GZ'), help='m/s^2 in the base frame')
     p.add_argument('--joints', nargs='+', metavar='J',
                    help='model reduction: keep only these joints (the others are locked)')
@@ -416,6 +430,17 @@ def parser() -> argparse.ArgumentParser:
                    help='read every message through rosbags (no numpy fast path)')
     p.add_argument('--timings', action='store_true', help='print stage times to stderr')
     return p
+
+
+def finite(text: str) -> float:
+    """Parse a finite number (argparse type)."""
+    try:
+        x = float(text)
+    except ValueError:
+        x = float('nan')
+    if not np.isfinite(x):
+        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number')
+    return x
 
 
 def positive(text: str) -> float:
@@ -439,13 +464,38 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         p.error('a BAG is needed (or --trajectory FILE.yaml)')
     if args.locked and not args.joints:
         p.error('--locked needs --joints (the joints kept movable)')
+    if float(np.linalg.norm(args.gravity)) > MAX_GRAVITY:
+        p.error(f'--gravity: |g| = {np.linalg.norm(args.gravity):g} m/s^2, more than '
+                f'{MAX_GRAVITY:g} (100 g) cannot be a mounting')
     try:
+        output_dir(args.out)      # before any computation: a bad --out is said at once
         if args.trajectory or args.trajectory_topic:
             return run_trajectory(args)
         return run_bag(args)
     except (Refused, bags.BagError, bags.MissingDependency, ValueError) as err:
-        print(f'error: {err}', file=sys.stderr)
-        return 1
+        print(f'error: {one_line(err)}', file=sys.stderr)
+    except OSError as err:
+        where = f'{err.filename}: ' if err.filename else ''
+        print(f'error: {where}{err.strerror or one_line(err)}', file=sys.stderr)
+    except MemoryError:
+        print('error: out of memory (a smaller --rate, a shorter bag or fewer joints?)',
+              file=sys.stderr)
+    return 1
+
+
+def one_line(err: BaseException) -> str:
+    """Return an exception's message on one line."""
+    return ' '.join(str(err).split()) or type(err).__name__
+
+
+def output_dir(path: str) -> None:
+    """Create the output directory ``path``; Refused naming it when it cannot be one."""
+    try:
+        report.ensure_dir(path)
+    except OSError as err:
+        raise Refused(f'--out {path}: cannot be the output directory ({err.strerror})') from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise Refused(f'--out {path}: cannot write in this directory')
 
 
 if __name__ == '__main__':

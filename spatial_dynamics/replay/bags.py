@@ -22,9 +22,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import os
+import shutil
 from typing import Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
+from urllib.parse import quote
+import weakref
 
 import numpy as np
+
+from ..files import load_yaml, read_regular, regular_file
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
@@ -283,8 +288,66 @@ def verify_layout(data: bytes) -> bool:
 # --------------------------------------------------------------------------------------------
 # Bags
 
+#: Largest metadata.yaml read, bytes (an hour of a busy robot's bag has a few kB).
+MAX_METADATA_BYTES = 16 * 1024 * 1024
+#: Largest storage file opened, bytes.
+MAX_STORAGE_BYTES = 1 << 44
+
+
+def _staged(path: str) -> Tuple[str, str]:
+    """Stage a bag in a private directory: ``(path to hand to rosbags, directory to remove)``.
+
+    SQLite opens a database by a ``file:`` URI, in which ``%``, ``#`` and ``?`` of a path mean
+    something else (rosbags builds ``file:{path}?immutable=1`` unquoted: a bag in ``pct%41``
+    would read the bag ``pctA``). So a bag is never opened by the name the user gave: a fresh
+    directory (its name chosen by ``tempfile``) gets a symbolic link with a plain name to each
+    storage file, each checked to be a regular file first (a FIFO would block SQLite), and,
+    for a bag directory, its ``metadata.yaml`` read by the safe reader, safe-loaded within
+    budgets, and written back naming the links. Nothing else of the bag is read.
+    """
+    import tempfile
+    import yaml
+    stage = tempfile.mkdtemp(prefix='spatial_dynamics_bag_')
+    try:
+        if not os.path.isdir(path):
+            ext = os.path.splitext(path)[1]
+            if ext not in ('.db3', '.mcap'):
+                raise BagError(f'{path}: a bag is a rosbag2 directory or a .db3 / .mcap file')
+            regular_file(path, f'bag file {path!r}', MAX_STORAGE_BYTES)
+            os.symlink(os.path.abspath(path), os.path.join(stage, 'bag' + ext))
+            return os.path.join(stage, 'bag' + ext), stage
+        where = f'bag {path!r} metadata.yaml'
+        meta = load_yaml(read_regular(os.path.join(path, 'metadata.yaml'), where,
+                                      MAX_METADATA_BYTES), where)
+        info = meta.get('rosbag2_bagfile_information') if isinstance(meta, dict) else None
+        files = info.get('relative_file_paths') if isinstance(info, dict) else None
+        if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
+            raise BagError(f'{where}: no rosbag2_bagfile_information.relative_file_paths list')
+        renamed = {}
+        for k, rel in enumerate(files):
+            name = os.path.basename(rel)        # as rosbags does: files are in the directory
+            real = os.path.join(path, name)
+            regular_file(real, f'bag file {real!r}', MAX_STORAGE_BYTES)
+            renamed[rel] = f'{k}{os.path.splitext(name)[1]}'
+            os.symlink(os.path.abspath(real), os.path.join(stage, renamed[rel]))
+        info['relative_file_paths'] = [renamed[f] for f in files]
+        for entry in info.get('files') or []:
+            if isinstance(entry, dict) and entry.get('path') in renamed:
+                entry['path'] = renamed[entry['path']]
+        with open(os.path.join(stage, 'metadata.yaml'), 'w', encoding='utf-8') as f:
+            yaml.safe_dump(meta, f, sort_keys=False)
+        return stage, stage
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+
+
 def open_reader(path: str):
-    """Return an open ``rosbags`` reader of a bag directory (or a single .db3/.mcap file)."""
+    """Return an open ``rosbags`` reader of a bag directory (or a single .db3/.mcap file).
+
+    The bag is opened through :func:`_staged` (plain names, regular files only, metadata
+    safe-loaded); the staging directory goes with the reader.
+    """
     try:
         from rosbags.rosbag2 import Reader
     except ImportError:
@@ -292,10 +355,17 @@ def open_reader(path: str):
     if not os.path.exists(path):
         raise BagError(f'{path}: no such bag')
     try:
-        reader = Reader(path)
+        staged, stage = _staged(path)
+    except ValueError as err:      # BagError, and the safe reader's refusals name the file
+        raise BagError(str(err)) from None
+    try:
+        reader = Reader(staged)
         reader.open()
     except Exception as err:     # rosbags' ReaderError and the storage plugins' errors
-        raise BagError(f'{path}: cannot open as a rosbag2 bag: {err}') from None
+        shutil.rmtree(stage, ignore_errors=True)
+        text = str(err).replace(stage, path)
+        raise BagError(f'{path}: cannot open as a rosbag2 bag: {text}') from None
+    weakref.finalize(reader, shutil.rmtree, stage, True)
     return reader
 
 
@@ -345,7 +415,8 @@ def _sqlite_batches(paths: Sequence[str], topic: str) -> Iterator[Batch]:
     """Yield batches of one topic's messages from rosbag2 sqlite3 files (standard library)."""
     import sqlite3
     for path in paths:
-        con = sqlite3.connect(f'file:{path}?mode=ro', uri=True)
+        # quoted: in a file: URI, %, # and ? of a path would mean something else
+        con = sqlite3.connect(f'file:{quote(os.path.abspath(path))}?mode=ro', uri=True)
         try:
             cur = con.execute('SELECT messages.timestamp, messages.data FROM messages JOIN '
                               'topics ON messages.topic_id = topics.id WHERE topics.name = ? '
@@ -355,7 +426,14 @@ def _sqlite_batches(paths: Sequence[str], topic: str) -> Iterator[Batch]:
                 if not rows:
                     break
                 times, data = zip(*rows)
+                if set(map(type, data)) != {bytes} or set(map(type, times)) != {int}:
+                    raise BagError(f'{os.path.realpath(path)}: not a rosbag2 sqlite3 database '
+                                   '(a message whose timestamp is not an integer or data not '
+                                   'bytes)')
                 yield np.array(times, dtype=np.int64), data
+        except sqlite3.Error as err:
+            raise BagError(f'{os.path.realpath(path)}: not a rosbag2 sqlite3 database '
+                           f'({err})') from None
         finally:
             con.close()
 

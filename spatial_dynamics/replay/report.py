@@ -20,18 +20,28 @@ import numpy as np
 CHUNK = 1 << 18          # rows formatted at once
 
 
+#: Largest |x| · 10**decimals written by the integer fast path: well inside int64 and exact
+#: in float64 (2**53 ≈ 9.007e15), so every digit it prints is the value's.
+FAST_LIMIT = 1e15
+
+
 def _fixed_point(x: np.ndarray, decimals: int) -> np.ndarray:
     """Format a float column as fixed-point ASCII: (N, width) bytes, right-aligned.
 
-    ``nan`` becomes ``nan``; infinities ``inf``/``-inf``.
+    ``nan`` becomes ``nan``; infinities ``inf``/``-inf``. Digits come from integer arithmetic
+    on numpy arrays (Python's formatting of millions of floats would take seconds); a value
+    too large for it (``|x| · 10**decimals`` ≥ :data:`FAST_LIMIT`) is written by Python's
+    ``%.17g``, which reads back as the same double.
     """
     finite = np.isfinite(x)
-    scaled = np.rint(np.where(finite, x, 0.0) * 10.0 ** decimals)
+    big = finite & (np.abs(x) >= FAST_LIMIT / 10.0 ** decimals)
+    scaled = np.rint(np.where(finite & ~big, x, 0.0) * 10.0 ** decimals)
     neg = scaled < 0
     mag = np.abs(scaled).astype(np.int64)
     digits = max(decimals + 1, len(str(int(mag.max()))) if len(mag) else 1)
     width = digits + 1 + (decimals > 0) + 1          # sign, point, at least 'nan'
-    width = max(width, 4)
+    texts = {int(i): b'%.17g' % x[i] for i in np.flatnonzero(big)}
+    width = max([width, 4] + [len(t) for t in texts.values()])
     out = np.full((len(x), width), ord(' '), dtype=np.uint8)
     col = width - 1
     rest = mag.copy()
@@ -50,10 +60,11 @@ def _fixed_point(x: np.ndarray, decimals: int) -> np.ndarray:
     out[rows, lead[rows] - 1] = ord('-')
     for bad, text in ((np.isnan(x), b'nan'), (np.isposinf(x), b'inf'),
                       (np.isneginf(x), b'-inf')):
-        rows = np.flatnonzero(bad)
-        if len(rows):
-            out[rows] = ord(' ')
-            out[rows, width - len(text):] = np.frombuffer(text, dtype=np.uint8)
+        for row in np.flatnonzero(bad):
+            texts[int(row)] = text
+    for row, text in texts.items():
+        out[row] = ord(' ')
+        out[row, width - len(text):] = np.frombuffer(text, dtype=np.uint8)
     return out
 
 

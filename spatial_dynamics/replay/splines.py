@@ -21,6 +21,13 @@ from typing import Optional, Sequence, Tuple
 
 import numpy as np
 
+from ..bounds import (check_bounded, JOINT_BOUNDS, MAX_SAMPLES, MAX_TRAJECTORY_POINTS,
+                      MAX_TRAJECTORY_TIME)
+from ..files import load_yaml, read_regular
+
+#: Largest trajectory YAML file read, bytes.
+MAX_YAML_BYTES = 256 * 1024 * 1024
+
 
 @dataclass
 class Trajectory:
@@ -40,30 +47,77 @@ class Trajectory:
         return 'cubic' if self.accelerations is None else 'quintic'
 
 
+def _number(value, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f'{what}: need a number, got {value!r}'[:300])
+    return float(value)
+
+
+def _time_from_start(p: dict, k: int, what: str) -> float:
+    tfs = p.get('time_from_start')
+    if tfs is None:
+        tfs = {}
+    if not isinstance(tfs, dict):
+        raise ValueError(f'{what}: point {k} time_from_start must be a mapping of sec and '
+                         f'nanosec, got {tfs!r}'[:300])
+    t = (_number(tfs.get('sec', 0), f'{what}: point {k} time_from_start.sec')
+         + _number(tfs.get('nanosec', 0), f'{what}: point {k} time_from_start.nanosec') * 1e-9)
+    if not 0.0 <= t <= MAX_TRAJECTORY_TIME:
+        raise ValueError(f'{what}: point {k} time_from_start is {t:g} s, outside 0 .. '
+                         f'{MAX_TRAJECTORY_TIME:g} s')
+    return t
+
+
+def _values(p: dict, f: str, n: int, k: int, what: str) -> Optional[np.ndarray]:
+    raw = p.get(f)
+    if raw is None:
+        return None
+    if isinstance(raw, (str, bytes, dict)) or not hasattr(raw, '__len__'):
+        raise ValueError(f'{what}: point {k} {f} must be a list of numbers, got {raw!r}'[:300])
+    v = np.array([_number(x, f'{what}: point {k} {f}') for x in raw], dtype=float)
+    if v.size not in (0, n):
+        raise ValueError(f'{what}: point {k} has {v.size} {f} for {n} joints')
+    bound, unit = JOINT_BOUNDS[f]
+    reason = check_bounded(f'{what}: point {k} {f}', v, bound, unit)
+    if reason:
+        raise ValueError(reason)
+    return v if v.size else None
+
+
 def trajectory(joint_names: Sequence[str], points: Sequence[dict], what: str = 'trajectory'
                ) -> Trajectory:
     """Build a :class:`Trajectory` from points in the message's dictionary form.
 
-    Each point: ``{positions, velocities, accelerations, time_from_start: {sec, nanosec}}``;
-    ``ValueError`` names the point that is wrong.
+    Each point: ``{positions, velocities, accelerations, time_from_start: {sec, nanosec}}``.
+    Refused whole, with a ``ValueError`` naming the point and field: anything not of the
+    message's shape, a non-finite value or one beyond the bounds of
+    :mod:`spatial_dynamics.bounds`, a time_from_start beyond a day, more than
+    :data:`~spatial_dynamics.bounds.MAX_TRAJECTORY_POINTS` points.
     """
+    if (isinstance(joint_names, (str, bytes, dict)) or not hasattr(joint_names, '__len__')
+            or not all(isinstance(x, str) for x in joint_names)):
+        raise ValueError(f'{what}: joint_names must be a list of names, got '
+                         f'{joint_names!r}'[:300])
     names = tuple(joint_names)
     n = len(names)
     if not n or len(set(names)) != n:
-        raise ValueError(f'{what}: joint_names must be non-empty and distinct, got {names}')
+        raise ValueError(f'{what}: joint_names must be non-empty and distinct, got {names}'
+                         [:300])
+    if isinstance(points, (str, bytes, dict)) or not hasattr(points, '__len__'):
+        raise ValueError(f'{what}: points must be a list of points, got {points!r}'[:300])
     if not points:
         raise ValueError(f'{what}: no points')
+    if len(points) > MAX_TRAJECTORY_POINTS:
+        raise ValueError(f'{what}: {len(points)} points, more than '
+                         f'{MAX_TRAJECTORY_POINTS:,}')
     time, fields = [], {'positions': [], 'velocities': [], 'accelerations': []}
     for k, p in enumerate(points):
-        tfs = p.get('time_from_start') or {}
-        time.append(float(tfs.get('sec', 0)) + float(tfs.get('nanosec', 0)) * 1e-9)
+        if not isinstance(p, dict):
+            raise ValueError(f'{what}: point {k} must be a mapping (positions, velocities, '
+                             f'accelerations, time_from_start), got {p!r}'[:300])
+        time.append(_time_from_start(p, k, what))
         for f, values in fields.items():
-            v = np.asarray(p.get(f, []) if p.get(f) is not None else [], dtype=float)
-            if v.size not in (0, n):
-                raise ValueError(f'{what}: point {k} has {v.size} {f} for {n} joints')
-            if not np.all(np.isfinite(v)):
-                raise ValueError(f'{what}: point {k} has a non-finite value in {f}')
-            values.append(v if v.size else None)
+            values.append(_values(p, f, n, k, what))
     if any(v is None for v in fields['positions']):
         raise ValueError(f'{what}: every point needs positions')
     t = np.array(time)
@@ -88,22 +142,25 @@ def trajectory(joint_names: Sequence[str], points: Sequence[dict], what: str = '
 
 def from_message(msg) -> Trajectory:
     """Build a :class:`Trajectory` from a ``rosbags`` JointTrajectory message."""
-    points = [{'positions': p.positions, 'velocities': p.velocities,
-               'accelerations': p.accelerations,
-               'time_from_start': {'sec': p.time_from_start.sec,
-                                   'nanosec': p.time_from_start.nanosec}}
+    points = [{'positions': list(p.positions), 'velocities': list(p.velocities),
+               'accelerations': list(p.accelerations),
+               'time_from_start': {'sec': int(p.time_from_start.sec),
+                                   'nanosec': int(p.time_from_start.nanosec)}}
               for p in msg.points]
-    return trajectory(msg.joint_names, points)
+    return trajectory(list(msg.joint_names), points)
 
 
 def from_yaml(path: str) -> Trajectory:
-    """Read a JointTrajectory in its YAML form (``ros2 topic echo --once ... > FILE``)."""
-    import yaml
-    with open(path, encoding='utf-8') as f:
-        docs = [d for d in yaml.safe_load_all(f) if d]
-    if not docs or not isinstance(docs[0], dict):
+    """Read a JointTrajectory in its YAML form (``ros2 topic echo --once ... > FILE``).
+
+    The file goes through :func:`spatial_dynamics.files.read_regular` (a regular file of at
+    most :data:`MAX_YAML_BYTES`) and :func:`spatial_dynamics.files.load_yaml` (safe, alias
+    budget); ``ValueError`` names the file and the reason.
+    """
+    doc = load_yaml(read_regular(path, f'trajectory file {path!r}', MAX_YAML_BYTES),
+                    f'trajectory file {path!r}')
+    if not isinstance(doc, dict):
         raise ValueError(f'{path}: no JointTrajectory mapping in the file')
-    doc = docs[0]
     if 'joint_names' not in doc or 'points' not in doc:
         raise ValueError(f'{path}: a JointTrajectory needs joint_names and points')
     return trajectory(doc['joint_names'], doc['points'], what=path)
@@ -146,6 +203,10 @@ def sample(traj: Trajectory, rate: float) -> Samples:
     The last point is always included. Inside a linear segment q̈ = 0.
     """
     t0, t1 = traj.time[0], traj.time[-1]
+    count = (t1 - t0) * rate + 1
+    if not count <= MAX_SAMPLES:
+        raise ValueError(f'{t1 - t0:g} s at {rate:g} Hz is {count:.4g} samples, more than '
+                         f'{MAX_SAMPLES:,}: lower the rate')
     t = t0 + np.arange(int(np.floor((t1 - t0) * rate)) + 1) / rate
     if t[-1] < t1 - 1e-12:
         t = np.append(t, t1)

@@ -11,7 +11,7 @@ graph (``test/test_ros_config.py``, ``test/test_node_config.py``). The node
 Robot descriptions, by precedence (:func:`description_source`): the ``robot_description``
 parameter (URDF XML text, never a path), the ``robot_description_file`` parameter (a regular
 UTF-8 file of at most :data:`MAX_DESCRIPTION_BYTES`, read with
-:func:`spatial_dynamics.urdf.read_urdf_file`), the ``robot_description`` topic (parsed by
+:func:`spatial_dynamics.urdf.read_description`), the ``robot_description`` topic (parsed by
 :class:`DescriptionParser`'s worker thread).
 
 Backends (parameter ``backend``, :data:`BACKEND_SETTINGS`): ``numpy`` runs the plain-float
@@ -42,7 +42,7 @@ from spatial_dynamics.ros.inputs import REASONS
 from spatial_dynamics.ros.observer import (
     check_observer_gain, check_warn, EstimateWindow, MAX_EXTERNAL_TORQUE_WARN,
     MAX_OBSERVER_GAIN, MomentumObserver, ObserverError)
-from spatial_dynamics.urdf import read_urdf_file
+from spatial_dynamics.urdf import read_description as read_urdf_description
 
 NODE_NAME = 'inverse_dynamics'
 ACCELERATION_SOURCES = ('effort', 'none')
@@ -247,41 +247,17 @@ DESCRIPTION_PARAMETERS = ('robot_description', 'robot_description_file')
 # Robot descriptions
 
 def read_description(path: str) -> str:
-    """URDF text of the file ``path``; a ``.xacro`` file is expanded when ``xacro`` is importable.
+    """URDF text of the file ``path`` (:func:`spatial_dynamics.urdf.read_description`).
 
-    Only a regular file (symbolic links followed) of at most :data:`MAX_DESCRIPTION_BYTES`,
-    UTF-8 (a byte order mark is dropped), read by :func:`~spatial_dynamics.urdf.read_urdf_file`:
-    a named pipe, a device or a directory is refused without blocking, and reading never runs
-    away. A ``.xacro`` file passes the same check before xacro opens it.
+    A regular file (symbolic links followed) of at most :data:`MAX_DESCRIPTION_BYTES`, UTF-8;
+    a ``.xacro`` file is expanded when ``xacro`` is importable. A named pipe, a device or a
+    directory is refused without blocking; :class:`ConfigError` names the file.
     """
-    where = f'robot_description_file {path!r}'
     try:
-        data = read_urdf_file(path, MAX_DESCRIPTION_BYTES)
+        return read_urdf_description(path, MAX_DESCRIPTION_BYTES,
+                                     f'robot_description_file {path!r}')
     except ValueError as err:
-        raise ConfigError(f'robot_description_file: {err} (a robot description)') from None
-    if path.endswith('.xacro'):
-        return _expand_xacro(where, path)
-    try:
-        return data.decode('utf-8-sig')
-    except UnicodeDecodeError as err:
-        raise ConfigError(f'{where}: not UTF-8 text (byte 0x{data[err.start]:02x} at offset '
-                          f'{err.start}); a URDF file must be UTF-8') from None
-
-
-def _expand_xacro(where: str, path: str) -> str:
-    try:
-        import xacro
-    except ImportError:
-        raise ConfigError(f'{where}: a .xacro file needs the xacro module (pip install xacro, '
-                          'or apt ros-jazzy-xacro)') from None
-    try:
-        text = xacro.process_file(path).toxml()
-    except Exception as err:  # xacro raises many types; all mean "cannot expand"
-        raise ConfigError(f'{where}: xacro failed: {err}') from None
-    if len(text) > MAX_DESCRIPTION_BYTES:
-        raise ConfigError(f'{where}: expands to more than the limit of '
-                          f'{MAX_DESCRIPTION_BYTES >> 20} MiB for a robot description')
-    return text
+        raise ConfigError(f'{err} (a robot description)') from None
 
 
 def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = None,

@@ -34,7 +34,7 @@ import numpy as np
 
 from spatial_dynamics import GRAVITY, Model
 from spatial_dynamics.terms import per_joint, PerJoint
-from spatial_dynamics.urdf import read_urdf_file
+from spatial_dynamics.urdf import read_description
 
 #: The one-line message when MuJoCo cannot be imported.
 MUJOCO_MISSING = ('the simulated robot needs MuJoCo, which is not installed: '
@@ -68,7 +68,7 @@ def urdf_text(source: Source) -> str:
         return source.decode('utf-8-sig')
     if isinstance(source, str) and source.lstrip('\ufeff \t\r\n').startswith('<'):
         return source
-    return read_urdf_file(os.fspath(source)).decode('utf-8-sig')
+    return read_description(os.fspath(source))
 
 
 def dynamics_only(xml: str) -> str:

@@ -1,0 +1,159 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The one reader of the files users name: regular files only, bounded, YAML safe-loaded.
+
+Every file the library, ``check_urdf`` and ``replay`` read goes through :func:`read_regular`
+(or is checked by :func:`regular_file` before a library such as SQLite opens it), so a path
+never blocks on a FIFO, never reads a device or a directory, and never reads more than its
+caller's limit. YAML goes through :func:`load_yaml`: PyYAML's safe loader (no ``!!python``
+tags), a size limit, and a budget on the nodes the document stands for once its aliases are
+expanded, so a few hundred bytes of nested aliases ("billion laughs") are refused before
+anything walks them.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from typing import Any, Union
+
+#: What a path is when it is not a regular file, by the test of its mode.
+_KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
+          (stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),
+          (stat.S_ISSOCK, 'a socket'))
+
+#: Nodes a YAML document may stand for with its aliases expanded (a trajectory of 10,000
+#: points of 32 joints with positions, velocities and accelerations is ~1 M).
+MAX_YAML_NODES = 10_000_000
+
+
+def size_text(n: int) -> str:
+    """Return a byte count as people read it (``64 MiB``)."""
+    return f'{n >> 20} MiB' if n >= 1 << 20 and not n % (1 << 20) else f'{n} bytes'
+
+
+def _kind(mode: int) -> str:
+    return next((name for test, name in _KINDS if test(mode)), 'a special file')
+
+
+def regular_file(path: Union[str, os.PathLike], what: str, limit: int) -> int:
+    """Check that ``path`` is a regular file of at most ``limit`` bytes; return its size.
+
+    For files a library opens itself (SQLite, an MCAP memory map). ``ValueError`` names the
+    file as ``what`` and says what it is instead.
+    """
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise ValueError(f'{what}: no such file') from None
+    except OSError as err:
+        raise ValueError(f'{what}: {err.strerror}') from None
+    if not stat.S_ISREG(info.st_mode):
+        raise ValueError(f'{what} is not a regular file ({_kind(info.st_mode)})')
+    if info.st_size > limit:
+        raise ValueError(f'{what} is too large ({info.st_size} bytes, limit '
+                         f'{size_text(limit)})')
+    return info.st_size
+
+
+def read_regular(path: Union[str, os.PathLike], what: str, limit: int) -> bytes:
+    """Return the bytes of ``path``: a regular file of at most ``limit`` bytes.
+
+    Never blocks on a FIFO or reads a device: the file is opened non-blocking and checked to
+    be regular (on the open descriptor) before anything is read; a file that grows while it
+    is read stops at ``limit + 1`` bytes and is refused. ``ValueError`` names the file as
+    ``what``, and the reason.
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, 'O_NONBLOCK', 0)
+                     | getattr(os, 'O_CLOEXEC', 0))
+    except FileNotFoundError:
+        raise ValueError(f'{what}: no such file') from None
+    except OSError as err:
+        raise ValueError(f'cannot read {what}: {err.strerror}') from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise ValueError(f'{what} is not a regular file ({_kind(info.st_mode)})')
+        if info.st_size > limit:
+            raise ValueError(f'{what} is too large ({info.st_size} bytes, limit '
+                             f'{size_text(limit)})')
+        chunks, size = [], 0
+        while size <= limit:
+            chunk = os.read(fd, limit + 1 - size)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as err:
+        raise ValueError(f'cannot read {what}: {err.strerror}') from None
+    finally:
+        os.close(fd)
+    data = b''.join(chunks)
+    if len(data) > limit:
+        raise ValueError(f'{what} is too large (more than {size_text(limit)})')
+    return data
+
+
+def _expanded_nodes(root) -> int:
+    """Count the nodes a composed YAML graph stands for with every alias expanded.
+
+    A shared subtree counts each time it is used; each distinct node is visited once, so the
+    count takes time linear in the file, whatever it expands to.
+    """
+    from yaml.nodes import MappingNode, SequenceNode
+    size: dict = {}
+    stack = [(root, False)]
+    while stack:
+        node, children_done = stack.pop()
+        if id(node) in size:
+            continue
+        if isinstance(node, SequenceNode):
+            children = node.value
+        elif isinstance(node, MappingNode):
+            children = [x for pair in node.value for x in pair]
+        else:
+            size[id(node)] = 1
+            continue
+        if children_done:
+            size[id(node)] = 1 + sum(size[id(c)] for c in children)
+        else:
+            stack.append((node, True))
+            stack.extend((c, False) for c in children if id(c) not in size)
+    return size[id(root)]
+
+
+def load_yaml(data: Union[str, bytes], what: str, max_nodes: int = MAX_YAML_NODES) -> Any:
+    """Return the first document of YAML ``data`` (``None`` if empty), safe-loaded in budget.
+
+    PyYAML's safe loader: tags such as ``!!python/object`` are refused. Before any Python
+    object is built, the composed document is measured with its aliases expanded; one that
+    stands for more than ``max_nodes`` nodes is refused. Further documents are ignored (as
+    ``ros2 topic echo --once`` ends its output with ``---``). ``ValueError`` names ``what``.
+    """
+    import yaml
+    try:
+        loader_class = yaml.CSafeLoader
+    except AttributeError:   # PyYAML built without libyaml
+        loader_class = yaml.SafeLoader
+    if isinstance(data, bytes):
+        try:
+            data = data.decode('utf-8')
+        except UnicodeDecodeError as err:
+            raise ValueError(f'{what}: not UTF-8 text (byte {err.start})') from None
+    loader = loader_class(data)
+    try:
+        if not loader.check_node():
+            return None
+        node = loader.get_node()
+        if _expanded_nodes(node) > max_nodes:
+            raise ValueError(f'{what}: the YAML stands for more than {max_nodes:,} values '
+                             'once its aliases are expanded (an alias bomb?)')
+        return loader.construct_document(node)
+    except yaml.YAMLError as err:
+        text = ' '.join(str(err).split())
+        raise ValueError(f'{what}: not valid YAML for this: {text}') from None
+    except RecursionError:
+        raise ValueError(f'{what}: the YAML is nested too deeply') from None
+    finally:
+        loader.dispose()
