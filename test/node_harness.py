@@ -191,6 +191,7 @@ class Io:
             QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self.parameters = node.create_client(SetParameters, f'/{node_name}/set_parameters')
+        self.atomic = None
         self.node_name = node_name
 
     def _on_efforts(self, msg) -> None:
@@ -208,6 +209,8 @@ class Io:
         for pub in (self.joint_states, self.trajectory, self.description):
             node.destroy_publisher(pub)
         node.destroy_client(self.parameters)
+        if self.atomic is not None:
+            node.destroy_client(self.atomic)
 
     def wait_connected(self) -> None:
         """Wait until the node's subscriptions and publishers are matched with ours."""
@@ -271,6 +274,18 @@ class Io:
             else:
                 request.parameters.append(Parameter(name, value=value).to_parameter_msg())
         return self.driver.call(self.parameters, request).results
+
+    def set_parameters_atomically(self, **values) -> List:
+        """Set parameters all or none (SetParametersAtomically); a one-result list."""
+        from rcl_interfaces.srv import SetParametersAtomically
+        from rclpy.parameter import Parameter
+        if self.atomic is None:
+            self.atomic = self.driver.node.create_client(
+                SetParametersAtomically, f'/{self.node_name}/set_parameters_atomically')
+        request = SetParametersAtomically.Request()
+        request.parameters = [Parameter(name, value=value).to_parameter_msg()
+                              for name, value in values.items()]
+        return [self.driver.call(self.atomic, request).result]
 
     def status(self, suffix: str, after: int = 0):
         """Latest diagnostics status ``'<node>: <suffix>'`` from message index ``after`` on."""

@@ -230,3 +230,22 @@ def test_no_ros_import():
     code = ('import sys, spatial_dynamics.ros.inputs; '
             "assert 'rclpy' not in sys.modules, 'inputs imported rclpy'")
     subprocess.run([sys.executable, '-c', code], check=True)
+
+
+def test_values_beyond_what_a_robot_reaches_are_refused_where_they_enter():
+    """Desired and measured states alike: one bound per quantity (spatial_dynamics.bounds)."""
+    names = ('a', 'b')
+    for field, values, message in (
+            ('position', ([1e300, 0.0], [0.0, 0.0], [0.0, 0.0]), "'position' of joint 'a'"),
+            ('velocity', ([0.0, 0.0], [0.0, -2e4], [0.0, 0.0]), "'velocity' of joint 'b'"),
+            ('effort', ([0.0, 0.0], [0.0, 0.0], [1e7, 0.0]), "'effort' of joint 'a'")):
+        with pytest.raises(InputError, match=message) as err:
+            joint_state_arrays(names, names, *values)
+        assert err.value.reason == 'out_of_bounds', field
+    point = SimpleNamespace(positions=[0.0, 1e5 + 1], velocities=[], accelerations=[])
+    with pytest.raises(InputError) as err:
+        trajectory_arrays(names, names, [point])
+    assert err.value.reason == 'out_of_bounds' and 'points[0].positions' in str(err.value)
+    # at the bound itself: accepted
+    q, qd, qdd = joint_state_arrays(names, names, [1e5, -1e5], [1e4, 0.0], [1e6, 0.0])
+    assert q.tolist() == [1e5, -1e5] and qdd.tolist() == [1e6, 0.0]

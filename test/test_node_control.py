@@ -354,6 +354,12 @@ def test_bad_gains_and_bad_measured_states_change_nothing(driver, demo, demo_mod
         ok(io.set_parameters(control_mode='computed_torque'))
         first = loop.measure(q, qd)
 
+        # output none with zero gains would publish zeros: refused, also atomically
+        ok(io.set_parameters(control_mode='pd_feedforward'))
+        refused(io.set_parameters_atomically(output='none', kp=[0.0], kd=[0.0]), 'output',
+                'kp = kd = 0', 'zeros')
+        ok(io.set_parameters(control_mode='computed_torque'))
+        np.testing.assert_array_equal(loop.measure(q, qd), first)
         for change, words in [
                 (dict(kp=[-1.0]), ['kp', 'joint1', '-1.0']),
                 (dict(kp=[1.0, 2.0]), ['kp', '2 values', '8 joints']),
@@ -388,6 +394,17 @@ def test_bad_gains_and_bad_measured_states_change_nothing(driver, demo, demo_mod
         keys = [stamp_key(m.header.stamp) for m in io.efforts]
         assert not any(9100 <= k < 9100 + len(bad) for k in keys), 'a bad state was answered'
         demo.wait_for_log('joint_states: measured state rejected')
+        np.testing.assert_array_equal(loop.measure(q, qd), first)   # identical to before
+
+        # a desired state that cannot be real is refused where it enters: the held one stays
+        huge = [list(desired[0]), list(desired[1]), list(desired[2])]
+        huge[0][0] = 1e300
+        for _ in range(3):
+            io.joint_states.publish(joint_state(names, *huge, 9200))
+            driver.spin_for(0.05)
+        driver.spin_until(lambda: int(values(io.fresh_status('feedforward'))
+                                      ['rejected out_of_bounds']) >= 1,
+                          what='the absurd desired state to be counted')
         np.testing.assert_array_equal(loop.measure(q, qd), first)   # identical to before
 
 

@@ -217,11 +217,13 @@ def test_external_wrenches_applied_until_timeout(driver, io, demo_model, node):
         for _ in range(3):
             wrenches.publish(wrench_msg('no_such_link', [0, 0, 0], [1, 0, 0]))
             wrenches.publish(wrench_msg('hand', [0, 0, 0], [math.nan, 0, 0]))
+            wrenches.publish(wrench_msg('hand', [0, 0, 0], [0, 1.7e308, 0]))
             driver.spin_for(0.05)
         node.wait_for_log("header.frame_id 'no_such_link' is not a link")
         kv = values(io.fresh_status('feedforward'))
         assert int(kv['external wrenches rejected unknown_link']) >= 1
         assert int(kv['external wrenches rejected non_finite']) >= 1
+        assert int(kv['external wrenches rejected out_of_bounds']) >= 1
         assert kv['external wrenches active'] == 'hand'
         np.testing.assert_allclose(ask(names, state), want_hand, rtol=0, atol=TOL)
         # timeout: a short one, and the wrench goes away by itself

@@ -215,7 +215,9 @@ def test_parameters_and_measured_effort_refused_with_the_reason():
     assert measured_effort(names, ['c', 'x', 'a', 'b'], [3.0, 9.0, 1.0, 2.0]).tolist() == [
         1.0, 2.0, 3.0]
     for effort, reason in (([], 'no_effort'), ([1.0, 2.0], 'length_mismatch'),
-                           ([1.0, math.nan, 3.0], 'non_finite')):
+                           ([1.0, math.nan, 3.0], 'non_finite'),
+                           ([1.0, 1e308, 3.0], 'out_of_bounds'),
+                           ([-1e300, 2.0, 3.0], 'out_of_bounds')):
         with pytest.raises(InputError) as err:
             measured_effort(names, ['a', 'b', 'c'], effort)
         assert err.value.reason == reason

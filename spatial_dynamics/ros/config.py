@@ -34,6 +34,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
+from spatial_dynamics.bounds import MAX_GRAVITY
 from spatial_dynamics.ros.control import (
     check_gains, check_gains_without_model, check_mode, continuous_joints, CONTROL_MODES,
     ControlError, FEEDBACK_MODES, FEEDBACK_REASONS, GAIN_UNITS, Gains, MAX_KD, MAX_KP,
@@ -80,7 +81,6 @@ TIMED_CALLS = 7
 # being accepted and then making every answer non-finite.
 MAX_DESCRIPTION_BYTES = 32 * 1024 * 1024   # robot_description_file (the largest URDF of
 #                                            example-robot-data is < 1 MiB)
-MAX_GRAVITY = 1e3                   # m/s², norm of `gravity` (100 g)
 MAX_ARMATURE = 1e6                  # kg m² (or kg), per joint
 MAX_PAYLOAD_MASS = 1e6              # kg
 MAX_PAYLOAD_COM = 1e3               # m, per component
@@ -91,7 +91,7 @@ URDF_WARNINGS_LISTED = 5            # URDF warnings listed one by one in /diagno
 # Rejection reasons the node adds to those of the input mapping.
 NODE_REASONS = ('no_model', 'compute_error', 'non_finite_output') + FEEDBACK_REASONS
 # Rejection reasons of external_wrenches messages.
-WRENCH_REASONS = ('no_model', 'unknown_link', 'non_finite')
+WRENCH_REASONS = ('no_model', 'unknown_link', 'non_finite', 'out_of_bounds')
 
 
 class ConfigError(ValueError):
@@ -728,7 +728,8 @@ def check_control(params: dict) -> Tuple[str, str]:
     """``(control_mode, output)`` of ``params`` (:func:`~.control.check_mode`)."""
     try:
         return check_mode(params.get('control_mode', 'feedforward'),
-                          params.get('output', 'full'))
+                          params.get('output', 'full'), params.get('kp') or (),
+                          params.get('kd') or ())
     except ControlError as err:
         raise ConfigError(str(err)) from None
 

@@ -49,6 +49,7 @@ from typing import Dict, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
+from spatial_dynamics.bounds import MAX_POSITION, MAX_VELOCITY
 from spatial_dynamics.joints import REVOLUTE
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays
 
@@ -75,10 +76,9 @@ OUTPUT_TERMS = {
 MAX_KP = 1e6
 #: Kd: 1e4 N·m·s/rad, or 1e4 1/s (2ζω for ζ = 1 at ω = 5000 rad/s).
 MAX_KD = 1e4
-#: |q| of a measured joint, rad or m: 1e5 rad is 16 000 turns of a continuous joint.
-MAX_MEASURED_POSITION = 1e5
-#: |q̇| of a measured joint, rad/s or m/s: 1e4 rad/s is 95 000 rpm.
-MAX_MEASURED_VELOCITY = 1e4
+#: |q| and |q̇| of a measured (and desired) joint: the bounds of every joint state.
+MAX_MEASURED_POSITION = MAX_POSITION
+MAX_MEASURED_VELOCITY = MAX_VELOCITY
 
 GAIN_UNITS = {'kp': 'N·m/rad (N/m) in pd_feedforward, 1/s² in computed_torque',
               'kd': 'N·m·s/rad (N·s/m) in pd_feedforward, 1/s in computed_torque'}
@@ -107,14 +107,22 @@ def check_choice(name: str, value: str, choices: Sequence[str]) -> str:
     return value
 
 
-def check_mode(control_mode: str, output: str) -> Tuple[str, str]:
+def check_mode(control_mode: str, output: str, kp: Sequence[float] = (1.0,),
+               kd: Sequence[float] = (1.0,)) -> Tuple[str, str]:
     """Return ``(control_mode, output)`` if each is valid and they make sense together.
 
-    ``output: none`` leaves only the feedback term, which ``feedforward`` does not have:
-    every answer would be zeros (a loaded arm would drop), so the pair is refused.
+    ``output: none`` leaves only the feedback term, which ``feedforward`` does not have, and
+    which is zero in a feedback mode whose gains ``kp`` and ``kd`` are all zero: every answer
+    would be zeros (a loaded arm would drop), so those combinations are refused.
     """
     check_choice('control_mode', control_mode, CONTROL_MODES)
     check_choice('output', output, OUTPUTS)
+    if output == 'none' and control_mode != 'feedforward' and not any(kp) and not any(kd):
+        raise ControlError(
+            f"parameters output 'none', control_mode {control_mode!r} and kp = kd = 0: output "
+            'none publishes only the feedback term, which is zero with zero gains, so every '
+            'answer would be zeros; set kp and kd first (or all of them atomically), or '
+            'choose another output')
     if output == 'none' and control_mode == 'feedforward':
         raise ControlError(
             "parameters output 'none' and control_mode 'feedforward': output none publishes "
@@ -190,14 +198,6 @@ def measured_arrays(joint_names: Tuple[str, ...], name: Sequence[str],
         raise InputError('no_velocity', "field 'velocity' is empty: the feedback modes need "
                          'the measured velocity of every model joint')
     q, qd, _ = joint_state_arrays(joint_names, name, position, velocity, None)
-    for field, values, bound, unit in (('position', q, MAX_MEASURED_POSITION, 'rad or m'),
-                                       ('velocity', qd, MAX_MEASURED_VELOCITY,
-                                        'rad/s or m/s')):
-        beyond = np.flatnonzero(np.abs(values) > bound)
-        if beyond.size:
-            joint = joint_names[beyond[0]]
-            raise InputError('out_of_bounds', f"field '{field}' of joint {joint!r} is "
-                             f'{values[beyond[0]]:g}, beyond ±{bound:g} {unit}')
     return q, (qd if len(velocity) else None)
 
 

@@ -29,6 +29,8 @@ from typing import Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
+from spatial_dynamics.bounds import JOINT_BOUNDS
+
 REASONS = (
     'empty',            # no joint names in the message
     'no_points',        # a trajectory without points
@@ -36,6 +38,7 @@ REASONS = (
     'duplicate_joint',  # a model joint named twice
     'missing_joint',    # a model joint the message doesn't name
     'non_finite',       # NaN or Inf in a value the model uses
+    'out_of_bounds',    # a value beyond what a real robot reaches (spatial_dynamics.bounds)
 )
 """Reason codes of :class:`InputError`, in the order the checks run."""
 
@@ -143,17 +146,19 @@ def _build_index(joint_names: Tuple[str, ...], names: Tuple[str, ...]) -> np.nda
 def _arrays(
     joint_names: Tuple[str, ...],
     names: Sequence[str],
-    fields: Sequence[Tuple[str, Optional[Sequence[float]]]],
+    fields: Sequence[Tuple[str, Optional[Sequence[float]], str]],
 ) -> Tuple[np.ndarray, ...]:
-    """Map each ``(field, values)`` to model order; the first field is required, ``None`` = zeros.
+    """Map each ``(field, values, kind)`` to model order; the first is required, ``None`` = 0.
 
-    Checks run in the order of :data:`REASONS`; one check failing stops the conversion, so the
-    caller never sees a partial result.
+    ``kind`` (``position``, ``velocity``, ``acceleration``, ``effort``) names the bound of
+    :data:`spatial_dynamics.bounds.JOINT_BOUNDS` every value is held to. Checks run in the
+    order of :data:`REASONS`; one check failing stops the conversion, so the caller never sees
+    a partial result.
     """
     count = len(names)
     if count == 0:
         raise InputError('empty', "field 'name' is empty: no joints in the message")
-    for k, (field, values) in enumerate(fields):
+    for k, (field, values, _) in enumerate(fields):
         if values is None:
             continue
         length = len(values)
@@ -165,7 +170,7 @@ def _arrays(
     idx = name_index(joint_names, tuple(names))
     n = len(joint_names)
     result = []
-    for field, values in fields:
+    for field, values, kind in fields:
         if values is None or len(values) == 0:
             result.append(np.zeros(n))
             continue
@@ -174,6 +179,12 @@ def _arrays(
             bad = [joint_names[i] for i in np.flatnonzero(~np.isfinite(mapped))]
             raise InputError('non_finite',
                              f"field '{field}' is not finite for joint(s) {_listed(bad)}")
+        bound, unit = JOINT_BOUNDS[kind]
+        huge = np.flatnonzero(np.abs(mapped) > bound)
+        if huge.size:
+            raise InputError('out_of_bounds', f"field '{field}' of joint "
+                             f'{joint_names[huge[0]]!r} is {mapped[huge[0]]:g}, beyond '
+                             f'±{bound:g} {unit}')
         result.append(mapped)
     return tuple(result)
 
@@ -192,7 +203,8 @@ def joint_state_arrays(
     required (same length as ``name``); ``velocity`` and ``effort`` may be empty (zeros).
     """
     return _arrays(joint_names, name,
-                   (('position', position), ('velocity', velocity), ('effort', effort)))
+                   (('position', position, 'position'), ('velocity', velocity, 'velocity'),
+                    ('effort', effort, 'acceleration')))
 
 
 def trajectory_arrays(
@@ -209,6 +221,6 @@ def trajectory_arrays(
         raise InputError('no_points', "field 'points' is empty: no trajectory point")
     point = points[0]
     return _arrays(joint_names, names,
-                   (('points[0].positions', point.positions),
-                    ('points[0].velocities', point.velocities),
-                    ('points[0].accelerations', point.accelerations)))
+                   (('points[0].positions', point.positions, 'position'),
+                    ('points[0].velocities', point.velocities, 'velocity'),
+                    ('points[0].accelerations', point.accelerations, 'acceleration')))

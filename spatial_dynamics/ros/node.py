@@ -111,6 +111,7 @@ from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, QoSReliabili
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import JointState
 import spatial_dynamics as sd
+from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
 from spatial_dynamics.ros.config import (
     backend_text, build_output, CompiledKernels, Config, ConfigError, DEFAULT_GRAVITY,
     DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT, DEFAULT_OBSERVER_GAIN,
@@ -718,6 +719,10 @@ class InverseDynamicsNode(Node):
             bad = [name for name, ok in zip(_WRENCH_FIELDS, np.isfinite(wrench)) if not ok]
             self._reject_wrench('non_finite', f'on {link!r}: wrench.{", wrench.".join(bad)} '
                                 'not finite')
+            return
+        reason = check_bounded('wrench', wrench, MAX_WRENCH, 'N m or N', _WRENCH_FIELDS)
+        if reason:
+            self._reject_wrench('out_of_bounds', f'on {link!r}: {reason}')
             return
         if not wrench.any():
             self.wrenches.pop(link, None)

@@ -42,6 +42,7 @@ from typing import Callable, Optional, Sequence, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
+from spatial_dynamics.bounds import MAX_EFFORT
 from spatial_dynamics.ros.inputs import InputError, name_index
 
 #: ``observer_gain`` K_O (1/s) at most: a time constant of 1 ms, one sample at 1 kHz. Beyond
@@ -53,10 +54,12 @@ MAX_EXTERNAL_TORQUE_WARN = 1e6
 #: Why a good measured state does not update the observer (diagnostics counter keys).
 #: ``no_effort`` (empty effort: not an error, the observer just waits), ``length_mismatch``
 #: (effort and name differ in length), ``non_finite`` (NaN/Inf effort of a model joint),
+#: ``out_of_bounds`` (|effort| beyond :data:`~spatial_dynamics.bounds.MAX_EFFORT`: one such
+#: sample integrated would poison every later estimate),
 #: ``no_velocity`` (the observer needs q̇), ``unstamped`` (header stamp 0, see
 #: :func:`sample_time`), ``repeated`` (the stamp of the previous sample).
-SKIP_REASONS = ('no_effort', 'length_mismatch', 'non_finite', 'no_velocity', 'unstamped',
-                'repeated')
+SKIP_REASONS = ('no_effort', 'length_mismatch', 'non_finite', 'out_of_bounds', 'no_velocity',
+                'unstamped', 'repeated')
 
 Friction = Callable[[np.ndarray], np.ndarray]
 
@@ -105,7 +108,9 @@ def measured_effort(joint_names: Tuple[str, ...], name: Sequence[str],
     """``τ_m`` (n,) in ``joint_names`` order from a measured JointState's ``effort``, by name.
 
     Raises :class:`~spatial_dynamics.ros.inputs.InputError` with a reason of
-    :data:`SKIP_REASONS`: ``no_effort`` when ``effort`` is empty.
+    :data:`SKIP_REASONS`: ``no_effort`` when ``effort`` is empty; beyond
+    :data:`~spatial_dynamics.bounds.MAX_EFFORT` it is ``out_of_bounds`` (the sample is skipped,
+    never integrated).
     """
     if len(effort) == 0:
         raise InputError('no_effort', "field 'effort' is empty")
@@ -116,6 +121,11 @@ def measured_effort(joint_names: Tuple[str, ...], name: Sequence[str],
     if not np.isfinite(tau).all():
         bad = [joint_names[i] for i in np.flatnonzero(~np.isfinite(tau))]
         raise InputError('non_finite', f"field 'effort' is not finite for joint(s) {bad}")
+    huge = np.flatnonzero(np.abs(tau) > MAX_EFFORT)
+    if huge.size:
+        raise InputError('out_of_bounds', f"field 'effort' of joint "
+                         f'{joint_names[huge[0]]!r} is {tau[huge[0]]:g}, beyond '
+                         f'±{MAX_EFFORT:g} N m or N')
     return tau
 
 
