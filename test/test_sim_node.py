@@ -13,6 +13,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -159,12 +160,56 @@ def test_missing_mujoco_clear_message_exit_1(tmp_path):
     assert proc.stderr.strip() == f'sim: {MUJOCO_MISSING}'
 
 
-def test_bad_start_up_exits_1_naming_the_problem(install, tmp_path):
+@pytest.mark.parametrize('param, words', [
+    ('mode:=fast', ["mode 'fast'"]),
+    ('timestep:=1e300', ['timestep', '1e+300']),
+    ('timestep:=1e-12', ['timestep', '1e-06']),
+    ('command_timeout:=1e300', ['command_timeout']),
+    ('initial_positions:=[1e300,0.0,0.0,0.0,0.0,0.0,0.0,0.0]', ['q of', 'beyond'])])
+def test_bad_start_up_exits_1_naming_the_problem(install, tmp_path, param, words):
     proc = SimProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
-                                '-p', 'mode:=fast'], str(tmp_path))
+                                '-p', param], str(tmp_path))
     assert proc.proc.wait(TIMEOUT) == 1
-    assert "mode 'fast'" in proc.log()
+    log = proc.log()
+    assert 'cannot start' in log and 'Traceback' not in log, log
+    for word in words:
+        assert word in log, (word, log)
     proc.stop()
+
+
+def test_lockstep_republishes_every_period_while_waiting(lockstep):
+    """With no controller, the state comes again every REPUBLISH_PERIOD (0.1 s), not 0.2."""
+    from spatial_dynamics.sim.node import REPUBLISH_PERIOD
+    proc, io = lockstep
+    io.states.clear()
+    arrivals = []
+    deadline = time.monotonic() + TIMEOUT
+    while len(arrivals) < 12 and time.monotonic() < deadline:
+        count = len(io.states)
+        io.driver.spin_until(lambda: len(io.states) > count, what='a republished state')
+        arrivals.append(time.monotonic())
+    gaps = np.diff(arrivals)
+    # the median is robust to a late wake-up on a loaded machine; the old timer gave 0.2 s
+    assert 0.75 * REPUBLISH_PERIOD < np.median(gaps) < 1.5 * REPUBLISH_PERIOD, gaps
+
+
+def test_commands_beyond_the_robot_never_publish_nan(lockstep):
+    """Send 1e6 N m once, zeros, then 1e3 N m held: every published state stays finite.
+
+    The demo arm's finger diverges; the sim restarts at its initial positions (logged).
+    """
+    proc, io = lockstep
+    n = 8
+    sequences = [[1e6] * n] + [[0.0] * n] * 20 + [[1e3] * n] * 120
+    for k, tau in enumerate(sequences):
+        count = len(io.states)
+        io.command(tau)
+        io.driver.spin_until(lambda: any(round(sim_time(s) / H) == k + 1
+                                         for s in io.states[count:]), what=f'step {k + 1}')
+    for s in io.states:
+        assert np.isfinite(s.position).all() and np.isfinite(s.velocity).all()
+        assert np.abs(s.position).max() <= 1e5 and np.abs(s.velocity).max() <= 1e4
+    proc.wait_for_log('the simulation diverged and restarted')
 
 
 def test_applied_wrench_pushes_the_robot_as_apply_wrench_does(lockstep):

@@ -254,3 +254,40 @@ def test_refusals_name_what_is_wrong():
         SimulatedRobot(urdf('ur5'), damping=-1.0)
     with pytest.raises(ValueError, match='timestep'):
         SimulatedRobot(urdf('ur5'), timestep=0.0)
+
+
+def test_a_diverging_state_restarts_at_home_and_stays_finite():
+    """The demo arm (mimic finger, our RK4): 1e6 N m once, then zeros; then 1e3 N m held.
+
+    The state leaves what a robot reaches; the simulation restarts at its initial positions at
+    rest (counted, with the reason) and then runs exactly as a fresh robot from there.
+    """
+    robot = SimulatedRobot(DEMO, timestep=1e-3)
+    n = robot.model.nq
+    home = np.linspace(-0.3, 0.3, n)
+    home[-1] = 0.01       # the finger
+    robot.set_state(home)
+    robot.step(np.full(n, 1e6))
+    for _ in range(10):
+        robot.step(np.zeros(n))
+        assert np.isfinite(robot.q).all() and np.isfinite(robot.qd).all()
+    assert robot.resets >= 1 and 'beyond' in robot.reset_reason
+    robot.step(np.full(n, 1e3), 200)
+    assert np.isfinite(robot.q).all() and np.abs(robot.qd).max() <= 1e4
+    # after a restart the physics is a fresh robot's
+    robot.set_state(home)
+    fresh = SimulatedRobot(DEMO, timestep=1e-3)
+    fresh.set_state(home)
+    resets = robot.resets
+    robot.step(np.zeros(n), 50)
+    fresh.step(np.zeros(n), 50)
+    assert robot.resets == resets
+    np.testing.assert_array_equal(robot.q, fresh.q)
+    np.testing.assert_array_equal(robot.qd, fresh.qd)
+
+
+def test_set_state_beyond_the_bounds_is_refused():
+    robot = SimulatedRobot(DEMO, timestep=1e-3)
+    n = robot.model.nq
+    with pytest.raises(ValueError, match='beyond'):
+        robot.set_state(np.full(n, 1e300))

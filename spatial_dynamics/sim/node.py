@@ -61,6 +61,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, QoSReliabilityPolicy
 from sensor_msgs.msg import JointState
+from spatial_dynamics.bounds import MAX_EFFORT, MAX_WRENCH
 from spatial_dynamics.ros.config import ConfigError, read_description
 from spatial_dynamics.ros.node import advertise, spin
 from spatial_dynamics.sim.robot import import_mujoco, MujocoMissing, SimulatedRobot
@@ -68,7 +69,9 @@ from std_msgs.msg import Float64MultiArray
 
 NODE_NAME = 'sim'
 MODES = ('realtime', 'lockstep')
-MAX_COMMAND = 1e6             # N m or N: beyond it a command is refused
+MAX_COMMAND = MAX_EFFORT      # N m or N: beyond it a command is refused
+TIMESTEP_RANGE = (1e-6, 1.0)  # s: the physics step
+MAX_COMMAND_TIMEOUT = 3600.0  # s
 REPUBLISH_PERIOD = 0.1        # s of wall time, lockstep: the state is sent again while waiting
 MAX_CATCH_UP_STEPS = 100      # realtime: steps run in one go when the process fell behind
 WARN_PERIOD = 1.0             # s between two warnings of one kind
@@ -118,8 +121,8 @@ def check_wrench(link: str, wrench: Sequence[float], links) -> Optional[str]:
     w = np.asarray(wrench, dtype=float)
     if not np.isfinite(w).all():
         return f'non-finite component {WRENCH_FIELDS[int(np.argmin(np.isfinite(w)))]}'
-    if np.abs(w).max(initial=0.0) > MAX_COMMAND:
-        return f'component {WRENCH_FIELDS[int(np.argmax(np.abs(w)))]} above {MAX_COMMAND:g}'
+    if np.abs(w).max(initial=0.0) > MAX_WRENCH:
+        return f'component {WRENCH_FIELDS[int(np.argmax(np.abs(w)))]} above {MAX_WRENCH:g}'
     return None
 
 
@@ -142,9 +145,13 @@ class SimNode(Node):
              for name, _, _ in PARAMETERS}   # unset arrays are None
         if p['mode'] not in MODES:
             raise ConfigError(f'mode {p["mode"]!r}: one of {", ".join(MODES)}')
-        for name in ('timestep', 'command_timeout'):
-            if not (math.isfinite(p[name]) and p[name] > 0.0):
-                raise ConfigError(f'{name}: a positive number of seconds, got {p[name]}')
+        lo, hi = TIMESTEP_RANGE
+        if not lo <= p['timestep'] <= hi:
+            raise ConfigError(f'timestep: need a physics step from {lo:g} to {hi:g} s, got '
+                              f'{p["timestep"]}')
+        if not 0.0 < p['command_timeout'] <= MAX_COMMAND_TIMEOUT:
+            raise ConfigError(f'command_timeout: need a number of seconds above 0 and at most '
+                              f'{MAX_COMMAND_TIMEOUT:g}, got {p["command_timeout"]}')
         if p['robot_description']:
             urdf, source = p['robot_description'], 'robot_description'
         elif p['robot_description_file']:
@@ -168,7 +175,6 @@ class SimNode(Node):
         self.command_at: Optional[float] = None
         self.steps = 0
         self.refused = 0
-        self.last_publish = time.monotonic()
         self._warned = {}
         self.state_pub = advertise(self, JointState, p['state_topic'])
         self.clock_pub = None
@@ -185,8 +191,10 @@ class SimNode(Node):
             f'{self.robot.model.summary()}; {self.mode}, step {self.timestep:g} s '
             f'({self.robot.integrator}); commands on {self.resolve_topic_name(p["command_topic"])}'
             f' for {list(self.robot.joint_names)}')
+        self.republish_timer = None
         if self.mode == 'lockstep':
-            self.create_timer(REPUBLISH_PERIOD, self._republish)
+            # restarted at every publish, so it fires REPUBLISH_PERIOD after the last one
+            self.republish_timer = self.create_timer(REPUBLISH_PERIOD, self._publish)
         else:
             self.start = time.monotonic()
             self.create_timer(self.timestep, self._realtime_tick)
@@ -208,8 +216,7 @@ class SimNode(Node):
         self.tau = np.array(msg.data, dtype=float)
         self.command_at = time.monotonic()
         if self.mode == 'lockstep':
-            self.robot.step(self.tau)
-            self.steps += 1
+            self._step(1)
             self._publish()
 
     def _on_wrench(self, msg: WrenchStamped) -> None:
@@ -228,10 +235,6 @@ class SimNode(Node):
                                + ('removed' if not any(wrench) else f'[n; f] = {wrench}'),
                                throttle_duration_sec=WARN_PERIOD)
 
-    def _republish(self) -> None:
-        if time.monotonic() - self.last_publish >= REPUBLISH_PERIOD:
-            self._publish()
-
     def _realtime_tick(self) -> None:
         now = time.monotonic()
         due = int((now - self.start) / self.timestep) - self.steps
@@ -245,9 +248,19 @@ class SimNode(Node):
         if due > MAX_CATCH_UP_STEPS:       # fell far behind: the sim slows down instead
             self.start += (due - MAX_CATCH_UP_STEPS) * self.timestep
             due = MAX_CATCH_UP_STEPS
-        self.robot.step(self.tau, due)
-        self.steps += due
+        self._step(due)
         self._publish()
+
+    def _step(self, count: int) -> None:
+        """Run ``count`` physics steps with the held command; say when the state diverged."""
+        resets = self.robot.resets
+        self.robot.step(self.tau, count)
+        self.steps += count
+        if self.robot.resets != resets:
+            self.get_logger().error(
+                f'the simulation diverged and restarted at its initial positions, at rest '
+                f'({self.robot.resets} restart(s) so far): {self.robot.reset_reason}; '
+                f'command {self.tau.tolist()}', throttle_duration_sec=WARN_PERIOD)
 
     def _publish(self) -> None:
         msg = self.msg
@@ -261,7 +274,8 @@ class SimNode(Node):
         self.state_pub.publish(msg)
         if self.clock_pub is not None:
             self.clock_pub.publish(self._clock_msg(clock=to_time(self.robot.time)))
-        self.last_publish = time.monotonic()
+        if self.republish_timer is not None:
+            self.republish_timer.reset()
 
 
 def main(args: Optional[Sequence[str]] = None) -> int:

@@ -33,6 +33,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from spatial_dynamics import GRAVITY, Model
+from spatial_dynamics.bounds import check_bounded, MAX_POSITION, MAX_VELOCITY
 from spatial_dynamics.terms import per_joint, PerJoint
 from spatial_dynamics.urdf import read_description
 
@@ -196,6 +197,8 @@ class SimulatedRobot:
         self._scratch = mujoco.MjData(m)     # for inverse(): never disturbs the simulation
         self._M = np.zeros((m.nv, m.nv))
         self._wrenches: dict = {}
+        self.resets = 0          # restarts after the state diverged (:meth:`_check_state`)
+        self.reset_reason = ''
         self.set_state(np.zeros(model.nq), np.zeros(model.nq))
 
     # ----------------------------------------------------------------------------------------
@@ -275,9 +278,17 @@ class SimulatedRobot:
         return float(self.d.time)
 
     def set_state(self, q, qd=None) -> None:
-        """Put the robot at ``q`` with velocity ``qd`` (default 0); time is kept."""
+        """Put the robot at ``q`` with velocity ``qd`` (default 0); time is kept.
+
+        ``q`` is also where a diverged simulation restarts (:meth:`step`).
+        """
         q = self._vector('q', q)
         qd = np.zeros_like(q) if qd is None else self._vector('qd', qd)
+        for what, x, bound in (('q', q, MAX_POSITION), ('qd', qd, MAX_VELOCITY)):
+            reason = check_bounded(what, x, bound, 'rad or m (/s)', self.joint_names)
+            if reason:
+                raise ValueError(reason)
+        self.home = q.copy()
         self.d.qpos[:] = self.G @ q + self.q0
         self.d.qvel[:] = self.G @ qd
         self.d.qacc_warmstart[:] = 0.0
@@ -297,12 +308,30 @@ class SimulatedRobot:
         for _ in range(int(n)):
             if self.constrained:
                 self._reduced_step(f)
-                continue
-            if self._wrenches:
-                mj.mj_kinematics(m, d)
-                self._apply_wrenches(d)
-            d.qfrc_applied[:] = f
-            mj.mj_step(m, d)
+            else:
+                if self._wrenches:
+                    mj.mj_kinematics(m, d)
+                    self._apply_wrenches(d)
+                d.qfrc_applied[:] = f
+                mj.mj_step(m, d)
+            self._check_state()
+
+    def _check_state(self) -> None:
+        """Restart at :attr:`home` at rest when the state left what a robot can reach.
+
+        A torque far beyond the robot (1e6 N m on a finger of a few grams) drives any explicit
+        integrator into non-finite numbers that never leave again. As MuJoCo does on a bad
+        acceleration (``mjWARN_BADQACC``), the simulation restarts instead (time is kept), and
+        :attr:`resets` and :attr:`reset_reason` say it: a simulated robot never reports NaN.
+        """
+        q, qd = self.q, self.qd
+        reason = (check_bounded('position', q, MAX_POSITION, 'rad or m', self.joint_names)
+                  or check_bounded('velocity', qd, MAX_VELOCITY, 'rad/s or m/s',
+                                   self.joint_names))
+        if reason:
+            self.resets += 1
+            self.reset_reason = f'at t = {self.time:.6g} s the {reason}'
+            self.set_state(self.home)
 
     def _reduced_qdd(self, q: np.ndarray, qd: np.ndarray, f: np.ndarray) -> np.ndarray:
         """Forward dynamics of q with mimic and locked joints, by Gauss's principle.
