@@ -75,13 +75,16 @@ def table(header: Sequence[str], rows: Sequence[tuple], left: Sequence[int]) -> 
 def joint_lines(model: Model, types: Dict[str, str]) -> List[str]:
     """List the joints of ``q`` in order: type, axis, limits, the mimic joints they drive."""
     body = {name: i for i, name in enumerate(model.body_joints)}
+    followers: Dict[int, List[int]] = {}       # q index -> the mimic bodies it drives
+    for m in range(1, model.NB + 1):
+        followers.setdefault(int(model.qidx[m]), []).append(m)
     rows = []
     for k, name in enumerate(model.joint_names):
         i = body[name]
         limits = (model.lower[k], model.upper[k], model.velocity_limit[k], model.effort_limit[k])
         mimics = []
-        for m in range(1, model.NB + 1):
-            if model.qidx[m] == k and model.body_joints[m] != name:
+        for m in followers.get(k, ()):
+            if model.body_joints[m] != name:
                 off = float(model.qoff[m])
                 mimics.append(f'{"":7}mimic: {model.body_joints[m]} = {num(model.qmul[m])} * '
                               f'{name} {"-" if off < 0 else "+"} {num(abs(off))}')

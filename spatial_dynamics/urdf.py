@@ -58,13 +58,17 @@ class _Report:
 
     def __init__(self, strict: bool) -> None:
         self.strict = strict
-        self.messages: list = []
+        self._messages: dict = {}     # message -> None: each once, in order of first report
 
     def __call__(self, message: str) -> None:
         if self.strict:
             raise ValueError(f'{message} (strict mode)')
-        if message not in self.messages:
-            self.messages.append(message)
+        self._messages.setdefault(message)
+
+    @property
+    def messages(self) -> tuple:
+        """The messages reported, each once, in the order they were first reported."""
+        return tuple(self._messages)
 
 
 def model_from_urdf(source: Source, joints: Optional[Sequence[str]] = None,
@@ -350,17 +354,18 @@ def _from_robot(robot_name: str, links: list, joints: list,
     roots = [name for name in link_by_name if name not in parent_joint]
     if len(roots) != 1:
         if not roots:
-            link, cycle = next(iter(link_by_name)), []
-            while link not in cycle:   # every link has a parent joint: walk up to a repeat
-                cycle.append(link)
+            link, step = next(iter(link_by_name)), {}
+            while link not in step:    # every link has a parent joint: walk up to a repeat
+                step[link] = len(step)
                 link = parent_joint[link].parent
-            cycle = cycle[cycle.index(link):]
+            cycle = list(step)[step[link]:]
             raise ValueError('the joints form a cycle, so there is no root link: '
                              + ' -> '.join(f'{parent_joint[c].name!r}' for c in cycle)
                              + f' (links {cycle})')
         raise ValueError(f'several root links (a URDF is one tree): {roots}')
 
-    lock = _locked_values(joint_by_name, keep, locked)
+    mimics: dict = {}     # joint name -> its resolved source, mult, offset (_resolve_mimic)
+    lock = _locked_values(joint_by_name, keep, locked, mimics)
 
     # Each link gets its body and the pose (R, p) of its frame in that body's frame;
     # movable joints start new bodies, so parent[i] < i.
@@ -415,7 +420,7 @@ def _from_robot(robot_name: str, links: list, joints: list,
     index = {j: k for k, j in enumerate(joint_names)}
     qidx, qmul, qoff = [-1], [0.0], [0.0]
     for jname in body_joints[1:]:
-        src, mult, off = _resolve_mimic(jname, joint_by_name)
+        src, mult, off = _resolve_mimic(jname, joint_by_name, mimics)
         qidx.append(index[src])
         qmul.append(mult)
         qoff.append(off)
@@ -442,36 +447,52 @@ def _from_robot(robot_name: str, links: list, joints: list,
         damping=per_joint(lambda j: j.damping), friction=per_joint(lambda j: j.friction),
         body_damping=np.r_[0.0, per_joint(lambda j: j.damping, body_joints[1:])],
         body_friction=np.r_[0.0, per_joint(lambda j: j.friction, body_joints[1:])],
-        lumped=tuple(n for n in order if pose[n][0] > 0 and n not in body_names),
+        lumped=tuple(n for n in order if pose[n][0] > 0 and body_names[pose[n][0]] != n),
         pruned=tuple(n for n in order[1:] if pose[n][0] == 0),
         locked={j: v for j, v in lock.items() if joint_by_name[j].mimic is None},
         warnings=tuple(report.messages))
 
 
-def _resolve_mimic(jname: str, joint_by_name: dict) -> tuple[str, float, float]:
+def _resolve_mimic(jname: str, joint_by_name: dict, resolved: dict
+                   ) -> tuple[str, float, float]:
     """Follow a chain of ``<mimic>`` tags to a non-mimic joint: ``(its name, mult, offset)``.
 
-    The joint then moves by ``mult·q_src + offset``.
+    The joint then moves by ``mult·q_src + offset``: a joint mimicking ``src`` by ``(m, o)``
+    moves by ``m·(mult_src·q + off_src) + o``. ``resolved`` (joint name → result) is filled
+    for every mimic joint on the way, so resolving all joints walks each tag once.
     """
-    mult, off, seen = 1.0, 0.0, [jname]
+    if jname in resolved:
+        return resolved[jname]
+    path, seen = [], {jname: None}     # the mimic joints walked; their names, in order
     joint = joint_by_name[jname]
-    while joint.mimic is not None:
+    while joint.mimic is not None and joint.name not in resolved:
         src, m, o = joint.mimic
         what = f'joint {joint.name!r} <mimic>'
         if src not in joint_by_name:
             raise ValueError(f'{what}: mimics a missing joint {src!r}')
         if src in seen:
-            raise ValueError(f'{what}: mimic joints form a loop {seen + [src]}')
+            raise ValueError(f'{what}: mimic joints form a loop {list(seen) + [src]}')
         if URDF_KINDS.get(joint_by_name[src].type, FIXED) == FIXED:
             raise ValueError(f'{what}: mimics {src!r}, which is not movable')
-        mult, off = mult * m, mult * o + off
-        seen.append(src)
+        path.append(joint)
+        seen[src] = None
         joint = joint_by_name[src]
-    return joint.name, mult, off
+    source = resolved.get(joint.name)
+    for joint in reversed(path):
+        _, m, o = joint.mimic
+        if source is None:    # mimics a non-mimic joint
+            source = resolved[joint.name] = (joint.mimic[0], 1.0 * m, 1.0 * o + 0.0)
+        else:
+            src, mult, off = source
+            source = resolved[joint.name] = (src, m * mult, m * off + o)
+    return source if source is not None else (jname, 1.0, 0.0)
 
 
-def _locked_values(joint_by_name: dict, keep, locked) -> dict:
-    """Joint name → locked value for every movable joint that model reduction locks."""
+def _locked_values(joint_by_name: dict, keep, locked, mimics: dict) -> dict:
+    """Joint name → locked value for every movable joint that model reduction locks.
+
+    In URDF order; ``mimics`` is the table of :func:`_resolve_mimic`.
+    """
     locked = dict(locked or {})
     movable = [j for j, jt in joint_by_name.items() if URDF_KINDS[jt.type] != FIXED]
     independent = {j for j in movable if joint_by_name[j].mimic is None}
@@ -497,11 +518,12 @@ def _locked_values(joint_by_name: dict, keep, locked) -> dict:
             raise ValueError(f'kept joint {j!r} {why}')
         if j in locked:
             raise ValueError(f'joint {j!r} is both kept and locked')
-    if len(set(keep)) != len(keep):
+    kept = set(keep)
+    if len(kept) != len(keep):
         raise ValueError(f'joints lists a joint twice: {list(keep)}')
-    lock = {j: locked.get(j, 0.0) for j in independent if j not in keep}
+    lock = {j: locked.get(j, 0.0) for j in movable if j in independent and j not in kept}
     for j in movable:
-        src, mult, off = _resolve_mimic(j, joint_by_name)
+        src, mult, off = _resolve_mimic(j, joint_by_name, mimics)
         if j not in independent and src in lock:
             lock[j] = mult * lock[src] + off
     return lock
