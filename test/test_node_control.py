@@ -429,3 +429,34 @@ def test_a_measured_state_is_answered_once_even_if_sent_again(driver, demo, demo
         # the next measurement is answered again
         loop.measured.publish(loop.measured_msg(q, zeros, 6001))
         driver.spin_until(lambda: loop.answers(6001), what='the answer to 6001')
+
+
+THREE_JOINTS = ('<robot name="three"><link name="base"/>' + ''.join(
+    f'<link name="l{i}"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" '
+    f'iyy="0.01" iyz="0" izz="0.01"/></inertial></link>'
+    f'<joint name="j{i}" type="revolute"><parent link="{"base" if i == 1 else f"l{i - 1}"}"/>'
+    f'<child link="l{i}"/><origin xyz="0 0 0.2"/><axis xyz="0 1 0"/>'
+    '<limit lower="-3" upper="3" effort="50" velocity="3"/></joint>' for i in (1, 2, 3))
+    + '</robot>')
+
+
+def test_related_changes_are_all_or_nothing_with_set_parameters_atomically(
+        driver, demo, demo_model, tmp_path):
+    """A new 3-joint description with its 3 gains: atomically all applied; one by one, not.
+
+    rclpy's plain SetParameters validates and applies each parameter alone (the README says
+    so): the description is refused against the 8 gains in use, the 3 gains against the
+    8-joint model, and only kd is applied. SetParametersAtomically validates them together.
+    """
+    path = tmp_path / 'three.urdf'
+    path.write_text(THREE_JOINTS)
+    n = len(demo_model.joint_names)
+    with connected(driver, demo_model.joint_names) as (io, _):
+        ok(io.set_parameters(kp=np.linspace(1.0, 8.0, n).tolist(), kd=[0.0]))
+        change = dict(robot_description_file=str(path), kp=[1.0, 2.0, 3.0], kd=[0.5])
+        results = io.set_parameters(**change)
+        assert [r.successful for r in results] == [False, False, True], results
+        assert values(io.fresh_status('robot model'))['dof'] == str(n)
+        ok(io.set_parameters_atomically(**change))
+        driver.spin_until(lambda: values(io.fresh_status('robot model'))['dof'] == '3',
+                          what='the 3-joint model')
