@@ -502,9 +502,10 @@ def _locked_values(joint_by_name: dict, keep, locked, mimics: dict) -> dict:
                 'is not a movable joint of the URDF'
             raise ValueError(f'locked joint {j!r} {why}')
         try:
-            locked[j] = float(finite(f'locked joint {j!r} value', float(v)))
+            value = float(v)
         except (TypeError, ValueError) as err:
             raise ValueError(f'locked joint {j!r} value: {err}') from None
+        locked[j] = float(finite(f'locked joint {j!r} value', value))
     if keep is None:
         if locked:
             raise ValueError(f'locked joints {sorted(locked)} need a list of kept joints')
