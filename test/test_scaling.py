@@ -24,7 +24,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def chain(n: int, kind: str = 'plain') -> bytes:
-    """A chain of ``n`` links after the base: revolute joints, mimics, or fixed joints."""
+    """Return a chain of ``n`` links after the base: revolute joints, mimics or fixed ones."""
     inertial = ('<inertial><mass value="1.0"/><origin xyz="0 0 0.05"/><inertia ixx="0.01" '
                 'ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>')
     parts = [f'<robot name="chain{n}"><link name="l0"/>']

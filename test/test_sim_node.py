@@ -165,7 +165,7 @@ def test_missing_mujoco_clear_message_exit_1(tmp_path):
     ('timestep:=1e300', ['timestep', '1e+300']),
     ('timestep:=1e-12', ['timestep', '1e-06']),
     ('command_timeout:=1e300', ['command_timeout']),
-    ('initial_positions:=[1e300,0.0,0.0,0.0,0.0,0.0,0.0,0.0]', ['q of', 'beyond'])])
+    ('initial_positions:=[1e300,0.0,0.0,0.0,0.0,0.0,0.0,0.0]', ['initial_positions', '1e+300'])])
 def test_bad_start_up_exits_1_naming_the_problem(install, tmp_path, param, words):
     proc = SimProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
                                 '-p', param], str(tmp_path))

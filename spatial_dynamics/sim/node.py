@@ -56,15 +56,15 @@ from typing import Optional, Sequence
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
-from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, QoSReliabilityPolicy
 from sensor_msgs.msg import JointState
-from spatial_dynamics.bounds import MAX_EFFORT, MAX_WRENCH
+from spatial_dynamics.bounds import MAX_EFFORT, MAX_POSITION, MAX_WRENCH
 from spatial_dynamics.ros.config import ConfigError, read_description
+from spatial_dynamics.ros.parameters import Param, ParameterError, Table
 from spatial_dynamics.ros.node import advertise, spin
-from spatial_dynamics.sim.robot import import_mujoco, MujocoMissing, SimulatedRobot
+from spatial_dynamics.sim.robot import (import_mujoco, INTEGRATORS, MujocoMissing,
+                                        SimulatedRobot)
 from std_msgs.msg import Float64MultiArray
 
 NODE_NAME = 'sim'
@@ -77,22 +77,39 @@ MAX_CATCH_UP_STEPS = 100      # realtime: steps run in one go when the process f
 WARN_PERIOD = 1.0             # s between two warnings of one kind
 WRENCH_FIELDS = ('torque.x', 'torque.y', 'torque.z', 'force.x', 'force.y', 'force.z')
 
-PARAMETERS = (
-    # name, default (or a parameter type when unset), description
-    ('robot_description', '', 'URDF XML text (takes precedence over the file)'),
-    ('robot_description_file', '', 'path of a URDF (or .xacro) file'),
-    ('joints', Parameter.Type.STRING_ARRAY,
-     'joints simulated and order of the commands (default: all, in the model order); the '
-     'others are locked at 0, as with the inverse_dynamics node\'s joints'),
-    ('command_topic', 'effort_commands', 'std_msgs/Float64MultiArray of joint torques'),
-    ('state_topic', 'joint_states', 'sensor_msgs/JointState published each step'),
-    ('timestep', 0.001, 'physics step (s)'),
-    ('mode', 'realtime', 'realtime | lockstep'),
-    ('initial_positions', Parameter.Type.DOUBLE_ARRAY, 'per joint of joints (default 0)'),
-    ('command_timeout', 0.1, 'realtime: a command older than this (s) gives zero torque'),
-    ('publish_clock', False, 'publish /clock (rosgraph_msgs/Clock) with the sim time'),
-    ('integrator', 'auto', 'auto | rk4 | euler'),
-)
+#: The sim node's parameters, each written once (read-only: set at start-up).
+PARAMETERS = Table(NODE_NAME, [
+    Param('robot_description', 'string', '', 'URDF XML text (takes precedence over the '
+          'file).', read_only=True),
+    Param('robot_description_file', 'string', '', 'Path of a URDF (or .xacro) file.',
+          read_only=True),
+    Param('joints', 'string[]', None, 'Joints simulated and the order of the commands '
+          '(default: all, in the model order); the others are locked at 0, as with the '
+          "inverse_dynamics node's joints.", read_only=True),
+    Param('command_topic', 'string', 'effort_commands', 'std_msgs/Float64MultiArray of '
+          'joint torques, one per joint (reliable, depth 10).', read_only=True),
+    Param('state_topic', 'string', 'joint_states', 'sensor_msgs/JointState published each '
+          'step: position, velocity, effort = the applied command.', read_only=True),
+    Param('timestep', 'double', 0.001, 'Physics step.', unit='s', bounds=TIMESTEP_RANGE,
+          read_only=True),
+    Param('mode', 'string', 'realtime', 'realtime: against the wall clock, wall-clock '
+          'stamps; lockstep: one step per command, sim-time stamps from 0.', choices=MODES,
+          read_only=True),
+    Param('initial_positions', 'double[]', None, 'Initial position of each joint of joints '
+          '(default 0).', unit='rad or m', bounds=(-MAX_POSITION, MAX_POSITION),
+          read_only=True),
+    Param('command_timeout', 'double', 0.1, 'realtime: a command older than this gives '
+          'zero torque (the drive goes limp, the robot falls).', unit='s',
+          bounds=(1e-6, MAX_COMMAND_TIMEOUT), read_only=True),
+    Param('publish_clock', 'bool', False, 'Publish /clock (rosgraph_msgs/Clock) with the sim '
+          'time, for use_sim_time.', read_only=True),
+    Param('integrator', 'string', 'auto', 'auto (rk4), rk4 or euler (semi-implicit).',
+          choices=INTEGRATORS, read_only=True),
+], header=(
+    'Parameters of the `sim` node (spatial_dynamics), all read-only (set at start-up):\n'
+    '  ros2 run spatial_dynamics sim --ros-args --params-file config/sim.yaml\n'
+    'Generated from the table in spatial_dynamics/sim/node.py (test/test_parameters.py '
+    'checks it).'))
 
 
 def command_qos() -> QoSProfile:
@@ -138,20 +155,11 @@ class SimNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        for name, default, text in PARAMETERS:
-            self.declare_parameter(name, default, ParameterDescriptor(description=text,
-                                                                      read_only=True))
-        p = {name: self.get_parameter_or(name, Parameter(name)).value
-             for name, _, _ in PARAMETERS}   # unset arrays are None
-        if p['mode'] not in MODES:
-            raise ConfigError(f'mode {p["mode"]!r}: one of {", ".join(MODES)}')
-        lo, hi = TIMESTEP_RANGE
-        if not lo <= p['timestep'] <= hi:
-            raise ConfigError(f'timestep: need a physics step from {lo:g} to {hi:g} s, got '
-                              f'{p["timestep"]}')
-        if not 0.0 < p['command_timeout'] <= MAX_COMMAND_TIMEOUT:
-            raise ConfigError(f'command_timeout: need a number of seconds above 0 and at most '
-                              f'{MAX_COMMAND_TIMEOUT:g}, got {p["command_timeout"]}')
+        try:
+            params = PARAMETERS.declare(self)
+        except ParameterError as err:
+            raise ConfigError(str(err)) from None
+        p = {param.name: getattr(params, param.field) for param in PARAMETERS.params}
         if p['robot_description']:
             urdf, source = p['robot_description'], 'robot_description'
         elif p['robot_description_file']:
