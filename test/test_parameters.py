@@ -80,7 +80,7 @@ def test_values_are_typed_frozen_and_checked():
 def test_generated_yaml_loads_to_the_defaults():
     doc = yaml.safe_load(TABLE.yaml())
     assert doc == {'toy': {'ros__parameters': {
-        'flag': False, 'count': 2, 'rate': 1.5, 'mode': 'a', 'payload.com': [0.0, 0.0, 0.0],
+        'flag': False, 'count': 2, 'rate': 1.5, 'mode': 'a', 'payload': {'com': [0.0, 0.0, 0.0]},
         'gains': [0.0]}}}
     table = TABLE.markdown().splitlines()
     assert len(table) == 2 + len(TABLE.params)
@@ -91,8 +91,9 @@ def test_generated_yaml_loads_to_the_defaults():
 def tables():
     """Return every node's table (imported here: the sim's module needs the ROS messages)."""
     pytest.importorskip('rclpy')
+    from spatial_dynamics.ros.config import PARAMETERS as INVERSE_DYNAMICS
     from spatial_dynamics.sim.node import PARAMETERS as SIM
-    return {'sim': SIM}
+    return {'sim': SIM, 'inverse_dynamics': INVERSE_DYNAMICS}
 
 
 def readme_block(text: str, node: str) -> str:
@@ -102,7 +103,7 @@ def readme_block(text: str, node: str) -> str:
     return match.group(1)
 
 
-@pytest.mark.parametrize('node', ['sim'])
+@pytest.mark.parametrize('node', ['sim', 'inverse_dynamics'])
 def test_config_file_and_readme_are_the_table(node):
     table = tables()[node]
     config = os.path.join(ROOT, 'config', f'{node}.yaml')
@@ -112,7 +113,10 @@ def test_config_file_and_readme_are_the_table(node):
     if os.environ.get('UPDATE_DOCS'):
         with open(config, 'w', encoding='utf-8') as f:
             f.write(table.yaml())
-        text = text.replace(readme_block(text, node), table.markdown())
+        old = readme_block(text, node)
+        start = text.index(f'<!-- parameters of {node}: ')
+        start = text.index('\n', start) + 1
+        text = text[:start] + table.markdown() + text[start + len(old):]
         with open(readme, 'w', encoding='utf-8') as f:
             f.write(text)
     with open(config, encoding='utf-8') as f:
@@ -122,4 +126,7 @@ def test_config_file_and_readme_are_the_table(node):
     declared = yaml.safe_load(table.yaml())[node]['ros__parameters']
     for param in table.params:
         if param.default is not None:
-            assert declared[param.name] == param.default, param.name
+            value = declared
+            for key in param.name.split('.'):     # payload.mass is written nested
+                value = value[key]
+            assert value == param.default, param.name

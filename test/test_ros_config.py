@@ -38,7 +38,7 @@ def demo_text():
 
 def defaults(**changes) -> dict:
     """Every parameter at its declared default (unset arrays as None), then ``changes``."""
-    params = {spec.name: (None if spec.unset else spec.default) for spec in config.PARAMETERS}
+    params = {spec.name: spec.default for spec in config.PARAMETERS}
     params.update(changes)
     return params
 
@@ -50,7 +50,7 @@ def test_config_never_imports_rclpy():
     script = textwrap.dedent('''\
         import sys
         from spatial_dynamics.ros import config
-        params = {s.name: (None if s.unset else s.default) for s in config.PARAMETERS}
+        params = {s.name: s.default for s in config.PARAMETERS}
         out = config.prepare({}, params, None)
         assert out.output is None and out.gravity == (0.0, 0.0, -9.81)
         print('ROS:', sorted(m for m in sys.modules if m.split('.')[0] in

@@ -37,7 +37,7 @@ def model():
 
 def defaults(**changes) -> dict:
     """Every parameter at its declared default (unset arrays as None), then ``changes``."""
-    params = {spec.name: (None if spec.unset else spec.default) for spec in config.PARAMETERS}
+    params = {spec.name: spec.default for spec in config.PARAMETERS}
     params.update(changes)
     return params
 

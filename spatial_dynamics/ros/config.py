@@ -40,6 +40,7 @@ from spatial_dynamics.ros.control import (
     ControlError, FEEDBACK_MODES, FEEDBACK_REASONS, GAIN_UNITS, Gains, MAX_KD, MAX_KP,
     MAX_MEASURED_POSITION, MAX_MEASURED_VELOCITY, MEASURED_REASONS, OUTPUTS)
 from spatial_dynamics.ros.inputs import REASONS
+from spatial_dynamics.ros.parameters import Param, Table
 from spatial_dynamics.ros.observer import (
     check_observer_gain, check_warn, EstimateWindow, MAX_EXTERNAL_TORQUE_WARN,
     MAX_OBSERVER_GAIN, MomentumObserver, ObserverError)
@@ -101,62 +102,88 @@ class ConfigError(ValueError):
 # --------------------------------------------------------------------------------------------
 # Parameters
 
-@dataclass(frozen=True)
-class Spec:
-    """One parameter of the node, as declared: ``unset`` names the type of an unset array."""
+#: The top of config/inverse_dynamics.yaml, above the parameters the table writes.
+PARAMETER_FILE_HEADER = (
+    'Copyright 2026 spatial_dynamics contributors\n'
+    'SPDX-License-Identifier: Apache-2.0\n'
+    '\n'
+    'Generated from the table in spatial_dynamics/ros/config.py (test/test_parameters.py '
+    'checks it).\n'
+    'Parameters of the `inverse_dynamics` node (spatial_dynamics). Every parameter the node\n'
+    'declares is listed here; all of them but `backend` can be changed while the node runs\n'
+    '(`ros2 param set /inverse_dynamics <name> <value>`). Each change is validated first and\n'
+    'rejected with a reason if it is unusable; a rejected change leaves everything as it was.\n'
+    '\n'
+    'Topics (relative names; remap them, e.g. effort_commands:=/effort_controller/commands):\n'
+    '  in   desired_joint_states  sensor_msgs/JointState           best effort, keep last 1\n'
+    '  in   desired_trajectory    trajectory_msgs/JointTrajectory  best effort, keep last 1\n'
+    '  in   external_wrenches     geometry_msgs/WrenchStamped      best effort, keep last 10\n'
+    '                             (depth 10: several links may publish in one burst)\n'
+    '  in   joint_states          sensor_msgs/JointState, the MEASURED state (by name; position\n'
+    '                             always, velocity in the feedback modes; effort = measured\n'
+    '                             torque, used by the external-torque observer)\n'
+    "                             best effort, keep last 1: connects to drivers' reliable and\n"
+    '                             sensor-data best-effort publishers alike\n'
+    '  in   robot_description     std_msgs/String (only if no description parameter is set)\n'
+    '                             reliable, transient local, depth 1 (robot_state_publisher)\n'
+    '  out  feedforward_efforts   sensor_msgs/JointState (stamp copied, effort = tau)  reliable\n'
+    '  out  effort_commands       std_msgs/Float64MultiArray (tau in `joints` order)   reliable\n'
+    '  out  feedforward_terms     sensor_msgs/JointState, name "<joint>/<term>", effort = value\n'
+    '                             (gravity, velocity_product, inertial, armature, friction,\n'
+    '                             external, feedback), summing to tau before clamping; computed\n'
+    '                             and published only while someone subscribes   reliable\n'
+    "  out  external_torque_estimate  sensor_msgs/JointState: the observer's external torque\n"
+    '                             per model joint in effort (N m, N), header of the measured\n'
+    '                             state it comes from; one per measured message carrying\n'
+    '                             velocity and effort of every model joint    reliable\n'
+    '  out  /diagnostics          diagnostic_msgs/DiagnosticArray, ~1 Hz\n'
+    'QoS of the data topics can be overridden with the standard parameters, e.g.\n'
+    '  qos_overrides./desired_joint_states.subscription.reliability: reliable'
+)
 
-    name: str
-    default: object
-    description: str
-    unset: str = ''                     # '' (default is the value), 'string[]' or 'double[]'
-    range: Optional[Tuple[float, float]] = None    # floating-point range, inclusive
-    choices: Tuple[str, ...] = ()
-    read_only: bool = False
-
-
-PARAMETERS = (
-    Spec('robot_description', '', (
+#: Every parameter of the node, each written once (test/test_parameters.py keeps
+#: config/inverse_dynamics.yaml and the README's table equal to it).
+PARAMETERS = Table(NODE_NAME, [
+    Param('robot_description', 'string', '', (
         'URDF XML of the robot (XML text, never a path). Takes precedence over '
         'robot_description_file and the robot_description topic. A new value is parsed '
         'completely and swapped in only if it parses; otherwise it is rejected with the '
         "reason and the old model stays. Set to '' to fall back to robot_description_file "
         '(or, when that is empty too, to the topic).')),
-    Spec('robot_description_file', '', (
+    Param('robot_description_file', 'string', '', (
         'Path of a URDF (or .xacro, expanded when the xacro module is importable): a '
         f'regular UTF-8 file of at most {MAX_DESCRIPTION_BYTES >> 20} MiB. Used when '
         'robot_description is empty; set while robot_description is set, it is checked '
         'and kept for later, and the model stays that of robot_description.')),
-    Spec('strict_urdf', False, (
+    Param('strict_urdf', 'bool', False, (
         'Refuse a description with URDF warnings (physically inconsistent but computable: '
         'an inertia that is not positive semi-definite or breaks the triangle inequality, '
         'inertia on a massless link...) like any bad description. Off: it loads as written '
         'and each warning is logged and listed in /diagnostics. Cannot be switched on '
         'while the loaded description has warnings.')),
-    Spec('joints', None, (
+    Param('joints', 'string[]', None, (
         'Joints the model keeps, in the output order of effort_commands and '
         "feedforward_efforts: a subset of the URDF's movable, non-mimic joints. The "
         'others are locked (locked_joints/locked_positions, default 0) and lumped, and '
         'branches that cannot affect the kept joints are pruned (model reduction); inputs '
-        'need only the kept joints. Unset or empty: all joints, in URDF order.'),
-        unset='string[]'),
-    Spec('locked_joints', None, (
+        'need only the kept joints. Unset or empty: all joints, in URDF order.')),
+    Param('locked_joints', 'string[]', None, (
         'Joints locked at a non-zero position when joints is set (others lock at 0); '
-        'values in locked_positions, same order.'), unset='string[]'),
-    Spec('locked_positions', None, (
-        'Positions (rad or m) of locked_joints, same length; unset or empty = all 0.'),
-        unset='double[]'),
-    Spec('gravity', list(DEFAULT_GRAVITY), (
+        'values in locked_positions, same order.')),
+    Param('locked_positions', 'double[]', None, (
+        'Positions (rad or m) of locked_joints, same length; unset or empty = all 0.')),
+    Param('gravity', 'double[]', list(DEFAULT_GRAVITY), (
         'Gravity [gx, gy, gz] in the base frame, m/s² (tilted or wall mounts). Live.')),
-    Spec('acceleration_source', 'effort', (
+    Param('acceleration_source', 'string', 'effort', (
         'Where desired_joint_states carries qdd: "effort" (the effort array holds desired '
         'accelerations, rad/s² or m/s²; empty = zeros) or "none" (qdd = 0: gravity and '
         'Coriolis compensation, safe with measured /joint_states).'),
         choices=ACCELERATION_SOURCES),
-    Spec('input_timeout', DEFAULT_INPUT_TIMEOUT, (
+    Param('input_timeout', 'double', DEFAULT_INPUT_TIMEOUT, (
         'Seconds without a good input after which diagnostics report ERROR (stale). The '
         'node publishes only in answer to input, so stale input means no output, never '
-        'zeros.'), range=(1e-3, 3600.0)),
-    Spec('output', 'full', (
+        'zeros.'), bounds=(1e-3, 3600.0)),
+    Param('output', 'string', 'full', (
         'What effort_commands and feedforward_efforts carry besides the feedback term: '
         '"full" (tau = ID + armature + friction - external: simulators, drives that add '
         'nothing), "without_gravity" (tau - g(q): drives that compensate gravity '
@@ -164,7 +191,7 @@ PARAMETERS = (
         'an arm), "none" (no model term, only the feedback term: the PD-alone baseline; '
         'refused with control_mode feedforward, where it would publish zeros). Live.'),
         choices=OUTPUTS),
-    Spec('control_mode', 'feedforward', (
+    Param('control_mode', 'string', 'feedforward', (
         '"feedforward": answer each desired message with the model part at the desired '
         'state (joint_states unused). "pd_feedforward": answer each measured joint_states '
         'message with model(q_d, qd_d, qdd_d) + kp (q_d - q) + kd (qd_d - qd), the desired '
@@ -172,67 +199,67 @@ PARAMETERS = (
         'measured message with model(q, qd, qdd_d + kp e + kd ed), the model part at the '
         'measured state. Position errors of continuous joints wrap to (-pi, pi]. Live.'),
         choices=CONTROL_MODES),
-    Spec('kp', [0.0], (
+    Param('kp', 'double[]', [0.0], (
         'Proportional gains, one value for all joints or one per model joint (order of '
         f'the joints parameter, or the URDF order when it is unset), 0 .. {MAX_KP:g}: '
         f'{GAIN_UNITS["kp"]}. Live.')),
-    Spec('kd', [0.0], (
+    Param('kd', 'double[]', [0.0], (
         'Derivative gains, one value for all joints or one per model joint (order of '
         f'the joints parameter, or the URDF order when it is unset), 0 .. {MAX_KD:g}: '
         f'{GAIN_UNITS["kd"]}. Live.')),
-    Spec('measured_timeout', DEFAULT_MEASURED_TIMEOUT, (
+    Param('measured_timeout', 'double', DEFAULT_MEASURED_TIMEOUT, (
         'Seconds (since receipt) after which the measured state on joint_states is stale: '
         'in the feedback modes diagnostics then report ERROR and nothing is published '
         '(answers come only in reply to a measured message), never zeros. Measured '
         f'values beyond ±{MAX_MEASURED_POSITION:g} rad (m) or ±{MAX_MEASURED_VELOCITY:g} '
-        'rad/s (m/s) are refused.'), range=(1e-3, 3600.0)),
-    Spec('payload.link', '', (
+        'rad/s (m/s) are refused.'), bounds=(1e-3, 3600.0)),
+    Param('payload.link', 'string', '', (
         "Link carrying a rigid payload (tool, grasped object); '' = no payload. Live: "
         'applied from the next message. A new robot_description lacking this link is '
         'rejected.')),
-    Spec('payload.mass', 0.0, 'Payload mass, kg (>= 0).'),
-    Spec('payload.com', [0.0, 0.0, 0.0], (
+    Param('payload.mass', 'double', 0.0, 'Payload mass, kg (>= 0).'),
+    Param('payload.com', 'double[]', [0.0, 0.0, 0.0], (
         "Payload centre of mass [x, y, z] in payload.link's frame, m.")),
-    Spec('payload.inertia', [0.0] * 6, (
+    Param('payload.inertia', 'double[]', [0.0] * 6, (
         'Payload inertia [ixx, ixy, ixz, iyy, iyz, izz] about its centre of mass, axes of '
         "payload.link's frame, kg m^2 (positive semi-definite, triangle inequality).")),
-    Spec('armature', None, (
+    Param('armature', 'double[]', None, (
         'Rotor inertia reflected through the gear (kg m^2 or kg), one value >= 0 per '
         'model joint in the order of the joints parameter (URDF order when unset): '
-        'tau += armature * qdd. Unset or empty: none.'), unset='double[]'),
-    Spec('friction_model', 'none', (
+        'tau += armature * qdd. Unset or empty: none.')),
+    Param('friction_model', 'string', 'none', (
         '"none", or "urdf": tau += damping * qd + friction * tanh(qd / '
         "friction_velocity_threshold) from each joint's URDF <dynamics>."),
         choices=FRICTION_MODELS),
-    Spec('friction_velocity_threshold', DEFAULT_FRICTION_THRESHOLD, (
+    Param('friction_velocity_threshold', 'double', DEFAULT_FRICTION_THRESHOLD, (
         'Velocity (rad/s or m/s) at which the smooth Coulomb sign reaches tanh(1) = 76 %.'),
-        range=(1e-9, 1e3)),
-    Spec('clamp_to_effort_limits', False, (
+        bounds=(1e-9, 1e3)),
+    Param('clamp_to_effort_limits', 'bool', False, (
         'Clamp tau to the URDF <limit effort> (joints without a positive limit are left '
         'alone); a throttled warning names the saturated joints.')),
-    Spec('external_wrench_timeout', DEFAULT_WRENCH_TIMEOUT, (
+    Param('external_wrench_timeout', 'double', DEFAULT_WRENCH_TIMEOUT, (
         'Seconds after its receipt that an external_wrenches message stops applying.'),
-        range=(1e-3, 3600.0)),
-    Spec('observer_gain', DEFAULT_OBSERVER_GAIN, (
+        bounds=(1e-3, 3600.0)),
+    Param('observer_gain', 'double', DEFAULT_OBSERVER_GAIN, (
         'Gain K_O (1/s) of the generalized-momentum observer of external joint torques: '
         'each measured joint_states message with effort for every model joint updates it '
         'and external_torque_estimate is published (time constant 1/K_O; the model '
         'includes payload, armature, friction_model and gravity). 0 = off. At most '
         f'{MAX_OBSERVER_GAIN:g} 1/s (1 ms: beyond it the estimate is the differentiated '
-        'momentum). Live; a change restarts the observer.'), range=(0.0, MAX_OBSERVER_GAIN)),
-    Spec('external_torque_warn', [DEFAULT_EXTERNAL_TORQUE_WARN], (
+        'momentum). Live; a change restarts the observer.'), bounds=(0.0, MAX_OBSERVER_GAIN)),
+    Param('external_torque_warn', 'double[]', [DEFAULT_EXTERNAL_TORQUE_WARN], (
         'Diagnostics WARN, naming the joints, when the RMS of external_torque_estimate over '
         'a diagnostics period exceeds this (N m, or N for prismatic joints): one value for '
         'all joints or one per model joint (order of the joints parameter), above 0 and at '
         f'most {MAX_EXTERNAL_TORQUE_WARN:g}. Live.')),
-    Spec('backend', 'auto', (
+    Param('backend', 'string', 'auto', (
         'How tau is computed. "numpy": plain Python floats (no numba import; ~30-150 µs per '
         'call for 6-32 joints). "compiled": numba kernels (~1-2 µs), prepared off the '
         'answering path (compiled in a child process when the cache is cold); the node '
         'answers on numpy until they are ready. "auto": compiled when one plain-float call '
         f'of the loaded model takes more than {AUTO_COMPILED_ABOVE_S * 1e6:g} µs, else '
         'numpy. Read-only.'), choices=BACKEND_SETTINGS, read_only=True),
-)
+], header=PARAMETER_FILE_HEADER)
 #: Every parameter, by name.
 PARAMETER_NAMES = tuple(spec.name for spec in PARAMETERS)
 #: Parameters that shape the model (a change re-parses the description).

@@ -99,7 +99,7 @@ import warnings
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
@@ -179,17 +179,6 @@ def advertise(node: Node, msg_type, topic: str):
         event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
 
 
-def descriptor(spec) -> ParameterDescriptor:
-    """Return the ParameterDescriptor of a :class:`~spatial_dynamics.ros.config.Spec`."""
-    result = ParameterDescriptor(description=spec.description, read_only=spec.read_only)
-    if spec.range is not None:
-        result.floating_point_range = [FloatingPointRange(
-            from_value=spec.range[0], to_value=spec.range[1], step=0.0)]
-    if spec.choices:
-        result.additional_constraints = 'one of: ' + ', '.join(spec.choices)
-    return result
-
-
 class Held(NamedTuple):
     """A good state kept between messages: model joints, arrays, receipt (monotonic ns)."""
 
@@ -203,9 +192,9 @@ class InverseDynamicsNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        for spec in PARAMETERS:
-            self.declare_parameter(spec.name, _UNSET[spec.unset] if spec.unset
-                                   else spec.default, descriptor(spec))
+        for param in PARAMETERS:   # the values are checked by _configure, below
+            self.declare_parameter(param.name, _UNSET[param.type] if param.default is None
+                                   else param.default, PARAMETERS.descriptor(param))
         self.output: Optional[Output] = None
         self.gravity = DEFAULT_GRAVITY
         self.acceleration_source = 'effort'

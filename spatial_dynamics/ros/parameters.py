@@ -198,6 +198,10 @@ class Table:
             [(p.field, Any, field(default=None)) for p in self.params], frozen=True)
         self.Params.__doc__ = f'The checked parameters of node {node!r}, one field each.'
 
+    def __iter__(self):
+        """Iterate over the :class:`Param` entries, in table order."""
+        return iter(self.params)
+
     @property
     def names(self) -> Tuple[str, ...]:
         """Every parameter name, in table order."""
@@ -266,17 +270,24 @@ class Table:
         """Return the node's parameter file: each parameter, its default, described above it."""
         lines = [f'# {line}' if line else '#' for line in self.header.splitlines()]
         lines += [f'{self.node}:', '  ros__parameters:']
+        group = ''
         for p in self.params:
+            *prefix, key = p.name.split('.')      # payload.mass is written nested
+            if '.'.join(prefix) != group:
+                group = '.'.join(prefix)
+                if group:
+                    lines.append(f'    {group}:')
+            indent = '    ' + '  ' * len(prefix)
             text = f'{p.name} ({_type_text(p)}): {_sentence(p)}'
             constraints = _constraints(p)
             if constraints:
                 text += f' Constraints: {constraints}.'
-            lines += textwrap.wrap(text, 95, initial_indent='    # ',
-                                   subsequent_indent='    # ')
+            lines += textwrap.wrap(text, 99 - len(indent) - 2, initial_indent=indent + '# ',
+                                   subsequent_indent=indent + '# ')
             if p.default is None:
-                lines.append(f'    # {p.name}: []   (unset by default)')
+                lines.append(f'{indent}# {key}: []   (unset by default)')
             else:
-                lines.append(f'    {p.name}: {_yaml_value(p.default)}')
+                lines.append(f'{indent}{key}: {_yaml_value(p.default)}')
         return '\n'.join(lines) + '\n'
 
     def markdown(self) -> str:

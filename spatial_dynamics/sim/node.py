@@ -106,6 +106,9 @@ PARAMETERS = Table(NODE_NAME, [
     Param('integrator', 'string', 'auto', 'auto (rk4), rk4 or euler (semi-implicit).',
           choices=INTEGRATORS, read_only=True),
 ], header=(
+    'Copyright 2026 spatial_dynamics contributors\n'
+    'SPDX-License-Identifier: Apache-2.0\n'
+    '\n'
     'Parameters of the `sim` node (spatial_dynamics), all read-only (set at start-up):\n'
     '  ros2 run spatial_dynamics sim --ros-args --params-file config/sim.yaml\n'
     'Generated from the table in spatial_dynamics/sim/node.py (test/test_parameters.py '
