@@ -21,7 +21,6 @@ import textwrap
 from typing import Dict, List, Optional, Sequence, Tuple
 import warnings
 
-from lxml import etree
 import numpy as np
 
 from . import Model, urdf, URDFWarning
@@ -33,13 +32,6 @@ WIDTH = 99
 def read_description(path: str) -> bytes:
     """Return the URDF XML of a file (:func:`spatial_dynamics.urdf.read_description`)."""
     return urdf.read_description(path, urdf.MAX_FILE_BYTES, path).encode('utf-8')
-
-
-def urdf_joint_types(xml: bytes) -> Dict[str, str]:
-    """Map joint name -> URDF ``type`` attribute ('continuous' is modelled as revolute)."""
-    parser = etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True)
-    root = etree.fromstring(xml, parser)
-    return {j.get('name'): j.get('type') for j in root.findall('joint')}
 
 
 def num(x: float) -> str:
@@ -170,7 +162,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except ValueError as err:
         print(f'error: {err}', file=sys.stderr)
         return 1
-    print(report(model, urdf_joint_types(xml)))
+    print(report(model, model.joint_types))
     if args.strict and model.warnings:
         print(f'error: {len(model.warnings)} warning(s) with --strict', file=sys.stderr)
         return 1

@@ -68,6 +68,10 @@ class Model:
         warnings: what is physically inconsistent in the URDF but loaded as written (each
             message names the link or joint, the quantity and its values); see
             :class:`~spatial_dynamics.urdf.URDFWarning`.
+        joint_types: joint name → its URDF ``type`` as written (``revolute``,
+            ``continuous``, ``prismatic``, ``fixed``), every joint of the URDF, in its order.
+        mimics: mimic joint → ``(source joint, multiplier, offset)`` of its ``<mimic>`` tag
+            as written (the source may itself be a mimic joint), every one of the URDF.
     """
 
     name: str
@@ -96,6 +100,8 @@ class Model:
     pruned: tuple = ()
     locked: Mapping[str, float] = field(default_factory=dict)
     warnings: tuple = ()
+    joint_types: Mapping[str, str] = field(default_factory=dict)
+    mimics: Mapping[str, tuple] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name, value in vars(self).items():

@@ -450,7 +450,9 @@ def _from_robot(robot_name: str, links: list, joints: list,
         lumped=tuple(n for n in order if pose[n][0] > 0 and body_names[pose[n][0]] != n),
         pruned=tuple(n for n in order[1:] if pose[n][0] == 0),
         locked={j: v for j, v in lock.items() if joint_by_name[j].mimic is None},
-        warnings=tuple(report.messages))
+        warnings=tuple(report.messages),
+        joint_types={name: j.type for name, j in joint_by_name.items()},
+        mimics={name: j.mimic for name, j in joint_by_name.items() if j.mimic is not None})
 
 
 def _resolve_mimic(jname: str, joint_by_name: dict, resolved: dict

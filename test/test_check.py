@@ -241,3 +241,33 @@ def test_installed_executable_runs(install):
     proc = subprocess.run([executable, DEMO_URDF + '.missing'], env=install.env(),
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 1 and proc.stderr.startswith('error: ')
+
+
+def test_what_the_model_loads_check_urdf_reports(tmp_path, capsys):
+    """Whitespace before the XML declaration or version 1.1 loads, so the check reports it.
+
+    The joint types come from the model (the parser's record), not from a second parse of the
+    file, which refused what the parser accepts and ended in a traceback.
+    """
+    path = tmp_path / 'ws.urdf'
+    path.write_text('  <?xml version="1.1"?>\n<robot name="r"><link name="a"/><link name="b"/>'
+                    '<joint name="j" type="continuous"><parent link="a"/><child link="b"/>'
+                    '</joint></robot>\n')
+    status, out, err = run(capsys, str(path))
+    assert status == 0 and err == '', err
+    assert re.search(r'^\s+0\s+j\s+continuous\s', out, re.M), out
+
+
+@pytest.mark.parametrize('robot', ['panda', 'ur5', 'talos'])
+def test_model_carries_the_joint_types_and_mimic_tags_as_written(robot):
+    """model.joint_types and model.mimics equal an independent reading of the XML."""
+    path = robot_urdf_path(robot)
+    model = sd.Model.from_urdf(path)
+    root = ET.parse(path).getroot()
+    joints = root.findall('joint')
+    assert model.joint_types == {j.get('name'): j.get('type') for j in joints}
+    assert model.mimics == {
+        j.get('name'): (j.find('mimic').get('joint'),
+                        float(j.find('mimic').get('multiplier', 1.0)),
+                        float(j.find('mimic').get('offset', 0.0)))
+        for j in joints if j.find('mimic') is not None}

@@ -64,7 +64,7 @@ def test_loading_and_the_report_are_linear_in_the_links(kind):
     for n in (100, 400):
         xml = chain(n, kind)
         model = sd.Model.from_urdf(xml)
-        types = check.urdf_joint_types(xml)
+        types = model.joint_types
         counts[n] = (lines(lambda: sd.Model.from_urdf(xml)),
                      lines(lambda: check.report(model, types)))
     for what, small, large in zip(('from_urdf', 'report'), counts[100], counts[400]):

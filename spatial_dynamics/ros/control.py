@@ -50,7 +50,6 @@ from typing import Dict, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import MAX_POSITION, MAX_VELOCITY
-from spatial_dynamics.joints import REVOLUTE
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays
 
 #: Values of the ``output`` parameter: which model part is published.
@@ -167,15 +166,9 @@ def check_gains_without_model(name: str, values: Optional[Sequence[float]]) -> N
 
 
 def continuous_joints(model: 'sd.Model') -> np.ndarray:
-    """Mask (n,) of the continuous joints: revolute without URDF position limits.
-
-    The parser gives a URDF ``continuous`` joint the kind ``REVOLUTE`` and no ``lower`` /
-    ``upper`` (nan); a revolute joint with limits has both.
-    """
-    body_of = {joint: i for i, joint in enumerate(model.body_joints)}
-    mask = np.array([model.jtype[body_of[name]] == REVOLUTE
-                     and not (np.isfinite(model.lower[k]) or np.isfinite(model.upper[k]))
-                     for k, name in enumerate(model.joint_names)], dtype=bool)
+    """Mask (n,) of the joints of ``q`` whose URDF type is ``continuous`` (their errors wrap)."""
+    mask = np.array([model.joint_types.get(name) == 'continuous' for name in model.joint_names],
+                    dtype=bool)
     mask.setflags(write=False)
     return mask
 

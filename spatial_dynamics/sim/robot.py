@@ -111,17 +111,6 @@ def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY):
     return m
 
 
-def _mimic_table(xml: str) -> dict:
-    """``{mimic joint: (source joint, multiplier, offset)}`` as written in the URDF."""
-    table = {}
-    for joint in ET.fromstring(xml.encode('utf-8')).iter('joint'):
-        tag = joint.find('mimic')
-        if tag is not None:
-            table[joint.get('name')] = (tag.get('joint'), float(tag.get('multiplier', 1.0)),
-                                        float(tag.get('offset', 0.0)))
-    return table
-
-
 class SimulatedRobot:
     """The rigid-body robot of a URDF, simulated by MuJoCo, driven by joint torques.
 
@@ -166,7 +155,7 @@ class SimulatedRobot:
         if integrator not in INTEGRATORS:
             raise ValueError(f'integrator {integrator!r}: one of {", ".join(INTEGRATORS)}')
         self.m = m = mujoco_model(xml, gravity)
-        self._map_joints(m, _mimic_table(xml))
+        self._map_joints(m, self.model.mimics)
         if integrator == 'auto':
             integrator = 'rk4'
         model = self.model
