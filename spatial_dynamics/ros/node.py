@@ -89,7 +89,6 @@ reference swap) once they are prepared off the answering path
 from __future__ import annotations
 
 from array import array
-import signal
 import sys
 import threading
 import time
@@ -100,18 +99,13 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
-import rclpy
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-import rclpy.logging
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, QoSReliabilityPolicy)
-from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import JointState
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
+from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, spin, subscribe
 from spatial_dynamics.ros.config import (
     backend_text, build_output, CompiledKernels, Config, ConfigError, DEFAULT_GRAVITY,
     DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT, DEFAULT_OBSERVER_GAIN,
@@ -133,50 +127,6 @@ _UNSET = {'string[]': Parameter.Type.STRING_ARRAY, 'double[]': Parameter.Type.DO
 _LEVELS = {'OK': DiagnosticStatus.OK, 'WARN': DiagnosticStatus.WARN,
            'ERROR': DiagnosticStatus.ERROR}
 _WRENCH_FIELDS = ('torque.x', 'torque.y', 'torque.z', 'force.x', 'force.y', 'force.z')
-
-
-def input_qos(depth: int = 1) -> QoSProfile:
-    """Input QoS: best effort, keep last ``depth`` (connects to reliable and best-effort pubs).
-
-    A new object per call: QoS overrides (``qos_overrides.<topic>.subscription.*``) are
-    written into the profile passed to ``create_subscription``, so it must not be shared.
-    """
-    return QoSProfile(reliability=QoSReliabilityPolicy.BEST_EFFORT,
-                      history=HistoryPolicy.KEEP_LAST, depth=depth)
-
-
-def output_qos() -> QoSProfile:
-    """Output QoS: reliable (what ros2_control's controllers subscribe with), keep last 10."""
-    return QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
-                      history=HistoryPolicy.KEEP_LAST, depth=10)
-
-
-DESCRIPTION_QOS = QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
-                             durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                             history=HistoryPolicy.KEEP_LAST, depth=1)
-
-
-def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1):
-    """Subscribe with :func:`input_qos`, QoS overrides enabled, no QoS event handlers.
-
-    rclpy adds default event handlers (incompatible QoS / type warnings) per endpoint to the
-    wait set, which costs every spin of the executor 5-12 µs per endpoint (measured with
-    rclpy 7.1.6: an idle spin_once with 3 subscriptions + 3 publishers took 219 µs with them,
-    148 µs without). The inputs' best effort + volatile accepts every publisher anyway, and
-    the other end of an incompatible pair still reports it with its own default handlers.
-    """
-    return node.create_subscription(
-        msg_type, topic, callback, input_qos(depth),
-        qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-        event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
-
-
-def advertise(node: Node, msg_type, topic: str):
-    """Create a publisher with :func:`output_qos`, QoS overrides, no QoS event handlers."""
-    return node.create_publisher(
-        msg_type, topic, output_qos(),
-        qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-        event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
 
 
 class Held(NamedTuple):
@@ -762,59 +712,6 @@ class InverseDynamicsNode(Node):
             for suffix, (level, message, values) in statuses])
         diagnostics.header.stamp = self.get_clock().now().to_msg()
         self.diagnostics_pub.publish(diagnostics)
-
-
-def _context_shut_down(grace: float = 1.0) -> bool:
-    """Whether the default context is shut down, or is within ``grace`` s (signal thread)."""
-    deadline = time.monotonic() + grace
-    while rclpy.ok():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.01)
-    return True
-
-
-def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
-         name: str = NODE_NAME) -> int:
-    """Make a node and spin it until SIGINT/SIGTERM; 0 on a clean exit, 1 on a bad start-up.
-
-    The node's and the latency baseline's (``relay.py``) process around them, one routine.
-
-    SIGINT is handled as SIGTERM is: rclpy's handler shuts the context down and wakes the
-    executor, which returns between two callbacks. Python's own SIGINT handler is not chained
-    to it: its KeyboardInterrupt would fire at any bytecode, inside rclpy's bookkeeping too
-    (half-built tasks, a taken message lost in pybind11's conversion).
-    """
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, signal.SIG_DFL)
-    rclpy.init(args=args)
-    node = None
-    status = 0
-    try:
-        node = make_node()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ConfigError, InvalidParameterTypeException, InvalidParameterValueException) as err:
-        # e.g. -p gravity:=[0,0,-10] (integers) or -p input_timeout:=0.0 (out of range)
-        rclpy.logging.get_logger(name).fatal(f'cannot start: {err}')
-        status = 1
-    except Exception:
-        # SIGINT/SIGTERM shut the context down from rclpy's signal thread, wherever the
-        # executor is: between two waits it raises RCLError ("failed to initialize wait set:
-        # the given context is not valid"); in a take, the KeyboardInterrupt of SIGINT inside
-        # pybind11's message conversion surfaces as RuntimeError ("Unable to convert call
-        # argument"). Those are the requested shutdown; with the context still valid, an
-        # exception is a real error and is raised.
-        if not _context_shut_down():
-            raise
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return status
 
 
 def main(args: Optional[Sequence[str]] = None) -> int:

@@ -62,7 +62,7 @@ from sensor_msgs.msg import JointState
 from spatial_dynamics.bounds import MAX_EFFORT, MAX_POSITION, MAX_WRENCH
 from spatial_dynamics.ros.config import ConfigError, read_description
 from spatial_dynamics.ros.parameters import Param, ParameterError, Table
-from spatial_dynamics.ros.node import advertise, spin
+from spatial_dynamics.ros.common import advertise, spin
 from spatial_dynamics.sim.robot import (import_mujoco, INTEGRATORS, MujocoMissing,
                                         SimulatedRobot)
 from std_msgs.msg import Float64MultiArray

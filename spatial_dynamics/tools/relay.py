@@ -16,7 +16,7 @@ from typing import Optional, Sequence
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
-from spatial_dynamics.ros.node import advertise, spin, subscribe
+from spatial_dynamics.ros.common import advertise, spin, subscribe
 
 
 class Relay(Node):
