@@ -37,7 +37,8 @@ import numpy as np
 from .. import friction_torque, Model, rnea, URDFWarning
 from ..bounds import JOINT_BOUNDS, MAX_GRAVITY
 from ..check import locked_item, read_description
-from . import bags, differentiate, identify, report, splines
+from .. import effort as effort_model
+from . import annotate, bags, differentiate, identify, report, splines
 
 #: The node's default ``friction_velocity_threshold`` (config/inverse_dynamics.yaml).
 NODE_THRESHOLD = 0.01
@@ -239,6 +240,7 @@ def run_bag(args) -> int:
         source = 'position (the bag has no velocities)'
     stages.done('differentiate')
     tau = rnea(model, q, qd, qdd, args.gravity)
+    effort = effort_model.with_gravity(model, q, effort, args.measured_effort, args.gravity)
     residual = effort - tau
     stages.done('rnea')
     rms_measured = np.sqrt(np.mean(effort ** 2, axis=0))
@@ -426,6 +428,17 @@ def parser() -> argparse.ArgumentParser:
                    help='trajectory sampling rate, Hz (default %(default)g)')
     p.add_argument('--friction-model', choices=('none', 'urdf'), default='none',
                    help='trajectory check: add the URDF <dynamics> friction (as the node)')
+    p.add_argument('--measured-effort', choices=effort_model.MEASURED_EFFORT, default='full',
+                   help='what the bag\'s effort is: link-side torque with gravity (full: '
+                   'Franka, KUKA) or gravity_compensated (UR); default %(default)s')
+    p.add_argument('--annotate', metavar='OUT.yaml',
+                   help='with --trajectory: write it with effort filled for '
+                   'joint_trajectory_controller (resampled to --tolerance)')
+    p.add_argument('--tolerance', type=positive, default=0.1,
+                   help='--annotate: |JTC\'s linear interpolation of effort - model torque|, '
+                   'N m (default %(default)g)')
+    p.add_argument('--output', choices=effort_model.OUTPUTS, default='full',
+                   help='--annotate: the torque written (default %(default)s)')
     p.add_argument('--generic', action='store_true',
                    help='read every message through rosbags (no numpy fast path)')
     p.add_argument('--timings', action='store_true', help='print stage times to stderr')
@@ -464,11 +477,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         p.error('a BAG is needed (or --trajectory FILE.yaml)')
     if args.locked and not args.joints:
         p.error('--locked needs --joints (the joints kept movable)')
+    if args.annotate and not args.trajectory:
+        p.error('--annotate needs --trajectory FILE.yaml')
     if float(np.linalg.norm(args.gravity)) > MAX_GRAVITY:
         p.error(f'--gravity: |g| = {np.linalg.norm(args.gravity):g} m/s^2, more than '
                 f'{MAX_GRAVITY:g} (100 g) cannot be a mounting')
     try:
         output_dir(args.out)      # before any computation: a bad --out is said at once
+        if args.annotate:
+            return annotate.run(args, load_model)
         if args.trajectory or args.trajectory_topic:
             return run_trajectory(args)
         return run_bag(args)
