@@ -460,3 +460,98 @@ def test_related_changes_are_all_or_nothing_with_set_parameters_atomically(
         ok(io.set_parameters_atomically(**change))
         driver.spin_until(lambda: values(io.fresh_status('robot model'))['dof'] == '3',
                           what='the 3-joint model')
+
+
+def test_a_whole_trajectory_is_followed_at_the_measured_stamps(driver, demo, demo_model):
+    """pd_feedforward samples the held trajectory at each measured state's stamp (JTC rules).
+
+    The answers equal the control law at the trajectory's cubic spline evaluated at the
+    stamp (the same splines as replay --trajectory); after the last point the last position
+    is held; a bad trajectory is refused whole and the one followed goes on; a new one
+    replaces it from its start.
+    """
+    from builtin_interfaces.msg import Duration, Time
+    from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+    import spatial_dynamics as sd
+    from spatial_dynamics import trajectory as plan
+    names = demo_model.joint_names
+    n = len(names)
+    kp, kd = 10.0, 1.0
+    t0 = 2_000_000                  # s: the trajectories' start, on the measured clock
+    rng = np.random.default_rng(71)
+    points = [(0.0, rng.uniform(-0.5, 0.5, n), np.zeros(n)),
+              (0.6, rng.uniform(-0.5, 0.5, n), rng.uniform(-0.5, 0.5, n)),
+              (1.0, rng.uniform(-0.5, 0.5, n), np.zeros(n))]
+
+    def message(pts, start, order=None):
+        order = list(range(n)) if order is None else order
+        msg = JointTrajectory(joint_names=[names[i] for i in order])
+        msg.header.stamp = Time(sec=ns(start) // 1_000_000_000,
+                                nanosec=ns(start) % 1_000_000_000)
+        for t, q, qd in pts:
+            msg.points.append(JointTrajectoryPoint(
+                positions=[float(q[i]) for i in order], velocities=[float(qd[i]) for i in order],
+                time_from_start=Duration(sec=int(t), nanosec=int(round((t % 1) * 1e9)))))
+        return msg
+
+    def ns(t):
+        """Seconds after t0 as integer ns on the measured clock (what the node samples at)."""
+        return t0 * 1_000_000_000 + int(round(t * 1e9))
+
+    def expected(pts, start, t, q, qd):
+        traj = plan.trajectory(names, [{'positions': list(p[1]), 'velocities': list(p[2]),
+                                        'time_from_start': {'sec': int(p[0]),
+                                                            'nanosec': int(round(
+                                                                (p[0] % 1) * 1e9))}}
+                                       for p in pts])
+        qd_, vd, ad = (x[0] for x in plan.evaluate(traj, np.array([(ns(t) - ns(start)) * 1e-9])))
+        return sd.rnea(demo_model, qd_, vd, ad) + kp * (qd_ - q) + kd * (vd - qd)
+
+    with connected(driver, names) as (io, loop):
+        ok(io.set_parameters(control_mode='pd_feedforward', kp=[kp], kd=[kd]))
+        # the measured clock (a driver's, or sim time) is the one trajectories are sampled on
+        first = loop.measured_msg(np.zeros(n), np.zeros(n), 0)
+        first.header.stamp = Time(sec=t0 - 1, nanosec=0)
+        for _ in range(3):
+            loop.measured.publish(first)
+            driver.spin_for(0.05)
+        # names in another order: mapped by name
+        io.trajectory.publish(message(points, 0.0, order=list(reversed(range(n)))))
+        demo.wait_for_log('desired_trajectory: following 3 points (cubic')
+
+        def answer(t, q, qd):
+            msg = loop.measured_msg(q, qd, 0)
+            msg.header.stamp = Time(sec=ns(t) // 1_000_000_000, nanosec=ns(t) % 1_000_000_000)
+            key = (msg.header.stamp.sec, msg.header.stamp.nanosec)
+            deadline = time.monotonic() + TIMEOUT
+            while True:
+                got = [m for m in io.efforts
+                       if (m.header.stamp.sec, m.header.stamp.nanosec) == key]
+                if got:
+                    return np.array(got[0].effort)
+                assert time.monotonic() < deadline, f'no answer at {t}'
+                loop.measured.publish(msg)
+                driver.spin_for(0.05)
+
+        q, qd = rng.uniform(-0.5, 0.5, n), rng.uniform(-0.5, 0.5, n)
+        for dt in (0.0, 0.25, 0.61, 0.85, 1.01, 1.7):    # not at knots; 1.01, 1.7: held
+            np.testing.assert_allclose(answer(dt, q, qd),
+                                       expected(points, 0.0, dt, q, qd), rtol=0, atol=1e-9,
+                                       err_msg=f'{dt} s into the trajectory')
+        # refused whole (time_from_start not increasing): the old trajectory goes on
+        bad = [points[0], points[2], points[1]]
+        io.trajectory.publish(message(bad, 1.8))
+        driver.spin_until(lambda: int(values(io.fresh_status('feedforward'))
+                                      ['rejected time_not_increasing']) >= 1,
+                          what='the bad trajectory to be refused')
+        np.testing.assert_allclose(answer(1.9, q, qd), expected(points, 0.0, 1.9, q, qd),
+                                   rtol=0, atol=1e-9)
+        # a new one replaces it from its start; before that start, the old one goes on
+        new = [(0.0, points[2][1], np.zeros(n)), (0.5, points[0][1], np.zeros(n))]
+        io.trajectory.publish(message(new, 2.0))
+        demo.wait_for_log('desired_trajectory: following 2 points')
+        np.testing.assert_allclose(answer(1.95, q, qd), expected(points, 0.0, 1.95, q, qd),
+                                   rtol=0, atol=1e-9)
+        for dt in (2.1, 2.4, 3.0):
+            np.testing.assert_allclose(answer(dt, q, qd), expected(new, 2.0, dt, q, qd),
+                                       rtol=0, atol=1e-9)

@@ -117,6 +117,7 @@ from spatial_dynamics.ros.control import (answer, Dynamics, FEEDBACK_MODES, meas
                                           terms_names)
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
 from spatial_dynamics.ros.observer import EstimateWindow, measured_effort, sample_time
+from spatial_dynamics.trajectory import Follower, TrajectoryError
 from std_msgs.msg import Float64MultiArray, String
 from trajectory_msgs.msg import JointTrajectory
 
@@ -158,6 +159,10 @@ class InverseDynamicsNode(Node):
         self._observer_key: Optional[tuple] = None
         self.estimates = EstimateWindow()   # external_torque_estimate of the period
         self.desired: Optional[Held] = None    # the last good desired state (zero-order hold)
+        self.follower = Follower()   # desired_trajectory in the feedback modes (JTC's rules)
+        self._following: Optional[tuple] = None   # the joints the follower's plans are in
+        self._measured_q: Optional[np.ndarray] = None   # the last measured position
+        self._measured_stamp = 0     # its stamp (ns): the clock trajectories are sampled on
         self._answered_stamp = 0               # stamp (ns) of the measured state answered last
         self.wrench_timeout_ns = int(DEFAULT_WRENCH_TIMEOUT * 1e9)
         self.params: dict = {}   # the last accepted value of every parameter of PARAMETERS
@@ -435,8 +440,36 @@ class InverseDynamicsNode(Node):
                           msg.effort if self.acceleration_source == 'effort' else None))
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
-        self._on_desired(msg, 'desired_trajectory', trajectory_arrays,
-                         (msg.joint_names, msg.points))
+        if self.control_mode in FEEDBACK_MODES:
+            self._follow(msg)
+        else:   # feedforward: the first point is the desired state, answered at once
+            self._on_desired(msg, 'desired_trajectory', trajectory_arrays,
+                             (msg.joint_names, msg.points))
+
+    def _follow(self, msg: JointTrajectory) -> None:
+        """Feedback modes: follow a whole trajectory, sampled at each measured stamp (JTC)."""
+        output = self.output
+        if output is None:
+            self._reject('desired_trajectory', 'no_model', 'no robot model loaded yet')
+            return
+        start_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        now_ns = self._measured_stamp or self.get_clock().now().nanoseconds
+        q = self._measured_q
+        if q is not None and len(q) != len(output.joints):   # measured on another model
+            q = None
+        try:
+            traj = self.follower.accept(msg.joint_names, msg.points, start_ns, now_ns,
+                                        output.joints, q)
+        except TrajectoryError as err:
+            self._reject('desired_trajectory', err.reason, f'refused whole, the trajectory '
+                         f'followed before goes on: {err}')
+            return
+        self._following = output.joints
+        self.totals.last_desired_ns = time.monotonic_ns()
+        self.get_logger().info(
+            'desired_trajectory: stopped, holding the measured position' if traj is None else
+            f'desired_trajectory: following {len(msg.points)} points ({traj.kind}, '
+            f'{traj.time[-1] - traj.time[0]:g} s) from {(start_ns or now_ns) * 1e-9:.9f} s')
 
     def _on_desired(self, msg, topic: str, to_arrays, fields: tuple) -> None:
         """Hold a good desired state; in feedforward mode, answer it (or reject it whole)."""
@@ -478,6 +511,9 @@ class InverseDynamicsNode(Node):
             return
         totals.last_measured_ns = t0
         self.window.measured += 1
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        self._measured_q = measured[0]     # in output.joints order: held by an empty trajectory
+        self._measured_stamp = stamp or self._measured_stamp
         if feedback:
             self._answer_measured(msg, output, measured, t0)
         if self.observer_gain > 0.0:   # after the answer: it never delays a command
@@ -486,25 +522,30 @@ class InverseDynamicsNode(Node):
     def _answer_measured(self, msg: JointState, output: Output, measured: tuple,
                          t0: int) -> None:
         """Answer a good measured state with the held desired state (a feedback mode)."""
-        held = self.desired
-        if held is None or held.joints != output.joints:
-            self._reject('joint_states', 'no_desired',
-                         f'{self.control_mode}: no desired state for the model\'s joints yet')
-            return
-        age = (t0 - held.receipt_ns) * 1e-9
-        if age > self.input_timeout:
-            self._reject('joint_states', 'desired_stale',
-                         f'{self.control_mode}: the held desired state is {age:.3f} s old '
-                         f'(input_timeout {self.input_timeout} s); not publishing')
-            return
         stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        desired = None
+        if self._following == output.joints:   # a trajectory, sampled at this measurement
+            desired = self.follower.sample(stamp or self._measured_stamp)
+        if desired is None:
+            held = self.desired
+            if held is None or held.joints != output.joints:
+                self._reject('joint_states', 'no_desired', f'{self.control_mode}: no desired '
+                             'state for the model\'s joints yet')
+                return
+            age = (t0 - held.receipt_ns) * 1e-9
+            if age > self.input_timeout:
+                self._reject('joint_states', 'desired_stale',
+                             f'{self.control_mode}: the held desired state is {age:.3f} s old '
+                             f'(input_timeout {self.input_timeout} s); not publishing')
+                return
+            desired = held.state
         if stamp != 0 and stamp == self._answered_stamp:
             self._reject('joint_states', 'repeated',
                          f'{self.control_mode}: the measured state stamped {stamp * 1e-9:.9f} '
                          's was answered already (one answer per measurement)')
             return
         self._answered_stamp = stamp
-        self._respond(msg.header, output, 'joint_states', held.state, measured, t0)
+        self._respond(msg.header, output, 'joint_states', desired, measured, t0)
 
     def _observe(self, msg: JointState, output: Output, measured: tuple) -> None:
         """Update the external-torque observer with a measured state; publish its estimate.
