@@ -24,7 +24,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import DEMO_URDF, PENDULUM_URDF  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.ros import config  # noqa: E402
+from spatial_dynamics.ros import config, descriptions, diagnostics  # noqa: E402
 from spatial_dynamics.ros.config import ConfigError  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -100,7 +100,7 @@ def test_description_text_is_never_opened_as_a_path(tmp_path, monkeypatch):
     (tmp_path / 'robot.urdf').write_text(open(DEMO_URDF).read())
     for text in (DEMO_URDF, 'robot.urdf', f'  {DEMO_URDF}\n'):
         with pytest.raises(ConfigError) as info:
-            config.parse_description(text, 'topic robot_description')
+            descriptions.parse_description(text, 'topic robot_description')
         message = str(info.value)
         assert 'topic robot_description' in message and 'robot_description_file' in message
         assert 'not URDF XML' in message
@@ -110,13 +110,13 @@ def test_description_text_is_never_opened_as_a_path(tmp_path, monkeypatch):
     for text in (str(fifo), '/dev/zero'):
         start = time.monotonic()
         with pytest.raises(ConfigError, match='not URDF XML'):
-            config.parse_description(text, 'parameter robot_description')
+            descriptions.parse_description(text, 'parameter robot_description')
         assert time.monotonic() - start < 5.0
 
 
 def test_description_text_with_bom_or_blank_lines_loads(demo_text):
     for text in ('\ufeff' + demo_text, '\n\n  ' + demo_text):
-        model = config.parse_description(text, 'parameter robot_description')
+        model = descriptions.parse_description(text, 'parameter robot_description')
         assert model.joint_names == sd.Model.from_urdf(DEMO_URDF).joint_names
 
 
@@ -129,14 +129,14 @@ def test_description_file_must_be_a_regular_file(tmp_path):
                        ('/dev/null', 'character device')]:
         start = time.monotonic()
         with pytest.raises(ConfigError) as info:
-            config.read_description(str(path))
+            descriptions.read_description(str(path))
         assert time.monotonic() - start < 5.0
         message = str(info.value)
         assert repr(str(path)) in message and 'not a regular file' in message
         assert kind in message, message
         assert 'robot_description_file' in message
     with pytest.raises(ConfigError, match='no such file'):
-        config.read_description(str(tmp_path / 'none.urdf'))
+        descriptions.read_description(str(tmp_path / 'none.urdf'))
 
 
 def test_description_file_size_is_limited(tmp_path, demo_text):
@@ -145,13 +145,13 @@ def test_description_file_size_is_limited(tmp_path, demo_text):
     with open(big, 'wb') as f:
         f.truncate(32 * 1024 * 1024 + 1)   # sparse: costs no disk
     with pytest.raises(ConfigError) as info:
-        config.read_description(str(big))
+        descriptions.read_description(str(big))
     message = str(info.value)
     assert 'big.urdf' in message and '32 MiB' in message and 'limit' in message
-    assert config.MAX_DESCRIPTION_BYTES == 32 * 1024 * 1024
+    assert descriptions.MAX_DESCRIPTION_BYTES == 32 * 1024 * 1024
     ok = tmp_path / 'ok.urdf'
     ok.write_text(demo_text)
-    assert config.read_description(str(ok)) == demo_text
+    assert descriptions.read_description(str(ok)) == demo_text
 
 
 def test_description_file_not_utf8_named(tmp_path, demo_text):
@@ -159,12 +159,12 @@ def test_description_file_not_utf8_named(tmp_path, demo_text):
     bad = tmp_path / 'latin1.urdf'
     bad.write_bytes(demo_text.replace('demo_arm', 'd\xe9mo_arm').encode('latin-1'))
     with pytest.raises(ConfigError) as info:
-        config.read_description(str(bad))
+        descriptions.read_description(str(bad))
     message = str(info.value)
     assert repr(str(bad)) in message and 'UTF-8' in message
     bom = tmp_path / 'bom.urdf'
     bom.write_bytes(b'\xef\xbb\xbf' + demo_text.encode())
-    assert config.read_description(str(bom)) == demo_text
+    assert descriptions.read_description(str(bom)) == demo_text
 
 
 def test_a_xacro_file_is_checked_like_any_file_before_xacro_opens_it(tmp_path):
@@ -172,32 +172,35 @@ def test_a_xacro_file_is_checked_like_any_file_before_xacro_opens_it(tmp_path):
     os.mkfifo(fifo)
     start = time.monotonic()
     with pytest.raises(ConfigError, match='named pipe'):
-        config.read_description(str(fifo))
+        descriptions.read_description(str(fifo))
     assert time.monotonic() - start < 5.0
 
 
 def test_description_precedence_parameter_file_topic():
-    assert config.description_source(defaults()) == 'topic'
-    assert config.description_source(defaults(robot_description_file=DEMO_URDF)) == 'file'
-    assert config.description_source(defaults(robot_description='<robot/>',
-                                              robot_description_file=DEMO_URDF)) == 'parameter'
+    assert descriptions.description_source(defaults()) == 'topic'
+    assert descriptions.description_source(defaults(robot_description_file=DEMO_URDF)) == 'file'
+    assert descriptions.description_source(defaults(
+        robot_description='<robot/>', robot_description_file=DEMO_URDF)) == 'parameter'
 
 
 def test_description_change_reads_the_file_set_while_the_string_wins(demo_text):
     previous = defaults(robot_description=demo_text)
     changes = {'robot_description_file': PENDULUM_URDF}
-    urdf, source, kept = config.description_change(previous, {**previous, **changes}, changes)
+    urdf, source, kept = descriptions.description_change(previous, {**previous, **changes},
+                                                         changes)
     assert (urdf, source, kept) == (None, None, PENDULUM_URDF)
     # clearing the string falls back to the file
     previous = {**previous, **changes}
     changes = {'robot_description': ''}
-    urdf, source, kept = config.description_change(previous, {**previous, **changes}, changes)
+    urdf, source, kept = descriptions.description_change(previous, {**previous, **changes},
+                                                         changes)
     assert source == f'file {PENDULUM_URDF}' and 'pendulum' in urdf and kept == ''
     # a bad file set while the string wins is refused all the same
     changes = {'robot_description_file': '/nonexistent/robot.urdf'}
     with pytest.raises(ConfigError, match='no such file'):
-        config.description_change(defaults(robot_description=demo_text),
-                                  defaults(robot_description=demo_text, **changes), changes)
+        descriptions.description_change(defaults(robot_description=demo_text),
+                                        defaults(robot_description=demo_text, **changes),
+                                        changes)
 
 
 # --------------------------------------------------------------------------------------------
@@ -341,7 +344,7 @@ def test_numpy_never_touches_the_compiled_kernels(demo_text):
     assert (out.backend, out.preferred, out.setting) == ('numpy', 'numpy', 'numpy')
     assert not out.waits_for_compiled and kernels.state == 'idle' and calls == []
     assert out.plain_call_s > 0.0
-    assert config.backend_text(out, kernels) == 'numpy'
+    assert diagnostics.backend_text(out, kernels) == 'numpy'
 
 
 def test_compiled_waits_on_numpy_until_the_kernels_are_ready(demo_text):
@@ -356,7 +359,7 @@ def test_compiled_waits_on_numpy_until_the_kernels_are_ready(demo_text):
     out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
                          kernels).output
     assert (out.backend, out.preferred) == ('numpy', 'compiled') and out.waits_for_compiled
-    assert config.backend_text(out, kernels) == 'numpy (preparing compiled kernels)'
+    assert diagnostics.backend_text(out, kernels) == 'numpy (preparing compiled kernels)'
     assert kernels.request(out.model) and not kernels.request(out.model)   # started once
     try:
         assert done.wait(30.0)
@@ -383,7 +386,7 @@ def test_kernels_that_cannot_be_had_leave_numpy_with_the_reason(demo_text):
     kernels.request(out.model)
     assert done.wait(30.0)
     assert kernels.state == 'failed' and 'numba is not installed (test)' in kernels.error
-    text = config.backend_text(out, kernels)
+    text = diagnostics.backend_text(out, kernels)
     assert text.startswith('numpy (compiled kernels unavailable') and 'test' in text
     assert not kernels.request(out.model)   # never retried
 
@@ -397,7 +400,7 @@ def test_an_output_built_once_the_kernels_are_ready_runs_compiled(demo_text):
     out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
                          kernels).output
     assert out.backend == 'compiled' and not out.waits_for_compiled
-    assert config.backend_text(out, kernels).startswith('compiled (numba')
+    assert diagnostics.backend_text(out, kernels).startswith('compiled (numba')
     q = np.linspace(-1.0, 1.0, len(out.joints))
     np.testing.assert_allclose(sd.rnea(out.model, q, q, q, backend=out.backend),
                                sd.rnea(out.model, q, q, q, backend='numpy'),
@@ -406,7 +409,7 @@ def test_an_output_built_once_the_kernels_are_ready_runs_compiled(demo_text):
 
 def test_auto_text_names_the_measured_time_and_the_budget(demo_text):
     out = config.prepare({}, defaults(robot_description=demo_text, backend='auto'), None).output
-    text = config.backend_text(out, None)
+    text = diagnostics.backend_text(out, None)
     if out.preferred == 'numpy':
         assert text.startswith('numpy (auto: ') and f'{out.plain_call_s * 1e6:.0f} us' in text
         assert f'{config.AUTO_COMPILED_ABOVE_S * 1e6:g} us budget' in text
@@ -432,11 +435,11 @@ def test_parser_keeps_only_the_newest_waiting_request_and_reports_errors():
             raise RuntimeError('boom')
         return request.urdf
 
-    parser = config.DescriptionParser(build, lambda: notified.append(1))
-    parser.submit(config.ParseRequest(1, 'first', {}, None))
+    parser = descriptions.DescriptionParser(build, lambda: notified.append(1))
+    parser.submit(descriptions.ParseRequest(1, 'first', {}, None))
     assert started.wait(10.0)
     for generation, urdf in ((2, 'dropped'), (3, 'bad'), (4, 'crash')):
-        parser.submit(config.ParseRequest(generation, urdf, {}, None))
+        parser.submit(descriptions.ParseRequest(generation, urdf, {}, None))
     release.set()
     deadline = time.monotonic() + 10.0
     results = []
@@ -454,13 +457,13 @@ def test_parser_keeps_only_the_newest_waiting_request_and_reports_errors():
 # Counters and diagnostics
 
 def test_model_status_levels_and_the_backend(demo_text):
-    totals = config.Totals()
-    level, message, values = config.model_status(None, totals, False, '')
+    totals = diagnostics.Totals()
+    level, message, values = diagnostics.model_status(None, totals, False, '')
     assert (level, message) == ('ERROR', 'waiting for robot_description')
     totals.description_rejected('bad XML')
     out = config.prepare({}, defaults(robot_description=demo_text, backend='numpy'),
                          None).output
-    level, message, values = config.model_status(out, totals, False, 'numpy')
+    level, message, values = diagnostics.model_status(out, totals, False, 'numpy')
     kv = dict(values)
     assert level == 'OK' and message == "robot 'demo_arm' loaded, 8 DOF"
     assert kv['backend'] == 'numpy' and kv['backend setting'] == 'numpy'
@@ -471,16 +474,16 @@ def test_model_status_levels_and_the_backend(demo_text):
 
 def test_feedforward_status_rates_staleness_and_rejections(demo_text):
     out = config.prepare({}, defaults(robot_description=demo_text), None).output
-    totals, window, settings = config.Totals(), config.Window(), config.Settings()
+    totals, window, settings = diagnostics.Totals(), diagnostics.Window(), diagnostics.Settings()
     now = window.start_ns + 2_000_000_000                 # a 2 s period
-    assert config.feedforward_status(out, window, totals, settings, {}, now)[:2] == \
+    assert diagnostics.feedforward_status(out, window, totals, settings, {}, now)[:2] == \
         ('WARN', 'no input received yet')
-    assert config.feedforward_status(None, window, totals, settings, {}, now)[0] == 'ERROR'
+    assert diagnostics.feedforward_status(None, window, totals, settings, {}, now)[0] == 'ERROR'
     window.received, window.answered = 10, 8
     window.compute_ns, window.compute_max_ns = 8 * 30_000, 50_000
     totals.answered, totals.last_input_ns = 8, now - 100_000_000
     totals.rejected['missing_joint'] += 2
-    level, message, values = config.feedforward_status(
+    level, message, values = diagnostics.feedforward_status(
         out, window, totals, settings, {'hand': (np.ones(6), now + 1), 'old': (None, now - 1)},
         now)
     kv = dict(values)
@@ -490,6 +493,6 @@ def test_feedforward_status_rates_staleness_and_rejections(demo_text):
     assert kv['rejected'] == '2' and kv['rejected missing_joint'] == '2'
     assert kv['external wrenches active'] == 'hand'
     totals.last_input_ns = now - int(1e9)                # older than input_timeout 0.5 s
-    level, message, values = config.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, values = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'ERROR' and message.startswith('input stale') and dict(values)['stale'] \
         == 'True'

@@ -21,7 +21,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import DEMO_URDF  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.ros import config, control  # noqa: E402
+from spatial_dynamics.ros import config, control, diagnostics  # noqa: E402
 from spatial_dynamics.ros.config import ConfigError  # noqa: E402
 from spatial_dynamics.ros.control import (  # noqa: E402
     answer, ControlError, Dynamics, Gains, InputError)
@@ -300,29 +300,29 @@ def test_each_term_is_its_part_of_the_dynamics(model):
 def test_feedback_status_names_the_stale_measured_state(model):
     text = open(DEMO_URDF).read()
     out = config.prepare({}, defaults(robot_description=text), None).output
-    totals, window = config.Totals(), config.Window()
+    totals, window = diagnostics.Totals(), diagnostics.Window()
     now = window.start_ns + 2_000_000_000
-    settings = config.Settings(control_mode='pd_feedforward', measured_timeout=0.1)
-    level, message, values = config.feedforward_status(out, window, totals, settings, {}, now)
+    settings = diagnostics.Settings(control_mode='pd_feedforward', measured_timeout=0.1)
+    level, message, values = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'ERROR' and 'no measured state' in message
     totals.last_measured_ns = now - 50_000_000
-    level, message, _ = config.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, _ = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'ERROR' and 'no desired state' in message
     totals.last_desired_ns = now - 10_000_000
     window.received = window.answered = 10
-    level, message, values = config.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, values = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert (level, message) == ('OK', '5.0 Hz')
     assert dict(values)['control mode'] == 'pd_feedforward'
     totals.last_measured_ns = now - 200_000_000
-    level, message, values = config.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, values = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'ERROR' and message.startswith('measured state stale'), message
     assert dict(values)['measured state stale'] == 'True'
     totals.last_measured_ns = now
     totals.last_desired_ns = now - 600_000_000
-    level, message, _ = config.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, _ = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'ERROR' and message.startswith('desired state stale'), message
     # feedforward ignores the measured state
-    settings = config.Settings()
+    settings = diagnostics.Settings()
     totals.last_input_ns = now
-    level, message, _ = config.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, _ = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'OK'

@@ -23,8 +23,8 @@ import rclpy.logging
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, QoSReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
-from spatial_dynamics.ros.config import ConfigError
-from spatial_dynamics.ros.parameters import ParameterError
+
+from spatial_dynamics.ros.parameters import ConfigError, ParameterError
 
 
 def input_qos(depth: int = 1) -> QoSProfile:

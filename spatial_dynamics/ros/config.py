@@ -23,28 +23,27 @@ plain-float call takes more than :data:`AUTO_COMPILED_ABOVE_S`, else ``numpy``.
 
 from __future__ import annotations
 
-from collections import Counter
 from dataclasses import dataclass, replace
 import gc
 import math
 import threading
 import time
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Optional, Sequence, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
 from spatial_dynamics.bounds import MAX_GRAVITY
+from spatial_dynamics.ros.descriptions import (
+    description_change, MAX_DESCRIPTION_BYTES, parse_description)
 from spatial_dynamics.ros.control import (
     check_gains, check_gains_without_model, check_mode, continuous_joints, CONTROL_MODES,
-    ControlError, FEEDBACK_MODES, FEEDBACK_REASONS, GAIN_UNITS, Gains, MAX_KD, MAX_KP,
-    MAX_MEASURED_POSITION, MAX_MEASURED_VELOCITY, MEASURED_REASONS, OUTPUTS)
-from spatial_dynamics.ros.inputs import REASONS
-from spatial_dynamics.ros.parameters import Param, Table
+    ControlError, FEEDBACK_REASONS, GAIN_UNITS, Gains, MAX_KD, MAX_KP,
+    MAX_MEASURED_POSITION, MAX_MEASURED_VELOCITY, OUTPUTS)
+from spatial_dynamics.ros.parameters import ConfigError, Param, Table
 from spatial_dynamics.ros.observer import (
-    check_observer_gain, check_warn, EstimateWindow, MAX_EXTERNAL_TORQUE_WARN,
+    check_observer_gain, check_warn, MAX_EXTERNAL_TORQUE_WARN,
     MAX_OBSERVER_GAIN, MomentumObserver, ObserverError)
-from spatial_dynamics.urdf import read_description as read_urdf_description
 
 NODE_NAME = 'inverse_dynamics'
 ACCELERATION_SOURCES = ('effort', 'none')
@@ -80,8 +79,6 @@ TIMED_CALLS = 7
 
 # Bounds beyond which a value cannot be physical: refused with the bound named, instead of
 # being accepted and then making every answer non-finite.
-MAX_DESCRIPTION_BYTES = 32 * 1024 * 1024   # robot_description_file (the largest URDF of
-#                                            example-robot-data is < 1 MiB)
 MAX_ARMATURE = 1e6                  # kg m² (or kg), per joint
 MAX_PAYLOAD_MASS = 1e6              # kg
 MAX_PAYLOAD_COM = 1e3               # m, per component
@@ -93,10 +90,6 @@ URDF_WARNINGS_LISTED = 5            # URDF warnings listed one by one in /diagno
 NODE_REASONS = ('no_model', 'compute_error', 'non_finite_output') + FEEDBACK_REASONS
 # Rejection reasons of external_wrenches messages.
 WRENCH_REASONS = ('no_model', 'unknown_link', 'non_finite', 'out_of_bounds')
-
-
-class ConfigError(ValueError):
-    """A parameter value or robot description that cannot be used; the message says why."""
 
 
 # --------------------------------------------------------------------------------------------
@@ -268,100 +261,6 @@ MODEL_PARAMETERS = ('joints', 'locked_joints', 'locked_positions')
 SLOW_PARAMETERS = frozenset({'robot_description', 'robot_description_file', *MODEL_PARAMETERS})
 PAYLOAD_PARAMETERS = ('payload.link', 'payload.mass', 'payload.com', 'payload.inertia')
 DESCRIPTION_PARAMETERS = ('robot_description', 'robot_description_file')
-
-
-# --------------------------------------------------------------------------------------------
-# Robot descriptions
-
-def read_description(path: str) -> str:
-    """URDF text of the file ``path`` (:func:`spatial_dynamics.urdf.read_description`).
-
-    A regular file (symbolic links followed) of at most :data:`MAX_DESCRIPTION_BYTES`, UTF-8;
-    a ``.xacro`` file is expanded when ``xacro`` is importable. A named pipe, a device or a
-    directory is refused without blocking; :class:`ConfigError` names the file.
-    """
-    try:
-        return read_urdf_description(path, MAX_DESCRIPTION_BYTES,
-                                     f'robot_description_file {path!r}')
-    except ValueError as err:
-        raise ConfigError(f'{err} (a robot description)') from None
-
-
-def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = None,
-                      locked: Optional[dict] = None, strict: bool = False) -> 'sd.Model':
-    """Build the (reduced) model from URDF text; ``source`` names where it came from.
-
-    ``urdf`` is XML text, never a path (a path goes in ``robot_description_file``): it is
-    handed to the parser as bytes, which :meth:`~spatial_dynamics.Model.from_urdf` never
-    opens. With ``joints``, model reduction (:meth:`~spatial_dynamics.Model.from_urdf`): the
-    other joints are locked at ``locked[name]`` (default 0), lumped, and branches that cannot
-    move a kept joint's torque are pruned; ``model.joint_names == joints``. ``strict``: a
-    physically inconsistent but computable description (a :class:`~spatial_dynamics.URDFWarning`)
-    is refused; otherwise it loads and its warnings are in ``model.warnings``.
-
-    One plain-float inverse-dynamics call at q = qd = qdd = 0 follows, before the model is
-    used: it proves the model computes (finite torques), and derives the backend's layout at
-    load time, not at the first live message. It never imports numba.
-    """
-    text = urdf.lstrip('\ufeff \t\r\n')
-    if not text:
-        raise ConfigError(f'{source}: empty robot description')
-    if not text.startswith('<'):
-        raise ConfigError(f'{source}: not URDF XML (it starts with {text[:200]!r}): a robot '
-                          'description is XML text, never a path; give a file in the '
-                          'robot_description_file parameter')
-    where = source
-    if joints:
-        where = f'{source} reduced to joints {list(joints)}'
-        if locked:
-            where += f' (locked {locked})'
-    try:
-        model = sd.Model.from_urdf(text.encode('utf-8'), joints=list(joints) if joints else None,
-                                   locked=locked or None, strict=strict)
-        zeros = np.zeros(len(model.joint_names))
-        tau = sd.rnea(model, zeros, zeros, zeros, backend='numpy')
-    except Exception as err:  # a bad description must never take the node down
-        raise ConfigError(f'{where}: {err}')
-    if not np.isfinite(tau).all():
-        raise ConfigError(f'{source}: the model gives non-finite torques at rest')
-    return model
-
-
-def description_source(params: dict) -> str:
-    """Where the description comes from: ``'parameter'``, ``'file'`` or ``'topic'`` (precedence).
-
-    The ``robot_description`` parameter when it is set (non-empty), else
-    ``robot_description_file`` when it is set, else the topic.
-    """
-    if params.get('robot_description'):
-        return 'parameter'
-    if params.get('robot_description_file'):
-        return 'file'
-    return 'topic'
-
-
-def description_change(previous: dict, params: dict, changes: dict
-                       ) -> Tuple[Optional[str], Optional[str], str]:
-    """Return ``(urdf, source, kept)``: the description ``changes`` make current.
-
-    ``previous`` are the parameters before the change, ``params`` after it. By precedence
-    (:func:`description_source`); ``urdf`` is None when the model's description does not
-    change. ``kept`` is the path of a ``robot_description_file`` that was set (and read, so
-    it is known to be readable) while ``robot_description`` is set: kept for later, not used.
-    """
-    text, path = params['robot_description'], params['robot_description_file']
-    if text:
-        kept = ''
-        if path and 'robot_description_file' in changes:
-            read_description(path)
-            kept = path
-        if 'robot_description' in changes:
-            return text, 'parameter robot_description', kept
-        return None, None, kept
-    if path and ('robot_description_file' in changes
-                 or previous.get('robot_description')):  # set, or the string cleared
-        return read_description(path), f'file {path}', ''
-    return None, None, ''
 
 
 # --------------------------------------------------------------------------------------------
@@ -798,312 +697,6 @@ def reparse_needed(requested: dict, params: dict) -> bool:
 
 
 # --------------------------------------------------------------------------------------------
-# Descriptions from the topic: parsed by a worker thread
-
-@dataclass(frozen=True)
-class ParseRequest:
-    """A description from the topic to build an :class:`Output` from, with its context.
-
-    ``generation`` identifies the request: the node applies the result only if no other
-    description came (or a parameter took precedence) since; ``params`` and ``current`` are
-    the node's parameters and output when the message arrived.
-    """
-
-    generation: int
-    urdf: str
-    params: dict
-    current: Optional[Output]
-
-
-class DescriptionParser:
-    """One worker thread that builds outputs from topic descriptions, off the answering path.
-
-    ``submit`` replaces any request not yet started (only the newest description matters);
-    each finished request is queued with its result (an :class:`Output` or a
-    :class:`ConfigError`) and ``notify()`` is called, from the worker thread, so the node can
-    pick it up in its executor (a guard condition). The thread starts with the first request.
-    """
-
-    def __init__(self, build: Callable[[ParseRequest], Output], notify: Callable[[], None]
-                 ) -> None:
-        self._build = build
-        self._notify = notify
-        self._wake = threading.Condition()
-        self._request: Optional[ParseRequest] = None
-        self._done: List[Tuple[ParseRequest, object]] = []
-        self._stopped = False
-        self._thread: Optional[threading.Thread] = None
-
-    def submit(self, request: ParseRequest) -> None:
-        """Parse ``request`` next (dropping a request that has not started yet)."""
-        with self._wake:
-            if self._stopped:
-                return
-            self._request = request
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._run, daemon=True,
-                                                name='robot_description parser')
-                self._thread.start()
-            self._wake.notify()
-
-    def finished(self) -> List[Tuple[ParseRequest, object]]:
-        """Return (and forget) the finished requests with their results, oldest first."""
-        with self._wake:
-            done, self._done = self._done, []
-        return done
-
-    def stop(self) -> None:
-        """Let the worker end after the request it is on (it is a daemon: never waited for)."""
-        with self._wake:
-            self._stopped = True
-            self._request = None
-            self._wake.notify()
-
-    def _run(self) -> None:
-        while True:
-            with self._wake:
-                while self._request is None and not self._stopped:
-                    self._wake.wait()
-                if self._stopped:
-                    return
-                request, self._request = self._request, None
-            try:
-                result = self._build(request)
-            except ConfigError as err:
-                result = err
-            except Exception as err:  # never lose the worker: report it as a rejection
-                result = ConfigError(f'topic robot_description: {err!r}')
-            with self._wake:
-                if self._stopped:
-                    return
-                self._done.append((request, result))
-            try:
-                self._notify()
-            except Exception:  # the context is gone: the node is shutting down
-                return
-
-
-# --------------------------------------------------------------------------------------------
-# Counters and what /diagnostics says about them
-
-class Window:
-    """Counts and compute times over one diagnostics period."""
-
-    def __init__(self) -> None:
-        self.start_ns = time.monotonic_ns()
-        self.received = 0
-        self.answered = 0
-        self.compute_ns = 0
-        self.compute_max_ns = 0
-        self.delay_ns = 0
-        self.delay_count = 0
-        self.delay_max_ns = 0
-        self.measured = 0          # good measured states (joint_states)
-
-
-class Totals:
-    """Counters since the start: answers, rejections by reason, saturation, wrenches, models."""
-
-    def __init__(self) -> None:
-        self.answered = 0
-        self.last_input_ns: Optional[int] = None     # monotonic ns of the last answered input
-        self.last_desired_ns: Optional[int] = None   # receipt of the last good desired state
-        self.last_measured_ns: Optional[int] = None  # receipt of the last good measured state
-        self.measured_received = 0
-        self.measured_rejected: Counter = Counter({reason: 0 for reason in MEASURED_REASONS})
-        self.rejected: Counter = Counter({reason: 0 for reason in REASONS + NODE_REASONS})
-        self.saturated = 0                  # answers with at least one clamped joint
-        self.saturated_joints: Counter = Counter()
-        self.wrenches_received = 0
-        self.wrenches_rejected: Counter = Counter({reason: 0 for reason in WRENCH_REASONS})
-        self.descriptions_rejected = 0
-        self.last_description_error = ''
-
-    def description_rejected(self, reason: str) -> None:
-        """Count a rejected description and remember why."""
-        self.descriptions_rejected += 1
-        self.last_description_error = reason
-
-
-#: A diagnostics status without ROS: level ('OK', 'WARN', 'ERROR'), message, key-values.
-Status = Tuple[str, str, List[Tuple[str, str]]]
-
-
-def backend_text(output: Output, kernels: Optional[CompiledKernels]) -> str:
-    """Name what the answers run on, for logs and diagnostics (the backend's name first)."""
-    if output.backend == 'compiled':
-        return kernels.description if kernels is not None and kernels.description \
-            else 'compiled'
-    if output.preferred == 'compiled':
-        if kernels is not None and kernels.state == 'failed':
-            return f'numpy (compiled kernels unavailable: {kernels.error})'
-        return 'numpy (preparing compiled kernels)'
-    if output.setting == 'auto':
-        return (f'numpy (auto: {output.plain_call_s * 1e6:.0f} us per call, within the '
-                f'{AUTO_COMPILED_ABOVE_S * 1e6:g} us budget)')
-    return 'numpy'
-
-
-def model_status(output: Optional[Output], totals: Totals, strict: bool,
-                 backend: str) -> Status:
-    """Return the ``robot model`` status: what is loaded, from where, backend, warnings."""
-    rejections = [('descriptions rejected', str(totals.descriptions_rejected)),
-                  ('last rejection', totals.last_description_error)]
-    if output is None:
-        return 'ERROR', 'waiting for robot_description', rejections
-    # WARN while the loaded description has URDF warnings: the torques are those of the
-    # file as written, but the file is physically inconsistent somewhere.
-    model, urdf_warnings = output.model, output.base.warnings
-    message = f'robot {model.name!r} loaded, {len(model.joint_names)} DOF'
-    if urdf_warnings:
-        message += f', {len(urdf_warnings)} URDF warning(s)'
-    values = [('robot name', model.name), ('dof', str(len(model.joint_names))),
-              ('model joints', ', '.join(model.joint_names)),
-              ('output joints', ', '.join(output.joints)), ('source', output.source),
-              ('summary', output.base.summary()), ('backend', backend),
-              ('backend setting', output.setting),
-              ('plain call time [us]', f'{output.plain_call_s * 1e6:.1f}')]
-    values += rejections + [('strict urdf', str(bool(strict))),
-                            ('urdf warnings', str(len(urdf_warnings)))]
-    values += [(f'urdf warning {i}', text)
-               for i, text in enumerate(urdf_warnings[:URDF_WARNINGS_LISTED], 1)]
-    return ('WARN' if urdf_warnings else 'OK'), message, values
-
-
-@dataclass(frozen=True)
-class Settings:
-    """The live settings an answer uses besides the :class:`Output` (diagnostics show them)."""
-
-    gravity: Tuple[float, float, float] = DEFAULT_GRAVITY
-    acceleration_source: str = 'effort'
-    input_timeout: float = DEFAULT_INPUT_TIMEOUT
-    control_mode: str = 'feedforward'
-    output: str = 'full'
-    measured_timeout: float = DEFAULT_MEASURED_TIMEOUT
-
-
-def _us(ns: float) -> str:
-    return f'{ns * 1e-3:.1f}'
-
-
-def _age(last_ns: Optional[int], now_ns: int) -> Optional[float]:
-    return None if last_ns is None else (now_ns - last_ns) * 1e-9
-
-
-def _feedback_state(settings: Settings, totals: Totals, now_ns: int
-                    ) -> Optional[Tuple[str, str]]:
-    """Level and message when a feedback mode cannot answer (stale or missing state)."""
-    measured, desired = (_age(totals.last_measured_ns, now_ns),
-                         _age(totals.last_desired_ns, now_ns))
-    mode = settings.control_mode
-    if measured is None:
-        return 'ERROR', f'no measured state on joint_states yet ({mode}); not publishing'
-    if measured > settings.measured_timeout:
-        return 'ERROR', (f'measured state stale: no good joint_states for {measured:.2f} s '
-                         f'(measured_timeout {settings.measured_timeout} s, {mode}); '
-                         'not publishing')
-    if desired is None:
-        return 'ERROR', f'no desired state yet ({mode}); not publishing'
-    if desired > settings.input_timeout:
-        return 'ERROR', (f'desired state stale: no good desired input for {desired:.2f} s '
-                         f'(input_timeout {settings.input_timeout} s, {mode}); '
-                         'not publishing')
-    return None
-
-
-def _input_state(output: Optional[Output], window: Window, settings: Settings, period: float,
-                 age: Optional[float], totals: Optional[Totals] = None, now_ns: int = 0
-                 ) -> Tuple[str, str]:
-    """Level and message of the ``feedforward`` status."""
-    rejected_now = window.received - window.answered
-    if output is None:
-        return 'ERROR', 'no robot model'
-    if settings.control_mode in FEEDBACK_MODES and totals is not None:
-        stale = _feedback_state(settings, totals, now_ns)
-        if stale is not None:
-            return stale
-    elif age is None:
-        return 'WARN', 'no input received yet'
-    elif age > settings.input_timeout:
-        return 'ERROR', (f'input stale: no good input for {age:.2f} s '
-                         f'(input_timeout {settings.input_timeout} s); not publishing')
-    if rejected_now:
-        return 'WARN', f'{window.answered / period:.1f} Hz, {rejected_now} rejected'
-    return 'OK', f'{window.answered / period:.1f} Hz'
-
-
-def _window_values(window: Window, period: float) -> List[Tuple[str, str]]:
-    answered, delays = window.answered, window.delay_count
-    return [
-        ('input rate [Hz]', f'{window.received / period:.1f}'),
-        ('output rate [Hz]', f'{answered / period:.1f}'),
-        ('compute time mean [us]', _us(window.compute_ns / answered) if answered else ''),
-        ('compute time max [us]', _us(window.compute_max_ns) if answered else ''),
-        ('input delay mean [ms]', f'{window.delay_ns / delays * 1e-6:.3f}' if delays else ''),
-        ('input delay max [ms]', f'{window.delay_max_ns * 1e-6:.3f}' if delays else ''),
-    ]
-
-
-def _terms_values(output: Output) -> List[Tuple[str, str]]:
-    return [('payload', str(output.payload)),
-            ('armature', 'none' if output.armature is None else str(output.armature.tolist())),
-            ('friction model', 'none' if output.friction_threshold is None
-             else f'urdf (threshold {output.friction_threshold:g})'),
-            ('clamp to effort limits', str(output.clamp))] + (
-        [] if output.gains is None else
-        [('kp', str(output.gains.kp.tolist())), ('kd', str(output.gains.kd.tolist())),
-         ('continuous joints', ', '.join(name for name, c in zip(
-             output.joints, output.gains.continuous) if c))])
-
-
-def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
-                       settings: Settings, wrenches: Dict[str, tuple], now_ns: int) -> Status:
-    """Return the ``feedforward`` status: rates, compute time, delays, staleness, rejections.
-
-    ``window`` is the period that ends at ``now_ns`` (monotonic); ``wrenches`` maps a link to
-    ``(wrench, expiry ns)``.
-    """
-    period = max((now_ns - window.start_ns) * 1e-9, 1e-9)
-    last = totals.last_input_ns
-    age = None if last is None else (now_ns - last) * 1e-9
-    level, message = _input_state(output, window, settings, period, age, totals, now_ns)
-    measured_age = _age(totals.last_measured_ns, now_ns)
-    values = _window_values(window, period) + [
-        ('last input age [s]', '' if age is None else f'{age:.3f}'),
-        ('input timeout [s]', str(settings.input_timeout)),
-        ('stale', str(age is None or age > settings.input_timeout)),
-        ('answered', str(totals.answered)),
-        ('rejected', str(sum(totals.rejected.values())))]
-    values += [(f'rejected {reason}', str(count)) for reason, count in totals.rejected.items()]
-    values += [
-        ('control mode', settings.control_mode), ('output', settings.output),
-        ('measured state rate [Hz]', f'{window.measured / period:.1f}'),
-        ('measured state age [s]', '' if measured_age is None else f'{measured_age:.3f}'),
-        ('measured timeout [s]', str(settings.measured_timeout)),
-        ('measured state stale', str(measured_age is None
-                                     or measured_age > settings.measured_timeout)),
-        ('measured states received', str(totals.measured_received)),
-        ('measured states rejected', str(sum(totals.measured_rejected.values())))]
-    values += [(f'measured states rejected {reason}', str(count))
-               for reason, count in totals.measured_rejected.items()]
-    values += [('gravity [m/s^2]', str(list(settings.gravity))),
-               ('acceleration source', settings.acceleration_source)]
-    if output is not None:
-        values += _terms_values(output)
-    values += [
-        ('saturated', str(totals.saturated)),
-        ('saturated joints', ', '.join(f'{name}: {count}' for name, count
-                                       in sorted(totals.saturated_joints.items()))),
-        ('external wrenches active', ', '.join(sorted(
-            link for link, (_, expiry) in wrenches.items() if expiry >= now_ns))),
-        ('external wrenches received', str(totals.wrenches_received)),
-        ('external wrenches rejected', str(sum(totals.wrenches_rejected.values())))]
-    values += [(f'external wrenches rejected {reason}', str(count))
-               for reason, count in totals.wrenches_rejected.items()]
-    return level, message, values
-
-
-# --------------------------------------------------------------------------------------------
 # The external-torque observer: what it depends on, and its diagnostics status
 
 def observer_key(output: Output, gravity: Sequence[float], gain: float,
@@ -1127,36 +720,3 @@ def make_observer(output: Output, gravity: Sequence[float], gain: float,
         lambda qd: sd.friction_torque(model, qd, threshold))
     return MomentumObserver(model, gain, output.armature, friction, gravity, max_gap,
                             output.backend)
-
-
-def observer_status(output: Optional[Output], gain: float,
-                    observer: Optional[MomentumObserver], window: EstimateWindow) -> Status:
-    """Return the ``external torque`` status: RMS of the estimate per joint over the period.
-
-    WARN, naming the joints, when a joint's RMS exceeds ``external_torque_warn``.
-    """
-    values = [('observer gain [1/s]', f'{gain:g}'),
-              ('time constant [ms]', f'{1e3 / gain:.1f}' if gain > 0.0 else '')]
-    if gain <= 0.0:
-        return 'OK', 'observer off (observer_gain 0)', values
-    if output is None:
-        return 'OK', 'no robot model', values
-    values += [('estimates', str(window.count))]
-    values += [(f'skipped {reason}', str(count)) for reason, count in window.skipped.items()]
-    if observer is not None:
-        values += [('samples since restart', str(observer.samples)),
-                   ('restarts', str(observer.resets)),
-                   ('last restart', observer.reset_reason)]
-    rms = window.rms()
-    if rms is None or len(rms) != len(output.joints):
-        return 'OK', 'no measured effort in this period (observer waiting)', values
-    warn = output.external_torque_warn
-    values += [(f'rms {joint}', f'{value:.4g}') for joint, value in zip(output.joints, rms)]
-    values += [('warn above', ', '.join(f'{x:g}' for x in warn))]
-    over = np.flatnonzero(rms > warn)
-    worst = int(np.argmax(rms / warn))
-    if over.size:
-        return 'WARN', ('external torque above external_torque_warn: ' + ', '.join(
-            f'{output.joints[i]} {rms[i]:.3g} (RMS) > {warn[i]:g}' for i in over)), values
-    return 'OK', (f'largest RMS {rms[worst]:.3g} on {output.joints[worst]} '
-                  f'(warn above {warn[worst]:g})'), values

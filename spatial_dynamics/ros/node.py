@@ -107,12 +107,14 @@ import spatial_dynamics as sd
 from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
 from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, spin, subscribe
 from spatial_dynamics.ros.config import (
-    backend_text, build_output, CompiledKernels, Config, ConfigError, DEFAULT_GRAVITY,
+    build_output, CompiledKernels, Config, ConfigError, DEFAULT_GRAVITY,
     DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT, DEFAULT_OBSERVER_GAIN,
-    DEFAULT_WRENCH_TIMEOUT, description_source, DescriptionParser, feedforward_status,
-    make_observer, model_status, NODE_NAME, observer_key, observer_status, Output,
-    PARAMETER_NAMES, PARAMETERS, ParseRequest, PAYLOAD_PARAMETERS, prepare, reparse_needed,
-    Settings, SLOW_PARAMETERS, Totals, Window)
+    DEFAULT_WRENCH_TIMEOUT, make_observer, NODE_NAME, observer_key, Output,
+    PARAMETER_NAMES, PARAMETERS, PAYLOAD_PARAMETERS, prepare, reparse_needed,
+    SLOW_PARAMETERS)
+from spatial_dynamics.ros.descriptions import description_source, DescriptionParser, ParseRequest
+from spatial_dynamics.ros.diagnostics import (
+    backend_text, feedforward_status, model_status, observer_status, Settings, Totals, Window)
 from spatial_dynamics.ros.control import (answer, Dynamics, FEEDBACK_MODES, measured_arrays,
                                           terms_names)
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays

@@ -31,7 +31,11 @@ from typing import Any, Callable, Dict, Iterable, Mapping, Optional, Sequence, T
 TYPES = ('bool', 'int', 'double', 'string', 'double[]', 'string[]')
 
 
-class ParameterError(ValueError):
+class ConfigError(ValueError):
+    """A parameter value or robot description that cannot be used; the message says why."""
+
+
+class ParameterError(ConfigError):
     """A parameter value that cannot be used; the message names the parameter and says why."""
 
 

@@ -60,8 +60,9 @@ from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, QoSReliabilityPolicy
 from sensor_msgs.msg import JointState
 from spatial_dynamics.bounds import MAX_EFFORT, MAX_POSITION, MAX_WRENCH
-from spatial_dynamics.ros.config import ConfigError, read_description
-from spatial_dynamics.ros.parameters import Param, ParameterError, Table
+from spatial_dynamics.ros.descriptions import read_description
+
+from spatial_dynamics.ros.parameters import ConfigError, Param, ParameterError, Table
 from spatial_dynamics.ros.common import advertise, spin
 from spatial_dynamics.sim.robot import (import_mujoco, INTEGRATORS, MujocoMissing,
                                         SimulatedRobot)

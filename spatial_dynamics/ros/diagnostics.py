@@ -1,0 +1,279 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""What the node says in /diagnostics: its counters and the text of each status.
+
+Pure: the node fills :class:`Window` (one diagnostics period) and :class:`Totals` (since the
+start) as messages come, and once a second publishes what :func:`model_status`,
+:func:`feedforward_status` and :func:`observer_status` make of them.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+import time
+from typing import Dict, List, Optional, Tuple, TYPE_CHECKING
+
+import numpy as np
+from spatial_dynamics.ros.config import (
+    AUTO_COMPILED_ABOVE_S, DEFAULT_GRAVITY, DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT,
+    NODE_REASONS, URDF_WARNINGS_LISTED, WRENCH_REASONS)
+from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
+from spatial_dynamics.ros.inputs import REASONS
+from spatial_dynamics.ros.observer import EstimateWindow, MomentumObserver
+
+if TYPE_CHECKING:
+    from spatial_dynamics.ros.config import CompiledKernels, Output
+
+
+# --------------------------------------------------------------------------------------------
+# Counters and what /diagnostics says about them
+
+class Window:
+    """Counts and compute times over one diagnostics period."""
+
+    def __init__(self) -> None:
+        self.start_ns = time.monotonic_ns()
+        self.received = 0
+        self.answered = 0
+        self.compute_ns = 0
+        self.compute_max_ns = 0
+        self.delay_ns = 0
+        self.delay_count = 0
+        self.delay_max_ns = 0
+        self.measured = 0          # good measured states (joint_states)
+
+
+class Totals:
+    """Counters since the start: answers, rejections by reason, saturation, wrenches, models."""
+
+    def __init__(self) -> None:
+        self.answered = 0
+        self.last_input_ns: Optional[int] = None     # monotonic ns of the last answered input
+        self.last_desired_ns: Optional[int] = None   # receipt of the last good desired state
+        self.last_measured_ns: Optional[int] = None  # receipt of the last good measured state
+        self.measured_received = 0
+        self.measured_rejected: Counter = Counter({reason: 0 for reason in MEASURED_REASONS})
+        self.rejected: Counter = Counter({reason: 0 for reason in REASONS + NODE_REASONS})
+        self.saturated = 0                  # answers with at least one clamped joint
+        self.saturated_joints: Counter = Counter()
+        self.wrenches_received = 0
+        self.wrenches_rejected: Counter = Counter({reason: 0 for reason in WRENCH_REASONS})
+        self.descriptions_rejected = 0
+        self.last_description_error = ''
+
+    def description_rejected(self, reason: str) -> None:
+        """Count a rejected description and remember why."""
+        self.descriptions_rejected += 1
+        self.last_description_error = reason
+
+
+#: A diagnostics status without ROS: level ('OK', 'WARN', 'ERROR'), message, key-values.
+Status = Tuple[str, str, List[Tuple[str, str]]]
+
+
+def backend_text(output: Output, kernels: Optional[CompiledKernels]) -> str:
+    """Name what the answers run on, for logs and diagnostics (the backend's name first)."""
+    if output.backend == 'compiled':
+        return kernels.description if kernels is not None and kernels.description \
+            else 'compiled'
+    if output.preferred == 'compiled':
+        if kernels is not None and kernels.state == 'failed':
+            return f'numpy (compiled kernels unavailable: {kernels.error})'
+        return 'numpy (preparing compiled kernels)'
+    if output.setting == 'auto':
+        return (f'numpy (auto: {output.plain_call_s * 1e6:.0f} us per call, within the '
+                f'{AUTO_COMPILED_ABOVE_S * 1e6:g} us budget)')
+    return 'numpy'
+
+
+def model_status(output: Optional[Output], totals: Totals, strict: bool,
+                 backend: str) -> Status:
+    """Return the ``robot model`` status: what is loaded, from where, backend, warnings."""
+    rejections = [('descriptions rejected', str(totals.descriptions_rejected)),
+                  ('last rejection', totals.last_description_error)]
+    if output is None:
+        return 'ERROR', 'waiting for robot_description', rejections
+    # WARN while the loaded description has URDF warnings: the torques are those of the
+    # file as written, but the file is physically inconsistent somewhere.
+    model, urdf_warnings = output.model, output.base.warnings
+    message = f'robot {model.name!r} loaded, {len(model.joint_names)} DOF'
+    if urdf_warnings:
+        message += f', {len(urdf_warnings)} URDF warning(s)'
+    values = [('robot name', model.name), ('dof', str(len(model.joint_names))),
+              ('model joints', ', '.join(model.joint_names)),
+              ('output joints', ', '.join(output.joints)), ('source', output.source),
+              ('summary', output.base.summary()), ('backend', backend),
+              ('backend setting', output.setting),
+              ('plain call time [us]', f'{output.plain_call_s * 1e6:.1f}')]
+    values += rejections + [('strict urdf', str(bool(strict))),
+                            ('urdf warnings', str(len(urdf_warnings)))]
+    values += [(f'urdf warning {i}', text)
+               for i, text in enumerate(urdf_warnings[:URDF_WARNINGS_LISTED], 1)]
+    return ('WARN' if urdf_warnings else 'OK'), message, values
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The live settings an answer uses besides the :class:`Output` (diagnostics show them)."""
+
+    gravity: Tuple[float, float, float] = DEFAULT_GRAVITY
+    acceleration_source: str = 'effort'
+    input_timeout: float = DEFAULT_INPUT_TIMEOUT
+    control_mode: str = 'feedforward'
+    output: str = 'full'
+    measured_timeout: float = DEFAULT_MEASURED_TIMEOUT
+
+
+def _us(ns: float) -> str:
+    return f'{ns * 1e-3:.1f}'
+
+
+def _age(last_ns: Optional[int], now_ns: int) -> Optional[float]:
+    return None if last_ns is None else (now_ns - last_ns) * 1e-9
+
+
+def _feedback_state(settings: Settings, totals: Totals, now_ns: int
+                    ) -> Optional[Tuple[str, str]]:
+    """Level and message when a feedback mode cannot answer (stale or missing state)."""
+    measured, desired = (_age(totals.last_measured_ns, now_ns),
+                         _age(totals.last_desired_ns, now_ns))
+    mode = settings.control_mode
+    if measured is None:
+        return 'ERROR', f'no measured state on joint_states yet ({mode}); not publishing'
+    if measured > settings.measured_timeout:
+        return 'ERROR', (f'measured state stale: no good joint_states for {measured:.2f} s '
+                         f'(measured_timeout {settings.measured_timeout} s, {mode}); '
+                         'not publishing')
+    if desired is None:
+        return 'ERROR', f'no desired state yet ({mode}); not publishing'
+    if desired > settings.input_timeout:
+        return 'ERROR', (f'desired state stale: no good desired input for {desired:.2f} s '
+                         f'(input_timeout {settings.input_timeout} s, {mode}); '
+                         'not publishing')
+    return None
+
+
+def _input_state(output: Optional[Output], window: Window, settings: Settings, period: float,
+                 age: Optional[float], totals: Optional[Totals] = None, now_ns: int = 0
+                 ) -> Tuple[str, str]:
+    """Level and message of the ``feedforward`` status."""
+    rejected_now = window.received - window.answered
+    if output is None:
+        return 'ERROR', 'no robot model'
+    if settings.control_mode in FEEDBACK_MODES and totals is not None:
+        stale = _feedback_state(settings, totals, now_ns)
+        if stale is not None:
+            return stale
+    elif age is None:
+        return 'WARN', 'no input received yet'
+    elif age > settings.input_timeout:
+        return 'ERROR', (f'input stale: no good input for {age:.2f} s '
+                         f'(input_timeout {settings.input_timeout} s); not publishing')
+    if rejected_now:
+        return 'WARN', f'{window.answered / period:.1f} Hz, {rejected_now} rejected'
+    return 'OK', f'{window.answered / period:.1f} Hz'
+
+
+def _window_values(window: Window, period: float) -> List[Tuple[str, str]]:
+    answered, delays = window.answered, window.delay_count
+    return [
+        ('input rate [Hz]', f'{window.received / period:.1f}'),
+        ('output rate [Hz]', f'{answered / period:.1f}'),
+        ('compute time mean [us]', _us(window.compute_ns / answered) if answered else ''),
+        ('compute time max [us]', _us(window.compute_max_ns) if answered else ''),
+        ('input delay mean [ms]', f'{window.delay_ns / delays * 1e-6:.3f}' if delays else ''),
+        ('input delay max [ms]', f'{window.delay_max_ns * 1e-6:.3f}' if delays else ''),
+    ]
+
+
+def _terms_values(output: Output) -> List[Tuple[str, str]]:
+    return [('payload', str(output.payload)),
+            ('armature', 'none' if output.armature is None else str(output.armature.tolist())),
+            ('friction model', 'none' if output.friction_threshold is None
+             else f'urdf (threshold {output.friction_threshold:g})'),
+            ('clamp to effort limits', str(output.clamp))] + (
+        [] if output.gains is None else
+        [('kp', str(output.gains.kp.tolist())), ('kd', str(output.gains.kd.tolist())),
+         ('continuous joints', ', '.join(name for name, c in zip(
+             output.joints, output.gains.continuous) if c))])
+
+
+def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
+                       settings: Settings, wrenches: Dict[str, tuple], now_ns: int) -> Status:
+    """Return the ``feedforward`` status: rates, compute time, delays, staleness, rejections.
+
+    ``window`` is the period that ends at ``now_ns`` (monotonic); ``wrenches`` maps a link to
+    ``(wrench, expiry ns)``.
+    """
+    period = max((now_ns - window.start_ns) * 1e-9, 1e-9)
+    last = totals.last_input_ns
+    age = None if last is None else (now_ns - last) * 1e-9
+    level, message = _input_state(output, window, settings, period, age, totals, now_ns)
+    measured_age = _age(totals.last_measured_ns, now_ns)
+    values = _window_values(window, period) + [
+        ('last input age [s]', '' if age is None else f'{age:.3f}'),
+        ('input timeout [s]', str(settings.input_timeout)),
+        ('stale', str(age is None or age > settings.input_timeout)),
+        ('answered', str(totals.answered)),
+        ('rejected', str(sum(totals.rejected.values())))]
+    values += [(f'rejected {reason}', str(count)) for reason, count in totals.rejected.items()]
+    values += [
+        ('control mode', settings.control_mode), ('output', settings.output),
+        ('measured state rate [Hz]', f'{window.measured / period:.1f}'),
+        ('measured state age [s]', '' if measured_age is None else f'{measured_age:.3f}'),
+        ('measured timeout [s]', str(settings.measured_timeout)),
+        ('measured state stale', str(measured_age is None
+                                     or measured_age > settings.measured_timeout)),
+        ('measured states received', str(totals.measured_received)),
+        ('measured states rejected', str(sum(totals.measured_rejected.values())))]
+    values += [(f'measured states rejected {reason}', str(count))
+               for reason, count in totals.measured_rejected.items()]
+    values += [('gravity [m/s^2]', str(list(settings.gravity))),
+               ('acceleration source', settings.acceleration_source)]
+    if output is not None:
+        values += _terms_values(output)
+    values += [
+        ('saturated', str(totals.saturated)),
+        ('saturated joints', ', '.join(f'{name}: {count}' for name, count
+                                       in sorted(totals.saturated_joints.items()))),
+        ('external wrenches active', ', '.join(sorted(
+            link for link, (_, expiry) in wrenches.items() if expiry >= now_ns))),
+        ('external wrenches received', str(totals.wrenches_received)),
+        ('external wrenches rejected', str(sum(totals.wrenches_rejected.values())))]
+    values += [(f'external wrenches rejected {reason}', str(count))
+               for reason, count in totals.wrenches_rejected.items()]
+    return level, message, values
+
+
+def observer_status(output: Optional[Output], gain: float,
+                    observer: Optional[MomentumObserver], window: EstimateWindow) -> Status:
+    """Return the ``external torque`` status: RMS of the estimate per joint over the period.
+
+    WARN, naming the joints, when a joint's RMS exceeds ``external_torque_warn``.
+    """
+    values = [('observer gain [1/s]', f'{gain:g}'),
+              ('time constant [ms]', f'{1e3 / gain:.1f}' if gain > 0.0 else '')]
+    if gain <= 0.0:
+        return 'OK', 'observer off (observer_gain 0)', values
+    if output is None:
+        return 'OK', 'no robot model', values
+    values += [('estimates', str(window.count))]
+    values += [(f'skipped {reason}', str(count)) for reason, count in window.skipped.items()]
+    if observer is not None:
+        values += [('samples since restart', str(observer.samples)),
+                   ('restarts', str(observer.resets)),
+                   ('last restart', observer.reset_reason)]
+    rms = window.rms()
+    if rms is None or len(rms) != len(output.joints):
+        return 'OK', 'no measured effort in this period (observer waiting)', values
+    warn = output.external_torque_warn
+    values += [(f'rms {joint}', f'{value:.4g}') for joint, value in zip(output.joints, rms)]
+    values += [('warn above', ', '.join(f'{x:g}' for x in warn))]
+    over = np.flatnonzero(rms > warn)
+    worst = int(np.argmax(rms / warn))
+    if over.size:
+        return 'WARN', ('external torque above external_torque_warn: ' + ', '.join(
+            f'{output.joints[i]} {rms[i]:.3g} (RMS) > {warn[i]:g}' for i in over)), values
+    return 'OK', (f'largest RMS {rms[worst]:.3g} on {output.joints[worst]} '
+                  f'(warn above {warn[worst]:g})'), values
