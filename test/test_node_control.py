@@ -555,3 +555,80 @@ def test_a_whole_trajectory_is_followed_at_the_measured_stamps(driver, demo, dem
         for dt in (2.1, 2.4, 3.0):
             np.testing.assert_allclose(answer(dt, q, qd), expected(new, 2.0, dt, q, qd),
                                        rtol=0, atol=1e-9)
+
+
+def test_a_plan_is_annotated_with_model_effort_for_jtc(driver, demo, demo_model):
+    """trajectory_effort_tolerance > 0: each desired_trajectory comes back with effort.
+
+    On ``annotated_trajectory``: the same joints (model order), the plan's own points among
+    the resampled ones with positions unchanged, effort = the model torque (``output`` part)
+    of the spline at each point, and JTC's linear interpolation of that effort between two
+    points within the tolerance of the model torque along the spline (checked at 7 interior
+    instants of every interval; a quintic plan: no torque jumps at its points).
+    ``output: without_gravity`` annotates τ − g(q); a plan
+    naming only some joints is refused with a reason and nothing is published.
+    """
+    from builtin_interfaces.msg import Duration
+    from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+    import spatial_dynamics as sd
+    from spatial_dynamics import trajectory as plan
+    names = demo_model.joint_names
+    n = len(names)
+    tol = 0.05                       # N m
+    rng = np.random.default_rng(5)
+    points = [(0.0, rng.uniform(-0.5, 0.5, n)), (0.8, rng.uniform(-0.5, 0.5, n)),
+              (2.0, rng.uniform(-0.5, 0.5, n))]
+    msg = JointTrajectory(joint_names=list(reversed(names)))
+    for t, q in points:
+        msg.points.append(JointTrajectoryPoint(
+            positions=[float(x) for x in reversed(q)], velocities=[0.0] * n,
+            accelerations=[0.0] * n,
+            time_from_start=Duration(sec=int(t), nanosec=int(round((t % 1) * 1e9)))))
+    traj = plan.trajectory(names, [
+        {'positions': list(q), 'velocities': [0.0] * n, 'accelerations': [0.0] * n,
+         'time_from_start': {'sec': int(t), 'nanosec': int(round((t % 1) * 1e9))}}
+        for t, q in points])
+    got = []
+    sub = driver.node.create_subscription(JointTrajectory, 'annotated_trajectory', got.append,
+                                          10)
+    try:
+        with connected(driver, names) as (io, loop):
+            for output, part in (('full', lambda q, v, a: sd.rnea(demo_model, q, v, a)),
+                                 ('without_gravity', lambda q, v, a: sd.rnea(demo_model, q, v, a)
+                                  - sd.gravity_torque(demo_model, q))):
+                ok(io.set_parameters(trajectory_effort_tolerance=tol, output=output))
+                before = len(got)
+                io.trajectory.publish(msg)
+                driver.spin_until(lambda: len(got) > before, what='annotated_trajectory')
+                out = got[-1]
+                assert list(out.joint_names) == list(names)
+                times = np.array([p.time_from_start.sec + p.time_from_start.nanosec * 1e-9
+                                  for p in out.points])
+                assert np.all(np.diff(times) > 0) and len(times) > len(points)
+                effort = np.array([p.effort for p in out.points])
+                for t, q in points:          # the plan's own points are kept as they were
+                    k = int(np.argmin(np.abs(times - t)))
+                    assert abs(times[k] - t) < 1e-9
+                    np.testing.assert_allclose(out.points[k].positions, q, rtol=0, atol=1e-12)
+                for k, t in enumerate(times):    # effort = the model part on the spline
+                    q, v, a = (x[0] for x in plan.evaluate(traj, np.array([t])))
+                    np.testing.assert_allclose(effort[k], part(q, v, a), rtol=0, atol=1e-9)
+                worst = 0.0                  # what JTC interpolates, against the model
+                for k in range(len(times) - 1):
+                    for s in np.linspace(0.0, 1.0, 9)[1:-1]:
+                        t = times[k] + s * (times[k + 1] - times[k])
+                        q, v, a = (x[0] for x in plan.evaluate(traj, np.array([t])))
+                        linear = (1 - s) * effort[k] + s * effort[k + 1]
+                        worst = max(worst, float(np.abs(linear - part(q, v, a)).max()))
+                assert worst <= tol, worst
+            # a plan that names only some of the joints: refused, nothing published
+            partial = JointTrajectory(joint_names=list(names[:3]))
+            partial.points = [JointTrajectoryPoint(positions=[0.0] * 3,
+                                                   time_from_start=Duration(sec=1))]
+            count = len(got)
+            io.trajectory.publish(partial)
+            demo.wait_for_log('annotated_trajectory: message rejected')
+            driver.spin_for(0.3)
+            assert len(got) == count
+    finally:
+        driver.node.destroy_subscription(sub)

@@ -59,7 +59,8 @@ def test_yaml_documents_every_parameter():
                         'friction_velocity_threshold', 'clamp_to_effort_limits',
                         'external_wrench_timeout', 'backend', 'output', 'control_mode',
                         'kp', 'kd', 'measured_timeout', 'observer_gain',
-                        'external_torque_warn'}
+                        'external_torque_warn', 'measured_effort', 'wrench_estimate.link',
+                        'wrench_estimate.epsilon', 'trajectory_effort_tolerance'}
     for name in declared:
         # payload.link is written nested: 'payload:' then 'link:'
         *group, leaf = name.split('.')

@@ -80,11 +80,11 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     node = NodeProcess(install, ns + [
         '-p', f'robot_description_file:={DEMO_URDF}', '-p', 'control_mode:=computed_torque',
         '-p', f'kp:={as_list(kp)}', '-p', f'kd:={as_list(kd)}',
-        '-p', f'observer_gain:={GAIN}', '-p', f'external_torque_warn:=[{threshold!r}]'],
-        str(tmp_path))
+        '-p', f'observer_gain:={GAIN}', '-p', f'external_torque_warn:=[{threshold!r}]',
+        '-p', f'wrench_estimate.link:={LINK}'], str(tmp_path))
     reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
     n = driver.node
-    states, estimates, statuses = [], [], []
+    states, estimates, statuses, wrenches = [], [], [], []
     push = n.create_publisher(WrenchStamped, f'{NS}/applied_wrench', reliable)
     pushed_at = []      # the sim time at which the push was sent
 
@@ -114,7 +114,9 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     subs = [n.create_subscription(JointState, f'{NS}/joint_states', on_state, 1000),
             n.create_subscription(JointState, f'{NS}/external_torque_estimate',
                                   estimates.append, reliable),
-            n.create_subscription(DiagnosticArray, '/diagnostics', on_diagnostics, 100)]
+            n.create_subscription(DiagnosticArray, '/diagnostics', on_diagnostics, 100),
+            n.create_subscription(WrenchStamped, f'{NS}/external_wrench_estimate',
+                                  wrenches.append, reliable)]
     try:
         driver.spin_until(lambda: (push.get_subscription_count() >= 1
                                    and lockstep.desired_pub.get_subscription_count() >= 1
@@ -181,3 +183,84 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     kv = values(warning)
     assert float(kv[f'rms {loudest}']) > threshold
     assert kv['observer gain [1/s]'] == f'{GAIN:g}'
+    # the virtual F/T sensor: the pushed wrench itself, in the tcp frame, within 3 % where
+    # the arm is well conditioned (all six directions observed: no damping)
+    assert kv['wrench estimate link'] == LINK and kv['wrench samples with weak directions'] == '0'
+    assert wrenches and all(w.header.frame_id == LINK for w in wrenches)
+    w_at = {seconds(w.header.stamp): w.wrench for w in wrenches}
+    # one reading per estimate, at the measurement's stamp (the last ones may still have been
+    # on their way when the run ended)
+    assert set(w_at) <= set(r) and len(w_at) >= len(r) - 10, (len(w_at), len(r))
+    late = [t for t in late if t in w_at]
+    assert len(late) > 400, len(late)
+    sigma = np.linalg.svd(sd.jacobian(model, hold, LINK), compute_uv=False)
+    assert sigma.min() > 0.02, sigma    # the hold pose is well conditioned
+    for t in late:
+        w = w_at[t]
+        got = np.array([w.torque.x, w.torque.y, w.torque.z, w.force.x, w.force.y, w.force.z])
+        error = np.linalg.norm(got - WRENCH) / np.linalg.norm(WRENCH)
+        assert error < 0.03, (t, error, got)
+
+
+def test_measured_effort_gravity_compensated_adds_g_of_q(install, driver, tmp_path):
+    """``measured_effort``: what a drive's effort means, for the observer (issue: UR vs Franka).
+
+    An arm at rest, held by its drives: a Franka-like drive reports the link-side torque
+    g(q), a UR-like one reports 0 (gravity compensated). With the matching setting the
+    observer sees no external torque; reading the UR's zeros as ``full`` it would "see"
+    τ_ext = g(q), the whole weight of the arm, which is what it finds.
+    """
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from node_harness import Io, joint_state
+    model = sd.Model.from_urdf(DEMO_URDF)
+    names = list(model.joint_names)
+    q = np.linspace(-0.6, 0.7, len(names))
+    g = sd.gravity_torque(model, q)
+    zero = np.zeros(len(names))
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
+                                 '-p', 'measured_effort:=gravity_compensated'], str(tmp_path))
+    io = Io(driver)
+    estimates = []
+    sub = driver.node.create_subscription(
+        JointState, 'external_torque_estimate', estimates.append,
+        QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+    measured = driver.node.create_publisher(JointState, 'joint_states', 10)
+    k = [0]
+
+    def send(effort):
+        k[0] += 1
+        msg = joint_state(names, q, zero, effort, k[0])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(k[0] * 5_000_000,
+                                                                1_000_000_000)
+        measured.publish(msg)
+        driver.spin_for(0.004)
+
+    def run(effort, seconds=1.0):
+        """Publish the held arm at 200 Hz for ``seconds`` of its stamps; the last estimate."""
+        start = len(estimates)
+        for _ in range(int(seconds * 200)):
+            send(effort)
+        driver.spin_until(lambda: len(estimates) > start + 100, what='estimates')
+        return np.array(estimates[-1].effort)
+    try:
+        io.wait_connected()
+        driver.spin_until(lambda: measured.get_subscription_count() >= 1, what='joint_states')
+        # until the node's subscription has matched this publisher (best effort: the first
+        # messages may be lost while discovery completes on its side)
+        driver.spin_until(lambda: send(zero) or estimates, what='a first estimate')
+        # UR-like zeros, read as gravity compensated: nothing external (1 s = 20 time constants)
+        np.testing.assert_allclose(run(zero), zero, rtol=0, atol=1e-6 * np.abs(g).max())
+        # Franka-like g(q), read as full: nothing external either
+        for result in io.set_parameters(measured_effort='full'):
+            assert result.successful, result.reason
+        np.testing.assert_allclose(run(g), zero, rtol=0, atol=1e-6 * np.abs(g).max())
+        # UR-like zeros read as full: the arm's weight appears as an external torque
+        np.testing.assert_allclose(run(zero), g, rtol=1e-6, atol=1e-6 * np.abs(g).max())
+        refused = io.set_parameters(measured_effort='compensated')[0]
+        assert not refused.successful and 'measured_effort' in refused.reason
+    finally:
+        driver.node.destroy_subscription(sub)
+        driver.node.destroy_publisher(measured)
+        io.close()
+        assert node.stop() == 0, node.log()

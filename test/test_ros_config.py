@@ -43,6 +43,11 @@ def defaults(**changes) -> dict:
     return params
 
 
+def checked(**changes):
+    """Return the table's ``Params`` of :func:`defaults` with ``changes`` (raises as the node)."""
+    return config.PARAMETERS.values(defaults(**changes))
+
+
 # --------------------------------------------------------------------------------------------
 # The module is pure, and the shell around it thin
 
@@ -177,29 +182,29 @@ def test_a_xacro_file_is_checked_like_any_file_before_xacro_opens_it(tmp_path):
 
 
 def test_description_precedence_parameter_file_topic():
-    assert descriptions.description_source(defaults()) == 'topic'
-    assert descriptions.description_source(defaults(robot_description_file=DEMO_URDF)) == 'file'
-    assert descriptions.description_source(defaults(
+    assert descriptions.description_source(checked()) == 'topic'
+    assert descriptions.description_source(checked(robot_description_file=DEMO_URDF)) == 'file'
+    assert descriptions.description_source(checked(
         robot_description='<robot/>', robot_description_file=DEMO_URDF)) == 'parameter'
 
 
 def test_description_change_reads_the_file_set_while_the_string_wins(demo_text):
-    previous = defaults(robot_description=demo_text)
+    previous = checked(robot_description=demo_text)
     changes = {'robot_description_file': PENDULUM_URDF}
-    urdf, source, kept = descriptions.description_change(previous, {**previous, **changes},
-                                                         changes)
+    urdf, source, kept = descriptions.description_change(
+        previous, config.PARAMETERS.changed(previous, changes), changes)
     assert (urdf, source, kept) == (None, None, PENDULUM_URDF)
     # clearing the string falls back to the file
-    previous = {**previous, **changes}
+    previous = config.PARAMETERS.changed(previous, changes)
     changes = {'robot_description': ''}
-    urdf, source, kept = descriptions.description_change(previous, {**previous, **changes},
-                                                         changes)
+    urdf, source, kept = descriptions.description_change(
+        previous, config.PARAMETERS.changed(previous, changes), changes)
     assert source == f'file {PENDULUM_URDF}' and 'pendulum' in urdf and kept == ''
     # a bad file set while the string wins is refused all the same
     changes = {'robot_description_file': '/nonexistent/robot.urdf'}
     with pytest.raises(ConfigError, match='no such file'):
-        descriptions.description_change(defaults(robot_description=demo_text),
-                                        defaults(robot_description=demo_text, **changes),
+        descriptions.description_change(checked(robot_description=demo_text),
+                                        checked(robot_description=demo_text, **changes),
                                         changes)
 
 
@@ -210,16 +215,16 @@ def test_description_change_reads_the_file_set_while_the_string_wins(demo_text):
                                      [-800.0, 800.0, 0.0]])
 def test_absurd_gravity_refused_with_the_bound(gravity):
     with pytest.raises(ConfigError) as info:
-        config.check_gravity(gravity)
+        checked(gravity=gravity)
     message = str(info.value)
     assert 'parameter gravity' in message and f'{config.MAX_GRAVITY:g} m/s²' in message
 
 
 def test_physical_gravity_accepted():
-    assert config.check_gravity([0.0, 0.0, -9.81]) == (0.0, 0.0, -9.81)
+    assert checked(gravity=[0.0, 0.0, -9.81]).gravity == (0.0, 0.0, -9.81)
     # a centrifuge or a test rig may exceed 1 g by far; the bound is 100 g
     assert config.MAX_GRAVITY == 1e3
-    assert config.check_gravity([0.0, 0.0, -1e3]) == (0.0, 0.0, -1e3)
+    assert checked(gravity=[0.0, 0.0, -1e3]).gravity == (0.0, 0.0, -1e3)
 
 
 def test_absurd_armature_refused_with_the_bound():
@@ -248,7 +253,7 @@ def test_absurd_payload_refused_with_the_bound(field, value, bound):
     args = dict(link='hand', mass=1.0, com=[0.0] * 3, inertia=[0.01, 0, 0, 0.01, 0, 0.01])
     args[field] = value
     with pytest.raises(ConfigError) as info:
-        config.check_payload(**args)
+        checked(**{f'payload.{key}': value for key, value in args.items()})
     message = str(info.value)
     assert f'parameter payload.{field}' in message
     assert f'{getattr(config, bound):g}' in message
@@ -256,18 +261,20 @@ def test_absurd_payload_refused_with_the_bound(field, value, bound):
 
 def test_absurd_locked_position_refused_with_the_bound():
     with pytest.raises(ConfigError) as info:
-        config.check_locked(['joint2'], [1e300])
+        checked(locked_joints=['joint2'], locked_positions=[1e300])
     message = str(info.value)
     assert 'parameter locked_positions' in message and f'{config.MAX_LOCKED_POSITION:g}' in message
-    assert config.check_locked(['joint2'], [-math.pi]) == {'joint2': -math.pi}
+    assert config.locked_positions(checked(locked_joints=['joint2'],
+                                           locked_positions=[-math.pi])) == {'joint2': -math.pi}
 
 
 def test_locked_joints_need_the_same_number_of_positions_and_distinct_names():
     with pytest.raises(ConfigError, match='1 values for 2 locked_joints'):
-        config.check_locked(['a', 'b'], [0.1])
+        config.locked_positions(checked(locked_joints=['a', 'b'], locked_positions=[0.1]))
     with pytest.raises(ConfigError, match='names repeated'):
-        config.check_locked(['a', 'a'], [])
-    assert config.check_locked(['a', 'b'], []) == {'a': 0.0, 'b': 0.0}
+        checked(locked_joints=['a', 'a'], locked_positions=[])
+    assert config.locked_positions(checked(locked_joints=['a', 'b'], locked_positions=[])) == \
+        {'a': 0.0, 'b': 0.0}
 
 
 # --------------------------------------------------------------------------------------------
@@ -284,7 +291,7 @@ def test_prepare_validates_without_changing_its_inputs(demo_text):
     second = config.prepare(first.params, change, first.output)
     assert second.output.base is first.output.base and not second.new_description
     assert second.output.model is not first.output.model
-    assert first.params['payload.link'] == ''   # the accepted parameters stay as they were
+    assert first.params.payload_link == ''   # the accepted parameters stay as they were
     q = np.linspace(-1.0, 1.0, len(first.output.joints))
     with_payload = sd.with_payload(first.output.base, hand, 2.0)
     np.testing.assert_allclose(sd.rnea(second.output.model, q, q, q),
@@ -305,11 +312,12 @@ def test_without_a_model_what_needs_none_is_checked():
 
 
 def test_reduction_and_strict_are_reparse_triggers(demo_text):
-    params = defaults(robot_description=demo_text)
-    assert not config.reparse_needed(params, {**params, 'gravity': [0.0, 0.0, -1.0]})
+    params = checked(robot_description=demo_text)
+    changed = config.PARAMETERS.changed
+    assert not config.reparse_needed(params, changed(params, {'gravity': [0.0, 0.0, -1.0]}))
     for name, value in (('joints', ['joint1']), ('locked_joints', ['joint2']),
                         ('locked_positions', [0.5]), ('strict_urdf', True)):
-        assert config.reparse_needed(params, {**params, name: value}), name
+        assert config.reparse_needed(params, changed(params, {name: value})), name
 
 
 # --------------------------------------------------------------------------------------------

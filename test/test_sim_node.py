@@ -161,7 +161,7 @@ def test_missing_mujoco_clear_message_exit_1(tmp_path):
 
 
 @pytest.mark.parametrize('param, words', [
-    ('mode:=fast', ["mode 'fast'"]),
+    ('mode:=fast', ["mode: 'fast'"]),
     ('timestep:=1e300', ['timestep', '1e+300']),
     ('timestep:=1e-12', ['timestep', '1e-06']),
     ('command_timeout:=1e300', ['command_timeout']),

@@ -18,7 +18,8 @@ from typing import Callable, Optional, Sequence
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import (ExternalShutdownException, MultiThreadedExecutor,
+                             SingleThreadedExecutor)
 import rclpy.logging
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, QoSReliabilityPolicy
@@ -48,7 +49,7 @@ DESCRIPTION_QOS = QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
                              history=HistoryPolicy.KEEP_LAST, depth=1)
 
 
-def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1):
+def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1, group=None):
     """Subscribe with :func:`input_qos`, QoS overrides enabled, no QoS event handlers.
 
     rclpy adds default event handlers (incompatible QoS / type warnings) per endpoint to the
@@ -58,7 +59,7 @@ def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1):
     the other end of an incompatible pair still reports it with its own default handlers.
     """
     return node.create_subscription(
-        msg_type, topic, callback, input_qos(depth),
+        msg_type, topic, callback, input_qos(depth), callback_group=group,
         qos_overriding_options=QoSOverridingOptions.with_default_policies(),
         event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
 
@@ -82,10 +83,13 @@ def _context_shut_down(grace: float = 1.0) -> bool:
 
 
 def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
-         name: str = 'inverse_dynamics') -> int:
+         name: str = 'inverse_dynamics', threads: int = 2) -> int:
     """Make a node and spin it until SIGINT/SIGTERM; 0 on a clean exit, 1 on a bad start-up.
 
     The node's and the latency baseline's (``relay.py``) process around them, one routine.
+    With ``threads`` > 1 the executor is rclpy's MultiThreadedExecutor: callbacks of different
+    callback groups run side by side (the node answers in one group while a parameter change
+    parses a description in rclpy's default group); 1 gives the SingleThreadedExecutor.
 
     SIGINT is handled as SIGTERM is: rclpy's handler shuts the context down and wakes the
     executor, which returns between two callbacks. Python's own SIGINT handler is not chained
@@ -99,7 +103,8 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
     status = 0
     try:
         node = make_node()
-        executor = SingleThreadedExecutor()
+        executor = (MultiThreadedExecutor(num_threads=threads) if threads > 1
+                    else SingleThreadedExecutor())
         executor.add_node(node)
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):

@@ -28,21 +28,23 @@ import gc
 import math
 import threading
 import time
-from typing import Callable, Optional, Sequence, Tuple
+from typing import Any, Callable, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
 from spatial_dynamics.bounds import MAX_GRAVITY
+from spatial_dynamics.effort import MEASURED_EFFORT
+from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
 from spatial_dynamics.ros.descriptions import (
     description_change, MAX_DESCRIPTION_BYTES, parse_description)
 from spatial_dynamics.ros.control import (
     check_gains, check_gains_without_model, check_mode, continuous_joints, CONTROL_MODES,
     ControlError, FEEDBACK_REASONS, GAIN_UNITS, Gains, MAX_KD, MAX_KP,
     MAX_MEASURED_POSITION, MAX_MEASURED_VELOCITY, OUTPUTS)
-from spatial_dynamics.ros.parameters import ConfigError, Param, Table
+from spatial_dynamics.ros.parameters import ConfigError, distinct, one_of, Param, Table
 from spatial_dynamics.ros.observer import (
-    check_observer_gain, check_warn, MAX_EXTERNAL_TORQUE_WARN,
+    check_warn, MAX_EXTERNAL_TORQUE_WARN,
     MAX_OBSERVER_GAIN, MomentumObserver, ObserverError)
 
 NODE_NAME = 'inverse_dynamics'
@@ -94,6 +96,16 @@ WRENCH_REASONS = ('no_model', 'unknown_link', 'non_finite', 'out_of_bounds')
 
 # --------------------------------------------------------------------------------------------
 # Parameters
+
+def _gravity_norm(name: str, g) -> None:
+    norm = math.hypot(*g)
+    if norm > MAX_GRAVITY:
+        raise ConfigError(f'parameter {name}: |g| = {norm:g} m/s² in {list(g)}, more than '
+                          f'{MAX_GRAVITY:g} m/s² (100 g) cannot be a mounting')
+
+
+_gravity_norm.__doc__ = f'norm at most {MAX_GRAVITY:g} m/s² (100 g).'
+
 
 #: The top of config/inverse_dynamics.yaml, above the parameters the table writes.
 PARAMETER_FILE_HEADER = (
@@ -162,11 +174,13 @@ PARAMETERS = Table(NODE_NAME, [
         'need only the kept joints. Unset or empty: all joints, in URDF order.')),
     Param('locked_joints', 'string[]', None, (
         'Joints locked at a non-zero position when joints is set (others lock at 0); '
-        'values in locked_positions, same order.')),
+        'values in locked_positions, same order.'), rules=(distinct,)),
     Param('locked_positions', 'double[]', None, (
-        'Positions (rad or m) of locked_joints, same length; unset or empty = all 0.')),
+        'Positions of locked_joints, same length; unset or empty = all 0.'), unit='rad or m',
+        bounds=(-MAX_LOCKED_POSITION, MAX_LOCKED_POSITION)),
     Param('gravity', 'double[]', list(DEFAULT_GRAVITY), (
-        'Gravity [gx, gy, gz] in the base frame, m/s² (tilted or wall mounts). Live.')),
+        'Gravity [gx, gy, gz] in the base frame (tilted or wall mounts); more than 100 g '
+        'cannot be a mounting. Live.'), unit='m/s²', length=3, rules=(_gravity_norm,)),
     Param('acceleration_source', 'string', 'effort', (
         'Where desired_joint_states carries qdd: "effort" (the effort array holds desired '
         'accelerations, rad/s² or m/s²; empty = zeros) or "none" (qdd = 0: gravity and '
@@ -210,12 +224,15 @@ PARAMETERS = Table(NODE_NAME, [
         "Link carrying a rigid payload (tool, grasped object); '' = no payload. Live: "
         'applied from the next message. A new robot_description lacking this link is '
         'rejected.')),
-    Param('payload.mass', 'double', 0.0, 'Payload mass, kg (>= 0).'),
+    Param('payload.mass', 'double', 0.0, 'Payload mass.', unit='kg',
+          bounds=(0.0, MAX_PAYLOAD_MASS)),
     Param('payload.com', 'double[]', [0.0, 0.0, 0.0], (
-        "Payload centre of mass [x, y, z] in payload.link's frame, m.")),
+        "Payload centre of mass [x, y, z] in payload.link's frame."), unit='m', length=3,
+        bounds=(-MAX_PAYLOAD_COM, MAX_PAYLOAD_COM)),
     Param('payload.inertia', 'double[]', [0.0] * 6, (
         'Payload inertia [ixx, ixy, ixz, iyy, iyz, izz] about its centre of mass, axes of '
-        "payload.link's frame, kg m^2 (positive semi-definite, triangle inequality).")),
+        "payload.link's frame (positive semi-definite, triangle inequality)."),
+        unit='kg m^2', length=6, bounds=(-MAX_PAYLOAD_INERTIA, MAX_PAYLOAD_INERTIA)),
     Param('armature', 'double[]', None, (
         'Rotor inertia reflected through the gear (kg m^2 or kg), one value >= 0 per '
         'model joint in the order of the joints parameter (URDF order when unset): '
@@ -245,6 +262,32 @@ PARAMETERS = Table(NODE_NAME, [
         'a diagnostics period exceeds this (N m, or N for prismatic joints): one value for '
         'all joints or one per model joint (order of the joints parameter), above 0 and at '
         f'most {MAX_EXTERNAL_TORQUE_WARN:g}. Live.')),
+    Param('measured_effort', 'string', 'full', (
+        'What the effort of a measured joint_states message is, for the observer: "full", '
+        'the link-side torque including gravity (Franka tau_J, KUKA iiwa measured torque, '
+        'MuJoCo and Gazebo joint torques, most ros2_control effort state interfaces), or '
+        '"gravity_compensated", the torque beyond gravity (UR\'s joint torques: the node '
+        'adds g(q) of its model before the observer). Live; a change restarts the '
+        'observer.'), choices=MEASURED_EFFORT),
+    Param('wrench_estimate.link', 'string', '', (
+        'Link whose external wrench is estimated from the observer\'s external torques '
+        '(a virtual force/torque sensor: damped least squares of J^T w = tau_ext, J the '
+        "link's Jacobian in its own frame) and published on external_wrench_estimate "
+        "(geometry_msgs/WrenchStamped, frame_id = the link, at the link's origin); '' = "
+        'off. Needs observer_gain > 0. With fewer than six joints between the base and the '
+        'link, or near a singularity, some directions cannot be observed: diagnostics WARN '
+        'naming them. Live.')),
+    Param('wrench_estimate.epsilon', 'double', WRENCH_EPSILON, (
+        "Smallest singular value of the link's Jacobian (m, or 1 for rotations) below which "
+        'the least squares are damped: directions weaker than this are underestimated '
+        'instead of amplifying noise. Live.'), bounds=(1e-6, 10.0)),
+    Param('trajectory_effort_tolerance', 'double', 0.0, (
+        'When > 0, each desired_trajectory is also published on annotated_trajectory with '
+        'effort filled at every point (the output part of the model torque, gravity '
+        'included unless output says otherwise), resampled so that joint_trajectory_'
+        'controller\'s linear interpolation of effort between points stays within this '
+        'tolerance of the model torque (N m, or N); remap it to a JTC\'s ~/joint_trajectory. '
+        '0 = off. Live.'), unit='N m or N', bounds=(0.0, 1e4)),
     Param('backend', 'string', 'auto', (
         'How tau is computed. "numpy": plain Python floats (no numba import; ~30-150 µs per '
         'call for 6-32 joints). "compiled": numba kernels (~1-2 µs), prepared off the '
@@ -291,48 +334,18 @@ class Payload:
             raise ConfigError(f'parameter payload.*: {err}')
 
 
-def _within(values: Sequence[float], bound: float) -> bool:
-    return all(math.isfinite(x) and abs(x) <= bound for x in values)
+def locked_positions(params) -> dict:
+    """``locked_joints`` with ``locked_positions`` (empty = all 0) as {name: value}.
 
-
-def check_payload(link, mass, com, inertia) -> Payload:
-    """Shape, finiteness and bounds of the ``payload.*`` parameters (the physics: :meth:`apply`).
-
-    Bounds (what no payload can exceed): :data:`MAX_PAYLOAD_MASS`, :data:`MAX_PAYLOAD_COM` per
-    com component, :data:`MAX_PAYLOAD_INERTIA` per inertia component.
+    The one rule across the two parameters (each one's own rules are in the table).
     """
-    mass = float(mass)
-    if not (math.isfinite(mass) and 0.0 <= mass <= MAX_PAYLOAD_MASS):
-        raise ConfigError(f'parameter payload.mass: need a mass from 0 to '
-                          f'{MAX_PAYLOAD_MASS:g} kg, got {mass}')
-    com = tuple(float(x) for x in com)
-    if len(com) != 3 or not _within(com, MAX_PAYLOAD_COM):
-        raise ConfigError(f'parameter payload.com: need 3 finite values within '
-                          f'±{MAX_PAYLOAD_COM:g} m (link frame), got {list(com)}')
-    inertia = tuple(float(x) for x in inertia)
-    if len(inertia) != 6 or not _within(inertia, MAX_PAYLOAD_INERTIA):
-        raise ConfigError('parameter payload.inertia: need 6 finite values (ixx ixy ixz iyy '
-                          f'iyz izz, kg m^2 about the com) within ±{MAX_PAYLOAD_INERTIA:g} '
-                          f'kg m^2, got {list(inertia)}')
-    return Payload(str(link), mass, com, inertia)
-
-
-def check_locked(joints: Optional[Sequence[str]], positions: Optional[Sequence[float]]
-                 ) -> dict:
-    """``locked_joints`` + ``locked_positions`` (empty = all 0) as {name: value}."""
-    joints = list(joints or [])
-    positions = list(positions or [])
+    joints = list(params.locked_joints or ())
+    positions = list(params.locked_positions or ())
     if positions and len(positions) != len(joints):
         raise ConfigError(f'parameter locked_positions: {len(positions)} values for '
                           f'{len(joints)} locked_joints {joints} (need the same number, or '
                           'none for all 0)')
-    if len(set(joints)) != len(joints):
-        raise ConfigError(f'parameter locked_joints: names repeated in {joints}')
-    values = positions or [0.0] * len(joints)
-    if not _within(values, MAX_LOCKED_POSITION):
-        raise ConfigError(f'parameter locked_positions: need finite values within '
-                          f'±{MAX_LOCKED_POSITION:g} rad or m, got {values}')
-    return dict(zip(joints, (float(v) for v in values)))
+    return dict(zip(joints, positions or [0.0] * len(joints)))
 
 
 def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
@@ -351,42 +364,6 @@ def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
                               f'{MAX_ARMATURE:g} kg m^2 (or kg) cannot be a rotor inertia')
     armature.setflags(write=False)
     return None if not armature.any() else armature
-
-
-def check_gravity(value: Sequence[float]) -> Tuple[float, float, float]:
-    """Gravity ``[gx, gy, gz]`` in m/s², base frame, of norm at most :data:`MAX_GRAVITY`."""
-    g = tuple(float(x) for x in value)
-    if len(g) != 3 or not all(math.isfinite(x) for x in g):
-        raise ConfigError(f'parameter gravity: need 3 finite values in m/s², got {list(value)}')
-    norm = math.hypot(*g)
-    if norm > MAX_GRAVITY:
-        raise ConfigError(f'parameter gravity: |g| = {norm:g} m/s² in {list(g)}, more than '
-                          f'{MAX_GRAVITY:g} m/s² (100 g) cannot be a mounting')
-    return g
-
-
-def check_choice(name: str, value: str, choices: Sequence[str]) -> str:
-    """Return ``value`` if it is one of ``choices``."""
-    if value not in choices:
-        raise ConfigError(f'parameter {name}: {value!r} is not one of {list(choices)}')
-    return value
-
-
-def check_acceleration_source(value: str) -> str:
-    """Return a valid ``acceleration_source``."""
-    return check_choice('acceleration_source', value, ACCELERATION_SOURCES)
-
-
-def check_positive(name: str, value: float, unit: str = 'seconds') -> float:
-    """Return ``value`` if it is a finite number > 0."""
-    if not (math.isfinite(value) and value > 0.0):
-        raise ConfigError(f'parameter {name}: need a positive number of {unit}, got {value}')
-    return float(value)
-
-
-def check_input_timeout(value: float) -> float:
-    """Return a valid ``input_timeout``."""
-    return check_positive('input_timeout', value)
 
 
 # --------------------------------------------------------------------------------------------
@@ -416,7 +393,7 @@ def preferred_backend(setting: str, plain_call_s: float) -> str:
     """
     if setting == 'auto':
         return 'compiled' if plain_call_s > AUTO_COMPILED_ABOVE_S else 'numpy'
-    return check_choice('backend', setting, BACKEND_SETTINGS)
+    return one_of('backend', setting, BACKEND_SETTINGS)
 
 
 class CompiledKernels:
@@ -538,23 +515,59 @@ class Output:
 
 @dataclass(frozen=True)
 class Config:
-    """A validated parameter change, ready to be swapped in (see :func:`prepare`)."""
+    """The checked parameters and what an answer needs, swapped in as one (see :func:`prepare`).
 
-    params: dict
+    ``params`` is the table's frozen ``Params`` (one field per parameter); the properties
+    below are the values the answers read, under the names the code uses.
+    """
+
+    params: object
     output: Optional[Output]
-    new_description: bool
-    kept_file: str
-    gravity: Tuple[float, float, float]
-    acceleration_source: str
-    input_timeout: float
-    wrench_timeout: float
-    control_mode: str = 'feedforward'
-    output_choice: str = 'full'
-    measured_timeout: float = DEFAULT_MEASURED_TIMEOUT
-    observer_gain: float = DEFAULT_OBSERVER_GAIN
+    new_description: bool = False
+    kept_file: str = ''
+
+    @property
+    def gravity(self) -> Tuple[float, float, float]:
+        """Gravity in the base frame, m/s²."""
+        return self.params.gravity
+
+    @property
+    def acceleration_source(self) -> str:
+        """Where desired_joint_states carries qdd."""
+        return self.params.acceleration_source
+
+    @property
+    def input_timeout(self) -> float:
+        """Seconds after which a held desired state is stale."""
+        return self.params.input_timeout
+
+    @property
+    def wrench_timeout(self) -> float:
+        """Seconds after its receipt that an external wrench stops applying."""
+        return self.params.external_wrench_timeout
+
+    @property
+    def control_mode(self) -> str:
+        """``feedforward``, ``pd_feedforward`` or ``computed_torque``."""
+        return self.params.control_mode
+
+    @property
+    def output_choice(self) -> str:
+        """The ``output`` parameter: which model part the answers carry."""
+        return self.params.output
+
+    @property
+    def measured_timeout(self) -> float:
+        """Seconds after which the measured state is stale."""
+        return self.params.measured_timeout
+
+    @property
+    def observer_gain(self) -> float:
+        """K_O of the external-torque observer, 1/s (0 = off)."""
+        return self.params.observer_gain
 
 
-def _base_model(params: dict, current: Optional[Output], urdf: str, source: str,
+def _base_model(params, current: Optional[Output], urdf: str, source: str,
                 joints: Tuple[str, ...], locked: dict) -> Tuple['sd.Model', float]:
     """Return the (reduced) model of ``urdf`` and its plain-float call time (reused if same)."""
     if (current is not None and urdf is current.urdf and joints == current.joints_param
@@ -563,11 +576,11 @@ def _base_model(params: dict, current: Optional[Output], urdf: str, source: str,
     if locked and not joints:
         raise ConfigError(f'parameter locked_joints: {list(locked)} lock joints only '
                           'when the joints parameter lists the joints to keep')
-    base = parse_description(urdf, source, joints, locked, bool(params['strict_urdf']))
+    base = parse_description(urdf, source, joints, locked, params.strict_urdf)
     return base, plain_call_seconds(base)
 
 
-def build_output(params: dict, current: Optional[Output], urdf: Optional[str] = None,
+def build_output(params, current: Optional[Output], urdf: Optional[str] = None,
                  source: Optional[str] = None, kernels: Optional[CompiledKernels] = None
                  ) -> Output:
     """Build the :class:`Output` for ``params``; the URDF is re-parsed only when needed.
@@ -579,13 +592,12 @@ def build_output(params: dict, current: Optional[Output], urdf: Optional[str] = 
     """
     if urdf is None:
         urdf, source = current.urdf, current.source
-    # the four payload parameters are checked first: they need no model
-    payload = check_payload(params['payload.link'], params['payload.mass'],
-                            params['payload.com'], params['payload.inertia'])
-    locked = check_locked(params['locked_joints'], params['locked_positions'])
-    joints = tuple(params['joints'] or ())
+    payload = Payload(params.payload_link, params.payload_mass, params.payload_com,
+                      params.payload_inertia)
+    locked = locked_positions(params)
+    joints = tuple(params.joints or ())
     base, plain_call_s = _base_model(params, current, urdf, source, joints, locked)
-    if params['strict_urdf'] and base.warnings:
+    if params.strict_urdf and base.warnings:
         raise ConfigError(
             f'parameter strict_urdf: {source} has {len(base.warnings)} URDF warning(s) '
             f'(strict_urdf refuses them), the first: {base.warnings[0]}')
@@ -594,19 +606,20 @@ def build_output(params: dict, current: Optional[Output], urdf: Optional[str] = 
             f'parameter payload.link: {payload.link!r} is not a link of robot '
             f'{base.name!r} ({source}); set payload.link to an existing link or \'\' '
             'first, or together with the new description')
-    friction_model = check_choice('friction_model', params['friction_model'], FRICTION_MODELS)
-    threshold = check_positive('friction_velocity_threshold',
-                               params['friction_velocity_threshold'], 'rad/s or m/s')
-    setting = params.get('backend') or 'auto'
+    if params.wrench_estimate_link and params.wrench_estimate_link not in base.frames:
+        raise ConfigError(
+            f'parameter wrench_estimate.link: {params.wrench_estimate_link!r} is not a link of '
+            f'robot {base.name!r} ({source})')
+    setting = params.backend
     gains = model_gains(base, params)
-    warn = _observer_check(check_warn, base.joint_names,
-                           params.get('external_torque_warn', [DEFAULT_EXTERNAL_TORQUE_WARN]))
+    warn = _observer_check(check_warn, base.joint_names, params.external_torque_warn)
     output = Output(
         urdf=urdf, source=source, base=base, model=payload.apply(base),
         joints=tuple(base.joint_names), joints_param=joints, locked=tuple(locked.items()),
-        payload=payload, armature=check_armature(base, params['armature']),
-        friction_threshold=threshold if friction_model == 'urdf' else None,
-        clamp=bool(params['clamp_to_effort_limits']), setting=setting,
+        payload=payload, armature=check_armature(base, params.armature),
+        friction_threshold=(params.friction_velocity_threshold
+                            if params.friction_model == 'urdf' else None),
+        clamp=params.clamp_to_effort_limits, setting=setting,
         preferred=preferred_backend(setting, plain_call_s), plain_call_s=plain_call_s,
         gains=gains, external_torque_warn=warn)
     if output.waits_for_compiled and kernels is not None and kernels.ready:
@@ -614,22 +627,14 @@ def build_output(params: dict, current: Optional[Output], urdf: Optional[str] = 
     return output
 
 
-def _check_without_model(params: dict) -> None:
-    """Check what needs no model (the rest is checked when one arrives)."""
-    check_payload(params['payload.link'], params['payload.mass'], params['payload.com'],
-                  params['payload.inertia'])
-    check_locked(params['locked_joints'], params['locked_positions'])
-    check_choice('friction_model', params['friction_model'], FRICTION_MODELS)
-    check_positive('friction_velocity_threshold', params['friction_velocity_threshold'],
-                   'rad/s or m/s')
-    check_choice('backend', params.get('backend') or 'auto', BACKEND_SETTINGS)
+def _check_without_model(params) -> None:
+    """Check what needs no model of the per-joint values (each named with its joint later)."""
     try:
         for name in ('kp', 'kd'):
-            check_gains_without_model(name, params.get(name))
+            check_gains_without_model(name, getattr(params, name))
     except ControlError as err:
         raise ConfigError(str(err)) from None
-    _observer_check(check_warn, None,
-                    params.get('external_torque_warn', [DEFAULT_EXTERNAL_TORQUE_WARN]))
+    _observer_check(check_warn, None, params.external_torque_warn)
 
 
 def _observer_check(check: Callable, *args):
@@ -640,67 +645,66 @@ def _observer_check(check: Callable, *args):
         raise ConfigError(str(err)) from None
 
 
-def model_gains(model: 'sd.Model', params: dict) -> Gains:
+def model_gains(model: 'sd.Model', params) -> Gains:
     """``kp``, ``kd`` of ``params`` for ``model`` (:func:`~.control.check_gains`)."""
     try:
-        return Gains(check_gains(model, 'kp', params.get('kp')),
-                     check_gains(model, 'kd', params.get('kd')), continuous_joints(model))
+        return Gains(check_gains(model, 'kp', params.kp),
+                     check_gains(model, 'kd', params.kd), continuous_joints(model))
     except ControlError as err:
         raise ConfigError(f'{err} (order of the joints parameter, or the URDF order when it '
                           'is unset)') from None
 
 
-def check_control(params: dict) -> Tuple[str, str]:
+def check_control(params) -> Tuple[str, str]:
     """``(control_mode, output)`` of ``params`` (:func:`~.control.check_mode`)."""
     try:
-        return check_mode(params.get('control_mode', 'feedforward'),
-                          params.get('output', 'full'), params.get('kp') or (),
-                          params.get('kd') or ())
+        return check_mode(params.control_mode, params.output, params.kp or (),
+                          params.kd or ())
     except ControlError as err:
         raise ConfigError(str(err)) from None
 
 
-def prepare(previous: dict, changes: dict, current: Optional[Output],
+def prepare(previous, changes: Mapping[str, Any], current: Optional[Output],
             kernels: Optional[CompiledKernels] = None) -> Config:
     """Validate ``changes`` to the parameters ``previous``; the result is swapped in as a whole.
 
-    ``current`` is the output in use (None: no model yet). Parses a new description when
-    the changes make one current (:func:`description_change`) or change the model's
-    parameters. Changes nothing; raises :class:`ConfigError` when a value cannot be used.
+    ``previous`` is the ``Params`` in use (None or empty at start-up, when ``changes`` holds
+    the start-up values by name); ``changes`` are raw values by parameter name, checked by
+    the table (:data:`PARAMETERS`: type, bounds, choices, length, rules), then together and
+    against the model. ``current`` is the output in use (None: no model yet). Parses a new
+    description when the changes make one current (:func:`description_change`) or change the
+    model's parameters. Changes nothing; raises :class:`ConfigError` when a value cannot be
+    used.
     """
-    params = {**previous, **changes}
+    if not previous:
+        params = PARAMETERS.values(changes)
+        previous = PARAMETERS.defaults()
+    else:
+        params = PARAMETERS.changed(previous, changes)
     urdf, source, kept_file = description_change(previous, params, changes)
     output = current
     if urdf is not None or current is not None:
         output = build_output(params, current, urdf, source, kernels)
     else:
+        locked_positions(params)
         _check_without_model(params)
-    control_mode, output_choice = check_control(params)
-    return Config(
-        params=params, output=output, new_description=urdf is not None,
-        kept_file=kept_file, gravity=check_gravity(params['gravity']),
-        acceleration_source=check_acceleration_source(params['acceleration_source']),
-        input_timeout=check_input_timeout(params['input_timeout']),
-        wrench_timeout=check_positive('external_wrench_timeout',
-                                      params['external_wrench_timeout']),
-        control_mode=control_mode, output_choice=output_choice,
-        observer_gain=_observer_check(check_observer_gain,
-                                      params.get('observer_gain', DEFAULT_OBSERVER_GAIN)),
-        measured_timeout=check_positive('measured_timeout',
-                                        params.get('measured_timeout',
-                                                   DEFAULT_MEASURED_TIMEOUT)))
+    check_control(params)
+    return Config(params=params, output=output, new_description=urdf is not None,
+                  kept_file=kept_file)
 
 
-def reparse_needed(requested: dict, params: dict) -> bool:
+def reparse_needed(requested, params) -> bool:
     """Whether a description parsed with parameters ``requested`` must be parsed again now."""
-    return any(requested[k] != params[k] for k in MODEL_PARAMETERS + ('strict_urdf',))
+    return any(getattr(requested, PARAMETERS.by_name[name].field)
+               != getattr(params, PARAMETERS.by_name[name].field)
+               for name in MODEL_PARAMETERS + ('strict_urdf',))
 
 
 # --------------------------------------------------------------------------------------------
 # The external-torque observer: what it depends on, and its diagnostics status
 
 def observer_key(output: Output, gravity: Sequence[float], gain: float,
-                 max_gap: float) -> tuple:
+                 max_gap: float, measured: str = 'full') -> tuple:
     """Return what the estimate depends on; the node restarts the observer when it changes.
 
     The model (the base, by identity: a parameter change that does not re-parse keeps it),
@@ -709,7 +713,7 @@ def observer_key(output: Output, gravity: Sequence[float], gain: float,
     """
     armature = None if output.armature is None else output.armature.tobytes()
     return (id(output.base), output.payload, armature, output.friction_threshold,
-            tuple(gravity), gain, max_gap)
+            tuple(gravity), gain, max_gap, measured)
 
 
 def make_observer(output: Output, gravity: Sequence[float], gain: float,

@@ -51,6 +51,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import MAX_POSITION, MAX_VELOCITY
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays
+from spatial_dynamics.ros.parameters import one_of, ParameterError
 
 #: Values of the ``output`` parameter: which model part is published.
 OUTPUTS = ('full', 'without_gravity', 'gravity_only', 'none')
@@ -92,19 +93,12 @@ MEASURED_REASONS = ('no_model', 'empty', 'length_mismatch', 'duplicate_joint',
 FEEDBACK_REASONS = ('no_desired', 'desired_stale', 'repeated')
 
 
-class ControlError(ValueError):
-    """A gain or a mode that cannot be used; the message names the parameter."""
+#: A gain or a mode that cannot be used; the message names the parameter.
+ControlError = ParameterError
 
 
 # --------------------------------------------------------------------------------------------
 # Parameters
-
-def check_choice(name: str, value: str, choices: Sequence[str]) -> str:
-    """Return ``value`` if it is one of ``choices``."""
-    if value not in choices:
-        raise ControlError(f'parameter {name}: {value!r} is not one of {list(choices)}')
-    return value
-
 
 def check_mode(control_mode: str, output: str, kp: Sequence[float] = (1.0,),
                kd: Sequence[float] = (1.0,)) -> Tuple[str, str]:
@@ -114,8 +108,8 @@ def check_mode(control_mode: str, output: str, kp: Sequence[float] = (1.0,),
     which is zero in a feedback mode whose gains ``kp`` and ``kd`` are all zero: every answer
     would be zeros (a loaded arm would drop), so those combinations are refused.
     """
-    check_choice('control_mode', control_mode, CONTROL_MODES)
-    check_choice('output', output, OUTPUTS)
+    one_of('control_mode', control_mode, CONTROL_MODES)
+    one_of('output', output, OUTPUTS)
     if output == 'none' and control_mode != 'feedforward' and not any(kp) and not any(kd):
         raise ControlError(
             f"parameters output 'none', control_mode {control_mode!r} and kp = kd = 0: output "

@@ -91,9 +91,9 @@ def description_source(params: dict) -> str:
     The ``robot_description`` parameter when it is set (non-empty), else
     ``robot_description_file`` when it is set, else the topic.
     """
-    if params.get('robot_description'):
+    if params.robot_description:
         return 'parameter'
-    if params.get('robot_description_file'):
+    if params.robot_description_file:
         return 'file'
     return 'topic'
 
@@ -107,7 +107,7 @@ def description_change(previous: dict, params: dict, changes: dict
     change. ``kept`` is the path of a ``robot_description_file`` that was set (and read, so
     it is known to be readable) while ``robot_description`` is set: kept for later, not used.
     """
-    text, path = params['robot_description'], params['robot_description_file']
+    text, path = params.robot_description, params.robot_description_file
     if text:
         kept = ''
         if path and 'robot_description_file' in changes:
@@ -117,7 +117,7 @@ def description_change(previous: dict, params: dict, changes: dict
             return text, 'parameter robot_description', kept
         return None, None, kept
     if path and ('robot_description_file' in changes
-                 or previous.get('robot_description')):  # set, or the string cleared
+                 or previous.robot_description):  # set, or the string cleared
         return read_description(path), f'file {path}', ''
     return None, None, ''
 

@@ -267,6 +267,7 @@ def observer_status(output: Optional[Output], gain: float,
     rms = window.rms()
     if rms is None or len(rms) != len(output.joints):
         return 'OK', 'no measured effort in this period (observer waiting)', values
+    wrench, loaded = _wrench_text(window.wrench, values)
     warn = output.external_torque_warn
     values += [(f'rms {joint}', f'{value:.4g}') for joint, value in zip(output.joints, rms)]
     values += [('warn above', ', '.join(f'{x:g}' for x in warn))]
@@ -274,6 +275,44 @@ def observer_status(output: Optional[Output], gain: float,
     worst = int(np.argmax(rms / warn))
     if over.size:
         return 'WARN', ('external torque above external_torque_warn: ' + ', '.join(
-            f'{output.joints[i]} {rms[i]:.3g} (RMS) > {warn[i]:g}' for i in over)), values
+            f'{output.joints[i]} {rms[i]:.3g} (RMS) > {warn[i]:g}' for i in over)
+            + (f'; {wrench}' if wrench else '')), values
+    if loaded:
+        return 'WARN', wrench, values
     return 'OK', (f'largest RMS {rms[worst]:.3g} on {output.joints[worst]} '
-                  f'(warn above {warn[worst]:g})'), values
+                  f'(warn above {warn[worst]:g})' + (f'; {wrench}' if wrench else '')), values
+
+
+_AXES = ('n_x', 'n_y', 'n_z', 'f_x', 'f_y', 'f_z')
+
+
+def _direction(u: np.ndarray) -> str:
+    """Name a unit wrench by its largest components, e.g. ``'1 f_z'``."""
+    parts = [(abs(c), f'{c:+.2g} {axis}') for c, axis in zip(u, _AXES) if abs(c) > 0.2]
+    parts.sort(reverse=True)
+    return ' '.join(text for _, text in parts).lstrip('+')
+
+
+def _wrench_text(wrench: Optional[dict], values: list) -> Tuple[str, bool]:
+    """Add the virtual F/T sensor's figures to ``values``; ``(text, loaded)``.
+
+    ``text`` names the directions it could not observe ('' when it observed all of them);
+    ``loaded``: some of those samples carried an external torque above the warning level
+    (WARN: a real wrench may be misread), else it is only said in the OK message.
+    """
+    if wrench is None:
+        return '', False
+    values += [('wrench estimate link', wrench['link']),
+               ('wrench estimates', str(wrench['count'])),
+               ('wrench rank (lowest)', str(wrench['rank'])),
+               ('wrench sigma_min (lowest)', f"{wrench['sigma_min']:.3g}"),
+               ('wrench samples with weak directions', str(wrench['weak'])),
+               ('of them loaded', str(wrench['weak_loaded']))]
+    if not wrench['weak']:
+        return '', False
+    directions = wrench['last_weak']
+    named = '; '.join(_direction(directions[:, i]) for i in range(directions.shape[1]))
+    return (f"external wrench at {wrench['link']!r}: {wrench['weak']} of {wrench['count']} "
+            f"samples could not observe every direction (rank {wrench['rank']}, sigma_min "
+            f"{wrench['sigma_min']:.3g}); missing or underestimated: {named}",
+            wrench['weak_loaded'] > 0)

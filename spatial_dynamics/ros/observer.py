@@ -236,6 +236,26 @@ class EstimateWindow:
         self.count = 0
         self.sum_squares = np.zeros(n)
         self.skipped = {reason: 0 for reason in SKIP_REASONS}
+        self.wrench: Optional[dict] = None   # the virtual F/T sensor's period (add_wrench)
+
+    def add_wrench(self, link: str, estimate, loaded: bool) -> None:
+        """Count one published wrench estimate (:class:`~spatial_dynamics.wrench.WrenchEstimate`).
+
+        Keeps the link, the samples with a weak (unobservable or damped) direction and those
+        of them ``loaded`` (an external torque above ``external_torque_warn``: a wrench the
+        sensor may misread), the smallest ``sigma_min`` and the rank of the period.
+        """
+        w = self.wrench
+        if w is None or w['link'] != link:
+            w = self.wrench = {'link': link, 'count': 0, 'weak': 0, 'weak_loaded': 0,
+                               'sigma_min': math.inf, 'rank': 6, 'last_weak': None}
+        w['count'] += 1
+        w['sigma_min'] = min(w['sigma_min'], float(estimate.sigma_min))
+        w['rank'] = min(w['rank'], int(estimate.rank))
+        if estimate.weak.any():
+            w['weak'] += 1
+            w['weak_loaded'] += loaded
+            w['last_weak'] = estimate.unobservable()
 
     def add(self, r: np.ndarray) -> None:
         """Count one published estimate."""

@@ -105,7 +105,7 @@ def within(name: str, value: float, bounds: Tuple[float, float], unit: str = '')
 def one_of(name: str, value: str, choices: Sequence[str]) -> str:
     """Return ``value`` if it is one of ``choices``."""
     if value not in choices:
-        raise ParameterError(f'parameter {name} {value!r}: not one of {list(choices)}')
+        raise ParameterError(f'parameter {name}: {value!r} is not one of {list(choices)}')
     return value
 
 
@@ -118,7 +118,10 @@ def of_length(name: str, values: Sequence, length: int, unit: str = '') -> Seque
 
 
 def distinct(name: str, values: Sequence[str]) -> Sequence[str]:
-    """Return ``values`` if no element is repeated."""
+    """No name repeated.
+
+    (The first line of a rule's docstring is its constraint in the generated documentation.)
+    """
     if len(set(values)) != len(values):
         raise ParameterError(f'parameter {name}: names repeated in {list(values)}')
     return values

@@ -297,7 +297,7 @@ def main(args: Optional[Sequence[str]] = None) -> int:
     except MujocoMissing as err:
         print(f'{NODE_NAME}: {err}', file=sys.stderr)
         return 1
-    return spin(SimNode, args, name=NODE_NAME)
+    return spin(SimNode, args, name=NODE_NAME, threads=1)
 
 
 if __name__ == '__main__':

@@ -29,6 +29,13 @@ node's answers to the simulator and, before it forwards the torque of step k, pu
 desired state of step k + 1 (:class:`Lockstep`), so every command is computed from the
 desired state of its own step, whatever the load on the machine.
 
+With ``--plan`` there is no relay: the node gets the whole trajectory once, as a
+``desired_trajectory`` (``JointTrajectory`` sampled every 50 ms with velocities and
+accelerations: quintic splines), and follows it by sampling it at each measured state's stamp
+(sim time), its commands going straight to the simulator; at half time a second plan replaces
+it (back to the start in 1 s, then held), which the node blends in from where the first one
+was. The error is then ``q_d - q`` with the ``q_d`` the node echoes for each measured state.
+
 A table of the tracking error per joint is shown live; at the end a PNG plots |e| per joint
 over time (log scale) for the three laws, and ``--json`` writes the figures.
 """
@@ -73,6 +80,9 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser.add_argument('--json', default='', help='write the figures to this JSON file')
     parser.add_argument('--log-dir', default='out',
                         help="directory for the nodes' output (default out)")
+    parser.add_argument('--plan', action='store_true',
+                        help='send the node whole plans (desired_trajectory), replaced at half '
+                             'time, instead of relaying a desired state per step')
     parser.add_argument('--timeout', type=float, default=120.0,
                         help='wall-clock seconds allowed per law before giving up (default 120)')
     return parser.parse_args(argv)
@@ -122,6 +132,8 @@ class Run:
         self.answers = 0        # answers of the node seen
         self.stale = 0          # of them computed from another step's desired state
         self.repeated = 0       # of them answering a state answered already (not forwarded)
+        self.replaced_at: Optional[float] = None   # --plan: when the second plan took over
+        self.end_from_start = float('nan')         # --plan: max |q - q0| at the end
 
     def summary(self) -> Dict[str, object]:
         e = np.abs(np.array(self.e)) if self.e else np.zeros((0, len(self.names)))
@@ -130,7 +142,8 @@ class Run:
                 'rms': float(np.sqrt(np.mean(e ** 2))) if e.size else float('nan'),
                 'max': float(e.max()) if e.size else float('nan'),
                 'answers': self.answers, 'stale_desired': self.stale,
-                'repeated_answers': self.repeated,
+                'repeated_answers': self.repeated, 'plan_replaced_at_s': self.replaced_at,
+                'end_from_start': self.end_from_start,
                 'rms_per_joint': dict(zip(self.names, np.sqrt(np.mean(e ** 2, axis=0)).tolist()
                                           if e.size else [float('nan')] * len(self.names)))}
 
@@ -216,6 +229,100 @@ class Lockstep:
         self.node.destroy_publisher(self.desired_pub)
 
 
+PLAN_STEP = 0.05      # s between the points of a plan sent with --plan
+BACK_IN = 1.0         # s: the replacing plan reaches the start in this time, then holds it
+
+
+def plan_message(names: Sequence[str], points, start: float):
+    """Return a ``JointTrajectory`` of ``points`` ``[(t, q, q̇, q̈)]`` from ``start`` (s)."""
+    from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+    msg = JointTrajectory(joint_names=list(names))
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(int(round(start * 1e9)), 10 ** 9)
+    for t, q, qd, qdd in points:
+        point = JointTrajectoryPoint(positions=list(map(float, q)),
+                                     velocities=list(map(float, qd)),
+                                     accelerations=list(map(float, qdd)))
+        point.time_from_start.sec, point.time_from_start.nanosec = divmod(
+            int(round(t * 1e9)), 10 ** 9)
+        msg.points.append(point)
+    return msg
+
+
+class Plans:
+    """``--plan``: the whole trajectory once, replaced at half time; errors from the echoes.
+
+    The node answers each measured state with the plan sampled at its stamp and echoes the
+    ``q_d`` it used on ``feedforward_efforts``; the error of a step is that ``q_d`` minus the
+    measured ``q`` of the same stamp.
+    """
+
+    def __init__(self, node, names: Sequence[str], trajectory, seconds: float, run: Run) -> None:
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import JointState
+        from trajectory_msgs.msg import JointTrajectory
+        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        self.node, self.names, self.run = node, list(names), run
+        self.q0 = trajectory(0.0)[0]
+        times = np.arange(0.0, seconds + PLAN_STEP, PLAN_STEP)
+        # stamped 0: starts on receipt, at the node's latest measured stamp (sim time 0)
+        self.first = plan_message(names, [(t, *trajectory(t)) for t in times], 0.0)
+        self.switch_at = 0.5 * seconds
+        self.replaced = None       # the sim time from which the second plan runs
+        self.measured: Dict[int, np.ndarray] = {}
+        self.desired: Dict[int, np.ndarray] = {}
+        self.pub = node.create_publisher(JointTrajectory, 'desired_trajectory', reliable)
+        self.sub = node.create_subscription(JointState, 'feedforward_efforts', self._on_answer,
+                                            reliable)
+        self.last_sent = -1.0
+        self.last_q: Optional[np.ndarray] = None
+        self.seen: set = set()     # stamps of the measured states seen
+
+    def kick(self) -> None:
+        """Until the first answer: (re)send the first plan, once the node subscribes."""
+        now = time.monotonic()
+        if (self.run.answers == 0 and self.pub.get_subscription_count() > 0
+                and now - self.last_sent > 0.2):
+            self.pub.publish(self.first)
+            self.last_sent = now
+
+    def on_state(self, t: float, q: np.ndarray) -> None:
+        """Take a measured state: pair it with its echo; send the replacement at half time."""
+        key = round(t * 1e9)
+        if key in self.seen:     # the simulator republishes the state it waits on
+            return
+        self.seen.add(key)
+        self.measured[key] = q
+        self.last_q = q
+        self._pair(key)
+        if self.replaced is None and t >= self.switch_at:
+            self.replaced = t + 0.01     # starts 10 ms ahead on the measured clock
+            hold = np.zeros(len(self.names))
+            self.pub.publish(plan_message(self.names, [(BACK_IN, self.q0, hold, hold)],
+                                          self.replaced))
+
+    def _on_answer(self, msg) -> None:
+        self.run.answers += 1
+        key = msg.header.stamp.sec * 10 ** 9 + msg.header.stamp.nanosec
+        self.desired[key] = np.array(msg.position)
+        self._pair(key)
+
+    def _pair(self, key: int) -> None:
+        if key in self.measured and key in self.desired:
+            self.run.t.append(key * 1e-9)
+            self.run.e.append(self.desired.pop(key) - self.measured.pop(key))
+
+    def sort(self) -> None:
+        """Order the errors by time (an echo may come after the next state)."""
+        order = np.argsort(self.run.t, kind='stable')
+        self.run.t = [self.run.t[i] for i in order]
+        self.run.e = [self.run.e[i] for i in order]
+
+    def close(self) -> None:
+        """Destroy the endpoints."""
+        self.node.destroy_subscription(self.sub)
+        self.node.destroy_publisher(self.pub)
+
+
 def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_mods,
             show) -> Run:
     """Start the sim and the node for one law, drive the trajectory, return the errors."""
@@ -224,14 +331,16 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
     q0 = start_point(model)
     trajectory = Trajectory(q0, args.amplitude)
     kp, kd = gains(model, q0, settings['control_mode'], args.frequency)
-    namespace = '/closed_loop_' + settings['control_mode'] + '_' + settings['output']
+    namespace = ('/closed_loop_' + ('plan_' if args.plan else '') + settings['control_mode']
+                 + '_' + settings['output'])
     fmt = '[' + ','.join(repr(float(x)) for x in q0) + ']'
     logs = args.log_dir
     os.makedirs(logs, exist_ok=True)
     slug = namespace.strip('/')
     sim = start(node_command('sim', 'spatial_dynamics.sim'), namespace, {
         'robot_description_file': urdf, 'mode': 'lockstep', 'timestep': str(TIMESTEP),
-        'initial_positions': fmt, 'command_topic': SIM_COMMANDS},
+        'initial_positions': fmt,
+        'command_topic': 'effort_commands' if args.plan else SIM_COMMANDS},
         os.path.join(logs, f'{slug}_sim.log'))
     node = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace, {
         'robot_description_file': urdf, 'control_mode': settings['control_mode'],
@@ -249,11 +358,14 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
             index = [list(state.name).index(j) for j in names]
         t = state.header.stamp.sec + state.header.stamp.nanosec * 1e-9
         q = np.array(state.position)[index]
-        if not run.t or t > run.t[-1]:
+        if plans is not None:
+            plans.on_state(t, q)
+        elif not run.t or t > run.t[-1]:
             run.t.append(t)
             run.e.append(trajectory(t)[0] - q)
 
-    lockstep = Lockstep(driver, names, trajectory, TIMESTEP)
+    plans = Plans(driver, names, trajectory, args.seconds, run) if args.plan else None
+    lockstep = None if args.plan else Lockstep(driver, names, trajectory, TIMESTEP)
     driver.create_subscription(JointState, 'joint_states', on_state, 1000)
     wall0 = time.monotonic()
     next_show = wall0
@@ -265,13 +377,21 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
             if time.monotonic() - wall0 > args.timeout:
                 raise RuntimeError(f'{name}: {args.timeout:g} s without finishing '
                                    f'({run.t[-1] if run.t else 0:.3f} s simulated)')
-            lockstep.kick()
+            (plans or lockstep).kick()
             rclpy.spin_once(driver, timeout_sec=0.05)
             if time.monotonic() >= next_show:
                 show(run)
                 next_show += 0.25
     finally:
-        run.answers, run.stale, run.repeated = lockstep.answers, lockstep.stale, lockstep.repeated
+        if lockstep is not None:
+            run.answers, run.stale, run.repeated = (lockstep.answers, lockstep.stale,
+                                                    lockstep.repeated)
+        else:
+            run.replaced_at = plans.replaced
+            if plans.last_q is not None:
+                run.end_from_start = float(np.abs(plans.last_q - plans.q0).max())
+            plans.sort()
+            plans.close()
         driver.destroy_node()
         stop(sim)
         stop(node)

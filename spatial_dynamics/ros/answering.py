@@ -1,0 +1,456 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""What the ``inverse_dynamics`` node does with each input message, without ROS.
+
+:class:`Answering` holds what lives between messages (the held desired state, the followed
+trajectory, the external wrenches, the observer, the counters of diagnostics), checks each
+message against the current :class:`~spatial_dynamics.ros.config.Config` (read once per
+message: a parameter change swaps the whole of it) and hands each answer to the node's
+``publish``. It reads the fields of the message types (``sensor_msgs/JointState``,
+``trajectory_msgs/JointTrajectory``, ``geometry_msgs/WrenchStamped``) and never imports
+rclpy; the node (:mod:`spatial_dynamics.ros.node`) does the ROS part. All of it runs in the
+node's ``inputs`` callback group, one message at a time.
+
+Every message is answered or rejected on its own: a rejected message (reason counted in
+diagnostics) produces no output, and nothing is published without fresh input, so a stale
+input means no output (never zeros). In ``feedforward`` each desired message is answered; in
+the feedback modes each measured ``joint_states`` message is, with the last desired state held
+(zero-order hold) while it is younger than ``input_timeout``, or the followed
+``desired_trajectory`` sampled at the measurement's stamp (:class:`~spatial_dynamics.trajectory.
+Follower`, joint_trajectory_controller's rules). A measured state with the (non-zero) stamp of
+the one answered last is not answered again (a lockstep simulator republishing the state it
+waits on must not get two commands for it).
+
+External torques (any ``control_mode``): each measured state whose ``effort`` holds the
+measured torque of every model joint updates a generalized-momentum observer
+(:mod:`spatial_dynamics.ros.observer`, gain ``observer_gain``, the node's model with payload,
+armature, friction and gravity), integrated over the header stamps (a message stamped 0 or with
+the stamp of the previous one is skipped; a stamp going back, a gap above ``measured_timeout``
+or a change of the model or of a parameter it uses restarts it at zero); its estimate of
+τ_ext = Jᵀw is published on ``external_torque_estimate``.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import NamedTuple, Optional, Tuple
+
+import numpy as np
+import spatial_dynamics as sd
+from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
+from spatial_dynamics.effort import annotate, with_gravity
+from spatial_dynamics.ros.config import Config, make_observer, observer_key, Output
+from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
+from spatial_dynamics.ros.diagnostics import Totals, Window
+from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
+from spatial_dynamics.ros.observer import EstimateWindow, measured_effort, sample_time
+from spatial_dynamics.trajectory import Follower, trajectory as to_trajectory, TrajectoryError
+from spatial_dynamics.wrench import wrench_from_torques
+
+_WRENCH_FIELDS = ('torque.x', 'torque.y', 'torque.z', 'force.x', 'force.y', 'force.z')
+
+
+class Held(NamedTuple):
+    """A good state kept between messages: model joints, arrays, receipt (monotonic ns)."""
+
+    joints: Tuple[str, ...]
+    state: tuple
+    receipt_ns: int
+
+
+class Answer(NamedTuple):
+    """One answer to publish: the input's header, the model joints, q_d, q̇_d, τ, the terms."""
+
+    header: object
+    joints: Tuple[str, ...]
+    q: np.ndarray
+    qd: np.ndarray
+    tau: np.ndarray
+    terms: Optional[dict]
+
+
+class Out:
+    """What one message gives to publish (each None when nothing): see :class:`Answering`."""
+
+    __slots__ = ('answer', 'estimate', 'wrench', 'annotated')
+
+    def __init__(self) -> None:
+        self.answer: Optional[Answer] = None
+        self.estimate: Optional[tuple] = None     # (header, joints, τ_ext)
+        self.wrench: Optional[tuple] = None       # (header, link, [n; f])
+        self.annotated: Optional[tuple] = None    # (header, effort.Annotated)
+
+
+class Answering:
+    """The answers to the input messages, and the state they keep (see the module docstring).
+
+    Each public method takes the current ``Config`` and a message and returns an :class:`Out`:
+    what the node publishes (an answer; an observer estimate and a virtual F/T reading; a plan
+    annotated for JTC). It never calls into the node; ``log`` is the node's logger
+    (``info``/``warn`` with ``throttle_duration_sec``).
+    """
+
+    def __init__(self, log) -> None:
+        self.log = log
+        self._out = Out()
+        self._observing: Optional[tuple] = None   # (msg, (q, qd)) accepted by measured()
+        self.desired: Optional[Held] = None    # the last good desired state (zero-order hold)
+        self.follower = Follower()   # desired_trajectory in the feedback modes (JTC's rules)
+        self._following: Optional[tuple] = None   # the joints the follower's plans are in
+        self._measured_q: Optional[np.ndarray] = None   # the last measured position
+        self._measured_stamp = 0     # its stamp (ns): the clock trajectories are sampled on
+        self._measured_seen = False  # whether that clock has ticked (a simulator starts at 0)
+        self._answered_stamp = 0               # stamp (ns) of the measured state answered last
+        self.observer = None              # MomentumObserver of the current model, when on
+        self._observed: Optional[Config] = None   # the config the observer was checked for
+        self._observer_key: Optional[tuple] = None
+        self.estimates = EstimateWindow()   # external_torque_estimate of the period
+        self.totals = Totals()
+        self.window = Window()
+        self.wrenches: dict = {}  # link -> (wrench [n; f] in the link frame, expiry ns)
+
+    def period(self) -> Tuple[Window, EstimateWindow]:
+        """Return the counters of the period that ended; start new ones."""
+        window, self.window = self.window, Window()
+        estimates, self.estimates = self.estimates, EstimateWindow()
+        return window, estimates
+
+    def joint_state(self, config: Config, msg, with_terms: bool = False) -> Out:
+        """Take a ``desired_joint_states`` message (``with_terms``: compute the terms too)."""
+        out = self._out = Out()
+        self._on_desired(config, msg, 'desired_joint_states', joint_state_arrays,
+                         (msg.name, msg.position, msg.velocity,
+                          msg.effort if config.acceleration_source == 'effort' else None),
+                         with_terms)
+        return out
+
+    def trajectory(self, config: Config, msg, now_ns: int, with_terms: bool = False) -> Out:
+        """Take a ``desired_trajectory``: a plan to follow, or (feedforward) one state.
+
+        ``now_ns``: the node's clock, the plan's start when it is stamped 0 and no measured
+        state came yet.
+        """
+        out = self._out = Out()
+        if config.control_mode in FEEDBACK_MODES:
+            self._follow(config.output, msg, now_ns)
+        else:   # feedforward: the first point is the desired state, answered at once
+            self._on_desired(config, msg, 'desired_trajectory', trajectory_arrays,
+                             (msg.joint_names, msg.points), with_terms)
+        if config.params.trajectory_effort_tolerance > 0.0 and config.output is not None:
+            self._annotate(config, msg)
+        return out
+
+    def _annotate(self, config: Config, msg) -> None:
+        """Publish the plan with effort at every point, resampled for JTC (:mod:`~.effort`)."""
+        output = config.output
+        if config.output_choice == 'none':
+            self.totals.rejected['no_model_part'] += 1
+            self.log.warn('annotated_trajectory: message rejected: output none has no model '
+                          'torque to annotate the plan with', throttle_duration_sec=1.0)
+            return
+        try:
+            plan = to_trajectory(msg.joint_names, msg.points, 'desired_trajectory')
+            if set(plan.joint_names) != set(output.joints):
+                raise ValueError(f'names {list(plan.joint_names)}, the model has '
+                                 f'{list(output.joints)}: JTC gets effort for every joint')
+            done = annotate(output.model, plan, config.params.trajectory_effort_tolerance,
+                            config.output_choice, config.gravity)
+        except (TrajectoryError, ValueError) as err:   # logged here: its own throttle
+            self.totals.rejected[getattr(err, 'reason', 'joints')] += 1
+            self.log.warn(f'annotated_trajectory: message rejected, not annotated: {err}',
+                          throttle_duration_sec=1.0)
+            return
+        self._out.annotated = (msg.header, done)
+        if done.jumps:
+            self.log.warn(f'annotated_trajectory: the model torque jumps at '
+                          f'{len(done.jumps)} point(s) (first at {done.jumps[0][1]:g} s): '
+                          'JTC\'s interpolation misses it there by more than the tolerance',
+                          throttle_duration_sec=1.0)
+
+    def _follow(self, output: Optional[Output], msg, clock_ns: int) -> None:
+        """Feedback modes: follow a whole trajectory, sampled at each measured stamp (JTC)."""
+        if output is None:
+            self._reject('desired_trajectory', 'no_model', 'no robot model loaded yet')
+            return
+        start_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        # the measured clock, once a measured state came (sim time may be 0 at the start)
+        now_ns = self._measured_stamp if self._measured_seen else clock_ns
+        q = self._measured_q
+        if q is not None and len(q) != len(output.joints):   # measured on another model
+            q = None
+        try:
+            traj = self.follower.accept(msg.joint_names, msg.points, start_ns, now_ns,
+                                        output.joints, q)
+        except TrajectoryError as err:
+            self._reject('desired_trajectory', err.reason, f'refused whole, the trajectory '
+                         f'followed before goes on: {err}')
+            return
+        self._following = output.joints
+        self.totals.last_desired_ns = time.monotonic_ns()
+        self.log.info(
+            'desired_trajectory: stopped, holding the measured position' if traj is None else
+            f'desired_trajectory: following {len(msg.points)} points ({traj.kind}, '
+            f'{traj.time[-1] - traj.time[0]:g} s) from {(start_ns or now_ns) * 1e-9:.9f} s')
+
+    def _on_desired(self, config: Config, msg, topic: str, to_arrays, fields: tuple,
+                    with_terms: bool) -> None:
+        """Hold a good desired state; in feedforward mode, answer it (or reject it whole)."""
+        t0 = time.monotonic_ns()
+        answers = config.control_mode not in FEEDBACK_MODES
+        if answers:
+            self.window.received += 1
+        output = config.output
+        if output is None:
+            self._reject(topic, 'no_model', 'no robot model loaded yet')
+            return
+        try:
+            desired = to_arrays(output.model.joint_names, *fields)
+        except InputError as err:
+            self._reject(topic, err.reason, str(err))
+            return
+        self.desired = Held(output.joints, desired, t0)
+        self.totals.last_desired_ns = t0
+        if answers:
+            self._respond(config, msg.header, topic, desired, None, t0, with_terms)
+
+    def measured(self, config: Config, msg, with_terms: bool = False) -> Out:
+        """Check a measured state; in a feedback mode, answer it with the held desired one.
+
+        The observer's update waits for :meth:`observe`, called once the answer is out: it
+        never delays a command.
+        """
+        out = self._out = Out()
+        self._observing = None
+        self._measured_msg(config, msg, with_terms)
+        return out
+
+    def observe(self, config: Config, msg) -> Out:
+        """Update the observer with the measured state :meth:`measured` just accepted."""
+        out = self._out = Out()
+        if config.observer_gain <= 0.0:
+            self.observer = None
+        elif self._observing is not None and self._observing[0] is msg:
+            self._observe(config, msg, self._observing[1])
+        self._observing = None
+        return out
+
+    def _measured_msg(self, config: Config, msg, with_terms: bool) -> None:
+        t0 = time.monotonic_ns()
+        feedback = config.control_mode in FEEDBACK_MODES
+        totals = self.totals
+        totals.measured_received += 1
+        if feedback:
+            self.window.received += 1
+        output = config.output
+        if output is None:
+            self._reject_measured('no_model', 'no robot model loaded yet')
+            return
+        try:
+            measured = measured_arrays(output.joints, msg.name, msg.position, msg.velocity,
+                                       feedback)
+        except InputError as err:
+            self._reject_measured(err.reason, str(err))
+            return
+        totals.last_measured_ns = t0
+        self.window.measured += 1
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        self._measured_q = measured[0]     # in output.joints order: held by an empty trajectory
+        self._measured_stamp = stamp or self._measured_stamp
+        self._measured_seen = True
+        if feedback:
+            self._answer_measured(config, msg, measured, t0, with_terms)
+        self._observing = (msg, measured)
+
+    def _answer_measured(self, config: Config, msg, measured: tuple, t0: int,
+                         with_terms: bool) -> None:
+        """Answer a good measured state with the held desired state (a feedback mode)."""
+        output, mode = config.output, config.control_mode
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        desired = None
+        if self._following == output.joints:   # a trajectory, sampled at this measurement
+            desired = self.follower.sample(stamp or self._measured_stamp)
+        if desired is None:
+            held = self.desired
+            if held is None or held.joints != output.joints:
+                self._reject('joint_states', 'no_desired', f'{mode}: no desired '
+                             'state for the model\'s joints yet')
+                return
+            age = (t0 - held.receipt_ns) * 1e-9
+            if age > config.input_timeout:
+                self._reject('joint_states', 'desired_stale',
+                             f'{mode}: the held desired state is {age:.3f} s old '
+                             f'(input_timeout {config.input_timeout} s); not publishing')
+                return
+            desired = held.state
+        if stamp != 0 and stamp == self._answered_stamp:
+            self._reject('joint_states', 'repeated',
+                         f'{mode}: the measured state stamped {stamp * 1e-9:.9f} '
+                         's was answered already (one answer per measurement)')
+            return
+        self._answered_stamp = stamp
+        self._respond(config, msg.header, 'joint_states', desired, measured, t0, with_terms)
+
+    def _observe(self, config: Config, msg, measured: tuple) -> None:
+        """Update the external-torque observer with a measured state; publish its estimate.
+
+        A message without effort (or velocity) for every model joint only skips the update
+        (counted in diagnostics): not an error. The observer restarts when the model or a
+        parameter it depends on changes (:func:`~.config.observer_key`).
+        """
+        skipped = self.estimates.skipped
+        output = config.output
+        q, qd = measured
+        if qd is None:
+            skipped['no_velocity'] += 1
+            return
+        try:
+            tau = measured_effort(output.joints, msg.name, msg.effort)
+        except InputError as err:
+            skipped[err.reason if err.reason in skipped else 'no_effort'] += 1
+            return
+        measured_kind = config.params.measured_effort
+        if measured_kind != 'full':   # e.g. UR: the drive reports the torque beyond gravity
+            tau = with_gravity(output.model, q, tau, measured_kind, config.gravity)
+        observer = self._observer_for(config)
+        t = sample_time(msg.header.stamp.sec, msg.header.stamp.nanosec)
+        if t is None:
+            skipped['unstamped'] += 1
+            return
+        try:
+            r = observer.update(t, q, qd, tau)
+        except Exception as err:  # never die on one message
+            self.log.warn(f'external torque observer failed: {err!r}', throttle_duration_sec=1.0)
+            observer.reset('compute error')
+            return
+        if r is None:
+            skipped['repeated'] += 1
+            return
+        self._out.estimate = (msg.header, output.joints, r)
+        self.estimates.add(r)
+        if config.params.wrench_estimate_link:
+            self._sense_wrench(config, msg.header, q, r)
+
+    def _observer_for(self, config: Config):
+        """Return the observer of ``config``: kept unless what it depends on changed."""
+        observer, output = self.observer, config.output
+        if config is not self._observed:   # a new config: does the observer still hold?
+            key = observer_key(output, config.gravity, config.observer_gain,
+                               config.measured_timeout, config.params.measured_effort)
+            if observer is None or key != self._observer_key:
+                observer = self.observer = make_observer(output, config.gravity,
+                                                         config.observer_gain,
+                                                         config.measured_timeout)
+                self._observer_key = key
+            observer.backend = output.backend
+            self._observed = config
+        return observer
+
+    def _sense_wrench(self, config: Config, header, q: np.ndarray, r: np.ndarray) -> None:
+        """Estimate the wrench at ``wrench_estimate.link`` that explains ``r`` (virtual F/T)."""
+        link, output = config.params.wrench_estimate_link, config.output
+        J = sd.jacobian(output.model, q, link, frame='local')
+        estimate = wrench_from_torques(J, r, config.params.wrench_estimate_epsilon)
+        self._out.wrench = (header, link, estimate.wrench)
+        self.estimates.add_wrench(link, estimate,
+                                  bool(np.any(np.abs(r) > output.external_torque_warn)))
+
+    def _respond(self, config: Config, header, topic: str, desired: tuple,
+                 measured: Optional[tuple], t0: int, with_terms: bool) -> None:
+        """Compute and publish one answer (and its terms while subscribed), or reject it."""
+        output = config.output
+        try:
+            f_ext = self._active_wrenches(output, t0) if self.wrenches else None
+            dynamics = Dynamics(output.model, config.gravity, output.backend, output.armature,
+                                output.friction_threshold, f_ext)
+            tau, terms = answer(dynamics, config.control_mode, config.output_choice, desired,
+                                measured, output.gains, with_terms)
+        except Exception as err:  # never die on one message
+            self._reject(topic, 'compute_error', f'rnea failed: {err!r}')
+            return
+        if not np.isfinite(tau).all():
+            self._reject(topic, 'non_finite_output', 'torque is not finite (extreme input?)')
+            return
+        if output.clamp:
+            tau, saturated = sd.clamp_to_effort_limits(output.model, tau)
+            if saturated.any():
+                self._count_saturated(output, tau, saturated)
+        t1 = time.monotonic_ns()
+        self._out.answer = Answer(header, output.joints, desired[0], desired[1], tau, terms)
+        self._count_answer(self.window, header.stamp, t0, t1)
+
+    def _count_answer(self, window: Window, stamp, t0: int, t1: int) -> None:
+        totals = self.totals
+        totals.answered += 1
+        totals.last_input_ns = t0
+        window.answered += 1
+        compute = t1 - t0
+        window.compute_ns += compute
+        if compute > window.compute_max_ns:
+            window.compute_max_ns = compute
+        if stamp.sec or stamp.nanosec:
+            delay = time.time_ns() - (stamp.sec * 1_000_000_000 + stamp.nanosec)
+            window.delay_ns += delay
+            window.delay_count += 1
+            if delay > window.delay_max_ns:
+                window.delay_max_ns = delay
+
+    def _count_saturated(self, output: Output, tau: np.ndarray, saturated: np.ndarray) -> None:
+        names = [output.joints[i] for i in np.flatnonzero(saturated)]
+        self.totals.saturated += 1
+        self.totals.saturated_joints.update(names)
+        self.log.warn(
+            'clamped to the URDF effort limit: '
+            + ', '.join(f'{name!r} at {tau[output.joints.index(name)]:+g}' for name in names),
+            throttle_duration_sec=1.0)
+
+    def _active_wrenches(self, output: Output, now_ns: int) -> Optional[dict]:
+        """Link -> wrench of the unexpired external wrenches on links of the model."""
+        wrenches = self.wrenches
+        for link in [link for link, (_, expiry) in wrenches.items() if expiry < now_ns]:
+            del wrenches[link]
+        frames = output.model.frames
+        return {link: f for link, (f, _) in wrenches.items() if link in frames} or None
+
+    def wrench(self, config: Config, msg) -> None:
+        """Store (or, when zero, remove) the wrench on link ``header.frame_id``."""
+        self.totals.wrenches_received += 1
+        link = msg.header.frame_id
+        output = config.output
+        if output is None:
+            self._reject_wrench('no_model', f'{link!r}: no robot model loaded yet')
+            return
+        if link not in output.model.frames:
+            self._reject_wrench('unknown_link', f'header.frame_id {link!r} is not a link of '
+                                f'robot {output.model.name!r}')
+            return
+        t, f = msg.wrench.torque, msg.wrench.force
+        wrench = np.array([t.x, t.y, t.z, f.x, f.y, f.z])   # [n; f], angular first
+        if not np.isfinite(wrench).all():
+            bad = [name for name, ok in zip(_WRENCH_FIELDS, np.isfinite(wrench)) if not ok]
+            self._reject_wrench('non_finite', f'on {link!r}: wrench.{", wrench.".join(bad)} '
+                                'not finite')
+            return
+        reason = check_bounded('wrench', wrench, MAX_WRENCH, 'N m or N', _WRENCH_FIELDS)
+        if reason:
+            self._reject_wrench('out_of_bounds', f'on {link!r}: {reason}')
+            return
+        if not wrench.any():
+            self.wrenches.pop(link, None)
+            return
+        expiry = time.monotonic_ns() + int(config.wrench_timeout * 1e9)
+        self.wrenches[link] = (wrench, expiry)
+
+    def _reject_wrench(self, reason: str, text: str) -> None:
+        self.totals.wrenches_rejected[reason] += 1
+        self.log.warn(f'external_wrenches: message rejected ({reason}): {text}',
+                      throttle_duration_sec=1.0)
+
+    def _reject_measured(self, reason: str, text: str) -> None:
+        self.totals.measured_rejected[reason] += 1
+        self.log.warn(f'joint_states: measured state rejected ({reason}): {text}',
+                      throttle_duration_sec=1.0)
+
+    def _reject(self, topic: str, reason: str, text: str) -> None:
+        self.totals.rejected[reason] += 1
+        self.log.warn(f'{topic}: message rejected ({reason}): {text}',
+                      throttle_duration_sec=1.0)
