@@ -216,3 +216,41 @@ def test_a_table_that_is_not_a_tree_is_refused(ext):
             ext.Kernels(bad)
     with pytest.raises(ValueError, match='shape'):
         ext.Kernels(table[:, :5].copy())
+
+
+def test_the_doors_are_the_functions_entered_in_c(ext, rng):
+    """sd.rnea and the terms are entered in C; every other call reaches the Python function."""
+    import inspect
+    from spatial_dynamics import backends
+    model = robot('ur5')
+    n = model.nq
+    q, qd, qdd = random_state(rng, (), n)
+    for name in ('rnea', 'gravity_torque', 'bias_torque', 'mass_matrix',
+                 'generalized_momentum'):
+        door = getattr(sd, name)
+        assert isinstance(door, ext.Door) and door is getattr(backends, name)
+        assert door.__name__ == name and door.__doc__ == door.__wrapped__.__doc__
+        assert inspect.signature(door) == inspect.signature(door.__wrapped__)
+    expected = sd.rnea.__wrapped__(model, q, qd, qdd, (0.0, 0.1, -9.8), None, 'auto')
+    calls = [lambda: sd.rnea(model, q, qd, qdd, (0.0, 0.1, -9.8)),
+             lambda: sd.rnea(model, q, qd, qdd, gravity=[0.0, 0.1, -9.8]),
+             lambda: sd.rnea(model, q, qd, qdd, (0.0, 0.1, -9.8), None, 'compiled'),
+             lambda: sd.rnea(model, q, qd, qdd, (0.0, 0.1, -9.8), {}, backend='auto'),
+             lambda: sd.rnea(model, q, qd, qdd=qdd, gravity=(0.0, 0.1, -9.8)),    # Python
+             lambda: sd.rnea(model, q, qd, qdd, (0.0, 0.1, -9.8), backend='numpy')]
+    for call in calls[:5]:
+        np.testing.assert_array_equal(call(), expected)
+    assert close(calls[5](), expected)
+    with pytest.raises(TypeError, match='unexpected keyword'):
+        sd.rnea(model, q, qd, qdd, gravty=(0.0, 0.0, -9.81))
+    with pytest.raises(TypeError, match='positional'):
+        sd.rnea(model, q, qd, qdd, (0.0, 0.0, -9.81), None, 'auto', 1)
+    with pytest.raises(TypeError, match='missing'):
+        sd.rnea(model, q, qd)
+    with pytest.raises(ValueError, match='backend must be one of'):
+        sd.gravity_torque(model, q, backend='fortran')
+    with pytest.raises(ValueError, match='gravity must be a 3-vector'):
+        sd.bias_torque(model, q, qd, gravity=(0.0, -9.81))
+    M = sd.mass_matrix(model, q.tolist(), backend='compiled')
+    np.testing.assert_array_equal(M, sd.mass_matrix.__wrapped__(model, q))
+    assert close(sd.mass_matrix(model, q, 'numpy'), M)

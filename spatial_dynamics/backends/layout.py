@@ -86,6 +86,8 @@ def derive(model: Model) -> Layout:
 
 #: id(model) -> Layout, each removed when its model is collected.
 LAYOUTS: dict = {}
+#: id(model) -> its ``Layout.kernels`` (the compiled extension's entries look models up here).
+KERNELS: dict = {}
 
 
 def of(model: Model) -> Layout:
@@ -94,4 +96,7 @@ def of(model: Model) -> Layout:
     if layout is None:
         layout = LAYOUTS[id(model)] = derive(model)
         weakref.finalize(model, LAYOUTS.pop, id(model), None)
+        if layout.kernels is not None:
+            KERNELS[id(model)] = layout.kernels
+            weakref.finalize(model, KERNELS.pop, id(model), None)
     return layout
