@@ -132,10 +132,10 @@ def test_the_terms_take_every_form_too(name, rng):
         assert compiled.ext.generalized_momentum(kernels, fq, fd) is not None
 
 
-@pytest.mark.parametrize('N', [1, 15, 16, 33, 1001])
+@pytest.mark.parametrize('N', [1, 15, 16, 33, 1001, 2400])
 @pytest.mark.parametrize('name', ['ur5', 'talos'])
 def test_a_batch_over_threads_equals_the_single_calls(name, N, rng):
-    """Batches split into slices over threads (16 states at least each), bit for bit."""
+    """Batches split into slices over threads (4096 body-states at least each), bit for bit."""
     model = robot(name)
     n = model.nq
     Q, QD, QDD = random_state(rng, (N,), n)

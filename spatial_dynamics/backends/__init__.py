@@ -106,6 +106,16 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
             tau = _c_rnea(kern, q, qd, qdd, gravity)
             if tau is not None:
                 return tau
+            if (type(q) is type(qd) is type(qdd) is _ndarray and q.ndim > 1
+                    and q.shape == qd.shape == qdd.shape and q.shape[-1] == lay.n
+                    and q.dtype is qd.dtype is qdd.dtype is _F8):
+                # a batch of float64 states of one shape: no broadcasting to work out
+                g = GRAVITY if gravity is GRAVITY else _gravity(gravity)
+                if g[0] is not None:
+                    if q.size == lay.n:     # one state with batch dimensions of 1
+                        return _c_rnea(kern, q.reshape(-1), qd.reshape(-1), qdd.reshape(-1),
+                                       g).reshape(q.shape)
+                    return compiled.rnea(lay, q, qd, qdd, g, {})
         else:
             # numpy: one float64 state on Python floats (lists and tuples converted once)
             if not (type(q) is type(qd) is type(qdd) is _ndarray):
@@ -241,9 +251,9 @@ def _rnea(model: Model, lay: layout.Layout, q, qd, qdd, gravity, f_ext,
     if kern is not None and q.dtype == np.float64:
         if q.size == q.shape[-1] > 0:
             # One state (maybe with batch dimensions of 1): the single-state entry.
-            fext = compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
-            tau = _c_rnea(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g,
-                          fext if fb else None)
+            fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
+                    if fb else None)
+            tau = _c_rnea(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g, fext)
             return tau.reshape(q.shape)
         return compiled.rnea(lay, q, qd, qdd, g, fb)
     return python.rnea(lay.rows, q, qd, qdd, g, fb)

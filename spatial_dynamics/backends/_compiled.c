@@ -30,9 +30,11 @@
 
 /* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
 #define STACK_DOUBLES 2048
-/* Largest number of threads of one batch; each takes at least MIN_SLICE states. */
+/* Largest number of threads of one batch; each gets at least MIN_WORK body-states (states x
+ * bodies, ~0.2 ms of work): starting a thread, and waiting for a core on a busy machine,
+ * must cost less than what it takes over. */
 #define MAX_THREADS 64
-#define MIN_SLICE 16
+#define MIN_WORK 4096
 
 static PyObject *np_empty;  /* numpy.empty */
 
@@ -534,8 +536,9 @@ run_batch(const Slice *job, Py_ssize_t N, long threads)
 {
     Slice slices[MAX_THREADS];
     long T = threads < 1 ? 1 : (threads > MAX_THREADS ? MAX_THREADS : threads);
-    if (T > N / MIN_SLICE)
-        T = N / MIN_SLICE > 0 ? (long)(N / MIN_SLICE) : 1;
+    Py_ssize_t most = N * job->rows / MIN_WORK;
+    if (T > most)
+        T = most > 0 ? (long)most : 1;
     int failed = 0;
     Py_BEGIN_ALLOW_THREADS
     for (long t = 0; t < T; t++) {
@@ -969,7 +972,7 @@ PyInit__compiled(void)
             || PyModule_AddObject(m, "Door", (PyObject *)&DoorType) < 0
             || PyModule_AddIntConstant(m, "WORK", WORK) < 0
             || PyModule_AddIntConstant(m, "MAX_THREADS", MAX_THREADS) < 0
-            || PyModule_AddIntConstant(m, "MIN_SLICE", MIN_SLICE) < 0) {
+            || PyModule_AddIntConstant(m, "MIN_WORK", MIN_WORK) < 0) {
         Py_DECREF(m);
         return NULL;
     }
