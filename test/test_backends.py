@@ -380,6 +380,23 @@ def test_without_the_extension_auto_runs_on_numpy():
     assert 'kernels: None' in out, out
 
 
+def test_a_stale_build_is_not_used():
+    """An extension of another interface (left beside newer sources) counts as missing."""
+    out = run_python(f'''
+        import sys, types
+        stale = types.ModuleType('spatial_dynamics.backends._compiled')
+        stale.API, stale.__file__ = 0, '/somewhere/_compiled.so'
+        sys.modules[stale.__name__] = stale
+        import numpy as np
+        import spatial_dynamics as sd
+        m = sd.Model.from_urdf({URDF!r})
+        assert abs(sd.rnea(m, [0.3], [0.0], [0.0])[0] - 9.81 * 0.5 * np.sin(0.3)) < 1e-12
+        print(sd.backends.describe())
+    ''')
+    assert out.startswith('numpy (compiled kernels not built: /somewhere/_compiled.so is a '
+                          'stale build (API 0, not 1): build the package again)'), out
+
+
 def test_numba_is_never_imported():
     out = run_python(f'''
         import sys

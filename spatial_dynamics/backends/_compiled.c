@@ -28,6 +28,9 @@
 
 #include "_kernels_generated.h"
 
+/* The interface this file offers to compiled.py, which refuses a build of another (a stale
+ * extension left beside newer sources): raise it with every change of an entry. */
+#define API 1
 /* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
 #define STACK_DOUBLES 2048
 /* Largest number of threads of one batch; each gets at least MIN_WORK body-states (states x
@@ -970,6 +973,7 @@ PyInit__compiled(void)
     Py_INCREF(&DoorType);
     if (PyModule_AddObject(m, "Kernels", (PyObject *)&KernelsType) < 0
             || PyModule_AddObject(m, "Door", (PyObject *)&DoorType) < 0
+            || PyModule_AddIntConstant(m, "API", API) < 0
             || PyModule_AddIntConstant(m, "WORK", WORK) < 0
             || PyModule_AddIntConstant(m, "MAX_THREADS", MAX_THREADS) < 0
             || PyModule_AddIntConstant(m, "MIN_WORK", MIN_WORK) < 0) {

@@ -23,17 +23,24 @@ import warnings
 
 import numpy as np
 
+#: The interface of ``_compiled.c`` this module speaks (its ``API``).
+API = 1
+
 try:
     ext = importlib.import_module(__package__ + '._compiled')
     FAILURE: Optional[str] = None
+    if getattr(ext, 'API', None) != API:      # an old build beside newer sources
+        ext, FAILURE = None, (f'{ext.__file__} is a stale build (API {getattr(ext, "API", 0)}'
+                              f', not {API}): build the package again')
 except ImportError as err:                 # built without a C compiler
     ext = None
     FAILURE = (f'no module {err.name}: the package was built without them'
                if isinstance(err, ModuleNotFoundError) else f'{type(err).__name__}: {err}')
+if ext is None:
     warnings.warn('spatial_dynamics was built without its compiled kernels; it runs on plain '
                   'Python (10-100x slower per call). Install a C compiler and the Python headers '
-                  '(Debian/Ubuntu: build-essential python3-dev) and build it again.',
-                  RuntimeWarning, stacklevel=2)
+                  '(Debian/Ubuntu: build-essential python3-dev) and build it again. '
+                  f'({FAILURE})', RuntimeWarning, stacklevel=2)
 
 #: Threads a batch may use: the CPUs this process may run on.
 THREADS = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else (
