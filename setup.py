@@ -3,10 +3,55 @@
 
 from glob import glob
 import os
+import sys
 
-from setuptools import find_packages, setup
+from setuptools import Extension, find_packages, setup
+from setuptools.command.build_ext import build_ext
 
 package_name = 'spatial_dynamics'
+#: The kernels generated from spatial_dynamics/algorithms (backends/codegen.py) as a C
+#: extension. -ffp-contract=off: no fused multiply-adds, so every operation rounds as in the
+#: Python backends.
+KERNELS = Extension(
+    package_name + '.backends._compiled',
+    sources=[package_name + '/backends/_compiled.c'],
+    depends=[package_name + '/backends/_kernels_generated.h'],
+    extra_compile_args=[] if os.name == 'nt' else ['-ffp-contract=off', '-pthread'],
+    extra_link_args=[] if os.name == 'nt' else ['-pthread'],
+)
+
+
+class BuildKernels(build_ext):
+    """Build the compiled kernels; without a working C compiler, install without them.
+
+    The package then runs on plain Python (``backend='auto'`` is ``'numpy'``): one warning
+    says so, and how to get the kernels.
+    """
+
+    def run(self) -> None:
+        """Build the extensions, or warn once and build none."""
+        try:
+            super().run()
+        except Exception as err:     # no compiler at all (DistutilsPlatformError)
+            self._skip(err)
+
+    def build_extension(self, ext) -> None:
+        """Build ``ext``, or warn once and leave it out."""
+        try:
+            super().build_extension(ext)
+        except Exception as err:     # the compiler failed (CompileError, LinkError)
+            self._skip(err)
+
+    def get_outputs(self) -> list:
+        """List the extensions built (none that failed)."""
+        return [path for path in super().get_outputs() if os.path.exists(path)]
+
+    def _skip(self, err: Exception) -> None:
+        reason = ' '.join(str(err).split()) or type(err).__name__
+        print(f'WARNING: {package_name}: the compiled kernels were not built ({reason}); '
+              f'the package runs on plain Python. For the compiled kernels install a C '
+              f'compiler and the Python headers (Debian/Ubuntu: build-essential python3-dev) '
+              f'and build again.', file=sys.stderr)
 
 
 def files(pattern):
@@ -24,16 +69,17 @@ setup(
         ('share/' + package_name + '/launch', files('launch/*.launch.py')),
         ('share/' + package_name + '/config', files('config/*')),
     ],
+    ext_modules=[KERNELS],
+    cmdclass={'build_ext': BuildKernels},
     install_requires=['numpy', 'lxml'],
     extras_require={
         'test': ['pytest', 'pin', 'example-robot-data', 'hypothesis', 'mpmath', 'flake8',
                  'pydocstyle'],
         'plot': ['matplotlib'],
-        'fast': ['numba'],
         'replay': ['rosbags', 'matplotlib', 'pyyaml'],
         'sim': ['mujoco'],
     },
-    zip_safe=True,
+    zip_safe=False,
     maintainer='spatial_dynamics maintainers',
     maintainer_email='maintainer@spatial-dynamics.dev',
     description='Inverse dynamics (RNEA on spatial vectors) from a URDF, with a ROS 2 node '

@@ -1,6 +1,6 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""The compiled (numba) backend against the numpy backend and against Pinocchio.
+"""The compiled backend (the C extension built with the package) against numpy and Pinocchio.
 
 - compiled vs Pinocchio: max abs difference <= 1e-10 Nm, as the numpy backend;
 - compiled vs numpy: a few ulps of the largest torque (the kernel is the same arithmetic in
@@ -8,11 +8,11 @@
 - single states, batches (serial and parallel entries, broadcast, shared and per-sample
   wrenches), gravity variations, the Panda with its mimic finger, UR5, Talos, Solo12 and
   seeded random trees (revolute, continuous, prismatic, fixed, mimic);
-- non-float64 inputs run on numpy; without numba the package imports and ``backend='auto'``
-  runs on numpy, ``backend='compiled'`` says how to install numba; numba is imported only
-  when a compiled call needs it.
+- non-float64 inputs run on numpy; without the extension the package imports and
+  ``backend='auto'`` runs on numpy, ``backend='compiled'`` says how to build it; nothing is
+  compiled or cached at run time, and numba is never imported.
 
-The compiled tests skip only when numba is missing (``pytest.importorskip('numba')``).
+The compiled tests fail (they do not skip) when the package was built without its kernels.
 """
 
 import functools
@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 import spatial_dynamics as sd
 from spatial_dynamics import backends
-from spatial_dynamics.backends import layout
+from spatial_dynamics.backends import compiled, layout
 from urdf_gen import random_tree_urdf
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -43,9 +43,9 @@ TREE_IDS = [f'seed{s}-{n}links-{"tree" if b else "chain"}{"-mimic" if m else ""}
 
 @pytest.fixture
 def kernels():
-    """Return the compiled backend's module; skip when numba is not installed."""
-    pytest.importorskip('numba')
-    return backends.compiled('compiled')
+    """Return the compiled extension; a package built without it fails here."""
+    assert compiled.ext is not None, f'built without the compiled kernels: {compiled.FAILURE}'
+    return compiled.ext
 
 
 @functools.lru_cache(maxsize=None)
@@ -250,7 +250,8 @@ def test_the_layout_is_the_backends_not_the_models(kernels):
     lay = layout.of(model)
     K, C = lay.table, layout.COLUMN
     assert layout.of(model) is lay and lay.n == model.nq
-    assert K.shape == (model.NB + 1, layout.WIDTH) and K.flags.writeable
+    assert K.shape == (model.NB + 1, layout.WIDTH) and not K.flags.writeable
+    assert (lay.kernels.rows, lay.kernels.n) == K.shape[:1] + (model.nq,)   # its copy
     assert K[0, C['qidx']] == model.nq      # the length the single entry checks q against
     np.testing.assert_array_equal(K[1:, C['parent']], model.parent[1:])
     np.testing.assert_array_equal(K[1:, C['qidx']], model.qidx[1:])
@@ -272,14 +273,14 @@ def test_the_layout_is_the_backends_not_the_models(kernels):
 
 
 def test_model_too_large_for_the_stack(kernels, rng):
-    """Beyond STACK_ROWS bodies the stack entry declines and the allocating one answers."""
-    xml = random_tree_urdf(np.random.default_rng(2099), kernels.STACK_ROWS + 20,
+    """Beyond the C stack scratch (2048 doubles: 50 bodies) the single entry uses the heap."""
+    xml = random_tree_urdf(np.random.default_rng(2099), 128 + 20,
                            branching=True, joint_kinds=('revolute', 'prismatic'), mimic=True)
     model, oracle = sd.Model.from_urdf(xml), PinOracle(xml)
-    assert model.NB + 1 > kernels.STACK_ROWS
+    assert (model.NB + 1) * kernels.WORK > 2048
     q, qd, qdd = random_state(rng, (), model.nq)
-    tau = np.empty(model.nq)
-    assert not kernels.rnea_single(layout.of(model).table, q, qd, qdd, 0.0, 0.0, -9.81, tau)
+    tau = kernels.rnea(layout.of(model).kernels, q, qd, qdd, (0.0, 0.0, -9.81))
+    assert_ulps_close(tau, sd.rnea(model, q, qd, qdd, backend='numpy'))
     for shape in ((model.nq,), (1, model.nq)):
         args = [x.reshape(shape) for x in (q, qd, qdd)]
         tau = sd.rnea(model, *args, backend='compiled')
@@ -289,20 +290,23 @@ def test_model_too_large_for_the_stack(kernels, rng):
 
 
 def test_single_entry_refuses_wrong_lengths(kernels):
+    """The C entry declines (None) what is not one state; the general path names it."""
     model, _ = robot('panda')
     n = model.nq
-    K = layout.of(model).table
-    z, tau = np.zeros(n), np.full(n, 7.0)
-    for q, out in ((np.zeros(n - 1), tau), (z, np.full(n + 1, 7.0))):
-        assert not kernels.rnea_single(K, q, z, z, 0.0, 0.0, -9.81, out)
-    np.testing.assert_array_equal(tau, 7.0)    # nothing written
+    K = layout.of(model).kernels
+    z, g = np.zeros(n), (0.0, 0.0, -9.81)
+    for args in ((np.zeros(n - 1), z, z, g), (z, np.zeros(n + 1), z, g), (z, z, z, g[:2]),
+                 (np.zeros((1, n)), z, z, g), (z, z, [0.0] * n + [1.0], g),
+                 (z, z, z, np.zeros(3, np.float32)), (z.astype(np.float32), z, z, g),
+                 (z, z, ['0'] * n, g), (z, z, b'\0' * n, g)):
+        assert kernels.rnea(K, *args) is None
     with pytest.raises(ValueError, match=rf'q must have shape \(\.\.\., {n}\)'):
         sd.rnea(model, np.zeros(n - 1), np.zeros(n - 1), np.zeros(n - 1), backend='compiled')
 
 
 def test_warmup_and_describe(kernels):
     model, _ = robot('talos_reduced')
-    assert backends.warmup(model).startswith('compiled (numba ')
+    assert backends.warmup(model).startswith('compiled (C extension, ')
     assert backends.warmup(model, backend='numpy') == 'numpy'
     assert backends.describe('compiled').startswith('compiled')
 
@@ -326,7 +330,7 @@ def test_concurrent_callers_agree(kernels, rng):
 
 
 # --------------------------------------------------------------------------------------------
-# Without numba, and lazily imported
+# Without the extension; nothing compiled at run time
 
 
 def run_python(code, env=None):
@@ -348,10 +352,11 @@ URDF = ('<robot name="r"><link name="base"/><link name="arm"><inertial><mass val
         '<limit effort="1" velocity="1" lower="-1" upper="1"/></joint></robot>')
 
 
-def test_without_numba_auto_runs_on_numpy():
+def test_without_the_extension_auto_runs_on_numpy():
+    """A package built without a C compiler: 'auto' is numpy, 'compiled' says how to build."""
     out = run_python(f'''
         import sys
-        sys.modules['numba'] = None          # `import numba` raises ImportError
+        sys.modules['spatial_dynamics.backends._compiled'] = None   # its import fails
         import numpy as np
         import spatial_dynamics as sd
         from spatial_dynamics import backends
@@ -359,83 +364,129 @@ def test_without_numba_auto_runs_on_numpy():
         tau = sd.rnea(m, np.array([0.3]), np.zeros(1), np.zeros(1))
         assert abs(tau[0] - 9.81 * 0.5 * np.sin(0.3)) < 1e-12, tau
         assert sd.rnea(m, np.ones((5, 1)), np.ones((5, 1)), np.ones((5, 1))).shape == (5, 1)
+        assert sd.mass_matrix(m, [0.3]).shape == (1, 1)
         print('describe:', backends.describe())
         print('warmup:', backends.warmup(m))
         try:
             sd.rnea(m, np.zeros(1), np.zeros(1), np.zeros(1), backend='compiled')
         except ImportError as err:
             print('error:', type(err).__name__, err)
-        print('kernels imported:', 'spatial_dynamics.backends.jit' in sys.modules)
+        print('kernels:', backends.compiled.ext)
     ''')
-    assert 'describe: numpy (numba unavailable: ' in out, out
-    assert 'warmup: numpy (numba unavailable' in out, out
+    assert 'describe: numpy (compiled kernels not built: ' in out, out
+    assert 'warmup: numpy (compiled kernels not built' in out, out
     assert 'error: CompiledBackendUnavailable' in out, out
-    assert 'pip install numba' in out and 'spatial_dynamics[fast]' in out, out
-    assert 'kernels imported: False' in out, out
+    assert 'C compiler' in out and 'build-essential python3-dev' in out, out
+    assert 'kernels: None' in out, out
 
 
-def test_numba_is_imported_only_when_the_compiled_backend_runs():
+def test_a_stale_build_is_not_used():
+    """An extension of another interface (left beside newer sources) counts as missing."""
+    out = run_python(f'''
+        import sys, types
+        stale = types.ModuleType('spatial_dynamics.backends._compiled')
+        stale.API, stale.__file__ = 0, '/somewhere/_compiled.so'
+        sys.modules[stale.__name__] = stale
+        import numpy as np
+        import spatial_dynamics as sd
+        m = sd.Model.from_urdf({URDF!r})
+        assert abs(sd.rnea(m, [0.3], [0.0], [0.0])[0] - 9.81 * 0.5 * np.sin(0.3)) < 1e-12
+        print(sd.backends.describe())
+    ''')
+    assert out.startswith('numpy (compiled kernels not built: /somewhere/_compiled.so is a '
+                          'stale build (API 0, not 1): build the package again)'), out
+
+
+def test_numba_is_never_imported():
     out = run_python(f'''
         import sys
         import numpy as np
         import spatial_dynamics as sd
         m = sd.Model.from_urdf({URDF!r})
         print('after import:', 'numba' in sys.modules)
-        sd.rnea(m, np.zeros(1), np.zeros(1), np.zeros(1), backend='numpy')
-        print('after numpy call:', 'numba' in sys.modules)
+        for backend in ('numpy', 'compiled', 'auto'):
+            sd.rnea(m, np.zeros(1), np.zeros(1), np.zeros(1), backend=backend)
+            sd.rnea(m, np.zeros((70, 1)), np.zeros(1), np.zeros(1), backend=backend)
+            sd.mass_matrix(m, np.zeros((3, 1)), backend=backend)
+        print('after the calls:', 'numba' in sys.modules)
     ''')
     assert 'after import: False' in out, out
-    assert 'after numpy call: False' in out, out
+    assert 'after the calls: False' in out, out
 
 
-def test_cache_dir_fallback(monkeypatch, tmp_path):
-    """A read-only package directory sends numba's cache to $XDG_CACHE_HOME/spatial_dynamics."""
-    monkeypatch.delenv('NUMBA_CACHE_DIR', raising=False)
-    monkeypatch.setenv('XDG_CACHE_HOME', str(tmp_path))
-    monkeypatch.setattr(os, 'access', lambda path, mode: False)
-    assert backends.cache_dir_fallback() == os.path.join(str(tmp_path), 'spatial_dynamics',
-                                                         'numba')
-    monkeypatch.setenv('NUMBA_CACHE_DIR', '/somewhere/else')
-    assert backends.cache_dir_fallback() is None       # the user's choice wins
-    monkeypatch.delenv('NUMBA_CACHE_DIR')
-    monkeypatch.setattr(os, 'access', lambda path, mode: True)
-    assert backends.cache_dir_fallback() is None       # numba caches next to the package
+def test_nothing_is_compiled_or_written_at_run_time(kernels, tmp_path):
+    """Every entry runs in a new process with an empty home and cache: nothing is written."""
+    home = tmp_path / 'home'
+    home.mkdir()
+    package = os.path.dirname(os.path.abspath(sd.__file__))
 
+    def listing():
+        return sorted(os.path.join(d, f) for d, _, names in os.walk(package) for f in names
+                      if '__pycache__' not in d)
 
-@pytest.mark.slow
-def test_read_only_install_caches_in_the_fallback_dir_and_reloads(tmp_path):
-    """Read-only package dir and no NUMBA_CACHE_DIR: the cache goes to the fallback dir.
-
-    The kernels compile into $XDG_CACHE_HOME/spatial_dynamics/numba once (slow: a cold
-    compile), and a new process loads every entry from there instead of compiling.
-    """
-    pytest.importorskip('numba')
-    code = f'''
-        import os
+    before = listing()
+    env = dict(os.environ, HOME=str(home), XDG_CACHE_HOME=str(home / '.cache'),
+               PYTHONDONTWRITEBYTECODE='1')
+    out = run_python(f'''
         import numpy as np
         import spatial_dynamics as sd
-        from spatial_dynamics import backends
-        here = os.path.dirname(os.path.abspath(sd.__file__))
-        access = os.access
-        os.access = lambda path, mode, **kw: (False if os.path.abspath(path).startswith(here)
-                                              else access(path, mode, **kw))
         m = sd.Model.from_urdf({URDF!r})
-        backends.warmup(m)
-        from spatial_dynamics.backends import jit as kernels
-        import numba
-        print('cache dir:', numba.config.CACHE_DIR)
-        for f in (kernels.rnea_single, kernels.rnea_single_large, kernels._rnea_batch,
-                  kernels._rnea_batch_parallel):
-            print(f.__name__, 'hits', sum(f.stats.cache_hits.values()),
-                  'misses', sum(f.stats.cache_misses.values()))
-    '''
-    env = {k: v for k, v in os.environ.items() if k != 'NUMBA_CACHE_DIR'}
-    env['XDG_CACHE_HOME'] = str(tmp_path)
-    first = run_python(code, env)
-    fallback = os.path.join(str(tmp_path), 'spatial_dynamics', 'numba')
-    assert f'cache dir: {fallback}' in first, first
-    assert 'misses 1' in first, first
-    assert any(name.endswith('.nbi') for _, _, names in os.walk(fallback) for name in names)
-    second = run_python(code, env)
-    for name in ('rnea_single', 'rnea_single_large', '_rnea_batch', '_rnea_batch_parallel'):
-        assert f'{name} hits 1 misses 0' in second, second
+        z, Z = np.zeros(1), np.zeros((100, 1))
+        for q in (z, Z):
+            sd.rnea(m, q, q, q, backend='compiled')
+            sd.gravity_torque(m, q, backend='compiled')
+            sd.bias_torque(m, q, q, backend='compiled')
+            sd.mass_matrix(m, q, backend='compiled')
+            sd.generalized_momentum(m, q, q, backend='compiled')
+        print(sd.backends.describe('compiled'))
+    ''', env)
+    assert out.startswith('compiled (C extension'), out
+    assert list(home.iterdir()) == []
+    assert listing() == before
+
+
+PACKAGE_FILES = ('setup.py', 'setup.cfg', 'MANIFEST.in', 'package.xml', 'README.md', 'LICENSE',
+                 'resource', 'launch', 'config', 'spatial_dynamics')
+
+
+def test_a_build_without_a_compiler_installs_and_runs_with_one_warning(tmp_path):
+    """``CC=/bin/false pip install``: installed without the extension, one warning each time."""
+    import shutil
+    source, target = tmp_path / 'source', tmp_path / 'target'
+    for name in PACKAGE_FILES:
+        path = os.path.join(ROOT, name)
+        if os.path.isdir(path):
+            shutil.copytree(path, source / name, ignore=shutil.ignore_patterns(
+                '__pycache__', '*.so', '*.pyd'))
+        else:
+            source.mkdir(exist_ok=True)
+            shutil.copy(path, source / name)
+    env = dict(os.environ, CC='/bin/false')
+    # pip builds in an isolated environment (setuptools and wheel from the index) unless this
+    # one can build wheels itself
+    import importlib.util
+    isolation = [] if importlib.util.find_spec('wheel') is None else ['--no-build-isolation']
+    build = subprocess.run([sys.executable, '-m', 'pip', 'install', '-v', '--no-deps',
+                            *isolation, '--target', str(target), str(source)],
+                           capture_output=True, text=True, env=env, timeout=600)
+    log = build.stdout + build.stderr
+    assert build.returncode == 0, log[-3000:]
+    assert log.count('WARNING: spatial_dynamics: the compiled kernels were not built') == 1, log
+    assert 'build-essential python3-dev' in log
+    installed = [name for _, _, names in os.walk(target) for name in names]
+    assert 'rnea.py' in installed and not any(n.startswith('_compiled') for n in installed)
+    code = textwrap.dedent(f'''
+        import numpy as np
+        import spatial_dynamics as sd
+        m = sd.Model.from_urdf({URDF!r})
+        tau = sd.rnea(m, [0.3], [0.0], [0.0])
+        assert abs(tau[0] - 9.81 * 0.5 * np.sin(0.3)) < 1e-12, tau
+        print(sd.backends.describe())
+    ''')
+    run = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                         cwd=str(tmp_path), timeout=300,
+                         env=dict(os.environ, PYTHONPATH=str(target)))
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.startswith('numpy (compiled kernels not built'), run.stdout
+    assert run.stderr.count('RuntimeWarning: spatial_dynamics was built without its compiled '
+                            'kernels') == 1, run.stderr

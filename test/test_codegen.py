@@ -43,3 +43,68 @@ def test_code_outside_the_rules_is_refused(body, message):
     tree = ast.parse(f'def rnea_kernel(rows, vel, acc):\n    {body}\n')
     with pytest.raises(SyntaxError, match=message):
         codegen._ToFlat().visit(tree.body[0])
+
+
+def test_the_committed_c_kernels_are_a_fresh_generation():
+    with open(codegen.TARGET_C, encoding='utf-8') as f:
+        committed = f.read()
+    assert committed == codegen.generate_c(), (
+        'backends/_kernels_generated.h is stale: run python -m spatial_dynamics.backends.codegen')
+
+
+def test_every_arithmetic_assignment_is_a_c_statement_as_written():
+    """``x = expression`` of the source is ``x = expression;`` in C, character for character."""
+    generated = codegen.generate_c()
+    storage = set(codegen.STORES) | {'rows', 'f_body', 'm', 'nonzero', 'fp', 'cp'}
+    checked = 0
+    for fn in codegen.SOURCES:
+        tree = ast.parse(inspect.getsource(fn))
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.Assign) and len(node.targets) == 1
+                    and isinstance(node.targets[0], ast.Name)
+                    and isinstance(node.value, ast.BinOp)):
+                continue
+            if {n.id for n in ast.walk(node) if isinstance(n, ast.Name)} & storage:
+                continue
+            assert f'{ast.unparse(node)};' in generated, ast.unparse(node)
+            checked += 1
+    assert checked >= 40
+
+
+def test_tuple_assignments_evaluate_every_value_before_storing():
+    """``a, b = b, a`` swaps in C as in Python (temporaries, then the stores)."""
+    func = ast.parse('def xup_kernel(K, q, work):\n    a, b = b + 1.0, a\n').body[0]
+    text = codegen._ToC(func, {}).function()
+    body = [line.strip() for line in text.splitlines()]
+    first, second = body.index('a = tmp1_;'), body.index('b = tmp2_;')
+    assert body.index('const double tmp1_ = b + 1.0;') < first
+    assert body.index('const double tmp2_ = a;') < first < second
+
+
+@pytest.mark.parametrize('body', ['x = y ** 2', 'x = y // 2', 'x = [y]',
+                                  'for i in range(0, 9, 2):\n        pass'])
+def test_code_without_a_c_translation_is_refused(body):
+    func = ast.parse(f'def xup_kernel(K, q, work):\n    {body}\n').body[0]
+    with pytest.raises(SyntaxError, match='no C for|steps by 1'):
+        codegen._ToC(func, {}).function()
+
+
+def test_the_flat_python_kernels_compute_what_the_source_computes(rng):
+    """The flat-array listing (the rewrite the C is printed from) run on Python floats."""
+    import numpy as np
+    import spatial_dynamics as sd
+    from spatial_dynamics.backends import _kernels_generated as flat, layout, python
+    from urdf_gen import random_tree_urdf
+    model = sd.Model.from_urdf(random_tree_urdf(np.random.default_rng(5), 9, branching=True,
+                                                mimic=True))
+    lay, n = layout.of(model), model.nq
+    q, qd, qdd = rng.normal(size=(3, n))
+    work = np.zeros(lay.table.shape[0] * flat.WORK)
+    tau = np.zeros(n)
+    flat.xup_kernel(lay.table, q, work)
+    flat.rnea_kernel(lay.table, q, qd, qdd, 0.5, 0.0, -9.8, np.zeros((1, 6)), False, tau, work)
+    expected = python.rnea_rows(lay.rows, q.tolist(), qd.tolist(), qdd.tolist(), (0.5, 0.0, -9.8))
+    assert tau.tolist() == expected
+    H = np.zeros(n * n)
+    flat.crba_kernel(lay.table, work, H)
+    assert H.tolist() == python.mass_matrix_rows(lay.rows, q.tolist())

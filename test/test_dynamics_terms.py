@@ -11,6 +11,7 @@ from conftest import PinOracle, random_state, robot_urdf_path
 import numpy as np
 import pytest
 import spatial_dynamics as sd
+from spatial_dynamics.backends import compiled
 from urdf_gen import random_tree_urdf
 
 ROBOTS = ('ur5', 'panda', 'talos', 'solo12')
@@ -19,8 +20,8 @@ EPS = np.finfo(float).eps
 
 @pytest.fixture(params=['numpy', 'compiled'])
 def backend(request):
-    if request.param == 'compiled':
-        pytest.importorskip('numba')
+    if request.param == 'compiled':     # built with the package: its absence is a failure
+        assert compiled.ext is not None, compiled.FAILURE
     return request.param
 
 
@@ -108,7 +109,6 @@ def test_gravity_and_bias_are_rnea_with_zero_rates(robot, backend, rng):
 
 
 def test_backends_agree_on_trees_with_mimic_and_prismatic_joints(rng):
-    pytest.importorskip('numba')
     for seed in range(6):
         xml = random_tree_urdf(np.random.default_rng(seed), 14, mimic=True)
         model = sd.Model.from_urdf(xml)
@@ -125,13 +125,11 @@ def test_backends_agree_on_trees_with_mimic_and_prismatic_joints(rng):
 
 
 def test_a_model_too_large_for_the_stack_scratch(rng):
-    """More bodies than the single-state entry keeps on the stack: the allocating entry."""
-    pytest.importorskip('numba')
-    from spatial_dynamics.backends import jit
-    xml = random_tree_urdf(np.random.default_rng(3), jit.STACK_ROWS + 20,
+    """More bodies than the single-state entry keeps on the stack (2048 doubles): the heap."""
+    xml = random_tree_urdf(np.random.default_rng(3), 128 + 20,
                            joint_kinds=('revolute', 'prismatic'))
     model = sd.Model.from_urdf(xml)
-    assert model.NB + 1 > jit.STACK_ROWS
+    assert model.nq + (model.NB + 1) * compiled.ext.WORK > 2048
     q, _, _ = random_state(rng, (), model.nq)
     a = sd.mass_matrix(model, q, backend='compiled')
     b = sd.mass_matrix(model, q, backend='numpy')

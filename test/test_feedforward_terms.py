@@ -15,7 +15,7 @@
 - clamp: exactly to +-``<limit effort>``, saturated mask, joints without a limit untouched.
 - none of these change the default ``rnea``.
 
-The rnea-based checks run on both backends (numpy, and compiled when numba is installed).
+The rnea-based checks run on both backends (numpy, and the compiled extension).
 """
 
 import dataclasses
@@ -28,7 +28,7 @@ from conftest import PinOracle, random_state, read_text, robot_urdf_path
 import numpy as np
 import pytest
 import spatial_dynamics as sd
-from spatial_dynamics.backends import layout
+from spatial_dynamics.backends import compiled, layout
 from urdf_gen import inertial_xml, origin_xml, rpy_to_matrix
 
 TOL = 1e-10  # N m (N for prismatic joints); do not loosen
@@ -53,9 +53,9 @@ BACKENDS = ['numpy', 'compiled']
 
 
 def rnea_on(backend):
-    """Return sd.rnea bound to ``backend``; skip 'compiled' when numba is not installed."""
+    """Return sd.rnea bound to ``backend`` ('compiled' fails when built without it)."""
     if backend == 'compiled':
-        pytest.importorskip('numba')
+        assert compiled.ext is not None, compiled.FAILURE
     return functools.partial(sd.rnea, backend=backend)
 
 

@@ -1,35 +1,31 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""How an algorithm runs: :func:`rnea` checks its arguments and picks a backend explicitly.
+"""How an algorithm runs: each public function checks its arguments and picks a backend.
 
-``rnea(..., backend=...)`` takes one of :data:`BACKENDS`:
+``backend=`` takes one of :data:`BACKENDS`, and means the same in every function:
 
-* ``'numpy'``: the one source of :mod:`spatial_dynamics.algorithms.rnea` on Python floats
-  (one state) or numpy arrays (a batch, any float dtype) — :mod:`.python`;
-* ``'compiled'``: the numba kernels generated from the same source, for float64 inputs
-  (other dtypes run on numpy) — :mod:`.jit`; :class:`CompiledBackendUnavailable` when
-  numba cannot be imported;
-* ``'auto'``: compiled when numba is importable, else numpy.
+* ``'numpy'``: the one source of :mod:`spatial_dynamics.algorithms` on Python floats (one
+  state) or numpy arrays (a batch, any float dtype) — :mod:`.python`;
+* ``'compiled'``: the C extension built with the package from the same source, for float64
+  (other float dtypes run on numpy) — :mod:`.compiled`; :class:`CompiledBackendUnavailable`
+  when the package was built without a C compiler;
+* ``'auto'``: compiled when the extension was built, else numpy.
 
-numba is imported on first use, not by ``import spatial_dynamics``, and the attempt is made
-once per process. Compiled code is cached on disk by numba; when the package directory is
-read-only (an installed tree) and ``NUMBA_CACHE_DIR`` is unset, the cache goes to
-``$XDG_CACHE_HOME/spatial_dynamics/numba`` (default ``~/.cache/...``), set in numba's own
-configuration (the process environment is never written).
+Nothing is compiled at run time. One state of any form (ndarray of float64 or integers with
+any strides, list, tuple, Python floats and ints, gravity as a tuple, list or array) goes to
+the extension's single-state entry as it is, converted once in C; a batch is made one
+C-contiguous float64 array and split over threads; anything else (other dtypes, wrong
+shapes) takes the general path, which validates and names the argument. The model's table is
+prepared once per model (:mod:`.layout`).
 """
 
 from __future__ import annotations
 
-import importlib.util
-import os
-import subprocess
-import sys
-from types import ModuleType
 from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
-from . import layout, python
+from . import compiled, layout, python
 from .layout import LAYOUTS
 from ..algorithms.arguments import as_joint_arrays, as_vector, f_ext_in_bodies
 from ..model import Model
@@ -38,18 +34,50 @@ BACKENDS = ('auto', 'numpy', 'compiled')
 #: Default gravity (m/s², root-link coordinates).
 GRAVITY = (0.0, 0.0, -9.81)
 
-_compiled: Optional[ModuleType] = None   # .jit once imported
-_crba: Optional[ModuleType] = None       # .jit_crba once imported (by mass_matrix)
-_failure: Optional[str] = None           # why numba could not be imported
-_tried = False                           # numba import attempted
 _F8 = np.dtype(np.float64)
 _ndarray = np.ndarray
 _NO_GRAVITY = (None, None, None)
-_layout_of, _empty = LAYOUTS.get, np.empty      # bound once: the fast path is ~1 µs
+_layout_of = LAYOUTS.get                 # bound once: the fast path is ~1 µs
+_ext = compiled.ext
+_c_rnea = _ext.rnea if _ext else None
+_c_gravity_torque = _ext.gravity_torque if _ext else None
+_c_bias_torque = _ext.bias_torque if _ext else None
+_c_mass_matrix = _ext.mass_matrix if _ext else None
+_c_momentum = _ext.generalized_momentum if _ext else None
 
 
 class CompiledBackendUnavailable(ImportError):
-    """``backend='compiled'`` was asked for, but numba cannot be imported."""
+    """``backend='compiled'`` was asked for, but the package was built without the kernels."""
+
+
+def kernels(model: Model, backend: str = 'auto'):
+    """Return the compiled kernels of ``model`` if ``backend`` selects them, else ``None``.
+
+    Raises ``ValueError`` for an unknown backend and :class:`CompiledBackendUnavailable` for
+    ``'compiled'`` in a package built without a C compiler.
+    """
+    lay = _layout_of(id(model)) or layout.of(model)
+    return lay.kernels if backend == 'auto' else _select(backend, lay)
+
+
+def _select(backend: str, lay: layout.Layout):
+    """Return the kernels ``backend`` selects for ``lay`` (see :func:`kernels`)."""
+    if backend == 'numpy':
+        return None
+    _check(backend)
+    return lay.kernels
+
+
+def _check(backend: str) -> None:
+    """Refuse an unknown backend, and ``'compiled'`` in a package built without the kernels."""
+    if backend not in BACKENDS:
+        raise ValueError(f'backend must be one of {BACKENDS}, got {backend!r}')
+    if compiled.ext is None and backend == 'compiled':
+        raise CompiledBackendUnavailable(
+            "backend='compiled' needs the compiled kernels, which this installation was built "
+            f'without ({compiled.FAILURE}); install a C compiler and the Python headers '
+            '(Debian/Ubuntu: build-essential python3-dev) and build the package again '
+            "(colcon build, pip install), or use backend='auto' or 'numpy'")
 
 
 def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
@@ -64,31 +92,41 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         gravity: gravitational acceleration (m/s²) in root-link coordinates, 3 numbers.
         f_ext: link name → spatial force ``[n; f]`` (N m, N), angular first, acting on that
             link and expressed in that link's frame; shape (6,) or broadcastable to (..., 6).
-        backend: ``'auto'`` (compiled when numba is importable), ``'numpy'`` or
-            ``'compiled'`` (float64 inputs; other dtypes run on numpy).
+        backend: ``'auto'`` (compiled when the package was built with its kernels),
+            ``'numpy'`` or ``'compiled'`` (float64 inputs; other dtypes run on numpy).
 
     Returns:
         τ (N m or N), same shape as the broadcast inputs; float64, or the inputs' floating
         dtype.
     """
-    kernels = _compiled if backend == 'auto' and _tried else compiled(backend)
+    lay = _layout_of(id(model)) or layout.of(model)
+    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
     if not f_ext:
-        # The fast path: one float64 state (arrays; lists and tuples are converted once).
-        lay = _layout_of(id(model)) or layout.of(model)
-        if not (type(q) is type(qd) is type(qdd) is _ndarray):
-            q, qd, qdd = _vector(q, lay.n), _vector(qd, lay.n), _vector(qdd, lay.n)
-        if (q.dtype is qd.dtype is qdd.dtype is _F8) and q.ndim == qd.ndim == qdd.ndim == 1:
-            gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
-            if gx is not None:
-                if kernels is not None:
-                    tau = _empty(lay.n)
-                    if (kernels.single(lay.table, q, qd, qdd, gx, gy, gz, tau)
-                            or kernels.single_large(lay.table, q, qd, qdd, gx, gy, gz, tau)):
-                        return tau
-                elif len(q) == len(qd) == len(qdd) == lay.n:
+        if kern is not None:
+            tau = _c_rnea(kern, q, qd, qdd, gravity)
+            if tau is not None:
+                return tau
+            if (type(q) is type(qd) is type(qdd) is _ndarray and q.ndim > 1
+                    and q.shape == qd.shape == qdd.shape and q.shape[-1] == lay.n
+                    and q.dtype is qd.dtype is qdd.dtype is _F8):
+                # a batch of float64 states of one shape: no broadcasting to work out
+                g = GRAVITY if gravity is GRAVITY else _gravity(gravity)
+                if g[0] is not None:
+                    if q.size == lay.n:     # one state with batch dimensions of 1
+                        return _c_rnea(kern, q.reshape(-1), qd.reshape(-1), qdd.reshape(-1),
+                                       g).reshape(q.shape)
+                    return compiled.rnea(lay, q, qd, qdd, g, {})
+        else:
+            # numpy: one float64 state on Python floats (lists and tuples converted once)
+            if not (type(q) is type(qd) is type(qdd) is _ndarray):
+                q, qd, qdd = _vector(q, lay.n), _vector(qd, lay.n), _vector(qdd, lay.n)
+            if ((q.dtype is qd.dtype is qdd.dtype is _F8) and q.ndim == qd.ndim == qdd.ndim == 1
+                    and len(q) == len(qd) == len(qdd) == lay.n):
+                gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
+                if gx is not None:
                     return np.array(python.rnea_rows(lay.rows, q.tolist(), qd.tolist(),
                                                      qdd.tolist(), (gx, gy, gz)))
-    return _rnea(model, q, qd, qdd, gravity, f_ext, kernels)
+    return _rnea(model, lay, q, qd, qdd, gravity, f_ext, kern)
 
 
 def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
@@ -100,7 +138,12 @@ def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
     or (..., n); returns τ of the same shape. Arguments as for :func:`rnea`.
     """
     lay = _layout_of(id(model)) or layout.of(model)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == lay.zeros.shape:
+    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
+    if kern is not None:
+        tau = _c_gravity_torque(kern, q, gravity)
+        if tau is not None:
+            return tau
+    elif type(q) is _ndarray and q.dtype is _F8 and q.shape == lay.zeros.shape:
         return rnea(model, q, lay.zeros, lay.zeros, gravity, backend=backend)
     q = _vector(q, lay.n)
     zero = np.zeros(np.shape(q), dtype=q.dtype if q.dtype.kind == 'f' else np.float64)
@@ -115,7 +158,12 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     Arguments as for :func:`rnea`.
     """
     lay = _layout_of(id(model)) or layout.of(model)
-    if (type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
+    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
+    if kern is not None:
+        tau = _c_bias_torque(kern, q, qd, gravity)
+        if tau is not None:
+            return tau
+    elif (type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
             and q.shape == qd.shape == lay.zeros.shape):
         return rnea(model, q, qd, lay.zeros, gravity, backend=backend)
     q, qd = _vector(q, lay.n), _vector(qd, lay.n)
@@ -132,23 +180,15 @@ def mass_matrix(model: Model, q, backend: str = 'auto') -> np.ndarray:
     ``τ = M(q) q̈ + bias_torque(q, q̇)``. ``q`` of shape (n,) or (..., n), arrays, lists or
     tuples; returns an array of shape (..., n, n), float64 or ``q``'s floating dtype.
     """
-    kernels = _compiled if backend == 'auto' and _tried else compiled(backend)
-    if kernels is not None:
-        global _crba
-        if _crba is None:
-            from . import jit_crba       # compiled on first use (the node never needs it)
-            _crba = jit_crba
-        kernels = _crba
     lay = _layout_of(id(model)) or layout.of(model)
-    q = _vector(q, lay.n)
-    n = lay.n
-    if kernels is not None and type(q) is _ndarray and q.dtype is _F8 and q.shape == (n,):
-        H = _empty(n * n)
-        if kernels.single(lay.table, q, H) or kernels.single_large(lay.table, q, H):
-            return H.reshape(n, n)
-    (q,) = as_joint_arrays(model, q)
-    if kernels is not None and q.dtype == np.float64:
-        return kernels.mass_matrix(lay, q)
+    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
+    if kern is not None:
+        H = _c_mass_matrix(kern, q)
+        if H is not None:
+            return H
+    (q,) = as_joint_arrays(model, _vector(q, lay.n))
+    if kern is not None and q.dtype == np.float64:
+        return compiled.mass_matrix(lay, q)
     return python.mass_matrix(lay.rows, q)
 
 
@@ -160,20 +200,15 @@ def generalized_momentum(model: Model, q, qd, backend: str = 'auto') -> tuple:
     (see :mod:`spatial_dynamics.algorithms.momentum`). ``q``, ``qd`` of shape (n,) or
     (..., n), broadcast; returns two arrays of the broadcast shape.
     """
-    kernels = _compiled if backend == 'auto' and _tried else compiled(backend)
     lay = _layout_of(id(model)) or layout.of(model)
+    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
+    if kern is not None:
+        out = _c_momentum(kern, q, qd)
+        if out is not None:
+            return out
     q, qd = as_joint_arrays(model, q, qd)
-    if kernels is not None and q.dtype == np.float64:
-        batch, n = q.shape[:-1], lay.n
-        if q.ndim == 1:
-            mom, ctq = np.empty(n), np.empty(n)
-            kernels.momentum_single(lay.table, q, qd, mom, ctq)
-            return mom, ctq
-        N = int(np.prod(batch, dtype=np.intp))
-        mom, ctq = np.empty((N, n)), np.empty((N, n))
-        kernels.momentum_batch(lay.table, *(np.ascontiguousarray(x.reshape(N, n))
-                                            for x in (q, qd)), mom, ctq)
-        return mom.reshape(q.shape), ctq.reshape(q.shape)
+    if kern is not None and q.dtype == np.float64:
+        return compiled.momentum(lay, q, qd)
     return python.momentum(lay.rows, q, qd)
 
 
@@ -204,7 +239,8 @@ def _gravity(gravity):
     return _NO_GRAVITY
 
 
-def _rnea(model: Model, q, qd, qdd, gravity, f_ext, kernels) -> np.ndarray:
+def _rnea(model: Model, lay: layout.Layout, q, qd, qdd, gravity, f_ext,
+          kern) -> np.ndarray:
     """Run :func:`rnea` for all its fast path leaves: validation, wrenches, batches."""
     q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
     g = tuple(as_vector('gravity', gravity, 3).tolist())
@@ -212,141 +248,62 @@ def _rnea(model: Model, q, qd, qdd, gravity, f_ext, kernels) -> np.ndarray:
     if fb:  # batched wrenches broadcast against the batch of states
         batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
         q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
-    lay = layout.of(model)
-    if kernels is not None and q.dtype == np.float64:
-        if not fb and q.size == q.shape[-1] > 0:
-            # One state with batch dimensions of 1: a single-state entry, not the batch's.
-            tau = np.empty(lay.n)
-            kernels.rnea_single_large(lay.table, *(np.array(x.reshape(lay.n))
-                                                   for x in (q, qd, qdd)), *g, tau)
+    if kern is not None and q.dtype == np.float64:
+        if q.size == q.shape[-1] > 0:
+            # One state (maybe with batch dimensions of 1): the single-state entry.
+            fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
+                    if fb else None)
+            tau = _c_rnea(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g, fext)
             return tau.reshape(q.shape)
-        return kernels.rnea(lay, q, qd, qdd, g, fb)
+        return compiled.rnea(lay, q, qd, qdd, g, fb)
     return python.rnea(lay.rows, q, qd, qdd, g, fb)
 
 
-# --------------------------------------------------------------------------------------------
-# The compiled backend: loaded on first use
+def describe(backend: str = 'auto') -> str:
+    """Name the backend that ``backend`` selects, for logs: e.g. ``'compiled (C extension, …)'``.
 
-def compiled(backend: str = 'auto') -> Optional[ModuleType]:
-    """Return the compiled backend (:mod:`.jit`) if ``backend`` selects it, else ``None``.
-
-    Raises ``ValueError`` for an unknown backend and :class:`CompiledBackendUnavailable` for
-    ``'compiled'`` without numba.
+    Raises as :func:`kernels` does.
     """
     if backend == 'numpy':
-        return None
-    if backend not in BACKENDS:
-        raise ValueError(f'backend must be one of {BACKENDS}, got {backend!r}')
-    if not _tried:
-        _load()
-    if _compiled is None and backend == 'compiled':
-        raise CompiledBackendUnavailable(
-            f"backend='compiled' needs numba, which cannot be imported ({_failure}); "
-            "install it with `pip install numba` (or the extra: "
-            "`pip install spatial_dynamics[fast]`), or use backend='auto' or 'numpy'")
-    return _compiled
-
-
-def describe(backend: str = 'auto') -> str:
-    """Name the backend that ``backend`` selects, for logs: e.g. ``'compiled (numba 0.61)'``."""
-    if compiled(backend) is None:
-        return 'numpy' if backend == 'numpy' else f'numpy (numba unavailable: {_failure})'
-    import numba
-    return f'compiled (numba {numba.__version__}, {numba.get_num_threads()} threads)'
+        return 'numpy'
+    _check(backend)
+    return compiled.describe()
 
 
 def warmup(model: Model, backend: str = 'auto') -> str:
-    """Load (or compile) the compiled kernels and run each entry once on ``model``.
+    """Prepare ``model``'s table for the backend (once per model) and return :func:`describe`.
 
-    Call it before the first time-critical ``rnea`` call: afterwards no call pays for
-    importing numba, compiling, loading the cache or starting the worker threads. Returns
-    :func:`describe` of the backend.
+    Nothing is compiled: the kernels are compiled when the package is built.
     """
-    kernels = compiled(backend)
-    if kernels is not None:
-        kernels.warmup(layout.of(model))
+    kernels(model, backend)
     return describe(backend)
 
 
-#: What the child of :func:`prepare_compiled` runs: the import that compiles (or loads) the
-#: kernels of the package in ``sys.argv[1]`` (first on the path, before the working
-#: directory), at a lower CPU priority (nice +10: the caller's own work comes first); it
-#: prints the file it compiled. On Linux it asks for SIGTERM when its parent goes (prctl
-#: PR_SET_PDEATHSIG), so a node stopped while the kernels compile leaves no compiler running.
-_PREPARE = '\n'.join([
-    'import ctypes, os, signal, sys',
-    'sys.path.insert(0, sys.argv[1])',
-    'try:',
-    '    os.nice(10)',
-    '    ctypes.CDLL(None).prctl(1, signal.SIGTERM)',
-    'except (OSError, AttributeError):',
-    '    pass',
-    'from spatial_dynamics import backends',
-    'backends.compiled("compiled")',
-    'print(backends.jit.__file__)'])
+def _doors() -> None:
+    """Enter the public functions in C when the extension is there (:class:`_compiled.Door`).
+
+    One state with the default or a given gravity, no ``f_ext`` and backend ``'auto'`` or
+    ``'compiled'`` is answered in C without the Python frame of the function (~0.2 µs); any
+    other call goes to the function itself, unchanged. Each door carries the function's
+    name, docstring and signature (``__wrapped__``).
+    """
+    import functools
+    g = globals()
+    for kind, name in enumerate(('rnea', 'gravity_torque', 'bias_torque', 'mass_matrix',
+                                 'generalized_momentum')):
+        function = g[name]
+        g[name] = functools.update_wrapper(_ext.Door(function, kind, layout.KERNELS, GRAVITY),
+                                           function)
+
+
+if _ext is not None:
+    _doors()
 
 
 def prepare_compiled(timeout: Optional[float] = None) -> None:
-    """Fill numba's on-disk cache with the compiled kernels, in a child process.
+    """Nothing to prepare: the kernels are compiled when the package is built.
 
-    Importing :mod:`.jit` compiles every kernel (about 13 s) unless numba's cache holds them
-    (then it loads them, < 1 s). This runs that import in a child Python (this interpreter,
-    this environment, this very package first on its path, whatever the working directory),
-    so the cache it fills is the one this process reads (``NUMBA_CACHE_DIR`` or
-    :func:`cache_dir_fallback`, entries keyed by the kernels' source file), and returns when
-    the child is done: a :func:`warmup` here afterwards only loads. Nothing of this process
-    changes, and the compilation never holds its interpreter. Returns at once when the
-    kernels are loaded here already. Raises :class:`CompiledBackendUnavailable` when numba is
-    not installed, the child fails (with the child's last error line) or compiled another
-    file than this process would load, and ``subprocess.TimeoutExpired`` after ``timeout`` s.
+    Kept for the node until it drops its preparation step; raises
+    :class:`CompiledBackendUnavailable` when the package was built without the kernels.
     """
-    if _compiled is not None:
-        return
-    if importlib.util.find_spec('numba') is None:
-        raise CompiledBackendUnavailable('numba is not installed (pip install numba)')
-    here = os.path.dirname(os.path.abspath(__file__))
-    root = os.path.dirname(os.path.dirname(here))
-    proc = subprocess.run([sys.executable, '-c', _PREPARE, root], stdin=subprocess.DEVNULL,
-                          capture_output=True, text=True, timeout=timeout)
-    if proc.returncode != 0:
-        lines = proc.stderr.strip().splitlines()
-        raise CompiledBackendUnavailable(
-            f'compiling the kernels failed (exit status {proc.returncode}): '
-            + (lines[-1] if lines else 'no error output'))
-    compiled_file = (proc.stdout.strip().splitlines() or [''])[-1]
-    expected = os.path.join(here, 'jit.py')
-    if not (compiled_file and os.path.samefile(compiled_file, expected)):
-        raise CompiledBackendUnavailable(
-            f'the compiling process compiled {compiled_file!r}, not {expected!r}')
-
-
-def cache_dir_fallback() -> Optional[str]:
-    """Return the numba cache directory to use, or ``None`` to keep numba's choice.
-
-    ``None`` when ``NUMBA_CACHE_DIR`` is set or numba can write next to this package
-    (``__pycache__``); else ``$XDG_CACHE_HOME/spatial_dynamics/numba`` (``~/.cache/...``).
-    """
-    if os.environ.get('NUMBA_CACHE_DIR'):
-        return None
-    here = os.path.dirname(os.path.abspath(__file__))
-    pycache = os.path.join(here, '__pycache__')
-    if os.access(pycache if os.path.isdir(pycache) else here, os.W_OK):
-        return None
-    base = os.environ.get('XDG_CACHE_HOME') or os.path.join(os.path.expanduser('~'), '.cache')
-    return os.path.join(base, 'spatial_dynamics', 'numba')
-
-
-def _load() -> None:
-    """Import numba (once) and then :mod:`.jit`; remember why numba failed, if it did."""
-    global _compiled, _failure, _tried
-    _tried = True
-    try:
-        import numba
-    except Exception as err:  # ImportError, or numba refusing this numpy version
-        _failure = f'{type(err).__name__}: {err}'
-        return
-    fallback = cache_dir_fallback()
-    if fallback is not None:
-        numba.config.CACHE_DIR = fallback     # read when the kernels' caches are opened
-    from . import jit   # an error in the kernels themselves is a bug: let it raise
-    _compiled = jit
+    _check('compiled')

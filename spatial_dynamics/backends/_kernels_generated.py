@@ -3,12 +3,12 @@
 # flake8: noqa
 """Kernels generated from :mod:`spatial_dynamics.algorithms`: do not edit.
 
+The flat-array form of the one source (the rules of :mod:`.codegen`), from which the C of
+``_kernels_generated.h`` is printed; plain Python, run by the tests to check the rewriting.
 Change the source and run ``python -m spatial_dynamics.backends.codegen``.
 """
-import numba
 import numpy as np
 
-JIT = dict(cache=True, fastmath=False, error_model='numpy')
 RX = 0
 RY = 1
 RZ = 2
@@ -22,7 +22,6 @@ FRC = 24
 ICS = 30
 
 
-@numba.njit(inline='always', **JIT)
 def X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1, m2, m3, m4, m5):
     """Run components.X_motion of the algorithms, generated from it."""
     u0 = m3 - (ry * m2 - rz * m1)
@@ -31,7 +30,6 @@ def X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1, m2
     return (e00 * m0 + e01 * m1 + e02 * m2, e10 * m0 + e11 * m1 + e12 * m2, e20 * m0 + e21 * m1 + e22 * m2, e00 * u0 + e01 * u1 + e02 * u2, e10 * u0 + e11 * u1 + e12 * u2, e20 * u0 + e21 * u1 + e22 * u2)
 
 
-@numba.njit(inline='always', **JIT)
 def XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, n0, n1, n2, f0, f1, f2):
     """Run components.XT_force of the algorithms, generated from it."""
     F0 = e00 * f0 + e10 * f1 + e20 * f2
@@ -40,13 +38,11 @@ def XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, n0, n1, n2
     return (e00 * n0 + e10 * n1 + e20 * n2 + (ry * F2 - rz * F1), e01 * n0 + e11 * n1 + e21 * n2 + (rz * F0 - rx * F2), e02 * n0 + e12 * n1 + e22 * n2 + (rx * F1 - ry * F0), F0, F1, F2)
 
 
-@numba.njit(inline='always', **JIT)
 def I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, m0, m1, m2, m3, m4, m5):
     """Run components.I_motion of the algorithms, generated from it."""
     return (Ixx * m0 + Ixy * m1 + Ixz * m2 + (hy * m5 - hz * m4), Ixy * m0 + Iyy * m1 + Iyz * m2 + (hz * m3 - hx * m5), Ixz * m0 + Iyz * m1 + Izz * m2 + (hx * m4 - hy * m3), mass * m3 - (hy * m2 - hz * m1), mass * m4 - (hz * m0 - hx * m2), mass * m5 - (hx * m1 - hy * m0))
 
 
-@numba.njit(inline='always', **JIT)
 def XT_I_X(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz):
     """Run components.XT_I_X of the algorithms, generated from it."""
     y0 = e00 * hx + e10 * hy + e20 * hz
@@ -72,7 +68,6 @@ def XT_I_X(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, mass, hx, hy
     return (mass, y0 + mr0, y1 + mr1, y2 + mr2, b00 - (2.0 * y0 * rx + mr0 * rx) + d, b01 - (y0 * ry + rx * y1 + mr0 * ry), b02 - (y0 * rz + rx * y2 + mr0 * rz), b11 - (2.0 * y1 * ry + mr1 * ry) + d, b12 - (y1 * rz + ry * y2 + mr1 * rz), b22 - (2.0 * y2 * rz + mr2 * rz) + d)
 
 
-@numba.njit(inline='always', **JIT)
 def xup_kernel(K, q, work):
     """Run rnea.xup_kernel of the algorithms, generated from it."""
     for i in range(1, K.shape[0]):
@@ -174,7 +169,6 @@ def xup_kernel(K, q, work):
             work[i * WORK + XUP + 11] = rz
 
 
-@numba.njit(inline='always', **JIT)
 def rnea_kernel(K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work):
     """Run rnea.rnea_kernel of the algorithms, generated from it."""
     NB = K.shape[0] - 1
@@ -368,7 +362,6 @@ def rnea_kernel(K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work):
         work[p * WORK + FRC + 5] += g5
 
 
-@numba.njit(inline='always', **JIT)
 def crba_kernel(K, work, H):
     """Run crba.crba_kernel of the algorithms, generated from it."""
     NB = K.shape[0] - 1
@@ -490,7 +483,6 @@ def crba_kernel(K, work, H):
             H[kj * n + k] = H[kj * n + k] + Hij
 
 
-@numba.njit(inline='always', **JIT)
 def momentum_kernel(K, q, qd, mom, ctq, work):
     """Run momentum.momentum_kernel of the algorithms, generated from it."""
     NB = K.shape[0] - 1

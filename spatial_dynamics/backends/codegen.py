@@ -1,18 +1,19 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Generate the numba kernels from the one source of each algorithm in :mod:`..algorithms`.
+"""Generate the C kernels from the one source of each algorithm in :mod:`..algorithms`.
 
 The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
 :mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`,
-:mod:`~spatial_dynamics.algorithms.momentum`) are plain
-Python over tuples and lists. numba compiles such code
-only slowly and with allocations, so this module rewrites their syntax tree statement for
-statement onto flat float64 arrays and writes ``_kernels_generated.py``; nothing of the
-arithmetic changes (same expressions, same order), so every backend computes the same
-numbers. The rewriting rules, each a change of storage only:
+:mod:`~spatial_dynamics.algorithms.momentum`) are plain Python over tuples and lists. This
+module rewrites their syntax tree statement for statement onto flat float64 arrays
+(``_kernels_generated.py``, a readable listing the tests run) and prints the result as C
+(``_kernels_generated.h``, compiled into the extension ``_compiled`` when the package is
+built: see ``setup.py``); nothing of the arithmetic changes (same expressions, same order,
+no fused multiply-adds), so every backend computes the same numbers. The rewriting rules,
+each a change of storage only:
 
 ==============================================  ==============================================
-source (Python backends)                        generated (numba)
+source (Python backends)                        generated (flat arrays)
 ==============================================  ==============================================
 ``a, b, … = rows[i]`` (the whole row)           ``a = K[i, 0]; b = K[i, 1]; …`` (``int()`` for
                                                 the integer columns; ``_`` skipped)
@@ -24,8 +25,12 @@ source (Python backends)                        generated (numba)
 ``nonzero(x)``, ``m.sin``, ``len(rows)``        ``x != 0.0``, ``np.sin``, ``K.shape[0]``
 ==============================================  ==============================================
 
-Run ``python -m spatial_dynamics.backends.codegen`` after changing the source; a test
-compares the committed file with a fresh generation.
+The C is the flat text typed (:class:`_ToC`): integer names ``long``, the rest ``double``;
+``K[i, j]`` is ``K[i * WIDTH + j]``, a tuple assignment evaluates every value before it
+stores one, a component product returns its values through an output array.
+
+Run ``python -m spatial_dynamics.backends.codegen`` after changing the source; tests
+compare the committed files with a fresh generation.
 """
 
 from __future__ import annotations
@@ -53,6 +58,7 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'crba_kernel': 'K, work, H',
               'momentum_kernel': 'K, q, qd, mom, ctq, work'}
 TARGET = os.path.join(os.path.dirname(os.path.abspath(__file__)), '_kernels_generated.py')
+TARGET_C = os.path.join(os.path.dirname(TARGET), '_kernels_generated.h')
 
 
 class _ToFlat(ast.NodeTransformer):
@@ -183,7 +189,296 @@ class _ToFlat(ast.NodeTransformer):
         return node
 
 
-def _kernel_source(fn) -> str:
+# --------------------------------------------------------------------------------------------
+# C: the same flat statements, typed
+
+#: C keywords used as names in the source get a trailing underscore.
+_C_RESERVED = {'auto', 'case', 'char', 'const', 'default', 'double', 'enum', 'extern', 'float',
+               'goto', 'inline', 'int', 'long', 'register', 'restrict', 'short', 'signed',
+               'sizeof', 'static', 'struct', 'switch', 'typedef', 'union', 'unsigned', 'void',
+               'volatile'}
+#: Parameters of the generated kernels that are arrays (the rest are doubles, or int flags).
+_C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'f_body', 'tau', 'work', 'H', 'mom', 'ctq'}
+_C_FLAGS = {'has_fext'}
+#: ``len(x)`` of an array parameter: the number of joints ``nq``, or ``nq * nq`` for M(q).
+_C_LENGTH = {'H': 'nq * nq'}
+_C_OPS = {ast.Add: ('+', 10), ast.Sub: ('-', 10), ast.Mult: ('*', 11), ast.Div: ('/', 11)}
+_C_COMPARE = {ast.Eq: '==', ast.NotEq: '!=', ast.Lt: '<', ast.LtE: '<=', ast.Gt: '>',
+              ast.GtE: '>='}
+
+
+def _c_name(name: str) -> str:
+    return name + '_' if name in _C_RESERVED else name
+
+
+class _ToC:
+    """Print one flat kernel (the output of :class:`_ToFlat`) as a C function.
+
+    Every name is a ``double``, except those that only ever hold integers or truth values
+    (``int()`` of a table entry, loop counters, flags: ``long``). Tuple assignments evaluate
+    every value before storing any (Python's order); a component product returns its tuple
+    through an output array. Expressions keep Python's tree, printed with the parentheses
+    Python's own printer uses (C has the same precedence for ``+ - * /`` and unary minus),
+    and nothing is contracted into fused multiply-adds (the build passes
+    ``-ffp-contract=off``), so each operation rounds as it does in Python.
+    """
+
+    def __init__(self, func: ast.FunctionDef, returns: dict) -> None:
+        self.func = func
+        self.returns = returns          # component name -> number of values it returns
+        self.params = [a.arg for a in func.args.args]
+        self.ints: set = set()
+        self.doubles: set = set()
+        self.uses_nq = False
+        self.temp = 0
+
+    # -- types -----------------------------------------------------------------------------
+    def _is_int(self, node) -> bool:
+        if isinstance(node, ast.Constant):
+            return isinstance(node.value, (bool, int))
+        if isinstance(node, ast.Name):
+            return node.id in self.ints
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            return node.func.id in ('int', 'len')
+        if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Attribute):
+            return True                                       # K.shape[0]
+        if isinstance(node, ast.BinOp):
+            return (not isinstance(node.op, ast.Div) and self._is_int(node.left)
+                    and self._is_int(node.right))
+        if isinstance(node, ast.UnaryOp):
+            return isinstance(node.op, ast.Not) or self._is_int(node.operand)
+        return isinstance(node, (ast.Compare, ast.BoolOp))
+
+    def _infer(self) -> None:
+        """Type every local: ``long`` if each value it is given is an integer, else double."""
+        assigned = {}
+        for node in ast.walk(self.func):
+            if isinstance(node, ast.Assign):
+                for target in node.targets:
+                    values = (node.value.elts if isinstance(target, ast.Tuple)
+                              and isinstance(node.value, ast.Tuple) else None)
+                    names = target.elts if isinstance(target, ast.Tuple) else [target]
+                    for j, t in enumerate(names):
+                        if isinstance(t, ast.Name):
+                            value = values[j] if values else (
+                                node.value if not isinstance(target, ast.Tuple) else None)
+                            assigned.setdefault(t.id, []).append(value)
+            elif isinstance(node, ast.For) and isinstance(node.target, ast.Name):
+                ranged = (isinstance(node.iter, ast.Call) and isinstance(node.iter.func, ast.Name)
+                          and node.iter.func.id == 'range')
+                assigned.setdefault(node.target.id, []).append(
+                    ast.Constant(0) if ranged else None)
+        locals_ = set(assigned) - set(self.params)
+        changed = True
+        while changed:      # a name is an integer once all its values are
+            changed = False
+            for name in locals_ - self.ints:
+                values = assigned[name]
+                if all(v is not None and self._is_int(v) for v in values):
+                    self.ints.add(name)
+                    changed = True
+        self.doubles = locals_ - self.ints
+
+    # -- expressions -----------------------------------------------------------------------
+    def expr(self, node, prec: int = 0) -> str:
+        """C text of an expression; parenthesized when its precedence is below ``prec``."""
+        if isinstance(node, ast.Constant):
+            if isinstance(node.value, bool):
+                return '1' if node.value else '0'
+            if isinstance(node.value, (int, float)):
+                return repr(node.value)
+        elif isinstance(node, ast.Name):
+            return _c_name(node.id)
+        elif isinstance(node, ast.BinOp) and type(node.op) in _C_OPS:
+            op, p = _C_OPS[type(node.op)]
+            text = f'{self.expr(node.left, p)} {op} {self.expr(node.right, p + 1)}'
+            return f'({text})' if p < prec else text
+        elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+            operand = self.expr(node.operand, 12)
+            text = '-' + (f'({operand})' if operand.startswith('-') else operand)
+            return f'({text})' if 12 < prec else text
+        elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not):
+            return f'!{self.expr(node.operand, 13)}'
+        elif isinstance(node, ast.BoolOp):
+            op, p = ('&&', 4) if isinstance(node.op, ast.And) else ('||', 3)
+            text = f' {op} '.join(self.expr(v, p + 1) for v in node.values)
+            return f'({text})' if p < prec else text
+        elif (isinstance(node, ast.Compare) and len(node.ops) == 1
+              and type(node.ops[0]) in _C_COMPARE):
+            text = (f'{self.expr(node.left, 9)} {_C_COMPARE[type(node.ops[0])]} '
+                    f'{self.expr(node.comparators[0], 9)}')
+            return f'({text})' if 8 < prec else text
+        elif isinstance(node, ast.IfExp):
+            return (f'({self.expr(node.test, 1)} ? {self.expr(node.body, 1)} : '
+                    f'{self.expr(node.orelse, 1)})')
+        elif isinstance(node, ast.Subscript):
+            return self._subscript(node)
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            name = node.func.id
+            if name == 'int':
+                return f'(long){self.expr(node.args[0], 13)}'
+            if name == 'len' and isinstance(node.args[0], ast.Name):
+                self.uses_nq = True
+                return _C_LENGTH.get(node.args[0].id, 'nq')
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+              and isinstance(node.func.value, ast.Name) and node.func.value.id == 'np'
+              and node.func.attr in ('sin', 'cos')):
+            return f'{node.func.attr}({self.expr(node.args[0])})'
+        raise SyntaxError(f'line {getattr(node, "lineno", "?")}: no C for '
+                          f'{ast.unparse(node)!r}')
+
+    def _subscript(self, node: ast.Subscript) -> str:
+        base = node.value
+        if isinstance(base, ast.Attribute) and base.attr == 'shape':     # K.shape[0]
+            return 'rows'
+        if not isinstance(base, ast.Name) or base.id not in _C_ARRAYS:
+            raise SyntaxError(f'line {node.lineno}: no C for {ast.unparse(node)!r}')
+        index = node.slice
+        if isinstance(index, ast.Tuple):       # K[i, j], f_body[i, j]: rows of a 2-D table
+            row, col = index.elts
+            width = 'WIDTH' if base.id == 'K' else '6'
+            return f'{base.id}[{self.expr(row, 11)} * {width} + {self.expr(col, 11)}]'
+        return f'{base.id}[{self.expr(index)}]'
+
+    # -- statements ------------------------------------------------------------------------
+    def block(self, body, depth: int) -> list:
+        out = []
+        for stmt in body:
+            out.extend(self.stmt(stmt, depth))
+        return out
+
+    def stmt(self, node, depth: int) -> list:
+        pad = '    ' * depth
+        if isinstance(node, ast.Assign):
+            return self._assign(node, pad)
+        if isinstance(node, ast.AugAssign) and type(node.op) in _C_OPS:
+            op = _C_OPS[type(node.op)][0]
+            return [f'{pad}{self.expr(node.target)} {op}= {self.expr(node.value)};']
+        if isinstance(node, ast.If):
+            out = [f'{pad}if ({self.expr(node.test)}) {{'] + self.block(node.body, depth + 1)
+            orelse = node.orelse
+            while len(orelse) == 1 and isinstance(orelse[0], ast.If):
+                out += [f'{pad}}} else if ({self.expr(orelse[0].test)}) {{']
+                out += self.block(orelse[0].body, depth + 1)
+                orelse = orelse[0].orelse
+            if orelse:
+                out += [f'{pad}}} else {{'] + self.block(orelse, depth + 1)
+            return out + [f'{pad}}}']
+        if isinstance(node, ast.For) and isinstance(node.target, ast.Name) and not node.orelse:
+            return self._for(node, depth)
+        if isinstance(node, ast.While) and not node.orelse:
+            return ([f'{pad}while ({self.expr(node.test)}) {{']
+                    + self.block(node.body, depth + 1) + [f'{pad}}}'])
+        if isinstance(node, ast.Break):
+            return [f'{pad}break;']
+        if isinstance(node, ast.Continue):
+            return [f'{pad}continue;']
+        if isinstance(node, ast.Return) and isinstance(node.value, ast.Tuple):
+            return [f'{pad}out[{j}] = {self.expr(v)};' for j, v in enumerate(node.value.elts)]
+        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
+            return []                                                    # the docstring
+        raise SyntaxError(f'line {getattr(node, "lineno", "?")}: no C for {ast.unparse(node)!r}')
+
+    def _assign(self, node: ast.Assign, pad: str) -> list:
+        target, value = node.targets[-1], node.value
+        if len(node.targets) > 1 or isinstance(target, (ast.Name, ast.Subscript)):
+            if not all(isinstance(t, (ast.Name, ast.Subscript)) for t in node.targets):
+                raise SyntaxError(f'line {node.lineno}: no C for {ast.unparse(node)!r}')
+            left = ' = '.join(self.expr(t) for t in node.targets)
+            return [f'{pad}{left} = {self.expr(value)};']
+        names = [self.expr(t) for t in target.elts]
+        if (isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
+                and value.func.id in self.returns):          # x0, … = component(…)
+            if self.returns[value.func.id] != len(names):
+                raise SyntaxError(f'line {node.lineno}: {value.func.id} returns '
+                                  f'{self.returns[value.func.id]} values')
+            r = f'ret{self._next()}_'
+            args = ', '.join(self.expr(a) for a in value.args)
+            return ([f'{pad}{{', f'{pad}    double {r}[{len(names)}];',
+                     f'{pad}    {value.func.id}({args}, {r});']
+                    + [f'{pad}    {n} = {r}[{j}];' for j, n in enumerate(names) if n != '_']
+                    + [f'{pad}}}'])
+        if isinstance(value, ast.Tuple) and len(value.elts) == len(names):
+            if len(names) == 1:
+                return [f'{pad}{names[0]} = {self.expr(value.elts[0])};']
+            temps = [f'tmp{self._next()}_' for _ in names]        # every value, then every store
+            kinds = ['long' if t.id in self.ints else 'double' for t in target.elts]
+            return ([f'{pad}{{']
+                     + [f'{pad}    const {k} {t} = {self.expr(v)};'
+                        for k, t, v in zip(kinds, temps, value.elts)]
+                     + [f'{pad}    {n} = {t};' for n, t in zip(names, temps)] + [f'{pad}}}'])
+        raise SyntaxError(f'line {node.lineno}: no C for {ast.unparse(node)!r}')
+
+    def _for(self, node: ast.For, depth: int) -> list:
+        pad, it, i = '    ' * depth, node.iter, _c_name(node.target.id)
+        if isinstance(it, ast.Call) and isinstance(it.func, ast.Name) and it.func.id == 'range':
+            args = list(it.args)
+            step = 1
+            if len(args) == 3:
+                if not (isinstance(args[2], ast.UnaryOp) and isinstance(args[2].op, ast.USub)
+                        and isinstance(args[2].operand, ast.Constant)
+                        and args[2].operand.value == 1):
+                    raise SyntaxError(f'line {node.lineno}: range steps by 1 or -1 only')
+                step, args = -1, args[:2]
+            lo, hi = (ast.Constant(0), args[0]) if len(args) == 1 else args
+            if step == 1:
+                head = f'for ({i} = {self.expr(lo)}; {i} < {self.expr(hi)}; {i}++) {{'
+            else:
+                head = f'for ({i} = {self.expr(lo)}; {i} > {self.expr(hi)}; {i}--) {{'
+            return [pad + head] + self.block(node.body, depth + 1) + [f'{pad}}}']
+        if isinstance(it, ast.Name) and it.id in _C_ARRAYS:    # for x in qd: the joint values
+            self.uses_nq = True
+            j = f'j{self._next()}_'
+            return ([f'{pad}for (long {j} = 0; {j} < {_C_LENGTH.get(it.id, "nq")}; {j}++) {{',
+                     f'{pad}    {i} = {it.id}[{j}];']
+                    + self.block(node.body, depth + 1) + [f'{pad}}}'])
+        raise SyntaxError(f'line {node.lineno}: no C for {ast.unparse(node.iter)!r}')
+
+    def _next(self) -> int:
+        self.temp += 1
+        return self.temp
+
+    # -- the function ----------------------------------------------------------------------
+    def function(self) -> str:
+        self._infer()
+        name = self.func.name
+        targets = [t for n in ast.walk(self.func) if isinstance(n, ast.Assign)
+                   for t in n.targets]
+        targets += [n.target for n in ast.walk(self.func) if isinstance(n, ast.AugAssign)]
+        written = {t.value.id for t in targets
+                   if isinstance(t, ast.Subscript) and isinstance(t.value, ast.Name)}
+        params = []
+        for p in self.params:
+            if p in _C_ARRAYS:
+                params.append(('double *' if p in written else 'const double *') + p)
+                if p == 'K':
+                    params.append('long rows')
+            else:
+                params.append(('long ' if p in _C_FLAGS else 'double ') + _c_name(p))
+        body = self.block(self.func.body, 1)
+        if name in self.returns:
+            params.append('double *out')
+        used = {n.id for n in ast.walk(self.func) if isinstance(n, ast.Name)}
+        head = [f'    (void){_c_name(p)};' for p in self.params if p not in used]
+        if self.uses_nq:
+            head.append('    const long nq = (long)K[QIDX];')
+        for kind, names in (('long', self.ints), ('double', self.doubles)):
+            names = sorted(_c_name(n) for n in names if n != '_')
+            for k in range(0, len(names), 12):
+                head.append(f'    {kind} {", ".join(names[k:k + 12])};')
+        doc = ast.get_docstring(self.func) or ''
+        lines, line = [], f'static inline void {name}('
+        for k, p in enumerate(params):
+            text = p + (', ' if k + 1 < len(params) else ')')
+            if len(line) + len(text.rstrip()) > 99:
+                lines.append(line.rstrip())
+                line = '    '
+            line += text
+        return '\n'.join([f'/* {doc} */'] + lines + [line, '{'] + head + body + ['}'])
+
+
+def _flat(fn) -> ast.FunctionDef:
+    """Return the syntax tree of ``fn`` rewritten onto flat arrays (no docstring)."""
     tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
     func = tree.body[0]
     func.body = [s for s in func.body if not (isinstance(s, ast.Expr)
@@ -191,43 +486,85 @@ def _kernel_source(fn) -> str:
     func.returns = None
     if fn.__name__ in SIGNATURES:
         func.args = ast.parse(f'def f({SIGNATURES[fn.__name__]}): pass').body[0].args
-    func.decorator_list = [ast.parse('numba.njit(inline="always", **JIT)').body[0].value]
     func = _ToFlat().visit(func)
     ast.fix_missing_locations(func)
-    func.body.insert(0, ast.Expr(ast.Constant(
-        f'Run {fn.__module__.split(".")[-1]}.{fn.__name__} of the algorithms, generated from it.')))
+    return func
+
+
+def _summary(fn) -> str:
+    return f'Run {fn.__module__.split(".")[-1]}.{fn.__name__} of the algorithms, generated from it.'
+
+
+def _kernel_source(fn) -> str:
+    func = _flat(fn)
+    func.body.insert(0, ast.Expr(ast.Constant(_summary(fn))))
     return ast.unparse(func)
+
+
+def _constants() -> dict:
+    """Return the constants the kernels name: joint codes and the scratch layout."""
+    consts = {name: getattr(rnea, name) for name in ('RX', 'RY', 'RZ', 'RA', 'PR')}
+    consts['WORK'] = WORK
+    consts.update((const, offset) for const, offset, _ in STORES.values())
+    return consts
 
 
 def generate() -> str:
     """Return the text of ``_kernels_generated.py``."""
-    consts = {name: getattr(rnea, name) for name in ('RX', 'RY', 'RZ', 'RA', 'PR')}
     header = f'''\
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
 # flake8: noqa
 """Kernels generated from :mod:`spatial_dynamics.algorithms`: do not edit.
 
+The flat-array form of the one source (the rules of :mod:`.codegen`), from which the C of
+``_kernels_generated.h`` is printed; plain Python, run by the tests to check the rewriting.
 Change the source and run ``python -m spatial_dynamics.backends.codegen``.
 """
-import numba
 import numpy as np
 
-JIT = dict(cache=True, fastmath=False, error_model='numpy')
-{chr(10).join(f'{k} = {v}' for k, v in consts.items())}
-WORK = {WORK}
-{chr(10).join(f'{const} = {offset}' for const, offset, _ in STORES.values())}
+{chr(10).join(f'{k} = {v}' for k, v in _constants().items())}
 '''
     body = '\n\n\n'.join(_kernel_source(fn) for fn in SOURCES)
     return header + '\n\n' + body + '\n'
 
 
+def generate_c() -> str:
+    """Return the text of ``_kernels_generated.h``: the same kernels as C functions."""
+    consts = dict(_constants(), WIDTH=layout.WIDTH, QIDX=layout.COLUMN['qidx'])
+    funcs, returns = [], {}
+    for fn in SOURCES:
+        func = _flat(fn)
+        func.body.insert(0, ast.Expr(ast.Constant(_summary(fn))))
+        ret = [n for n in ast.walk(func) if isinstance(n, ast.Return)]
+        if ret:
+            returns[fn.__name__] = len(ret[0].value.elts)
+        funcs.append(_ToC(func, returns).function())
+    header = '''\
+/* Copyright 2026 spatial_dynamics contributors
+ * SPDX-License-Identifier: Apache-2.0
+ *
+ * Kernels generated from spatial_dynamics.algorithms: do not edit.
+ * Change the source and run `python -m spatial_dynamics.backends.codegen`.
+ * Included by _compiled.c; compile without fused multiply-adds (-ffp-contract=off).
+ */
+#ifndef SPATIAL_DYNAMICS_KERNELS_GENERATED_H
+#define SPATIAL_DYNAMICS_KERNELS_GENERATED_H
+
+#include <math.h>
+
+'''
+    enum = 'enum {\n' + ',\n'.join(f'    {k} = {v}' for k, v in consts.items()) + '\n};\n'
+    return (header + enum + '\n' + '\n\n'.join(funcs)
+            + '\n\n#endif  /* SPATIAL_DYNAMICS_KERNELS_GENERATED_H */\n')
+
+
 def main() -> int:
-    """Write ``_kernels_generated.py`` next to this module."""
-    text = generate()
-    with open(TARGET, 'w', encoding='utf-8') as f:
-        f.write(text)
-    print(f'wrote {TARGET}')
+    """Write ``_kernels_generated.py`` and ``_kernels_generated.h`` next to this module."""
+    for target, text in ((TARGET, generate()), (TARGET_C, generate_c())):
+        with open(target, 'w', encoding='utf-8') as f:
+            f.write(text)
+        print(f'wrote {target}')
     return 0
 
 

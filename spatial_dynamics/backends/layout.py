@@ -7,7 +7,8 @@ Row ``i`` describes body ``i`` (row 0 is the fixed base) in :data:`COLUMNS` orde
 into ``q``, joint axis (3), ``E_tree`` row-major (9) and ``r_tree`` (3) of ``Xtree = (E, r)``,
 mass, ``h = m c`` (3), ``Ibar`` (xx xy xz yy yz zz), mimic multiplier and offset. The Python
 backends read the rows as tuples; the compiled one as one float64 table (the small integers
-are exact in float64; row 0 holds ``n = len(q)`` in its index column).
+are exact in float64; row 0 holds ``n = len(q)`` in its index column), which the C extension
+copies once (``kernels``).
 
 :func:`of` derives a model's :class:`Layout` once and keeps it for as long as the model
 lives: a cache of a pure function of an immutable record, which never changes a result.
@@ -20,6 +21,7 @@ import weakref
 
 import numpy as np
 
+from . import compiled
 from ..algorithms.rnea import PR, RA
 from ..joints import PRISMATIC, REVOLUTE
 from ..model import Model
@@ -45,8 +47,9 @@ class Layout:
 
     n: int
     rows: tuple
-    table: np.ndarray     # writable: numba types a read-only array on its slow path
+    table: np.ndarray     # read-only
     zeros: np.ndarray     # (n,) read-only zeros: q̇ or q̈ of the terms at rest
+    kernels: object       # the compiled extension's copy of the table, or None without it
 
 
 def joint_code(jtype: int, axis: np.ndarray) -> int:
@@ -75,13 +78,16 @@ def derive(model: Model) -> Layout:
                     + tuple(float(x) for x in (*model.axis[i], *E.ravel(), *r, Ii[3, 3], *h,
                                                *Ibar, model.qmul[i], model.qoff[i])))
     table = np.array(rows, dtype=np.float64)
+    table.flags.writeable = False
     zeros = np.zeros(model.nq)
     zeros.flags.writeable = False
-    return Layout(model.nq, tuple(rows), table, zeros)
+    return Layout(model.nq, tuple(rows), table, zeros, compiled.kernels(table))
 
 
 #: id(model) -> Layout, each removed when its model is collected.
 LAYOUTS: dict = {}
+#: id(model) -> its ``Layout.kernels`` (the compiled extension's entries look models up here).
+KERNELS: dict = {}
 
 
 def of(model: Model) -> Layout:
@@ -90,4 +96,7 @@ def of(model: Model) -> Layout:
     if layout is None:
         layout = LAYOUTS[id(model)] = derive(model)
         weakref.finalize(model, LAYOUTS.pop, id(model), None)
+        if layout.kernels is not None:
+            KERNELS[id(model)] = layout.kernels
+            weakref.finalize(model, KERNELS.pop, id(model), None)
     return layout

@@ -6,7 +6,7 @@ Every implementation gets the same states of the same robot in one process:
 
 * ours, ``backend='numpy'``: float64 (a single call on one 1-D state runs on plain Python
   floats, a batch on numpy arrays), float32 and ``np.longdouble`` (numpy arrays, also for
-  one state); and ``backend='compiled'`` when it exists and numba imports;
+  one state); and ``backend='compiled'`` when the package was built with its C kernels;
 * peers, when importable and when they model the same URDF: Pinocchio ``pin.rnea`` (single
   call, and looped from Python for a batch) and its C++ batch ``pin.rneaInParallel``,
   MuJoCo ``mj_inverse`` (damping, armature and friction loss zeroed, constraints disabled)
@@ -841,7 +841,7 @@ def versions() -> str:
     try:
         from spatial_dynamics import backends
         parts.append(f"ours compiled = {backends.describe('compiled')}")
-    except Exception as err:        # no compiled backend (yet, or numba missing)
+    except Exception as err:        # built without the compiled kernels
         parts.append(f'ours compiled: {type(err).__name__}')
     for dist in ('pin', 'mujoco', 'pybullet', 'mpmath'):
         try:
@@ -955,11 +955,8 @@ def terms_table(names: list, rounds: int = 9) -> str:
 
 
 def _has_compiled() -> bool:
-    try:
-        from spatial_dynamics import backends
-        return backends.compiled('auto') is not None
-    except ImportError:
-        return False
+    from spatial_dynamics.backends import compiled
+    return compiled.ext is not None
 
 
 def main(argv: Optional[list] = None) -> int:
@@ -975,7 +972,7 @@ def main(argv: Optional[list] = None) -> int:
     parser.add_argument('--impls', nargs='+', metavar='NAME',
                         help='only implementations whose name starts with one of these')
     args = parser.parse_args(argv)
-    # Idle OpenMP threads (Pinocchio's batch, numba) sleep instead of spinning, so that they
+    # Idle OpenMP threads (Pinocchio's batch) sleep instead of spinning, so that they
     # do not slow down whichever implementation is timed next on a small machine.
     os.environ.setdefault('OMP_WAIT_POLICY', 'PASSIVE')
     settings = QUICK if args.quick else FULL

@@ -1,0 +1,984 @@
+/* Copyright 2026 spatial_dynamics contributors
+ * SPDX-License-Identifier: Apache-2.0
+ *
+ * spatial_dynamics.backends._compiled: the kernels of _kernels_generated.h (generated from
+ * spatial_dynamics/algorithms by codegen.py) as a CPython extension, built by setup.py.
+ *
+ * This file only moves data. A Kernels object holds a copy of a model's table (the rows of
+ * backends/layout.py, prepared once in Python). The single-state entries (METH_FASTCALL)
+ * read q, qd, qdd and gravity once each, through the buffer protocol (any 1-D array of
+ * float64 or integers, any strides) or a list or tuple of Python floats and ints, into C
+ * doubles; anything else (a batch, float32, a wrong length, other objects) returns None so
+ * that the Python caller takes its general path, which validates and names the argument.
+ * The batch entries take C-contiguous float64 arrays prepared by the caller, release the GIL
+ * and split the batch into contiguous slices over POSIX threads.
+ *
+ * No numpy C API: results are made by numpy.empty and filled through the buffer protocol, so
+ * one build works with numpy 1.26 and 2.x.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+#ifndef _WIN32
+#include <pthread.h>
+#endif
+
+#include "_kernels_generated.h"
+
+/* The interface this file offers to compiled.py, which refuses a build of another (a stale
+ * extension left beside newer sources): raise it with every change of an entry. */
+#define API 1
+/* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
+#define STACK_DOUBLES 2048
+/* Largest number of threads of one batch; each gets at least MIN_WORK body-states (states x
+ * bodies, ~0.2 ms of work): starting a thread, and waiting for a core on a busy machine,
+ * must cost less than what it takes over. */
+#define MAX_THREADS 64
+#define MIN_WORK 4096
+
+static PyObject *np_empty;  /* numpy.empty */
+
+/* ------------------------------------------------------------------------------------------
+ * Kernels: one model's table */
+
+typedef struct {
+    PyObject_HEAD
+    double *K;          /* rows x WIDTH, row-major */
+    long rows;          /* NB + 1 */
+    long n;             /* joints (len(q)) */
+    double *zeros;      /* n zeros: qd, qdd of the terms at rest */
+    PyObject *n_obj;    /* n, and (n, n): the shapes of the results */
+    PyObject *nn_obj;
+} KernelsObject;
+
+static PyTypeObject KernelsType;
+
+static void
+kernels_dealloc(KernelsObject *self)
+{
+    PyMem_Free(self->K);
+    PyMem_Free(self->zeros);
+    Py_XDECREF(self->n_obj);
+    Py_XDECREF(self->nn_obj);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyObject *
+kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
+{
+    PyObject *table;
+    static char *keywords[] = {"table", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O:Kernels", keywords, &table))
+        return NULL;
+    Py_buffer v;
+    if (PyObject_GetBuffer(table, &v, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
+        return NULL;
+    const char *fmt = v.format ? v.format : "B";
+    if (*fmt == '@' || *fmt == '=' || *fmt == '<')
+        fmt++;
+    if (strcmp(fmt, "d") != 0 || v.ndim != 2 || v.shape[1] != WIDTH || v.shape[0] < 1) {
+        PyBuffer_Release(&v);
+        PyErr_Format(PyExc_ValueError,
+                     "Kernels: table must be a C-contiguous float64 array of shape (NB + 1, %d)",
+                     (int)WIDTH);
+        return NULL;
+    }
+    const double *K = (const double *)v.buf;
+    long rows = (long)v.shape[0];
+    double n = K[QIDX];
+    int ok = n >= 0.0 && n <= 1e9 && n == (double)(long)n;
+    /* The kernels index q, the scratch and their parents by these columns: check them once,
+     * so no table reaches the kernels that could make them read or write out of bounds. */
+    for (long i = 1; ok && i < rows; i++) {
+        const double *row = K + i * WIDTH;
+        ok = row[0] >= 0.0 && row[0] < (double)i && row[0] == (double)(long)row[0]
+             && row[1] >= 0.0 && row[1] <= (double)PR && row[1] == (double)(long)row[1]
+             && row[QIDX] >= 0.0 && row[QIDX] < n && row[QIDX] == (double)(long)row[QIDX];
+    }
+    if (!ok) {
+        PyBuffer_Release(&v);
+        PyErr_SetString(PyExc_ValueError, "Kernels: table rows are not a tree over its joints");
+        return NULL;
+    }
+    KernelsObject *self = (KernelsObject *)type->tp_alloc(type, 0);
+    if (self == NULL) {
+        PyBuffer_Release(&v);
+        return NULL;
+    }
+    self->rows = rows;
+    self->n = (long)n;
+    self->K = PyMem_Malloc(sizeof(double) * rows * WIDTH);
+    self->zeros = PyMem_Calloc(self->n + 1, sizeof(double));
+    if (self->K != NULL)
+        memcpy(self->K, K, sizeof(double) * rows * WIDTH);
+    PyBuffer_Release(&v);
+    self->n_obj = PyLong_FromLong(self->n);
+    self->nn_obj = Py_BuildValue("(ll)", self->n, self->n);
+    if (self->K == NULL || self->zeros == NULL) {
+        Py_DECREF(self);
+        return PyErr_NoMemory();
+    }
+    if (self->n_obj == NULL || self->nn_obj == NULL) {
+        Py_DECREF(self);
+        return NULL;
+    }
+    return (PyObject *)self;
+}
+
+static PyObject *
+kernels_get_n(KernelsObject *self, void *closure)
+{
+    return PyLong_FromLong(self->n);
+}
+
+static PyObject *
+kernels_get_rows(KernelsObject *self, void *closure)
+{
+    return PyLong_FromLong(self->rows);
+}
+
+static PyGetSetDef kernels_getset[] = {
+    {"n", (getter)kernels_get_n, NULL, "number of joints (len(q))", NULL},
+    {"rows", (getter)kernels_get_rows, NULL, "rows of the table (NB + 1)", NULL},
+    {NULL},
+};
+
+static PyTypeObject KernelsType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "spatial_dynamics.backends._compiled.Kernels",
+    .tp_doc = PyDoc_STR("Kernels(table): a model's table (backends/layout.py), copied once."),
+    .tp_basicsize = sizeof(KernelsObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_new = kernels_new,
+    .tp_dealloc = (destructor)kernels_dealloc,
+    .tp_getset = kernels_getset,
+};
+
+/* ------------------------------------------------------------------------------------------
+ * Arguments */
+
+/* Read the 1-D buffer v (n items, any strides) as doubles: 1, or 0 for an item type this
+ * entry leaves to the general path (float32, float16, longdouble, complex, objects, …). */
+static int
+read_buffer(const Py_buffer *v, double *out)
+{
+    const char *fmt = v->format ? v->format : "B";
+#if PY_LITTLE_ENDIAN
+    if (*fmt == '@' || *fmt == '=' || *fmt == '<')
+#else
+    if (*fmt == '@' || *fmt == '=' || *fmt == '>' || *fmt == '!')
+#endif
+        fmt++;
+    if (fmt[0] == '\0' || fmt[1] != '\0')
+        return 0;
+    const char *p = (const char *)v->buf;
+    Py_ssize_t n = v->shape[0], step = v->strides[0];
+#define READ(ctype)                                                                 \
+    do {                                                                            \
+        if (v->itemsize != (Py_ssize_t)sizeof(ctype))                               \
+            return 0;                                                               \
+        for (Py_ssize_t i = 0; i < n; i++) {                                        \
+            ctype x;                                                                \
+            memcpy(&x, p + i * step, sizeof x);                                     \
+            out[i] = (double)x;                                                     \
+        }                                                                           \
+        return 1;                                                                   \
+    } while (0)
+    switch (fmt[0]) {
+    case 'd': READ(double);
+    case '?': READ(unsigned char);
+    case 'b': READ(signed char);
+    case 'B': READ(unsigned char);
+    case 'h': READ(short);
+    case 'H': READ(unsigned short);
+    case 'i': READ(int);
+    case 'I': READ(unsigned int);
+    case 'l': READ(long);
+    case 'L': READ(unsigned long);
+    case 'q': READ(long long);
+    case 'Q': READ(unsigned long long);
+    default: return 0;
+    }
+#undef READ
+}
+
+/* ``obj`` as n doubles: 1; 0 when it is not one state of n numbers this entry reads (the
+ * caller's general path then decides); never an error. */
+static int
+as_doubles(PyObject *obj, Py_ssize_t n, double *out)
+{
+    if (PyList_CheckExact(obj) || PyTuple_CheckExact(obj)) {
+        if (PySequence_Fast_GET_SIZE(obj) != n)
+            return 0;
+        PyObject **items = PySequence_Fast_ITEMS(obj);
+        for (Py_ssize_t i = 0; i < n; i++) {
+            PyObject *x = items[i];
+            if (PyFloat_Check(x)) {
+                out[i] = PyFloat_AS_DOUBLE(x);
+            } else if (PyLong_Check(x)) {
+                out[i] = PyLong_AsDouble(x);
+                if (out[i] == -1.0 && PyErr_Occurred()) {
+                    PyErr_Clear();
+                    return 0;
+                }
+            } else {
+                return 0;
+            }
+        }
+        return 1;
+    }
+    if (PyBytes_Check(obj) || PyByteArray_Check(obj) || !PyObject_CheckBuffer(obj))
+        return 0;
+    Py_buffer v;
+    if (PyObject_GetBuffer(obj, &v, PyBUF_STRIDES | PyBUF_FORMAT) < 0) {
+        PyErr_Clear();
+        return 0;
+    }
+    int ok = v.ndim == 1 && v.shape[0] == n && read_buffer(&v, out);
+    PyBuffer_Release(&v);
+    return ok;
+}
+
+static KernelsObject *
+kernels_arg(PyObject *obj)
+{
+    if (!PyObject_TypeCheck(obj, &KernelsType)) {
+        PyErr_Format(PyExc_TypeError, "expected Kernels, got %.100s", Py_TYPE(obj)->tp_name);
+        return NULL;
+    }
+    return (KernelsObject *)obj;
+}
+
+/* A new float64 array of the given shape (a Python int or tuple) and its writable buffer. */
+static PyObject *
+new_array(PyObject *shape, Py_buffer *v)
+{
+    PyObject *out = PyObject_Vectorcall(np_empty, &shape, 1, NULL);
+    if (out == NULL)
+        return NULL;
+    if (PyObject_GetBuffer(out, v, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
+        Py_DECREF(out);
+        return NULL;
+    }
+    return out;
+}
+
+/* Scratch of one call: `size` doubles on the stack (stack) or the heap. */
+static double *
+scratch(double *stack, Py_ssize_t size)
+{
+    if (size <= STACK_DOUBLES)
+        return stack;
+    double *p = PyMem_Malloc(sizeof(double) * size);
+    if (p == NULL)
+        PyErr_NoMemory();
+    return p;
+}
+
+static void
+scratch_free(double *p, double *stack)
+{
+    if (p != stack)
+        PyMem_Free(p);
+}
+
+/* The buffer of obj, C-contiguous float64 (writable if asked); -1 with an error if not. */
+static int
+get_table(PyObject *obj, Py_buffer *v, int writable, const char *what)
+{
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, v, flags) < 0)
+        return -1;
+    const char *fmt = v->format ? v->format : "B";
+    if (*fmt == '@' || *fmt == '=' || *fmt == '<')
+        fmt++;
+    if (strcmp(fmt, "d") != 0) {
+        PyBuffer_Release(v);
+        PyErr_Format(PyExc_TypeError, "%s must be C-contiguous float64", what);
+        return -1;
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------------------------------------
+ * Single states */
+
+PyDoc_STRVAR(rnea_doc,
+"rnea(kernels, q, qd, qdd, gravity, f_body=None) -> tau (n,), or None\n\n"
+"One state: q, qd, qdd of n numbers each, gravity of 3 (m/s^2, root coordinates); f_body\n"
+"a C-contiguous float64 array of rows x 6 (the external force [n; f] on each body, body\n"
+"coordinates) or None. None when an argument is not such a state (the caller's general\n"
+"path takes it).");
+
+static PyObject *
+c_rnea(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 5 && nargs != 6) {
+        PyErr_SetString(PyExc_TypeError, "rnea takes 5 or 6 arguments");
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    if (h == NULL)
+        return NULL;
+    const Py_ssize_t n = h->n, rows = h->rows;
+    double stack[STACK_DOUBLES];
+    double *buf = scratch(stack, 3 * n + 3 + rows * WORK);
+    if (buf == NULL)
+        return NULL;
+    double *q = buf, *qd = q + n, *qdd = qd + n, *g = qdd + n, *work = g + 3;
+    PyObject *out = NULL;
+    Py_buffer fb = {0}, tau;
+    int has_fext = nargs == 6 && args[5] != Py_None;
+    if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd)
+          && as_doubles(args[3], n, qdd) && as_doubles(args[4], 3, g))) {
+        out = Py_None;
+        Py_INCREF(out);
+        goto done;
+    }
+    if (has_fext) {
+        if (get_table(args[5], &fb, 0, "f_body") < 0)
+            goto done;
+        if (fb.len != (Py_ssize_t)sizeof(double) * rows * 6) {
+            PyErr_SetString(PyExc_ValueError, "f_body must hold rows x 6 numbers");
+            goto done;
+        }
+    }
+    out = new_array(h->n_obj, &tau);
+    if (out == NULL)
+        goto done;
+    xup_kernel(h->K, rows, q, work);
+    rnea_kernel(h->K, rows, q, qd, qdd, g[0], g[1], g[2],
+                has_fext ? (const double *)fb.buf : NULL, has_fext, (double *)tau.buf, work);
+    PyBuffer_Release(&tau);
+done:
+    if (has_fext && fb.obj != NULL)
+        PyBuffer_Release(&fb);
+    scratch_free(buf, stack);
+    return out;
+}
+
+/* RNEA with qd, qdd given or zero: the shared body of gravity_torque and bias_torque. */
+static PyObject *
+rnea_at_rest(PyObject *const *args, Py_ssize_t nargs, int with_qd, const char *name)
+{
+    if (nargs != (with_qd ? 4 : 3)) {
+        PyErr_Format(PyExc_TypeError, "%s takes %d arguments", name, with_qd ? 4 : 3);
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    if (h == NULL)
+        return NULL;
+    const Py_ssize_t n = h->n, rows = h->rows;
+    double stack[STACK_DOUBLES];
+    double *buf = scratch(stack, 2 * n + 3 + rows * WORK);
+    if (buf == NULL)
+        return NULL;
+    double *q = buf, *qd = q + n, *g = qd + n, *work = g + 3;
+    PyObject *out = NULL;
+    Py_buffer tau;
+    if (!(as_doubles(args[1], n, q) && (!with_qd || as_doubles(args[2], n, qd))
+          && as_doubles(args[with_qd ? 3 : 2], 3, g))) {
+        out = Py_None;
+        Py_INCREF(out);
+    } else if ((out = new_array(h->n_obj, &tau)) != NULL) {
+        xup_kernel(h->K, rows, q, work);
+        rnea_kernel(h->K, rows, q, with_qd ? qd : h->zeros, h->zeros, g[0], g[1], g[2], NULL,
+                    0, (double *)tau.buf, work);
+        PyBuffer_Release(&tau);
+    }
+    scratch_free(buf, stack);
+    return out;
+}
+
+PyDoc_STRVAR(gravity_torque_doc,
+"gravity_torque(kernels, q, gravity) -> g(q) (n,), or None: rnea at qd = qdd = 0.");
+
+static PyObject *
+c_gravity_torque(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    return rnea_at_rest(args, nargs, 0, "gravity_torque");
+}
+
+PyDoc_STRVAR(bias_torque_doc,
+"bias_torque(kernels, q, qd, gravity) -> C(q, qd) qd + g(q) (n,), or None: rnea at qdd = 0.");
+
+static PyObject *
+c_bias_torque(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    return rnea_at_rest(args, nargs, 1, "bias_torque");
+}
+
+PyDoc_STRVAR(mass_matrix_doc,
+"mass_matrix(kernels, q) -> M(q) (n, n), or None: the composite rigid body algorithm.");
+
+static PyObject *
+c_mass_matrix(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 2) {
+        PyErr_SetString(PyExc_TypeError, "mass_matrix takes 2 arguments");
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    if (h == NULL)
+        return NULL;
+    const Py_ssize_t n = h->n, rows = h->rows;
+    double stack[STACK_DOUBLES];
+    double *buf = scratch(stack, n + rows * WORK);
+    if (buf == NULL)
+        return NULL;
+    double *q = buf, *work = q + n;
+    PyObject *out = NULL;
+    Py_buffer H;
+    if (!as_doubles(args[1], n, q)) {
+        out = Py_None;
+        Py_INCREF(out);
+    } else if ((out = new_array(h->nn_obj, &H)) != NULL) {
+        xup_kernel(h->K, rows, q, work);
+        crba_kernel(h->K, rows, work, (double *)H.buf);
+        PyBuffer_Release(&H);
+    }
+    scratch_free(buf, stack);
+    return out;
+}
+
+PyDoc_STRVAR(generalized_momentum_doc,
+"generalized_momentum(kernels, q, qd) -> (M(q) qd, C(q, qd)^T qd), each (n,), or None.");
+
+static PyObject *
+c_generalized_momentum(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 3) {
+        PyErr_SetString(PyExc_TypeError, "generalized_momentum takes 3 arguments");
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    if (h == NULL)
+        return NULL;
+    const Py_ssize_t n = h->n, rows = h->rows;
+    double stack[STACK_DOUBLES];
+    double *buf = scratch(stack, 2 * n + rows * WORK);
+    if (buf == NULL)
+        return NULL;
+    double *q = buf, *qd = q + n, *work = qd + n;
+    PyObject *out = NULL, *mom = NULL, *ctq = NULL;
+    Py_buffer vm, vc;
+    if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd))) {
+        out = Py_None;
+        Py_INCREF(out);
+        goto done;
+    }
+    if ((mom = new_array(h->n_obj, &vm)) == NULL)
+        goto done;
+    if ((ctq = new_array(h->n_obj, &vc)) == NULL) {
+        PyBuffer_Release(&vm);
+        goto done;
+    }
+    xup_kernel(h->K, rows, q, work);
+    momentum_kernel(h->K, rows, q, qd, (double *)vm.buf, (double *)vc.buf, work);
+    PyBuffer_Release(&vm);
+    PyBuffer_Release(&vc);
+    out = PyTuple_Pack(2, mom, ctq);
+done:
+    Py_XDECREF(mom);
+    Py_XDECREF(ctq);
+    scratch_free(buf, stack);
+    return out;
+}
+
+/* ------------------------------------------------------------------------------------------
+ * Batches: contiguous slices of the states on threads, without the GIL */
+
+enum { RNEA = 0, CRBA = 1, MOMENTUM = 2 };
+
+typedef struct {
+    int kind;
+    const double *K;
+    long rows, n;
+    const double *q, *qd, *qdd, *fext;  /* (N, n) each; fext (1 or N, rows, 6) or NULL */
+    int fext_per_state;
+    double g[3];
+    double *out1, *out2;                 /* tau | H | mom, ctq */
+    Py_ssize_t lo, hi;                   /* the slice of states [lo, hi) */
+    int failed;                          /* no memory for the scratch */
+} Slice;
+
+static void *
+run_slice(void *arg)
+{
+    Slice *s = (Slice *)arg;
+    const long n = s->n, rows = s->rows;
+    double *work = malloc(sizeof(double) * rows * WORK);
+    if (work == NULL) {
+        s->failed = 1;
+        return NULL;
+    }
+    for (Py_ssize_t k = s->lo; k < s->hi; k++) {
+        const double *q = s->q + k * n;
+        xup_kernel(s->K, rows, q, work);
+        if (s->kind == RNEA) {
+            const double *f = s->fext ? s->fext + (s->fext_per_state ? k : 0) * rows * 6 : NULL;
+            rnea_kernel(s->K, rows, q, s->qd + k * n, s->qdd + k * n, s->g[0], s->g[1],
+                        s->g[2], f, f != NULL, s->out1 + k * n, work);
+        } else if (s->kind == CRBA) {
+            crba_kernel(s->K, rows, work, s->out1 + k * n * n);
+        } else {
+            momentum_kernel(s->K, rows, q, s->qd + k * n, s->out1 + k * n, s->out2 + k * n,
+                            work);
+        }
+    }
+    free(work);
+    return NULL;
+}
+
+/* Run states [0, N) of `job` on up to `threads` threads (the caller's included). */
+static int
+run_batch(const Slice *job, Py_ssize_t N, long threads)
+{
+    Slice slices[MAX_THREADS];
+    long T = threads < 1 ? 1 : (threads > MAX_THREADS ? MAX_THREADS : threads);
+    Py_ssize_t most = N * job->rows / MIN_WORK;
+    if (T > most)
+        T = most > 0 ? (long)most : 1;
+    int failed = 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (long t = 0; t < T; t++) {
+        slices[t] = *job;
+        slices[t].lo = N * t / T;
+        slices[t].hi = N * (t + 1) / T;
+    }
+#ifndef _WIN32
+    pthread_t ids[MAX_THREADS];
+    int started[MAX_THREADS] = {0};
+    for (long t = 1; t < T; t++)
+        started[t] = pthread_create(&ids[t], NULL, run_slice, &slices[t]) == 0;
+    run_slice(&slices[0]);
+    for (long t = 1; t < T; t++) {
+        if (started[t])
+            pthread_join(ids[t], NULL);
+        else
+            run_slice(&slices[t]);      /* no thread to be had: run it here */
+    }
+#else
+    for (long t = 0; t < T; t++)
+        run_slice(&slices[t]);
+#endif
+    for (long t = 0; t < T; t++)
+        failed |= slices[t].failed;
+    Py_END_ALLOW_THREADS
+    if (failed) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    return 0;
+}
+
+/* Buffers of a batch call: inputs read-only, outputs writable; each C-contiguous float64
+ * holding sizes[i] doubles. On an error none is held. */
+static int
+batch_buffers(PyObject *const *objs, Py_buffer *views, int count, const int *writable,
+              const Py_ssize_t *sizes, const char *const *names)
+{
+    for (int i = 0; i < count; i++) {
+        int ok = get_table(objs[i], &views[i], writable[i], names[i]) == 0;
+        if (ok && views[i].len != (Py_ssize_t)sizeof(double) * sizes[i]) {
+            PyBuffer_Release(&views[i]);
+            PyErr_Format(PyExc_ValueError, "%s must hold %zd numbers", names[i], sizes[i]);
+            ok = 0;
+        }
+        if (!ok) {
+            for (int j = 0; j < i; j++)
+                PyBuffer_Release(&views[j]);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static void
+release_all(Py_buffer *views, int count)
+{
+    for (int i = 0; i < count; i++)
+        PyBuffer_Release(&views[i]);
+}
+
+PyDoc_STRVAR(rnea_batch_doc,
+"rnea_batch(kernels, N, q, qd, qdd, gravity, fext, tau, threads) -> None\n\n"
+"N states: q, qd, qdd C-contiguous float64 of N x n numbers, gravity 3 numbers, fext None\n"
+"or C-contiguous float64 of rows x 6 (shared) or N x rows x 6 numbers; writes tau (N x n).\n"
+"Releases the GIL; up to `threads` threads.");
+
+static PyObject *
+c_rnea_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 9) {
+        PyErr_SetString(PyExc_TypeError, "rnea_batch takes 9 arguments");
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    Py_ssize_t N = PyLong_AsSsize_t(args[1]);
+    long threads = PyLong_AsLong(args[8]);
+    if (h == NULL || PyErr_Occurred())
+        return NULL;
+    Slice job = {.kind = RNEA, .K = h->K, .rows = h->rows, .n = h->n};
+    if (!as_doubles(args[5], 3, job.g)) {
+        PyErr_SetString(PyExc_TypeError, "gravity must be 3 numbers");
+        return NULL;
+    }
+    PyObject *objs[4] = {args[2], args[3], args[4], args[7]};
+    const int writable[4] = {0, 0, 0, 1};
+    const Py_ssize_t sizes[4] = {N * h->n, N * h->n, N * h->n, N * h->n};
+    const char *const names[4] = {"q", "qd", "qdd", "tau"};
+    Py_buffer v[5];
+    if (batch_buffers(objs, v, 4, writable, sizes, names) < 0)
+        return NULL;
+    int nviews = 4;
+    if (args[6] != Py_None) {
+        if (get_table(args[6], &v[4], 0, "fext") < 0) {
+            release_all(v, 4);
+            return NULL;
+        }
+        nviews = 5;
+        Py_ssize_t m = v[4].len / (Py_ssize_t)sizeof(double);
+        if (m != h->rows * 6 && m != N * h->rows * 6) {
+            release_all(v, 5);
+            PyErr_SetString(PyExc_ValueError, "fext must hold rows x 6 or N x rows x 6 numbers");
+            return NULL;
+        }
+        job.fext = v[4].buf;
+        job.fext_per_state = m != h->rows * 6;
+    }
+    job.q = v[0].buf;
+    job.qd = v[1].buf;
+    job.qdd = v[2].buf;
+    job.out1 = v[3].buf;
+    int rc = run_batch(&job, N, threads);
+    release_all(v, nviews);
+    if (rc < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+PyDoc_STRVAR(mass_matrix_batch_doc,
+"mass_matrix_batch(kernels, N, q, H, threads) -> None: M(q) of N states into H (N x n x n).");
+
+static PyObject *
+c_mass_matrix_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "mass_matrix_batch takes 5 arguments");
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    Py_ssize_t N = PyLong_AsSsize_t(args[1]);
+    long threads = PyLong_AsLong(args[4]);
+    if (h == NULL || PyErr_Occurred())
+        return NULL;
+    Slice job = {.kind = CRBA, .K = h->K, .rows = h->rows, .n = h->n};
+    PyObject *objs[2] = {args[2], args[3]};
+    const int writable[2] = {0, 1};
+    const Py_ssize_t sizes[2] = {N * h->n, N * h->n * h->n};
+    const char *const names[2] = {"q", "H"};
+    Py_buffer v[2];
+    if (batch_buffers(objs, v, 2, writable, sizes, names) < 0)
+        return NULL;
+    job.q = v[0].buf;
+    job.out1 = v[1].buf;
+    int rc = run_batch(&job, N, threads);
+    release_all(v, 2);
+    if (rc < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+PyDoc_STRVAR(momentum_batch_doc,
+"momentum_batch(kernels, N, q, qd, mom, ctq, threads) -> None: M(q) qd and C^T qd of N\n"
+"states into mom and ctq (N x n each).");
+
+static PyObject *
+c_momentum_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 7) {
+        PyErr_SetString(PyExc_TypeError, "momentum_batch takes 7 arguments");
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    Py_ssize_t N = PyLong_AsSsize_t(args[1]);
+    long threads = PyLong_AsLong(args[6]);
+    if (h == NULL || PyErr_Occurred())
+        return NULL;
+    Slice job = {.kind = MOMENTUM, .K = h->K, .rows = h->rows, .n = h->n};
+    PyObject *objs[4] = {args[2], args[3], args[4], args[5]};
+    const int writable[4] = {0, 0, 1, 1};
+    const Py_ssize_t sizes[4] = {N * h->n, N * h->n, N * h->n, N * h->n};
+    const char *const names[4] = {"q", "qd", "mom", "ctq"};
+    Py_buffer v[4];
+    if (batch_buffers(objs, v, 4, writable, sizes, names) < 0)
+        return NULL;
+    job.q = v[0].buf;
+    job.qd = v[1].buf;
+    job.out1 = v[2].buf;
+    job.out2 = v[3].buf;
+    int rc = run_batch(&job, N, threads);
+    release_all(v, 4);
+    if (rc < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+/* ------------------------------------------------------------------------------------------
+ * Door: a public function of spatial_dynamics entered in C
+ *
+ * Door(function, kind, kernels, gravity) is called as `function` is (same arguments, and it carries
+ * its __doc__, __name__ and __wrapped__). One state with gravity given or default, no f_ext
+ * (`gravity` when not given) and backend 'auto' or 'compiled', of a model whose Kernels are
+ * in the dict `kernels`
+ * (id(model) -> Kernels), runs here; every other call, or one whose arguments the entry
+ * declines, is passed on to `function` unchanged (it validates, derives the table, runs
+ * batches and the other backends). This saves the Python frame of `function` (~0.2 µs, a
+ * fifth of a call) on the path users take most. */
+
+enum { D_RNEA = 0, D_GRAVITY = 1, D_BIAS = 2, D_MASS = 3, D_MOMENTUM = 4 };
+/* joint-vector arguments after the model, and whether gravity and f_ext come next */
+static const int door_vectors[] = {3, 1, 2, 1, 2};
+static const int door_gravity[] = {1, 1, 1, 0, 0};
+static const int door_fext[] = {1, 0, 0, 0, 0};
+
+static PyObject *str_gravity, *str_f_ext, *str_backend, *str_auto, *str_compiled;
+
+typedef struct {
+    PyObject_HEAD
+    vectorcallfunc vectorcall;
+    int kind;
+    PyObject *function;   /* the Python function: every other call */
+    PyObject *kernels;    /* dict id(model) -> Kernels */
+    PyObject *gravity;    /* the default gravity */
+    PyObject *dict;       /* __doc__, __name__, __wrapped__, … */
+} DoorObject;
+
+static int
+is_name(PyObject *name, PyObject *interned)
+{
+    return name == interned || PyUnicode_Compare(name, interned) == 0;
+}
+
+static PyObject *
+door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames)
+{
+    Py_ssize_t nargs = PyVectorcall_NARGS(nargsf);
+    const int kind = self->kind, nv = door_vectors[kind];
+    PyObject *gravity = self->gravity, *f_ext = NULL, *backend = NULL;
+    Py_ssize_t nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
+    int ok = nargs >= 1 + nv;
+    /* optional arguments by position: gravity, f_ext, backend (those the function has) */
+    Py_ssize_t k = 1 + nv;
+    if (ok && door_gravity[kind] && k < nargs)
+        gravity = args[k++];
+    if (ok && door_fext[kind] && k < nargs)
+        f_ext = args[k++];
+    if (ok && k < nargs)
+        backend = args[k++];
+    ok = ok && k == nargs;
+    for (Py_ssize_t i = 0; ok && i < nkw; i++) {
+        PyObject *name = PyTuple_GET_ITEM(kwnames, i), *value = args[nargs + i];
+        if (door_gravity[kind] && is_name(name, str_gravity))
+            gravity = value;
+        else if (door_fext[kind] && is_name(name, str_f_ext))
+            f_ext = value;
+        else if (is_name(name, str_backend))
+            backend = value;
+        else
+            ok = 0;
+    }
+    if (ok && f_ext != NULL && f_ext != Py_None)
+        ok = PyDict_CheckExact(f_ext) && PyDict_GET_SIZE(f_ext) == 0;
+    if (ok && backend != NULL)
+        ok = PyUnicode_CheckExact(backend)
+             && (is_name(backend, str_auto) || is_name(backend, str_compiled));
+    PyObject *kern = NULL;
+    if (ok) {
+        PyObject *key = PyLong_FromVoidPtr(args[0]);
+        if (key == NULL)
+            return NULL;
+        kern = PyDict_GetItemWithError(self->kernels, key);   /* borrowed */
+        Py_DECREF(key);
+        if (kern == NULL && PyErr_Occurred())
+            return NULL;
+        ok = kern != NULL && PyObject_TypeCheck(kern, &KernelsType);
+    }
+    if (ok) {
+        PyObject *call[5] = {kern, args[1], NULL, NULL, NULL};
+        PyObject *out;
+        switch (kind) {
+        case D_RNEA:
+            call[2] = args[2], call[3] = args[3], call[4] = gravity;
+            out = c_rnea(NULL, call, 5);
+            break;
+        case D_GRAVITY:
+            call[2] = gravity;
+            out = c_gravity_torque(NULL, call, 3);
+            break;
+        case D_BIAS:
+            call[2] = args[2], call[3] = gravity;
+            out = c_bias_torque(NULL, call, 4);
+            break;
+        case D_MASS:
+            out = c_mass_matrix(NULL, call, 2);
+            break;
+        default:
+            call[2] = args[2];
+            out = c_generalized_momentum(NULL, call, 3);
+        }
+        if (out != Py_None)
+            return out;        /* the answer, or an error (no memory) */
+        Py_DECREF(out);
+    }
+    return PyObject_Vectorcall(self->function, args, nargsf, kwnames);
+}
+
+static PyObject *
+door_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
+{
+    PyObject *function, *kernels, *gravity;
+    int kind;
+    static char *keywords[] = {"function", "kind", "kernels", "gravity", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OiO!O:Door", keywords, &function, &kind,
+                                     &PyDict_Type, &kernels, &gravity))
+        return NULL;
+    if (kind < D_RNEA || kind > D_MOMENTUM || !PyCallable_Check(function)) {
+        PyErr_SetString(PyExc_ValueError, "Door: a callable and a kind in 0..4");
+        return NULL;
+    }
+    DoorObject *self = (DoorObject *)type->tp_alloc(type, 0);
+    if (self == NULL)
+        return NULL;
+    self->vectorcall = (vectorcallfunc)door_call;
+    self->kind = kind;
+    Py_INCREF(function);
+    self->function = function;
+    Py_INCREF(kernels);
+    self->kernels = kernels;
+    Py_INCREF(gravity);
+    self->gravity = gravity;
+    return (PyObject *)self;
+}
+
+static int
+door_traverse(DoorObject *self, visitproc visit, void *arg)
+{
+    Py_VISIT(self->function);
+    Py_VISIT(self->kernels);
+    Py_VISIT(self->gravity);
+    Py_VISIT(self->dict);
+    return 0;
+}
+
+static int
+door_clear(DoorObject *self)
+{
+    Py_CLEAR(self->function);
+    Py_CLEAR(self->kernels);
+    Py_CLEAR(self->gravity);
+    Py_CLEAR(self->dict);
+    return 0;
+}
+
+static void
+door_dealloc(DoorObject *self)
+{
+    PyObject_GC_UnTrack(self);
+    door_clear(self);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyObject *
+door_repr(DoorObject *self)
+{
+    return PyUnicode_FromFormat("<compiled door to %R>", self->function);
+}
+
+static PyGetSetDef door_getset[] = {
+    {"__dict__", PyObject_GenericGetDict, PyObject_GenericSetDict, NULL, NULL},
+    {NULL},
+};
+
+static PyTypeObject DoorType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "spatial_dynamics.backends._compiled.Door",
+    .tp_doc = PyDoc_STR("Door(function, kind, kernels, gravity): `function`, one state in C."),
+    .tp_basicsize = sizeof(DoorObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
+    .tp_new = door_new,
+    .tp_dealloc = (destructor)door_dealloc,
+    .tp_traverse = (traverseproc)door_traverse,
+    .tp_clear = (inquiry)door_clear,
+    .tp_repr = (reprfunc)door_repr,
+    .tp_call = PyVectorcall_Call,
+    .tp_vectorcall_offset = offsetof(DoorObject, vectorcall),
+    .tp_dictoffset = offsetof(DoorObject, dict),
+    .tp_getset = door_getset,
+};
+
+/* ------------------------------------------------------------------------------------------
+ * The module */
+
+static PyMethodDef methods[] = {
+    {"rnea", (PyCFunction)(void (*)(void))c_rnea, METH_FASTCALL, rnea_doc},
+    {"gravity_torque", (PyCFunction)(void (*)(void))c_gravity_torque, METH_FASTCALL,
+     gravity_torque_doc},
+    {"bias_torque", (PyCFunction)(void (*)(void))c_bias_torque, METH_FASTCALL, bias_torque_doc},
+    {"mass_matrix", (PyCFunction)(void (*)(void))c_mass_matrix, METH_FASTCALL,
+     mass_matrix_doc},
+    {"generalized_momentum", (PyCFunction)(void (*)(void))c_generalized_momentum,
+     METH_FASTCALL, generalized_momentum_doc},
+    {"rnea_batch", (PyCFunction)(void (*)(void))c_rnea_batch, METH_FASTCALL, rnea_batch_doc},
+    {"mass_matrix_batch", (PyCFunction)(void (*)(void))c_mass_matrix_batch, METH_FASTCALL,
+     mass_matrix_batch_doc},
+    {"momentum_batch", (PyCFunction)(void (*)(void))c_momentum_batch, METH_FASTCALL,
+     momentum_batch_doc},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module_def = {
+    PyModuleDef_HEAD_INIT,
+    .m_name = "spatial_dynamics.backends._compiled",
+    .m_doc = PyDoc_STR("The generated kernels, compiled when the package is built."),
+    .m_size = -1,
+    .m_methods = methods,
+};
+
+PyMODINIT_FUNC
+PyInit__compiled(void)
+{
+    PyObject *numpy = PyImport_ImportModule("numpy");
+    if (numpy == NULL)
+        return NULL;
+    np_empty = PyObject_GetAttrString(numpy, "empty");
+    Py_DECREF(numpy);
+    if (np_empty == NULL || PyType_Ready(&KernelsType) < 0 || PyType_Ready(&DoorType) < 0)
+        return NULL;
+    str_gravity = PyUnicode_InternFromString("gravity");
+    str_f_ext = PyUnicode_InternFromString("f_ext");
+    str_backend = PyUnicode_InternFromString("backend");
+    str_auto = PyUnicode_InternFromString("auto");
+    str_compiled = PyUnicode_InternFromString("compiled");
+    if (!(str_gravity && str_f_ext && str_backend && str_auto && str_compiled))
+        return NULL;
+    PyObject *m = PyModule_Create(&module_def);
+    if (m == NULL)
+        return NULL;
+    Py_INCREF(&KernelsType);
+    Py_INCREF(&DoorType);
+    if (PyModule_AddObject(m, "Kernels", (PyObject *)&KernelsType) < 0
+            || PyModule_AddObject(m, "Door", (PyObject *)&DoorType) < 0
+            || PyModule_AddIntConstant(m, "API", API) < 0
+            || PyModule_AddIntConstant(m, "WORK", WORK) < 0
+            || PyModule_AddIntConstant(m, "MAX_THREADS", MAX_THREADS) < 0
+            || PyModule_AddIntConstant(m, "MIN_WORK", MIN_WORK) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
+}

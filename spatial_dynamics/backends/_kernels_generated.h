@@ -1,0 +1,966 @@
+/* Copyright 2026 spatial_dynamics contributors
+ * SPDX-License-Identifier: Apache-2.0
+ *
+ * Kernels generated from spatial_dynamics.algorithms: do not edit.
+ * Change the source and run `python -m spatial_dynamics.backends.codegen`.
+ * Included by _compiled.c; compile without fused multiply-adds (-ffp-contract=off).
+ */
+#ifndef SPATIAL_DYNAMICS_KERNELS_GENERATED_H
+#define SPATIAL_DYNAMICS_KERNELS_GENERATED_H
+
+#include <math.h>
+
+enum {
+    RX = 0,
+    RY = 1,
+    RZ = 2,
+    RA = 3,
+    PR = 4,
+    WORK = 40,
+    XUP = 0,
+    VEL = 12,
+    ACC = 18,
+    FRC = 24,
+    ICS = 30,
+    WIDTH = 30,
+    QIDX = 2
+};
+
+/* Run components.X_motion of the algorithms, generated from it. */
+static inline void X_motion(double e00, double e01, double e02, double e10, double e11, double e12,
+    double e20, double e21, double e22, double rx, double ry, double rz, double m0, double m1,
+    double m2, double m3, double m4, double m5, double *out)
+{
+    double u0, u1, u2;
+    u0 = m3 - (ry * m2 - rz * m1);
+    u1 = m4 - (rz * m0 - rx * m2);
+    u2 = m5 - (rx * m1 - ry * m0);
+    out[0] = e00 * m0 + e01 * m1 + e02 * m2;
+    out[1] = e10 * m0 + e11 * m1 + e12 * m2;
+    out[2] = e20 * m0 + e21 * m1 + e22 * m2;
+    out[3] = e00 * u0 + e01 * u1 + e02 * u2;
+    out[4] = e10 * u0 + e11 * u1 + e12 * u2;
+    out[5] = e20 * u0 + e21 * u1 + e22 * u2;
+}
+
+/* Run components.XT_force of the algorithms, generated from it. */
+static inline void XT_force(double e00, double e01, double e02, double e10, double e11, double e12,
+    double e20, double e21, double e22, double rx, double ry, double rz, double n0, double n1,
+    double n2, double f0, double f1, double f2, double *out)
+{
+    double F0, F1, F2;
+    F0 = e00 * f0 + e10 * f1 + e20 * f2;
+    F1 = e01 * f0 + e11 * f1 + e21 * f2;
+    F2 = e02 * f0 + e12 * f1 + e22 * f2;
+    out[0] = e00 * n0 + e10 * n1 + e20 * n2 + (ry * F2 - rz * F1);
+    out[1] = e01 * n0 + e11 * n1 + e21 * n2 + (rz * F0 - rx * F2);
+    out[2] = e02 * n0 + e12 * n1 + e22 * n2 + (rx * F1 - ry * F0);
+    out[3] = F0;
+    out[4] = F1;
+    out[5] = F2;
+}
+
+/* Run components.I_motion of the algorithms, generated from it. */
+static inline void I_motion(double mass, double hx, double hy, double hz, double Ixx, double Ixy,
+    double Ixz, double Iyy, double Iyz, double Izz, double m0, double m1, double m2, double m3,
+    double m4, double m5, double *out)
+{
+    out[0] = Ixx * m0 + Ixy * m1 + Ixz * m2 + (hy * m5 - hz * m4);
+    out[1] = Ixy * m0 + Iyy * m1 + Iyz * m2 + (hz * m3 - hx * m5);
+    out[2] = Ixz * m0 + Iyz * m1 + Izz * m2 + (hx * m4 - hy * m3);
+    out[3] = mass * m3 - (hy * m2 - hz * m1);
+    out[4] = mass * m4 - (hz * m0 - hx * m2);
+    out[5] = mass * m5 - (hx * m1 - hy * m0);
+}
+
+/* Run components.XT_I_X of the algorithms, generated from it. */
+static inline void XT_I_X(double e00, double e01, double e02, double e10, double e11, double e12,
+    double e20, double e21, double e22, double rx, double ry, double rz, double mass, double hx,
+    double hy, double hz, double Ixx, double Ixy, double Ixz, double Iyy, double Iyz, double Izz,
+    double *out)
+{
+    double b00, b01, b02, b11, b12, b22, d, mr0, mr1, mr2, t00, t01;
+    double t02, t10, t11, t12, t20, t21, t22, y0, y1, y2;
+    y0 = e00 * hx + e10 * hy + e20 * hz;
+    y1 = e01 * hx + e11 * hy + e21 * hz;
+    y2 = e02 * hx + e12 * hy + e22 * hz;
+    t00 = Ixx * e00 + Ixy * e10 + Ixz * e20;
+    t01 = Ixx * e01 + Ixy * e11 + Ixz * e21;
+    t02 = Ixx * e02 + Ixy * e12 + Ixz * e22;
+    t10 = Ixy * e00 + Iyy * e10 + Iyz * e20;
+    t11 = Ixy * e01 + Iyy * e11 + Iyz * e21;
+    t12 = Ixy * e02 + Iyy * e12 + Iyz * e22;
+    t20 = Ixz * e00 + Iyz * e10 + Izz * e20;
+    t21 = Ixz * e01 + Iyz * e11 + Izz * e21;
+    t22 = Ixz * e02 + Iyz * e12 + Izz * e22;
+    b00 = e00 * t00 + e10 * t10 + e20 * t20;
+    b01 = e00 * t01 + e10 * t11 + e20 * t21;
+    b02 = e00 * t02 + e10 * t12 + e20 * t22;
+    b11 = e01 * t01 + e11 * t11 + e21 * t21;
+    b12 = e01 * t02 + e11 * t12 + e21 * t22;
+    b22 = e02 * t02 + e12 * t12 + e22 * t22;
+    {
+        const double tmp1_ = mass * rx;
+        const double tmp2_ = mass * ry;
+        const double tmp3_ = mass * rz;
+        mr0 = tmp1_;
+        mr1 = tmp2_;
+        mr2 = tmp3_;
+    }
+    d = 2.0 * (rx * y0 + ry * y1 + rz * y2) + (mr0 * rx + mr1 * ry + mr2 * rz);
+    out[0] = mass;
+    out[1] = y0 + mr0;
+    out[2] = y1 + mr1;
+    out[3] = y2 + mr2;
+    out[4] = b00 - (2.0 * y0 * rx + mr0 * rx) + d;
+    out[5] = b01 - (y0 * ry + rx * y1 + mr0 * ry);
+    out[6] = b02 - (y0 * rz + rx * y2 + mr0 * rz);
+    out[7] = b11 - (2.0 * y1 * ry + mr1 * ry) + d;
+    out[8] = b12 - (y1 * rz + ry * y2 + mr1 * rz);
+    out[9] = b22 - (2.0 * y2 * rz + mr2 * rz) + d;
+}
+
+/* Run rnea.xup_kernel of the algorithms, generated from it. */
+static inline void xup_kernel(const double *K, long rows, const double *q, double *work)
+{
+    long code, i, k;
+    double C, ax, ay, az, c, cxy, cxz, cyz, j00, j01, j02, j10;
+    double j11, j12, j20, j21, j22, mul, off, qi, rx, ry, rz, s;
+    double sx, sy, sz, t00, t01, t02, t10, t11, t12, t20, t21, t22;
+    for (i = 1; i < rows; i++) {
+        code = (long)K[i * WIDTH + 1];
+        k = (long)K[i * WIDTH + 2];
+        ax = K[i * WIDTH + 3];
+        ay = K[i * WIDTH + 4];
+        az = K[i * WIDTH + 5];
+        t00 = K[i * WIDTH + 6];
+        t01 = K[i * WIDTH + 7];
+        t02 = K[i * WIDTH + 8];
+        t10 = K[i * WIDTH + 9];
+        t11 = K[i * WIDTH + 10];
+        t12 = K[i * WIDTH + 11];
+        t20 = K[i * WIDTH + 12];
+        t21 = K[i * WIDTH + 13];
+        t22 = K[i * WIDTH + 14];
+        rx = K[i * WIDTH + 15];
+        ry = K[i * WIDTH + 16];
+        rz = K[i * WIDTH + 17];
+        mul = K[i * WIDTH + 28];
+        off = K[i * WIDTH + 29];
+        qi = (mul == 1.0 && off == 0.0 ? q[k] : mul * q[k] + off);
+        if (code == PR) {
+            work[i * WORK + XUP + 0] = t00;
+            work[i * WORK + XUP + 1] = t01;
+            work[i * WORK + XUP + 2] = t02;
+            work[i * WORK + XUP + 3] = t10;
+            work[i * WORK + XUP + 4] = t11;
+            work[i * WORK + XUP + 5] = t12;
+            work[i * WORK + XUP + 6] = t20;
+            work[i * WORK + XUP + 7] = t21;
+            work[i * WORK + XUP + 8] = t22;
+            work[i * WORK + XUP + 9] = rx + (t00 * ax + t10 * ay + t20 * az) * qi;
+            work[i * WORK + XUP + 10] = ry + (t01 * ax + t11 * ay + t21 * az) * qi;
+            work[i * WORK + XUP + 11] = rz + (t02 * ax + t12 * ay + t22 * az) * qi;
+            continue;
+        }
+        {
+            const double tmp1_ = cos(qi);
+            const double tmp2_ = sin(qi);
+            c = tmp1_;
+            s = tmp2_;
+        }
+        if (code == RZ) {
+            s = az * s;
+            work[i * WORK + XUP + 0] = c * t00 + s * t10;
+            work[i * WORK + XUP + 1] = c * t01 + s * t11;
+            work[i * WORK + XUP + 2] = c * t02 + s * t12;
+            work[i * WORK + XUP + 3] = c * t10 - s * t00;
+            work[i * WORK + XUP + 4] = c * t11 - s * t01;
+            work[i * WORK + XUP + 5] = c * t12 - s * t02;
+            work[i * WORK + XUP + 6] = t20;
+            work[i * WORK + XUP + 7] = t21;
+            work[i * WORK + XUP + 8] = t22;
+            work[i * WORK + XUP + 9] = rx;
+            work[i * WORK + XUP + 10] = ry;
+            work[i * WORK + XUP + 11] = rz;
+        } else if (code == RX) {
+            s = ax * s;
+            work[i * WORK + XUP + 0] = t00;
+            work[i * WORK + XUP + 1] = t01;
+            work[i * WORK + XUP + 2] = t02;
+            work[i * WORK + XUP + 3] = c * t10 + s * t20;
+            work[i * WORK + XUP + 4] = c * t11 + s * t21;
+            work[i * WORK + XUP + 5] = c * t12 + s * t22;
+            work[i * WORK + XUP + 6] = c * t20 - s * t10;
+            work[i * WORK + XUP + 7] = c * t21 - s * t11;
+            work[i * WORK + XUP + 8] = c * t22 - s * t12;
+            work[i * WORK + XUP + 9] = rx;
+            work[i * WORK + XUP + 10] = ry;
+            work[i * WORK + XUP + 11] = rz;
+        } else if (code == RY) {
+            s = ay * s;
+            work[i * WORK + XUP + 0] = c * t00 - s * t20;
+            work[i * WORK + XUP + 1] = c * t01 - s * t21;
+            work[i * WORK + XUP + 2] = c * t02 - s * t22;
+            work[i * WORK + XUP + 3] = t10;
+            work[i * WORK + XUP + 4] = t11;
+            work[i * WORK + XUP + 5] = t12;
+            work[i * WORK + XUP + 6] = s * t00 + c * t20;
+            work[i * WORK + XUP + 7] = s * t01 + c * t21;
+            work[i * WORK + XUP + 8] = s * t02 + c * t22;
+            work[i * WORK + XUP + 9] = rx;
+            work[i * WORK + XUP + 10] = ry;
+            work[i * WORK + XUP + 11] = rz;
+        } else {
+            C = 1.0 - c;
+            {
+                const double tmp3_ = c + C * ax * ax;
+                const double tmp4_ = c + C * ay * ay;
+                const double tmp5_ = c + C * az * az;
+                j00 = tmp3_;
+                j11 = tmp4_;
+                j22 = tmp5_;
+            }
+            {
+                const double tmp6_ = C * ax * ay;
+                const double tmp7_ = C * ax * az;
+                const double tmp8_ = C * ay * az;
+                cxy = tmp6_;
+                cxz = tmp7_;
+                cyz = tmp8_;
+            }
+            {
+                const double tmp9_ = s * ax;
+                const double tmp10_ = s * ay;
+                const double tmp11_ = s * az;
+                sx = tmp9_;
+                sy = tmp10_;
+                sz = tmp11_;
+            }
+            {
+                const double tmp12_ = cxy + sz;
+                const double tmp13_ = cxz - sy;
+                const double tmp14_ = cxy - sz;
+                j01 = tmp12_;
+                j02 = tmp13_;
+                j10 = tmp14_;
+            }
+            {
+                const double tmp15_ = cyz + sx;
+                const double tmp16_ = cxz + sy;
+                const double tmp17_ = cyz - sx;
+                j12 = tmp15_;
+                j20 = tmp16_;
+                j21 = tmp17_;
+            }
+            work[i * WORK + XUP + 0] = j00 * t00 + j01 * t10 + j02 * t20;
+            work[i * WORK + XUP + 1] = j00 * t01 + j01 * t11 + j02 * t21;
+            work[i * WORK + XUP + 2] = j00 * t02 + j01 * t12 + j02 * t22;
+            work[i * WORK + XUP + 3] = j10 * t00 + j11 * t10 + j12 * t20;
+            work[i * WORK + XUP + 4] = j10 * t01 + j11 * t11 + j12 * t21;
+            work[i * WORK + XUP + 5] = j10 * t02 + j11 * t12 + j12 * t22;
+            work[i * WORK + XUP + 6] = j20 * t00 + j21 * t10 + j22 * t20;
+            work[i * WORK + XUP + 7] = j20 * t01 + j21 * t11 + j22 * t21;
+            work[i * WORK + XUP + 8] = j20 * t02 + j21 * t12 + j22 * t22;
+            work[i * WORK + XUP + 9] = rx;
+            work[i * WORK + XUP + 10] = ry;
+            work[i * WORK + XUP + 11] = rz;
+        }
+    }
+}
+
+/* Run rnea.rnea_kernel of the algorithms, generated from it. */
+static inline void rnea_kernel(const double *K, long rows, const double *q, const double *qd,
+    const double *qdd, double gx, double gy, double gz, const double *f_body, long has_fext,
+    double *tau, double *work)
+{
+    (void)q;
+    const long nq = (long)K[QIDX];
+    long NB, code, i, k, moving, p, static_, weightless;
+    double Ixx, Ixy, Ixz, Iyy, Iyz, Izz, a0, a1, a2, ax, ay, az;
+    double e00, e01, e02, e10, e11, e12, e20, e21, e22, f0, f1, f2;
+    double fe0, fe1, fe2, fe3, fe4, fe5, g0, g1, g2, g3, g4, g5;
+    double hx, hy, hz, j0, j1, j2, k0, k1, k2, l0, l1, l2;
+    double m0, m1, m2, mass, mul, n0, n1, n2, pa0, pa1, pa2, pl0;
+    double pl1, pl2, pv0, pv1, pv2, pw0, pw1, pw2, qddi, qdi, rx, ry;
+    double rz, t, v0, v1, v2, w0, w1, w2, x, zero;
+    NB = rows - 1;
+    zero = 0.0 * gx;
+    moving = 0;
+    for (long j1_ = 0; j1_ < nq; j1_++) {
+        x = qd[j1_];
+        if (x != 0.0) {
+            moving = 1;
+            break;
+        }
+    }
+    static_ = !moving;
+    if (static_) {
+        for (long j2_ = 0; j2_ < nq; j2_++) {
+            x = qdd[j2_];
+            if (x != 0.0) {
+                static_ = 0;
+                break;
+            }
+        }
+    }
+    weightless = !(gx != 0.0 || gy != 0.0 || gz != 0.0);
+    work[0 * WORK + VEL + 0] = zero;
+    work[0 * WORK + VEL + 1] = zero;
+    work[0 * WORK + VEL + 2] = zero;
+    work[0 * WORK + VEL + 3] = zero;
+    work[0 * WORK + VEL + 4] = zero;
+    work[0 * WORK + VEL + 5] = zero;
+    work[0 * WORK + ACC + 0] = zero;
+    work[0 * WORK + ACC + 1] = zero;
+    work[0 * WORK + ACC + 2] = zero;
+    work[0 * WORK + ACC + 3] = -gx;
+    work[0 * WORK + ACC + 4] = -gy;
+    work[0 * WORK + ACC + 5] = -gz;
+    for (k = 0; k < nq; k++) {
+        tau[k] = zero;
+    }
+    for (i = 1; i < NB + 1; i++) {
+        p = (long)K[i * WIDTH + 0];
+        code = (long)K[i * WIDTH + 1];
+        k = (long)K[i * WIDTH + 2];
+        ax = K[i * WIDTH + 3];
+        ay = K[i * WIDTH + 4];
+        az = K[i * WIDTH + 5];
+        mass = K[i * WIDTH + 18];
+        hx = K[i * WIDTH + 19];
+        hy = K[i * WIDTH + 20];
+        hz = K[i * WIDTH + 21];
+        Ixx = K[i * WIDTH + 22];
+        Ixy = K[i * WIDTH + 23];
+        Ixz = K[i * WIDTH + 24];
+        Iyy = K[i * WIDTH + 25];
+        Iyz = K[i * WIDTH + 26];
+        Izz = K[i * WIDTH + 27];
+        mul = K[i * WIDTH + 28];
+        e00 = work[i * WORK + XUP + 0];
+        e01 = work[i * WORK + XUP + 1];
+        e02 = work[i * WORK + XUP + 2];
+        e10 = work[i * WORK + XUP + 3];
+        e11 = work[i * WORK + XUP + 4];
+        e12 = work[i * WORK + XUP + 5];
+        e20 = work[i * WORK + XUP + 6];
+        e21 = work[i * WORK + XUP + 7];
+        e22 = work[i * WORK + XUP + 8];
+        rx = work[i * WORK + XUP + 9];
+        ry = work[i * WORK + XUP + 10];
+        rz = work[i * WORK + XUP + 11];
+        if (static_) {
+            pl0 = work[p * WORK + ACC + 3];
+            pl1 = work[p * WORK + ACC + 4];
+            pl2 = work[p * WORK + ACC + 5];
+            l0 = e00 * pl0 + e01 * pl1 + e02 * pl2;
+            l1 = e10 * pl0 + e11 * pl1 + e12 * pl2;
+            l2 = e20 * pl0 + e21 * pl1 + e22 * pl2;
+            work[i * WORK + ACC + 0] = zero;
+            work[i * WORK + ACC + 1] = zero;
+            work[i * WORK + ACC + 2] = zero;
+            work[i * WORK + ACC + 3] = l0;
+            work[i * WORK + ACC + 4] = l1;
+            work[i * WORK + ACC + 5] = l2;
+            {
+                const double tmp3_ = hy * l2 - hz * l1;
+                const double tmp4_ = hz * l0 - hx * l2;
+                const double tmp5_ = hx * l1 - hy * l0;
+                n0 = tmp3_;
+                n1 = tmp4_;
+                n2 = tmp5_;
+            }
+            {
+                const double tmp6_ = mass * l0;
+                const double tmp7_ = mass * l1;
+                const double tmp8_ = mass * l2;
+                f0 = tmp6_;
+                f1 = tmp7_;
+                f2 = tmp8_;
+            }
+        } else {
+            qddi = (mul == 1.0 ? qdd[k] : mul * qdd[k]);
+            if (p == 0 && weightless) {
+                a0 = a1 = a2 = l0 = l1 = l2 = zero;
+            } else {
+                pa0 = work[p * WORK + ACC + 0];
+                pa1 = work[p * WORK + ACC + 1];
+                pa2 = work[p * WORK + ACC + 2];
+                pl0 = work[p * WORK + ACC + 3];
+                pl1 = work[p * WORK + ACC + 4];
+                pl2 = work[p * WORK + ACC + 5];
+                {
+                    double ret9_[6];
+                    X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, pa0, pa1, pa2, pl0, pl1, pl2, ret9_);
+                    a0 = ret9_[0];
+                    a1 = ret9_[1];
+                    a2 = ret9_[2];
+                    l0 = ret9_[3];
+                    l1 = ret9_[4];
+                    l2 = ret9_[5];
+                }
+            }
+            if (code == PR) {
+                {
+                    const double tmp10_ = l0 + ax * qddi;
+                    const double tmp11_ = l1 + ay * qddi;
+                    const double tmp12_ = l2 + az * qddi;
+                    l0 = tmp10_;
+                    l1 = tmp11_;
+                    l2 = tmp12_;
+                }
+            } else {
+                {
+                    const double tmp13_ = a0 + ax * qddi;
+                    const double tmp14_ = a1 + ay * qddi;
+                    const double tmp15_ = a2 + az * qddi;
+                    a0 = tmp13_;
+                    a1 = tmp14_;
+                    a2 = tmp15_;
+                }
+            }
+            w0 = w1 = w2 = v0 = v1 = v2 = zero;
+            if (moving) {
+                qdi = (mul == 1.0 ? qd[k] : mul * qd[k]);
+                pw0 = work[p * WORK + VEL + 0];
+                pw1 = work[p * WORK + VEL + 1];
+                pw2 = work[p * WORK + VEL + 2];
+                pv0 = work[p * WORK + VEL + 3];
+                pv1 = work[p * WORK + VEL + 4];
+                pv2 = work[p * WORK + VEL + 5];
+                {
+                    double ret16_[6];
+                    X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2, ret16_);
+                    w0 = ret16_[0];
+                    w1 = ret16_[1];
+                    w2 = ret16_[2];
+                    v0 = ret16_[3];
+                    v1 = ret16_[4];
+                    v2 = ret16_[5];
+                }
+                {
+                    const double tmp17_ = ax * qdi;
+                    const double tmp18_ = ay * qdi;
+                    const double tmp19_ = az * qdi;
+                    j0 = tmp17_;
+                    j1 = tmp18_;
+                    j2 = tmp19_;
+                }
+                if (code == PR) {
+                    {
+                        const double tmp20_ = v0 + j0;
+                        const double tmp21_ = v1 + j1;
+                        const double tmp22_ = v2 + j2;
+                        v0 = tmp20_;
+                        v1 = tmp21_;
+                        v2 = tmp22_;
+                    }
+                    l0 += w1 * j2 - w2 * j1;
+                    l1 += w2 * j0 - w0 * j2;
+                    l2 += w0 * j1 - w1 * j0;
+                } else {
+                    {
+                        const double tmp23_ = w0 + j0;
+                        const double tmp24_ = w1 + j1;
+                        const double tmp25_ = w2 + j2;
+                        w0 = tmp23_;
+                        w1 = tmp24_;
+                        w2 = tmp25_;
+                    }
+                    a0 += w1 * j2 - w2 * j1;
+                    a1 += w2 * j0 - w0 * j2;
+                    a2 += w0 * j1 - w1 * j0;
+                    l0 += v1 * j2 - v2 * j1;
+                    l1 += v2 * j0 - v0 * j2;
+                    l2 += v0 * j1 - v1 * j0;
+                }
+                work[i * WORK + VEL + 0] = w0;
+                work[i * WORK + VEL + 1] = w1;
+                work[i * WORK + VEL + 2] = w2;
+                work[i * WORK + VEL + 3] = v0;
+                work[i * WORK + VEL + 4] = v1;
+                work[i * WORK + VEL + 5] = v2;
+            }
+            work[i * WORK + ACC + 0] = a0;
+            work[i * WORK + ACC + 1] = a1;
+            work[i * WORK + ACC + 2] = a2;
+            work[i * WORK + ACC + 3] = l0;
+            work[i * WORK + ACC + 4] = l1;
+            work[i * WORK + ACC + 5] = l2;
+            {
+                double ret26_[6];
+                I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, a0, a1, a2, l0, l1, l2, ret26_);
+                n0 = ret26_[0];
+                n1 = ret26_[1];
+                n2 = ret26_[2];
+                f0 = ret26_[3];
+                f1 = ret26_[4];
+                f2 = ret26_[5];
+            }
+            if (moving) {
+                {
+                    double ret27_[6];
+                    I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, w0, w1, w2, v0, v1, v2, ret27_);
+                    m0 = ret27_[0];
+                    m1 = ret27_[1];
+                    m2 = ret27_[2];
+                    k0 = ret27_[3];
+                    k1 = ret27_[4];
+                    k2 = ret27_[5];
+                }
+                n0 += w1 * m2 - w2 * m1 + (v1 * k2 - v2 * k1);
+                n1 += w2 * m0 - w0 * m2 + (v2 * k0 - v0 * k2);
+                n2 += w0 * m1 - w1 * m0 + (v0 * k1 - v1 * k0);
+                f0 += w1 * k2 - w2 * k1;
+                f1 += w2 * k0 - w0 * k2;
+                f2 += w0 * k1 - w1 * k0;
+            }
+        }
+        if (has_fext) {
+            fe0 = f_body[i * 6 + 0];
+            fe1 = f_body[i * 6 + 1];
+            fe2 = f_body[i * 6 + 2];
+            fe3 = f_body[i * 6 + 3];
+            fe4 = f_body[i * 6 + 4];
+            fe5 = f_body[i * 6 + 5];
+            {
+                const double tmp28_ = n0 - fe0;
+                const double tmp29_ = n1 - fe1;
+                const double tmp30_ = n2 - fe2;
+                n0 = tmp28_;
+                n1 = tmp29_;
+                n2 = tmp30_;
+            }
+            {
+                const double tmp31_ = f0 - fe3;
+                const double tmp32_ = f1 - fe4;
+                const double tmp33_ = f2 - fe5;
+                f0 = tmp31_;
+                f1 = tmp32_;
+                f2 = tmp33_;
+            }
+        }
+        work[i * WORK + FRC + 0] = n0;
+        work[i * WORK + FRC + 1] = n1;
+        work[i * WORK + FRC + 2] = n2;
+        work[i * WORK + FRC + 3] = f0;
+        work[i * WORK + FRC + 4] = f1;
+        work[i * WORK + FRC + 5] = f2;
+    }
+    for (i = NB; i > 0; i--) {
+        p = (long)K[i * WIDTH + 0];
+        code = (long)K[i * WIDTH + 1];
+        k = (long)K[i * WIDTH + 2];
+        ax = K[i * WIDTH + 3];
+        ay = K[i * WIDTH + 4];
+        az = K[i * WIDTH + 5];
+        mul = K[i * WIDTH + 28];
+        n0 = work[i * WORK + FRC + 0];
+        n1 = work[i * WORK + FRC + 1];
+        n2 = work[i * WORK + FRC + 2];
+        f0 = work[i * WORK + FRC + 3];
+        f1 = work[i * WORK + FRC + 4];
+        f2 = work[i * WORK + FRC + 5];
+        if (code == PR) {
+            t = ax * f0 + ay * f1 + az * f2;
+        } else {
+            t = ax * n0 + ay * n1 + az * n2;
+        }
+        tau[k] = tau[k] + (mul == 1.0 ? t : mul * t);
+        if (p == 0) {
+            continue;
+        }
+        e00 = work[i * WORK + XUP + 0];
+        e01 = work[i * WORK + XUP + 1];
+        e02 = work[i * WORK + XUP + 2];
+        e10 = work[i * WORK + XUP + 3];
+        e11 = work[i * WORK + XUP + 4];
+        e12 = work[i * WORK + XUP + 5];
+        e20 = work[i * WORK + XUP + 6];
+        e21 = work[i * WORK + XUP + 7];
+        e22 = work[i * WORK + XUP + 8];
+        rx = work[i * WORK + XUP + 9];
+        ry = work[i * WORK + XUP + 10];
+        rz = work[i * WORK + XUP + 11];
+        {
+            double ret34_[6];
+            XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, n0, n1, n2, f0, f1, f2, ret34_);
+            g0 = ret34_[0];
+            g1 = ret34_[1];
+            g2 = ret34_[2];
+            g3 = ret34_[3];
+            g4 = ret34_[4];
+            g5 = ret34_[5];
+        }
+        work[p * WORK + FRC + 0] += g0;
+        work[p * WORK + FRC + 1] += g1;
+        work[p * WORK + FRC + 2] += g2;
+        work[p * WORK + FRC + 3] += g3;
+        work[p * WORK + FRC + 4] += g4;
+        work[p * WORK + FRC + 5] += g5;
+    }
+}
+
+/* Run crba.crba_kernel of the algorithms, generated from it. */
+static inline void crba_kernel(const double *K, long rows, double *work, double *H)
+{
+    const long nq = (long)K[QIDX];
+    long NB, a, cj, code, i, j, k, kj, n, p, pj;
+    double F0, F1, F2, F3, F4, F5, Hii, Hij, Ixx, Ixy, Ixz, Iyy;
+    double Iyz, Izz, ax, ay, az, bx, by, bz, chx, chy, chz, cm;
+    double cxx, cxy, cxz, cyy, cyz, czz, d0, d1, d2, d3, d4, d5;
+    double d6, d7, d8, d9, e00, e01, e02, e10, e11, e12, e20, e21;
+    double e22, hx, hy, hz, mass, mj, mul, rx, ry, rz;
+    NB = rows - 1;
+    for (a = 0; a < nq * nq; a++) {
+        H[a] = 0.0;
+    }
+    for (i = 1; i < NB + 1; i++) {
+        mass = K[i * WIDTH + 18];
+        hx = K[i * WIDTH + 19];
+        hy = K[i * WIDTH + 20];
+        hz = K[i * WIDTH + 21];
+        Ixx = K[i * WIDTH + 22];
+        Ixy = K[i * WIDTH + 23];
+        Ixz = K[i * WIDTH + 24];
+        Iyy = K[i * WIDTH + 25];
+        Iyz = K[i * WIDTH + 26];
+        Izz = K[i * WIDTH + 27];
+        work[i * WORK + ICS + 0] = mass;
+        work[i * WORK + ICS + 1] = hx;
+        work[i * WORK + ICS + 2] = hy;
+        work[i * WORK + ICS + 3] = hz;
+        work[i * WORK + ICS + 4] = Ixx;
+        work[i * WORK + ICS + 5] = Ixy;
+        work[i * WORK + ICS + 6] = Ixz;
+        work[i * WORK + ICS + 7] = Iyy;
+        work[i * WORK + ICS + 8] = Iyz;
+        work[i * WORK + ICS + 9] = Izz;
+    }
+    for (i = NB; i > 0; i--) {
+        p = (long)K[i * WIDTH + 0];
+        if (p == 0) {
+            continue;
+        }
+        e00 = work[i * WORK + XUP + 0];
+        e01 = work[i * WORK + XUP + 1];
+        e02 = work[i * WORK + XUP + 2];
+        e10 = work[i * WORK + XUP + 3];
+        e11 = work[i * WORK + XUP + 4];
+        e12 = work[i * WORK + XUP + 5];
+        e20 = work[i * WORK + XUP + 6];
+        e21 = work[i * WORK + XUP + 7];
+        e22 = work[i * WORK + XUP + 8];
+        rx = work[i * WORK + XUP + 9];
+        ry = work[i * WORK + XUP + 10];
+        rz = work[i * WORK + XUP + 11];
+        cm = work[i * WORK + ICS + 0];
+        chx = work[i * WORK + ICS + 1];
+        chy = work[i * WORK + ICS + 2];
+        chz = work[i * WORK + ICS + 3];
+        cxx = work[i * WORK + ICS + 4];
+        cxy = work[i * WORK + ICS + 5];
+        cxz = work[i * WORK + ICS + 6];
+        cyy = work[i * WORK + ICS + 7];
+        cyz = work[i * WORK + ICS + 8];
+        czz = work[i * WORK + ICS + 9];
+        {
+            double ret1_[10];
+            XT_I_X(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz, ret1_);
+            d0 = ret1_[0];
+            d1 = ret1_[1];
+            d2 = ret1_[2];
+            d3 = ret1_[3];
+            d4 = ret1_[4];
+            d5 = ret1_[5];
+            d6 = ret1_[6];
+            d7 = ret1_[7];
+            d8 = ret1_[8];
+            d9 = ret1_[9];
+        }
+        work[p * WORK + ICS + 0] += d0;
+        work[p * WORK + ICS + 1] += d1;
+        work[p * WORK + ICS + 2] += d2;
+        work[p * WORK + ICS + 3] += d3;
+        work[p * WORK + ICS + 4] += d4;
+        work[p * WORK + ICS + 5] += d5;
+        work[p * WORK + ICS + 6] += d6;
+        work[p * WORK + ICS + 7] += d7;
+        work[p * WORK + ICS + 8] += d8;
+        work[p * WORK + ICS + 9] += d9;
+    }
+    n = (long)K[0 * WIDTH + 2];
+    for (i = 1; i < NB + 1; i++) {
+        p = (long)K[i * WIDTH + 0];
+        code = (long)K[i * WIDTH + 1];
+        k = (long)K[i * WIDTH + 2];
+        ax = K[i * WIDTH + 3];
+        ay = K[i * WIDTH + 4];
+        az = K[i * WIDTH + 5];
+        mul = K[i * WIDTH + 28];
+        cm = work[i * WORK + ICS + 0];
+        chx = work[i * WORK + ICS + 1];
+        chy = work[i * WORK + ICS + 2];
+        chz = work[i * WORK + ICS + 3];
+        cxx = work[i * WORK + ICS + 4];
+        cxy = work[i * WORK + ICS + 5];
+        cxz = work[i * WORK + ICS + 6];
+        cyy = work[i * WORK + ICS + 7];
+        cyz = work[i * WORK + ICS + 8];
+        czz = work[i * WORK + ICS + 9];
+        if (code == PR) {
+            {
+                double ret2_[6];
+                I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz, 0.0, 0.0, 0.0, ax, ay, az, ret2_);
+                F0 = ret2_[0];
+                F1 = ret2_[1];
+                F2 = ret2_[2];
+                F3 = ret2_[3];
+                F4 = ret2_[4];
+                F5 = ret2_[5];
+            }
+            Hii = ax * F3 + ay * F4 + az * F5;
+        } else {
+            {
+                double ret3_[6];
+                I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz, ax, ay, az, 0.0, 0.0, 0.0, ret3_);
+                F0 = ret3_[0];
+                F1 = ret3_[1];
+                F2 = ret3_[2];
+                F3 = ret3_[3];
+                F4 = ret3_[4];
+                F5 = ret3_[5];
+            }
+            Hii = ax * F0 + ay * F1 + az * F2;
+        }
+        H[k * n + k] = H[k * n + k] + mul * mul * Hii;
+        j = i;
+        pj = p;
+        while (pj != 0) {
+            e00 = work[j * WORK + XUP + 0];
+            e01 = work[j * WORK + XUP + 1];
+            e02 = work[j * WORK + XUP + 2];
+            e10 = work[j * WORK + XUP + 3];
+            e11 = work[j * WORK + XUP + 4];
+            e12 = work[j * WORK + XUP + 5];
+            e20 = work[j * WORK + XUP + 6];
+            e21 = work[j * WORK + XUP + 7];
+            e22 = work[j * WORK + XUP + 8];
+            rx = work[j * WORK + XUP + 9];
+            ry = work[j * WORK + XUP + 10];
+            rz = work[j * WORK + XUP + 11];
+            {
+                double ret4_[6];
+                XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, F0, F1, F2, F3, F4, F5, ret4_);
+                F0 = ret4_[0];
+                F1 = ret4_[1];
+                F2 = ret4_[2];
+                F3 = ret4_[3];
+                F4 = ret4_[4];
+                F5 = ret4_[5];
+            }
+            j = pj;
+            pj = (long)K[j * WIDTH + 0];
+            cj = (long)K[j * WIDTH + 1];
+            kj = (long)K[j * WIDTH + 2];
+            bx = K[j * WIDTH + 3];
+            by = K[j * WIDTH + 4];
+            bz = K[j * WIDTH + 5];
+            mj = K[j * WIDTH + 28];
+            if (cj == PR) {
+                Hij = mul * mj * (bx * F3 + by * F4 + bz * F5);
+            } else {
+                Hij = mul * mj * (bx * F0 + by * F1 + bz * F2);
+            }
+            H[k * n + kj] = H[k * n + kj] + Hij;
+            H[kj * n + k] = H[kj * n + k] + Hij;
+        }
+    }
+}
+
+/* Run momentum.momentum_kernel of the algorithms, generated from it. */
+static inline void momentum_kernel(const double *K, long rows, const double *q, const double *qd,
+    double *mom, double *ctq, double *work)
+{
+    (void)q;
+    const long nq = (long)K[QIDX];
+    long NB, code, i, k, p;
+    double Ixx, Ixy, Ixz, Iyy, Iyz, Izz, ax, ay, az, c, c0, c1;
+    double c2, e00, e01, e02, e10, e11, e12, e20, e21, e22, f0, f1;
+    double f2, g0, g1, g2, g3, g4, g5, hx, hy, hz, k0, k1;
+    double k2, m0, m1, m2, mass, mul, n0, n1, n2, pv0, pv1, pv2;
+    double pw0, pw1, pw2, qdi, rx, ry, rz, t, v0, v1, v2, w0;
+    double w1, w2;
+    NB = rows - 1;
+    work[0 * WORK + VEL + 0] = 0.0;
+    work[0 * WORK + VEL + 1] = 0.0;
+    work[0 * WORK + VEL + 2] = 0.0;
+    work[0 * WORK + VEL + 3] = 0.0;
+    work[0 * WORK + VEL + 4] = 0.0;
+    work[0 * WORK + VEL + 5] = 0.0;
+    for (k = 0; k < nq; k++) {
+        mom[k] = 0.0;
+        ctq[k] = 0.0;
+    }
+    for (i = 1; i < NB + 1; i++) {
+        p = (long)K[i * WIDTH + 0];
+        code = (long)K[i * WIDTH + 1];
+        k = (long)K[i * WIDTH + 2];
+        ax = K[i * WIDTH + 3];
+        ay = K[i * WIDTH + 4];
+        az = K[i * WIDTH + 5];
+        mass = K[i * WIDTH + 18];
+        hx = K[i * WIDTH + 19];
+        hy = K[i * WIDTH + 20];
+        hz = K[i * WIDTH + 21];
+        Ixx = K[i * WIDTH + 22];
+        Ixy = K[i * WIDTH + 23];
+        Ixz = K[i * WIDTH + 24];
+        Iyy = K[i * WIDTH + 25];
+        Iyz = K[i * WIDTH + 26];
+        Izz = K[i * WIDTH + 27];
+        mul = K[i * WIDTH + 28];
+        e00 = work[i * WORK + XUP + 0];
+        e01 = work[i * WORK + XUP + 1];
+        e02 = work[i * WORK + XUP + 2];
+        e10 = work[i * WORK + XUP + 3];
+        e11 = work[i * WORK + XUP + 4];
+        e12 = work[i * WORK + XUP + 5];
+        e20 = work[i * WORK + XUP + 6];
+        e21 = work[i * WORK + XUP + 7];
+        e22 = work[i * WORK + XUP + 8];
+        rx = work[i * WORK + XUP + 9];
+        ry = work[i * WORK + XUP + 10];
+        rz = work[i * WORK + XUP + 11];
+        qdi = (mul == 1.0 ? qd[k] : mul * qd[k]);
+        pw0 = work[p * WORK + VEL + 0];
+        pw1 = work[p * WORK + VEL + 1];
+        pw2 = work[p * WORK + VEL + 2];
+        pv0 = work[p * WORK + VEL + 3];
+        pv1 = work[p * WORK + VEL + 4];
+        pv2 = work[p * WORK + VEL + 5];
+        {
+            double ret1_[6];
+            X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2, ret1_);
+            w0 = ret1_[0];
+            w1 = ret1_[1];
+            w2 = ret1_[2];
+            v0 = ret1_[3];
+            v1 = ret1_[4];
+            v2 = ret1_[5];
+        }
+        if (code == PR) {
+            {
+                const double tmp2_ = v0 + ax * qdi;
+                const double tmp3_ = v1 + ay * qdi;
+                const double tmp4_ = v2 + az * qdi;
+                v0 = tmp2_;
+                v1 = tmp3_;
+                v2 = tmp4_;
+            }
+        } else {
+            {
+                const double tmp5_ = w0 + ax * qdi;
+                const double tmp6_ = w1 + ay * qdi;
+                const double tmp7_ = w2 + az * qdi;
+                w0 = tmp5_;
+                w1 = tmp6_;
+                w2 = tmp7_;
+            }
+        }
+        work[i * WORK + VEL + 0] = w0;
+        work[i * WORK + VEL + 1] = w1;
+        work[i * WORK + VEL + 2] = w2;
+        work[i * WORK + VEL + 3] = v0;
+        work[i * WORK + VEL + 4] = v1;
+        work[i * WORK + VEL + 5] = v2;
+        {
+            double ret8_[6];
+            I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, w0, w1, w2, v0, v1, v2, ret8_);
+            m0 = ret8_[0];
+            m1 = ret8_[1];
+            m2 = ret8_[2];
+            k0 = ret8_[3];
+            k1 = ret8_[4];
+            k2 = ret8_[5];
+        }
+        work[i * WORK + FRC + 0] = m0;
+        work[i * WORK + FRC + 1] = m1;
+        work[i * WORK + FRC + 2] = m2;
+        work[i * WORK + FRC + 3] = k0;
+        work[i * WORK + FRC + 4] = k1;
+        work[i * WORK + FRC + 5] = k2;
+    }
+    for (i = NB; i > 0; i--) {
+        p = (long)K[i * WIDTH + 0];
+        code = (long)K[i * WIDTH + 1];
+        k = (long)K[i * WIDTH + 2];
+        ax = K[i * WIDTH + 3];
+        ay = K[i * WIDTH + 4];
+        az = K[i * WIDTH + 5];
+        mul = K[i * WIDTH + 28];
+        n0 = work[i * WORK + FRC + 0];
+        n1 = work[i * WORK + FRC + 1];
+        n2 = work[i * WORK + FRC + 2];
+        f0 = work[i * WORK + FRC + 3];
+        f1 = work[i * WORK + FRC + 4];
+        f2 = work[i * WORK + FRC + 5];
+        w0 = work[i * WORK + VEL + 0];
+        w1 = work[i * WORK + VEL + 1];
+        w2 = work[i * WORK + VEL + 2];
+        v0 = work[i * WORK + VEL + 3];
+        v1 = work[i * WORK + VEL + 4];
+        v2 = work[i * WORK + VEL + 5];
+        {
+            const double tmp9_ = w1 * az - w2 * ay;
+            const double tmp10_ = w2 * ax - w0 * az;
+            const double tmp11_ = w0 * ay - w1 * ax;
+            c0 = tmp9_;
+            c1 = tmp10_;
+            c2 = tmp11_;
+        }
+        if (code == PR) {
+            t = ax * f0 + ay * f1 + az * f2;
+            c = c0 * f0 + c1 * f1 + c2 * f2;
+        } else {
+            t = ax * n0 + ay * n1 + az * n2;
+            c = c0 * n0 + c1 * n1 + c2 * n2 + (v1 * az - v2 * ay) * f0 + (v2 * ax - v0 * az) * f1 + (v0 * ay - v1 * ax) * f2;
+        }
+        mom[k] = mom[k] + (mul == 1.0 ? t : mul * t);
+        ctq[k] = ctq[k] + (mul == 1.0 ? c : mul * c);
+        if (p == 0) {
+            continue;
+        }
+        e00 = work[i * WORK + XUP + 0];
+        e01 = work[i * WORK + XUP + 1];
+        e02 = work[i * WORK + XUP + 2];
+        e10 = work[i * WORK + XUP + 3];
+        e11 = work[i * WORK + XUP + 4];
+        e12 = work[i * WORK + XUP + 5];
+        e20 = work[i * WORK + XUP + 6];
+        e21 = work[i * WORK + XUP + 7];
+        e22 = work[i * WORK + XUP + 8];
+        rx = work[i * WORK + XUP + 9];
+        ry = work[i * WORK + XUP + 10];
+        rz = work[i * WORK + XUP + 11];
+        {
+            double ret12_[6];
+            XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, n0, n1, n2, f0, f1, f2, ret12_);
+            g0 = ret12_[0];
+            g1 = ret12_[1];
+            g2 = ret12_[2];
+            g3 = ret12_[3];
+            g4 = ret12_[4];
+            g5 = ret12_[5];
+        }
+        work[p * WORK + FRC + 0] += g0;
+        work[p * WORK + FRC + 1] += g1;
+        work[p * WORK + FRC + 2] += g2;
+        work[p * WORK + FRC + 3] += g3;
+        work[p * WORK + FRC + 4] += g4;
+        work[p * WORK + FRC + 5] += g5;
+    }
+}
+
+#endif  /* SPATIAL_DYNAMICS_KERNELS_GENERATED_H */

@@ -1,0 +1,113 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Compiled backend: the C extension ``_compiled`` built with the package, and its batches.
+
+``setup.py`` compiles ``_compiled.c`` around ``_kernels_generated.h``, the kernels that
+:mod:`.codegen` prints from :mod:`spatial_dynamics.algorithms`: the same statements in the
+same order, without fused multiply-adds, so the results agree with the Python backends to a
+few ulps (to the bit on the same libm). Nothing is compiled at run time. A build without a C
+compiler installs without the extension: then :data:`ext` is ``None``, :data:`FAILURE` says
+why, importing warns once, and ``backend='auto'`` runs on numpy.
+
+The single-state entries are called by :mod:`spatial_dynamics.backends` directly; this module
+prepares the batches: one float64 C-contiguous copy of each input, the external forces as one
+(1 or N, NB + 1, 6) table, and the number of threads.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+from typing import Optional
+import warnings
+
+import numpy as np
+
+#: The interface of ``_compiled.c`` this module speaks (its ``API``).
+API = 1
+
+try:
+    ext = importlib.import_module(__package__ + '._compiled')
+    FAILURE: Optional[str] = None
+    if getattr(ext, 'API', None) != API:      # an old build beside newer sources
+        ext, FAILURE = None, (f'{ext.__file__} is a stale build (API {getattr(ext, "API", 0)}'
+                              f', not {API}): build the package again')
+except ImportError as err:                 # built without a C compiler
+    ext = None
+    FAILURE = (f'no module {err.name}: the package was built without them'
+               if isinstance(err, ModuleNotFoundError) else f'{type(err).__name__}: {err}')
+if ext is None:
+    warnings.warn('spatial_dynamics was built without its compiled kernels; it runs on plain '
+                  'Python (10-100x slower per call). Install a C compiler and the Python headers '
+                  '(Debian/Ubuntu: build-essential python3-dev) and build it again. '
+                  f'({FAILURE})', RuntimeWarning, stacklevel=2)
+
+#: Threads a batch may use: the CPUs this process may run on.
+THREADS = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else (
+    os.cpu_count() or 1)
+
+
+def kernels(table: np.ndarray):
+    """Return the extension's copy of a model's table (:mod:`.layout`), or ``None``."""
+    return None if ext is None else ext.Kernels(table)
+
+
+def _rows(x: np.ndarray, N: int, n: int) -> np.ndarray:
+    return np.ascontiguousarray(x.reshape(N, n), dtype=np.float64)
+
+
+def rnea(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
+         f_body: dict) -> np.ndarray:
+    """τ from validated float64 arrays of one broadcast shape (..., n) (any strides).
+
+    ``gravity`` (gx, gy, gz) floats, m/s² in root coordinates; ``f_body`` maps a body index to
+    its external force ``[n; f]`` in body coordinates, shape (6,) or broadcastable to
+    (..., 6). Returns τ of shape (..., n), float64.
+    """
+    n, rows = lay.n, lay.table.shape[0]
+    batch = q.shape[:-1]
+    N = int(np.prod(batch, dtype=np.intp))
+    fext = None
+    if f_body:
+        shared = all(np.ndim(f) <= 1 for f in f_body.values())
+        fext = np.zeros(((1,) if shared else batch) + (rows, 6))
+        for b, f in f_body.items():
+            fext[..., b, :] = f
+    tau = np.empty((N, n))
+    ext.rnea_batch(lay.kernels, N, _rows(q, N, n), _rows(qd, N, n), _rows(qdd, N, n), gravity,
+                   fext, tau, THREADS)
+    return tau.reshape(batch + (n,))
+
+
+def f_body_table(lay, f_body: dict) -> np.ndarray:
+    """One state's external forces ``{body: (6,)}`` as the (NB + 1, 6) table of the kernels."""
+    fext = np.zeros((lay.table.shape[0], 6))
+    for b, f in f_body.items():
+        fext[b] = f
+    return fext
+
+
+def mass_matrix(lay, q: np.ndarray) -> np.ndarray:
+    """M(q) of shape (..., n, n) from a validated float64 array ``q`` of shape (..., n)."""
+    n = lay.n
+    batch = q.shape[:-1]
+    N = int(np.prod(batch, dtype=np.intp))
+    H = np.empty((N, n, n))
+    ext.mass_matrix_batch(lay.kernels, N, _rows(q, N, n), H, THREADS)
+    return H.reshape(batch + (n, n))
+
+
+def momentum(lay, q: np.ndarray, qd: np.ndarray) -> tuple:
+    """``(M q̇, Cᵀ q̇)``, each of shape (..., n), from validated float64 arrays (..., n)."""
+    n = lay.n
+    N = int(np.prod(q.shape[:-1], dtype=np.intp))
+    mom, ctq = np.empty((N, n)), np.empty((N, n))
+    ext.momentum_batch(lay.kernels, N, _rows(q, N, n), _rows(qd, N, n), mom, ctq, THREADS)
+    return mom.reshape(q.shape), ctq.reshape(q.shape)
+
+
+def describe() -> str:
+    """``'compiled (C extension, 2 threads)'``, or why there is no extension."""
+    if ext is None:
+        return f'numpy (compiled kernels not built: {FAILURE})'
+    return f'compiled (C extension, {THREADS} threads)'

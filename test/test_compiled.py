@@ -1,0 +1,256 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The compiled extension's one door: every argument form, the terms, batches over threads.
+
+- compiled == numpy backend (plain Python floats for one state) to 1e-12 of the largest value
+  on the example-robot-data robots, for q, qd, qdd given as float64 arrays (contiguous and
+  strided), lists, tuples, Python ints and integer arrays, gravity as the default, a tuple,
+  a list of ints, a float64 or integer array, f_ext on one link or several, and the terms
+  gravity_torque, bias_torque, mass_matrix and generalized_momentum;
+- each of those forms reaches the extension's single-state entry (it returns an answer, not
+  None) — no form falls back to a slower path;
+- a batch split over threads (the batch entries release the GIL) equals the single calls
+  state by state, bit for bit (to 1e-12 with external wrenches), also for batch sizes that
+  do not divide evenly and for several Python threads calling at once.
+"""
+
+import functools
+import threading
+
+from conftest import random_state, robot_urdf_path
+import numpy as np
+import pytest
+import spatial_dynamics as sd
+from spatial_dynamics.backends import compiled, layout
+
+ROBOTS = ['ur5', 'panda', 'talos', 'solo12']
+TOL = 1e-12
+
+
+@pytest.fixture(autouse=True)
+def ext():
+    """Return the extension (built with the package: its absence is a failure)."""
+    assert compiled.ext is not None, compiled.FAILURE
+    return compiled.ext
+
+
+@functools.lru_cache(maxsize=None)
+def robot(name):
+    return sd.Model.from_urdf(robot_urdf_path(name))
+
+
+def close(a, b):
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape and a.dtype == b.dtype == np.float64
+    return float(np.abs(a - b).max(initial=0.0)) <= TOL * max(1.0, np.abs(b).max(initial=0.0))
+
+
+def forms(x):
+    """Return the forms users pass one joint vector in: name -> value."""
+    wide = np.repeat(x, 2)[::2]
+    assert not wide.flags.c_contiguous
+    return {'ndarray': x, 'strided': wide, 'list': x.tolist(), 'tuple': tuple(x.tolist()),
+            'readonly': np.frombuffer(x.tobytes())}
+
+
+def integer_forms(n):
+    """Return integer joint vectors: Python ints in a list and a tuple, integer arrays."""
+    k = np.arange(n) % 3 - 1
+    return {'int list': k.tolist(), 'int tuple': tuple(k.tolist()), 'int64': k,
+            'int32': k.astype(np.int32), 'bool': k > 0}
+
+
+GRAVITY_FORMS = {'default': None, 'tuple': (0.3, -0.2, -9.81), 'list of ints': [0, 0, -10],
+                 'ndarray': np.array([0.3, -0.2, -9.81]), 'int array': np.array([0, 1, -9]),
+                 'list of numpy floats': [np.float64(0.0), np.float64(0.5), np.float64(-9.8)]}
+
+
+def gravity_kw(g):
+    return {} if g is None else {'gravity': g}
+
+
+@pytest.mark.parametrize('name', ROBOTS)
+def test_every_argument_form_gives_the_python_backends_answer(name, rng):
+    model = robot(name)
+    n = model.nq
+    q, qd, qdd = random_state(rng, (), n)
+    kernels = layout.of(model).kernels
+    cases = list(zip(forms(q).values(), forms(qd).values(), forms(qdd).values()))
+    cases += [(x, x, x) for x in integer_forms(n).values()]
+    cases += [(q.tolist(), qd, tuple(qdd.tolist())), (q, [0] * n, (0,) * n)]
+    for args in cases:
+        for g in GRAVITY_FORMS.values():
+            expected = sd.rnea(model, *args, backend='numpy', **gravity_kw(g))
+            assert close(sd.rnea(model, *args, **gravity_kw(g)), expected)
+            assert close(sd.rnea(model, *args, backend='compiled', **gravity_kw(g)), expected)
+            # the extension's own entry answers every one of these forms (no fallback)
+            g3 = sd.GRAVITY if g is None else g
+            assert close(compiled.ext.rnea(kernels, *args, g3), expected)
+
+
+@pytest.mark.parametrize('name', ROBOTS)
+def test_external_wrenches_on_one_state(name, rng):
+    model = robot(name)
+    n = model.nq
+    links = sorted(model.frames)
+    q, qd, qdd = random_state(rng, (), n)
+    for k in (1, 3):
+        f_ext = {links[j]: rng.normal(0.0, 10.0, 6)
+                 for j in rng.choice(len(links), size=k, replace=False)}
+        for args in ((q, qd, qdd), (q.tolist(), tuple(qd.tolist()), qdd.tolist())):
+            as_lists = {link: f.tolist() for link, f in f_ext.items()}
+            for wrenches in (f_ext, as_lists):
+                expected = sd.rnea(model, *args, f_ext=wrenches, backend='numpy')
+                assert close(sd.rnea(model, *args, f_ext=wrenches), expected)
+                assert close(sd.rnea(model, *args, f_ext=wrenches, backend='compiled'),
+                             expected)
+        assert not close(sd.rnea(model, q, qd, qdd, f_ext=f_ext), sd.rnea(model, q, qd, qdd))
+
+
+@pytest.mark.parametrize('name', ROBOTS)
+def test_the_terms_take_every_form_too(name, rng):
+    model = robot(name)
+    n = model.nq
+    q, qd, _ = random_state(rng, (), n)
+    kernels = layout.of(model).kernels
+    for fq, fd in list(zip(forms(q).values(), forms(qd).values())) + [
+            (x, x) for x in integer_forms(n).values()]:
+        for g in GRAVITY_FORMS.values():
+            assert close(sd.gravity_torque(model, fq, **gravity_kw(g)),
+                         sd.gravity_torque(model, fq, backend='numpy', **gravity_kw(g)))
+            assert close(sd.bias_torque(model, fq, fd, **gravity_kw(g)),
+                         sd.bias_torque(model, fq, fd, backend='numpy', **gravity_kw(g)))
+        g3 = (0.0, 0.0, -9.81)
+        assert compiled.ext.gravity_torque(kernels, fq, g3) is not None
+        assert compiled.ext.bias_torque(kernels, fq, fd, g3) is not None
+        M = sd.mass_matrix(model, fq)
+        assert M.shape == (n, n) and close(M, sd.mass_matrix(model, fq, backend='numpy'))
+        assert compiled.ext.mass_matrix(kernels, fq) is not None
+        p, ctq = sd.generalized_momentum(model, fq, fd)
+        p_ref, ctq_ref = sd.generalized_momentum(model, fq, fd, backend='numpy')
+        assert close(p, p_ref) and close(ctq, ctq_ref)
+        assert compiled.ext.generalized_momentum(kernels, fq, fd) is not None
+
+
+@pytest.mark.parametrize('N', [1, 15, 16, 33, 1001, 2400])
+@pytest.mark.parametrize('name', ['ur5', 'talos'])
+def test_a_batch_over_threads_equals_the_single_calls(name, N, rng):
+    """Batches split into slices over threads (4096 body-states at least each), bit for bit."""
+    model = robot(name)
+    n = model.nq
+    Q, QD, QDD = random_state(rng, (N,), n)
+    QD[::4] = 0.0
+    g = (0.4, -0.3, -9.7)
+    f_var = {sorted(model.frames)[-1]: rng.normal(0.0, 5.0, (N, 6))}
+    tau = sd.rnea(model, Q, QD, QDD, gravity=g)
+    tau_f = sd.rnea(model, Q, QD, QDD, gravity=g, f_ext=f_var)
+    H = sd.mass_matrix(model, Q)
+    P, CTQ = sd.generalized_momentum(model, Q, QD)
+    picks = range(N) if N <= 33 else range(0, N, 37)
+    for s in picks:
+        np.testing.assert_array_equal(tau[s], sd.rnea(model, Q[s], QD[s], QDD[s], gravity=g))
+        one = {link: f[s] for link, f in f_var.items()}
+        # (the link-to-body transform of a batch of wrenches is one numpy matmul: its sums
+        # may round differently from the single wrench's)
+        assert close(tau_f[s], sd.rnea(model, Q[s], QD[s], QDD[s], gravity=g, f_ext=one))
+        np.testing.assert_array_equal(H[s], sd.mass_matrix(model, Q[s]))
+        p, ctq = sd.generalized_momentum(model, Q[s], QD[s])
+        np.testing.assert_array_equal(P[s], p)
+        np.testing.assert_array_equal(CTQ[s], ctq)
+
+
+def test_the_thread_count_does_not_change_a_bit(ext, rng):
+    """The same batch on 1, 2, 3 and 64 threads (slices of other sizes), and under load."""
+    model = robot('talos')
+    n, lay = model.nq, layout.of(model)
+    N = 777
+    Q, QD, QDD = random_state(rng, (N,), n)
+    results = []
+    for threads in (1, 2, 3, 64):
+        tau = np.empty((N, n))
+        ext.rnea_batch(lay.kernels, N, Q, QD, QDD, (0.0, 0.0, -9.81), None, tau, threads)
+        results.append(tau)
+    for tau in results[1:]:
+        np.testing.assert_array_equal(tau, results[0])
+    np.testing.assert_array_equal(results[0], sd.rnea(model, Q, QD, QDD, backend='numpy'))
+
+    def call(out, k):
+        out[k] = sd.rnea(model, Q, QD, QDD)
+    out = [None] * 4
+    workers = [threading.Thread(target=call, args=(out, k)) for k in range(4)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    for tau in out:
+        np.testing.assert_array_equal(tau, results[0])
+
+
+def test_batch_entries_check_their_buffers(ext):
+    model = robot('ur5')
+    n, lay = model.nq, layout.of(model)
+    Q = np.zeros((4, n))
+    with pytest.raises(ValueError, match='q must hold 24 numbers'):
+        ext.rnea_batch(lay.kernels, 4, Q[:3], Q, Q, (0, 0, -9.81), None, np.empty((4, n)), 2)
+    with pytest.raises(TypeError, match='tau must be C-contiguous float64'):
+        ext.rnea_batch(lay.kernels, 4, Q, Q, Q, (0, 0, -9.81), None, np.empty((4, n), 'f4'), 2)
+    with pytest.raises(ValueError, match='fext must hold'):
+        ext.rnea_batch(lay.kernels, 4, Q, Q, Q, (0, 0, -9.81), np.zeros(5), np.empty((4, n)), 2)
+    with pytest.raises(ValueError, match='read-only'):
+        frozen = np.empty((4, n))
+        frozen.flags.writeable = False
+        ext.rnea_batch(lay.kernels, 4, Q, Q, Q, (0, 0, -9.81), None, frozen, 2)
+    with pytest.raises(TypeError, match='expected Kernels'):
+        ext.rnea(lay.table, Q[0], Q[0], Q[0], (0, 0, -9.81))
+
+
+def test_a_table_that_is_not_a_tree_is_refused(ext):
+    """The table's integer columns index the arrays: a broken one never reaches the kernels."""
+    table = layout.of(robot('ur5')).table.copy()
+    ext.Kernels(table)
+    for column, value in ((layout.COLUMN['parent'], 5.0), (layout.COLUMN['qidx'], 6.0),
+                          (layout.COLUMN['code'], 7.0), (layout.COLUMN['qidx'], 0.5)):
+        bad = table.copy()
+        bad[3, column] = value
+        with pytest.raises(ValueError, match='not a tree'):
+            ext.Kernels(bad)
+    with pytest.raises(ValueError, match='shape'):
+        ext.Kernels(table[:, :5].copy())
+
+
+def test_the_doors_are_the_functions_entered_in_c(ext, rng):
+    """sd.rnea and the terms are entered in C; every other call reaches the Python function."""
+    import inspect
+    from spatial_dynamics import backends
+    model = robot('ur5')
+    n = model.nq
+    q, qd, qdd = random_state(rng, (), n)
+    for name in ('rnea', 'gravity_torque', 'bias_torque', 'mass_matrix',
+                 'generalized_momentum'):
+        door = getattr(sd, name)
+        assert isinstance(door, ext.Door) and door is getattr(backends, name)
+        assert door.__name__ == name and door.__doc__ == door.__wrapped__.__doc__
+        assert inspect.signature(door) == inspect.signature(door.__wrapped__)
+    expected = sd.rnea.__wrapped__(model, q, qd, qdd, (0.0, 0.1, -9.8), None, 'auto')
+    calls = [lambda: sd.rnea(model, q, qd, qdd, (0.0, 0.1, -9.8)),
+             lambda: sd.rnea(model, q, qd, qdd, gravity=[0.0, 0.1, -9.8]),
+             lambda: sd.rnea(model, q, qd, qdd, (0.0, 0.1, -9.8), None, 'compiled'),
+             lambda: sd.rnea(model, q, qd, qdd, (0.0, 0.1, -9.8), {}, backend='auto'),
+             lambda: sd.rnea(model, q, qd, qdd=qdd, gravity=(0.0, 0.1, -9.8)),    # Python
+             lambda: sd.rnea(model, q, qd, qdd, (0.0, 0.1, -9.8), backend='numpy')]
+    for call in calls[:5]:
+        np.testing.assert_array_equal(call(), expected)
+    assert close(calls[5](), expected)
+    with pytest.raises(TypeError, match='unexpected keyword'):
+        sd.rnea(model, q, qd, qdd, gravty=(0.0, 0.0, -9.81))
+    with pytest.raises(TypeError, match='positional'):
+        sd.rnea(model, q, qd, qdd, (0.0, 0.0, -9.81), None, 'auto', 1)
+    with pytest.raises(TypeError, match='missing'):
+        sd.rnea(model, q, qd)
+    with pytest.raises(ValueError, match='backend must be one of'):
+        sd.gravity_torque(model, q, backend='fortran')
+    with pytest.raises(ValueError, match='gravity must be a 3-vector'):
+        sd.bias_torque(model, q, qd, gravity=(0.0, -9.81))
+    M = sd.mass_matrix(model, q.tolist(), backend='compiled')
+    np.testing.assert_array_equal(M, sd.mass_matrix.__wrapped__(model, q))
+    assert close(sd.mass_matrix(model, q, 'numpy'), M)
