@@ -3,12 +3,11 @@
 """The node's configuration without ROS: ``spatial_dynamics.ros.config``.
 
 Descriptions and description files, parameter bounds, precedence, validation that changes
-nothing, the backend choice and the compiled kernels' preparation, the counters and what
+nothing, the backend choice, the counters and what
 /diagnostics says. No ROS graph and no rclpy: the module is checked not to import it.
 """
 
 import ast
-import gc
 import math
 import os
 import subprocess
@@ -321,17 +320,18 @@ def test_reduction_and_strict_are_reparse_triggers(demo_text):
 
 
 # --------------------------------------------------------------------------------------------
-# Backend: the choice, and the preparation of the compiled kernels
+# Backend: the choice (the compiled kernels are built with the package)
 
-def test_auto_compiles_only_models_slower_than_the_budget():
-    budget = config.AUTO_COMPILED_ABOVE_S
-    assert config.preferred_backend('auto', 0.5 * budget) == 'numpy'
-    assert config.preferred_backend('auto', 2.0 * budget) == 'compiled'
-    for setting in ('numpy', 'compiled'):
-        for seconds in (0.0, 0.5 * budget, 2.0 * budget):
-            assert config.preferred_backend(setting, seconds) == setting
+def test_auto_and_compiled_run_the_compiled_kernels_numpy_never(monkeypatch):
+    assert sd.backends.compiled.ext is not None, sd.backends.compiled.FAILURE
+    assert config.resolve_backend('auto') == 'compiled'
+    assert config.resolve_backend('compiled') == 'compiled'
+    assert config.resolve_backend('numpy') == 'numpy'
     with pytest.raises(ConfigError, match="parameter backend: 'fast'"):
-        config.preferred_backend('fast', 0.0)
+        config.resolve_backend('fast')
+    monkeypatch.setattr(sd.backends.compiled, 'ext', None)     # a build without a compiler
+    for setting in ('auto', 'compiled', 'numpy'):
+        assert config.resolve_backend(setting) == 'numpy'
 
 
 def test_plain_call_time_is_measured_on_the_model():
@@ -341,88 +341,35 @@ def test_plain_call_time_is_measured_on_the_model():
     assert 0.0 < t_small < 1.0 and 0.0 < t_demo < 1.0
 
 
-def test_numpy_never_touches_the_compiled_kernels(demo_text):
-    """With backend numpy, nothing asks for the compiled kernels; the output runs on numpy."""
-    calls = []
-    kernels = config.CompiledKernels(lambda: calls.append('notify'),
-                                     prepare=lambda: calls.append('prepare'),
-                                     load=lambda model, backend: calls.append('load'))
-    out = config.prepare({}, defaults(robot_description=demo_text, backend='numpy'), None,
-                         kernels).output
-    assert (out.backend, out.preferred, out.setting) == ('numpy', 'numpy', 'numpy')
-    assert not out.waits_for_compiled and kernels.state == 'idle' and calls == []
+@pytest.mark.parametrize('setting', ['auto', 'compiled'])
+def test_the_first_output_runs_compiled(demo_text, setting):
+    """No preparation, no switch: the output the node starts with is on the compiled kernels."""
+    out = config.prepare({}, defaults(robot_description=demo_text, backend=setting),
+                         None).output
+    assert (out.backend, out.setting) == ('compiled', setting)
+    assert diagnostics.backend_text(out).startswith('compiled (C extension, ')
     assert out.plain_call_s > 0.0
-    assert diagnostics.backend_text(out, kernels) == 'numpy'
-
-
-def test_compiled_waits_on_numpy_until_the_kernels_are_ready(demo_text):
-    done = threading.Event()
-    loaded = []
-
-    def load(model, backend):
-        loaded.append((model, backend, gc.isenabled()))
-        return 'compiled (test)'
-
-    kernels = config.CompiledKernels(done.set, prepare=lambda: None, load=load)
-    out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
-                         kernels).output
-    assert (out.backend, out.preferred) == ('numpy', 'compiled') and out.waits_for_compiled
-    assert diagnostics.backend_text(out, kernels) == 'numpy (preparing compiled kernels)'
-    assert kernels.request(out.model) and not kernels.request(out.model)   # started once
-    try:
-        assert done.wait(30.0)
-        assert kernels.ready and kernels.description == 'compiled (test)'
-        assert kernels.seconds >= 0.0
-        # loaded with the collector paused (no pause of the answers mid-import), then what
-        # was loaded frozen, and the collector running again
-        assert loaded == [(out.model, 'compiled', False)]
-        assert gc.isenabled() and gc.get_freeze_count() > 0
-    finally:
-        gc.unfreeze()
-
-
-def test_kernels_that_cannot_be_had_leave_numpy_with_the_reason(demo_text):
-    done = threading.Event()
-
-    def missing():
-        raise sd.backends.CompiledBackendUnavailable('numba is not installed (test)')
-
-    kernels = config.CompiledKernels(done.set, prepare=missing,
-                                     load=lambda model, backend: pytest.fail('loaded'))
-    out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
-                         kernels).output
-    kernels.request(out.model)
-    assert done.wait(30.0)
-    assert kernels.state == 'failed' and 'numba is not installed (test)' in kernels.error
-    text = diagnostics.backend_text(out, kernels)
-    assert text.startswith('numpy (compiled kernels unavailable') and 'test' in text
-    assert not kernels.request(out.model)   # never retried
-
-
-def test_an_output_built_once_the_kernels_are_ready_runs_compiled(demo_text):
-    """With the kernels loaded, a new model that prefers them starts on them (warmed up)."""
-    pytest.importorskip('numba')
-    sd.backends.warmup(sd.Model.from_urdf(PENDULUM_URDF), 'compiled')
-    kernels = config.CompiledKernels(lambda: None)
-    kernels.state, kernels.description = 'ready', sd.backends.describe('compiled')
-    out = config.prepare({}, defaults(robot_description=demo_text, backend='compiled'), None,
-                         kernels).output
-    assert out.backend == 'compiled' and not out.waits_for_compiled
-    assert diagnostics.backend_text(out, kernels).startswith('compiled (numba')
     q = np.linspace(-1.0, 1.0, len(out.joints))
     np.testing.assert_allclose(sd.rnea(out.model, q, q, q, backend=out.backend),
                                sd.rnea(out.model, q, q, q, backend='numpy'),
                                rtol=1e-12, atol=1e-12)
 
 
-def test_auto_text_names_the_measured_time_and_the_budget(demo_text):
-    out = config.prepare({}, defaults(robot_description=demo_text, backend='auto'), None).output
-    text = diagnostics.backend_text(out, None)
-    if out.preferred == 'numpy':
-        assert text.startswith('numpy (auto: ') and f'{out.plain_call_s * 1e6:.0f} us' in text
-        assert f'{config.AUTO_COMPILED_ABOVE_S * 1e6:g} us budget' in text
-    else:   # a slow machine: the demo arm is above the budget there
-        assert text == 'numpy (preparing compiled kernels)'
+def test_numpy_runs_numpy(demo_text):
+    out = config.prepare({}, defaults(robot_description=demo_text, backend='numpy'),
+                         None).output
+    assert (out.backend, out.setting) == ('numpy', 'numpy')
+    assert diagnostics.backend_text(out) == 'numpy'
+
+
+def test_without_the_kernels_the_text_says_why(demo_text, monkeypatch):
+    monkeypatch.setattr(sd.backends.compiled, 'ext', None)
+    monkeypatch.setattr(sd.backends.compiled, 'FAILURE', 'no module (test)')
+    out = config.prepare({}, defaults(robot_description=demo_text, backend='auto'),
+                         None).output
+    assert out.backend == 'numpy'
+    assert diagnostics.backend_text(out) == \
+        'numpy (compiled kernels unavailable: no module (test))'
 
 
 # --------------------------------------------------------------------------------------------

@@ -15,18 +15,15 @@ UTF-8 file of at most :data:`MAX_DESCRIPTION_BYTES`, read with
 :class:`DescriptionParser`'s worker thread).
 
 Backends (parameter ``backend``, :data:`BACKEND_SETTINGS`): ``numpy`` runs the plain-float
-RNEA and never imports numba; ``compiled`` answers on numpy at once and switches to the
-compiled kernels when :class:`CompiledKernels` has them ready (compiled in a child process
-when numba's cache is cold, loaded in a thread); ``auto`` is ``compiled`` for a model whose
-plain-float call takes more than :data:`AUTO_COMPILED_ABOVE_S`, else ``numpy``.
+RNEA; ``auto`` and ``compiled`` run the compiled kernels (built with the package) from the
+first answer, or numpy, with the reason, in a package built without them
+(:func:`resolve_backend`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-import gc
+from dataclasses import dataclass
 import math
-import threading
 import time
 from typing import Any, Callable, Mapping, Optional, Sequence, Tuple
 
@@ -68,15 +65,7 @@ DEFAULT_OBSERVER_GAIN = 20.0
 #: should know about; set it per joint for a robot with small wrist joints.
 DEFAULT_EXTERNAL_TORQUE_WARN = 5.0
 
-#: ``backend: auto`` runs a model on the compiled kernels when one plain-float RNEA call
-#: (backend 'numpy', the median of :data:`TIMED_CALLS` on a moving state, see
-#: :func:`plain_call_seconds`) takes longer than this, in s; else on numpy, and numba
-#: (+0.8 s, +130 MB resident) is never imported. Measured on a laptop-class x86: UR5 (6 DOF)
-#: 30 µs, Panda and the demo arm (8 DOF) 43 µs, Solo-12 54 µs, Talos (32 DOF) 145 µs; the
-#: compiled call 1-2 µs. The budget sits between arms and humanoids with a margin of about
-#: 2x either way: below it the call is well under the ~100 µs an answer costs anyway
-#: (mapping the message, two publications).
-AUTO_COMPILED_ABOVE_S = 80e-6
+#: Plain-float calls timed at load for the ``plain call time`` of the diagnostics.
 TIMED_CALLS = 7
 
 # Bounds beyond which a value cannot be physical: refused with the bound named, instead of
@@ -289,12 +278,10 @@ PARAMETERS = Table(NODE_NAME, [
         'tolerance of the model torque (N m, or N); remap it to a JTC\'s ~/joint_trajectory. '
         '0 = off. Live.'), unit='N m or N', bounds=(0.0, 1e4)),
     Param('backend', 'string', 'auto', (
-        'How tau is computed. "numpy": plain Python floats (no numba import; ~30-150 µs per '
-        'call for 6-32 joints). "compiled": numba kernels (~1-2 µs), prepared off the '
-        'answering path (compiled in a child process when the cache is cold); the node '
-        'answers on numpy until they are ready. "auto": compiled when one plain-float call '
-        f'of the loaded model takes more than {AUTO_COMPILED_ABOVE_S * 1e6:g} µs, else '
-        'numpy. Read-only.'), choices=BACKEND_SETTINGS, read_only=True),
+        'How tau is computed. "numpy": plain Python floats (~30-150 µs per call for 6-32 '
+        'joints). "compiled" and "auto": the compiled kernels built with the package (~1-3 '
+        'µs), from the first answer; numpy, with a warning, in a package built without them. '
+        'Read-only.'), choices=BACKEND_SETTINGS, read_only=True),
 ], header=PARAMETER_FILE_HEADER)
 #: Every parameter, by name.
 PARAMETER_NAMES = tuple(spec.name for spec in PARAMETERS)
@@ -385,88 +372,16 @@ def plain_call_seconds(model: 'sd.Model', calls: int = TIMED_CALLS) -> float:
     return float(np.median(times))
 
 
-def preferred_backend(setting: str, plain_call_s: float) -> str:
-    """``'numpy'`` or ``'compiled'``: what ``backend`` = ``setting`` asks for this model.
+def resolve_backend(setting: str) -> str:
+    """``'numpy'`` or ``'compiled'``: what ``backend`` = ``setting`` runs on in this process.
 
-    ``auto`` is ``compiled`` only when a plain-float call takes more than
-    :data:`AUTO_COMPILED_ABOVE_S`.
+    ``auto`` and ``compiled`` are the compiled kernels when the package was built with them,
+    else numpy (:func:`~.diagnostics.backend_text` says why).
     """
-    if setting == 'auto':
-        return 'compiled' if plain_call_s > AUTO_COMPILED_ABOVE_S else 'numpy'
-    return one_of('backend', setting, BACKEND_SETTINGS)
-
-
-class CompiledKernels:
-    """The compiled backend of this process, made ready once, off the answering path.
-
-    :meth:`request` starts one daemon thread (the first time only) that runs ``prepare``
-    (:func:`spatial_dynamics.backends.prepare_compiled`: a child process compiles the kernels
-    into numba's on-disk cache when it is cold) and then ``load(model, 'compiled')``
-    (:func:`spatial_dynamics.backends.warmup`: imports numba here and loads the kernels from
-    that cache), then calls ``notify()`` from that thread. ``state`` goes ``'idle'`` →
-    ``'preparing'`` → ``'ready'`` (``description`` names the backend) or ``'failed'``
-    (``error`` says why: numba missing, or its error). Answers never wait for it.
-    """
-
-    def __init__(self, notify: Callable[[], None],
-                 prepare: Callable[[], None] = backends.prepare_compiled,
-                 load: Callable[['sd.Model', str], str] = backends.warmup) -> None:
-        self._notify = notify
-        self._prepare = prepare
-        self._load = load
-        self._lock = threading.Lock()
-        self.state = 'idle'
-        self.description = ''
-        self.error = ''
-        self.seconds = 0.0       # from request to ready (or failed)
-
-    @property
-    def ready(self) -> bool:
-        """Whether the compiled kernels are loaded in this process."""
-        return self.state == 'ready'
-
-    def request(self, model: 'sd.Model') -> bool:
-        """Start preparing the kernels (warmed up on ``model``) unless started; True if now."""
-        with self._lock:
-            if self.state != 'idle':
-                return False
-            self.state = 'preparing'
-        threading.Thread(target=self._run, args=(model,), daemon=True,
-                         name='compiled kernels').start()
-        return True
-
-    def _loaded(self, model: 'sd.Model') -> str:
-        """Load the kernels with the garbage collector paused, then freeze what is loaded.
-
-        Importing numba and loading the kernels creates ~160 000 objects; a collection in the
-        middle scans them all while holding the GIL: a 35-50 ms pause of the answers (measured
-        here). Paused, and the objects then frozen (``gc.freeze``: never scanned again), the
-        load holds the answers up for less than 10 ms at a time.
-        """
-        enabled = gc.isenabled()
-        gc.disable()
-        try:
-            description = self._load(model, 'compiled')
-            gc.freeze()
-            return description
-        finally:
-            if enabled:
-                gc.enable()
-
-    def _run(self, model: 'sd.Model') -> None:
-        start = time.monotonic()
-        try:
-            self._prepare()
-            self.description = self._loaded(model)
-            self.state = 'ready'
-        except Exception as err:  # numba missing or failing: stay on numpy, say why
-            self.error = str(err) or type(err).__name__
-            self.state = 'failed'
-        self.seconds = time.monotonic() - start
-        try:
-            self._notify()
-        except Exception:  # the context is gone: the node is shutting down
-            pass
+    one_of('backend', setting, BACKEND_SETTINGS)
+    if setting == 'numpy' or backends.compiled.ext is None:
+        return 'numpy'
+    return 'compiled'
 
 
 # --------------------------------------------------------------------------------------------
@@ -479,9 +394,9 @@ class Output:
     ``base`` is the (reduced) model of the URDF, ``model`` the same with the payload; ``tau``
     is in the order of ``joints`` (= ``model.joint_names``). ``armature`` is ``None`` or (n,),
     ``friction_threshold`` is ``None`` (friction_model none) or the smooth-sign velocity.
-    ``backend`` is what the answers run on now (``'numpy'`` or ``'compiled'``), ``preferred``
-    what the ``backend`` setting asks for this model; they differ while the compiled kernels
-    are prepared. ``plain_call_s``: one plain-float call of ``base``, measured at load.
+    ``backend`` is what the answers run on (``'numpy'`` or ``'compiled'``, see
+    :func:`resolve_backend`). ``plain_call_s``: one plain-float call of ``base``, measured at
+    load.
     """
 
     urdf: str
@@ -496,21 +411,10 @@ class Output:
     friction_threshold: Optional[float] = None
     clamp: bool = False
     backend: str = 'numpy'
-    preferred: str = 'numpy'
     setting: str = 'auto'
     plain_call_s: float = 0.0
     gains: Optional[Gains] = None
     external_torque_warn: Optional[np.ndarray] = None
-
-    @property
-    def waits_for_compiled(self) -> bool:
-        """Whether it prefers the compiled kernels but runs on numpy (until they are ready)."""
-        return self.preferred == 'compiled' and self.backend != 'compiled'
-
-    def upgraded(self) -> 'Output':
-        """Return this output on the compiled kernels (loaded already), warmed up on its model."""
-        backends.warmup(self.model, 'compiled')
-        return replace(self, backend='compiled')
 
 
 @dataclass(frozen=True)
@@ -581,14 +485,11 @@ def _base_model(params, current: Optional[Output], urdf: str, source: str,
 
 
 def build_output(params, current: Optional[Output], urdf: Optional[str] = None,
-                 source: Optional[str] = None, kernels: Optional[CompiledKernels] = None
-                 ) -> Output:
+                 source: Optional[str] = None) -> Output:
     """Build the :class:`Output` for ``params``; the URDF is re-parsed only when needed.
 
     ``urdf`` None keeps the description of ``current``. Reads nothing of the node, so the
-    description parser's thread may call it. The output runs on the compiled kernels when
-    its model prefers them and ``kernels`` has them ready, else on numpy. Raises
-    :class:`ConfigError`.
+    description parser's thread may call it. Raises :class:`ConfigError`.
     """
     if urdf is None:
         urdf, source = current.urdf, current.source
@@ -620,10 +521,8 @@ def build_output(params, current: Optional[Output], urdf: Optional[str] = None,
         friction_threshold=(params.friction_velocity_threshold
                             if params.friction_model == 'urdf' else None),
         clamp=params.clamp_to_effort_limits, setting=setting,
-        preferred=preferred_backend(setting, plain_call_s), plain_call_s=plain_call_s,
+        backend=resolve_backend(setting), plain_call_s=plain_call_s,
         gains=gains, external_torque_warn=warn)
-    if output.waits_for_compiled and kernels is not None and kernels.ready:
-        return output.upgraded()
     return output
 
 
@@ -664,8 +563,7 @@ def check_control(params) -> Tuple[str, str]:
         raise ConfigError(str(err)) from None
 
 
-def prepare(previous, changes: Mapping[str, Any], current: Optional[Output],
-            kernels: Optional[CompiledKernels] = None) -> Config:
+def prepare(previous, changes: Mapping[str, Any], current: Optional[Output]) -> Config:
     """Validate ``changes`` to the parameters ``previous``; the result is swapped in as a whole.
 
     ``previous`` is the ``Params`` in use (None or empty at start-up, when ``changes`` holds
@@ -684,7 +582,7 @@ def prepare(previous, changes: Mapping[str, Any], current: Optional[Output],
     urdf, source, kept_file = description_change(previous, params, changes)
     output = current
     if urdf is not None or current is not None:
-        output = build_output(params, current, urdf, source, kernels)
+        output = build_output(params, current, urdf, source)
     else:
         locked_positions(params)
         _check_without_model(params)

@@ -15,15 +15,16 @@ import time
 from typing import Dict, List, Optional, Tuple, TYPE_CHECKING
 
 import numpy as np
+from spatial_dynamics import backends
 from spatial_dynamics.ros.config import (
-    AUTO_COMPILED_ABOVE_S, DEFAULT_GRAVITY, DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT,
+    DEFAULT_GRAVITY, DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT,
     NODE_REASONS, URDF_WARNINGS_LISTED, WRENCH_REASONS)
 from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
 from spatial_dynamics.ros.inputs import REASONS
 from spatial_dynamics.ros.observer import EstimateWindow, MomentumObserver
 
 if TYPE_CHECKING:
-    from spatial_dynamics.ros.config import CompiledKernels, Output
+    from spatial_dynamics.ros.config import Output
 
 
 # --------------------------------------------------------------------------------------------
@@ -72,18 +73,12 @@ class Totals:
 Status = Tuple[str, str, List[Tuple[str, str]]]
 
 
-def backend_text(output: Output, kernels: Optional[CompiledKernels]) -> str:
+def backend_text(output: Output) -> str:
     """Name what the answers run on, for logs and diagnostics (the backend's name first)."""
     if output.backend == 'compiled':
-        return kernels.description if kernels is not None and kernels.description \
-            else 'compiled'
-    if output.preferred == 'compiled':
-        if kernels is not None and kernels.state == 'failed':
-            return f'numpy (compiled kernels unavailable: {kernels.error})'
-        return 'numpy (preparing compiled kernels)'
-    if output.setting == 'auto':
-        return (f'numpy (auto: {output.plain_call_s * 1e6:.0f} us per call, within the '
-                f'{AUTO_COMPILED_ABOVE_S * 1e6:g} us budget)')
+        return backends.describe('compiled')
+    if output.setting != 'numpy':
+        return f'numpy (compiled kernels unavailable: {backends.compiled.FAILURE})'
     return 'numpy'
 
 

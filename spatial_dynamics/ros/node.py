@@ -49,7 +49,7 @@ from spatial_dynamics.ros import messages
 from spatial_dynamics.ros.answering import Answering, Out
 from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, spin, subscribe
 from spatial_dynamics.ros.config import (
-    build_output, CompiledKernels, Config, ConfigError, NODE_NAME, Output, PARAMETER_NAMES,
+    build_output, Config, ConfigError, NODE_NAME, Output, PARAMETER_NAMES,
     PARAMETERS, PAYLOAD_PARAMETERS, prepare, reparse_needed)
 from spatial_dynamics.ros.control import terms_names
 from spatial_dynamics.ros.descriptions import description_source, DescriptionParser, ParseRequest
@@ -74,7 +74,7 @@ class InverseDynamicsNode(Node):
                                    else param.default, PARAMETERS.descriptor(param))
         # Two callback groups, two threads (spin's MultiThreadedExecutor): the answering one
         # (inputs, diagnostics) and rclpy's default one (parameter services, the description
-        # topic, the parser's and the compiled kernels' notifications), which alone writes
+        # topic, the parser's notifications), which alone writes
         # ``config``. A parameter change that parses a description waits in its callback for
         # the parse while the answers go on in theirs; the new ``Config`` is swapped in as one
         # reference, and each answer reads ``self.config`` once.
@@ -88,8 +88,6 @@ class InverseDynamicsNode(Node):
         self._pending = None      # (parameters, Config, changes) validated, not yet applied
         self._parsed = self.create_guard_condition(self._on_parsed)
         self._parser = DescriptionParser(self._build_from_topic, self._parsed.trigger)
-        self._compiled = self.create_guard_condition(self._on_compiled)
-        self.kernels = CompiledKernels(self._compiled.trigger)
         self._configure({name: self._value(name) for name in PARAMETER_NAMES})
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
@@ -164,8 +162,8 @@ class InverseDynamicsNode(Node):
         """Validate ``changes`` against the current state (:func:`~.config.prepare`)."""
         config = self.config
         if config is None:
-            return prepare({}, changes, None, self.kernels)
-        return prepare(config.params, changes, config.output, self.kernels)
+            return prepare({}, changes, None)
+        return prepare(config.params, changes, config.output)
 
     def _configure(self, changes: dict) -> None:
         """Validate ``changes`` against the current state, then apply all of them at once."""
@@ -189,35 +187,15 @@ class InverseDynamicsNode(Node):
         self._follow_topic()
 
     def _set_output(self, config: Config, payload_changed: bool = False) -> None:
-        """Swap ``config`` in (one reference); start preparing compiled kernels if it wants."""
+        """Swap ``config`` in (one reference); log a new model or payload."""
         previous = self.config
         before = None if previous is None else previous.output
         output = config.output
-        if output is not None and output.waits_for_compiled:
-            if self.kernels.ready:   # got ready while this output was built
-                config = replace(config, output=output.upgraded())
-                output = config.output
-            else:
-                self.kernels.request(output.model)
         self.config = config
         if output is not None and (before is None or output.base is not before.base):
             self._log_model(output, before)
         elif output is not None and payload_changed:
             self.get_logger().info(f'payload: {output.payload}')
-
-    def _on_compiled(self) -> None:
-        """Executor: the compiled kernels are ready (switch to them) or cannot be had."""
-        kernels = self.kernels
-        if not kernels.ready:
-            self.get_logger().warn(f'compiled kernels unavailable, answering on numpy: '
-                                   f'{kernels.error}')
-            return
-        self.get_logger().info(f'compiled kernels ready after {kernels.seconds:.1f} s: '
-                               f'{kernels.description}')
-        config = self.config
-        if config.output is not None and config.output.waits_for_compiled:
-            self.config = config = replace(config, output=config.output.upgraded())
-            self.get_logger().info(f'backend: {backend_text(config.output, kernels)}')
 
     # -- the robot_description topic --------------------------------------------------------
 
@@ -254,7 +232,7 @@ class InverseDynamicsNode(Node):
     def _build_from_topic(self, request: ParseRequest) -> Output:
         """Worker thread: the :class:`Output` of a topic description (ConfigError if bad)."""
         return build_output(request.params, request.current, request.urdf,
-                            'topic robot_description', self.kernels)
+                            'topic robot_description')
 
     def _on_parsed(self) -> None:
         """Executor: swap in a parsed topic description, unless something newer came since."""
@@ -280,7 +258,7 @@ class InverseDynamicsNode(Node):
             self._submit_topic(request.urdf)   # again, with the current parameters
             return None
         try:   # the same model: only the cheap parts again
-            return build_output(params, result, kernels=self.kernels)
+            return build_output(params, result)
         except ConfigError as err:
             return err
 
@@ -290,7 +268,10 @@ class InverseDynamicsNode(Node):
             f'robot {out.model.name!r} from {out.source}: {len(out.model.joint_names)} DOF; '
             f'output joints {list(out.joints)}')
         self.get_logger().info(f'model: {out.base.summary()}; backend: '
-                               f'{backend_text(out, self.kernels)}; payload: {out.payload}')
+                               f'{backend_text(out)}; payload: {out.payload}')
+        if out.backend != 'compiled' and out.setting != 'numpy' and previous is None:
+            self.get_logger().warn(f'backend {out.setting}: compiled kernels unavailable, '
+                                   f'answering on numpy: {sd.backends.compiled.FAILURE}')
         if previous is None or out.urdf != previous.urdf:
             for warning in out.base.warnings:
                 self.get_logger().warn(f'URDF warning ({out.source}): {warning}')
@@ -379,7 +360,7 @@ class InverseDynamicsNode(Node):
         output = config.output
         if output is None:
             self._warn_waiting()
-        backend = '' if output is None else backend_text(output, self.kernels)
+        backend = '' if output is None else backend_text(output)
         settings = Settings(config.gravity, config.acceleration_source, config.input_timeout,
                             config.control_mode, config.output_choice, config.measured_timeout)
         statuses = [

@@ -20,8 +20,10 @@ in a namespace of its own, and measures:
   1/rate s: a compilation that held the node up would show here); **wrong**: answers that
   differ from the library's τ (must be 0).
 
-Each run measures **cold** (a fresh, empty ``NUMBA_CACHE_DIR`` for the node: what a fresh
-install or a new container sees) and then **warm** (the same directory again). The table
+Each run measures **cold** (a fresh, empty ``PYTHONPYCACHEPREFIX`` for the node: no
+bytecode cached, what a read-only install or a new container sees; nothing else is compiled
+at run time, the kernels are built with the package) and then **warm** (the same directory
+again). The table
 gives min / median / max over the runs. The default robot is the UR5 of example-robot-data
 (``config/demo_arm.urdf`` when that is not installed).
 """
@@ -88,17 +90,17 @@ def numba_loaded(pid: int) -> bool:
 
 
 @contextlib.contextmanager
-def numba_cache(path: str) -> Iterator[None]:
-    """Set ``NUMBA_CACHE_DIR`` for the processes started inside (this one imports no numba)."""
-    old = os.environ.get('NUMBA_CACHE_DIR')
-    os.environ['NUMBA_CACHE_DIR'] = path
+def bytecode_cache(path: str) -> Iterator[None]:
+    """Set ``PYTHONPYCACHEPREFIX`` (where Python caches bytecode) for the processes inside."""
+    old = os.environ.get('PYTHONPYCACHEPREFIX')
+    os.environ['PYTHONPYCACHEPREFIX'] = path
     try:
         yield
     finally:
         if old is None:
-            del os.environ['NUMBA_CACHE_DIR']
+            del os.environ['PYTHONPYCACHEPREFIX']
         else:
-            os.environ['NUMBA_CACHE_DIR'] = old
+            os.environ['PYTHONPYCACHEPREFIX'] = old
 
 
 class Probe:
@@ -199,7 +201,7 @@ def run_once(executor, bench, model, urdf: str, backend: str, cache_dir: str, la
 
     tick(lambda: time.monotonic() - t0 > args.lead)     # inputs flowing before the start
     log = args.log_dir and os.path.join(args.log_dir, f'{label.replace(" ", "_")}_{index}.log')
-    with numba_cache(cache_dir):
+    with bytecode_cache(cache_dir):
         started = time.monotonic()
         proc = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace,
                      {'robot_description_file': urdf, 'backend': backend}, log)
@@ -312,7 +314,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         for run in range(args.runs):
             for backend in args.backend:
-                cache_dir = tempfile.mkdtemp(prefix='sd_numba_cache_')
+                cache_dir = tempfile.mkdtemp(prefix='sd_pycache_')
                 try:
                     for cache in ('cold', 'warm'):
                         rows.append(run_once(executor, bench, model, urdf, backend, cache_dir,
