@@ -91,16 +91,23 @@ def numba_loaded(pid: int) -> bool:
 
 @contextlib.contextmanager
 def bytecode_cache(path: str) -> Iterator[None]:
-    """Set ``PYTHONPYCACHEPREFIX`` (where Python caches bytecode) for the processes inside."""
-    old = os.environ.get('PYTHONPYCACHEPREFIX')
+    """Cache the bytecode of the processes started inside in ``path`` (``PYTHONPYCACHEPREFIX``).
+
+    Writing is allowed there even when ``PYTHONDONTWRITEBYTECODE`` is set, so that the cold
+    run fills what the warm run reads.
+    """
+    saved = {key: os.environ.get(key) for key in ('PYTHONPYCACHEPREFIX',
+                                                  'PYTHONDONTWRITEBYTECODE')}
     os.environ['PYTHONPYCACHEPREFIX'] = path
+    os.environ.pop('PYTHONDONTWRITEBYTECODE', None)
     try:
         yield
     finally:
-        if old is None:
-            del os.environ['PYTHONPYCACHEPREFIX']
-        else:
-            os.environ['PYTHONPYCACHEPREFIX'] = old
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
 
 
 class Probe:
