@@ -77,6 +77,7 @@ setup(
                  'pydocstyle'],
         'plot': ['matplotlib'],
         'replay': ['rosbags', 'matplotlib', 'pyyaml'],
+        'identify': ['scipy'],
         'sim': ['mujoco'],
     },
     zip_safe=False,
