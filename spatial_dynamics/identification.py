@@ -25,7 +25,7 @@ from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .algorithms.regressor import PARAMETERS, regressor
+from .algorithms.regressor import parameters, PARAMETERS, regressor
 from .model import Model
 
 #: A pivot of ``R`` below ``RTOL`` times the largest counts as zero (the rank's threshold).
@@ -117,3 +117,110 @@ def base_parameters(model: Model, states: Optional[Sequence[np.ndarray]] = None,
     K = np.linalg.solve(R[:r, :r], R[:r, r:])
     K[np.abs(K) < 1e-12] = 0.0
     return BaseParameters(parameter_names(model), P[:r].copy(), P[r:].copy(), K, unexcited)
+
+
+# --------------------------------------------------------------------------------------------
+# Payload: the ten parameters of one rigid body added to a link
+
+def _spatial_inertia(pi: np.ndarray) -> np.ndarray:
+    """Return the 6×6 spatial inertia ``[[Ī, h×], [-h×, m 1]]`` of the parameters ``pi``."""
+    m, hx, hy, hz, ixx, ixy, iyy, ixz, iyz, izz = pi
+    h = np.array([[0.0, -hz, hy], [hz, 0.0, -hx], [-hy, hx, 0.0]])
+    out = np.zeros((6, 6))
+    out[:3, :3] = [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]
+    out[:3, 3:] = h
+    out[3:, :3] = -h
+    out[3:, 3:] = m * np.eye(3)
+    return out
+
+
+def _ten(inertia: np.ndarray) -> np.ndarray:
+    """Return the ten parameters of a 6×6 spatial inertia (:func:`_spatial_inertia` inverted)."""
+    hx = inertia[:3, 3:]
+    return np.array([inertia[3, 3], hx[2, 1], hx[0, 2], hx[1, 0], inertia[0, 0],
+                     inertia[0, 1], inertia[1, 1], inertia[0, 2], inertia[1, 2], inertia[2, 2]])
+
+
+def link_to_body(model: Model, link: str) -> Tuple[int, np.ndarray]:
+    """``(body, T)``: parameters on ``link`` (its frame) add ``T @ π`` to ``body``'s (10×10)."""
+    frame = model.frames.get(link)
+    if frame is None:
+        raise ValueError(f'link {link!r} is not a link of {model.name!r}')
+    X = frame.lXb
+    T = np.column_stack([_ten(X.T @ _spatial_inertia(e) @ X) for e in np.eye(10)])
+    return frame.body, T
+
+
+@dataclass(frozen=True)
+class Payload:
+    """A payload identified on ``link``: mass (kg), centre of mass (m, link frame), inertia.
+
+    ``inertia`` is ``[ixx, ixy, ixz, iyy, iyz, izz]`` about the centre of mass (kg m², the
+    node's ``payload.inertia`` order); ``pi`` the ten parameters in the link frame and
+    ``covariance`` (10×10) their covariance from the fit's residual; ``rms`` the residual per
+    joint after the fit.
+    """
+
+    link: str
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray
+    pi: np.ndarray
+    covariance: np.ndarray
+    rms: np.ndarray
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """One standard deviation of each of the ten parameters."""
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    def node_parameters(self) -> str:
+        """Return the node's ``payload.*`` parameters, as a YAML block."""
+        fmt = ', '.join
+        return (f'payload.link: {self.link}\npayload.mass: {self.mass:.6g}\n'
+                f'payload.com: [{fmt(f"{x:.6g}" for x in self.com)}]\n'
+                f'payload.inertia: [{fmt(f"{x:.6g}" for x in self.inertia)}]\n')
+
+    def urdf_inertial(self) -> str:
+        """Return a URDF ``<inertial>`` of the payload (for a link, or a fixed child of it)."""
+        ixx, ixy, ixz, iyy, iyz, izz = self.inertia
+        x, y, z = self.com
+        return (f'<inertial>\n  <origin xyz="{x:.6g} {y:.6g} {z:.6g}" rpy="0 0 0"/>\n'
+                f'  <mass value="{self.mass:.6g}"/>\n'
+                f'  <inertia ixx="{ixx:.6g}" ixy="{ixy:.6g}" ixz="{ixz:.6g}" iyy="{iyy:.6g}" '
+                f'iyz="{iyz:.6g}" izz="{izz:.6g}"/>\n</inertial>')
+
+
+def identify_payload(model: Model, link: str, q, qd, qdd, tau,
+                     gravity: Sequence[float] = (0.0, 0.0, -9.81)) -> Payload:
+    """Fit a rigid payload on ``link`` to measured torques ``tau`` (N, n), by least squares.
+
+    ``model`` is the robot without the payload (its friction and armature, if any, already
+    taken from ``tau``); the residual ``tau − rnea(model)`` is ``Y_body T π`` for the payload's
+    ten parameters ``π`` in the link frame (:func:`link_to_body`). Raises ``ValueError``
+    when the states cannot tell the mass (the columns are rank deficient).
+    """
+    q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
+    body, T = link_to_body(model, link)
+    Y_all = regressor(model, q, qd, qdd, gravity)
+    Y = Y_all[..., 10 * (body - 1):10 * body] @ T
+    r = tau - Y_all @ parameters(model)
+    A, b = Y.reshape(-1, 10), r.reshape(-1)
+    pi, _, rank, _ = np.linalg.lstsq(A, b, rcond=None)
+    if rank < 10:
+        raise ValueError(f'the recording determines only {rank} of the 10 payload parameters '
+                         f'on {link!r}: move the joints between the base and it more (rotate '
+                         'the payload about several axes, with accelerations)')
+    fit = b - A @ pi
+    dof = max(len(b) - 10, 1)
+    covariance = (fit @ fit / dof) * np.linalg.inv(A.T @ A)
+    m = pi[0]
+    if not m > 0.0:
+        raise ValueError(f'identified payload mass {m:.3g} kg on {link!r} is not positive')
+    c = pi[1:4] / m
+    ixx, ixy, iyy, ixz, iyz, izz = pi[4:]
+    about_origin = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    Ic = about_origin - m * (c @ c * np.eye(3) - np.outer(c, c))
+    inertia = np.array([Ic[0, 0], Ic[0, 1], Ic[0, 2], Ic[1, 1], Ic[1, 2], Ic[2, 2]])
+    rms = np.sqrt(np.mean(fit.reshape(r.shape) ** 2, axis=0))
+    return Payload(link, float(m), c, inertia, pi, covariance, rms)
