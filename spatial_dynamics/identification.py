@@ -158,7 +158,8 @@ class Payload:
     ``inertia`` is ``[ixx, ixy, ixz, iyy, iyz, izz]`` about the centre of mass (kg m², the
     node's ``payload.inertia`` order); ``pi`` the ten parameters in the link frame and
     ``covariance`` (10×10) their covariance from the fit's residual; ``rms`` the residual per
-    joint after the fit.
+    joint after the fit. With the drives fitted jointly, ``drives`` is ``(damping, friction,
+    armature)`` per joint (each (n,)), else None.
     """
 
     link: str
@@ -168,6 +169,7 @@ class Payload:
     pi: np.ndarray
     covariance: np.ndarray
     rms: np.ndarray
+    drives: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
 
     @property
     def sigma(self) -> np.ndarray:
@@ -192,13 +194,16 @@ class Payload:
 
 
 def identify_payload(model: Model, link: str, q, qd, qdd, tau,
-                     gravity: Sequence[float] = (0.0, 0.0, -9.81)) -> Payload:
+                     gravity: Sequence[float] = (0.0, 0.0, -9.81),
+                     drive_threshold: Optional[float] = None) -> Payload:
     """Fit a rigid payload on ``link`` to measured torques ``tau`` (N, n), by least squares.
 
-    ``model`` is the robot without the payload (its friction and armature, if any, already
-    taken from ``tau``); the residual ``tau − rnea(model)`` is ``Y_body T π`` for the payload's
-    ten parameters ``π`` in the link frame (:func:`link_to_body`). Raises ``ValueError``
-    when the states cannot tell the mass (the columns are rank deficient).
+    ``model`` is the robot without the payload; the residual ``tau − rnea(model)`` is
+    ``Y_body T π`` for the payload's ten parameters ``π`` in the link frame
+    (:func:`link_to_body`). With ``drive_threshold`` (the smooth-sign velocity, rad/s) each
+    joint's damping, Coulomb friction and armature (the node's drive terms) are fitted in the
+    same least squares, so they cannot absorb the payload. Raises ``ValueError`` when the
+    states cannot tell the payload (the columns are rank deficient).
     """
     q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
     body, T = link_to_body(model, link)
@@ -206,14 +211,24 @@ def identify_payload(model: Model, link: str, q, qd, qdd, tau,
     Y = Y_all[..., 10 * (body - 1):10 * body] @ T
     r = tau - Y_all @ parameters(model)
     A, b = Y.reshape(-1, 10), r.reshape(-1)
-    pi, _, rank, _ = np.linalg.lstsq(A, b, rcond=None)
-    if rank < 10:
-        raise ValueError(f'the recording determines only {rank} of the 10 payload parameters '
-                         f'on {link!r}: move the joints between the base and it more (rotate '
-                         'the payload about several axes, with accelerations)')
-    fit = b - A @ pi
-    dof = max(len(b) - 10, 1)
-    covariance = (fit @ fit / dof) * np.linalg.inv(A.T @ A)
+    n = q.shape[-1]
+    if drive_threshold is not None:       # rows are (sample, joint): joint j's own columns
+        drive = np.zeros(r.shape + (3 * n,))
+        for j in range(n):
+            drive[:, j, 3 * j:3 * j + 3] = np.column_stack(
+                [qd[:, j], np.tanh(qd[:, j] / drive_threshold), qdd[:, j]])
+        A = np.hstack([A, drive.reshape(-1, 3 * n)])
+    x, _, rank, _ = np.linalg.lstsq(A, b, rcond=None)
+    pi = x[:10]
+    if rank < A.shape[1]:
+        what = ('10 payload parameters' if A.shape[1] == 10 else
+                f'{A.shape[1]} parameters (10 of the payload, 3 of each drive)')
+        raise ValueError(f'the recording determines only {rank} of the {what} on {link!r}: '
+                         'move the joints between the base and it more (rotate the payload '
+                         'about several axes, with accelerations; reverse every joint)')
+    fit = b - A @ x
+    dof = max(len(b) - A.shape[1], 1)
+    covariance = ((fit @ fit / dof) * np.linalg.inv(A.T @ A))[:10, :10]
     m = pi[0]
     if not m > 0.0:
         raise ValueError(f'identified payload mass {m:.3g} kg on {link!r} is not positive')
@@ -223,4 +238,5 @@ def identify_payload(model: Model, link: str, q, qd, qdd, tau,
     Ic = about_origin - m * (c @ c * np.eye(3) - np.outer(c, c))
     inertia = np.array([Ic[0, 0], Ic[0, 1], Ic[0, 2], Ic[1, 1], Ic[1, 2], Ic[2, 2]])
     rms = np.sqrt(np.mean(fit.reshape(r.shape) ** 2, axis=0))
-    return Payload(link, float(m), c, inertia, pi, covariance, rms)
+    drives = None if drive_threshold is None else tuple(x[10 + k::3] for k in range(3))
+    return Payload(link, float(m), c, inertia, pi, covariance, rms, drives)

@@ -262,3 +262,41 @@ def test_plots_and_residual_file_are_written(recording, tmp_path):
     assert rows[0] == ['t'] + list(names)
     assert len(rows) == 1 + m
     assert float(rows[1][0]) == 0.0
+
+
+def test_a_payload_is_identified_from_a_bag_with_the_drives(tmp_path, capsys):
+    """With --payload tool0 --identify: 1.2 kg on the UR5's tool0, drives with friction.
+
+    The bag holds a smooth motion of every joint (positions and velocities as a driver
+    records them, 500 Hz) and the torques of the robot with the payload plus each drive's
+    damping, Coulomb friction and armature and 0.05 N m of noise; the fit is against the URDF
+    without the payload, jointly with the drives.
+    """
+    model = sd.Model.from_urdf(robot_urdf_path('ur5'))
+    n = model.nq
+    rate, seconds = 500.0, 20.0
+    t = np.arange(int(rate * seconds)) / rate
+    k = np.arange(n)
+    amp, freq = 1.0 / (1 + 0.15 * k), 0.21 + 0.13 * k
+    w = 2 * np.pi * freq
+    q = amp * (np.sin(w * t[:, None]) + 0.4 * np.sin(2.3 * w * t[:, None]))
+    qd = amp * w * (np.cos(w * t[:, None]) + 0.92 * np.cos(2.3 * w * t[:, None]))
+    qdd = -amp * w * w * (np.sin(w * t[:, None]) + 0.4 * 5.29 * np.sin(2.3 * w * t[:, None]))
+    heavy = sd.with_payload(model, 'tool0', 1.2, (0.0, 0.03, 0.06),
+                            (0.003, 0.0, 0.0, 0.003, 0.0, 0.002))
+    damping, friction, armature = 0.5 + 0.1 * k, 1.0 + 0.2 * k, 0.05 + 0.01 * k
+    tau = (sd.rnea(heavy, q, qd, qdd) + damping * qd + friction * np.tanh(qd / EPS)
+           + armature * qdd)
+    effort = tau + np.random.default_rng(2).normal(0.0, 0.05, tau.shape)
+    t_ns = (1_700_000_000 * 10 ** 9 + np.arange(len(t)) * int(1e9 / rate)).astype(np.int64)
+    bag = write(tmp_path / 'bag', model.joint_names, t_ns, q, qd, effort)
+    out = str(tmp_path / 'out')
+    assert main([bag, '--urdf', robot_urdf_path('ur5'), '--out', out, '--payload', 'tool0',
+                 '--identify', '--threshold', str(EPS), '--no-plots']) == 0
+    text = capsys.readouterr().out
+    mass = float(text.split('payload.mass: ')[1].split()[0])
+    com = [float(x) for x in text.split('payload.com: [')[1].split(']')[0].split(',')]
+    assert mass == pytest.approx(1.2, rel=0.02), text
+    np.testing.assert_allclose(com, (0.0, 0.03, 0.06), rtol=0, atol=3e-3)
+    assert "payload on 'tool0'" in text and '<mass value=' in text
+    assert 'fitted jointly with each drive' in text

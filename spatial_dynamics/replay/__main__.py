@@ -39,6 +39,7 @@ from ..bounds import JOINT_BOUNDS, MAX_GRAVITY
 from ..check import locked_item, read_description
 from .. import effort as effort_model
 from . import annotate, bags, differentiate, identify, report, splines
+from .. import identification
 
 #: The node's default ``friction_velocity_threshold`` (config/inverse_dynamics.yaml).
 NODE_THRESHOLD = 0.01
@@ -211,6 +212,24 @@ def clean(js: bags.JointStates, window: float) -> Dict:
 # --------------------------------------------------------------------------------------------
 # The bag command
 
+def print_payload(payload, names: Sequence[str], args) -> None:
+    """Print an identified payload: values with one σ, the node's parameters, a URDF tag."""
+    s = payload.sigma
+    rms = ', '.join(f'{n} {r:.3g}' for n, r in zip(names, payload.rms))
+    print(f'\npayload on {payload.link!r}: {payload.mass:.5g} kg (σ {s[0]:.2g}), centre of '
+          f'mass {np.array2string(payload.com, precision=4)} m (link frame); residual RMS '
+          f'per joint after the fit {rms}')
+    if payload.drives is not None:
+        print('  fitted jointly with each drive (damping, friction, armature; the table '
+              'above fitted the drives without the payload, use these): ' + '; '.join(
+                  f'{n} {d:.3g} {f:.3g} {a:.3g}' for n, d, f, a in zip(names, *payload.drives)))
+    print('\n# node parameters (the payload):')
+    print(payload.node_parameters(), end='')
+    print('\n<!-- URDF: the payload as an <inertial> in the frame of '
+          f'{payload.link!r} -->')
+    print(payload.urdf_inertial())
+
+
 def run_bag(args) -> int:
     """Compare measured efforts with the model over a bag; write the files; return 0."""
     stages = Stages()
@@ -249,6 +268,12 @@ def run_bag(args) -> int:
     if args.identify:
         fit = identify.identify(residual, qd, qdd, args.threshold, names)
         stages.done('identify')
+    payload = None
+    if args.payload:
+        payload = identification.identify_payload(
+            model, args.payload, q, qd, qdd, effort, args.gravity,
+            args.threshold if args.identify else None)
+        stages.done('payload')
     report.ensure_dir(args.out)
     header = ['joint', 'samples', 'rms_measured', 'rms_residual']
     rows = [[n, len(t), rms_measured[j], rms_residual[j]] for j, n in enumerate(names)]
@@ -314,6 +339,8 @@ def run_bag(args) -> int:
         print(report.node_parameters(names, fit.armature, args.threshold))
         print('\n<!-- URDF: each joint\'s <dynamics> (read by friction_model: urdf) -->')
         print(report.urdf_dynamics(names, fit.damping, fit.friction))
+    if payload is not None:
+        print_payload(payload, names, args)
     print(f'\nwritten to {args.out}: summary.csv'
           + {'csv': ', residual.csv', 'npy': ', residual.npy', 'none': ''}[args.residual]
           + ('' if args.no_plots else ', measured_vs_model.png, residual.png'))
@@ -404,6 +431,10 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument('--out', default='replay_out', help='output directory (created)')
     p.add_argument('--identify', action='store_true',
                    help='fit damping, friction and armature per joint to the residual')
+    p.add_argument('--payload', metavar='LINK',
+                   help="identify a rigid payload on LINK (mass, centre of mass, inertia) "
+                        "against the URDF without it; with --identify, jointly with each "
+                        "joint's damping, friction and armature")
     p.add_argument('--threshold', type=positive, default=NODE_THRESHOLD,
                    help='friction velocity threshold, rad/s or m/s (default: the node\'s, '
                    '%(default)g)')
