@@ -240,3 +240,142 @@ def identify_payload(model: Model, link: str, q, qd, qdd, tau,
     rms = np.sqrt(np.mean(fit.reshape(r.shape) ** 2, axis=0))
     drives = None if drive_threshold is None else tuple(x[10 + k::3] for k in range(3))
     return Payload(link, float(m), c, inertia, pi, covariance, rms, drives)
+
+
+# --------------------------------------------------------------------------------------------
+# Inertial parameters of the links: physically consistent least squares
+
+def pseudo_inertia(pi: np.ndarray) -> np.ndarray:
+    """Return the 4×4 pseudo-inertia ``[[Σ, h], [hᵀ, m]]`` of ten parameters (Wensing 2017).
+
+    ``Σ = ½ tr(Ī) 1 − Ī`` is the second moment of the mass about the frame's origin; a body is
+    physically realisable (a non-negative mass density) exactly when this matrix is positive
+    semi-definite, which covers positive mass and the triangle inequalities.
+    """
+    m, hx, hy, hz, ixx, ixy, iyy, ixz, iyz, izz = pi
+    Ibar = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    J = np.zeros((4, 4))
+    J[:3, :3] = 0.5 * np.trace(Ibar) * np.eye(3) - Ibar
+    J[:3, 3] = J[3, :3] = (hx, hy, hz)
+    J[3, 3] = m
+    return J
+
+
+def from_pseudo_inertia(J: np.ndarray) -> np.ndarray:
+    """Return the ten parameters of a pseudo-inertia (:func:`pseudo_inertia` inverted)."""
+    S = J[:3, :3]
+    Ibar = np.trace(S) * np.eye(3) - S
+    return np.array([J[3, 3], J[0, 3], J[1, 3], J[2, 3], Ibar[0, 0], Ibar[0, 1],
+                     Ibar[1, 1], Ibar[0, 2], Ibar[1, 2], Ibar[2, 2]])
+
+
+_TRIU = np.triu_indices(4)
+
+
+def log_cholesky(pi: np.ndarray, floor: float = 1e-9) -> np.ndarray:
+    """Return ``θ`` (10,) with ``pi = from_log_cholesky(θ)``: ``J = U Uᵀ``, log of U's diagonal.
+
+    (Rucker and Wensing 2022.) A ``pi`` that is not realisable is first moved to the
+    nearest realisable one (its pseudo-inertia's negative eigenvalues raised to ``floor``).
+    """
+    J = pseudo_inertia(pi)
+    w, V = np.linalg.eigh(J)
+    J = (V * np.maximum(w, floor * max(1.0, w.max()))) @ V.T
+    # J = U Uᵀ with U upper triangular: the Cholesky factor of J with rows/columns reversed
+    P = np.eye(4)[::-1]
+    U = P @ np.linalg.cholesky(P @ J @ P) @ P
+    theta = U[_TRIU].copy()
+    diag = [k for k, (i, j) in enumerate(zip(*_TRIU)) if i == j]
+    theta[diag] = np.log(theta[diag])
+    return theta
+
+
+def from_log_cholesky(theta: np.ndarray) -> np.ndarray:
+    """Return the ten parameters of ``θ`` (:func:`log_cholesky`): always realisable."""
+    U = np.zeros((4, 4))
+    U[_TRIU] = theta
+    U[np.diag_indices(4)] = np.exp(np.diag(U))
+    return from_pseudo_inertia(U @ U.T)
+
+
+@dataclass(frozen=True)
+class Inertias:
+    """Identified inertial parameters of the model's bodies (see :func:`identify_inertias`).
+
+    Attributes:
+        pi: (10·NB,) every body's parameters (the fitted ones replaced, the rest the URDF's).
+        bodies: the body indices fitted (1..NB).
+        before, after: (n,) RMS of the residual per joint with the URDF's and the fitted π.
+        drives: ``(damping, friction, armature)`` per joint, or None.
+    """
+
+    pi: np.ndarray
+    bodies: Tuple[int, ...]
+    before: np.ndarray
+    after: np.ndarray
+    drives: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+
+
+def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[str]] = None,
+                      gravity: Sequence[float] = (0.0, 0.0, -9.81),
+                      drive_threshold: Optional[float] = None,
+                      regularisation: float = 1e-3) -> Inertias:
+    """Fit the inertial parameters of ``links`` (default: every moving body) to ``tau``.
+
+    Least squares (:func:`scipy.optimize.least_squares`) on ``Y π(θ) (+ drives) − τ`` with
+    every fitted body in the log-Cholesky parameters ``θ`` (so each stays physically
+    realisable whatever the data), plus ``regularisation`` · (π − π_URDF), scaled by the
+    regressor's column norms: where the data says nothing (a combination no motion excites)
+    the URDF's values stay.
+    """
+    from scipy.optimize import least_squares
+    q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
+    n = q.shape[-1]
+    if links is None:
+        bodies = tuple(range(1, model.NB + 1))
+    else:
+        bodies = tuple(sorted({link_to_body(model, link)[0] for link in links}))
+    W = regressor(model, q, qd, qdd, gravity).reshape(-1, 10 * model.NB)
+    b = tau.reshape(-1)
+    pi0 = parameters(model)
+    cols = np.concatenate([np.arange(10 * (i - 1), 10 * i) for i in bodies])
+    fixed = np.setdiff1d(np.arange(10 * model.NB), cols)
+    b_fit = b - W[:, fixed] @ pi0[fixed]
+    A = W[:, cols]
+    if drive_threshold is not None:
+        drive = np.zeros((len(q), n, 3 * n))
+        for j in range(n):
+            drive[:, j, 3 * j:3 * j + 3] = np.column_stack(
+                [qd[:, j], np.tanh(qd[:, j] / drive_threshold), qdd[:, j]])
+        A = np.hstack([A, drive.reshape(-1, 3 * n)])
+    scale = np.linalg.norm(A[:, :len(cols)], axis=0)
+    weight = regularisation * np.where(scale > 0, scale, scale.max() or 1.0)
+    ndrive = A.shape[1] - len(cols)
+    theta0 = np.concatenate([log_cholesky(pi0[10 * (i - 1):10 * i]) for i in bodies])
+
+    def pi_of(x):
+        return np.concatenate([from_log_cholesky(x[10 * k:10 * k + 10])
+                               for k in range(len(bodies))])
+
+    # |A x − b|² = |R x − c|² + const with [R c] the triangle of [A b]'s QR: the fit runs
+    # on as many rows as unknowns, whatever the length of the recording
+    Rc = np.linalg.qr(np.column_stack([A, b_fit]), mode='r')
+    R, c = Rc[:, :-1], Rc[:, -1]
+
+    def residual(x):
+        p = pi_of(x[:10 * len(bodies)])
+        full = np.concatenate([p, x[10 * len(bodies):]])
+        return np.concatenate([R @ full - c, weight * (p - pi0[cols])])
+
+    x0 = np.concatenate([theta0, np.zeros(ndrive)])
+    result = least_squares(residual, x0, method='trf', x_scale='jac')
+    pi = pi0.copy()
+    pi[cols] = pi_of(result.x[:10 * len(bodies)])
+    fit_drive = result.x[10 * len(bodies):]
+    predicted = W @ pi
+    if ndrive:
+        predicted = predicted + drive.reshape(-1, 3 * n) @ fit_drive
+    before = np.sqrt(np.mean((b - W @ pi0).reshape(tau.shape) ** 2, axis=0))
+    after = np.sqrt(np.mean((b - predicted).reshape(tau.shape) ** 2, axis=0))
+    drives = None if not ndrive else tuple(fit_drive[k::3] for k in range(3))
+    return Inertias(pi, bodies, before, after, drives)

@@ -117,3 +117,54 @@ def test_a_payload_the_recording_cannot_tell_is_refused_with_why():
         identify_payload(model, 'tool0', q, qd, qdd, tau)
     with pytest.raises(ValueError, match="link 'gripper' is not a link"):
         identify_payload(model, 'gripper', q, qd, qdd, tau)
+
+
+def perturbed_ur5(seed=1):
+    """The UR5 and a 'true' one: every body 25 % heavier (all ten parameters), centres moved."""
+    from dataclasses import replace
+    from spatial_dynamics.identification import _spatial_inertia
+    model = sd.Model.from_urdf(robot_urdf_path('ur5'))
+    rng = np.random.default_rng(seed)
+    inertia = np.array(model.inertia)
+    pi = parameters(model)
+    for i in range(model.NB):
+        p = 1.25 * pi[10 * i:10 * i + 10]
+        p[1:4] += p[0] * rng.normal(0.0, 0.01, 3)          # ~1 cm shifts
+        inertia[i + 1] = _spatial_inertia(p)
+    return model, replace(model, inertia=inertia)
+
+
+def test_inertias_fitted_stay_physical_and_predict_held_out_motion():
+    """Fit all bodies of a UR5 whose URDF is 25 % off, on noisy torques; check on new motion."""
+    from spatial_dynamics.identification import identify_inertias, pseudo_inertia
+    model, true = perturbed_ur5()
+    q, qd, qdd = random_states(model, 1500, seed=2)
+    noise = 0.05
+    tau = sd.rnea(true, q, qd, qdd) + np.random.default_rng(3).normal(0.0, noise, q.shape)
+    fit = identify_inertias(model, q, qd, qdd, tau)
+    np.testing.assert_allclose(fit.after, noise, rtol=0.1)          # down to the noise
+    assert (fit.before > 5 * noise).sum() >= 4                      # the URDF was far off
+    for i in range(model.NB):                                        # every body realisable
+        assert np.linalg.eigvalsh(pseudo_inertia(fit.pi[10 * i:10 * i + 10])).min() >= 0.0
+    # held-out motion the fit never saw: within 2x the noise, the URDF's error far above
+    qv, qdv, qddv = random_states(model, 300, seed=9)
+    truth = sd.rnea(true, qv, qdv, qddv)
+    Y = sd.regressor(model, qv, qdv, qddv)
+    fitted = np.sqrt(np.mean((Y @ fit.pi - truth) ** 2, axis=0))
+    urdf = np.sqrt(np.mean((Y @ parameters(model) - truth) ** 2, axis=0))
+    assert (fitted < 2 * noise).all(), fitted
+    assert (urdf > 10 * fitted).sum() >= 4, (urdf, fitted)
+
+
+def test_what_the_recording_cannot_tell_stays_at_the_urdf_values():
+    """Only joint 2 moves: the shoulder link's mass (felt by no torque) keeps its URDF value."""
+    from spatial_dynamics.identification import identify_inertias
+    model, true = perturbed_ur5()
+    q, qd, qdd = random_states(model, 400, seed=3)
+    held = [0, 2, 3, 4, 5]
+    q[:, held] = q[0, held]
+    qd[:, held] = qdd[:, held] = 0.0
+    fit = identify_inertias(model, q, qd, qdd, sd.rnea(true, q, qd, qdd))
+    urdf = parameters(model)
+    assert fit.pi[0] == pytest.approx(urdf[0], rel=1e-6)   # m of shoulder_link
+    assert fit.after.max() < 1e-3 * max(1.0, fit.before.max())   # what is felt, is fitted
