@@ -298,6 +298,19 @@ def from_log_cholesky(theta: np.ndarray) -> np.ndarray:
     return from_pseudo_inertia(U @ U.T)
 
 
+def log_cholesky_jacobian(theta: np.ndarray) -> np.ndarray:
+    """Return ``∂π/∂θ`` (10×10) of :func:`from_log_cholesky` (exact: π is linear in J)."""
+    U = np.zeros((4, 4))
+    U[_TRIU] = theta
+    U[np.diag_indices(4)] = np.exp(np.diag(U))
+    out = np.zeros((10, 10))
+    for k, (i, j) in enumerate(zip(*_TRIU)):
+        dU = np.zeros((4, 4))
+        dU[i, j] = U[i, j] if i == j else 1.0
+        out[:, k] = from_pseudo_inertia(dU @ U.T + U @ dU.T)
+    return out
+
+
 @dataclass(frozen=True)
 class Inertias:
     """Identified inertial parameters of the model's bodies (see :func:`identify_inertias`).
@@ -322,7 +335,8 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
                       regularisation: float = 1e-3) -> Inertias:
     """Fit the inertial parameters of ``links`` (default: every moving body) to ``tau``.
 
-    Least squares (:func:`scipy.optimize.least_squares`) on ``Y π(θ) (+ drives) − τ`` with
+    Least squares (:func:`scipy.optimize.least_squares`, Levenberg-Marquardt, the exact
+    Jacobian) on ``Y π(θ) (+ drives) − τ`` with
     every fitted body in the log-Cholesky parameters ``θ`` (so each stays physically
     realisable whatever the data), plus ``regularisation`` · (π − π_URDF), scaled by the
     regressor's column norms: where the data says nothing (a combination no motion excites)
@@ -367,8 +381,19 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
         full = np.concatenate([p, x[10 * len(bodies):]])
         return np.concatenate([R @ full - c, weight * (p - pi0[cols])])
 
+    nb = 10 * len(bodies)
+
+    def jacobian(x):
+        D = np.zeros((nb, nb))
+        for k in range(len(bodies)):
+            D[10 * k:10 * k + 10, 10 * k:10 * k + 10] = log_cholesky_jacobian(
+                x[10 * k:10 * k + 10])
+        top = np.hstack([R[:, :nb] @ D, R[:, nb:]])
+        bottom = np.hstack([weight[:, None] * D, np.zeros((nb, ndrive))])
+        return np.vstack([top, bottom])
+
     x0 = np.concatenate([theta0, np.zeros(ndrive)])
-    result = least_squares(residual, x0, method='trf', x_scale='jac')
+    result = least_squares(residual, x0, jac=jacobian, method='lm', x_scale='jac')
     pi = pi0.copy()
     pi[cols] = pi_of(result.x[:10 * len(bodies)])
     fit_drive = result.x[10 * len(bodies):]
