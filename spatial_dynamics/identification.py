@@ -273,7 +273,9 @@ _TRIU = np.triu_indices(4)
 
 
 def log_cholesky(pi: np.ndarray, floor: float = 1e-9) -> np.ndarray:
-    """Return ``θ`` (10,) with ``pi = from_log_cholesky(θ)``: ``J = U Uᵀ``, log of U's diagonal.
+    """Return the log-Cholesky coordinates θ (10,) of ``pi``: ``J = U Uᵀ``, log of U's diagonal.
+
+    ``from_log_cholesky(θ)`` gives ``pi`` back.
 
     (Rucker and Wensing 2022.) A ``pi`` that is not realisable is first moved to the
     nearest realisable one (its pseudo-inertia's negative eigenvalues raised to ``floor``).

@@ -120,7 +120,10 @@ def test_a_payload_the_recording_cannot_tell_is_refused_with_why():
 
 
 def perturbed_ur5(seed=1):
-    """The UR5 and a 'true' one: every body 25 % heavier (all ten parameters), centres moved."""
+    """Return the UR5 and a 'true' one: every body 25 % heavier (all ten parameters).
+
+    The centres of mass are moved too.
+    """
     from dataclasses import replace
     from spatial_dynamics.identification import _spatial_inertia
     model = sd.Model.from_urdf(robot_urdf_path('ur5'))
