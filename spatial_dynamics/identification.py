@@ -20,12 +20,13 @@ state is a parameter no torque depends on at all.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .algorithms.regressor import parameters, PARAMETERS, regressor
+from .backends import rnea
 from .model import Model
 
 #: A pivot of ``R`` below ``RTOL`` times the largest counts as zero (the rank's threshold).
@@ -117,6 +118,49 @@ def base_parameters(model: Model, states: Optional[Sequence[np.ndarray]] = None,
     K = np.linalg.solve(R[:r, :r], R[:r, r:])
     K[np.abs(K) < 1e-12] = 0.0
     return BaseParameters(parameter_names(model), P[:r].copy(), P[r:].copy(), K, unexcited)
+
+
+#: A base parameter the recording excites less than WEAK times as well as random motion over
+#: the joint limits does (in the recording's direction least like the others) counts as not
+#: determined: its error is the noise amplified by more than 1/WEAK.
+WEAK = 0.02
+
+
+def poorly_excited(model: Model, states: Sequence[np.ndarray], bodies: Sequence[int],
+                   gravity: Sequence[float] = (0.0, 0.0, -9.81), weak: float = WEAK,
+                   samples: int = 4000) -> List[str]:
+    """Name the base parameters of ``bodies`` a recording's ``states`` do not determine.
+
+    The structural base parameters (:func:`base_parameters` over random states, what any
+    motion could determine) are the columns; each is scaled so that random motion over the
+    joint limits gives it unit RMS per sample; a pivoted QR of the recording's scaled base
+    regressor (at most ``samples`` states, evenly spaced) then finds the combinations whose
+    pivot is below ``weak``: what this recording leaves to the URDF (or to chance).
+    """
+    from scipy.linalg import qr
+    structural = base_parameters(model, gravity=gravity)
+    wanted = set(int(i) for i in bodies)
+
+    def involved(k):
+        used = [structural.independent[k]] + [
+            d for d, c in zip(structural.dependent, structural.K[k]) if abs(c) > SHOWN]
+        return {int(i) // 10 + 1 for i in used}
+
+    keep = [k for k in range(structural.rank) if involved(k) & wanted]
+    if not keep:
+        return []
+    q, qd, qdd = (np.atleast_2d(np.asarray(x, dtype=float)) for x in states)
+    step = max(1, len(q) // samples)
+    W = structural.columns(regressor(model, q[::step], qd[::step], qdd[::step], gravity)
+                           ).reshape(-1, structural.rank)
+    Wr = structural.columns(regressor(model, *random_states(model, 400, seed=1), gravity)
+                            ).reshape(-1, structural.rank)
+    # column k then has norm (RMS in the recording) / (RMS under random motion)
+    scale = np.linalg.norm(Wr, axis=0) * np.sqrt(len(W) / len(Wr))
+    R, P = qr(W / scale, mode='r', pivoting=True)
+    d = np.zeros(structural.rank)
+    d[P[:min(R.shape)]] = np.abs(np.diag(R))
+    return [structural.describe(k) for k in keep if d[k] < weak]
 
 
 # --------------------------------------------------------------------------------------------
@@ -292,11 +336,16 @@ def log_cholesky(pi: np.ndarray, floor: float = 1e-9) -> np.ndarray:
     return theta
 
 
+#: |log| of U's diagonal beyond which a trial step of the solver is cut (e^±40: far beyond
+#: any body; the cut keeps a wild step finite, so the solver rejects it instead of failing).
+LOG_LIMIT = 40.0
+
+
 def from_log_cholesky(theta: np.ndarray) -> np.ndarray:
     """Return the ten parameters of ``θ`` (:func:`log_cholesky`): always realisable."""
     U = np.zeros((4, 4))
     U[_TRIU] = theta
-    U[np.diag_indices(4)] = np.exp(np.diag(U))
+    U[np.diag_indices(4)] = np.exp(np.clip(np.diag(U), -LOG_LIMIT, LOG_LIMIT))
     return from_pseudo_inertia(U @ U.T)
 
 
@@ -304,13 +353,63 @@ def log_cholesky_jacobian(theta: np.ndarray) -> np.ndarray:
     """Return ``∂π/∂θ`` (10×10) of :func:`from_log_cholesky` (exact: π is linear in J)."""
     U = np.zeros((4, 4))
     U[_TRIU] = theta
-    U[np.diag_indices(4)] = np.exp(np.diag(U))
+    U[np.diag_indices(4)] = np.exp(np.clip(np.diag(U), -LOG_LIMIT, LOG_LIMIT))
     out = np.zeros((10, 10))
     for k, (i, j) in enumerate(zip(*_TRIU)):
         dU = np.zeros((4, 4))
         dU[i, j] = U[i, j] if i == j else 1.0
         out[:, k] = from_pseudo_inertia(dU @ U.T + U @ dU.T)
     return out
+
+
+#: Samples whose regressor rows are formed at once: the stacked regressor of an hour at 1 kHz
+#: would take gigabytes, its running triangle a few kilobytes.
+CHUNK = 20_000
+
+
+def _drive_columns(qd: np.ndarray, qdd: np.ndarray, threshold: float) -> np.ndarray:
+    """Return (N, n, 3n): joint j's damping, Coulomb friction and armature columns."""
+    N, n = qd.shape
+    drive = np.zeros((N, n, 3 * n))
+    for j in range(n):
+        drive[:, j, 3 * j] = qd[:, j]
+        drive[:, j, 3 * j + 1] = np.tanh(qd[:, j] / threshold)
+        drive[:, j, 3 * j + 2] = qdd[:, j]
+    return drive
+
+
+def drive_torque(qd, qdd, drives, threshold: float) -> np.ndarray:
+    """Return ``damping q̇ + friction tanh(q̇/threshold) + armature q̈`` per joint."""
+    damping, friction, armature = drives
+    return damping * qd + friction * np.tanh(qd / threshold) + armature * qdd
+
+
+def _triangle(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarray,
+              pi0: np.ndarray, drive_threshold: Optional[float]) -> Tuple[np.ndarray, float]:
+    """Return ``[R c]``, the triangle of the QR of ``[A b]``, and ``|b|²``, chunk by chunk.
+
+    ``A`` is the regressor's ``cols`` (then the drive columns), ``b`` the torque less what the
+    other columns give with ``pi0``. ``|A x − b|² = |R x − c|² + |b|² − |c|²``: the fit runs
+    on as many rows as unknowns, whatever the length of the recording.
+    """
+    q, qd, qdd = states
+    fixed = np.setdiff1d(np.arange(10 * model.NB), cols)
+    Rc = None
+    bb = 0.0
+    for a in range(0, len(q), CHUNK):
+        part = slice(a, a + CHUNK)
+        Y = regressor(model, q[part], qd[part], qdd[part], gravity)
+        b = (tau[part] - Y[..., fixed] @ pi0[fixed]).reshape(-1)
+        blocks = [Y[..., cols].reshape(len(b), -1)]
+        if drive_threshold is not None:
+            blocks.append(_drive_columns(qd[part], qdd[part], drive_threshold)
+                          .reshape(len(b), -1))
+        rows = np.column_stack(blocks + [b])
+        if Rc is not None:
+            rows = np.vstack([Rc, rows])
+        Rc = np.linalg.qr(rows, mode='r')
+        bb += float(b @ b)
+    return Rc, bb
 
 
 @dataclass(frozen=True)
@@ -320,15 +419,45 @@ class Inertias:
     Attributes:
         pi: (10·NB,) every body's parameters (the fitted ones replaced, the rest the URDF's).
         bodies: the body indices fitted (1..NB).
-        before, after: (n,) RMS of the residual per joint with the URDF's and the fitted π.
+        before, after: (n,) RMS of the residual per joint with the URDF's and the fitted π
+            (and drives).
+        covariance: (10·len(bodies), 10·len(bodies)) the fitted parameters' covariance,
+            from the residual and the regularised normal equations.
         drives: ``(damping, friction, armature)`` per joint, or None.
+        drive_threshold: the friction's smooth-sign velocity, with ``drives``.
+        undetermined: (10·len(bodies),) 0 when the data determines the parameter by itself,
+            1 when it does not (it is in no combination the data sees, or only in
+            combinations with others, and the regularisation toward the URDF chose its
+            value): ``diag((AᵀA + W²)⁻¹ W²)``.
     """
 
     pi: np.ndarray
     bodies: Tuple[int, ...]
     before: np.ndarray
     after: np.ndarray
+    covariance: np.ndarray
     drives: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+    drive_threshold: Optional[float] = None
+    undetermined: Optional[np.ndarray] = None
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """One standard deviation of each fitted parameter (bodies in order, ten each)."""
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    def model(self, model: Model) -> Model:
+        """Return ``model`` with the identified inertias (drives are not part of a model)."""
+        inertia = np.array(model.inertia)
+        for i in self.bodies:
+            inertia[i] = _spatial_inertia(self.pi[10 * (i - 1):10 * i])
+        return replace(model, inertia=inertia)
+
+    def predict(self, model: Model, q, qd, qdd, gravity=(0.0, 0.0, -9.81)) -> np.ndarray:
+        """Return the torque the identified model (and drives) gives on the states."""
+        tau = rnea(self.model(model), q, qd, qdd, gravity)
+        if self.drives is not None:
+            tau = tau + drive_torque(qd, qdd, self.drives, self.drive_threshold)
+        return tau
 
 
 def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[str]] = None,
@@ -337,12 +466,15 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
                       regularisation: float = 1e-3) -> Inertias:
     """Fit the inertial parameters of ``links`` (default: every moving body) to ``tau``.
 
-    Least squares (:func:`scipy.optimize.least_squares`, Levenberg-Marquardt, the exact
-    Jacobian) on ``Y π(θ) (+ drives) − τ`` with
-    every fitted body in the log-Cholesky parameters ``θ`` (so each stays physically
-    realisable whatever the data), plus ``regularisation`` · (π − π_URDF), scaled by the
-    regressor's column norms: where the data says nothing (a combination no motion excites)
-    the URDF's values stay.
+    Least squares (:func:`scipy.optimize.least_squares`, trust region, the exact Jacobian,
+    unscaled: scaling by the Jacobian's columns sends the barely excited ones flying) on
+    ``Y π(θ) (+ drives) − τ`` with every fitted body in the log-Cholesky
+    parameters ``θ`` (so each stays physically realisable whatever the data), plus
+    ``regularisation`` · (π − π_URDF), scaled by the regressor's column norms: where the data
+    says nothing (a combination no motion excites) the URDF's values stay. With
+    ``drive_threshold`` each joint's damping, Coulomb friction (``tanh(q̇/threshold)``) and
+    armature are fitted jointly. The recording is reduced chunk by chunk to a triangle
+    (:func:`_triangle`), so its length costs time, not memory.
     """
     from scipy.optimize import least_squares
     q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
@@ -351,39 +483,24 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
         bodies = tuple(range(1, model.NB + 1))
     else:
         bodies = tuple(sorted({link_to_body(model, link)[0] for link in links}))
-    W = regressor(model, q, qd, qdd, gravity).reshape(-1, 10 * model.NB)
-    b = tau.reshape(-1)
     pi0 = parameters(model)
     cols = np.concatenate([np.arange(10 * (i - 1), 10 * i) for i in bodies])
-    fixed = np.setdiff1d(np.arange(10 * model.NB), cols)
-    b_fit = b - W[:, fixed] @ pi0[fixed]
-    A = W[:, cols]
-    if drive_threshold is not None:
-        drive = np.zeros((len(q), n, 3 * n))
-        for j in range(n):
-            drive[:, j, 3 * j:3 * j + 3] = np.column_stack(
-                [qd[:, j], np.tanh(qd[:, j] / drive_threshold), qdd[:, j]])
-        A = np.hstack([A, drive.reshape(-1, 3 * n)])
-    scale = np.linalg.norm(A[:, :len(cols)], axis=0)
+    Rc, bb = _triangle(model, (q, qd, qdd), tau, gravity, cols, pi0, drive_threshold)
+    R, c = Rc[:, :-1], Rc[:, -1]
+    nb = 10 * len(bodies)
+    ndrive = R.shape[1] - nb
+    scale = np.linalg.norm(R[:, :nb], axis=0)            # = the column norms of A
     weight = regularisation * np.where(scale > 0, scale, scale.max() or 1.0)
-    ndrive = A.shape[1] - len(cols)
     theta0 = np.concatenate([log_cholesky(pi0[10 * (i - 1):10 * i]) for i in bodies])
 
     def pi_of(x):
         return np.concatenate([from_log_cholesky(x[10 * k:10 * k + 10])
                                for k in range(len(bodies))])
 
-    # |A x − b|² = |R x − c|² + const with [R c] the triangle of [A b]'s QR: the fit runs
-    # on as many rows as unknowns, whatever the length of the recording
-    Rc = np.linalg.qr(np.column_stack([A, b_fit]), mode='r')
-    R, c = Rc[:, :-1], Rc[:, -1]
-
     def residual(x):
-        p = pi_of(x[:10 * len(bodies)])
-        full = np.concatenate([p, x[10 * len(bodies):]])
+        p = pi_of(x[:nb])
+        full = np.concatenate([p, x[nb:]])
         return np.concatenate([R @ full - c, weight * (p - pi0[cols])])
-
-    nb = 10 * len(bodies)
 
     def jacobian(x):
         D = np.zeros((nb, nb))
@@ -395,14 +512,26 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
         return np.vstack([top, bottom])
 
     x0 = np.concatenate([theta0, np.zeros(ndrive)])
-    result = least_squares(residual, x0, jac=jacobian, method='lm', x_scale='jac')
+    result = least_squares(residual, x0, jac=jacobian, method='trf', x_scale=1.0)
     pi = pi0.copy()
-    pi[cols] = pi_of(result.x[:10 * len(bodies)])
-    fit_drive = result.x[10 * len(bodies):]
-    predicted = W @ pi
-    if ndrive:
-        predicted = predicted + drive.reshape(-1, 3 * n) @ fit_drive
-    before = np.sqrt(np.mean((b - W @ pi0).reshape(tau.shape) ** 2, axis=0))
-    after = np.sqrt(np.mean((b - predicted).reshape(tau.shape) ** 2, axis=0))
-    drives = None if not ndrive else tuple(fit_drive[k::3] for k in range(3))
-    return Inertias(pi, bodies, before, after, drives)
+    fitted = pi_of(result.x[:nb])
+    pi[cols] = fitted
+    drives = None if not ndrive else tuple(result.x[nb + k::3] for k in range(3))
+    found = Inertias(pi, bodies, np.zeros(n), np.zeros(n), np.zeros((nb, nb)), drives,
+                     drive_threshold if ndrive else None)
+    before, after = np.zeros(n), np.zeros(n)
+    for a in range(0, len(q), CHUNK):
+        part = slice(a, a + CHUNK)
+        before += np.sum((tau[part] - rnea(model, q[part], qd[part], qdd[part], gravity)) ** 2,
+                         axis=0)
+        after += np.sum((tau[part] - found.predict(model, q[part], qd[part], qdd[part],
+                                                   gravity)) ** 2, axis=0)
+    rows = tau.size
+    # the covariance of the linearised, regularised estimate: s² (AᵀA + W²)⁻¹
+    s2 = float(after.sum()) / max(rows - R.shape[1], 1)
+    normal = R.T @ R
+    normal[np.arange(nb), np.arange(nb)] += weight ** 2
+    inverse = np.linalg.pinv(normal)[:nb, :nb]
+    return replace(found, before=np.sqrt(before / len(q)), after=np.sqrt(after / len(q)),
+                   covariance=s2 * inverse,
+                   undetermined=np.clip(np.diag(inverse) * weight ** 2, 0.0, 1.0))

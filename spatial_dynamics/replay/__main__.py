@@ -4,6 +4,8 @@
 
     python -m spatial_dynamics.replay BAG --urdf URDF [--topic /joint_states] [--out DIR]
                                       [--identify] [--threshold 0.01] [--window 0.05]
+                                      [--inertias [LINK ...] | --payload LINK]
+                                      [--validate BAG] [--write-urdf OUT.urdf]
     python -m spatial_dynamics.replay --urdf URDF --trajectory FILE.yaml [--rate 1000]
     python -m spatial_dynamics.replay BAG --urdf URDF --trajectory-topic /arm/joint_trajectory
     ros2 run spatial_dynamics replay ...
@@ -14,6 +16,14 @@ the bag has no velocities). The model torque is the rigid-body RNEA for the whol
 batched call. Written to DIR: summary.csv (per joint), residual.csv (per sample: t, measured
 - model per joint), measured_vs_model.png, residual.png. ``--identify`` fits per-joint
 damping, Coulomb friction (tanh(q̇/threshold), as the node) and armature to the residual.
+
+``--inertias [LINK ...]`` fits the inertial parameters of the links (default all moving ones;
+physically consistent, regularised toward the URDF; with ``--identify`` jointly with the
+drives) and warns, naming them, about the combinations the recording does not determine;
+``--payload LINK`` fits a payload. What was identified is checked on a held-out recording
+(``--validate BAG``: the residual with the URDF and with the correction, validation.csv,
+identification.png), listed with one σ (parameters.csv), and ``--write-urdf OUT.urdf``
+writes the URDF with only the identified ``<inertial>`` and ``<dynamics>`` replaced.
 
 A trajectory (``--trajectory`` YAML or ``--trajectory-topic``) is sampled like
 joint_trajectory_controller's splines at ``--rate`` and τ compared with the URDF effort limits.
@@ -40,6 +50,8 @@ from ..check import locked_item, read_description
 from .. import effort as effort_model
 from . import annotate, bags, differentiate, identify, report, splines
 from .. import identification
+from ..urdf import read_urdf_file
+from . import correction as correction_of
 
 #: The node's default ``friction_velocity_threshold`` (config/inverse_dynamics.yaml).
 NODE_THRESHOLD = 0.01
@@ -230,21 +242,22 @@ def print_payload(payload, names: Sequence[str], args) -> None:
     print(payload.urdf_inertial())
 
 
-def run_bag(args) -> int:
-    """Compare measured efforts with the model over a bag; write the files; return 0."""
-    stages = Stages()
-    model = load_model(args)
-    names = model.joint_names
-    stages.done('model')
+def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
+    """Read, clean and differentiate ``bag``: ``{t, q, qd, qdd, effort, ...}`` for the model.
+
+    ``effort`` is what the model's torque is compared with (``--measured-effort``); the rest
+    of the keys are :func:`clean`'s and ``js`` (the messages read), ``source`` and
+    ``resampled`` (how q̈ was found).
+    """
     bar = Progress('reading')
     try:
-        js = bags.read_joint_states(args.bag, args.topic, names, fast=not args.generic,
+        js = bags.read_joint_states(bag, args.topic, model.joint_names, fast=not args.generic,
                                     progress=bar)
     finally:
         bar.close()
     stages.done('read+decode')
     s = clean(js, args.window)
-    t, q, effort, spans = s['t'], s['q'], s['effort'], s['spans']
+    t, q, spans = s['t'], s['q'], s['spans']
     stages.done('clean+sort')
     if s['qd'] is not None:
         # the same zero-phase smoother on the measured velocity: without it the velocity
@@ -258,8 +271,27 @@ def run_bag(args) -> int:
         qdd = differentiate.derivatives(t, q, args.window, args.order, 2, spans)[0]
         source = 'position (the bag has no velocities)'
     stages.done('differentiate')
+    effort = effort_model.with_gravity(model, q, s['effort'], args.measured_effort,
+                                       args.gravity)
+    return dict(s, qd=qd, qdd=qdd, effort=effort, js=js, source=source, resampled=resampled)
+
+
+def run_bag(args) -> int:
+    """Compare measured efforts with the model over a bag; write the files; return 0."""
+    stages = Stages()
+    model = load_model(args)
+    names = model.joint_names
+    stages.done('model')
+    if args.inertias:
+        for link in args.inertias:
+            if link not in model.frames:
+                raise Refused(f'--inertias: {link!r} is not a link of {model.name!r}')
+    if args.payload and args.payload not in model.frames:
+        raise Refused(f'--payload: {args.payload!r} is not a link of {model.name!r}')
+    s = recording(args, args.bag, model, stages)
+    js, t, q, qd, qdd, effort = (s[k] for k in ('js', 't', 'q', 'qd', 'qdd', 'effort'))
+    spans, source, resampled = s['spans'], s['source'], s['resampled']
     tau = rnea(model, q, qd, qdd, args.gravity)
-    effort = effort_model.with_gravity(model, q, effort, args.measured_effort, args.gravity)
     residual = effort - tau
     stages.done('rnea')
     rms_measured = np.sqrt(np.mean(effort ** 2, axis=0))
@@ -274,6 +306,23 @@ def run_bag(args) -> int:
             model, args.payload, q, qd, qdd, effort, args.gravity,
             args.threshold if args.identify else None)
         stages.done('payload')
+    correction, excitation_warning = None, ''
+    if args.inertias is not None:
+        found = identification.identify_inertias(
+            model, q, qd, qdd, effort, args.inertias or None, args.gravity,
+            args.threshold if args.identify else None)
+        correction = correction_of.from_inertias(model, found, args.threshold)
+        excitation_warning = correction_of.undetermined_warning(
+            model, s, found.bodies, args.gravity)
+        stages.done('inertias')
+    elif payload is not None:
+        correction = correction_of.Correction(model, payload=payload, drives=payload.drives,
+                                              threshold=args.threshold)
+    elif fit is not None:
+        correction = correction_of.Correction(
+            model, drives=tuple(np.nan_to_num(x) for x in (fit.damping, fit.friction,
+                                                           fit.armature)),
+            threshold=args.threshold)
     report.ensure_dir(args.out)
     header = ['joint', 'samples', 'rms_measured', 'rms_residual']
     rows = [[n, len(t), rms_measured[j], rms_residual[j]] for j, n in enumerate(names)]
@@ -341,12 +390,56 @@ def run_bag(args) -> int:
         print(report.urdf_dynamics(names, fit.damping, fit.friction))
     if payload is not None:
         print_payload(payload, names, args)
-    print(f'\nwritten to {args.out}: summary.csv'
-          + {'csv': ', residual.csv', 'npy': ', residual.npy', 'none': ''}[args.residual]
-          + ('' if args.no_plots else ', measured_vs_model.png, residual.png'))
+    written = ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
+                                 'none': []}[args.residual]
+    if not args.no_plots:
+        written += ['measured_vs_model.png', 'residual.png']
+    if correction is not None:
+        written += corrected(args, model, correction, s, stages)
+    if excitation_warning:
+        print(excitation_warning, file=sys.stderr)
+    print(f'\nwritten to {args.out}: {", ".join(written)}')
     if args.timings:
         print('stages:\n' + stages.text(), file=sys.stderr)
     return 0
+
+
+def corrected(args, model: Model, correction, data: Dict, stages: Stages) -> List[str]:
+    """Report a correction: inertias, residual before and after (held-out), files written."""
+    written = ['parameters.csv', 'validation.csv']
+    if correction.bodies:
+        correction_of.print_inertias(correction)
+        if correction.drives is not None:
+            print('  fitted jointly with each drive (damping, friction, armature; the table '
+                  'above fitted the drives without the inertias, use these): ' + '; '.join(
+                      f'{n} {d:.3g} {f:.3g} {a:.3g}'
+                      for n, d, f, a in zip(model.joint_names, *correction.drives)))
+    correction_of.write_parameters(correction, args.out)
+    train = correction_of.residuals(correction, data, args.gravity)
+    held = None
+    if args.validate:
+        held = correction_of.residuals(correction, recording(args, args.validate, model,
+                                                             stages), args.gravity)
+        stages.done('validate')
+    correction_of.print_validation(model.joint_names, train, held, args.out,
+                                   not args.no_plots)
+    if not args.no_plots:
+        written.append('identification.png')
+    if args.write_urdf:
+        if args.urdf.endswith('.xacro'):
+            text = read_description(args.urdf)
+            print(f'note: {args.urdf} is a xacro file: {args.write_urdf} is its expansion '
+                  'with the identified elements replaced')
+        else:
+            text = read_urdf_file(args.urdf)
+        for note in correction.write_urdf(text, args.write_urdf):
+            print(f'note: {note}')
+        print(f'\ncorrected URDF: {args.write_urdf} (only the identified <inertial> and '
+              '<dynamics> elements differ from ' + os.path.basename(args.urdf) + ')')
+        if correction.drives is not None:
+            print('  with the node: friction_model: urdf, friction_velocity_threshold: '
+                  f'{args.threshold:g} and the armature above')
+    return written
 
 
 # --------------------------------------------------------------------------------------------
@@ -435,6 +528,16 @@ def parser() -> argparse.ArgumentParser:
                    help="identify a rigid payload on LINK (mass, centre of mass, inertia) "
                         "against the URDF without it; with --identify, jointly with each "
                         "joint's damping, friction and armature")
+    p.add_argument('--inertias', nargs='*', metavar='LINK',
+                   help='identify the inertial parameters of these links (default: every '
+                   'moving one), physically consistent, regularised toward the URDF; with '
+                   '--identify jointly with the drives')
+    p.add_argument('--validate', metavar='BAG',
+                   help='a held-out recording: the residual with the URDF and with what was '
+                   'identified (--inertias, --payload, --identify)')
+    p.add_argument('--write-urdf', metavar='OUT.urdf',
+                   help='write the URDF with only the identified <inertial> and <dynamics> '
+                   'elements replaced')
     p.add_argument('--threshold', type=positive, default=NODE_THRESHOLD,
                    help='friction velocity threshold, rad/s or m/s (default: the node\'s, '
                    '%(default)g)')
@@ -510,6 +613,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         p.error('--locked needs --joints (the joints kept movable)')
     if args.annotate and not args.trajectory:
         p.error('--annotate needs --trajectory FILE.yaml')
+    identifies = args.inertias is not None or args.payload or args.identify
+    if (args.validate or args.write_urdf) and not identifies:
+        p.error('--validate and --write-urdf need something identified: --inertias, '
+                '--payload or --identify')
+    if args.inertias is not None and args.payload:
+        p.error('--inertias and --payload exclude each other (--inertias fits the payload '
+                'with the link that holds it)')
+    if identifies and (args.trajectory or args.trajectory_topic):
+        p.error('--inertias, --payload and --identify work on a recording, not with '
+                '--trajectory or --trajectory-topic')
     if float(np.linalg.norm(args.gravity)) > MAX_GRAVITY:
         p.error(f'--gravity: |g| = {np.linalg.norm(args.gravity):g} m/s^2, more than '
                 f'{MAX_GRAVITY:g} (100 g) cannot be a mounting')
