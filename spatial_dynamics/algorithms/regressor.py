@@ -17,8 +17,9 @@ in the body frame: Pinocchio's ``Inertia.toDynamicParameters`` order). With ``h 
 (``[ω; v]`` the body's velocity, ``[ω̇; a]`` its acceleration with gravity as a base
 acceleration, RBDA §5.3), so ``f_i = K(v_i, a_i) π_i`` with ``K`` 6×10. The backward pass
 then carries ``K`` instead of ``f``: the column block of body ``i`` in the row of joint ``j``
-is ``S_jᵀ (ʲX_i)* K_i`` for every ``i`` in the subtree of ``j``. The forward pass is
-:func:`~spatial_dynamics.algorithms.rnea.rnea_spatial`'s, on 6×6 matrices, batched; bodies
+is ``S_jᵀ (ʲX_i)* K_i = (ⁱX_j S_j)ᵀ K_i`` for every ``i`` in the subtree of ``j``, so one
+forward pass carries each body's ancestors' joint axes into its frame and no backward pass is
+needed. The pass is :func:`~spatial_dynamics.algorithms.rnea.rnea_spatial`'s, batched; bodies
 are the model's moving bodies (``model.body_names[1:]``, fixed-joint links lumped into them),
 mimic joints fold onto their source as in ``rnea``.
 """
@@ -74,27 +75,28 @@ def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = (0.0, 0.0, -9
     a_grav = np.concatenate([np.zeros(3), as_vector('gravity', gravity, 3)])
     batch = q.shape[:-1]
     NB = model.NB
-    Xup, S, F = [None] * (NB + 1), [None] * (NB + 1), [None] * (NB + 1)
+    n = q.shape[-1]
+    Y = np.zeros(batch + (n, 10 * NB))
     v = [np.zeros(batch + (6,))] + [None] * NB
     a = [np.broadcast_to(-a_grav, batch + (6,))] + [None] * NB
+    # axes[i]: the motion subspaces of body i and its moving ancestors in body i's frame,
+    # (..., 6, depth), in the order of chain[i]
+    axes, chain = [np.zeros(batch + (6, 0))] + [None] * NB, [[]] + [None] * NB
     for i in range(1, NB + 1):
         k, mul, off = model.qidx[i], model.qmul[i], model.qoff[i]
-        XJ, S[i] = jcalc(model.jtype[i], model.axis[i], mul * q[..., k] + off)
-        vJ = S[i] * (mul * qd[..., k])[..., None]
-        Xup[i] = XJ @ model.Xtree[i]
+        XJ, S = jcalc(model.jtype[i], model.axis[i], mul * q[..., k] + off)
+        vJ = S * (mul * qd[..., k])[..., None]
+        Xup = XJ @ model.Xtree[i]
         p = model.parent[i]
-        v[i] = _mv(Xup[i], v[p]) + vJ
-        a[i] = (_mv(Xup[i], a[p]) + S[i] * (mul * qdd[..., k])[..., None]
-                + _mv(crm(v[i]), vJ))
-        F[i] = np.zeros(batch + (6, 10 * NB))
-        F[i][..., 10 * (i - 1):10 * i] = body_wrench_basis(v[i], a[i])
-    Y = np.zeros(batch + (q.shape[-1], 10 * NB))
-    for i in range(NB, 0, -1):
-        k = model.qidx[i]
-        Y[..., k, :] += model.qmul[i] * np.einsum('...j,...jc->...c', S[i], F[i])
-        p = model.parent[i]
-        if p > 0:
-            F[p] = F[p] + np.swapaxes(Xup[i], -1, -2) @ F[i]
+        v[i] = _mv(Xup, v[p]) + vJ
+        a[i] = _mv(Xup, a[p]) + S * (mul * qdd[..., k])[..., None] + _mv(crm(v[i]), vJ)
+        own = np.broadcast_to(S, batch + (6,))[..., None]
+        axes[i] = np.concatenate([Xup @ axes[p], own], axis=-1) if chain[p] else own
+        chain[i] = chain[p] + [i]
+        # joint j's row, body i's columns: S_jᵀ (ʲX_i)* K_i = (ⁱX_j S_j)ᵀ K_i
+        rows = np.swapaxes(axes[i], -1, -2) @ body_wrench_basis(v[i], a[i])
+        for r, j in enumerate(chain[i]):
+            Y[..., model.qidx[j], 10 * (i - 1):10 * i] += model.qmul[j] * rows[..., r, :]
     return Y
 
 
