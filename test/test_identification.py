@@ -173,3 +173,33 @@ def test_what_the_recording_cannot_tell_stays_at_the_urdf_values():
     urdf = parameters(model)
     assert fit.pi[0] == pytest.approx(urdf[0], rel=1e-6)   # m of shoulder_link
     assert fit.after.max() < 1e-3 * max(1.0, fit.before.max())   # what is felt, is fitted
+
+
+def test_the_recording_is_summed_in_chunks_without_changing_the_least_squares(monkeypatch):
+    """|F x − f|² = |A x − b|² for any x: the chunked square root is the stacked system.
+
+    ``A`` is the stacked regressor of chosen bodies' columns with the drive columns, ``b``
+    the torque less the other bodies' share, built here directly from ``sd.regressor``.
+    """
+    from spatial_dynamics import identification
+    model, true = perturbed_ur5()
+    q, qd, qdd = random_states(model, 700, seed=4)
+    tau = sd.rnea(true, q, qd, qdd) + 0.3 * np.tanh(qd / 0.01)
+    pi0 = parameters(model)
+    cols = np.arange(20, 60)                                # bodies 3..6
+    monkeypatch.setattr(identification, 'CHUNK', 128)       # several chunks, a short last one
+    F = identification._square_root(model, (q, qd, qdd), tau, (0.0, 0.0, -9.81), cols, pi0,
+                                    0.01)
+    Y = sd.regressor(model, q, qd, qdd)
+    fixed = np.setdiff1d(np.arange(10 * model.NB), cols)
+    b = (tau - Y[..., fixed] @ pi0[fixed]).reshape(-1)
+    n = model.nq
+    drive = np.zeros((len(q), n, 3 * n))
+    for j in range(n):
+        drive[:, j, 3 * j:3 * j + 3] = np.column_stack(
+            [qd[:, j], np.tanh(qd[:, j] / 0.01), qdd[:, j]])
+    A = np.hstack([Y[..., cols].reshape(len(b), -1), drive.reshape(len(b), -1)])
+    rng = np.random.default_rng(0)
+    for x in [np.zeros(A.shape[1])] + [rng.normal(size=A.shape[1]) for _ in range(3)]:
+        direct = np.sum((A @ x - b) ** 2)
+        assert np.sum((F[:, :-1] @ x - F[:, -1]) ** 2) == pytest.approx(direct, rel=1e-9)
