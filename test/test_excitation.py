@@ -134,3 +134,29 @@ def test_out_unwritable_is_refused(tmp_path, capsys):
                           '--out', str(tmp_path / 'no' / 'plan.yaml')])
     err = capsys.readouterr().err
     assert status == 1 and len(err.strip().splitlines()) == 1 and 'cannot write' in err
+
+
+def test_effort_limit_binds_and_holds():
+    """The UR5 wrist with 2 % of its effort limits: the torques reach the bound, not beyond."""
+    from spatial_dynamics.excitation import excitation
+    model = sd.Model.from_urdf(robot_urdf_path('ur5'),
+                               joints=['wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint'])
+    bound = 0.02 * model.effort_limit
+    plan = excitation(model, period=6.0, harmonics=3, effort_fraction=0.02, maxiter=40)
+    t, q, qd, qdd = plan.sample(1000.0)
+    peak = np.abs(sd.rnea(model, q, qd, qdd)).max(axis=0)
+    assert (peak <= bound * 1.001).all(), (peak, bound)
+    assert peak.max() > 0.95 * bound.max()            # the constraint is what stopped it
+    assert plan.cond_after < plan.cond_before
+    again = excitation(model, period=6.0, harmonics=3, effort_fraction=0.02, maxiter=40)
+    np.testing.assert_array_equal(plan.a, again.a)     # seeded: the same plan twice
+    np.testing.assert_array_equal(plan.b, again.b)
+
+
+def test_effort_limits_no_pose_can_hold_are_refused(tmp_path, capsys):
+    """1 % of the UR5's effort limits cannot hold its arm still: exit 1, one line."""
+    status = excite.main(['--urdf', robot_urdf_path('ur5'), '--duration', '10',
+                          '--effort-fraction', '0.01', '--out', str(tmp_path / 'p.yaml')])
+    err = capsys.readouterr().err
+    assert status == 1 and len(err.strip().splitlines()) == 1 and 'no motion' in err, err
+    assert not (tmp_path / 'p.yaml').exists()
