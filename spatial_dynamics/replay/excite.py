@@ -330,8 +330,9 @@ def print_commands(path: str, plan: Excitation, controller: str, size: int) -> N
     start = ('{trajectory: {joint_names: [' + ', '.join(_name(j) for j in plan.joint_names)
              + '], points: '
              '[{positions: ' + _numbers(q0) + ', time_from_start: {sec: 10}}]}}')
-    print('\nto run it (joint_trajectory_controller): first move the robot to the first point, '
-          'slowly (10 s here; longer if it is far from it):')
+    print('\nto run it (joint_trajectory_controller): the plan\'s first point is at time 0, so '
+          'the robot must already be there; move it to that point first, slowly (10 s here; '
+          'longer if it is far from it):')
     print(f'  {action} "{start}"')
     print('then record the joint states (ros2 bag record /joint_states) and send the plan:')
     print(f'  {action} "{{trajectory: $(cat {path})}}"')
