@@ -7,6 +7,7 @@
                                       [--inertias [LINK ...] | --payload LINK]
                                       [--validate BAG] [--write-urdf OUT.urdf]
     python -m spatial_dynamics.replay --urdf URDF --trajectory FILE.yaml [--rate 1000]
+    python -m spatial_dynamics.replay excite --urdf URDF --duration 30 --out plan.yaml
     python -m spatial_dynamics.replay BAG --urdf URDF --trajectory-topic /arm/joint_trajectory
     ros2 run spatial_dynamics replay ...
 
@@ -25,6 +26,9 @@ drives) and warns, naming them, about the combinations the recording does not de
 identification.png), listed with one σ (parameters.csv), and ``--write-urdf OUT.urdf``
 writes the URDF with only the identified ``<inertial>`` and ``<dynamics>`` replaced.
 
+``excite`` plans a motion that determines every base parameter (:mod:`.excite`), for
+joint_trajectory_controller to execute while the bag is recorded.
+
 A trajectory (``--trajectory`` YAML or ``--trajectory-topic``) is sampled like
 joint_trajectory_controller's splines at ``--rate`` and τ compared with the URDF effort limits.
 
@@ -40,25 +44,21 @@ import os
 import sys
 import time
 from typing import Dict, List, Optional, Sequence
-import warnings
 
 import numpy as np
 
-from .. import friction_torque, Model, rnea, URDFWarning
-from ..bounds import JOINT_BOUNDS, MAX_GRAVITY
+from .. import friction_torque, Model, rnea
+from ..bounds import JOINT_BOUNDS
 from ..check import locked_item, read_description
 from .. import effort as effort_model
 from . import annotate, bags, differentiate, identify, report, splines
 from .. import identification
+from .arguments import check_gravity, finite, load_model, one_line, positive, Refused
 from ..urdf import read_urdf_file
 from . import correction as correction_of
 
 #: The node's default ``friction_velocity_threshold`` (config/inverse_dynamics.yaml).
 NODE_THRESHOLD = 0.01
-
-
-class Refused(Exception):
-    """The input cannot be used; the message says why (exit status 1)."""
 
 
 class Progress:
@@ -116,18 +116,6 @@ class Stages:
         """Return the stages and their sum, one per line."""
         lines = [f'  {k:<16} {v:8.3f} s' for k, v in self.times.items()]
         return '\n'.join(lines + [f'  {"total":<16} {sum(self.times.values()):8.3f} s'])
-
-
-def load_model(args, joints: Optional[Sequence[str]] = None) -> Model:
-    """Build the model from ``--urdf`` with ``--joints``/``--locked``; :class:`Refused` if not."""
-    try:
-        xml = read_description(args.urdf)
-        with warnings.catch_warnings():
-            warnings.simplefilter('ignore', URDFWarning)
-            return Model.from_urdf(xml, joints=joints or args.joints,
-                                   locked=dict(args.locked) or None)
-    except ValueError as err:
-        raise Refused(str(err)) from None
 
 
 def mimic_notes(model: Model) -> List[str]:
@@ -579,30 +567,12 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def finite(text: str) -> float:
-    """Parse a finite number (argparse type)."""
-    try:
-        x = float(text)
-    except ValueError:
-        x = float('nan')
-    if not np.isfinite(x):
-        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number')
-    return x
-
-
-def positive(text: str) -> float:
-    """Parse a finite number > 0 (argparse type)."""
-    try:
-        x = float(text)
-    except ValueError:
-        x = float('nan')
-    if not (x > 0.0 and np.isfinite(x)):
-        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number > 0')
-    return x
-
-
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Run the command; return the exit status (0, 1 or 2)."""
+    """Run the command; return the exit status (0, 1 or 2). ``excite ...``: plan a motion."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ['excite']:
+        from . import excite
+        return excite.main(argv[1:])
     p = parser()
     args = p.parse_args(argv)
     if args.trajectory and args.trajectory_topic:
@@ -623,9 +593,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if identifies and (args.trajectory or args.trajectory_topic):
         p.error('--inertias, --payload and --identify work on a recording, not with '
                 '--trajectory or --trajectory-topic')
-    if float(np.linalg.norm(args.gravity)) > MAX_GRAVITY:
-        p.error(f'--gravity: |g| = {np.linalg.norm(args.gravity):g} m/s^2, more than '
-                f'{MAX_GRAVITY:g} (100 g) cannot be a mounting')
+    check_gravity(p, args.gravity)
     try:
         output_dir(args.out)      # before any computation: a bad --out is said at once
         if args.annotate:
@@ -642,11 +610,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print('error: out of memory (a smaller --rate, a shorter bag or fewer joints?)',
               file=sys.stderr)
     return 1
-
-
-def one_line(err: BaseException) -> str:
-    """Return an exception's message on one line."""
-    return ' '.join(str(err).split()) or type(err).__name__
 
 
 def output_dir(path: str) -> None:

@@ -31,14 +31,14 @@ import os
 import re
 import sys
 from typing import List, Optional, Sequence, Tuple
-import warnings
 
 import numpy as np
 
-from .. import Model, rnea, URDFWarning
-from ..bounds import MAX_GRAVITY, MAX_TRAJECTORY_POINTS, MAX_TRAJECTORY_TIME
-from ..check import locked_item, read_description
+from .. import Model, rnea
+from ..bounds import MAX_TRAJECTORY_POINTS, MAX_TRAJECTORY_TIME
+from ..check import locked_item
 from ..excitation import Excitation, excitation
+from .arguments import check_gravity, finite, load_model, one_line, positive, Refused
 from . import report, splines
 
 #: Period (s) aimed at when ``--period`` is not given: the duration split into whole periods
@@ -50,35 +50,12 @@ CHECK_RATE = 1000.0
 MAX_ARGUMENT = 128 * 1024
 
 
-class Refused(Exception):
-    """The input cannot be used; the message says why (exit status 1)."""
-
-
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose usage errors are one line on stderr (exit status 2)."""
 
     def error(self, message: str):
         """Print ``replay excite: error: MESSAGE`` and exit with status 2."""
         self.exit(2, f'{self.prog}: error: {" ".join(message.split())}\n')
-
-
-def finite(text: str) -> float:
-    """Parse a finite number (argparse type)."""
-    try:
-        x = float(text)
-    except ValueError:
-        x = float('nan')
-    if not math.isfinite(x):
-        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number')
-    return x
-
-
-def positive(text: str) -> float:
-    """Parse a finite number > 0 (argparse type)."""
-    x = finite(text)
-    if not x > 0.0:
-        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number > 0')
-    return x
 
 
 def non_negative(text: str) -> float:
@@ -149,17 +126,6 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument('--list', action='store_true',
                    help='print every base parameter as its combination of standard ones')
     return p
-
-
-def load_model(args) -> Model:
-    """Build the model from ``--urdf`` with ``--joints``/``--locked``; :class:`Refused` if not."""
-    try:
-        xml = read_description(args.urdf)
-        with warnings.catch_warnings():
-            warnings.simplefilter('ignore', URDFWarning)
-            return Model.from_urdf(xml, joints=args.joints, locked=dict(args.locked) or None)
-    except ValueError as err:
-        raise Refused(str(err)) from None
 
 
 def periods(duration: float, period: Optional[float]) -> Tuple[float, int]:
@@ -379,9 +345,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         p.error('--locked needs --joints (the joints moved)')
     if args.iterations < 1:
         p.error(f'--iterations: need a whole number >= 1, got {args.iterations}')
-    if float(np.linalg.norm(args.gravity)) > MAX_GRAVITY:
-        p.error(f'--gravity: |g| = {np.linalg.norm(args.gravity):g} m/s^2, more than '
-                f'{MAX_GRAVITY:g} (100 g) cannot be a mounting')
+    check_gravity(p, args.gravity)
     if os.path.isdir(args.out):
         p.error(f'--out {args.out}: is a directory; name the file to write')
     try:
@@ -391,11 +355,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except MemoryError:
         print('error: out of memory (fewer harmonics or joints?)', file=sys.stderr)
     return 1
-
-
-def one_line(err: BaseException) -> str:
-    """Return an exception's message on one line."""
-    return ' '.join(str(err).split()) or type(err).__name__
 
 
 if __name__ == '__main__':
