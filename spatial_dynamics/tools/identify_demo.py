@@ -11,12 +11,14 @@ a URDF (:mod:`spatial_dynamics.replay.urdf_writer`) and simulated by MuJoCo
 (:class:`~spatial_dynamics.sim.robot.SimulatedRobot`) with drive damping, armature and a
 Coulomb friction ``friction·tanh(q̇/0.01)``; the effort recorded is the drive torque plus
 0.05 N m of noise, the velocity has 1e-3 rad/s of noise. The controller tracking the motion
-is the user's: PD + feed-forward on the original URDF. Then, with the ``replay`` command on
-the bags, exactly as a user runs it:
+is the user's: PD + feed-forward on the original URDF. Then, with the ``replay`` command,
+exactly as a user runs it:
 
-a. ``--inertias --identify --validate HELD --write-urdf``: the training motion (every joint,
-   several frequencies) fits the inertias and drives; the held-out motion (other amplitudes
-   and frequencies) is predicted by the original URDF and by the corrected one;
+a. ``replay excite`` plans the training motion (two periods, four harmonics), followed as
+   joint_trajectory_controller interpolates it and recorded; ``--inertias --identify
+   --validate HELD --write-urdf`` fits the inertias and drives; the held-out motion (two
+   sines per joint, other amplitudes and frequencies) is predicted by the original URDF and
+   by the corrected one, and by the true robot's own model (what the recording allows);
 b. ``--payload LINK --identify`` on a robot whose only error is the payload: its mass;
 c. the closed loop on the held-out motion (the node's control laws, :func:`spatial_dynamics.
    ros.control.answer`, 1 kHz) with the original URDF and with the corrected URDF and drives;
@@ -117,6 +119,25 @@ class Motion:
         qd = a * (w1 * np.cos(w1 * t) + 0.3 * w2 * np.cos(w2 * t))
         qdd = -a * (w1 ** 2 * np.sin(w1 * t) + 0.3 * w2 ** 2 * np.sin(w2 * t))
         return q, qd, qdd
+
+
+class PlanMotion:
+    """A JointTrajectory file as joint_trajectory_controller follows it (its splines)."""
+
+    def __init__(self, path: str, names: Sequence[str]) -> None:
+        """Read ``path`` (``replay excite``'s plan) for the joints ``names``."""
+        from spatial_dynamics import trajectory
+        from spatial_dynamics.replay import splines
+        self.traj = splines.from_yaml(path)
+        self.cols = [self.traj.joint_names.index(n) for n in names]
+        self.c = trajectory.coefficients(self.traj)
+        self.duration = float(self.traj.time[-1])
+        self._evaluate = trajectory.evaluate
+
+    def __call__(self, t: float):
+        """Return ``(q, q̇, q̈)`` at ``t``."""
+        q, qd, qdd = self._evaluate(self.traj, t, self.c)
+        return q[self.cols], qd[self.cols], qdd[self.cols]
 
 
 def pd_gains(model: sd.Model, q0: np.ndarray, frequency: float):
@@ -240,13 +261,19 @@ def prove(robot: str, urdf: str, seconds: float, out: str, seed: int = 1,
     truth = true_urdf(text, model, payload_link, seed)
     with open(os.path.join(out, 'true.urdf'), 'wb') as f:
         f.write(truth)
-    train, held = Motion(model, seed), Motion(model, seed + 100, fraction=0.3)
+    plan = os.path.join(out, 'plan.yaml')
+    keep = ['--joints', *joints] if joints else []
+    e = run_replay(['excite', '--urdf', urdf, *keep, '--duration', f'{seconds:g}',
+                    '--period', f'{seconds / 2:g}', '--harmonics', '4', '--iterations', '40',
+                    '--seed', str(seed), '--out', plan])
+    if e['status'] != 0:
+        raise RuntimeError(f'replay excite failed: {e["err"]}')
+    train, held = PlanMotion(plan, names), Motion(model, seed + 100, fraction=0.3)
     train_bag = write_bag(os.path.join(out, 'train'), names,
-                          simulate(truth, joints, model, train, seconds, seed))
+                          simulate(truth, joints, model, train, train.duration, seed))
     held_bag = write_bag(os.path.join(out, 'held_out'), names,
                          simulate(truth, joints, model, held, seconds / 2, seed + 1))
     corrected = os.path.join(out, 'corrected.urdf')
-    keep = ['--joints', *joints] if joints else []
     a = run_replay([train_bag, '--urdf', urdf, *keep, '--out', os.path.join(out, 'fit'),
                     '--inertias', '--identify', '--validate', held_bag, '--write-urdf',
                     corrected, '--no-plots', '--residual', 'none'])
@@ -263,7 +290,7 @@ def prove(robot: str, urdf: str, seconds: float, out: str, seed: int = 1,
     # b. the payload alone
     payload_only = true_urdf(text, model, payload_link, seed, links_off=False)
     bag = write_bag(os.path.join(out, 'payload'), names,
-                    simulate(payload_only, joints, model, train, seconds / 2, seed + 2))
+                    simulate(payload_only, joints, model, held, seconds / 2, seed + 2))
     b = run_replay([bag, '--urdf', urdf, *keep, '--out', os.path.join(out, 'payload_fit'),
                     '--payload', payload_link, '--identify', '--no-plots', '--residual',
                     'none'])
