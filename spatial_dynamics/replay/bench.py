@@ -4,6 +4,8 @@
 
     python -m spatial_dynamics.replay.bench [--seconds 3600] [--rate 1000]
                                             [--storage mcap|sqlite3|both] [--dir DIR]
+                                            [--residual csv|npy|none] [--identify]
+                                            [--inertias]
 
 Writes ``/joint_states`` of the demo arm (joint1..7, fingers locked) moving on sinusoids, with
 efforts from the model plus damping and friction, into DIR (a temporary directory by
@@ -62,6 +64,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument('--dir', help='where to write the bags (kept); default a temporary one')
     p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv')
     p.add_argument('--identify', action='store_true')
+    p.add_argument('--inertias', action='store_true',
+                   help='time the fit of every link\'s inertial parameters too')
     args = p.parse_args(argv)
     work = args.dir or tempfile.mkdtemp(prefix='replay_bench_')
     storages = ('mcap', 'sqlite3') if args.storage == 'both' else (args.storage,)
@@ -77,7 +81,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             cmd = [sys.executable, '-m', 'spatial_dynamics.replay', bag, '--urdf', URDF,
                    '--joints', *JOINTS, '--out', os.path.join(work, f'out_{storage}'),
                    '--timings', '--residual', args.residual] + (
-                       ['--identify'] if args.identify else [])
+                       ['--identify'] if args.identify else []) + (
+                       ['--inertias'] if args.inertias else [])
             env = dict(os.environ, PYTHONPATH=os.pathsep.join(
                 [ROOT] + ([os.environ['PYTHONPATH']] if 'PYTHONPATH' in os.environ else [])))
             print(f'{storage}: timing {" ".join(cmd[1:])}', flush=True)
