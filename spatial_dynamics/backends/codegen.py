@@ -4,13 +4,13 @@
 
 The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
 :mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`,
-:mod:`~spatial_dynamics.algorithms.momentum`) are plain Python over tuples and lists. This
-module rewrites their syntax tree statement for statement onto flat float64 arrays
-(``_kernels_generated.py``, a readable listing the tests run) and prints the result as C
-(``_kernels_generated.h``, compiled into the extension ``_compiled`` when the package is
-built: see ``setup.py``); nothing of the arithmetic changes (same expressions, same order,
-no fused multiply-adds), so every backend computes the same numbers. The rewriting rules,
-each a change of storage only:
+:mod:`~spatial_dynamics.algorithms.momentum`, :mod:`~spatial_dynamics.algorithms.regressor`)
+are plain Python over tuples and lists. This module rewrites their syntax tree statement for
+statement onto flat float64 arrays (``_kernels_generated.py``, a readable listing the tests
+run) and prints the result as C (``_kernels_generated.h``, compiled into the extension
+``_compiled`` when the package is built: see ``setup.py``); nothing of the arithmetic changes
+(same expressions, same order, no fused multiply-adds), so every backend computes the same
+numbers. The rewriting rules, each a change of storage only:
 
 ==============================================  ==============================================
 source (Python backends)                        generated (flat arrays)
