@@ -12,10 +12,9 @@ imports rclpy; ``node`` is the ROS 2 shell around it.
 
 from .model import Frame, Model, with_payload
 from .algorithms.jacobian import jacobian
-from .algorithms.regressor import regressor
 from .algorithms.rnea import rnea_spatial
 from .backends import (bias_torque, generalized_momentum, GRAVITY, gravity_torque,
-                       mass_matrix, rnea)
+                       mass_matrix, regressor, rnea)
 from .terms import armature_torque, clamp_to_effort_limits, friction_torque, per_joint
 from .urdf import URDFWarning
 

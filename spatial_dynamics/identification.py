@@ -25,8 +25,8 @@ from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .algorithms.regressor import parameters, PARAMETERS, regressor
-from .backends import rnea
+from .algorithms.regressor import parameters, PARAMETERS
+from .backends import regressor, rnea
 from .model import Model
 
 #: A pivot of ``R`` below ``RTOL`` times the largest counts as zero (the rank's threshold).

@@ -365,6 +365,7 @@ def test_without_the_extension_auto_runs_on_numpy():
         assert abs(tau[0] - 9.81 * 0.5 * np.sin(0.3)) < 1e-12, tau
         assert sd.rnea(m, np.ones((5, 1)), np.ones((5, 1)), np.ones((5, 1))).shape == (5, 1)
         assert sd.mass_matrix(m, [0.3]).shape == (1, 1)
+        assert sd.regressor(m, np.ones((5, 1)), [1.0], [1.0]).shape == (5, 1, 10)
         print('describe:', backends.describe())
         print('warmup:', backends.warmup(m))
         try:
@@ -394,7 +395,7 @@ def test_a_stale_build_is_not_used():
         print(sd.backends.describe())
     ''')
     assert out.startswith('numpy (compiled kernels not built: /somewhere/_compiled.so is a '
-                          'stale build (API 0, not 1): build the package again)'), out
+                          'stale build (API 0, not 2): build the package again)'), out
 
 
 def test_numba_is_never_imported():
@@ -438,6 +439,7 @@ def test_nothing_is_compiled_or_written_at_run_time(kernels, tmp_path):
             sd.bias_torque(m, q, q, backend='compiled')
             sd.mass_matrix(m, q, backend='compiled')
             sd.generalized_momentum(m, q, q, backend='compiled')
+            sd.regressor(m, q, q, q, backend='compiled')
         print(sd.backends.describe('compiled'))
     ''', env)
     assert out.startswith('compiled (C extension'), out

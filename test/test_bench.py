@@ -106,3 +106,14 @@ def test_terms_table_compares_each_term_with_pinocchio():
         for term in ('g(q)', 'C q̇ + g', 'M(q)')]
     for row in rows:
         assert float(row[5]) < 1e-13, row
+
+
+def test_regressor_table_times_each_implementation_beside_rnea():
+    """One row per backend and the 6×6 specification (and Pinocchio's, when importable)."""
+    table = bench.regressor_table(['ur5'], rounds=1, N=50)
+    rows = [[c.strip() for c in line.split('|')[1:-1]] for line in table.splitlines()[2:]]
+    labels = [r[1] for r in rows]
+    assert labels[0] == 'sd.regressor, numpy' and '6×6 specification' in labels
+    assert all(r[0] == 'ur5 (6 dof)' for r in rows)
+    for r in rows[:labels.index('6×6 specification') + 1]:
+        assert float(r[2]) > 0 and float(r[3]) > 0 and r[5].endswith('×')

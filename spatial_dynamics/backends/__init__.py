@@ -44,6 +44,7 @@ _c_gravity_torque = _ext.gravity_torque if _ext else None
 _c_bias_torque = _ext.bias_torque if _ext else None
 _c_mass_matrix = _ext.mass_matrix if _ext else None
 _c_momentum = _ext.generalized_momentum if _ext else None
+_c_regressor = _ext.regressor if _ext else None
 
 
 class CompiledBackendUnavailable(ImportError):
@@ -210,6 +211,33 @@ def generalized_momentum(model: Model, q, qd, backend: str = 'auto') -> tuple:
     if kern is not None and q.dtype == np.float64:
         return compiled.momentum(lay, q, qd)
     return python.momentum(lay.rows, q, qd)
+
+
+def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
+              backend: str = 'auto') -> np.ndarray:
+    """Return the joint-torque regressor ``Y`` (..., n, 10·NB): ``rnea(...) = Y @ π``.
+
+    ``π`` stacks the ten inertial parameters ``m, m c, Ī`` (:data:`~spatial_dynamics.
+    algorithms.regressor.PARAMETERS`) of each moving body ``model.body_names[1:]``
+    (:func:`~spatial_dynamics.algorithms.regressor.parameters` gives the model's own); see
+    :mod:`spatial_dynamics.algorithms.regressor`. Arguments as for :func:`rnea` (no
+    ``f_ext``: external wrenches do not depend on the inertias); float64, or the inputs'
+    floating dtype.
+    """
+    lay = _layout_of(id(model)) or layout.of(model)
+    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
+    if kern is not None:
+        Y = _c_regressor(kern, q, qd, qdd, gravity)
+        if Y is not None:
+            return Y
+    q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
+    g = tuple(as_vector('gravity', gravity, 3).tolist())
+    if kern is not None and q.dtype == np.float64:
+        if q.size == q.shape[-1] > 0:       # one state with batch dimensions of 1
+            Y = _c_regressor(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g)
+            return Y.reshape(q.shape[:-1] + Y.shape)
+        return compiled.regressor(lay, q, qd, qdd, g)
+    return python.regressor(lay.rows, q, qd, qdd, g)
 
 
 def _vector(x, n: int):

@@ -30,7 +30,7 @@
 
 /* The interface this file offers to compiled.py, which refuses a build of another (a stale
  * extension left beside newer sources): raise it with every change of an entry. */
-#define API 1
+#define API 2
 /* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
 #define STACK_DOUBLES 2048
 /* Largest number of threads of one batch; each gets at least MIN_WORK body-states (states x
@@ -50,8 +50,9 @@ typedef struct {
     long rows;          /* NB + 1 */
     long n;             /* joints (len(q)) */
     double *zeros;      /* n zeros: qd, qdd of the terms at rest */
-    PyObject *n_obj;    /* n, and (n, n): the shapes of the results */
+    PyObject *n_obj;    /* n, (n, n) and (n, 10 NB): the shapes of the results */
     PyObject *nn_obj;
+    PyObject *ny_obj;
 } KernelsObject;
 
 static PyTypeObject KernelsType;
@@ -63,6 +64,7 @@ kernels_dealloc(KernelsObject *self)
     PyMem_Free(self->zeros);
     Py_XDECREF(self->n_obj);
     Py_XDECREF(self->nn_obj);
+    Py_XDECREF(self->ny_obj);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -117,11 +119,12 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     PyBuffer_Release(&v);
     self->n_obj = PyLong_FromLong(self->n);
     self->nn_obj = Py_BuildValue("(ll)", self->n, self->n);
+    self->ny_obj = Py_BuildValue("(ll)", self->n, 10 * (rows - 1));
     if (self->K == NULL || self->zeros == NULL) {
         Py_DECREF(self);
         return PyErr_NoMemory();
     }
-    if (self->n_obj == NULL || self->nn_obj == NULL) {
+    if (self->n_obj == NULL || self->nn_obj == NULL || self->ny_obj == NULL) {
         Py_DECREF(self);
         return NULL;
     }
@@ -488,10 +491,47 @@ done:
     return out;
 }
 
+PyDoc_STRVAR(regressor_doc,
+"regressor(kernels, q, qd, qdd, gravity) -> Y (n, 10 NB), or None\n\n"
+"The joint-torque regressor of one state (tau = Y pi, pi the ten inertial parameters of\n"
+"each body); arguments as for rnea, None when one is not such a state.");
+
+static PyObject *
+c_regressor(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "regressor takes 5 arguments");
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    if (h == NULL)
+        return NULL;
+    const Py_ssize_t n = h->n, rows = h->rows;
+    double stack[STACK_DOUBLES];
+    double *buf = scratch(stack, 3 * n + 3 + rows * WORK + 6 * rows * rows);
+    if (buf == NULL)
+        return NULL;
+    double *q = buf, *qd = q + n, *qdd = qd + n, *g = qdd + n, *work = g + 3;
+    double *axes = work + rows * WORK;
+    PyObject *out = NULL;
+    Py_buffer Y;
+    if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd)
+          && as_doubles(args[3], n, qdd) && as_doubles(args[4], 3, g))) {
+        out = Py_None;
+        Py_INCREF(out);
+    } else if ((out = new_array(h->ny_obj, &Y)) != NULL) {
+        xup_kernel(h->K, rows, q, work);
+        regressor_kernel(h->K, rows, qd, qdd, g[0], g[1], g[2], (double *)Y.buf, axes, work);
+        PyBuffer_Release(&Y);
+    }
+    scratch_free(buf, stack);
+    return out;
+}
+
 /* ------------------------------------------------------------------------------------------
  * Batches: contiguous slices of the states on threads, without the GIL */
 
-enum { RNEA = 0, CRBA = 1, MOMENTUM = 2 };
+enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3 };
 
 typedef struct {
     int kind;
@@ -500,7 +540,7 @@ typedef struct {
     const double *q, *qd, *qdd, *fext;  /* (N, n) each; fext (1 or N, rows, 6) or NULL */
     int fext_per_state;
     double g[3];
-    double *out1, *out2;                 /* tau | H | mom, ctq */
+    double *out1, *out2;                 /* tau | H | mom, ctq | Y */
     Py_ssize_t lo, hi;                   /* the slice of states [lo, hi) */
     int failed;                          /* no memory for the scratch */
 } Slice;
@@ -510,7 +550,9 @@ run_slice(void *arg)
 {
     Slice *s = (Slice *)arg;
     const long n = s->n, rows = s->rows;
-    double *work = malloc(sizeof(double) * rows * WORK);
+    /* the regressor's carried axes after the per-body scratch */
+    double *work = malloc(sizeof(double) * (rows * WORK
+                                            + (s->kind == REGRESSOR ? 6 * rows * rows : 0)));
     if (work == NULL) {
         s->failed = 1;
         return NULL;
@@ -524,6 +566,10 @@ run_slice(void *arg)
                         s->g[2], f, f != NULL, s->out1 + k * n, work);
         } else if (s->kind == CRBA) {
             crba_kernel(s->K, rows, work, s->out1 + k * n * n);
+        } else if (s->kind == REGRESSOR) {
+            regressor_kernel(s->K, rows, s->qd + k * n, s->qdd + k * n, s->g[0], s->g[1],
+                             s->g[2], s->out1 + k * n * 10 * (rows - 1), work + rows * WORK,
+                             work);
         } else {
             momentum_kernel(s->K, rows, q, s->qd + k * n, s->out1 + k * n, s->out2 + k * n,
                             work);
@@ -721,6 +767,45 @@ c_momentum_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
     job.qd = v[1].buf;
     job.out1 = v[2].buf;
     job.out2 = v[3].buf;
+    int rc = run_batch(&job, N, threads);
+    release_all(v, 4);
+    if (rc < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+PyDoc_STRVAR(regressor_batch_doc,
+"regressor_batch(kernels, N, q, qd, qdd, gravity, Y, threads) -> None: the regressors of N\n"
+"states (q, qd, qdd N x n each, gravity 3 numbers) into Y (N x n x 10 NB).");
+
+static PyObject *
+c_regressor_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 8) {
+        PyErr_SetString(PyExc_TypeError, "regressor_batch takes 8 arguments");
+        return NULL;
+    }
+    KernelsObject *h = kernels_arg(args[0]);
+    Py_ssize_t N = PyLong_AsSsize_t(args[1]);
+    long threads = PyLong_AsLong(args[7]);
+    if (h == NULL || PyErr_Occurred())
+        return NULL;
+    Slice job = {.kind = REGRESSOR, .K = h->K, .rows = h->rows, .n = h->n};
+    if (!as_doubles(args[5], 3, job.g)) {
+        PyErr_SetString(PyExc_TypeError, "gravity must be 3 numbers");
+        return NULL;
+    }
+    PyObject *objs[4] = {args[2], args[3], args[4], args[6]};
+    const int writable[4] = {0, 0, 0, 1};
+    const Py_ssize_t sizes[4] = {N * h->n, N * h->n, N * h->n, N * h->n * 10 * (h->rows - 1)};
+    const char *const names[4] = {"q", "qd", "qdd", "Y"};
+    Py_buffer v[4];
+    if (batch_buffers(objs, v, 4, writable, sizes, names) < 0)
+        return NULL;
+    job.q = v[0].buf;
+    job.qd = v[1].buf;
+    job.qdd = v[2].buf;
+    job.out1 = v[3].buf;
     int rc = run_batch(&job, N, threads);
     release_all(v, 4);
     if (rc < 0)
@@ -933,11 +1018,14 @@ static PyMethodDef methods[] = {
      mass_matrix_doc},
     {"generalized_momentum", (PyCFunction)(void (*)(void))c_generalized_momentum,
      METH_FASTCALL, generalized_momentum_doc},
+    {"regressor", (PyCFunction)(void (*)(void))c_regressor, METH_FASTCALL, regressor_doc},
     {"rnea_batch", (PyCFunction)(void (*)(void))c_rnea_batch, METH_FASTCALL, rnea_batch_doc},
     {"mass_matrix_batch", (PyCFunction)(void (*)(void))c_mass_matrix_batch, METH_FASTCALL,
      mass_matrix_batch_doc},
     {"momentum_batch", (PyCFunction)(void (*)(void))c_momentum_batch, METH_FASTCALL,
      momentum_batch_doc},
+    {"regressor_batch", (PyCFunction)(void (*)(void))c_regressor_batch, METH_FASTCALL,
+     regressor_batch_doc},
     {NULL, NULL, 0, NULL},
 };
 

@@ -963,4 +963,331 @@ static inline void momentum_kernel(const double *K, long rows, const double *q, 
     }
 }
 
+/* Run regressor.regressor_kernel of the algorithms, generated from it. */
+static inline void regressor_kernel(const double *K, long rows, const double *qd,
+    const double *qdd, double gx, double gy, double gz, double *Y, double *axes, double *work)
+{
+    const long nq = (long)K[QIDX];
+    long NB, R, W, c, code, i, j, k, kj, p, pj, y;
+    double a0, a1, a2, al0, al1, al2, ax, ay, az, b00, b01, b02;
+    double b10, b11, b12, b20, b21, b22, e00, e01, e02, e10, e11, e12;
+    double e20, e21, e22, j0, j1, j2, l0, l1, l2, mul, p01, p02;
+    double p12, pa0, pa1, pa2, pl0, pl1, pl2, pv0, pv1, pv2, pw0, pw1;
+    double pw2, q00, q11, q22, qddi, qdi, rx, ry, rz, s0, s1, s2;
+    double s3, s4, s5, t0, t1, t2, u0, u1, u2, v0, v1, v2;
+    double w0, w1, w2, xx0, xx1, xx2, xy0, xy1, xy2, xz0, xz1, xz2;
+    double yy0, yy1, yy2, yz0, yz1, yz2, zero, zz0, zz1, zz2;
+    NB = rows - 1;
+    R = rows;
+    W = 10 * NB;
+    zero = 0.0 * gx;
+    for (c = 0; c < nq * 10 * (rows - 1); c++) {
+        Y[c] = zero;
+    }
+    work[0 * WORK + VEL + 0] = zero;
+    work[0 * WORK + VEL + 1] = zero;
+    work[0 * WORK + VEL + 2] = zero;
+    work[0 * WORK + VEL + 3] = zero;
+    work[0 * WORK + VEL + 4] = zero;
+    work[0 * WORK + VEL + 5] = zero;
+    work[0 * WORK + ACC + 0] = zero;
+    work[0 * WORK + ACC + 1] = zero;
+    work[0 * WORK + ACC + 2] = zero;
+    work[0 * WORK + ACC + 3] = -gx;
+    work[0 * WORK + ACC + 4] = -gy;
+    work[0 * WORK + ACC + 5] = -gz;
+    for (i = 1; i < NB + 1; i++) {
+        p = (long)K[i * WIDTH + 0];
+        code = (long)K[i * WIDTH + 1];
+        k = (long)K[i * WIDTH + 2];
+        ax = K[i * WIDTH + 3];
+        ay = K[i * WIDTH + 4];
+        az = K[i * WIDTH + 5];
+        mul = K[i * WIDTH + 28];
+        e00 = work[i * WORK + XUP + 0];
+        e01 = work[i * WORK + XUP + 1];
+        e02 = work[i * WORK + XUP + 2];
+        e10 = work[i * WORK + XUP + 3];
+        e11 = work[i * WORK + XUP + 4];
+        e12 = work[i * WORK + XUP + 5];
+        e20 = work[i * WORK + XUP + 6];
+        e21 = work[i * WORK + XUP + 7];
+        e22 = work[i * WORK + XUP + 8];
+        rx = work[i * WORK + XUP + 9];
+        ry = work[i * WORK + XUP + 10];
+        rz = work[i * WORK + XUP + 11];
+        qdi = (mul == 1.0 ? qd[k] : mul * qd[k]);
+        qddi = (mul == 1.0 ? qdd[k] : mul * qdd[k]);
+        pw0 = work[p * WORK + VEL + 0];
+        pw1 = work[p * WORK + VEL + 1];
+        pw2 = work[p * WORK + VEL + 2];
+        pv0 = work[p * WORK + VEL + 3];
+        pv1 = work[p * WORK + VEL + 4];
+        pv2 = work[p * WORK + VEL + 5];
+        {
+            double ret1_[6];
+            X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2, ret1_);
+            w0 = ret1_[0];
+            w1 = ret1_[1];
+            w2 = ret1_[2];
+            v0 = ret1_[3];
+            v1 = ret1_[4];
+            v2 = ret1_[5];
+        }
+        pa0 = work[p * WORK + ACC + 0];
+        pa1 = work[p * WORK + ACC + 1];
+        pa2 = work[p * WORK + ACC + 2];
+        pl0 = work[p * WORK + ACC + 3];
+        pl1 = work[p * WORK + ACC + 4];
+        pl2 = work[p * WORK + ACC + 5];
+        {
+            double ret2_[6];
+            X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, pa0, pa1, pa2, pl0, pl1, pl2, ret2_);
+            a0 = ret2_[0];
+            a1 = ret2_[1];
+            a2 = ret2_[2];
+            l0 = ret2_[3];
+            l1 = ret2_[4];
+            l2 = ret2_[5];
+        }
+        {
+            const double tmp3_ = ax * qdi;
+            const double tmp4_ = ay * qdi;
+            const double tmp5_ = az * qdi;
+            j0 = tmp3_;
+            j1 = tmp4_;
+            j2 = tmp5_;
+        }
+        if (code == PR) {
+            {
+                const double tmp6_ = v0 + j0;
+                const double tmp7_ = v1 + j1;
+                const double tmp8_ = v2 + j2;
+                v0 = tmp6_;
+                v1 = tmp7_;
+                v2 = tmp8_;
+            }
+            {
+                const double tmp9_ = l0 + ax * qddi;
+                const double tmp10_ = l1 + ay * qddi;
+                const double tmp11_ = l2 + az * qddi;
+                l0 = tmp9_;
+                l1 = tmp10_;
+                l2 = tmp11_;
+            }
+            l0 += w1 * j2 - w2 * j1;
+            l1 += w2 * j0 - w0 * j2;
+            l2 += w0 * j1 - w1 * j0;
+            {
+                const double tmp12_ = zero;
+                const double tmp13_ = zero;
+                const double tmp14_ = zero;
+                const double tmp15_ = mul * ax;
+                const double tmp16_ = mul * ay;
+                const double tmp17_ = mul * az;
+                s0 = tmp12_;
+                s1 = tmp13_;
+                s2 = tmp14_;
+                s3 = tmp15_;
+                s4 = tmp16_;
+                s5 = tmp17_;
+            }
+        } else {
+            {
+                const double tmp18_ = w0 + j0;
+                const double tmp19_ = w1 + j1;
+                const double tmp20_ = w2 + j2;
+                w0 = tmp18_;
+                w1 = tmp19_;
+                w2 = tmp20_;
+            }
+            {
+                const double tmp21_ = a0 + ax * qddi;
+                const double tmp22_ = a1 + ay * qddi;
+                const double tmp23_ = a2 + az * qddi;
+                a0 = tmp21_;
+                a1 = tmp22_;
+                a2 = tmp23_;
+            }
+            a0 += w1 * j2 - w2 * j1;
+            a1 += w2 * j0 - w0 * j2;
+            a2 += w0 * j1 - w1 * j0;
+            l0 += v1 * j2 - v2 * j1;
+            l1 += v2 * j0 - v0 * j2;
+            l2 += v0 * j1 - v1 * j0;
+            {
+                const double tmp24_ = mul * ax;
+                const double tmp25_ = mul * ay;
+                const double tmp26_ = mul * az;
+                const double tmp27_ = zero;
+                const double tmp28_ = zero;
+                const double tmp29_ = zero;
+                s0 = tmp24_;
+                s1 = tmp25_;
+                s2 = tmp26_;
+                s3 = tmp27_;
+                s4 = tmp28_;
+                s5 = tmp29_;
+            }
+        }
+        work[i * WORK + VEL + 0] = w0;
+        work[i * WORK + VEL + 1] = w1;
+        work[i * WORK + VEL + 2] = w2;
+        work[i * WORK + VEL + 3] = v0;
+        work[i * WORK + VEL + 4] = v1;
+        work[i * WORK + VEL + 5] = v2;
+        work[i * WORK + ACC + 0] = a0;
+        work[i * WORK + ACC + 1] = a1;
+        work[i * WORK + ACC + 2] = a2;
+        work[i * WORK + ACC + 3] = l0;
+        work[i * WORK + ACC + 4] = l1;
+        work[i * WORK + ACC + 5] = l2;
+        al0 = l0 + (w1 * v2 - w2 * v1);
+        al1 = l1 + (w2 * v0 - w0 * v2);
+        al2 = l2 + (w0 * v1 - w1 * v0);
+        {
+            const double tmp30_ = w0 * w1;
+            const double tmp31_ = w0 * w2;
+            const double tmp32_ = w1 * w2;
+            p01 = tmp30_;
+            p02 = tmp31_;
+            p12 = tmp32_;
+        }
+        {
+            const double tmp33_ = w0 * w0;
+            const double tmp34_ = w1 * w1;
+            const double tmp35_ = w2 * w2;
+            q00 = tmp33_;
+            q11 = tmp34_;
+            q22 = tmp35_;
+        }
+        {
+            const double tmp36_ = -(q11 + q22);
+            const double tmp37_ = -(q00 + q22);
+            const double tmp38_ = -(q00 + q11);
+            b00 = tmp36_;
+            b11 = tmp37_;
+            b22 = tmp38_;
+        }
+        {
+            const double tmp39_ = p01 - a2;
+            const double tmp40_ = p01 + a2;
+            b01 = tmp39_;
+            b10 = tmp40_;
+        }
+        {
+            const double tmp41_ = p02 + a1;
+            const double tmp42_ = p02 - a1;
+            b02 = tmp41_;
+            b20 = tmp42_;
+        }
+        {
+            const double tmp43_ = p12 - a0;
+            const double tmp44_ = p12 + a0;
+            b12 = tmp43_;
+            b21 = tmp44_;
+        }
+        {
+            const double tmp45_ = a0;
+            const double tmp46_ = p02;
+            const double tmp47_ = -p01;
+            xx0 = tmp45_;
+            xx1 = tmp46_;
+            xx2 = tmp47_;
+        }
+        {
+            const double tmp48_ = a1 - p02;
+            const double tmp49_ = a0 + p12;
+            const double tmp50_ = q00 - q11;
+            xy0 = tmp48_;
+            xy1 = tmp49_;
+            xy2 = tmp50_;
+        }
+        {
+            const double tmp51_ = -p12;
+            const double tmp52_ = a1;
+            const double tmp53_ = p01;
+            yy0 = tmp51_;
+            yy1 = tmp52_;
+            yy2 = tmp53_;
+        }
+        {
+            const double tmp54_ = a2 + p01;
+            const double tmp55_ = q22 - q00;
+            const double tmp56_ = a0 - p12;
+            xz0 = tmp54_;
+            xz1 = tmp55_;
+            xz2 = tmp56_;
+        }
+        {
+            const double tmp57_ = q11 - q22;
+            const double tmp58_ = a2 - p01;
+            const double tmp59_ = a1 + p02;
+            yz0 = tmp57_;
+            yz1 = tmp58_;
+            yz2 = tmp59_;
+        }
+        {
+            const double tmp60_ = p12;
+            const double tmp61_ = -p02;
+            const double tmp62_ = a2;
+            zz0 = tmp60_;
+            zz1 = tmp61_;
+            zz2 = tmp62_;
+        }
+        j = i;
+        while (j != 0) {
+            pj = (long)K[j * WIDTH + 0];
+            kj = (long)K[j * WIDTH + 2];
+            if (j == i) {
+                {
+                    const double tmp63_ = s0;
+                    const double tmp64_ = s1;
+                    const double tmp65_ = s2;
+                    const double tmp66_ = s3;
+                    const double tmp67_ = s4;
+                    const double tmp68_ = s5;
+                    t0 = tmp63_;
+                    t1 = tmp64_;
+                    t2 = tmp65_;
+                    u0 = tmp66_;
+                    u1 = tmp67_;
+                    u2 = tmp68_;
+                }
+            } else {
+                c = 6 * (p * R + j);
+                {
+                    double ret69_[6];
+                    X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, axes[c], axes[c + 1], axes[c + 2], axes[c + 3], axes[c + 4], axes[c + 5], ret69_);
+                    t0 = ret69_[0];
+                    t1 = ret69_[1];
+                    t2 = ret69_[2];
+                    u0 = ret69_[3];
+                    u1 = ret69_[4];
+                    u2 = ret69_[5];
+                }
+            }
+            c = 6 * (i * R + j);
+            axes[c] = t0;
+            axes[c + 1] = t1;
+            axes[c + 2] = t2;
+            axes[c + 3] = u0;
+            axes[c + 4] = u1;
+            axes[c + 5] = u2;
+            y = kj * W + 10 * (i - 1);
+            Y[y] = Y[y] + (u0 * al0 + u1 * al1 + u2 * al2);
+            Y[y + 1] = Y[y + 1] + (al1 * t2 - al2 * t1 + (b00 * u0 + b10 * u1 + b20 * u2));
+            Y[y + 2] = Y[y + 2] + (al2 * t0 - al0 * t2 + (b01 * u0 + b11 * u1 + b21 * u2));
+            Y[y + 3] = Y[y + 3] + (al0 * t1 - al1 * t0 + (b02 * u0 + b12 * u1 + b22 * u2));
+            Y[y + 4] = Y[y + 4] + (t0 * xx0 + t1 * xx1 + t2 * xx2);
+            Y[y + 5] = Y[y + 5] + (t0 * xy0 + t1 * xy1 + t2 * xy2);
+            Y[y + 6] = Y[y + 6] + (t0 * yy0 + t1 * yy1 + t2 * yy2);
+            Y[y + 7] = Y[y + 7] + (t0 * xz0 + t1 * xz1 + t2 * xz2);
+            Y[y + 8] = Y[y + 8] + (t0 * yz0 + t1 * yz1 + t2 * yz2);
+            Y[y + 9] = Y[y + 9] + (t0 * zz0 + t1 * zz1 + t2 * zz2);
+            j = pj;
+        }
+    }
+}
+
 #endif  /* SPATIAL_DYNAMICS_KERNELS_GENERATED_H */

@@ -600,3 +600,134 @@ def momentum_kernel(K, q, qd, mom, ctq, work):
         work[p * WORK + FRC + 3] += g3
         work[p * WORK + FRC + 4] += g4
         work[p * WORK + FRC + 5] += g5
+
+
+def regressor_kernel(K, qd, qdd, gx, gy, gz, Y, axes, work):
+    """Run regressor.regressor_kernel of the algorithms, generated from it."""
+    NB = K.shape[0] - 1
+    R = K.shape[0]
+    W = 10 * NB
+    zero = 0.0 * gx
+    for c in range(len(Y)):
+        Y[c] = zero
+    work[0 * WORK + VEL + 0] = zero
+    work[0 * WORK + VEL + 1] = zero
+    work[0 * WORK + VEL + 2] = zero
+    work[0 * WORK + VEL + 3] = zero
+    work[0 * WORK + VEL + 4] = zero
+    work[0 * WORK + VEL + 5] = zero
+    work[0 * WORK + ACC + 0] = zero
+    work[0 * WORK + ACC + 1] = zero
+    work[0 * WORK + ACC + 2] = zero
+    work[0 * WORK + ACC + 3] = -gx
+    work[0 * WORK + ACC + 4] = -gy
+    work[0 * WORK + ACC + 5] = -gz
+    for i in range(1, NB + 1):
+        p = int(K[i, 0])
+        code = int(K[i, 1])
+        k = int(K[i, 2])
+        ax = K[i, 3]
+        ay = K[i, 4]
+        az = K[i, 5]
+        mul = K[i, 28]
+        e00 = work[i * WORK + XUP + 0]
+        e01 = work[i * WORK + XUP + 1]
+        e02 = work[i * WORK + XUP + 2]
+        e10 = work[i * WORK + XUP + 3]
+        e11 = work[i * WORK + XUP + 4]
+        e12 = work[i * WORK + XUP + 5]
+        e20 = work[i * WORK + XUP + 6]
+        e21 = work[i * WORK + XUP + 7]
+        e22 = work[i * WORK + XUP + 8]
+        rx = work[i * WORK + XUP + 9]
+        ry = work[i * WORK + XUP + 10]
+        rz = work[i * WORK + XUP + 11]
+        qdi = qd[k] if mul == 1.0 else mul * qd[k]
+        qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
+        pw0 = work[p * WORK + VEL + 0]
+        pw1 = work[p * WORK + VEL + 1]
+        pw2 = work[p * WORK + VEL + 2]
+        pv0 = work[p * WORK + VEL + 3]
+        pv1 = work[p * WORK + VEL + 4]
+        pv2 = work[p * WORK + VEL + 5]
+        w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2)
+        pa0 = work[p * WORK + ACC + 0]
+        pa1 = work[p * WORK + ACC + 1]
+        pa2 = work[p * WORK + ACC + 2]
+        pl0 = work[p * WORK + ACC + 3]
+        pl1 = work[p * WORK + ACC + 4]
+        pl2 = work[p * WORK + ACC + 5]
+        a0, a1, a2, l0, l1, l2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, pa0, pa1, pa2, pl0, pl1, pl2)
+        j0, j1, j2 = (ax * qdi, ay * qdi, az * qdi)
+        if code == PR:
+            v0, v1, v2 = (v0 + j0, v1 + j1, v2 + j2)
+            l0, l1, l2 = (l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi)
+            l0 += w1 * j2 - w2 * j1
+            l1 += w2 * j0 - w0 * j2
+            l2 += w0 * j1 - w1 * j0
+            s0, s1, s2, s3, s4, s5 = (zero, zero, zero, mul * ax, mul * ay, mul * az)
+        else:
+            w0, w1, w2 = (w0 + j0, w1 + j1, w2 + j2)
+            a0, a1, a2 = (a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi)
+            a0 += w1 * j2 - w2 * j1
+            a1 += w2 * j0 - w0 * j2
+            a2 += w0 * j1 - w1 * j0
+            l0 += v1 * j2 - v2 * j1
+            l1 += v2 * j0 - v0 * j2
+            l2 += v0 * j1 - v1 * j0
+            s0, s1, s2, s3, s4, s5 = (mul * ax, mul * ay, mul * az, zero, zero, zero)
+        work[i * WORK + VEL + 0] = w0
+        work[i * WORK + VEL + 1] = w1
+        work[i * WORK + VEL + 2] = w2
+        work[i * WORK + VEL + 3] = v0
+        work[i * WORK + VEL + 4] = v1
+        work[i * WORK + VEL + 5] = v2
+        work[i * WORK + ACC + 0] = a0
+        work[i * WORK + ACC + 1] = a1
+        work[i * WORK + ACC + 2] = a2
+        work[i * WORK + ACC + 3] = l0
+        work[i * WORK + ACC + 4] = l1
+        work[i * WORK + ACC + 5] = l2
+        al0 = l0 + (w1 * v2 - w2 * v1)
+        al1 = l1 + (w2 * v0 - w0 * v2)
+        al2 = l2 + (w0 * v1 - w1 * v0)
+        p01, p02, p12 = (w0 * w1, w0 * w2, w1 * w2)
+        q00, q11, q22 = (w0 * w0, w1 * w1, w2 * w2)
+        b00, b11, b22 = (-(q11 + q22), -(q00 + q22), -(q00 + q11))
+        b01, b10 = (p01 - a2, p01 + a2)
+        b02, b20 = (p02 + a1, p02 - a1)
+        b12, b21 = (p12 - a0, p12 + a0)
+        xx0, xx1, xx2 = (a0, p02, -p01)
+        xy0, xy1, xy2 = (a1 - p02, a0 + p12, q00 - q11)
+        yy0, yy1, yy2 = (-p12, a1, p01)
+        xz0, xz1, xz2 = (a2 + p01, q22 - q00, a0 - p12)
+        yz0, yz1, yz2 = (q11 - q22, a2 - p01, a1 + p02)
+        zz0, zz1, zz2 = (p12, -p02, a2)
+        j = i
+        while j != 0:
+            pj = int(K[j, 0])
+            kj = int(K[j, 2])
+            if j == i:
+                t0, t1, t2, u0, u1, u2 = (s0, s1, s2, s3, s4, s5)
+            else:
+                c = 6 * (p * R + j)
+                t0, t1, t2, u0, u1, u2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, axes[c], axes[c + 1], axes[c + 2], axes[c + 3], axes[c + 4], axes[c + 5])
+            c = 6 * (i * R + j)
+            axes[c] = t0
+            axes[c + 1] = t1
+            axes[c + 2] = t2
+            axes[c + 3] = u0
+            axes[c + 4] = u1
+            axes[c + 5] = u2
+            y = kj * W + 10 * (i - 1)
+            Y[y] = Y[y] + (u0 * al0 + u1 * al1 + u2 * al2)
+            Y[y + 1] = Y[y + 1] + (al1 * t2 - al2 * t1 + (b00 * u0 + b10 * u1 + b20 * u2))
+            Y[y + 2] = Y[y + 2] + (al2 * t0 - al0 * t2 + (b01 * u0 + b11 * u1 + b21 * u2))
+            Y[y + 3] = Y[y + 3] + (al0 * t1 - al1 * t0 + (b02 * u0 + b12 * u1 + b22 * u2))
+            Y[y + 4] = Y[y + 4] + (t0 * xx0 + t1 * xx1 + t2 * xx2)
+            Y[y + 5] = Y[y + 5] + (t0 * xy0 + t1 * xy1 + t2 * xy2)
+            Y[y + 6] = Y[y + 6] + (t0 * yy0 + t1 * yy1 + t2 * yy2)
+            Y[y + 7] = Y[y + 7] + (t0 * xz0 + t1 * xz1 + t2 * xz2)
+            Y[y + 8] = Y[y + 8] + (t0 * yz0 + t1 * yz1 + t2 * yz2)
+            Y[y + 9] = Y[y + 9] + (t0 * zz0 + t1 * zz1 + t2 * zz2)
+            j = pj

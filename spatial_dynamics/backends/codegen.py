@@ -4,13 +4,13 @@
 
 The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
 :mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`,
-:mod:`~spatial_dynamics.algorithms.momentum`) are plain Python over tuples and lists. This
-module rewrites their syntax tree statement for statement onto flat float64 arrays
-(``_kernels_generated.py``, a readable listing the tests run) and prints the result as C
-(``_kernels_generated.h``, compiled into the extension ``_compiled`` when the package is
-built: see ``setup.py``); nothing of the arithmetic changes (same expressions, same order,
-no fused multiply-adds), so every backend computes the same numbers. The rewriting rules,
-each a change of storage only:
+:mod:`~spatial_dynamics.algorithms.momentum`, :mod:`~spatial_dynamics.algorithms.regressor`)
+are plain Python over tuples and lists. This module rewrites their syntax tree statement for
+statement onto flat float64 arrays (``_kernels_generated.py``, a readable listing the tests
+run) and prints the result as C (``_kernels_generated.h``, compiled into the extension
+``_compiled`` when the package is built: see ``setup.py``); nothing of the arithmetic changes
+(same expressions, same order, no fused multiply-adds), so every backend computes the same
+numbers. The rewriting rules, each a change of storage only:
 
 ==============================================  ==============================================
 source (Python backends)                        generated (flat arrays)
@@ -42,7 +42,7 @@ import sys
 import textwrap
 
 from . import layout
-from ..algorithms import components, crba, momentum, rnea
+from ..algorithms import components, crba, momentum, regressor, rnea
 
 #: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
 #: (m, h, Ibar) (10) per body, flat.
@@ -51,12 +51,14 @@ STORES = {'Xup': ('XUP', 0, 12), 'vel': ('VEL', 12, 6), 'acc': ('ACC', 18, 6),
 WORK = 40
 #: The functions translated, in order (a function is generated after those it calls).
 SOURCES = (components.X_motion, components.XT_force, components.I_motion, components.XT_I_X,
-           rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel)
+           rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
+           regressor.regressor_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
               'rnea_kernel': 'K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work',
               'crba_kernel': 'K, work, H',
-              'momentum_kernel': 'K, q, qd, mom, ctq, work'}
+              'momentum_kernel': 'K, q, qd, mom, ctq, work',
+              'regressor_kernel': 'K, qd, qdd, gx, gy, gz, Y, axes, work'}
 TARGET = os.path.join(os.path.dirname(os.path.abspath(__file__)), '_kernels_generated.py')
 TARGET_C = os.path.join(os.path.dirname(TARGET), '_kernels_generated.h')
 
@@ -198,10 +200,11 @@ _C_RESERVED = {'auto', 'case', 'char', 'const', 'default', 'double', 'enum', 'ex
                'sizeof', 'static', 'struct', 'switch', 'typedef', 'union', 'unsigned', 'void',
                'volatile'}
 #: Parameters of the generated kernels that are arrays (the rest are doubles, or int flags).
-_C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'f_body', 'tau', 'work', 'H', 'mom', 'ctq'}
+_C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'f_body', 'tau', 'work', 'H', 'mom', 'ctq', 'Y', 'axes'}
 _C_FLAGS = {'has_fext'}
-#: ``len(x)`` of an array parameter: the number of joints ``nq``, or ``nq * nq`` for M(q).
-_C_LENGTH = {'H': 'nq * nq'}
+#: ``len(x)`` of an array parameter: the number of joints ``nq``, ``nq * nq`` for M(q),
+#: ``nq * 10 NB`` for the regressor.
+_C_LENGTH = {'H': 'nq * nq', 'Y': 'nq * 10 * (rows - 1)'}
 _C_OPS = {ast.Add: ('+', 10), ast.Sub: ('-', 10), ast.Mult: ('*', 11), ast.Div: ('/', 11)}
 _C_COMPARE = {ast.Eq: '==', ast.NotEq: '!=', ast.Lt: '<', ast.LtE: '<=', ast.Gt: '>',
               ast.GtE: '>='}

@@ -24,7 +24,7 @@ import warnings
 import numpy as np
 
 #: The interface of ``_compiled.c`` this module speaks (its ``API``).
-API = 1
+API = 2
 
 try:
     ext = importlib.import_module(__package__ + '._compiled')
@@ -104,6 +104,17 @@ def momentum(lay, q: np.ndarray, qd: np.ndarray) -> tuple:
     mom, ctq = np.empty((N, n)), np.empty((N, n))
     ext.momentum_batch(lay.kernels, N, _rows(q, N, n), _rows(qd, N, n), mom, ctq, THREADS)
     return mom.reshape(q.shape), ctq.reshape(q.shape)
+
+
+def regressor(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple) -> np.ndarray:
+    """``Y`` of shape (..., n, 10 NB) from validated float64 arrays of one shape (..., n)."""
+    n, NB = lay.n, lay.table.shape[0] - 1
+    batch = q.shape[:-1]
+    N = int(np.prod(batch, dtype=np.intp))
+    Y = np.empty((N, n, 10 * NB))
+    ext.regressor_batch(lay.kernels, N, _rows(q, N, n), _rows(qd, N, n), _rows(qdd, N, n),
+                        gravity, Y, THREADS)
+    return Y.reshape(batch + (n, 10 * NB))
 
 
 def describe() -> str:

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..algorithms.crba import crba_kernel
 from ..algorithms.momentum import momentum_kernel
+from ..algorithms.regressor import regressor_kernel
 from ..algorithms.rnea import rnea_kernel, xup_kernel
 
 
@@ -120,3 +121,32 @@ def momentum(rows, q: np.ndarray, qd: np.ndarray) -> tuple:
     N = int(np.prod(q.shape[:-1], dtype=np.intp))
     return tuple(_stacked(part, N, q.dtype, q.shape)
                  for part in momentum_rows(rows, _columns(q), _columns(qd), np))
+
+
+def regressor_rows(rows, q, qd, qdd, gravity, m=math) -> list:
+    """Return the regressor ``Y`` as a list of ``n * 10 NB`` scalars (row-major) from ``rows``.
+
+    Arguments as for :func:`rnea_rows` (no external forces: they do not depend on π).
+    """
+    gx, gy, gz = gravity
+    slots = len(rows)
+    Xup, vel, acc = [None] * slots, [None] * slots, [None] * slots
+    xup_kernel(rows, q, m, Xup)
+    Y = [None] * (rows[0][2] * 10 * (slots - 1))
+    regressor_kernel(rows, qd, qdd, gx, gy, gz, Y, [None] * (6 * slots * slots), Xup, vel, acc)
+    return Y
+
+
+def regressor(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+              gravity: Sequence[float]) -> np.ndarray:
+    """``Y`` of shape (..., n, 10 NB) from validated arrays of one float dtype, shape (..., n)."""
+    n = q.shape[-1]
+    shape = q.shape[:-1] + (n, 10 * (len(rows) - 1))
+    if q.dtype == np.float64 and q.size == n > 0:
+        Y = regressor_rows(rows, *(x.reshape(-1).tolist() for x in (q, qd, qdd)),
+                           [float(x) for x in gravity])
+        return np.array(Y).reshape(shape)
+    N = int(np.prod(q.shape[:-1], dtype=np.intp))
+    Y = regressor_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
+                       [q.dtype.type(x) for x in gravity], np)
+    return _stacked(Y, N, q.dtype, shape)

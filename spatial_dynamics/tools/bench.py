@@ -954,6 +954,64 @@ def terms_table(names: list, rounds: int = 9) -> str:
     return '\n'.join(rows)
 
 
+def regressor_table(names: list, rounds: int = 5, N: int = 20_000) -> str:
+    """Markdown table: the joint-torque regressor ``Y`` per state, against ``rnea``.
+
+    ``sd.regressor`` on each backend and the 6×6 specification (``regressor_spatial``, numpy),
+    one call on one state (median over 32 states) and a batch of ``N`` states per state
+    (medians of ``rounds``), beside ``sd.rnea`` on the same backend and states, and
+    Pinocchio's ``computeJointTorqueRegressor`` (one state) where importable. Run alone:
+    ``python -c "from spatial_dynamics.tools import bench; print(bench.regressor_table(['ur5',
+    'panda']))"``.
+    """
+    from spatial_dynamics.algorithms.regressor import regressor_spatial
+    rows = ['| robot | implementation | one state µs | batch µs/state | rnea batch µs/state '
+            '| ratio to rnea (batch) |', '|---|---|---|---|---|---|']
+    rng = np.random.default_rng(13)
+    for name in names:
+        try:
+            robot = load_robot(name)
+        except Skip as err:
+            rows.append(f'| {name} | skipped: {err} | | | | |')
+            continue
+        model, n = robot.model, robot.model.nq
+        Q, QD, QDD = rng.uniform(-1, 1, (3, N, n))
+        impls = [(f'sd.regressor, {b}', functools.partial(sd.regressor, backend=b),
+                  functools.partial(sd.rnea, backend=b))
+                 for b in ('numpy',) + (('compiled',) if _has_compiled() else ())]
+        impls.append(('6×6 specification', regressor_spatial,
+                      functools.partial(sd.rnea, backend='numpy')))
+        for label, fn, rnea in impls:
+            one, big, ref = [], [], []
+            for _ in range(rounds):
+                t0 = time.perf_counter()
+                for s in range(32):
+                    fn(model, Q[s], QD[s], QDD[s])
+                one.append((time.perf_counter() - t0) / 32 * 1e6)
+                for f, acc in ((fn, big), (rnea, ref)):
+                    t0 = time.perf_counter()
+                    f(model, Q, QD, QDD)
+                    acc.append((time.perf_counter() - t0) / N * 1e6)
+            a, b = statistics.median(big), statistics.median(ref)
+            rows.append(f'| {name} ({n} dof) | {label} | {statistics.median(one):.3g} '
+                        f'| {a:.3g} | {b:.3g} | {a / b:.1f}× |')
+        try:
+            P = _pin(robot)
+        except Skip:
+            continue
+        data = P.model.createData()
+        QP, VP, AP = _pin_expand(P, Q[:32], QD[:32], QDD[:32])
+        one = []
+        for _ in range(rounds):
+            t0 = time.perf_counter()
+            for s in range(32):
+                P.pin.computeJointTorqueRegressor(P.model, data, QP[s], VP[s], AP[s])
+            one.append((time.perf_counter() - t0) / 32 * 1e6)
+        rows.append(f'| {name} ({n} dof) | Pinocchio computeJointTorqueRegressor '
+                    f'| {statistics.median(one):.3g} | | | |')
+    return '\n'.join(rows)
+
+
 def _has_compiled() -> bool:
     from spatial_dynamics.backends import compiled
     return compiled.ext is not None
@@ -999,12 +1057,16 @@ def main(argv: Optional[list] = None) -> int:
             write_csv(args.out / 'results.csv', rows, settings.sizes)
         skipped = skipped_work_table(settings.rounds) if 'talos' in names else ''
         terms = terms_table(names, settings.rounds)
+        regressors = regressor_table([r for r in ('ur5', 'panda') if r in names],
+                                     min(settings.rounds, 3), 2_000 if args.quick else 20_000)
     table = markdown(rows, checks, settings.sizes)
     if skipped:
         table += '\n\nWhat the code skips (single call, Talos):\n\n' + skipped
     if terms.count('\n') > 1:
         table += ('\n\nThe terms of τ = M q̈ + C q̇ + g (single call, indexing of the 32 '
                   'states included in both):\n\n' + terms)
+    if regressors.count('\n') > 1:
+        table += '\n\nThe joint-torque regressor Y (τ = Y π), per state:\n\n' + regressors
     paths = plot(rows, args.out, log, settings.sizes)
     print(f'Command: python -m spatial_dynamics.tools.bench {" ".join(argv or sys.argv[1:])}')
     print(f'Setup: {setup}\n')
