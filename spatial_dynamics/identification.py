@@ -401,19 +401,27 @@ def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarra
     decides those directions anyway (``test_identification``: the same fit as a QR of the
     stacked rows).
     """
+    from scipy.linalg.blas import dsyrk
     q, qd, qdd = states
     fixed = np.setdiff1d(np.arange(10 * model.NB), cols)
-    G = None
+    every = len(fixed) == 0 and np.array_equal(cols, np.arange(10 * model.NB))
+    n = q.shape[-1]
+    width = len(cols) + (3 * n if drive_threshold is not None else 0) + 1
+    G = np.zeros((width, width))
     for a in range(0, len(q), CHUNK):
         part = slice(a, a + CHUNK)
-        Y = regressor(model, q[part], qd[part], qdd[part], gravity)
-        b = (tau[part] - Y[..., fixed] @ pi0[fixed]).reshape(-1)
-        blocks = [Y[..., cols].reshape(len(b), -1)]
+        Y = regressor(model, q[part], qd[part], qdd[part], gravity).reshape(-1, 10 * model.NB)
+        M = np.empty((len(Y), width))        # [A | drives | b], filled in place
+        M[:, :len(cols)] = Y if every else Y[:, cols]
         if drive_threshold is not None:
-            blocks.append(_drive_columns(qd[part], qdd[part], drive_threshold)
-                          .reshape(len(b), -1))
-        M = np.column_stack(blocks + [b])
-        G = M.T @ M if G is None else G + M.T @ M
+            M[:, len(cols):-1] = _drive_columns(qd[part], qdd[part], drive_threshold
+                                                ).reshape(len(Y), -1)
+        M[:, -1] = tau[part].reshape(-1)
+        if len(fixed):
+            M[:, -1] -= Y[:, fixed] @ pi0[fixed]
+        # Mᵀ M, its upper triangle (BLAS syrk: half of a matrix product's work)
+        G += dsyrk(1.0, M.T, trans=0)
+    G = np.triu(G) + np.triu(G, 1).T
     d = np.sqrt(np.diag(G))
     d[d == 0.0] = 1.0
     w, V = np.linalg.eigh(G / d[:, None] / d[None, :])
