@@ -48,8 +48,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .algorithms.regressor import regressor
-from .backends import rnea
+from .backends import regressor, rnea
 from .identification import base_parameters, BaseParameters
 from .model import Model
 

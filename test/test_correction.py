@@ -40,14 +40,14 @@ def drives(n):
     return 0.5 + 0.1 * k, 1.0 + 0.2 * k, 0.05 + 0.01 * k
 
 
-def motion(n, seed, seconds=12.0, only=None):
+def motion(n, seed, seconds=12.0, only=()):
     """Return t, q, q̇, q̈ of two sines per joint (random amplitudes and frequencies)."""
     rng = np.random.default_rng(seed)
     t = np.arange(int(RATE * seconds)) / RATE
     amp = rng.uniform(0.6, 1.2, n)
     w1, w2 = 2 * np.pi * rng.uniform(0.15, 0.5, n), 2 * np.pi * rng.uniform(1.5, 2.7, n)
-    if only is not None:
-        amp = np.where(np.arange(n) == only, amp, 0.0)
+    if only != ():
+        amp = np.where(np.isin(np.arange(n), only), amp, 0.0)
     T = t[:, None]
     q = amp * (np.sin(w1 * T) + 0.3 * np.sin(w2 * T))
     qd = amp * (w1 * np.cos(w1 * T) + 0.3 * w2 * np.cos(w2 * T))
@@ -124,6 +124,33 @@ def test_a_corrected_urdf_predicts_held_out_motion(robot_bags, tmp_path, capsys)
     params = list(csv.DictReader(open(os.path.join(out, 'parameters.csv'))))
     assert len(params) == 10 * model.NB
     assert all(float(r['sigma']) >= 0.0 for r in params)
+
+
+def test_two_recordings_fit_together(robot_bags, tmp_path, capsys):
+    """--also: a recording of joints 1-2 and one of joints 3-6, each poor alone, fit as one.
+
+    Alone, the first is flagged and misses the held-out motion; together (every joint moved,
+    in one or the other) nothing is flagged and the held-out residual is the noise.
+    """
+    model, true, train, held, _ = robot_bags
+    first = record(tmp_path / 'first', true, *motion(model.nq, 5, only=(0, 1)), seed=14)
+    second = record(tmp_path / 'second', true, *motion(model.nq, 6, only=(2, 3, 4, 5)),
+                    seed=15)
+    urdf = robot_urdf_path('ur5')
+    out = str(tmp_path / 'alone')
+    assert main([first, '--urdf', urdf, '--out', out, '--inertias', '--identify',
+                 '--threshold', str(EPS), '--validate', held, '--no-plots']) == 0
+    assert 'warning: the recording does not determine' in capsys.readouterr().err
+    alone = read_csv(os.path.join(out, 'validation.csv'))
+    assert max(r['held_out_corrected'] for r in alone.values()) > 10 * NOISE
+    out = str(tmp_path / 'both')
+    assert main([first, '--also', second, '--urdf', urdf, '--out', out, '--inertias',
+                 '--identify', '--threshold', str(EPS), '--validate', held,
+                 '--no-plots']) == 0
+    text, err = capsys.readouterr()
+    assert 'fitted on' in text and 'warning' not in err, err
+    both = read_csv(os.path.join(out, 'validation.csv'))
+    assert max(r['held_out_corrected'] for r in both.values()) < 2 * NOISE, both
 
 
 def test_a_poorly_exciting_recording_is_named_not_trusted(robot_bags, tmp_path, capsys):
@@ -248,6 +275,7 @@ def test_usage_errors_are_one_line(robot_bags, tmp_path, capsys):
     out = str(tmp_path / 'o')
     for argv, status, words in (
             ([train, '--validate', held], 2, 'need something identified'),
+            ([train, '--also', held], 2, 'need something identified'),
             ([train, '--write-urdf', str(tmp_path / 'x.urdf')], 2, 'need something'),
             ([train, '--inertias', '--payload', 'tool0'], 2, 'exclude each other'),
             ([train, '--inertias', 'no_such_link'], 1, "'no_such_link' is not a link"),

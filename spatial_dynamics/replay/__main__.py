@@ -5,7 +5,8 @@
     python -m spatial_dynamics.replay BAG --urdf URDF [--topic /joint_states] [--out DIR]
                                       [--identify] [--threshold 0.01] [--window 0.05]
                                       [--inertias [LINK ...] | --payload LINK]
-                                      [--validate BAG] [--write-urdf OUT.urdf]
+                                      [--also BAG ...] [--validate BAG]
+                                      [--write-urdf OUT.urdf]
     python -m spatial_dynamics.replay --urdf URDF --trajectory FILE.yaml [--rate 1000]
     python -m spatial_dynamics.replay excite --urdf URDF --duration 30 --out plan.yaml
     python -m spatial_dynamics.replay BAG --urdf URDF --trajectory-topic /arm/joint_trajectory
@@ -284,24 +285,33 @@ def run_bag(args) -> int:
     stages.done('rnea')
     rms_measured = np.sqrt(np.mean(effort ** 2, axis=0))
     rms_residual = np.sqrt(np.mean(residual ** 2, axis=0))
+    # what the fits see: this bag and the --also ones, each cleaned and differentiated alone
+    train = {k: s[k] for k in ('q', 'qd', 'qdd', 'effort')}
+    if args.also:
+        more = [recording(args, bag, model, stages) for bag in args.also]
+        train = {k: np.concatenate([train[k]] + [m[k] for m in more]) for k in train}
+        print(f'fitted on {args.bag} and {len(more)} more bag(s): {len(train["q"])} samples')
+    fq, fqd, fqdd, feffort = (train[k] for k in ('q', 'qd', 'qdd', 'effort'))
     fit = None
     if args.identify:
-        fit = identify.identify(residual, qd, qdd, args.threshold, names)
+        fresidual = residual if not args.also else feffort - rnea(model, fq, fqd, fqdd,
+                                                                  args.gravity)
+        fit = identify.identify(fresidual, fqd, fqdd, args.threshold, names)
         stages.done('identify')
     payload = None
     if args.payload:
         payload = identification.identify_payload(
-            model, args.payload, q, qd, qdd, effort, args.gravity,
+            model, args.payload, fq, fqd, fqdd, feffort, args.gravity,
             args.threshold if args.identify else None)
         stages.done('payload')
     correction, excitation_warning = None, ''
     if args.inertias is not None:
         found = identification.identify_inertias(
-            model, q, qd, qdd, effort, args.inertias or None, args.gravity,
+            model, fq, fqd, fqdd, feffort, args.inertias or None, args.gravity,
             args.threshold if args.identify else None)
         correction = correction_of.from_inertias(model, found, args.threshold)
         excitation_warning = correction_of.undetermined_warning(
-            model, s, found.bodies, args.gravity)
+            model, train, found.bodies, args.gravity)
         stages.done('inertias')
     elif payload is not None:
         correction = correction_of.Correction(model, payload=payload, drives=payload.drives,
@@ -383,7 +393,7 @@ def run_bag(args) -> int:
     if not args.no_plots:
         written += ['measured_vs_model.png', 'residual.png']
     if correction is not None:
-        written += corrected(args, model, correction, s, stages)
+        written += corrected(args, model, correction, train, stages)
     if excitation_warning:
         print(excitation_warning, file=sys.stderr)
     print(f'\nwritten to {args.out}: {", ".join(written)}')
@@ -520,6 +530,9 @@ def parser() -> argparse.ArgumentParser:
                    help='identify the inertial parameters of these links (default: every '
                    'moving one), physically consistent, regularised toward the URDF; with '
                    '--identify jointly with the drives')
+    p.add_argument('--also', nargs='+', metavar='BAG', default=[],
+                   help='more recordings to fit on (--identify, --payload, --inertias) with '
+                   'BAG; the files written are of BAG')
     p.add_argument('--validate', metavar='BAG',
                    help='a held-out recording: the residual with the URDF and with what was '
                    'identified (--inertias, --payload, --identify)')
@@ -584,8 +597,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.annotate and not args.trajectory:
         p.error('--annotate needs --trajectory FILE.yaml')
     identifies = args.inertias is not None or args.payload or args.identify
-    if (args.validate or args.write_urdf) and not identifies:
-        p.error('--validate and --write-urdf need something identified: --inertias, '
+    if (args.validate or args.write_urdf or args.also) and not identifies:
+        p.error('--validate, --write-urdf and --also need something identified: --inertias, '
                 '--payload or --identify')
     if args.inertias is not None and args.payload:
         p.error('--inertias and --payload exclude each other (--inertias fits the payload '
