@@ -13,7 +13,7 @@ from conftest import PinOracle, robot_urdf_path
 import numpy as np
 import pytest
 import spatial_dynamics as sd
-from spatial_dynamics.tools import bench
+from benchmarks import bench
 from spatial_dynamics.tools.driving import demo_urdf
 
 TINY = bench.Settings(ref_states=2, rounds=1, rounds_big=1, block_s=0.0005, states=4,

@@ -14,7 +14,7 @@ import sys
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-PATHS = ['spatial_dynamics', 'test', 'launch', 'setup.py']
+PATHS = ['spatial_dynamics', 'benchmarks', 'test', 'launch', 'setup.py']
 
 try:
     from ament_flake8.main import main_with_errors

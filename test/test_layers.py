@@ -25,8 +25,8 @@ RANKS = {
     'ros': 7,               # the node and its pure configuration
     'sim': 8,               # the simulated robot: robot.py pure (MuJoCo), node.py on ros/;
     #                         above ros (it reuses the node's readers and spin), below tools
-    #                         (bench takes MuJoCo's URDF preparation from sim.robot)
-    'tools': 9,             # bench, demo, latency, soak, ...: use everything, used by none
+    'tools': 9,             # demo, closed_loop, latency, soak, ...: use everything, used by none
+    #                         (the benchmarks live outside the package: benchmarks/)
 }
 # The one import against the direction: Model.from_urdf, the public entry point, hands the
 # work to the parser (inside the method, so importing model never imports urdf).

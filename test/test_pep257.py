@@ -14,7 +14,7 @@ import sys
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-PATHS = ['spatial_dynamics', 'test', 'launch', 'setup.py']
+PATHS = ['spatial_dynamics', 'benchmarks', 'test', 'launch', 'setup.py']
 AMENT_IGNORE = ['D100', 'D101', 'D102', 'D103', 'D104', 'D105', 'D106', 'D107',
                 'D203', 'D212', 'D404']
 

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Numerical stress suite (``-m stress``): extreme generated robots and states.
 
-Robots come from the seeded generator ``spatial_dynamics.tools.generate.random_robot_urdf``: serial
+Robots come from the seeded generator ``benchmarks.generate.random_robot_urdf``: serial
 chains and branching trees up to 500 links mixing revolute, continuous, prismatic, fixed and
 ``<mimic>`` joints; axes along a frame axis, random unit and non-unit (length 1e-3 to 1e3);
 joint and inertial origins at gimbal lock (pitch exactly ±π/2); masses log-uniform in
@@ -21,9 +21,9 @@ from conftest import PinOracle
 import numpy as np
 import pytest
 import spatial_dynamics as sd
-from spatial_dynamics.tools import bench
-from spatial_dynamics.tools.generate import (chain_urdf, INERTIA_KINDS, JOINT_KINDS,
-                                             random_robot_urdf)
+from benchmarks import bench
+from benchmarks.generate import (chain_urdf, INERTIA_KINDS, JOINT_KINDS,  # noqa: E402
+                                 random_robot_urdf)
 from spatial_dynamics.joints import PRISMATIC
 
 pytestmark = pytest.mark.stress

@@ -4,7 +4,7 @@
 
 Every generated robot is physical (positive masses, inertias that are positive definite and
 satisfy the triangle inequality) so that it loads in both spatial_dynamics and Pinocchio.
-The XML and rotation helpers live in ``spatial_dynamics.tools.generate`` (shared with the
+The XML and rotation helpers live in ``benchmarks.generate`` (shared with the
 benchmark) and are re-exported here.
 """
 
@@ -12,7 +12,7 @@ from typing import Optional
 
 import numpy as np
 # The XML and rotation helpers are shared with the benchmark's generator.
-from spatial_dynamics.tools.generate import (  # noqa: F401 (re-exported to the tests)
+from benchmarks.generate import (  # noqa: F401 (re-exported to the tests)
     fmt, inertia_xml, inertial_xml, MOVABLE, origin_xml, random_rotation, rpy_to_matrix)
 
 

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Time the replay command on a generated bag: one hour of a 7-joint arm at 1 kHz by default.
 
-    python -m spatial_dynamics.replay.bench [--seconds 3600] [--rate 1000]
+    python -m benchmarks.replay [--seconds 3600] [--rate 1000]
                                             [--storage mcap|sqlite3|both] [--dir DIR]
                                             [--residual csv|npy|none] [--identify]
                                             [--inertias]
@@ -27,10 +27,10 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .. import Model, rnea
-from . import bags
+from spatial_dynamics import Model, rnea
+from spatial_dynamics.replay import bags
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 URDF = os.path.join(ROOT, 'config', 'demo_arm.urdf')
 JOINTS = [f'joint{k}' for k in range(1, 8)]
 
@@ -57,7 +57,8 @@ def generate(path: str, storage: str, seconds: float, rate: float) -> int:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Generate the bag(s), time the command on each; return 0 (1 if the command fails)."""
-    p = argparse.ArgumentParser(prog='replay.bench', description=__doc__.split('\n\n')[0])
+    p = argparse.ArgumentParser(prog='python -m benchmarks.replay',
+                                description=__doc__.split('\n\n')[0])
     p.add_argument('--seconds', type=float, default=3600.0)
     p.add_argument('--rate', type=float, default=1000.0)
     p.add_argument('--storage', choices=('mcap', 'sqlite3', 'both'), default='both')

@@ -1,6 +1,6 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Run time against error: ``python -m spatial_dynamics.tools.bench [--quick] [--out DIR]``.
+"""Run time against error: ``python -m benchmarks.bench [--quick] [--out DIR]``.
 
 Every implementation gets the same states of the same robot in one process:
 
@@ -54,7 +54,7 @@ import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics.tools.driving import demo_urdf
-from spatial_dynamics.tools.generate import chain_urdf, tree_urdf
+from benchmarks.generate import chain_urdf, tree_urdf
 from spatial_dynamics.algorithms.rnea import PR, RA
 from spatial_dynamics.backends import layout, python as python_backend
 from spatial_dynamics.sim.robot import dynamics_only, mujoco_model
@@ -961,7 +961,7 @@ def regressor_table(names: list, rounds: int = 5, N: int = 20_000) -> str:
     one call on one state (median over 32 states) and a batch of ``N`` states per state
     (medians of ``rounds``), beside ``sd.rnea`` on the same backend and states, and
     Pinocchio's ``computeJointTorqueRegressor`` (one state) where importable. Run alone:
-    ``python -c "from spatial_dynamics.tools import bench; print(bench.regressor_table(['ur5',
+    ``python -c "from benchmarks import bench; print(bench.regressor_table(['ur5',
     'panda']))"``.
     """
     from spatial_dynamics.algorithms.regressor import regressor_spatial
@@ -1020,7 +1020,7 @@ def _has_compiled() -> bool:
 def main(argv: Optional[list] = None) -> int:
     """Command-line entry point."""
     parser = argparse.ArgumentParser(
-        prog='python -m spatial_dynamics.tools.bench', description=__doc__.split('\n')[0])
+        prog='python -m benchmarks.bench', description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true',
                         help='fewer robots, states and rounds (under 2 minutes)')
     parser.add_argument('--out', default='out/bench', type=Path,
@@ -1068,7 +1068,7 @@ def main(argv: Optional[list] = None) -> int:
     if regressors.count('\n') > 1:
         table += '\n\nThe joint-torque regressor Y (τ = Y π), per state:\n\n' + regressors
     paths = plot(rows, args.out, log, settings.sizes)
-    print(f'Command: python -m spatial_dynamics.tools.bench {" ".join(argv or sys.argv[1:])}')
+    print(f'Command: python -m benchmarks.bench {" ".join(argv or sys.argv[1:])}')
     print(f'Setup: {setup}\n')
     print(table)
     print(f'\nWrote {args.out / "results.csv"}' + ''.join(f', {p}' for p in paths)
