@@ -43,16 +43,15 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
 from .. import friction_torque, Model, rnea
-from ..bounds import JOINT_BOUNDS
 from ..check import locked_item, read_description
 from .. import effort as effort_model
 from . import annotate, bags, differentiate, identify, report, splines
+from .recording import recording, Stages
 from .. import identification
 from .arguments import check_gravity, finite, load_model, one_line, positive, Refused
 from ..urdf import read_urdf_file
@@ -60,33 +59,6 @@ from . import correction as correction_of
 
 #: The node's default ``friction_velocity_threshold`` (config/inverse_dynamics.yaml).
 NODE_THRESHOLD = 0.01
-
-
-class Progress:
-    """A one-line progress bar on stderr, drawn only when stderr is a terminal."""
-
-    def __init__(self, label: str, stream=None) -> None:
-        """Draw on ``stream`` (stderr) if it is a terminal."""
-        self.label = label
-        self.stream = stream or sys.stderr
-        self.on = self.stream.isatty()
-        self.last = 0.0
-
-    def __call__(self, done: int, total: int) -> None:
-        """Redraw at most 10 times a second."""
-        now = time.monotonic()
-        if not self.on or (now - self.last < 0.1 and done < total):
-            return
-        self.last = now
-        frac = min(1.0, done / total) if total else 1.0
-        bar = '#' * int(30 * frac)
-        self.stream.write(f'\r{self.label} [{bar:<30}] {done}/{total}')
-        self.stream.flush()
-
-    def close(self) -> None:
-        """End the line."""
-        if self.on:
-            self.stream.write('\n')
 
 
 def plot_replay(out: str, topic: str, t: np.ndarray, names: Sequence[str], effort: np.ndarray,
@@ -99,26 +71,6 @@ def plot_replay(out: str, topic: str, t: np.ndarray, names: Sequence[str], effor
                        {'measured - model': residual}, 'residual (N m or N)')
 
 
-class Stages:
-    """Wall-clock time of each stage of the command (``--timings``)."""
-
-    def __init__(self) -> None:
-        """Start the clock."""
-        self.times: Dict[str, float] = {}
-        self.start = time.perf_counter()
-
-    def done(self, stage: str) -> None:
-        """Record the time since the previous stage ended."""
-        now = time.perf_counter()
-        self.times[stage] = self.times.get(stage, 0.0) + now - self.start
-        self.start = now
-
-    def text(self) -> str:
-        """Return the stages and their sum, one per line."""
-        lines = [f'  {k:<16} {v:8.3f} s' for k, v in self.times.items()]
-        return '\n'.join(lines + [f'  {"total":<16} {sum(self.times.values()):8.3f} s'])
-
-
 def mimic_notes(model: Model) -> List[str]:
     """Say which joints of ``q`` drive mimic joints (their fitted terms include those)."""
     notes = []
@@ -129,85 +81,6 @@ def mimic_notes(model: Model) -> List[str]:
             notes.append(f'{name} drives mimic joint(s) {", ".join(followers)}: its fitted '
                          'terms include theirs (set their <dynamics> to 0)')
     return notes
-
-
-# --------------------------------------------------------------------------------------------
-# Samples: from the bag to clean, sorted arrays
-
-def clean(js: bags.JointStates, window: float) -> Dict:
-    """Drop what cannot be used, sort by stamp, cut at gaps; return arrays and the reasons.
-
-    Returns ``{t, q, qd (or None), effort, skipped: {reason: count}, segments}``.
-    ``Refused`` when a joint is never present, the bag has no effort, or nothing is left.
-    """
-    skipped = dict(js.skipped)
-    names = js.names
-    if len(js.stamp) == 0:
-        raise Refused('no JointState messages could be read' + (
-            f' ({"; ".join(f"{v} {k}" for k, v in skipped.items())})' if skipped else ''))
-    have_q = np.isfinite(js.position)
-    never = [n for n, seen in zip(names, have_q.any(axis=0)) if not seen]
-    if never:
-        raise Refused(f'joint(s) {", ".join(never)} never have a position in the topic; keep '
-                      'only the recorded joints with --joints (the others are locked)')
-    if not np.isfinite(js.effort).any():
-        raise Refused('the topic has no measured effort (JointState.effort is empty)')
-    has_velocity = bool(np.isfinite(js.velocity).any())
-    fields = [('position', js.position), ('effort', js.effort)]
-    if has_velocity:
-        fields.insert(1, ('velocity', js.velocity))
-    keep = np.ones(len(js.stamp), dtype=bool)
-    for what, a in fields:
-        bad = ~np.isfinite(a)
-        bound, unit = JOINT_BOUNDS[what]
-        with np.errstate(invalid='ignore'):
-            huge = np.abs(a) > bound
-        if not (bad.any() or huge.any()):
-            continue
-        for j, name in enumerate(names):
-            for rows, reason in (
-                    (bad[:, j] & keep,
-                     f'{name}: no finite {what} (joint missing from the message, or NaN)'),
-                    (huge[:, j] & keep, f'{name}: {what} beyond ±{bound:g} {unit}')):
-                if rows.any():
-                    skipped[reason] = skipped.get(reason, 0) + int(rows.sum())
-                    keep &= ~rows
-    everything = bool(keep.all())
-    t = js.stamp if everything else js.stamp[keep]
-    backwards = int(np.sum(np.diff(t) < 0))
-    idx = None if everything else np.flatnonzero(keep)
-    if backwards:
-        order = np.argsort(t, kind='stable')
-        t = t[order]
-        idx = order if idx is None else idx[order]
-    repeated = np.concatenate(([False], np.diff(t) <= 0))
-    if repeated.any():
-        skipped['repeated stamp (first kept)'] = int(repeated.sum())
-        t = t[~repeated]
-        idx = np.flatnonzero(~repeated) if idx is None else idx[~repeated]
-    if len(t) < 5:
-        raise Refused(f'only {len(t)} usable samples: ' + '; '.join(
-            f'{v} skipped, {k}' for k, v in skipped.items()))
-    seg = differentiate.segments(t, window)
-    if seg.dropped:
-        skipped['in a stretch between gaps shorter than the window'] = seg.dropped
-    if not seg.spans:
-        raise Refused('no stretch of samples without gaps is as long as the window '
-                      f'({window} s); lower --window')
-    inside = np.zeros(len(t), dtype=bool)
-    for a, b in seg.spans:
-        inside[a:b] = True
-    # Renumber the spans onto the samples kept.
-    starts = np.cumsum(np.concatenate(([0], inside[:-1])))
-    spans = [(int(starts[a]), int(starts[a]) + (b - a)) for a, b in seg.spans]
-    if inside.all():
-        rows = idx if idx is not None else slice(None)     # a slice: no copies
-    else:
-        rows = (idx if idx is not None else np.arange(len(t)))[inside]
-        t = t[inside]
-    return {'t': t, 'q': js.position[rows], 'qd': js.velocity[rows] if has_velocity
-            else None, 'effort': js.effort[rows], 'skipped': skipped, 'spans': spans,
-            'period': seg.period, 'out_of_order': backwards}
 
 
 # --------------------------------------------------------------------------------------------
@@ -229,40 +102,6 @@ def print_payload(payload, names: Sequence[str], args) -> None:
     print('\n<!-- URDF: the payload as an <inertial> in the frame of '
           f'{payload.link!r} -->')
     print(payload.urdf_inertial())
-
-
-def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
-    """Read, clean and differentiate ``bag``: ``{t, q, qd, qdd, effort, ...}`` for the model.
-
-    ``effort`` is what the model's torque is compared with (``--measured-effort``); the rest
-    of the keys are :func:`clean`'s and ``js`` (the messages read), ``source`` and
-    ``resampled`` (how q̈ was found).
-    """
-    bar = Progress('reading')
-    try:
-        js = bags.read_joint_states(bag, args.topic, model.joint_names, fast=not args.generic,
-                                    progress=bar)
-    finally:
-        bar.close()
-    stages.done('read+decode')
-    s = clean(js, args.window)
-    t, q, spans = s['t'], s['q'], s['spans']
-    stages.done('clean+sort')
-    if s['qd'] is not None:
-        # the same zero-phase smoother on the measured velocity: without it the velocity
-        # noise stays in the residual (test_replay: 0.08 instead of 0.05 N m)
-        qd = differentiate.derivatives(t, s['qd'], args.window, args.order, 0, spans)[0]
-        qdd, resampled = differentiate.derivatives(t, s['qd'], args.window, args.order, 1,
-                                                   spans)
-        source = 'velocity'
-    else:
-        qd, resampled = differentiate.derivatives(t, q, args.window, args.order, 1, spans)
-        qdd = differentiate.derivatives(t, q, args.window, args.order, 2, spans)[0]
-        source = 'position (the bag has no velocities)'
-    stages.done('differentiate')
-    effort = effort_model.with_gravity(model, q, s['effort'], args.measured_effort,
-                                       args.gravity)
-    return dict(s, qd=qd, qdd=qdd, effort=effort, js=js, source=source, resampled=resampled)
 
 
 def run_bag(args) -> int:

@@ -214,7 +214,8 @@ def floor(true_text: bytes, joints, urdf: str, bag: str) -> np.ndarray:
     misses: each drive's friction flips within milliseconds at a reversal, faster than a
     50 ms smoothing window follows).
     """
-    from spatial_dynamics.replay.__main__ import parser, recording, Stages
+    from spatial_dynamics.replay.__main__ import parser
+    from spatial_dynamics.replay.recording import recording, Stages
     true = sd.Model.from_urdf(true_text.decode(), joints=joints)
     args = parser().parse_args([bag, '--urdf', urdf])
     data = recording(args, bag, true, Stages())
