@@ -854,7 +854,8 @@ c_regressor_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
  * (id(model) -> Kernels), runs here; every other call, or one whose arguments the entry
  * declines, is passed on to `function` unchanged (it validates, derives the table, runs
  * batches and the other backends). This saves the Python frame of `function` (~0.2 µs, a
- * fifth of a call) on the path users take most. */
+ * fifth of a call) on the path users take most. The door keeps the last model it answered
+ * (a weak reference) and its Kernels, so that a run of calls on one model skips the dict. */
 
 enum { D_RNEA = 0, D_GRAVITY = 1, D_BIAS = 2, D_MASS = 3, D_MOMENTUM = 4 };
 /* joint-vector arguments after the model, and whether gravity and f_ext come next */
