@@ -11,7 +11,8 @@ from setuptools.command.build_ext import build_ext
 package_name = 'spatial_dynamics'
 #: The kernels generated from spatial_dynamics/algorithms (backends/codegen.py) as a C
 #: extension. -ffp-contract=off: no fused multiply-adds, so every operation rounds as in the
-#: Python backends.
+#: Python backends. It reads numpy arrays through the numpy C API: numpy (its headers) is a
+#: build requirement (pyproject.toml, package.xml), added to the include path by BuildKernels.
 KERNELS = Extension(
     package_name + '.backends._compiled',
     sources=[package_name + '/backends/_compiled.c'],
@@ -36,8 +37,15 @@ class BuildKernels(build_ext):
             self._skip(err)
 
     def build_extension(self, ext) -> None:
-        """Build ``ext``, or warn once and leave it out."""
+        """Build ``ext`` (with numpy's headers), or warn once and leave it out."""
         try:
+            try:
+                import numpy
+            except ImportError as err:
+                raise RuntimeError(f'numpy, whose C headers they need, is not importable at '
+                                   f'build time ({err}); install numpy (Debian/Ubuntu: '
+                                   f'python3-numpy)') from None
+            ext.include_dirs = [*ext.include_dirs, numpy.get_include()]
             super().build_extension(ext)
         except Exception as err:     # the compiler failed (CompileError, LinkError)
             self._skip(err)

@@ -14,7 +14,9 @@
   do not divide evenly and for several Python threads calling at once.
 """
 
+import array
 import functools
+import gc
 import threading
 
 from conftest import random_state, robot_urdf_path
@@ -49,15 +51,22 @@ def forms(x):
     """Return the forms users pass one joint vector in: name -> value."""
     wide = np.repeat(x, 2)[::2]
     assert not wide.flags.c_contiguous
+    unaligned = np.frombuffer(b'\0' + x.tobytes(), offset=1)
+    assert not unaligned.flags.aligned
     return {'ndarray': x, 'strided': wide, 'list': x.tolist(), 'tuple': tuple(x.tolist()),
-            'readonly': np.frombuffer(x.tobytes())}
+            'readonly': np.frombuffer(x.tobytes()), 'unaligned': unaligned,
+            'reversed': x[::-1].copy()[::-1], 'array.array': array.array('d', x.tolist()),
+            'memoryview': memoryview(x)}
 
 
 def integer_forms(n):
     """Return integer joint vectors: Python ints in a list and a tuple, integer arrays."""
     k = np.arange(n) % 3 - 1
     return {'int list': k.tolist(), 'int tuple': tuple(k.tolist()), 'int64': k,
-            'int32': k.astype(np.int32), 'bool': k > 0}
+            'int32': k.astype(np.int32), 'bool': k > 0, 'int8': k.astype(np.int8),
+            'uint16': (k + 1).astype(np.uint16), 'longlong': k.astype(np.longlong),
+            'ulonglong': (k + 1).astype(np.ulonglong), 'strided int': np.repeat(k, 3)[::3],
+            'int array.array': array.array('l', k.tolist())}
 
 
 GRAVITY_FORMS = {'default': None, 'tuple': (0.3, -0.2, -9.81), 'list of ints': [0, 0, -10],
@@ -254,3 +263,44 @@ def test_the_doors_are_the_functions_entered_in_c(ext, rng):
     M = sd.mass_matrix(model, q.tolist(), backend='compiled')
     np.testing.assert_array_equal(M, sd.mass_matrix.__wrapped__(model, q))
     assert close(sd.mass_matrix(model, q, 'numpy'), M)
+
+
+def test_arrays_the_entries_decline_take_the_general_path(ext, rng):
+    """Swapped bytes, float32 and batches of one state: None from the entry, the same answer."""
+    model = robot('ur5')
+    n = model.nq
+    kernels = layout.of(model).kernels
+    q, qd, qdd = random_state(rng, (), n)
+    swapped = q.astype(q.dtype.newbyteorder())
+    assert ext.rnea(kernels, swapped, qd, qdd, sd.GRAVITY) is None
+    assert ext.mass_matrix(kernels, swapped) is None
+    np.testing.assert_array_equal(sd.rnea(model, swapped, qd, qdd), sd.rnea(model, q, qd, qdd))
+    np.testing.assert_array_equal(sd.mass_matrix(model, swapped), sd.mass_matrix(model, q))
+    for declined in (q.astype(np.float32), q[None], q[:-1], np.append(q, 0.0),
+                     q.astype(np.complex128), q.astype(object)):
+        assert ext.rnea(kernels, declined, qd, qdd, sd.GRAVITY) is None
+        assert ext.gravity_torque(kernels, declined, sd.GRAVITY) is None
+        assert ext.mass_matrix(kernels, declined) is None
+    assert ext.rnea(kernels, q, qd, qdd, np.zeros(4)) is None
+    assert ext.rnea(kernels, q, qd, qdd, np.zeros(3, dtype=np.float32)) is None
+
+
+def test_the_doors_answer_each_model_with_its_own_kernels(ext, rng):
+    """Calls alternating between models, and a model made after one was collected."""
+    names = ['ur5', 'panda']
+    models = [sd.Model.from_urdf(robot_urdf_path(name)) for name in names]
+    states = [random_state(rng, (), m.nq) for m in models]
+    expected = [sd.rnea.__wrapped__(m, *x) for m, x in zip(models, states)]
+    masses = [sd.mass_matrix.__wrapped__(m, x[0]) for m, x in zip(models, states)]
+    for _ in range(3):
+        for m, x, tau, M in zip(models, states, expected, masses):
+            np.testing.assert_array_equal(sd.rnea(m, *x), tau)
+            np.testing.assert_array_equal(sd.mass_matrix(m, x[0]), M)
+    for k in range(20):         # a new model may take the address of a collected one
+        models = [None, None]
+        gc.collect()
+        j = k % 2
+        model = sd.Model.from_urdf(robot_urdf_path(names[j]))
+        np.testing.assert_array_equal(sd.rnea(model, *states[j]), expected[j])
+        np.testing.assert_array_equal(sd.mass_matrix(model, states[j][0]), masses[j])
+        del model

@@ -6,18 +6,26 @@
  *
  * This file only moves data. A Kernels object holds a copy of a model's table (the rows of
  * backends/layout.py, prepared once in Python). The single-state entries (METH_FASTCALL)
- * read q, qd, qdd and gravity once each, through the buffer protocol (any 1-D array of
- * float64 or integers, any strides) or a list or tuple of Python floats and ints, into C
- * doubles; anything else (a batch, float32, a wrong length, other objects) returns None so
- * that the Python caller takes its general path, which validates and names the argument.
- * The batch entries take C-contiguous float64 arrays prepared by the caller, release the GIL
- * and split the batch into contiguous slices over POSIX threads.
+ * read q, qd, qdd and gravity once each into C doubles: a 1-D numpy array of float64 or
+ * integers (any strides) through the numpy C API, a list or tuple of Python floats and
+ * ints, or another 1-D buffer of such numbers through the buffer protocol; anything else (a
+ * batch, float32, a wrong length, other objects) returns None so that the Python caller
+ * takes its general path, which validates and names the argument. Results are new numpy
+ * arrays. The batch entries take C-contiguous float64 arrays prepared by the caller, release
+ * the GIL and split the batch into contiguous slices over POSIX threads.
  *
- * No numpy C API: results are made by numpy.empty and filled through the buffer protocol, so
- * one build works with numpy 1.26 and 2.x.
+ * The numpy C API, version-targeted: built against numpy 2.x headers, the extension also
+ * runs on numpy 1.23 and later (NPY_TARGET_VERSION; 1.23 is the oldest numpy for Python
+ * 3.11), e.g. Ubuntu 24.04's 1.26. Built against numpy 1.x headers it runs on numpy 1.x
+ * only (numpy's rule); import_array then fails on 2.x and the package runs on plain Python,
+ * with compiled.py's warning.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+
+#define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
+#define NPY_TARGET_VERSION NPY_1_23_API_VERSION
+#include <numpy/arrayobject.h>
 
 #include <stddef.h>
 #include <stdlib.h>
@@ -39,8 +47,6 @@
 #define MAX_THREADS 64
 #define MIN_WORK 4096
 
-static PyObject *np_empty;  /* numpy.empty */
-
 /* ------------------------------------------------------------------------------------------
  * Kernels: one model's table */
 
@@ -50,9 +56,8 @@ typedef struct {
     long rows;          /* NB + 1 */
     long n;             /* joints (len(q)) */
     double *zeros;      /* n zeros: qd, qdd of the terms at rest */
-    PyObject *n_obj;    /* n, (n, n) and (n, 10 NB): the shapes of the results */
-    PyObject *nn_obj;
-    PyObject *ny_obj;
+    npy_intp nn[2];     /* (n, n) and (n, 10 NB): the shapes of the results */
+    npy_intp ny[2];
 } KernelsObject;
 
 static PyTypeObject KernelsType;
@@ -62,9 +67,6 @@ kernels_dealloc(KernelsObject *self)
 {
     PyMem_Free(self->K);
     PyMem_Free(self->zeros);
-    Py_XDECREF(self->n_obj);
-    Py_XDECREF(self->nn_obj);
-    Py_XDECREF(self->ny_obj);
     Py_TYPE(self)->tp_free((PyObject *)self);
 }
 
@@ -117,16 +119,11 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     if (self->K != NULL)
         memcpy(self->K, K, sizeof(double) * rows * WIDTH);
     PyBuffer_Release(&v);
-    self->n_obj = PyLong_FromLong(self->n);
-    self->nn_obj = Py_BuildValue("(ll)", self->n, self->n);
-    self->ny_obj = Py_BuildValue("(ll)", self->n, 10 * (rows - 1));
+    self->nn[0] = self->nn[1] = self->ny[0] = self->n;
+    self->ny[1] = 10 * (rows - 1);
     if (self->K == NULL || self->zeros == NULL) {
         Py_DECREF(self);
         return PyErr_NoMemory();
-    }
-    if (self->n_obj == NULL || self->nn_obj == NULL || self->ny_obj == NULL) {
-        Py_DECREF(self);
-        return NULL;
     }
     return (PyObject *)self;
 }
@@ -208,11 +205,57 @@ read_buffer(const Py_buffer *v, double *out)
 #undef READ
 }
 
+/* The 1-D numpy array a of n items as doubles: 1, or 0 for an item type or byte order the
+ * buffer protocol path would decline too (read_buffer: float32, float16, longdouble,
+ * complex, objects, datetimes, swapped bytes, …), so both paths take the same arrays. */
+static int
+read_array(PyArrayObject *a, Py_ssize_t n, double *out)
+{
+    const char *p = PyArray_BYTES(a);
+    const npy_intp step = PyArray_STRIDE(a, 0);
+    if (!PyArray_ISNOTSWAPPED(a))
+        return 0;
+#define READ(ctype)                                                                 \
+    do {                                                                            \
+        for (Py_ssize_t i = 0; i < n; i++) {                                        \
+            ctype x;                                                                \
+            memcpy(&x, p + i * step, sizeof x);                                     \
+            out[i] = (double)x;                                                     \
+        }                                                                           \
+        return 1;                                                                   \
+    } while (0)
+    switch (PyArray_TYPE(a)) {
+    case NPY_DOUBLE:
+        if (step == (npy_intp)sizeof(double)) {     /* contiguous: the common case */
+            memcpy(out, p, sizeof(double) * n);
+            return 1;
+        }
+        READ(double);
+    case NPY_BOOL: READ(npy_bool);
+    case NPY_BYTE: READ(npy_byte);
+    case NPY_UBYTE: READ(npy_ubyte);
+    case NPY_SHORT: READ(npy_short);
+    case NPY_USHORT: READ(npy_ushort);
+    case NPY_INT: READ(npy_int);
+    case NPY_UINT: READ(npy_uint);
+    case NPY_LONG: READ(npy_long);
+    case NPY_ULONG: READ(npy_ulong);
+    case NPY_LONGLONG: READ(npy_longlong);
+    case NPY_ULONGLONG: READ(npy_ulonglong);
+    default: return 0;
+    }
+#undef READ
+}
+
 /* ``obj`` as n doubles: 1; 0 when it is not one state of n numbers this entry reads (the
  * caller's general path then decides); never an error. */
 static int
 as_doubles(PyObject *obj, Py_ssize_t n, double *out)
 {
+    if (PyArray_Check(obj)) {
+        PyArrayObject *a = (PyArrayObject *)obj;
+        return PyArray_NDIM(a) == 1 && PyArray_DIM(a, 0) == n && read_array(a, n, out);
+    }
     if (PyList_CheckExact(obj) || PyTuple_CheckExact(obj)) {
         if (PySequence_Fast_GET_SIZE(obj) != n)
             return 0;
@@ -255,17 +298,14 @@ kernels_arg(PyObject *obj)
     return (KernelsObject *)obj;
 }
 
-/* A new float64 array of the given shape (a Python int or tuple) and its writable buffer. */
+/* A new C-contiguous float64 array of shape dims[:ndim] (what numpy.empty makes), and its
+ * data in *data. */
 static PyObject *
-new_array(PyObject *shape, Py_buffer *v)
+new_array(int ndim, npy_intp *dims, double **data)
 {
-    PyObject *out = PyObject_Vectorcall(np_empty, &shape, 1, NULL);
-    if (out == NULL)
-        return NULL;
-    if (PyObject_GetBuffer(out, v, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0) {
-        Py_DECREF(out);
-        return NULL;
-    }
+    PyObject *out = PyArray_SimpleNew(ndim, dims, NPY_DOUBLE);
+    if (out != NULL)
+        *data = (double *)PyArray_DATA((PyArrayObject *)out);
     return out;
 }
 
@@ -333,7 +373,8 @@ c_rnea(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
         return NULL;
     double *q = buf, *qd = q + n, *qdd = qd + n, *g = qdd + n, *work = g + 3;
     PyObject *out = NULL;
-    Py_buffer fb = {0}, tau;
+    Py_buffer fb = {0};
+    double *tau;
     int has_fext = nargs == 6 && args[5] != Py_None;
     if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd)
           && as_doubles(args[3], n, qdd) && as_doubles(args[4], 3, g))) {
@@ -349,13 +390,12 @@ c_rnea(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
             goto done;
         }
     }
-    out = new_array(h->n_obj, &tau);
+    out = new_array(1, h->nn, &tau);
     if (out == NULL)
         goto done;
     xup_kernel(h->K, rows, q, work);
     rnea_kernel(h->K, rows, q, qd, qdd, g[0], g[1], g[2],
-                has_fext ? (const double *)fb.buf : NULL, has_fext, (double *)tau.buf, work);
-    PyBuffer_Release(&tau);
+                has_fext ? (const double *)fb.buf : NULL, has_fext, tau, work);
 done:
     if (has_fext && fb.obj != NULL)
         PyBuffer_Release(&fb);
@@ -381,16 +421,15 @@ rnea_at_rest(PyObject *const *args, Py_ssize_t nargs, int with_qd, const char *n
         return NULL;
     double *q = buf, *qd = q + n, *g = qd + n, *work = g + 3;
     PyObject *out = NULL;
-    Py_buffer tau;
+    double *tau;
     if (!(as_doubles(args[1], n, q) && (!with_qd || as_doubles(args[2], n, qd))
           && as_doubles(args[with_qd ? 3 : 2], 3, g))) {
         out = Py_None;
         Py_INCREF(out);
-    } else if ((out = new_array(h->n_obj, &tau)) != NULL) {
+    } else if ((out = new_array(1, h->nn, &tau)) != NULL) {
         xup_kernel(h->K, rows, q, work);
         rnea_kernel(h->K, rows, q, with_qd ? qd : h->zeros, h->zeros, g[0], g[1], g[2], NULL,
-                    0, (double *)tau.buf, work);
-        PyBuffer_Release(&tau);
+                    0, tau, work);
     }
     scratch_free(buf, stack);
     return out;
@@ -434,14 +473,13 @@ c_mass_matrix(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
         return NULL;
     double *q = buf, *work = q + n;
     PyObject *out = NULL;
-    Py_buffer H;
+    double *H;
     if (!as_doubles(args[1], n, q)) {
         out = Py_None;
         Py_INCREF(out);
-    } else if ((out = new_array(h->nn_obj, &H)) != NULL) {
+    } else if ((out = new_array(2, h->nn, &H)) != NULL) {
         xup_kernel(h->K, rows, q, work);
-        crba_kernel(h->K, rows, work, (double *)H.buf);
-        PyBuffer_Release(&H);
+        crba_kernel(h->K, rows, work, H);
     }
     scratch_free(buf, stack);
     return out;
@@ -467,22 +505,16 @@ c_generalized_momentum(PyObject *module, PyObject *const *args, Py_ssize_t nargs
         return NULL;
     double *q = buf, *qd = q + n, *work = qd + n;
     PyObject *out = NULL, *mom = NULL, *ctq = NULL;
-    Py_buffer vm, vc;
+    double *vm, *vc;
     if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd))) {
         out = Py_None;
         Py_INCREF(out);
         goto done;
     }
-    if ((mom = new_array(h->n_obj, &vm)) == NULL)
+    if ((mom = new_array(1, h->nn, &vm)) == NULL || (ctq = new_array(1, h->nn, &vc)) == NULL)
         goto done;
-    if ((ctq = new_array(h->n_obj, &vc)) == NULL) {
-        PyBuffer_Release(&vm);
-        goto done;
-    }
     xup_kernel(h->K, rows, q, work);
-    momentum_kernel(h->K, rows, q, qd, (double *)vm.buf, (double *)vc.buf, work);
-    PyBuffer_Release(&vm);
-    PyBuffer_Release(&vc);
+    momentum_kernel(h->K, rows, q, qd, vm, vc, work);
     out = PyTuple_Pack(2, mom, ctq);
 done:
     Py_XDECREF(mom);
@@ -514,15 +546,14 @@ c_regressor(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
     double *q = buf, *qd = q + n, *qdd = qd + n, *g = qdd + n, *work = g + 3;
     double *axes = work + rows * WORK;
     PyObject *out = NULL;
-    Py_buffer Y;
+    double *Y;
     if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd)
           && as_doubles(args[3], n, qdd) && as_doubles(args[4], 3, g))) {
         out = Py_None;
         Py_INCREF(out);
-    } else if ((out = new_array(h->ny_obj, &Y)) != NULL) {
+    } else if ((out = new_array(2, h->ny, &Y)) != NULL) {
         xup_kernel(h->K, rows, q, work);
-        regressor_kernel(h->K, rows, qd, qdd, g[0], g[1], g[2], (double *)Y.buf, axes, work);
-        PyBuffer_Release(&Y);
+        regressor_kernel(h->K, rows, qd, qdd, g[0], g[1], g[2], Y, axes, work);
     }
     scratch_free(buf, stack);
     return out;
@@ -823,7 +854,8 @@ c_regressor_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
  * (id(model) -> Kernels), runs here; every other call, or one whose arguments the entry
  * declines, is passed on to `function` unchanged (it validates, derives the table, runs
  * batches and the other backends). This saves the Python frame of `function` (~0.2 µs, a
- * fifth of a call) on the path users take most. */
+ * fifth of a call) on the path users take most. The door keeps the last model it answered
+ * (a weak reference) and its Kernels, so that a run of calls on one model skips the dict. */
 
 enum { D_RNEA = 0, D_GRAVITY = 1, D_BIAS = 2, D_MASS = 3, D_MOMENTUM = 4 };
 /* joint-vector arguments after the model, and whether gravity and f_ext come next */
@@ -841,7 +873,30 @@ typedef struct {
     PyObject *kernels;    /* dict id(model) -> Kernels */
     PyObject *gravity;    /* the default gravity */
     PyObject *dict;       /* __doc__, __name__, __wrapped__, … */
+    PyObject *last_model; /* a weak reference to the model of the last call, or NULL */
+    PyObject *last_kern;  /* its Kernels */
 } DoorObject;
+
+/* Whether the model of the last call is `model` (alive: its Kernels are still in the dict,
+ * removed only when the model is collected). Saves the dict look-up (~40 ns) of each call
+ * on one model. */
+static int
+door_is_last(DoorObject *self, PyObject *model)
+{
+    if (self->last_model == NULL)
+        return 0;
+#if PY_VERSION_HEX >= 0x030D0000
+    PyObject *obj;
+    if (PyWeakref_GetRef(self->last_model, &obj) <= 0) {
+        PyErr_Clear();
+        return 0;
+    }
+    Py_DECREF(obj);
+    return obj == model;
+#else
+    return PyWeakref_GET_OBJECT(self->last_model) == model;
+#endif
+}
 
 static int
 is_name(PyObject *name, PyObject *interned)
@@ -883,7 +938,9 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
         ok = PyUnicode_CheckExact(backend)
              && (is_name(backend, str_auto) || is_name(backend, str_compiled));
     PyObject *kern = NULL;
-    if (ok) {
+    if (ok && door_is_last(self, args[0])) {
+        kern = self->last_kern;
+    } else if (ok) {
         PyObject *key = PyLong_FromVoidPtr(args[0]);
         if (key == NULL)
             return NULL;
@@ -892,8 +949,19 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
         if (kern == NULL && PyErr_Occurred())
             return NULL;
         ok = kern != NULL && PyObject_TypeCheck(kern, &KernelsType);
+        if (ok) {
+            PyObject *ref = PyWeakref_NewRef(args[0], NULL);
+            if (ref == NULL) {
+                PyErr_Clear();      /* no weak references to it: no cache */
+            } else {
+                Py_INCREF(kern);
+                Py_XSETREF(self->last_kern, kern);
+                Py_XSETREF(self->last_model, ref);
+            }
+        }
     }
     if (ok) {
+        Py_INCREF(kern);
         PyObject *call[5] = {kern, args[1], NULL, NULL, NULL};
         PyObject *out;
         switch (kind) {
@@ -916,6 +984,7 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
             call[2] = args[2];
             out = c_generalized_momentum(NULL, call, 3);
         }
+        Py_DECREF(kern);
         if (out != Py_None)
             return out;        /* the answer, or an error (no memory) */
         Py_DECREF(out);
@@ -957,6 +1026,8 @@ door_traverse(DoorObject *self, visitproc visit, void *arg)
     Py_VISIT(self->kernels);
     Py_VISIT(self->gravity);
     Py_VISIT(self->dict);
+    Py_VISIT(self->last_model);
+    Py_VISIT(self->last_kern);
     return 0;
 }
 
@@ -967,6 +1038,8 @@ door_clear(DoorObject *self)
     Py_CLEAR(self->kernels);
     Py_CLEAR(self->gravity);
     Py_CLEAR(self->dict);
+    Py_CLEAR(self->last_model);
+    Py_CLEAR(self->last_kern);
     return 0;
 }
 
@@ -1040,12 +1113,8 @@ static struct PyModuleDef module_def = {
 PyMODINIT_FUNC
 PyInit__compiled(void)
 {
-    PyObject *numpy = PyImport_ImportModule("numpy");
-    if (numpy == NULL)
-        return NULL;
-    np_empty = PyObject_GetAttrString(numpy, "empty");
-    Py_DECREF(numpy);
-    if (np_empty == NULL || PyType_Ready(&KernelsType) < 0 || PyType_Ready(&DoorType) < 0)
+    import_array();
+    if (PyType_Ready(&KernelsType) < 0 || PyType_Ready(&DoorType) < 0)
         return NULL;
     str_gravity = PyUnicode_InternFromString("gravity");
     str_f_ext = PyUnicode_InternFromString("f_ext");

@@ -36,6 +36,10 @@ except ImportError as err:                 # built without a C compiler
     ext = None
     FAILURE = (f'no module {err.name}: the package was built without them'
                if isinstance(err, ModuleNotFoundError) else f'{type(err).__name__}: {err}')
+    if 'numpy' in str(err) and not isinstance(err, ModuleNotFoundError):
+        # built against numpy 1.x headers, imported on numpy 2.x
+        FAILURE += (f'; they were built against another numpy than this {np.__version__}: '
+                    'build the package again')
 if ext is None:
     warnings.warn('spatial_dynamics was built without its compiled kernels; it runs on plain '
                   'Python (10-100x slower per call). Install a C compiler and the Python headers '
