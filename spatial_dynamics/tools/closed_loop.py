@@ -4,6 +4,7 @@
 
     python -m spatial_dynamics.tools.closed_loop [--urdf ROBOT.urdf] [--seconds 6]
         [--frequency 5] [--plot out/closed_loop.png] [--json out/closed_loop.json]
+        [--robot-urdf TRUE.urdf]
 
 For each control law the MuJoCo robot (``python -m spatial_dynamics.sim``, lockstep, 1 ms
 steps) and the ``inverse_dynamics`` node start in a namespace of their own; this process
@@ -67,6 +68,10 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog='python -m spatial_dynamics.tools.closed_loop',
                                      description=__doc__.split('\n\n')[0])
     parser.add_argument('--urdf', default=None, help='robot (default: the embedded demo arm)')
+    parser.add_argument('--robot-urdf', default=None,
+                        help='the simulated robot when it is not the one the node is given '
+                             '(default: --urdf): e.g. the true robot, with the node on an '
+                             'original or a corrected URDF (replay --write-urdf)')
     parser.add_argument('--seconds', type=float, default=6.0,
                         help='simulated seconds per control law (default 6)')
     parser.add_argument('--frequency', type=float, default=5.0,
@@ -338,7 +343,8 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
     os.makedirs(logs, exist_ok=True)
     slug = namespace.strip('/')
     sim = start(node_command('sim', 'spatial_dynamics.sim'), namespace, {
-        'robot_description_file': urdf, 'mode': 'lockstep', 'timestep': str(TIMESTEP),
+        'robot_description_file': os.path.abspath(args.robot_urdf or urdf),
+        'mode': 'lockstep', 'timestep': str(TIMESTEP),
         'initial_positions': fmt,
         'command_topic': 'effort_commands' if args.plan else SIM_COMMANDS},
         os.path.join(logs, f'{slug}_sim.log'))
@@ -468,7 +474,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if live:
             shown = redraw(table(runs + [current], model.joint_names), shown)
 
-    print(f'closed loop on {urdf}: {args.seconds:g} s per law, feedback {args.frequency:g} Hz\n'
+    print(f'closed loop on {urdf}'
+          + (f' (the simulated robot: {args.robot_urdf})' if args.robot_urdf else '')
+          + f': {args.seconds:g} s per law, feedback {args.frequency:g} Hz\n'
           f'simulator: {" ".join(node_command("sim", "spatial_dynamics.sim"))}\n'
           f'controller: {" ".join(node_command("inverse_dynamics", "spatial_dynamics.ros.node"))}'
           f'\n(their output in {args.log_dir}/)', flush=True)
@@ -496,7 +504,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, 'w') as f:
-            json.dump({'robot': model.name, 'urdf': urdf, 'frequency_hz': args.frequency,
+            json.dump({'robot': model.name, 'urdf': urdf, 'robot_urdf': args.robot_urdf or urdf,
+                       'frequency_hz': args.frequency,
                        'timestep_s': TIMESTEP, 'laws': summaries}, f, indent=1)
     if args.plot and runs:
         print(plot(runs, args.plot, model.name, args.frequency))
