@@ -311,31 +311,15 @@ def run_trajectory(args) -> int:
         if args.friction_model == 'urdf':
             tau = tau + friction_torque(model, qd, args.threshold)
         limit = model.effort_limit
-        finite = np.isfinite(tau)
-        magnitude = np.where(finite, np.abs(tau), np.inf)     # a non-finite torque is no peak
-        peak = np.max(magnitude, axis=0)
-        at = t[np.argmax(magnitude, axis=0)]
-        rows = []
-        for j, name in enumerate(model.joint_names):
-            has = limit[j] > 0
-            if not finite[:, j].all():
-                exceeded = True
-                rows.append([name, 'non-finite', f'{at[j]:.3f}', f'{limit[j]:g}' if has else '-',
-                             '-', 'NOT FINITE'])
-                continue
-            use = peak[j] / limit[j] if has else np.nan
-            over = has and use > 1.0
-            exceeded |= bool(over)
-            rows.append([name, f'{peak[j]:.4g}', f'{at[j]:.3f}',
-                         f'{limit[j]:g}' if has else '-',
-                         f'{100 * use:.1f} %' if has else '-', 'EXCEEDED' if over else ''])
+        rows, over = report.effort_rows(model.joint_names, t, tau, limit)
+        exceeded |= over
         print(f'{label}: {len(traj.time)} points, {traj.kind} interpolation, '
               f'{t[-1] - t[0]:.3f} s sampled at {args.rate:g} Hz ({len(t)} samples); '
               'torque = RNEA' + (' + URDF friction' if args.friction_model == 'urdf' else ''))
         if model.locked:
             print(f'  joints not in the trajectory, locked: '
                   f'{", ".join(f"{j}={v:g}" for j, v in model.locked.items())}')
-        print(report.table(['joint', 'peak |tau|', 'at (s)', 'limit', 'use', ''], rows))
+        print(report.table(report.EFFORT_HEADER, rows))
         base = os.path.join(args.out, 'trajectory' + (f'_{k}' if len(trajectories) > 1 else ''))
         report.write_csv(base + '.csv', ['t'] + [f'tau_{n}' for n in model.joint_names],
                          [t] + [tau[:, j] for j in range(model.nq)], [6] + [4] * model.nq)

@@ -188,24 +188,7 @@ def limit_rows(model: Model, t: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: 
     The torque table is ``replay --trajectory``'s (peak |τ|, when, limit, use); the motion
     table holds each joint's range used and peak |q̇| against the URDF's limits.
     """
-    exceeded = False
-    limit = model.effort_limit
-    finite_tau = np.isfinite(tau)
-    magnitude = np.where(finite_tau, np.abs(tau), np.inf)
-    peak, at = np.max(magnitude, axis=0), t[np.argmax(magnitude, axis=0)]
-    torque = []
-    for j, name in enumerate(model.joint_names):
-        has = limit[j] > 0 and np.isfinite(limit[j])
-        if not finite_tau[:, j].all():
-            exceeded = True
-            torque.append([name, 'non-finite', f'{at[j]:.3f}', f'{limit[j]:g}' if has else '-',
-                           '-', 'NOT FINITE'])
-            continue
-        use = peak[j] / limit[j] if has else np.nan
-        over = bool(has and use > 1.0)
-        exceeded |= over
-        torque.append([name, f'{peak[j]:.4g}', f'{at[j]:.3f}', f'{limit[j]:g}' if has else '-',
-                       f'{100 * use:.1f} %' if has else '-', 'EXCEEDED' if over else ''])
+    torque, exceeded = report.effort_rows(model.joint_names, t, tau, model.effort_limit)
     motion = []
     vpeak = np.max(np.abs(qd), axis=0)
     for j, name in enumerate(model.joint_names):
@@ -237,7 +220,7 @@ def check_plan(path: str, model: Model, gravity: Sequence[float]) -> bool:
     torque, motion, exceeded = limit_rows(model, t, q, qd, tau)
     print(f'\n{path}: {len(traj.time)} points, {traj.kind} interpolation, {t[-1]:.3f} s '
           f'sampled at {CHECK_RATE:g} Hz ({len(t)} samples); torque = RNEA')
-    print(report.table(['joint', 'peak |tau|', 'at (s)', 'limit', 'use', ''], torque))
+    print(report.table(report.EFFORT_HEADER, torque))
     print(report.table(['joint', 'range used', 'limits', 'peak |qd|', 'limit', 'use', ''],
                        motion))
     print(f'  at rest at the start and the end: |qd| <= {np.abs(qd[[0, -1]]).max():.2g}, '

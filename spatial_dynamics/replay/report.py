@@ -105,6 +105,35 @@ def table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
                      for row in cells)
 
 
+#: The header of :func:`effort_rows`' table.
+EFFORT_HEADER = ['joint', 'peak |tau|', 'at (s)', 'limit', 'use', '']
+
+
+def effort_rows(names: Sequence[str], t: np.ndarray, tau: np.ndarray, limit: np.ndarray):
+    """Return the effort check's rows (peak |τ|, when, limit, use) and whether one fails.
+
+    A joint fails when its peak exceeds a positive, finite limit, or a torque is not finite
+    (``NOT FINITE``: a non-finite torque is no peak, it fails the check).
+    """
+    finite = np.isfinite(tau)
+    magnitude = np.where(finite, np.abs(tau), np.inf)
+    peak, at = np.max(magnitude, axis=0), t[np.argmax(magnitude, axis=0)]
+    rows, exceeded = [], False
+    for j, name in enumerate(names):
+        has = bool(limit[j] > 0 and np.isfinite(limit[j]))
+        shown = f'{limit[j]:g}' if has else '-'
+        if not finite[:, j].all():
+            exceeded = True
+            rows.append([name, 'non-finite', f'{at[j]:.3f}', shown, '-', 'NOT FINITE'])
+            continue
+        use = peak[j] / limit[j] if has else np.nan
+        over = bool(has and use > 1.0)
+        exceeded |= over
+        rows.append([name, f'{peak[j]:.4g}', f'{at[j]:.3f}', shown,
+                     f'{100 * use:.1f} %' if has else '-', 'EXCEEDED' if over else ''])
+    return rows, exceeded
+
+
 def yaml_double(x: float) -> str:
     """``x`` with 6 significant digits, always read back as a double (``0.0``, not ``0``).
 
