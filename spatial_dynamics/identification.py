@@ -189,6 +189,19 @@ def _ten(inertia: np.ndarray) -> np.ndarray:
                      inertia[0, 1], inertia[1, 1], inertia[0, 2], inertia[1, 2], inertia[2, 2]])
 
 
+def mass_com_inertia(pi: np.ndarray) -> Tuple[float, np.ndarray, np.ndarray]:
+    """Return the mass, centre of mass (3,) and inertia about it (3×3) of ten parameters.
+
+    The inverse of the parallel-axis step: ``Ī = I_c + m (cᵀc 1 − c cᵀ)`` (RBDA 2.63); a body
+    without mass has its centre at the origin.
+    """
+    m = float(pi[0])
+    c = pi[1:4] / m if m > 0 else np.zeros(3)
+    ixx, ixy, iyy, ixz, iyz, izz = pi[4:]
+    about_origin = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    return m, c, about_origin - m * (c @ c * np.eye(3) - np.outer(c, c))
+
+
 def link_to_body(model: Model, link: str) -> Tuple[int, np.ndarray]:
     """``(body, T)``: parameters on ``link`` (its frame) add ``T @ π`` to ``body``'s (10×10)."""
     frame = model.frames.get(link)
@@ -261,11 +274,7 @@ def identify_payload(model: Model, link: str, q, qd, qdd, tau,
     A, b = Y.reshape(-1, 10), r.reshape(-1)
     n = q.shape[-1]
     if drive_threshold is not None:       # rows are (sample, joint): joint j's own columns
-        drive = np.zeros(r.shape + (3 * n,))
-        for j in range(n):
-            drive[:, j, 3 * j:3 * j + 3] = np.column_stack(
-                [qd[:, j], np.tanh(qd[:, j] / drive_threshold), qdd[:, j]])
-        A = np.hstack([A, drive.reshape(-1, 3 * n)])
+        A = np.hstack([A, _drive_columns(qd, qdd, drive_threshold).reshape(-1, 3 * n)])
     x, _, rank, _ = np.linalg.lstsq(A, b, rcond=None)
     pi = x[:10]
     if rank < A.shape[1]:
@@ -277,13 +286,9 @@ def identify_payload(model: Model, link: str, q, qd, qdd, tau,
     fit = b - A @ x
     dof = max(len(b) - A.shape[1], 1)
     covariance = ((fit @ fit / dof) * np.linalg.inv(A.T @ A))[:10, :10]
-    m = pi[0]
-    if not m > 0.0:
-        raise ValueError(f'identified payload mass {m:.3g} kg on {link!r} is not positive')
-    c = pi[1:4] / m
-    ixx, ixy, iyy, ixz, iyz, izz = pi[4:]
-    about_origin = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    Ic = about_origin - m * (c @ c * np.eye(3) - np.outer(c, c))
+    if not pi[0] > 0.0:
+        raise ValueError(f'identified payload mass {pi[0]:.3g} kg on {link!r} is not positive')
+    m, c, Ic = mass_com_inertia(pi)
     inertia = np.array([Ic[0, 0], Ic[0, 1], Ic[0, 2], Ic[1, 1], Ic[1, 2], Ic[2, 2]])
     rms = np.sqrt(np.mean(fit.reshape(r.shape) ** 2, axis=0))
     drives = None if drive_threshold is None else tuple(x[10 + k::3] for k in range(3))
@@ -388,6 +393,23 @@ def drive_torque(qd, qdd, drives, threshold: float) -> np.ndarray:
     return damping * qd + friction * np.tanh(qd / threshold) + armature * qdd
 
 
+def with_bodies(model: Model, inertias) -> Model:
+    """Return ``model`` with the spatial inertias of some bodies replaced (body → 6×6)."""
+    inertia = np.array(model.inertia)
+    for body, value in inertias.items():
+        inertia[body] = value
+    return replace(model, inertia=inertia)
+
+
+def predicted_torque(model: Model, q, qd, qdd, gravity, drives=None,
+                     threshold: Optional[float] = None) -> np.ndarray:
+    """Return ``rnea(model)`` plus, with ``drives``, :func:`drive_torque`."""
+    tau = rnea(model, q, qd, qdd, gravity)
+    if drives is not None:
+        tau = tau + drive_torque(qd, qdd, drives, threshold)
+    return tau
+
+
 def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarray,
                  pi0: np.ndarray, drive_threshold: Optional[float]) -> np.ndarray:
     """Return ``F`` with ``Fᵀ F = [A b]ᵀ [A b]``, the recording summed chunk by chunk.
@@ -463,17 +485,8 @@ class Inertias:
 
     def model(self, model: Model) -> Model:
         """Return ``model`` with the identified inertias (drives are not part of a model)."""
-        inertia = np.array(model.inertia)
-        for i in self.bodies:
-            inertia[i] = _spatial_inertia(self.pi[10 * (i - 1):10 * i])
-        return replace(model, inertia=inertia)
-
-    def predict(self, model: Model, q, qd, qdd, gravity=(0.0, 0.0, -9.81)) -> np.ndarray:
-        """Return the torque the identified model (and drives) gives on the states."""
-        tau = rnea(self.model(model), q, qd, qdd, gravity)
-        if self.drives is not None:
-            tau = tau + drive_torque(qd, qdd, self.drives, self.drive_threshold)
-        return tau
+        return with_bodies(model, {i: _spatial_inertia(self.pi[10 * (i - 1):10 * i])
+                                   for i in self.bodies})
 
 
 def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[str]] = None,
@@ -535,13 +548,14 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
     drives = None if not ndrive else tuple(result.x[nb + k::3] for k in range(3))
     found = Inertias(pi, bodies, np.zeros(n), np.zeros(n), np.zeros((nb, nb)), drives,
                      drive_threshold if ndrive else None)
+    corrected = found.model(model)     # built once: each new model has its own kernels
     before, after = np.zeros(n), np.zeros(n)
     for a in range(0, len(q), CHUNK):
         part = slice(a, a + CHUNK)
-        before += np.sum((tau[part] - rnea(model, q[part], qd[part], qdd[part], gravity)) ** 2,
-                         axis=0)
-        after += np.sum((tau[part] - found.predict(model, q[part], qd[part], qdd[part],
-                                                   gravity)) ** 2, axis=0)
+        states = q[part], qd[part], qdd[part]
+        before += np.sum((tau[part] - rnea(model, *states, gravity)) ** 2, axis=0)
+        after += np.sum((tau[part] - predicted_torque(corrected, *states, gravity, drives,
+                                                      drive_threshold)) ** 2, axis=0)
     rows = tau.size
     # the covariance of the linearised, regularised estimate: s² (AᵀA + W²)⁻¹
     s2 = float(after.sum()) / max(rows - R.shape[1], 1)

@@ -42,21 +42,17 @@ class Correction:
 
     def corrected_model(self) -> Model:
         """Return the model with the identified inertias and payload."""
-        inertia = np.array(self.model.inertia)
-        for body, value in self.bodies.items():
-            inertia[body] = value
+        bodies = dict(self.bodies)
         if self.payload is not None:
             body, T = identification.link_to_body(self.model, self.payload.link)
-            inertia[body] += identification._spatial_inertia(T @ self.payload.pi)
-        from dataclasses import replace
-        return replace(self.model, inertia=inertia)
+            bodies[body] = bodies.get(body, self.model.inertia[body]) + \
+                identification._spatial_inertia(T @ self.payload.pi)
+        return identification.with_bodies(self.model, bodies)
 
     def predict(self, q, qd, qdd, gravity) -> np.ndarray:
         """Return the corrected robot's torque (rigid body and drives)."""
-        tau = rnea(self.corrected_model(), q, qd, qdd, gravity)
-        if self.drives is not None:
-            tau = tau + identification.drive_torque(qd, qdd, self.drives, self.threshold)
-        return tau
+        return identification.predicted_torque(self.corrected_model(), q, qd, qdd, gravity,
+                                               self.drives, self.threshold)
 
     def parameter_rows(self) -> List[list]:
         """Return ``[link, parameter, urdf, identified, sigma, undetermined]`` rows."""

@@ -19,13 +19,13 @@ are removed, which the notes say.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Tuple
 import xml.etree.ElementTree as ET
 from xml.parsers import expat
 
 import numpy as np
 
-from ..identification import _spatial_inertia, _ten, pseudo_inertia
+from ..identification import _ten, mass_com_inertia, pseudo_inertia
 from ..model import Model
 
 
@@ -98,12 +98,7 @@ def _number(x: float) -> str:
 
 def inertial_text(inertia: np.ndarray, indent: str) -> str:
     """Return an ``<inertial>`` element (in the link frame) of a 6×6 spatial inertia."""
-    pi = _ten(inertia)
-    m = pi[0]
-    c = pi[1:4] / m if m > 0 else np.zeros(3)
-    ixx, ixy, iyy, ixz, iyz, izz = pi[4:]
-    about_origin = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    Ic = about_origin - m * (c @ c * np.eye(3) - np.outer(c, c))
+    m, c, Ic = mass_com_inertia(_ten(inertia))
     inner = indent + '  '
     values = dict(ixx=Ic[0, 0], ixy=Ic[0, 1], ixz=Ic[0, 2], iyy=Ic[1, 1], iyz=Ic[1, 2],
                   izz=Ic[2, 2])
@@ -213,8 +208,3 @@ def _insert(text: bytes, element: _Element, make) -> Tuple[int, int, bytes]:
         return (element.start, element.end,
                 head + b'>\n' + child + f'\n{outer}</{element.tag}>'.encode())
     return (element.open_end, element.open_end, b'\n' + child)
-
-
-def body_inertias(model: Model, pi: np.ndarray, bodies: Sequence[int]) -> Dict[int, np.ndarray]:
-    """Return body → 6×6 spatial inertia of the ten-parameter blocks of ``pi`` for ``bodies``."""
-    return {i: _spatial_inertia(pi[10 * (i - 1):10 * i]) for i in bodies}

@@ -77,14 +77,9 @@ def true_urdf(text: bytes, model: sd.Model, payload_link: str, seed: int,
     rng = np.random.default_rng(seed)
     bodies = {}
     for i in range(1, model.NB + 1) if links_off else ():
-        pi = identification._ten(model.inertia[i])
-        m = pi[0]
+        m, c, Ic = identification.mass_com_inertia(identification._ten(model.inertia[i]))
         if m <= 0.0:
             continue
-        c = pi[1:4] / m
-        ixx, ixy, iyy, ixz, iyz, izz = pi[4:]
-        Io = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-        Ic = Io - m * (c @ c * np.eye(3) - np.outer(c, c))
         scale = 1.0 + rng.choice((-1.0, 1.0)) * rng.uniform(0.2, 0.3)
         bodies[i] = rigid_body_inertia('true body', scale * m, c + rng.normal(0.0, 0.015, 3),
                                        scale * Ic)
