@@ -39,11 +39,12 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
 from spatial_dynamics.effort import annotate, with_gravity
-from spatial_dynamics.ros.config import Config, make_observer, observer_key, Output
+from spatial_dynamics.ros.config import Config, Output
 from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
 from spatial_dynamics.ros.diagnostics import Totals, Window
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
-from spatial_dynamics.ros.observer import EstimateWindow, measured_effort, sample_time
+from spatial_dynamics.ros.observer import (
+    EstimateWindow, make_observer, measured_effort, observer_key, sample_time)
 from spatial_dynamics.trajectory import Follower, trajectory as to_trajectory, TrajectoryError
 from spatial_dynamics.wrench import wrench_from_torques
 
@@ -295,7 +296,7 @@ class Answering:
 
         A message without effort (or velocity) for every model joint only skips the update
         (counted in diagnostics): not an error. The observer restarts when the model or a
-        parameter it depends on changes (:func:`~.config.observer_key`).
+        parameter it depends on changes (:func:`~.observer.observer_key`).
         """
         skipped = self.estimates.skipped
         output = config.output

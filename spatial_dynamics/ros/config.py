@@ -1,6 +1,6 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""The node's configuration, without ROS: parameters, descriptions, backend, counters.
+"""The node's configuration, without ROS: its parameter table, and a change made a Config.
 
 Pure Python + numpy + the library (no rclpy import), so all of it is tested without a ROS
 graph (``test/test_ros_config.py``, ``test/test_node_config.py``). The node
@@ -8,11 +8,8 @@ graph (``test/test_ros_config.py``, ``test/test_node_config.py``). The node
 :func:`prepare` to validate a change (its on-set callback) and swaps in the resulting
 :class:`Config` (its post-set callback); everything an answer needs is one :class:`Output`.
 
-Robot descriptions, by precedence (:func:`description_source`): the ``robot_description``
-parameter (URDF XML text, never a path), the ``robot_description_file`` parameter (a regular
-UTF-8 file of at most :data:`MAX_DESCRIPTION_BYTES`, read with
-:func:`spatial_dynamics.urdf.read_description`), the ``robot_description`` topic (parsed by
-:class:`DescriptionParser`'s worker thread).
+Robot descriptions (which source wins, how one is read and parsed) are
+:mod:`spatial_dynamics.ros.descriptions`'; this module only asks it for a model.
 
 Backends (parameter ``backend``, :data:`BACKEND_SETTINGS`): ``numpy`` runs the plain-float
 RNEA; ``auto`` and ``compiled`` run the compiled kernels (built with the package) from the
@@ -41,8 +38,7 @@ from spatial_dynamics.ros.control import (
     MAX_MEASURED_POSITION, MAX_MEASURED_VELOCITY, OUTPUTS)
 from spatial_dynamics.ros.parameters import ConfigError, distinct, one_of, Param, Table
 from spatial_dynamics.ros.observer import (
-    check_warn, MAX_EXTERNAL_TORQUE_WARN,
-    MAX_OBSERVER_GAIN, MomentumObserver, ObserverError)
+    check_warn, MAX_EXTERNAL_TORQUE_WARN, MAX_OBSERVER_GAIN, ObserverError)
 
 NODE_NAME = 'inverse_dynamics'
 ACCELERATION_SOURCES = ('effort', 'none')
@@ -369,7 +365,7 @@ def plain_call_seconds(model: 'sd.Model', calls: int = TIMED_CALLS) -> float:
         t0 = time.perf_counter()
         sd.rnea(model, x, x, x, backend='numpy')
         times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+    return sorted(times)[len(times) // 2]       # np.median would import numpy.ma (~30 ms)
 
 
 def resolve_backend(setting: str) -> str:
@@ -596,29 +592,3 @@ def reparse_needed(requested, params) -> bool:
     return any(getattr(requested, PARAMETERS.by_name[name].field)
                != getattr(params, PARAMETERS.by_name[name].field)
                for name in MODEL_PARAMETERS + ('strict_urdf',))
-
-
-# --------------------------------------------------------------------------------------------
-# The external-torque observer: what it depends on, and its diagnostics status
-
-def observer_key(output: Output, gravity: Sequence[float], gain: float,
-                 max_gap: float, measured: str = 'full') -> tuple:
-    """Return what the estimate depends on; the node restarts the observer when it changes.
-
-    The model (the base, by identity: a parameter change that does not re-parse keeps it),
-    payload, armature, friction model, gravity, gain and the gap that restarts it; not the
-    backend (the compiled kernels compute the same numbers).
-    """
-    armature = None if output.armature is None else output.armature.tobytes()
-    return (id(output.base), output.payload, armature, output.friction_threshold,
-            tuple(gravity), gain, max_gap, measured)
-
-
-def make_observer(output: Output, gravity: Sequence[float], gain: float,
-                  max_gap: float) -> MomentumObserver:
-    """Return the observer of ``output``'s model (payload included) with the node's terms."""
-    model, threshold = output.model, output.friction_threshold
-    friction = None if threshold is None else (
-        lambda qd: sd.friction_torque(model, qd, threshold))
-    return MomentumObserver(model, gain, output.armature, friction, gravity, max_gap,
-                            output.backend)

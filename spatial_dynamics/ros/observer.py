@@ -38,12 +38,15 @@ gives ``r = (1 − e^{−K_O t}) τ_ext`` at the samples after it.
 from __future__ import annotations
 
 import math
-from typing import Callable, Optional, Sequence, Tuple
+from typing import Callable, Optional, Sequence, Tuple, TYPE_CHECKING
 
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import MAX_EFFORT
 from spatial_dynamics.ros.inputs import InputError, name_index
+
+if TYPE_CHECKING:       # config imports this module
+    from spatial_dynamics.ros.config import Output
 
 #: ``observer_gain`` K_O (1/s) at most: a time constant of 1 ms, one sample at 1 kHz. Beyond
 #: it the estimate is the raw difference quotient of the momentum (differentiated
@@ -267,3 +270,29 @@ class EstimateWindow:
     def rms(self) -> Optional[np.ndarray]:
         """RMS per joint of the period's estimates, or None when there were none."""
         return np.sqrt(self.sum_squares / self.count) if self.count else None
+
+
+# --------------------------------------------------------------------------------------------
+# The node's observer: what it depends on
+
+def observer_key(output: Output, gravity: Sequence[float], gain: float,
+                 max_gap: float, measured: str = 'full') -> tuple:
+    """Return what the estimate depends on; the node restarts the observer when it changes.
+
+    The model (the base, by identity: a parameter change that does not re-parse keeps it),
+    payload, armature, friction model, gravity, gain and the gap that restarts it; not the
+    backend (the compiled kernels compute the same numbers).
+    """
+    armature = None if output.armature is None else output.armature.tobytes()
+    return (id(output.base), output.payload, armature, output.friction_threshold,
+            tuple(gravity), gain, max_gap, measured)
+
+
+def make_observer(output: Output, gravity: Sequence[float], gain: float,
+                  max_gap: float) -> MomentumObserver:
+    """Return the observer of ``output``'s model (payload included) with the node's terms."""
+    model, threshold = output.model, output.friction_threshold
+    friction = None if threshold is None else (
+        lambda qd: sd.friction_torque(model, qd, threshold))
+    return MomentumObserver(model, gain, output.armature, friction, gravity, max_gap,
+                            output.backend)
