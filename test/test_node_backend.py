@@ -190,12 +190,12 @@ def test_on_set_only_validates_and_post_set_applies():
         output = node.output
         gravity = [Parameter('gravity', value=[0.0, -9.81, 0.0])]
         assert node._on_set_parameters(gravity).successful
-        assert node.config.gravity == (0.0, 0.0, -9.81)
+        assert node.config.params.gravity == (0.0, 0.0, -9.81)
         assert node.config.params.gravity == (0.0, 0.0, -9.81)
         node._on_parameters_set([Parameter('gravity', value=[0.0, -9.81, 0.0])])  # not it
-        assert node.config.gravity == (0.0, 0.0, -9.81)
+        assert node.config.params.gravity == (0.0, 0.0, -9.81)
         node._on_parameters_set(gravity)
-        assert node.config.gravity == (0.0, -9.81, 0.0) and node.output.base is output.base
+        assert node.config.params.gravity == (0.0, -9.81, 0.0) and node.output.base is output.base
         # a description by parameter: validated (parsed) in on-set, swapped in post-set
         with open(PENDULUM_URDF) as f:
             text = f.read()
@@ -211,7 +211,7 @@ def test_on_set_only_validates_and_post_set_applies():
         assert not node.set_parameters([Parameter('payload.mass', value=-1.0)])[0].successful
         assert node.output is output and node._pending is None
         assert node.set_parameters([Parameter('gravity', value=[0.0, 0.0, -1.0])])[0].successful
-        assert node.config.gravity == (0.0, 0.0, -1.0) and node._pending is None
+        assert node.config.params.gravity == (0.0, 0.0, -1.0) and node._pending is None
     finally:
         node.destroy_node()
         rclpy.try_shutdown(context=context)

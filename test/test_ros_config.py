@@ -56,7 +56,7 @@ def test_config_never_imports_rclpy():
         from spatial_dynamics.ros import config
         params = {s.name: s.default for s in config.PARAMETERS}
         out = config.prepare({}, params, None)
-        assert out.output is None and out.gravity == (0.0, 0.0, -9.81)
+        assert out.output is None and out.params.gravity == (0.0, 0.0, -9.81)
         print('ROS:', sorted(m for m in sys.modules if m.split('.')[0] in
                              ('rclpy', 'rcl_interfaces', 'sensor_msgs', 'std_msgs',
                               'diagnostic_msgs', 'geometry_msgs')))
@@ -429,7 +429,8 @@ def test_model_status_levels_and_the_backend(demo_text):
 
 def test_feedforward_status_rates_staleness_and_rejections(demo_text):
     out = config.prepare({}, defaults(robot_description=demo_text), None).output
-    totals, window, settings = diagnostics.Totals(), diagnostics.Window(), diagnostics.Settings()
+    totals, window = diagnostics.Totals(), diagnostics.Window()
+    settings = config.PARAMETERS.defaults()
     now = window.start_ns + 2_000_000_000                 # a 2 s period
     assert diagnostics.feedforward_status(out, window, totals, settings, {}, now)[:2] == \
         ('WARN', 'no input received yet')

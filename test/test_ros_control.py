@@ -110,11 +110,11 @@ def test_prepare_checks_modes_and_gains(model):
     text = open(DEMO_URDF).read()
     params = defaults(robot_description=text)
     cfg = config.prepare({}, params, None)
-    assert (cfg.control_mode, cfg.output_choice) == ('feedforward', 'full')
+    assert (cfg.params.control_mode, cfg.params.output) == ('feedforward', 'full')
     np.testing.assert_array_equal(cfg.output.gains.kp, np.zeros(len(model.joint_names)))
     cfg = config.prepare(cfg.params, {'control_mode': 'pd_feedforward', 'output': 'none',
                                       'kp': [100.0], 'measured_timeout': 0.2}, cfg.output)
-    assert (cfg.control_mode, cfg.output_choice, cfg.measured_timeout) == \
+    assert (cfg.params.control_mode, cfg.params.output, cfg.params.measured_timeout) == \
         ('pd_feedforward', 'none', 0.2)
     np.testing.assert_array_equal(cfg.output.gains.kp, np.full(len(model.joint_names), 100.0))
     # then back to feedforward while output is none: refused, naming both
@@ -302,7 +302,9 @@ def test_feedback_status_names_the_stale_measured_state(model):
     out = config.prepare({}, defaults(robot_description=text), None).output
     totals, window = diagnostics.Totals(), diagnostics.Window()
     now = window.start_ns + 2_000_000_000
-    settings = diagnostics.Settings(control_mode='pd_feedforward', measured_timeout=0.1)
+    table = config.PARAMETERS
+    settings = table.changed(table.defaults(),
+                             {'control_mode': 'pd_feedforward', 'measured_timeout': 0.1})
     level, message, values = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'ERROR' and 'no measured state' in message
     totals.last_measured_ns = now - 50_000_000
@@ -322,7 +324,7 @@ def test_feedback_status_names_the_stale_measured_state(model):
     level, message, _ = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'ERROR' and message.startswith('desired state stale'), message
     # feedforward ignores the measured state
-    settings = diagnostics.Settings()
+    settings = config.PARAMETERS.defaults()
     totals.last_input_ns = now
     level, message, _ = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
     assert level == 'OK'

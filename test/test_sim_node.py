@@ -268,3 +268,11 @@ def test_check_wrench_names_the_link_or_the_component():
     assert 'force.z' in check_wrench('tcp', [0, 0, 0, 0, 0, math.inf], links)
     assert 'torque.x' in check_wrench('tcp', [math.nan, 0, 0, 0, 0, 0], links)
     assert 'force.x above' in check_wrench('tcp', [0, 0, 0, 2e6, 0, 0], links)
+
+
+def test_check_command_names_the_length_or_the_value():
+    from spatial_dynamics.sim.node import check_command
+    assert check_command([0.0, 1.0], 2) is None
+    assert check_command([0.0], 2) == '1 values for 2 joints'
+    assert check_command([0.0, math.nan], 2) == 'non-finite value at index 1'
+    assert check_command([-2e6, 0.0], 2) == 'value at index 0 above 1e+06'

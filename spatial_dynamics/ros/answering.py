@@ -121,7 +121,7 @@ class Answering:
         out = self._out = Out()
         self._on_desired(config, msg, 'desired_joint_states', joint_state_arrays,
                          (msg.name, msg.position, msg.velocity,
-                          msg.effort if config.acceleration_source == 'effort' else None),
+                          msg.effort if config.params.acceleration_source == 'effort' else None),
                          with_terms)
         return out
 
@@ -132,7 +132,7 @@ class Answering:
         state came yet.
         """
         out = self._out = Out()
-        if config.control_mode in FEEDBACK_MODES:
+        if config.params.control_mode in FEEDBACK_MODES:
             self._follow(config.output, msg, now_ns)
         else:   # feedforward: the first point is the desired state, answered at once
             self._on_desired(config, msg, 'desired_trajectory', trajectory_arrays,
@@ -144,7 +144,7 @@ class Answering:
     def _annotate(self, config: Config, msg) -> None:
         """Publish the plan with effort at every point, resampled for JTC (:mod:`~.effort`)."""
         output = config.output
-        if config.output_choice == 'none':
+        if config.params.output == 'none':
             self.totals.rejected['no_model_part'] += 1
             self.log.warn('annotated_trajectory: message rejected: output none has no model '
                           'torque to annotate the plan with', throttle_duration_sec=1.0)
@@ -155,7 +155,7 @@ class Answering:
                 raise ValueError(f'names {list(plan.joint_names)}, the model has '
                                  f'{list(output.joints)}: JTC gets effort for every joint')
             done = annotate(output.model, plan, config.params.trajectory_effort_tolerance,
-                            config.output_choice, config.gravity)
+                            config.params.output, config.params.gravity)
         except (TrajectoryError, ValueError) as err:   # logged here: its own throttle
             self.totals.rejected[getattr(err, 'reason', 'joints')] += 1
             self.log.warn(f'annotated_trajectory: message rejected, not annotated: {err}',
@@ -197,7 +197,7 @@ class Answering:
                     with_terms: bool) -> None:
         """Hold a good desired state; in feedforward mode, answer it (or reject it whole)."""
         t0 = time.monotonic_ns()
-        answers = config.control_mode not in FEEDBACK_MODES
+        answers = config.params.control_mode not in FEEDBACK_MODES
         if answers:
             self.window.received += 1
         output = config.output
@@ -228,7 +228,7 @@ class Answering:
     def observe(self, config: Config, msg) -> Out:
         """Update the observer with the measured state :meth:`measured` just accepted."""
         out = self._out = Out()
-        if config.observer_gain <= 0.0:
+        if config.params.observer_gain <= 0.0:
             self.observer = None
         elif self._observing is not None and self._observing[0] is msg:
             self._observe(config, msg, self._observing[1])
@@ -237,7 +237,7 @@ class Answering:
 
     def _measured_msg(self, config: Config, msg, with_terms: bool) -> None:
         t0 = time.monotonic_ns()
-        feedback = config.control_mode in FEEDBACK_MODES
+        feedback = config.params.control_mode in FEEDBACK_MODES
         totals = self.totals
         totals.measured_received += 1
         if feedback:
@@ -265,7 +265,7 @@ class Answering:
     def _answer_measured(self, config: Config, msg, measured: tuple, t0: int,
                          with_terms: bool) -> None:
         """Answer a good measured state with the held desired state (a feedback mode)."""
-        output, mode = config.output, config.control_mode
+        output, mode = config.output, config.params.control_mode
         stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         desired = None
         if self._following == output.joints:   # a trajectory, sampled at this measurement
@@ -277,10 +277,10 @@ class Answering:
                              'state for the model\'s joints yet')
                 return
             age = (t0 - held.receipt_ns) * 1e-9
-            if age > config.input_timeout:
+            if age > config.params.input_timeout:
                 self._reject('joint_states', 'desired_stale',
                              f'{mode}: the held desired state is {age:.3f} s old '
-                             f'(input_timeout {config.input_timeout} s); not publishing')
+                             f'(input_timeout {config.params.input_timeout} s); not publishing')
                 return
             desired = held.state
         if stamp != 0 and stamp == self._answered_stamp:
@@ -311,7 +311,7 @@ class Answering:
             return
         measured_kind = config.params.measured_effort
         if measured_kind != 'full':   # e.g. UR: the drive reports the torque beyond gravity
-            tau = with_gravity(output.model, q, tau, measured_kind, config.gravity)
+            tau = with_gravity(output.model, q, tau, measured_kind, config.params.gravity)
         observer = self._observer_for(config)
         t = sample_time(msg.header.stamp.sec, msg.header.stamp.nanosec)
         if t is None:
@@ -335,12 +335,9 @@ class Answering:
         """Return the observer of ``config``: kept unless what it depends on changed."""
         observer, output = self.observer, config.output
         if config is not self._observed:   # a new config: does the observer still hold?
-            key = observer_key(output, config.gravity, config.observer_gain,
-                               config.measured_timeout, config.params.measured_effort)
+            key = observer_key(output, config.params)
             if observer is None or key != self._observer_key:
-                observer = self.observer = make_observer(output, config.gravity,
-                                                         config.observer_gain,
-                                                         config.measured_timeout)
+                observer = self.observer = make_observer(output, config.params)
                 self._observer_key = key
             observer.backend = output.backend
             self._observed = config
@@ -358,13 +355,13 @@ class Answering:
     def _respond(self, config: Config, header, topic: str, desired: tuple,
                  measured: Optional[tuple], t0: int, with_terms: bool) -> None:
         """Compute and publish one answer (and its terms while subscribed), or reject it."""
-        output = config.output
+        output, params = config.output, config.params
         try:
             f_ext = self._active_wrenches(output, t0) if self.wrenches else None
-            dynamics = Dynamics(output.model, config.gravity, output.backend, output.armature,
+            dynamics = Dynamics(output.model, params.gravity, output.backend, output.armature,
                                 output.friction_threshold, f_ext)
-            tau, terms = answer(dynamics, config.control_mode, config.output_choice, desired,
-                                measured, output.gains, with_terms)
+            tau, terms = answer(dynamics, params.control_mode, params.output, desired, measured,
+                                output.gains, with_terms)
         except Exception as err:  # never die on one message
             self._reject(topic, 'compute_error', f'rnea failed: {err!r}')
             return
@@ -438,7 +435,7 @@ class Answering:
         if not wrench.any():
             self.wrenches.pop(link, None)
             return
-        expiry = time.monotonic_ns() + int(config.wrench_timeout * 1e9)
+        expiry = time.monotonic_ns() + int(config.params.external_wrench_timeout * 1e9)
         self.wrenches[link] = (wrench, expiry)
 
     def _reject_wrench(self, reason: str, text: str) -> None:

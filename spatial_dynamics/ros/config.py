@@ -417,54 +417,14 @@ class Output:
 class Config:
     """The checked parameters and what an answer needs, swapped in as one (see :func:`prepare`).
 
-    ``params`` is the table's frozen ``Params`` (one field per parameter); the properties
-    below are the values the answers read, under the names the code uses.
+    ``params`` is the table's frozen ``Params`` (one field per parameter, under the
+    parameter's name with ``.`` as ``_``): what the answers read.
     """
 
     params: object
     output: Optional[Output]
     new_description: bool = False
     kept_file: str = ''
-
-    @property
-    def gravity(self) -> Tuple[float, float, float]:
-        """Gravity in the base frame, m/s²."""
-        return self.params.gravity
-
-    @property
-    def acceleration_source(self) -> str:
-        """Where desired_joint_states carries qdd."""
-        return self.params.acceleration_source
-
-    @property
-    def input_timeout(self) -> float:
-        """Seconds after which a held desired state is stale."""
-        return self.params.input_timeout
-
-    @property
-    def wrench_timeout(self) -> float:
-        """Seconds after its receipt that an external wrench stops applying."""
-        return self.params.external_wrench_timeout
-
-    @property
-    def control_mode(self) -> str:
-        """``feedforward``, ``pd_feedforward`` or ``computed_torque``."""
-        return self.params.control_mode
-
-    @property
-    def output_choice(self) -> str:
-        """The ``output`` parameter: which model part the answers carry."""
-        return self.params.output
-
-    @property
-    def measured_timeout(self) -> float:
-        """Seconds after which the measured state is stale."""
-        return self.params.measured_timeout
-
-    @property
-    def observer_gain(self) -> float:
-        """K_O of the external-torque observer, 1/s (0 = off)."""
-        return self.params.observer_gain
 
 
 def _base_model(params, current: Optional[Output], urdf: str, source: str,

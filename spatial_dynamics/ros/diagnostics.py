@@ -10,15 +10,12 @@ start) as messages come, and once a second publishes what :func:`model_status`,
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import dataclass
 import time
 from typing import Dict, List, Optional, Tuple, TYPE_CHECKING
 
 import numpy as np
 from spatial_dynamics import backends
-from spatial_dynamics.ros.config import (
-    DEFAULT_GRAVITY, DEFAULT_INPUT_TIMEOUT, DEFAULT_MEASURED_TIMEOUT,
-    NODE_REASONS, URDF_WARNINGS_LISTED, WRENCH_REASONS)
+from spatial_dynamics.ros.config import NODE_REASONS, URDF_WARNINGS_LISTED, WRENCH_REASONS
 from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
 from spatial_dynamics.ros.inputs import REASONS
 from spatial_dynamics.ros.observer import EstimateWindow, MomentumObserver
@@ -108,18 +105,6 @@ def model_status(output: Optional[Output], totals: Totals, strict: bool,
     return ('WARN' if urdf_warnings else 'OK'), message, values
 
 
-@dataclass(frozen=True)
-class Settings:
-    """The live settings an answer uses besides the :class:`Output` (diagnostics show them)."""
-
-    gravity: Tuple[float, float, float] = DEFAULT_GRAVITY
-    acceleration_source: str = 'effort'
-    input_timeout: float = DEFAULT_INPUT_TIMEOUT
-    control_mode: str = 'feedforward'
-    output: str = 'full'
-    measured_timeout: float = DEFAULT_MEASURED_TIMEOUT
-
-
 def _us(ns: float) -> str:
     return f'{ns * 1e-3:.1f}'
 
@@ -128,43 +113,38 @@ def _age(last_ns: Optional[int], now_ns: int) -> Optional[float]:
     return None if last_ns is None else (now_ns - last_ns) * 1e-9
 
 
-def _feedback_state(settings: Settings, totals: Totals, now_ns: int
-                    ) -> Optional[Tuple[str, str]]:
+def _feedback_state(params, totals: Totals, now_ns: int) -> Optional[Tuple[str, str]]:
     """Level and message when a feedback mode cannot answer (stale or missing state)."""
-    measured, desired = (_age(totals.last_measured_ns, now_ns),
-                         _age(totals.last_desired_ns, now_ns))
-    mode = settings.control_mode
-    if measured is None:
-        return 'ERROR', f'no measured state on joint_states yet ({mode}); not publishing'
-    if measured > settings.measured_timeout:
-        return 'ERROR', (f'measured state stale: no good joint_states for {measured:.2f} s '
-                         f'(measured_timeout {settings.measured_timeout} s, {mode}); '
-                         'not publishing')
-    if desired is None:
-        return 'ERROR', f'no desired state yet ({mode}); not publishing'
-    if desired > settings.input_timeout:
-        return 'ERROR', (f'desired state stale: no good desired input for {desired:.2f} s '
-                         f'(input_timeout {settings.input_timeout} s, {mode}); '
-                         'not publishing')
+    mode = params.control_mode
+    for what, where, source, last_ns, timeout in (
+            ('measured', ' on joint_states', 'joint_states', totals.last_measured_ns,
+             'measured_timeout'),
+            ('desired', '', 'desired input', totals.last_desired_ns, 'input_timeout')):
+        age, limit = _age(last_ns, now_ns), getattr(params, timeout)
+        if age is None:
+            return 'ERROR', f'no {what} state{where} yet ({mode}); not publishing'
+        if age > limit:
+            return 'ERROR', (f'{what} state stale: no good {source} for {age:.2f} s '
+                             f'({timeout} {limit} s, {mode}); not publishing')
     return None
 
 
-def _input_state(output: Optional[Output], window: Window, settings: Settings, period: float,
+def _input_state(output: Optional[Output], window: Window, params, period: float,
                  age: Optional[float], totals: Optional[Totals] = None, now_ns: int = 0
                  ) -> Tuple[str, str]:
     """Level and message of the ``feedforward`` status."""
     rejected_now = window.received - window.answered
     if output is None:
         return 'ERROR', 'no robot model'
-    if settings.control_mode in FEEDBACK_MODES and totals is not None:
-        stale = _feedback_state(settings, totals, now_ns)
+    if params.control_mode in FEEDBACK_MODES and totals is not None:
+        stale = _feedback_state(params, totals, now_ns)
         if stale is not None:
             return stale
     elif age is None:
         return 'WARN', 'no input received yet'
-    elif age > settings.input_timeout:
+    elif age > params.input_timeout:
         return 'ERROR', (f'input stale: no good input for {age:.2f} s '
-                         f'(input_timeout {settings.input_timeout} s); not publishing')
+                         f'(input_timeout {params.input_timeout} s); not publishing')
     if rejected_now:
         return 'WARN', f'{window.answered / period:.1f} Hz, {rejected_now} rejected'
     return 'OK', f'{window.answered / period:.1f} Hz'
@@ -195,37 +175,37 @@ def _terms_values(output: Output) -> List[Tuple[str, str]]:
 
 
 def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
-                       settings: Settings, wrenches: Dict[str, tuple], now_ns: int) -> Status:
+                       params, wrenches: Dict[str, tuple], now_ns: int) -> Status:
     """Return the ``feedforward`` status: rates, compute time, delays, staleness, rejections.
 
-    ``window`` is the period that ends at ``now_ns`` (monotonic); ``wrenches`` maps a link to
-    ``(wrench, expiry ns)``.
+    ``window`` is the period that ends at ``now_ns`` (monotonic); ``params`` the node's
+    parameters (the table's ``Params``); ``wrenches`` maps a link to ``(wrench, expiry ns)``.
     """
     period = max((now_ns - window.start_ns) * 1e-9, 1e-9)
     last = totals.last_input_ns
     age = None if last is None else (now_ns - last) * 1e-9
-    level, message = _input_state(output, window, settings, period, age, totals, now_ns)
+    level, message = _input_state(output, window, params, period, age, totals, now_ns)
     measured_age = _age(totals.last_measured_ns, now_ns)
     values = _window_values(window, period) + [
         ('last input age [s]', '' if age is None else f'{age:.3f}'),
-        ('input timeout [s]', str(settings.input_timeout)),
-        ('stale', str(age is None or age > settings.input_timeout)),
+        ('input timeout [s]', str(params.input_timeout)),
+        ('stale', str(age is None or age > params.input_timeout)),
         ('answered', str(totals.answered)),
         ('rejected', str(sum(totals.rejected.values())))]
     values += [(f'rejected {reason}', str(count)) for reason, count in totals.rejected.items()]
     values += [
-        ('control mode', settings.control_mode), ('output', settings.output),
+        ('control mode', params.control_mode), ('output', params.output),
         ('measured state rate [Hz]', f'{window.measured / period:.1f}'),
         ('measured state age [s]', '' if measured_age is None else f'{measured_age:.3f}'),
-        ('measured timeout [s]', str(settings.measured_timeout)),
+        ('measured timeout [s]', str(params.measured_timeout)),
         ('measured state stale', str(measured_age is None
-                                     or measured_age > settings.measured_timeout)),
+                                     or measured_age > params.measured_timeout)),
         ('measured states received', str(totals.measured_received)),
         ('measured states rejected', str(sum(totals.measured_rejected.values())))]
     values += [(f'measured states rejected {reason}', str(count))
                for reason, count in totals.measured_rejected.items()]
-    values += [('gravity [m/s^2]', str(list(settings.gravity))),
-               ('acceleration source', settings.acceleration_source)]
+    values += [('gravity [m/s^2]', str(list(params.gravity))),
+               ('acceleration source', params.acceleration_source)]
     if output is not None:
         values += _terms_values(output)
     values += [

@@ -54,7 +54,7 @@ from spatial_dynamics.ros.config import (
 from spatial_dynamics.ros.control import terms_names
 from spatial_dynamics.ros.descriptions import description_source, DescriptionParser, ParseRequest
 from spatial_dynamics.ros.diagnostics import (
-    backend_text, feedforward_status, model_status, observer_status, Settings)
+    backend_text, feedforward_status, model_status, observer_status)
 from std_msgs.msg import Float64MultiArray, String
 from trajectory_msgs.msg import JointTrajectory
 
@@ -172,10 +172,10 @@ class InverseDynamicsNode(Node):
     def _apply(self, config: Config, changes: dict) -> None:
         """Swap in a validated configuration (between two messages), log what changed."""
         before = ('feedforward', 'full') if self.config is None else (
-            self.config.control_mode, self.config.output_choice)
-        if (config.control_mode, config.output_choice) != before:
-            self.get_logger().info(f'control_mode {config.control_mode}, output '
-                                   f'{config.output_choice}')
+            self.config.params.control_mode, self.config.params.output)
+        if (config.params.control_mode, config.params.output) != before:
+            self.get_logger().info(f'control_mode {config.params.control_mode}, output '
+                                   f'{config.params.output}')
         if config.new_description:
             self._description_generation += 1   # a topic description still parsing is stale
         self._set_output(config, bool(set(PAYLOAD_PARAMETERS) & changes.keys()))
@@ -361,14 +361,12 @@ class InverseDynamicsNode(Node):
         if output is None:
             self._warn_waiting()
         backend = '' if output is None else backend_text(output)
-        settings = Settings(config.gravity, config.acceleration_source, config.input_timeout,
-                            config.control_mode, config.output_choice, config.measured_timeout)
         statuses = [
             ('robot model', model_status(output, answering.totals, config.params.strict_urdf,
                                          backend)),
-            ('feedforward', feedforward_status(output, window, answering.totals, settings,
+            ('feedforward', feedforward_status(output, window, answering.totals, config.params,
                                                answering.wrenches, now_ns)),
-            ('external torque', observer_status(output, config.observer_gain,
+            ('external torque', observer_status(output, config.params.observer_gain,
                                                 answering.observer, estimates))]
         name = self.get_fully_qualified_name().lstrip('/')  # 'inverse_dynamics' in the root ns
         diagnostics = messages.diagnostic_array(

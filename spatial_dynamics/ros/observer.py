@@ -275,24 +275,24 @@ class EstimateWindow:
 # --------------------------------------------------------------------------------------------
 # The node's observer: what it depends on
 
-def observer_key(output: Output, gravity: Sequence[float], gain: float,
-                 max_gap: float, measured: str = 'full') -> tuple:
+def observer_key(output: Output, params) -> tuple:
     """Return what the estimate depends on; the node restarts the observer when it changes.
 
     The model (the base, by identity: a parameter change that does not re-parse keeps it),
-    payload, armature, friction model, gravity, gain and the gap that restarts it; not the
+    payload, armature, friction model, and of the node's ``params`` gravity, gain, the gap
+    that restarts it (``measured_timeout``) and what the measured effort holds; not the
     backend (the compiled kernels compute the same numbers).
     """
     armature = None if output.armature is None else output.armature.tobytes()
     return (id(output.base), output.payload, armature, output.friction_threshold,
-            tuple(gravity), gain, max_gap, measured)
+            tuple(params.gravity), params.observer_gain, params.measured_timeout,
+            params.measured_effort)
 
 
-def make_observer(output: Output, gravity: Sequence[float], gain: float,
-                  max_gap: float) -> MomentumObserver:
+def make_observer(output: Output, params) -> MomentumObserver:
     """Return the observer of ``output``'s model (payload included) with the node's terms."""
     model, threshold = output.model, output.friction_threshold
     friction = None if threshold is None else (
         lambda qd: sd.friction_torque(model, qd, threshold))
-    return MomentumObserver(model, gain, output.armature, friction, gravity, max_gap,
-                            output.backend)
+    return MomentumObserver(model, params.observer_gain, output.armature, friction,
+                            params.gravity, params.measured_timeout, output.backend)

@@ -122,16 +122,25 @@ def command_qos() -> QoSProfile:
                       history=HistoryPolicy.KEEP_LAST, depth=10)
 
 
+def _first_bad(values: Sequence[float], bound: float, names) -> Optional[str]:
+    """Why ``values`` cannot be applied: the first non-finite one, else one beyond ``bound``.
+
+    ``names(i)`` names value ``i`` in the message; None when all are good.
+    """
+    x = np.asarray(values, dtype=float)
+    finite = np.isfinite(x)
+    if not finite.all():
+        return f'non-finite {names(int(np.argmin(finite)))}'
+    if np.abs(x).max(initial=0.0) > bound:
+        return f'{names(int(np.argmax(np.abs(x))))} above {bound:g}'
+    return None
+
+
 def check_command(data: Sequence[float], n: int) -> Optional[str]:
     """Why a command cannot be applied to ``n`` joints, or None when it can."""
     if len(data) != n:
         return f'{len(data)} values for {n} joints'
-    tau = np.asarray(data, dtype=float)
-    if not np.isfinite(tau).all():
-        return f'non-finite value at index {int(np.argmin(np.isfinite(tau)))}'
-    if np.abs(tau).max(initial=0.0) > MAX_COMMAND:
-        return f'value above {MAX_COMMAND:g} at index {int(np.argmax(np.abs(tau)))}'
-    return None
+    return _first_bad(data, MAX_COMMAND, lambda i: f'value at index {i}')
 
 
 def check_wrench(link: str, wrench: Sequence[float], links) -> Optional[str]:
@@ -139,12 +148,7 @@ def check_wrench(link: str, wrench: Sequence[float], links) -> Optional[str]:
     if link not in links:
         return (f'header.frame_id {link!r} is not a link of the robot (links: '
                 f'{", ".join(links)})')
-    w = np.asarray(wrench, dtype=float)
-    if not np.isfinite(w).all():
-        return f'non-finite component {WRENCH_FIELDS[int(np.argmin(np.isfinite(w)))]}'
-    if np.abs(w).max(initial=0.0) > MAX_WRENCH:
-        return f'component {WRENCH_FIELDS[int(np.argmax(np.abs(w)))]} above {MAX_WRENCH:g}'
-    return None
+    return _first_bad(wrench, MAX_WRENCH, lambda i: f'component {WRENCH_FIELDS[i]}')
 
 
 def to_time(seconds: float) -> Time:

@@ -54,7 +54,7 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-from .driving import demo_urdf, node_command, pyplot, redraw, start, stop
+from .driving import node_command, pyplot, redraw, robot_model, save_figure, start, stop
 
 LAWS = (('PD alone', {'control_mode': 'pd_feedforward', 'output': 'none'}),
         ('PD + feed-forward', {'control_mode': 'pd_feedforward', 'output': 'full'}),
@@ -444,10 +444,7 @@ def plot(runs: List[Run], path: str, robot: str, frequency: float) -> str:
         ax.set_xlabel('simulated time [s]')
     axes[0][0].legend(fontsize='small', loc='lower right')
     fig.suptitle(f'tracking error, {robot}, MuJoCo lockstep 1 ms, feedback {frequency:g} Hz')
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
+    save_figure(plt, fig, path)
     return f'plot written to {path}'
 
 
@@ -458,9 +455,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     from rclpy.signals import SignalHandlerOptions
     from sensor_msgs.msg import JointState
 
-    import spatial_dynamics as sd
-    urdf = os.path.abspath(args.urdf or demo_urdf())
-    model = sd.Model.from_urdf(urdf)
+    urdf, model = robot_model(args.urdf)
     chosen = {'pd': 0, 'pd_ff': 1, 'ct': 2}
     picks = range(3) if args.laws == 'all' else [chosen[x] for x in args.laws.split(',')]
     signal.signal(signal.SIGTERM, signal.default_int_handler)

@@ -24,7 +24,7 @@ import sys
 import time
 from typing import List, Optional, Sequence, Tuple
 
-from .driving import demo_urdf, node_command, pyplot, redraw, Sinusoids, start, stop
+from .driving import node_command, pyplot, redraw, robot_model, save_figure, Sinusoids, start, stop
 
 NAMESPACE = '/spatial_dynamics_demo'
 
@@ -97,7 +97,6 @@ def plot(recorder: Recorder, path: str, robot: str) -> str:
     plt = pyplot()
     if plt is None:
         return 'matplotlib is not installed: plot skipped (pip install matplotlib)'
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig, ax = plt.subplots(figsize=(10, 5.5), dpi=100)
     for i, name in enumerate(recorder.names):
         ax.plot(recorder.t, [tau[i] for tau in recorder.tau], label=name, linewidth=1.2)
@@ -106,9 +105,7 @@ def plot(recorder: Recorder, path: str, robot: str) -> str:
     ax.set_title(f'inverse_dynamics feed-forward torques, {robot}, smooth sinusoid trajectory')
     ax.grid(True, alpha=0.3)
     ax.legend(loc='upper right', ncol=4, fontsize='small')
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    save_figure(plt, fig, path)
     return f'plot of {len(recorder.t)} answers written to {path}'
 
 
@@ -122,9 +119,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     from diagnostic_msgs.msg import DiagnosticArray
     from sensor_msgs.msg import JointState
 
-    import spatial_dynamics as sd
-    urdf = os.path.abspath(args.urdf or demo_urdf())
-    model = sd.Model.from_urdf(urdf)
+    urdf, model = robot_model(args.urdf)
     names = model.joint_names
     trajectory = Sinusoids.for_model(model)
     command = node_command('inverse_dynamics', 'spatial_dynamics.ros.node')

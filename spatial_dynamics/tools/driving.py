@@ -171,6 +171,21 @@ def redraw(lines: Sequence[str], shown: int) -> int:
     return len(lines)
 
 
+def robot_model(urdf: Optional[str]):
+    """Return the absolute path of ``urdf`` (the demo arm when None) and its ``Model``."""
+    import spatial_dynamics as sd
+    path = os.path.abspath(urdf or demo_urdf())
+    return path, sd.Model.from_urdf(path)
+
+
+def save_figure(plt, fig, path: str) -> None:
+    """Lay ``fig`` out, write it to ``path`` (its directory created) and close it."""
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+
+
 def pyplot():
     """Return matplotlib's pyplot on the file-only Agg backend, or None when not installed."""
     try:

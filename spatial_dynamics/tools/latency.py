@@ -27,7 +27,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Set
 
 import numpy as np
 
-from .driving import cpu_seconds, demo_urdf, node_command, Sinusoids, start, stop
+from .driving import cpu_seconds, node_command, robot_model, Sinusoids, start, stop
 
 
 class Target:
@@ -182,9 +182,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    import spatial_dynamics as sd
-    urdf = os.path.abspath(args.urdf or demo_urdf())
-    model = sd.Model.from_urdf(urdf)
+    urdf, model = robot_model(args.urdf)
     trajectory = Sinusoids.for_model(model)
     namespace = f'/sd_latency_{os.getpid()}'
     logs = args.log_dir

@@ -24,7 +24,7 @@ import sys
 import time
 from typing import Optional, Sequence, Tuple
 
-from .driving import demo_urdf, node_command, rss_bytes, Sinusoids, start, stop
+from .driving import node_command, robot_model, rss_bytes, Sinusoids, start, stop
 from .latency import fill, input_depth, joint_state_for, pace, prime, spin_until, Target
 
 MB = 1024.0 * 1024.0
@@ -75,11 +75,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    import spatial_dynamics as sd
     seconds = 60.0 * args.minutes
     warmup = args.warmup if args.warmup is not None else min(max(0.2 * seconds, 10.0), 60.0)
-    urdf = os.path.abspath(args.urdf or demo_urdf())
-    model = sd.Model.from_urdf(urdf)
+    urdf, model = robot_model(args.urdf)
     trajectory = Sinusoids.for_model(model)
     namespace = f'/sd_soak_{os.getpid()}'
     proc = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace,
