@@ -11,7 +11,9 @@
   None) — no form falls back to a slower path;
 - a batch split over threads (the batch entries release the GIL) equals the single calls
   state by state, bit for bit (to 1e-12 with external wrenches), also for batch sizes that
-  do not divide evenly and for several Python threads calling at once.
+  do not divide evenly and for several Python threads calling at once; so does a batch run
+  in SIMD lanes, on the robots and a random tree with general axes, prismatic and mimic
+  joints.
 """
 
 import array
@@ -166,6 +168,48 @@ def test_a_batch_over_threads_equals_the_single_calls(name, N, rng):
         p, ctq = sd.generalized_momentum(model, Q[s], QD[s])
         np.testing.assert_array_equal(P[s], p)
         np.testing.assert_array_equal(CTQ[s], ctq)
+
+
+
+@functools.lru_cache(maxsize=None)
+def lane_tree():
+    """A random tree with general axes, prismatic and mimic joints (multiplier, offset)."""
+    from urdf_gen import random_tree_urdf
+    return sd.Model.from_urdf(random_tree_urdf(np.random.default_rng(5), 12, branching=True,
+                                               mimic=True))
+
+
+@pytest.mark.parametrize('name', ['ur5', 'panda', 'talos', 'tree'])
+def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
+    """A batch runs its states in SIMD lanes (2, or 4 with AVX), the scalar kernel's bits.
+
+    The lane kernels are the scalar ones printed on vectors (backends/codegen.py): the same
+    operations in the same order per lane, so a moving state's torques are its single call's
+    bit for bit. A state at rest in a group with a moving one takes the general path, whose
+    extra products are exact zeros: equal values (a zero's sign aside). The batch size leaves
+    a remainder that runs state by state; zero gravity takes the weightless path.
+    """
+    model = lane_tree() if name == 'tree' else robot(name)
+    n, lay = model.nq, layout.of(model)
+    if name == 'tree':
+        codes = lay.table[1:, layout.COLUMN['code']]
+        mul = lay.table[1:, layout.COLUMN['mul']]
+        assert {3, 4} <= set(codes.tolist()) and (mul != 1.0).any()   # RA, PR, mimic
+    N = 4 * 11 + 3
+    Q, QD, QDD = random_state(rng, (N,), n)
+    QD[5] = 0.0                             # at rest, accelerating, beside moving states
+    QD[8:12] = QDD[8:12] = 0.0              # a whole group of four: gravity only
+    QD[13] = QDD[13] = 0.0                  # gravity only, beside moving states
+    moving = (QD != 0.0).any(axis=1)
+    for g in ((0.4, -0.3, -9.7), (0.0, 0.0, 0.0)):
+        for threads in (1, 2):
+            tau = np.empty((N, n))
+            ext.rnea_batch(lay.kernels, N, Q, QD, QDD, g, None, tau, threads)
+            one = np.array([ext.rnea(lay.kernels, Q[s], QD[s], QDD[s], g) for s in range(N)])
+            np.testing.assert_array_equal(tau, one)
+            np.testing.assert_array_equal(tau[moving].view(np.int64),
+                                          one[moving].view(np.int64))
+            assert np.isfinite(tau).all() and np.abs(tau).max() > 0.0
 
 
 def test_the_thread_count_does_not_change_a_bit(ext, rng):

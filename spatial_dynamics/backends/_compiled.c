@@ -588,7 +588,22 @@ run_slice(void *arg)
         s->failed = 1;
         return NULL;
     }
-    for (Py_ssize_t k = s->lo; k < s->hi; k++) {
+    Py_ssize_t lo = s->lo;
+#ifdef SD_LANES
+    if (s->kind == RNEA && s->fext == NULL) {
+        /* several states at once (SIMD across states), the same bits as one by one */
+        long done = rnea_batch_lanes(s->K, rows, (long)(s->hi - lo), s->q + lo * n,
+                                     s->qd + lo * n, s->qdd + lo * n, s->g[0], s->g[1],
+                                     s->g[2], s->out1 + lo * n);
+        if (done < 0) {
+            free(work);
+            s->failed = 1;
+            return NULL;
+        }
+        lo += done;
+    }
+#endif
+    for (Py_ssize_t k = lo; k < s->hi; k++) {
         const double *q = s->q + k * n;
         xup_kernel(s->K, rows, q, work);
         if (s->kind == RNEA) {
