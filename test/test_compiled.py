@@ -170,10 +170,9 @@ def test_a_batch_over_threads_equals_the_single_calls(name, N, rng):
         np.testing.assert_array_equal(CTQ[s], ctq)
 
 
-
 @functools.lru_cache(maxsize=None)
 def lane_tree():
-    """A random tree with general axes, prismatic and mimic joints (multiplier, offset)."""
+    """Return a random tree with general axes, prismatic and mimic joints (mult, offset)."""
     from urdf_gen import random_tree_urdf
     return sd.Model.from_urdf(random_tree_urdf(np.random.default_rng(5), 12, branching=True,
                                                mimic=True))
