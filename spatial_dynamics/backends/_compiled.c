@@ -46,6 +46,10 @@
  * must cost less than what it takes over. */
 #define MAX_THREADS 64
 #define MIN_WORK 4096
+/* The threads of a batch claim its states a chunk at a time, about CHUNK_WORK body-states
+ * (~25 us) in a multiple of 4 states: a thread that a busy machine holds back leaves the
+ * rest to the others, and the SIMD lanes group the same states whatever the thread count. */
+#define CHUNK_WORK 1024
 
 /* ------------------------------------------------------------------------------------------
  * Kernels: one model's table */
@@ -572,38 +576,45 @@ typedef struct {
     int fext_per_state;
     double g[3];
     double *out1, *out2;                 /* tau | H | mom, ctq | Y */
-    Py_ssize_t lo, hi;                   /* the slice of states [lo, hi) */
+    Py_ssize_t N, chunk;                 /* the states [0, N), claimed chunk by chunk */
+    Py_ssize_t *next;                    /* the first state not claimed yet (shared) */
     int failed;                          /* no memory for the scratch */
 } Slice;
 
-static void *
-run_slice(void *arg)
+#if !defined(_WIN32) && (defined(__GNUC__) || defined(__clang__))
+#define THREADED 1
+#endif
+
+/* The first state of the next chunk, claimed (by one thread only). */
+static Py_ssize_t
+claim(Slice *s)
 {
-    Slice *s = (Slice *)arg;
+#ifdef THREADED
+    return __atomic_fetch_add(s->next, s->chunk, __ATOMIC_RELAXED);
+#else
+    Py_ssize_t lo = *s->next;           /* one thread: run_batch starts no other */
+    *s->next += s->chunk;
+    return lo;
+#endif
+}
+
+/* The states [lo, hi) of job s with the scratch `work`: 0, or -1 without memory. */
+static int
+run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
+{
     const long n = s->n, rows = s->rows;
-    /* the regressor's carried axes after the per-body scratch */
-    double *work = malloc(sizeof(double) * (rows * WORK
-                                            + (s->kind == REGRESSOR ? 6 * rows * rows : 0)));
-    if (work == NULL) {
-        s->failed = 1;
-        return NULL;
-    }
-    Py_ssize_t lo = s->lo;
 #ifdef SD_LANES
     if (s->kind == RNEA && s->fext == NULL) {
         /* several states at once (SIMD across states), the same bits as one by one */
-        long done = rnea_batch_lanes(s->K, rows, (long)(s->hi - lo), s->q + lo * n,
+        long done = rnea_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
                                      s->qd + lo * n, s->qdd + lo * n, s->g[0], s->g[1],
                                      s->g[2], s->out1 + lo * n);
-        if (done < 0) {
-            free(work);
-            s->failed = 1;
-            return NULL;
-        }
+        if (done < 0)
+            return -1;
         lo += done;
     }
 #endif
-    for (Py_ssize_t k = lo; k < s->hi; k++) {
+    for (Py_ssize_t k = lo; k < hi; k++) {
         const double *q = s->q + k * n;
         xup_kernel(s->K, rows, q, work);
         if (s->kind == RNEA) {
@@ -621,6 +632,26 @@ run_slice(void *arg)
                             work);
         }
     }
+    return 0;
+}
+
+/* A thread of a batch: claims chunks of states until none is left. */
+static void *
+run_slice(void *arg)
+{
+    Slice *s = (Slice *)arg;
+    const long rows = s->rows;
+    /* the regressor's carried axes after the per-body scratch */
+    double *work = malloc(sizeof(double) * (rows * WORK
+                                            + (s->kind == REGRESSOR ? 6 * rows * rows : 0)));
+    if (work == NULL) {
+        s->failed = 1;
+        return NULL;
+    }
+    for (Py_ssize_t lo = claim(s); lo < s->N && !s->failed; lo = claim(s)) {
+        Py_ssize_t hi = s->N - lo < s->chunk ? s->N : lo + s->chunk;
+        s->failed = run_states(s, work, lo, hi) < 0;
+    }
     free(work);
     return NULL;
 }
@@ -635,13 +666,17 @@ run_batch(const Slice *job, Py_ssize_t N, long threads)
     if (T > most)
         T = most > 0 ? (long)most : 1;
     int failed = 0;
+    Py_ssize_t next = 0, chunk = (CHUNK_WORK / job->rows + 3) / 4 * 4;
+    if (chunk < 4)
+        chunk = 4;
     Py_BEGIN_ALLOW_THREADS
     for (long t = 0; t < T; t++) {
         slices[t] = *job;
-        slices[t].lo = N * t / T;
-        slices[t].hi = N * (t + 1) / T;
+        slices[t].N = N;
+        slices[t].chunk = chunk;
+        slices[t].next = &next;
     }
-#ifndef _WIN32
+#ifdef THREADED
     pthread_t ids[MAX_THREADS];
     int started[MAX_THREADS] = {0};
     for (long t = 1; t < T; t++)
