@@ -180,7 +180,7 @@ def lane_tree():
 
 @pytest.mark.parametrize('name', ['ur5', 'panda', 'talos', 'tree'])
 def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
-    """A batch runs its states in SIMD lanes (2, or 4 with AVX), the scalar kernel's bits.
+    """A batch runs its states in SIMD lanes (2; 4 with AVX, 8 with AVX-512F), bit for bit.
 
     The lane kernels are the scalar ones printed on vectors (backends/codegen.py): the same
     operations in the same order per lane, so a moving state's torques are its single call's
@@ -194,11 +194,11 @@ def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
         codes = lay.table[1:, layout.COLUMN['code']]
         mul = lay.table[1:, layout.COLUMN['mul']]
         assert {3, 4} <= set(codes.tolist()) and (mul != 1.0).any()   # RA, PR, mimic
-    N = 4 * 11 + 3
+    N = 8 * 5 + 7
     Q, QD, QDD = random_state(rng, (N,), n)
     QD[5] = 0.0                             # at rest, accelerating, beside moving states
-    QD[8:12] = QDD[8:12] = 0.0              # a whole group of four: gravity only
-    QD[13] = QDD[13] = 0.0                  # gravity only, beside moving states
+    QD[8:16] = QDD[8:16] = 0.0              # a whole group of lanes: gravity only
+    QD[17] = QDD[17] = 0.0                  # gravity only, beside moving states
     moving = (QD != 0.0).any(axis=1)
     for g in ((0.4, -0.3, -9.7), (0.0, 0.0, 0.0)):
         for threads in (1, 2):

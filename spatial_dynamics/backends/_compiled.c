@@ -47,8 +47,9 @@
 #define MAX_THREADS 64
 #define MIN_WORK 4096
 /* The threads of a batch claim its states a chunk at a time, about CHUNK_WORK body-states
- * (~25 us) in a multiple of 4 states: a thread that a busy machine holds back leaves the
- * rest to the others, and the SIMD lanes group the same states whatever the thread count. */
+ * (~25 us) in a multiple of 8 states (the widest SIMD lanes): a thread that a busy machine
+ * holds back leaves the rest to the others, and the lanes group the same states whatever
+ * the thread count. */
 #define CHUNK_WORK 1024
 
 /* ------------------------------------------------------------------------------------------
@@ -666,9 +667,9 @@ run_batch(const Slice *job, Py_ssize_t N, long threads)
     if (T > most)
         T = most > 0 ? (long)most : 1;
     int failed = 0;
-    Py_ssize_t next = 0, chunk = (CHUNK_WORK / job->rows + 3) / 4 * 4;
-    if (chunk < 4)
-        chunk = 4;
+    Py_ssize_t next = 0, chunk = (CHUNK_WORK / job->rows + 7) / 8 * 8;
+    if (chunk < 8)
+        chunk = 8;
     Py_BEGIN_ALLOW_THREADS
     for (long t = 0; t < T; t++) {
         slices[t] = *job;

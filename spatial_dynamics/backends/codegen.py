@@ -669,7 +669,7 @@ static void rnea_batch_lanes{L}(const double *K, long rows, long N, const double
 """
 
 #: How the lane kernels are compiled: two lanes (SSE2, NEON: every 64-bit target), and
-#: with GCC on x86-64 four lanes for CPUs with AVX, chosen when the batch runs.
+#: with GCC on x86-64 four for CPUs with AVX and eight with AVX-512F, chosen at run time.
 _LANES_HEAD = """\
 /* ------------------------------------------------------------------------------------------
  * The same RNEA on several states at once (SIMD across the states of a batch): the kernels
@@ -677,7 +677,7 @@ _LANES_HEAD = """\
  * runs as many states of a batch as fill the lanes and returns how many; a compiler without
  * vector extensions gets SD_LANES undefined, and the batch runs the scalar kernels. */
 #if defined(__GNUC__) || defined(__clang__)
-#define SD_LANES 1      /* rnea_batch_lanes is defined */
+#define SD_LANES 8      /* rnea_batch_lanes is defined: up to 8 states at once */
 #include <stdint.h>
 #include <stdlib.h>
 #if defined(__x86_64__) && !defined(__clang__)
@@ -692,16 +692,17 @@ _LANES_TAIL = """\
 static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q,
     const double *QD, const double *QDD, double gx, double gy, double gz, double *TAU)
 {
-    const long n = (long)K[QIDX], size = 4 * (rows * WORK + 4 * n);      /* doubles */
+    const long n = (long)K[QIDX], size = 8 * (rows * WORK + 4 * n);      /* doubles */
     double *raw = malloc(sizeof(double) * size + 64);
     if (raw == NULL)
         return -1;
     void *work = (void *)(((uintptr_t)raw + 63) & ~(uintptr_t)63);
     long lanes = 2;
 #ifdef SD_AVX
-    if (__builtin_cpu_supports("avx"))
-        lanes = 4;
-    if (lanes == 4)
+    lanes = __builtin_cpu_supports("avx512f") ? 8 : __builtin_cpu_supports("avx") ? 4 : 2;
+    if (lanes == 8)
+        rnea_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
+    else if (lanes == 4)
         rnea_batch_lanes4(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
     else
 #endif
@@ -738,10 +739,12 @@ def _lanes_c(returns: dict, lanes: int) -> str:
 
 
 def lanes_c(returns: dict) -> str:
-    """Return the C of the lane kernels: two lanes everywhere, four with AVX on x86-64 (GCC)."""
-    avx = ('#ifdef SD_AVX\n#pragma GCC push_options\n#pragma GCC target("avx")\n'
-           + _lanes_c(returns, 4) + '#pragma GCC pop_options\n#endif  /* SD_AVX */\n\n')
-    return _LANES_HEAD + _lanes_c(returns, 2) + '\n' + avx + _LANES_TAIL
+    """Return the C of the lane kernels: 2 lanes everywhere, 4 with AVX, 8 with AVX-512F."""
+    wide = ''.join(f'#pragma GCC push_options\n#pragma GCC target("{isa}")\n'
+                   + _lanes_c(returns, lanes) + '#pragma GCC pop_options\n\n'
+                   for lanes, isa in ((4, 'avx'), (8, 'avx512f')))
+    return (_LANES_HEAD + _lanes_c(returns, 2) + '\n#ifdef SD_AVX\n' + wide
+            + '#endif  /* SD_AVX */\n\n' + _LANES_TAIL)
 
 
 def _flat(fn) -> ast.FunctionDef:
