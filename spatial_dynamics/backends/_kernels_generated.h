@@ -1299,7 +1299,7 @@ static inline void regressor_kernel(const double *K, long rows, const double *qd
 #define SD_LANES 8      /* rnea_batch_lanes is defined: up to 8 states at once */
 #include <stdint.h>
 #include <stdlib.h>
-#if defined(__x86_64__) && !defined(__clang__)
+#if defined(__x86_64__)
 #define SD_AVX 1
 #endif
 
@@ -1886,8 +1886,12 @@ static void rnea_batch_lanes2(const double *K, long rows, long N, const double *
 }
 
 #ifdef SD_AVX
+#ifdef __clang__
+#pragma clang attribute push (__attribute__((target("avx"))), apply_to = function)
+#else
 #pragma GCC push_options
 #pragma GCC target("avx")
+#endif
 typedef double sd_vd4 __attribute__((vector_size(32)));
 
 /* x in every lane. */
@@ -2469,10 +2473,18 @@ static void rnea_batch_lanes4(const double *K, long rows, long N, const double *
                 TAU[(b + s) * n + k] = tau[k][s];
     }
 }
+#ifdef __clang__
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#endif
 
+#ifdef __clang__
+#pragma clang attribute push (__attribute__((target("avx512f"))), apply_to = function)
+#else
 #pragma GCC push_options
 #pragma GCC target("avx512f")
+#endif
 typedef double sd_vd8 __attribute__((vector_size(64)));
 
 /* x in every lane. */
@@ -3054,7 +3066,11 @@ static void rnea_batch_lanes8(const double *K, long rows, long N, const double *
                 TAU[(b + s) * n + k] = tau[k][s];
     }
 }
+#ifdef __clang__
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#endif
 
 #endif  /* SD_AVX */
 

@@ -668,8 +668,8 @@ static void rnea_batch_lanes{L}(const double *K, long rows, long N, const double
 }}
 """
 
-#: How the lane kernels are compiled: two lanes (SSE2, NEON: every 64-bit target), and
-#: with GCC on x86-64 four for CPUs with AVX and eight with AVX-512F, chosen at run time.
+#: How the lane kernels are compiled: two lanes (SSE2, NEON: every 64-bit target), and on
+#: x86-64 four for CPUs with AVX and eight with AVX-512F, chosen at run time.
 _LANES_HEAD = """\
 /* ------------------------------------------------------------------------------------------
  * The same RNEA on several states at once (SIMD across the states of a batch): the kernels
@@ -680,7 +680,7 @@ _LANES_HEAD = """\
 #define SD_LANES 8      /* rnea_batch_lanes is defined: up to 8 states at once */
 #include <stdint.h>
 #include <stdlib.h>
-#if defined(__x86_64__) && !defined(__clang__)
+#if defined(__x86_64__)
 #define SD_AVX 1
 #endif
 
@@ -739,10 +739,13 @@ def _lanes_c(returns: dict, lanes: int) -> str:
 
 
 def lanes_c(returns: dict) -> str:
-    """Return the C of the lane kernels: 2 lanes everywhere, 4 with AVX, 8 with AVX-512F."""
-    wide = ''.join(f'#pragma GCC push_options\n#pragma GCC target("{isa}")\n'
-                   + _lanes_c(returns, lanes) + '#pragma GCC pop_options\n\n'
-                   for lanes, isa in ((4, 'avx'), (8, 'avx512f')))
+    """Return the C of the lane kernels: 2 lanes, and on x86-64 4 with AVX, 8 with AVX-512F."""
+    wide = ''.join(
+        '#ifdef __clang__\n#pragma clang attribute push (__attribute__((target('
+        f'"{isa}"))), apply_to = function)\n#else\n#pragma GCC push_options\n'
+        f'#pragma GCC target("{isa}")\n#endif\n' + _lanes_c(returns, lanes)
+        + '#ifdef __clang__\n#pragma clang attribute pop\n#else\n#pragma GCC pop_options\n'
+        '#endif\n\n' for lanes, isa in ((4, 'avx'), (8, 'avx512f')))
     return (_LANES_HEAD + _lanes_c(returns, 2) + '\n#ifdef SD_AVX\n' + wide
             + '#endif  /* SD_AVX */\n\n' + _LANES_TAIL)
 
