@@ -211,6 +211,99 @@ def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
             assert np.isfinite(tau).all() and np.abs(tau).max() > 0.0
 
 
+
+#: Runs the scalar kernels and each lane width of _kernels_generated.h on the states of a
+#: file (the widths this CPU has), and writes their torques after them.
+LANES_PROGRAM = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#include "_kernels_generated.h"
+int main(int argc, char **argv)
+{
+    long rows, N, n;
+    FILE *f = fopen(argv[1], "rb");
+    if (fread(&rows, sizeof rows, 1, f) != 1 || fread(&N, sizeof N, 1, f) != 1)
+        return 1;
+    double *K = malloc(sizeof(double) * rows * WIDTH);
+    if (fread(K, sizeof(double), rows * WIDTH, f) != (size_t)(rows * WIDTH))
+        return 1;
+    n = (long)K[QIDX];
+    double *S = malloc(sizeof(double) * 3 * N * n), *tau = malloc(sizeof(double) * N * n);
+    if (fread(S, sizeof(double), 3 * N * n, f) != (size_t)(3 * N * n))
+        return 1;
+    fclose(f);
+    const double *Q = S, *QD = S + N * n, *QDD = S + 2 * N * n;
+    double *work = malloc(sizeof(double) * rows * WORK);
+    sd_vd8 *lanes = aligned_alloc(64, sizeof(sd_vd8) * (rows * WORK + 4 * n));
+    f = fopen(argv[2], "wb");
+    for (long k = 0; k < N; k++) {
+        xup_kernel(K, rows, Q + k * n, work);
+        rnea_kernel(K, rows, Q + k * n, QD + k * n, QDD + k * n, 0.4, -0.3, -9.7, NULL, 0,
+                    tau + k * n, work);
+    }
+    fwrite(tau, sizeof(double), N * n, f);
+    for (int width = 2; width <= 8; width *= 2) {
+        if (width == 2)
+            rnea_batch_lanes2(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, tau, (void *)lanes);
+#ifdef SD_AVX
+        else if (width == 4 && __builtin_cpu_supports("avx"))
+            rnea_batch_lanes4(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, tau, (void *)lanes);
+        else if (width == 8 && __builtin_cpu_supports("avx512f"))
+            rnea_batch_lanes8(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, tau, (void *)lanes);
+#endif
+        else
+            continue;
+        fprintf(stderr, "%d\n", width);
+        fwrite(tau, sizeof(double), N * n, f);
+    }
+    fclose(f);
+    return 0;
+}
+"""
+
+
+@pytest.mark.parametrize('name', ['talos', 'tree'])
+def test_every_lane_width_gives_the_scalar_kernels_bits(name, rng, tmp_path):
+    """Each lane width this CPU runs (2; 4 with AVX; 8 with AVX-512F), not only the widest.
+
+    The extension runs the widest; this compiles the generated header into a small program
+    with the compiler that built the extension (-ffp-contract=off, as setup.py) and runs
+    the scalar kernels and every width on the same states.
+    """
+    import os
+    import shlex
+    import subprocess
+    import sysconfig
+    model = lane_tree() if name == 'tree' else robot(name)
+    n, lay = model.nq, layout.of(model)
+    N = 8 * 6
+    Q, QD, QDD = random_state(rng, (N,), n)
+    QD[3] = 0.0
+    QD[16:24] = QDD[16:24] = 0.0
+    rows = lay.table.shape[0]
+    with open(tmp_path / 'in', 'wb') as f:
+        f.write(np.array([rows, N], dtype=np.int64).tobytes())
+        f.write(np.ascontiguousarray(lay.table).tobytes())
+        f.write(np.concatenate([Q, QD, QDD]).tobytes())
+    (tmp_path / 'lanes.c').write_text(LANES_PROGRAM)
+    here = os.path.dirname(os.path.abspath(compiled.__file__))
+    cc = shlex.split(sysconfig.get_config_var('CC') or 'cc')
+    subprocess.run(cc + ['-O2', '-ffp-contract=off', '-I', here, str(tmp_path / 'lanes.c'),
+                         '-o', str(tmp_path / 'lanes'), '-lm'], check=True)
+    run = subprocess.run([str(tmp_path / 'lanes'), str(tmp_path / 'in'), str(tmp_path / 'out')],
+                         check=True, capture_output=True, text=True)
+    widths = [int(w) for w in run.stderr.split()]
+    assert widths[0] == 2
+    out = np.fromfile(tmp_path / 'out').reshape(1 + len(widths), N, n)
+    scalar = out[0]
+    np.testing.assert_array_equal(scalar, sd.rnea(model, Q, QD, QDD, gravity=(0.4, -0.3, -9.7)))
+    moving = (QD != 0.0).any(axis=1)
+    for width, tau in zip(widths, out[1:]):
+        np.testing.assert_array_equal(tau, scalar, err_msg=f'{width} lanes')
+        np.testing.assert_array_equal(tau[moving].view(np.int64), scalar[moving].view(np.int64),
+                                      err_msg=f'{width} lanes')
+
+
 def test_the_thread_count_does_not_change_a_bit(ext, rng):
     """The same batch on 1, 2, 3 and 64 threads (slices of other sizes), and under load."""
     model = robot('talos')
