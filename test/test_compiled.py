@@ -211,7 +211,6 @@ def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
             assert np.isfinite(tau).all() and np.abs(tau).max() > 0.0
 
 
-
 #: Runs the scalar kernels and each lane width of _kernels_generated.h on the states of a
 #: file (the widths this CPU has), and writes their torques after them.
 LANES_PROGRAM = r"""
