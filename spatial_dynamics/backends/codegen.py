@@ -29,9 +29,9 @@ The C is the flat text typed (:class:`_ToC`): integer names ``long``, the rest `
 ``K[i, j]`` is ``K[i * WIDTH + j]``, a tuple assignment evaluates every value before it
 stores one, a component product returns its values through an output array.
 
-The RNEA kernels (with the components they call) are printed a second time on vectors of
-two or four states (:class:`_ToCLanes`: SIMD across the states of a batch, GCC and Clang
-vector extensions), each lane doing the scalar kernel's operations in its order.
+The RNEA kernels (with the components they call) are printed again on vectors of 2, 4 and
+8 states (:class:`_ToCLanes`: SIMD across the states of a batch, GCC and Clang vector
+extensions), each lane doing the scalar kernel's operations in its order.
 
 Run ``python -m spatial_dynamics.backends.codegen`` after changing the source; tests
 compare the committed files with a fresh generation.
@@ -238,6 +238,7 @@ class _ToC:
         self.doubles: set = set()
         self.uses_nq = False
         self.temp = 0
+        self.typed = False              # _infer has run
 
     # -- types -----------------------------------------------------------------------------
     def _is_int(self, node) -> bool:
@@ -470,7 +471,9 @@ class _ToC:
 
     # -- the function ----------------------------------------------------------------------
     def function(self) -> str:
-        self._infer()
+        if not self.typed:
+            self._infer()
+            self.typed = True
         name = self.func.name
         targets = [t for n in ast.walk(self.func) if isinstance(n, ast.Assign)
                    for t in n.targets]
@@ -512,12 +515,12 @@ _LANE_ARRAYS = {'q', 'qd', 'qdd', 'f_body', 'tau', 'work'}
 
 
 class _ToCLanes(_ToC):
-    """Print one flat kernel a second time for ``LANES`` states at once (SIMD across states).
+    """Print one flat kernel again for ``lanes`` states at once (SIMD across states).
 
     A value derived from the state (``q``, ``qd``, ``qdd``, ``f_body``, ``work``, ``tau``) is an
-    ``sd_vd``, a GCC/Clang vector of one double per state; one read from the table (joint code,
-    parent, axis, ``Xtree``, inertia, mimic multiplier), gravity and the flags stay scalars,
-    uniform across the lanes, as do the branches on them. Each lane gets the scalar kernel's
+    ``sd_vd2`` (``sd_vd4``, ``sd_vd8``), a GCC/Clang vector of one double per state; one read
+    from the table (joint code, parent, axis, ``Xtree``, inertia, mimic multiplier), gravity
+    and the flags stay scalars, uniform across the lanes, as do the branches on them. Each lane gets the scalar kernel's
     operations in the scalar kernel's order (a scalar operand is broadcast, ``sin`` and ``cos``
     are the C library's, lane by lane), so each lane's result is the scalar kernel's to the
     bit. A test over the state (``nonzero(x)``) is true when it holds in some lane: the lanes
@@ -729,7 +732,7 @@ def _lanes_c(returns: dict, lanes: int) -> str:
             params = {a.arg for a in func.args.args if a.arg in _LANE_ARRAYS}
         printers[fn.__name__] = printer = _ToCLanes(func, returns, lanes, params, calls)
         printer._infer()
-        printer._infer = lambda: None          # typed: function() keeps these types
+        printer.typed = True
     for fn in LANE_SOURCES:
         kernels.append(printers[fn.__name__].function())
     each = {f: ', '.join(f'{f}(x[{j}])' for j in range(lanes)) for f in ('sin', 'cos')}
