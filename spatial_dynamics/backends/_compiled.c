@@ -12,7 +12,8 @@
  * batch, float32, a wrong length, other objects) returns None so that the Python caller
  * takes its general path, which validates and names the argument. Results are new numpy
  * arrays. The batch entries take C-contiguous float64 arrays prepared by the caller, release
- * the GIL and split the batch into contiguous slices over POSIX threads.
+ * the GIL and let POSIX threads claim the states chunk by chunk; the RNEA of a batch runs
+ * several states at once in the SIMD lanes of _kernels_generated.h.
  *
  * The numpy C API, version-targeted: built against numpy 2.x headers, the extension also
  * runs on numpy 1.23 and later (NPY_TARGET_VERSION; 1.23 is the oldest numpy for Python
