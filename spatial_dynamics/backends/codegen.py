@@ -696,13 +696,17 @@ static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q
     const double *QD, const double *QDD, double gx, double gy, double gz, double *TAU)
 {
     const long n = (long)K[QIDX], size = 8 * (rows * WORK + 4 * n);      /* doubles */
+    long lanes = 2;
+#ifdef SD_AVX
+    lanes = __builtin_cpu_supports("avx512f") ? 8 : __builtin_cpu_supports("avx") ? 4 : 2;
+#endif
+    if (N < lanes)
+        return 0;
     double *raw = malloc(sizeof(double) * size + 64);
     if (raw == NULL)
         return -1;
     void *work = (void *)(((uintptr_t)raw + 63) & ~(uintptr_t)63);
-    long lanes = 2;
 #ifdef SD_AVX
-    lanes = __builtin_cpu_supports("avx512f") ? 8 : __builtin_cpu_supports("avx") ? 4 : 2;
     if (lanes == 8)
         rnea_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
     else if (lanes == 4)
