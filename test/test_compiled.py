@@ -186,7 +186,8 @@ def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
     operations in the same order per lane, so a moving state's torques are its single call's
     bit for bit. A state at rest in a group with a moving one takes the general path, whose
     extra products are exact zeros: equal values (a zero's sign aside). The batch size leaves
-    a remainder that runs state by state; zero gravity takes the weightless path.
+    a remainder that runs state by state; zero gravity takes the weightless path; external
+    forces are the same for every state or one table per state.
     """
     model = lane_tree() if name == 'tree' else robot(name)
     n, lay = model.nq, layout.of(model)
@@ -200,11 +201,17 @@ def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
     QD[8:16] = QDD[8:16] = 0.0              # a whole group of lanes: gravity only
     QD[17] = QDD[17] = 0.0                  # gravity only, beside moving states
     moving = (QD != 0.0).any(axis=1)
-    for g in ((0.4, -0.3, -9.7), (0.0, 0.0, 0.0)):
+    rows = lay.table.shape[0]
+    each = rng.normal(0.0, 5.0, (N, rows, 6))
+    for g, fext in (((0.4, -0.3, -9.7), None), ((0.0, 0.0, 0.0), None),
+                    ((0.4, -0.3, -9.7), each[0]), ((0.0, 0.0, -9.8), each)):
         for threads in (1, 2):
             tau = np.empty((N, n))
-            ext.rnea_batch(lay.kernels, N, Q, QD, QDD, g, None, tau, threads)
-            one = np.array([ext.rnea(lay.kernels, Q[s], QD[s], QDD[s], g) for s in range(N)])
+            ext.rnea_batch(lay.kernels, N, Q, QD, QDD, g, fext, tau, threads)
+            one = np.array([ext.rnea(lay.kernels, Q[s], QD[s], QDD[s], g,
+                                     *(() if fext is None else (fext[s] if fext.ndim == 3
+                                                                else fext,)))
+                            for s in range(N)])
             np.testing.assert_array_equal(tau, one)
             np.testing.assert_array_equal(tau[moving].view(np.int64),
                                           one[moving].view(np.int64))
@@ -212,7 +219,8 @@ def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
 
 
 #: Runs the scalar kernels and each lane width of _kernels_generated.h on the states of a
-#: file (the widths this CPU has), and writes their torques after them.
+#: file (the widths this CPU has), without and with external forces (a table per state),
+#: and writes their torques.
 LANES_PROGRAM = r"""
 #include <stdio.h>
 #include <stdlib.h>
@@ -227,33 +235,41 @@ int main(int argc, char **argv)
     if (fread(K, sizeof(double), rows * WIDTH, f) != (size_t)(rows * WIDTH))
         return 1;
     n = (long)K[QIDX];
-    double *S = malloc(sizeof(double) * 3 * N * n), *tau = malloc(sizeof(double) * N * n);
-    if (fread(S, sizeof(double), 3 * N * n, f) != (size_t)(3 * N * n))
+    const long size = 3 * N * n + N * rows * 6;
+    double *S = malloc(sizeof(double) * size), *tau = malloc(sizeof(double) * N * n);
+    if (fread(S, sizeof(double), size, f) != (size_t)size)
         return 1;
     fclose(f);
-    const double *Q = S, *QD = S + N * n, *QDD = S + 2 * N * n;
+    const double *Q = S, *QD = S + N * n, *QDD = S + 2 * N * n, *FE = S + 3 * N * n;
     double *work = malloc(sizeof(double) * rows * WORK);
-    sd_vd8 *lanes = aligned_alloc(64, sizeof(sd_vd8) * (rows * WORK + 4 * n));
+    sd_vd8 *lanes = aligned_alloc(64, sizeof(sd_vd8) * (rows * WORK + 4 * n + 6 * rows));
     f = fopen(argv[2], "wb");
-    for (long k = 0; k < N; k++) {
-        xup_kernel(K, rows, Q + k * n, work);
-        rnea_kernel(K, rows, Q + k * n, QD + k * n, QDD + k * n, 0.4, -0.3, -9.7, NULL, 0,
-                    tau + k * n, work);
-    }
-    fwrite(tau, sizeof(double), N * n, f);
-    for (int width = 2; width <= 8; width *= 2) {
-        if (width == 2)
-            rnea_batch_lanes2(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, tau, (void *)lanes);
-#ifdef SD_AVX
-        else if (width == 4 && __builtin_cpu_supports("avx"))
-            rnea_batch_lanes4(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, tau, (void *)lanes);
-        else if (width == 8 && __builtin_cpu_supports("avx512f"))
-            rnea_batch_lanes8(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, tau, (void *)lanes);
-#endif
-        else
-            continue;
-        fprintf(stderr, "%d\n", width);
+    for (int with_f = 0; with_f < 2; with_f++) {
+        const double *F = with_f ? FE : NULL;
+        for (long k = 0; k < N; k++) {
+            xup_kernel(K, rows, Q + k * n, work);
+            rnea_kernel(K, rows, Q + k * n, QD + k * n, QDD + k * n, 0.4, -0.3, -9.7,
+                        F ? F + k * rows * 6 : NULL, with_f, tau + k * n, work);
+        }
         fwrite(tau, sizeof(double), N * n, f);
+        for (int width = 2; width <= 8; width *= 2) {
+            if (width == 2)
+                rnea_batch_lanes2(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, F, 1, tau,
+                                  (void *)lanes);
+#ifdef SD_AVX
+            else if (width == 4 && __builtin_cpu_supports("avx"))
+                rnea_batch_lanes4(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, F, 1, tau,
+                                  (void *)lanes);
+            else if (width == 8 && __builtin_cpu_supports("avx512f"))
+                rnea_batch_lanes8(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, F, 1, tau,
+                                  (void *)lanes);
+#endif
+            else
+                continue;
+            if (!with_f)
+                fprintf(stderr, "%d\n", width);
+            fwrite(tau, sizeof(double), N * n, f);
+        }
     }
     fclose(f);
     return 0;
@@ -267,7 +283,7 @@ def test_every_lane_width_gives_the_scalar_kernels_bits(name, rng, tmp_path):
 
     The extension runs the widest; this compiles the generated header into a small program
     with the compiler that built the extension (-ffp-contract=off, as setup.py) and runs
-    the scalar kernels and every width on the same states.
+    the scalar kernels and every width on the same states, without and with external forces.
     """
     import os
     import shlex
@@ -284,6 +300,7 @@ def test_every_lane_width_gives_the_scalar_kernels_bits(name, rng, tmp_path):
         f.write(np.array([rows, N], dtype=np.int64).tobytes())
         f.write(np.ascontiguousarray(lay.table).tobytes())
         f.write(np.concatenate([Q, QD, QDD]).tobytes())
+        f.write(rng.normal(0.0, 5.0, (N, rows, 6)).tobytes())
     (tmp_path / 'lanes.c').write_text(LANES_PROGRAM)
     here = os.path.dirname(os.path.abspath(compiled.__file__))
     cc = shlex.split(sysconfig.get_config_var('CC') or 'cc')
@@ -293,14 +310,16 @@ def test_every_lane_width_gives_the_scalar_kernels_bits(name, rng, tmp_path):
                          check=True, capture_output=True, text=True)
     widths = [int(w) for w in run.stderr.split()]
     assert widths[0] == 2
-    out = np.fromfile(tmp_path / 'out').reshape(1 + len(widths), N, n)
-    scalar = out[0]
-    np.testing.assert_array_equal(scalar, sd.rnea(model, Q, QD, QDD, gravity=(0.4, -0.3, -9.7)))
+    out = np.fromfile(tmp_path / 'out').reshape(2, 1 + len(widths), N, n)
+    np.testing.assert_array_equal(out[0, 0],
+                                  sd.rnea(model, Q, QD, QDD, gravity=(0.4, -0.3, -9.7)))
+    assert not np.array_equal(out[0, 0], out[1, 0])          # the forces count
     moving = (QD != 0.0).any(axis=1)
-    for width, tau in zip(widths, out[1:]):
-        np.testing.assert_array_equal(tau, scalar, err_msg=f'{width} lanes')
-        np.testing.assert_array_equal(tau[moving].view(np.int64), scalar[moving].view(np.int64),
-                                      err_msg=f'{width} lanes')
+    for scalar, *lanes in out:
+        for width, tau in zip(widths, lanes):
+            np.testing.assert_array_equal(tau, scalar, err_msg=f'{width} lanes')
+            np.testing.assert_array_equal(tau[moving].view(np.int64),
+                                          scalar[moving].view(np.int64), err_msg=f'{width} lanes')
 
 
 def test_the_thread_count_does_not_change_a_bit(ext, rng):

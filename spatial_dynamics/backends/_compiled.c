@@ -611,11 +611,12 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
     if (work == NULL)
         return -1;
 #ifdef SD_LANES
-    if (s->kind == RNEA && s->fext == NULL) {
+    if (s->kind == RNEA) {
         /* several states at once (SIMD across states), the same bits as one by one */
+        const double *f = s->fext ? s->fext + (s->fext_per_state ? lo : 0) * rows * 6 : NULL;
         long done = rnea_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
                                      s->qd + lo * n, s->qdd + lo * n, s->g[0], s->g[1],
-                                     s->g[2], s->out1 + lo * n);
+                                     s->g[2], f, s->fext_per_state, s->out1 + lo * n);
         if (done < 0)
             return -1;
         lo += done;

@@ -1860,16 +1860,18 @@ static inline void rnea_kernel_lanes2(const double *K, long rows, const sd_vd2 *
     }
 }
 
-/* RNEA without external forces of the states [0, N - N % 2) of a batch, 2 at a time: rows
- * of Q, QD, QDD (n numbers each) into the same rows of TAU; `work` holds rows * WORK + 4 n
- * vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel on
- * that state alone. */
+/* RNEA of the states [0, N - N % 2) of a batch, 2 at a time: rows of Q, QD, QDD (n numbers
+ * each) into the same rows of TAU, with the external forces F (rows x 6 numbers for every
+ * state, or for each state with F_each) or none (NULL); `work` holds rows * WORK + 4 n +
+ * 6 rows vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel
+ * on that state alone. */
 static void rnea_batch_lanes2(const double *K, long rows, long N, const double *Q,
-    const double *QD, const double *QDD, double gx, double gy, double gz, double *TAU,
-    sd_vd2 *work)
+    const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
+    long F_each, double *TAU, sd_vd2 *work)
 {
     const long n = (long)K[QIDX];
     sd_vd2 *q = work + rows * WORK, *qd = q + n, *qdd = qd + n, *tau = qdd + n;
+    sd_vd2 *f_body = tau + n;
     for (long b = 0; b + 2 <= N; b += 2) {
         for (long k = 0; k < n; k++)
             for (int s = 0; s < 2; s++) {
@@ -1877,8 +1879,11 @@ static void rnea_batch_lanes2(const double *K, long rows, long N, const double *
                 qd[k][s] = QD[(b + s) * n + k];
                 qdd[k][s] = QDD[(b + s) * n + k];
             }
+        for (long k = 0; F != NULL && k < rows * 6; k++)
+            for (int s = 0; s < 2; s++)
+                f_body[k][s] = F[(F_each ? b + s : 0) * rows * 6 + k];
         xup_kernel_lanes2(K, rows, q, work);
-        rnea_kernel_lanes2(K, rows, q, qd, qdd, gx, gy, gz, NULL, 0, tau, work);
+        rnea_kernel_lanes2(K, rows, q, qd, qdd, gx, gy, gz, f_body, F != NULL, tau, work);
         for (long k = 0; k < n; k++)
             for (int s = 0; s < 2; s++)
                 TAU[(b + s) * n + k] = tau[k][s];
@@ -2449,16 +2454,18 @@ static inline void rnea_kernel_lanes4(const double *K, long rows, const sd_vd4 *
     }
 }
 
-/* RNEA without external forces of the states [0, N - N % 4) of a batch, 4 at a time: rows
- * of Q, QD, QDD (n numbers each) into the same rows of TAU; `work` holds rows * WORK + 4 n
- * vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel on
- * that state alone. */
+/* RNEA of the states [0, N - N % 4) of a batch, 4 at a time: rows of Q, QD, QDD (n numbers
+ * each) into the same rows of TAU, with the external forces F (rows x 6 numbers for every
+ * state, or for each state with F_each) or none (NULL); `work` holds rows * WORK + 4 n +
+ * 6 rows vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel
+ * on that state alone. */
 static void rnea_batch_lanes4(const double *K, long rows, long N, const double *Q,
-    const double *QD, const double *QDD, double gx, double gy, double gz, double *TAU,
-    sd_vd4 *work)
+    const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
+    long F_each, double *TAU, sd_vd4 *work)
 {
     const long n = (long)K[QIDX];
     sd_vd4 *q = work + rows * WORK, *qd = q + n, *qdd = qd + n, *tau = qdd + n;
+    sd_vd4 *f_body = tau + n;
     for (long b = 0; b + 4 <= N; b += 4) {
         for (long k = 0; k < n; k++)
             for (int s = 0; s < 4; s++) {
@@ -2466,8 +2473,11 @@ static void rnea_batch_lanes4(const double *K, long rows, long N, const double *
                 qd[k][s] = QD[(b + s) * n + k];
                 qdd[k][s] = QDD[(b + s) * n + k];
             }
+        for (long k = 0; F != NULL && k < rows * 6; k++)
+            for (int s = 0; s < 4; s++)
+                f_body[k][s] = F[(F_each ? b + s : 0) * rows * 6 + k];
         xup_kernel_lanes4(K, rows, q, work);
-        rnea_kernel_lanes4(K, rows, q, qd, qdd, gx, gy, gz, NULL, 0, tau, work);
+        rnea_kernel_lanes4(K, rows, q, qd, qdd, gx, gy, gz, f_body, F != NULL, tau, work);
         for (long k = 0; k < n; k++)
             for (int s = 0; s < 4; s++)
                 TAU[(b + s) * n + k] = tau[k][s];
@@ -3042,16 +3052,18 @@ static inline void rnea_kernel_lanes8(const double *K, long rows, const sd_vd8 *
     }
 }
 
-/* RNEA without external forces of the states [0, N - N % 8) of a batch, 8 at a time: rows
- * of Q, QD, QDD (n numbers each) into the same rows of TAU; `work` holds rows * WORK + 4 n
- * vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel on
- * that state alone. */
+/* RNEA of the states [0, N - N % 8) of a batch, 8 at a time: rows of Q, QD, QDD (n numbers
+ * each) into the same rows of TAU, with the external forces F (rows x 6 numbers for every
+ * state, or for each state with F_each) or none (NULL); `work` holds rows * WORK + 4 n +
+ * 6 rows vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel
+ * on that state alone. */
 static void rnea_batch_lanes8(const double *K, long rows, long N, const double *Q,
-    const double *QD, const double *QDD, double gx, double gy, double gz, double *TAU,
-    sd_vd8 *work)
+    const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
+    long F_each, double *TAU, sd_vd8 *work)
 {
     const long n = (long)K[QIDX];
     sd_vd8 *q = work + rows * WORK, *qd = q + n, *qdd = qd + n, *tau = qdd + n;
+    sd_vd8 *f_body = tau + n;
     for (long b = 0; b + 8 <= N; b += 8) {
         for (long k = 0; k < n; k++)
             for (int s = 0; s < 8; s++) {
@@ -3059,8 +3071,11 @@ static void rnea_batch_lanes8(const double *K, long rows, long N, const double *
                 qd[k][s] = QD[(b + s) * n + k];
                 qdd[k][s] = QDD[(b + s) * n + k];
             }
+        for (long k = 0; F != NULL && k < rows * 6; k++)
+            for (int s = 0; s < 8; s++)
+                f_body[k][s] = F[(F_each ? b + s : 0) * rows * 6 + k];
         xup_kernel_lanes8(K, rows, q, work);
-        rnea_kernel_lanes8(K, rows, q, qd, qdd, gx, gy, gz, NULL, 0, tau, work);
+        rnea_kernel_lanes8(K, rows, q, qd, qdd, gx, gy, gz, f_body, F != NULL, tau, work);
         for (long k = 0; k < n; k++)
             for (int s = 0; s < 8; s++)
                 TAU[(b + s) * n + k] = tau[k][s];
@@ -3074,12 +3089,13 @@ static void rnea_batch_lanes8(const double *K, long rows, long N, const double *
 
 #endif  /* SD_AVX */
 
-/* RNEA without external forces of the first states of a batch of N (see above) in lanes:
- * the number of states done (N rounded down to the lanes), or -1 without memory. */
+/* RNEA of the first states of a batch of N (see above) in lanes: the number of states done
+ * (N rounded down to the lanes), or -1 without memory. */
 static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q,
-    const double *QD, const double *QDD, double gx, double gy, double gz, double *TAU)
+    const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
+    long F_each, double *TAU)
 {
-    const long n = (long)K[QIDX], size = 8 * (rows * WORK + 4 * n);      /* doubles */
+    const long n = (long)K[QIDX], size = 8 * (rows * WORK + 4 * n + 6 * rows);   /* doubles */
     long lanes = 2;
 #ifdef SD_AVX
     lanes = __builtin_cpu_supports("avx512f") ? 8 : __builtin_cpu_supports("avx") ? 4 : 2;
@@ -3092,12 +3108,12 @@ static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q
     void *work = (void *)(((uintptr_t)raw + 63) & ~(uintptr_t)63);
 #ifdef SD_AVX
     if (lanes == 8)
-        rnea_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
+        rnea_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, TAU, work);
     else if (lanes == 4)
-        rnea_batch_lanes4(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
+        rnea_batch_lanes4(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, TAU, work);
     else
 #endif
-        rnea_batch_lanes2(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
+        rnea_batch_lanes2(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, TAU, work);
     free(raw);
     return N - N % lanes;
 }

@@ -645,16 +645,18 @@ static inline sd_vd{L} sd_cos{L}(sd_vd{L} x)
 
 {kernels}
 
-/* RNEA without external forces of the states [0, N - N % {L}) of a batch, {L} at a time: rows
- * of Q, QD, QDD (n numbers each) into the same rows of TAU; `work` holds rows * WORK + 4 n
- * vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel on
- * that state alone. */
+/* RNEA of the states [0, N - N % {L}) of a batch, {L} at a time: rows of Q, QD, QDD (n numbers
+ * each) into the same rows of TAU, with the external forces F (rows x 6 numbers for every
+ * state, or for each state with F_each) or none (NULL); `work` holds rows * WORK + 4 n +
+ * 6 rows vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel
+ * on that state alone. */
 static void rnea_batch_lanes{L}(const double *K, long rows, long N, const double *Q,
-    const double *QD, const double *QDD, double gx, double gy, double gz, double *TAU,
-    sd_vd{L} *work)
+    const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
+    long F_each, double *TAU, sd_vd{L} *work)
 {{
     const long n = (long)K[QIDX];
     sd_vd{L} *q = work + rows * WORK, *qd = q + n, *qdd = qd + n, *tau = qdd + n;
+    sd_vd{L} *f_body = tau + n;
     for (long b = 0; b + {L} <= N; b += {L}) {{
         for (long k = 0; k < n; k++)
             for (int s = 0; s < {L}; s++) {{
@@ -662,8 +664,11 @@ static void rnea_batch_lanes{L}(const double *K, long rows, long N, const double
                 qd[k][s] = QD[(b + s) * n + k];
                 qdd[k][s] = QDD[(b + s) * n + k];
             }}
+        for (long k = 0; F != NULL && k < rows * 6; k++)
+            for (int s = 0; s < {L}; s++)
+                f_body[k][s] = F[(F_each ? b + s : 0) * rows * 6 + k];
         xup_kernel_lanes{L}(K, rows, q, work);
-        rnea_kernel_lanes{L}(K, rows, q, qd, qdd, gx, gy, gz, NULL, 0, tau, work);
+        rnea_kernel_lanes{L}(K, rows, q, qd, qdd, gx, gy, gz, f_body, F != NULL, tau, work);
         for (long k = 0; k < n; k++)
             for (int s = 0; s < {L}; s++)
                 TAU[(b + s) * n + k] = tau[k][s];
@@ -690,12 +695,13 @@ _LANES_HEAD = """\
 """
 
 _LANES_TAIL = """\
-/* RNEA without external forces of the first states of a batch of N (see above) in lanes:
- * the number of states done (N rounded down to the lanes), or -1 without memory. */
+/* RNEA of the first states of a batch of N (see above) in lanes: the number of states done
+ * (N rounded down to the lanes), or -1 without memory. */
 static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q,
-    const double *QD, const double *QDD, double gx, double gy, double gz, double *TAU)
+    const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
+    long F_each, double *TAU)
 {
-    const long n = (long)K[QIDX], size = 8 * (rows * WORK + 4 * n);      /* doubles */
+    const long n = (long)K[QIDX], size = 8 * (rows * WORK + 4 * n + 6 * rows);   /* doubles */
     long lanes = 2;
 #ifdef SD_AVX
     lanes = __builtin_cpu_supports("avx512f") ? 8 : __builtin_cpu_supports("avx") ? 4 : 2;
@@ -708,12 +714,12 @@ static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q
     void *work = (void *)(((uintptr_t)raw + 63) & ~(uintptr_t)63);
 #ifdef SD_AVX
     if (lanes == 8)
-        rnea_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
+        rnea_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, TAU, work);
     else if (lanes == 4)
-        rnea_batch_lanes4(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
+        rnea_batch_lanes4(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, TAU, work);
     else
 #endif
-        rnea_batch_lanes2(K, rows, N, Q, QD, QDD, gx, gy, gz, TAU, work);
+        rnea_batch_lanes2(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, TAU, work);
     free(raw);
     return N - N % lanes;
 }
