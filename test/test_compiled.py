@@ -11,7 +11,9 @@
   None) — no form falls back to a slower path;
 - a batch split over threads (the batch entries release the GIL) equals the single calls
   state by state, bit for bit (to 1e-12 with external wrenches), also for batch sizes that
-  do not divide evenly and for several Python threads calling at once.
+  do not divide evenly and for several Python threads calling at once; so does a batch run
+  in SIMD lanes, on the robots and a random tree with general axes, prismatic and mimic
+  joints.
 """
 
 import array
@@ -166,6 +168,158 @@ def test_a_batch_over_threads_equals_the_single_calls(name, N, rng):
         p, ctq = sd.generalized_momentum(model, Q[s], QD[s])
         np.testing.assert_array_equal(P[s], p)
         np.testing.assert_array_equal(CTQ[s], ctq)
+
+
+@functools.lru_cache(maxsize=None)
+def lane_tree():
+    """Return a random tree with general axes, prismatic and mimic joints (mult, offset)."""
+    from urdf_gen import random_tree_urdf
+    return sd.Model.from_urdf(random_tree_urdf(np.random.default_rng(5), 12, branching=True,
+                                               mimic=True))
+
+
+@pytest.mark.parametrize('name', ['ur5', 'panda', 'talos', 'tree'])
+def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
+    """A batch runs its states in SIMD lanes (2; 4 with AVX, 8 with AVX-512F), bit for bit.
+
+    The lane kernels are the scalar ones printed on vectors (backends/codegen.py): the same
+    operations in the same order per lane, so a moving state's torques are its single call's
+    bit for bit. A state at rest in a group with a moving one takes the general path, whose
+    extra products are exact zeros: equal values (a zero's sign aside). The batch size leaves
+    a remainder that runs state by state; zero gravity takes the weightless path; external
+    forces are the same for every state or one table per state.
+    """
+    model = lane_tree() if name == 'tree' else robot(name)
+    n, lay = model.nq, layout.of(model)
+    if name == 'tree':
+        codes = lay.table[1:, layout.COLUMN['code']]
+        mul = lay.table[1:, layout.COLUMN['mul']]
+        assert {3, 4} <= set(codes.tolist()) and (mul != 1.0).any()   # RA, PR, mimic
+    N = 8 * 5 + 7
+    Q, QD, QDD = random_state(rng, (N,), n)
+    QD[5] = 0.0                             # at rest, accelerating, beside moving states
+    QD[8:16] = QDD[8:16] = 0.0              # a whole group of lanes: gravity only
+    QD[17] = QDD[17] = 0.0                  # gravity only, beside moving states
+    moving = (QD != 0.0).any(axis=1)
+    rows = lay.table.shape[0]
+    each = rng.normal(0.0, 5.0, (N, rows, 6))
+    for g, fext in (((0.4, -0.3, -9.7), None), ((0.0, 0.0, 0.0), None),
+                    ((0.4, -0.3, -9.7), each[0]), ((0.0, 0.0, -9.8), each)):
+        for threads in (1, 2):
+            tau = np.empty((N, n))
+            ext.rnea_batch(lay.kernels, N, Q, QD, QDD, g, fext, tau, threads)
+            one = np.array([ext.rnea(lay.kernels, Q[s], QD[s], QDD[s], g,
+                                     *(() if fext is None else (fext[s] if fext.ndim == 3
+                                                                else fext,)))
+                            for s in range(N)])
+            np.testing.assert_array_equal(tau, one)
+            np.testing.assert_array_equal(tau[moving].view(np.int64),
+                                          one[moving].view(np.int64))
+            assert np.isfinite(tau).all() and np.abs(tau).max() > 0.0
+
+
+#: Runs the scalar kernels and each lane width of _kernels_generated.h on the states of a
+#: file (the widths this CPU has), without and with external forces (a table per state),
+#: and writes their torques.
+LANES_PROGRAM = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#include "_kernels_generated.h"
+int main(int argc, char **argv)
+{
+    long rows, N, n;
+    FILE *f = fopen(argv[1], "rb");
+    if (fread(&rows, sizeof rows, 1, f) != 1 || fread(&N, sizeof N, 1, f) != 1)
+        return 1;
+    double *K = malloc(sizeof(double) * rows * WIDTH);
+    if (fread(K, sizeof(double), rows * WIDTH, f) != (size_t)(rows * WIDTH))
+        return 1;
+    n = (long)K[QIDX];
+    const long size = 3 * N * n + N * rows * 6;
+    double *S = malloc(sizeof(double) * size), *tau = malloc(sizeof(double) * N * n);
+    if (fread(S, sizeof(double), size, f) != (size_t)size)
+        return 1;
+    fclose(f);
+    const double *Q = S, *QD = S + N * n, *QDD = S + 2 * N * n, *FE = S + 3 * N * n;
+    double *work = malloc(sizeof(double) * rows * WORK);
+    sd_vd8 *lanes = aligned_alloc(64, sizeof(sd_vd8) * (rows * WORK + 4 * n + 6 * rows));
+    f = fopen(argv[2], "wb");
+    for (int with_f = 0; with_f < 2; with_f++) {
+        const double *F = with_f ? FE : NULL;
+        for (long k = 0; k < N; k++) {
+            xup_kernel(K, rows, Q + k * n, work);
+            rnea_kernel(K, rows, Q + k * n, QD + k * n, QDD + k * n, 0.4, -0.3, -9.7,
+                        F ? F + k * rows * 6 : NULL, with_f, tau + k * n, work);
+        }
+        fwrite(tau, sizeof(double), N * n, f);
+        for (int width = 2; width <= 8; width *= 2) {
+            if (width == 2)
+                rnea_batch_lanes2(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, F, 1, tau,
+                                  (void *)lanes);
+#ifdef SD_AVX
+            else if (width == 4 && __builtin_cpu_supports("avx"))
+                rnea_batch_lanes4(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, F, 1, tau,
+                                  (void *)lanes);
+            else if (width == 8 && __builtin_cpu_supports("avx512f"))
+                rnea_batch_lanes8(K, rows, N, Q, QD, QDD, 0.4, -0.3, -9.7, F, 1, tau,
+                                  (void *)lanes);
+#endif
+            else
+                continue;
+            if (!with_f)
+                fprintf(stderr, "%d\n", width);
+            fwrite(tau, sizeof(double), N * n, f);
+        }
+    }
+    fclose(f);
+    return 0;
+}
+"""
+
+
+@pytest.mark.parametrize('name', ['talos', 'tree'])
+def test_every_lane_width_gives_the_scalar_kernels_bits(name, rng, tmp_path):
+    """Each lane width this CPU runs (2; 4 with AVX; 8 with AVX-512F), not only the widest.
+
+    The extension runs the widest; this compiles the generated header into a small program
+    with the compiler that built the extension (-ffp-contract=off, as setup.py) and runs
+    the scalar kernels and every width on the same states, without and with external forces.
+    """
+    import os
+    import shlex
+    import subprocess
+    import sysconfig
+    model = lane_tree() if name == 'tree' else robot(name)
+    n, lay = model.nq, layout.of(model)
+    N = 8 * 6
+    Q, QD, QDD = random_state(rng, (N,), n)
+    QD[3] = 0.0
+    QD[16:24] = QDD[16:24] = 0.0
+    rows = lay.table.shape[0]
+    with open(tmp_path / 'in', 'wb') as f:
+        f.write(np.array([rows, N], dtype=np.int64).tobytes())
+        f.write(np.ascontiguousarray(lay.table).tobytes())
+        f.write(np.concatenate([Q, QD, QDD]).tobytes())
+        f.write(rng.normal(0.0, 5.0, (N, rows, 6)).tobytes())
+    (tmp_path / 'lanes.c').write_text(LANES_PROGRAM)
+    here = os.path.dirname(os.path.abspath(compiled.__file__))
+    cc = shlex.split(sysconfig.get_config_var('CC') or 'cc')
+    subprocess.run(cc + ['-O2', '-ffp-contract=off', '-I', here, str(tmp_path / 'lanes.c'),
+                         '-o', str(tmp_path / 'lanes'), '-lm'], check=True)
+    run = subprocess.run([str(tmp_path / 'lanes'), str(tmp_path / 'in'), str(tmp_path / 'out')],
+                         check=True, capture_output=True, text=True)
+    widths = [int(w) for w in run.stderr.split()]
+    assert widths[0] == 2
+    out = np.fromfile(tmp_path / 'out').reshape(2, 1 + len(widths), N, n)
+    np.testing.assert_array_equal(out[0, 0],
+                                  sd.rnea(model, Q, QD, QDD, gravity=(0.4, -0.3, -9.7)))
+    assert not np.array_equal(out[0, 0], out[1, 0])          # the forces count
+    moving = (QD != 0.0).any(axis=1)
+    for scalar, *lanes in out:
+        for width, tau in zip(widths, lanes):
+            np.testing.assert_array_equal(tau, scalar, err_msg=f'{width} lanes')
+            np.testing.assert_array_equal(tau[moving].view(np.int64),
+                                          scalar[moving].view(np.int64), err_msg=f'{width} lanes')
 
 
 def test_the_thread_count_does_not_change_a_bit(ext, rng):

@@ -12,7 +12,8 @@
  * batch, float32, a wrong length, other objects) returns None so that the Python caller
  * takes its general path, which validates and names the argument. Results are new numpy
  * arrays. The batch entries take C-contiguous float64 arrays prepared by the caller, release
- * the GIL and split the batch into contiguous slices over POSIX threads.
+ * the GIL and let POSIX threads claim the states chunk by chunk; the RNEA of a batch runs
+ * several states at once in the SIMD lanes of _kernels_generated.h.
  *
  * The numpy C API, version-targeted: built against numpy 2.x headers, the extension also
  * runs on numpy 1.23 and later (NPY_TARGET_VERSION; 1.23 is the oldest numpy for Python
@@ -46,6 +47,11 @@
  * must cost less than what it takes over. */
 #define MAX_THREADS 64
 #define MIN_WORK 4096
+/* The threads of a batch claim its states a chunk at a time, about CHUNK_WORK body-states
+ * (~25 us) in a multiple of 8 states (the widest SIMD lanes): a thread that a busy machine
+ * holds back leaves the rest to the others, and the lanes group the same states whatever
+ * the thread count. */
+#define CHUNK_WORK 1024
 
 /* ------------------------------------------------------------------------------------------
  * Kernels: one model's table */
@@ -572,23 +578,51 @@ typedef struct {
     int fext_per_state;
     double g[3];
     double *out1, *out2;                 /* tau | H | mom, ctq | Y */
-    Py_ssize_t lo, hi;                   /* the slice of states [lo, hi) */
-    int failed;                          /* no memory for the scratch */
 } Slice;
 
-static void *
-run_slice(void *arg)
+#if !defined(_WIN32) && (defined(__GNUC__) || defined(__clang__))
+#define THREADED 1
+#define ATOMIC_ADD(p, x) __atomic_add_fetch((p), (x), __ATOMIC_ACQ_REL)
+#else
+#define ATOMIC_ADD(p, x) (*(p) += (x))     /* one thread: run_batch starts no other */
+#endif
+
+/* One batch as its threads share it: the states [0, N) claimed chunk by chunk. The caller
+ * waits until every state is done, not for the threads: a thread that a busy machine starts
+ * late finds nothing left and ends; the last thread out frees this. */
+typedef struct {
+    Slice job;
+    Py_ssize_t N, chunk;
+    Py_ssize_t next;                     /* the first state not claimed yet */
+    Py_ssize_t done;                     /* states finished */
+    int failed;                          /* chunks left undone (no memory for a scratch) */
+    int refs;                            /* threads (the caller's included) holding this */
+#ifdef THREADED
+    pthread_mutex_t lock;
+    pthread_cond_t finished;
+#endif
+} Batch;
+
+/* The states [lo, hi) of job s with the scratch `work`: 0, or -1 without memory. */
+static int
+run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
 {
-    Slice *s = (Slice *)arg;
     const long n = s->n, rows = s->rows;
-    /* the regressor's carried axes after the per-body scratch */
-    double *work = malloc(sizeof(double) * (rows * WORK
-                                            + (s->kind == REGRESSOR ? 6 * rows * rows : 0)));
-    if (work == NULL) {
-        s->failed = 1;
-        return NULL;
+    if (work == NULL)
+        return -1;
+#ifdef SD_LANES
+    if (s->kind == RNEA) {
+        /* several states at once (SIMD across states), the same bits as one by one */
+        const double *f = s->fext ? s->fext + (s->fext_per_state ? lo : 0) * rows * 6 : NULL;
+        long done = rnea_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
+                                     s->qd + lo * n, s->qdd + lo * n, s->g[0], s->g[1],
+                                     s->g[2], f, s->fext_per_state, s->out1 + lo * n);
+        if (done < 0)
+            return -1;
+        lo += done;
     }
-    for (Py_ssize_t k = s->lo; k < s->hi; k++) {
+#endif
+    for (Py_ssize_t k = lo; k < hi; k++) {
         const double *q = s->q + k * n;
         xup_kernel(s->K, rows, q, work);
         if (s->kind == RNEA) {
@@ -606,44 +640,110 @@ run_slice(void *arg)
                             work);
         }
     }
+    return 0;
+}
+
+/* Claim chunks of b until none is left, and count them done (a chunk without memory too:
+ * then b->failed). The thread that finishes the last state wakes the caller. */
+static void
+run_chunks(Batch *b)
+{
+    const Slice *s = &b->job;
+    const long rows = s->rows;
+    /* the regressor's carried axes after the per-body scratch */
+    double *work = malloc(sizeof(double) * (rows * WORK
+                                            + (s->kind == REGRESSOR ? 6 * rows * rows : 0)));
+    for (;;) {
+        Py_ssize_t lo = ATOMIC_ADD(&b->next, b->chunk) - b->chunk;
+        if (lo >= b->N)
+            break;
+        Py_ssize_t hi = b->N - lo < b->chunk ? b->N : lo + b->chunk;
+        if (run_states(s, work, lo, hi) < 0)
+            ATOMIC_ADD(&b->failed, 1);
+        if (ATOMIC_ADD(&b->done, hi - lo) == b->N) {
+#ifdef THREADED
+            pthread_mutex_lock(&b->lock);
+            pthread_cond_broadcast(&b->finished);
+            pthread_mutex_unlock(&b->lock);
+#endif
+        }
+    }
     free(work);
+}
+
+/* Let go of b; the last thread frees it. */
+static void
+release_batch(Batch *b)
+{
+    if (ATOMIC_ADD(&b->refs, -1) == 0) {
+#ifdef THREADED
+        pthread_mutex_destroy(&b->lock);
+        pthread_cond_destroy(&b->finished);
+#endif
+        free(b);
+    }
+}
+
+#ifdef THREADED
+static void *
+run_thread(void *arg)
+{
+    run_chunks((Batch *)arg);
+    release_batch((Batch *)arg);
     return NULL;
 }
+#endif
 
 /* Run states [0, N) of `job` on up to `threads` threads (the caller's included). */
 static int
 run_batch(const Slice *job, Py_ssize_t N, long threads)
 {
-    Slice slices[MAX_THREADS];
     long T = threads < 1 ? 1 : (threads > MAX_THREADS ? MAX_THREADS : threads);
     Py_ssize_t most = N * job->rows / MIN_WORK;
     if (T > most)
         T = most > 0 ? (long)most : 1;
-    int failed = 0;
+    Batch *b = calloc(1, sizeof(Batch));
+    if (b == NULL) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    b->job = *job;
+    b->N = N;
+    b->chunk = (CHUNK_WORK / job->rows + 7) / 8 * 8;
+    if (b->chunk < 8)
+        b->chunk = 8;
+    b->refs = 1;
+    int failed;
     Py_BEGIN_ALLOW_THREADS
-    for (long t = 0; t < T; t++) {
-        slices[t] = *job;
-        slices[t].lo = N * t / T;
-        slices[t].hi = N * (t + 1) / T;
+#ifdef THREADED
+    pthread_mutex_init(&b->lock, NULL);
+    pthread_cond_init(&b->finished, NULL);
+    pthread_attr_t attr;
+    int detached = T > 1 && pthread_attr_init(&attr) == 0;
+    if (detached && pthread_attr_setdetachstate(&attr, PTHREAD_CREATE_DETACHED) != 0) {
+        pthread_attr_destroy(&attr);
+        detached = 0;
     }
-#ifndef _WIN32
-    pthread_t ids[MAX_THREADS];
-    int started[MAX_THREADS] = {0};
-    for (long t = 1; t < T; t++)
-        started[t] = pthread_create(&ids[t], NULL, run_slice, &slices[t]) == 0;
-    run_slice(&slices[0]);
-    for (long t = 1; t < T; t++) {
-        if (started[t])
-            pthread_join(ids[t], NULL);
-        else
-            run_slice(&slices[t]);      /* no thread to be had: run it here */
+    for (long t = 1; detached && t < T; t++) {
+        pthread_t id;
+        ATOMIC_ADD(&b->refs, 1);
+        if (pthread_create(&id, &attr, run_thread, b) != 0) {
+            ATOMIC_ADD(&b->refs, -1);   /* no thread to be had: the others take its part */
+            break;
+        }
     }
-#else
-    for (long t = 0; t < T; t++)
-        run_slice(&slices[t]);
+    if (detached)
+        pthread_attr_destroy(&attr);
 #endif
-    for (long t = 0; t < T; t++)
-        failed |= slices[t].failed;
+    run_chunks(b);
+#ifdef THREADED
+    pthread_mutex_lock(&b->lock);
+    while (__atomic_load_n(&b->done, __ATOMIC_ACQUIRE) < N)
+        pthread_cond_wait(&b->finished, &b->lock);
+    pthread_mutex_unlock(&b->lock);
+#endif
+    failed = b->failed;
+    release_batch(b);
     Py_END_ALLOW_THREADS
     if (failed) {
         PyErr_NoMemory();
