@@ -448,7 +448,7 @@ def test_nothing_is_compiled_or_written_at_run_time(kernels, tmp_path):
 
 
 PACKAGE_FILES = ('setup.py', 'setup.cfg', 'pyproject.toml', 'MANIFEST.in', 'package.xml',
-                 'README.md', 'LICENSE', 'resource', 'launch', 'config', 'spatial_dynamics')
+                 'README.md', 'LICENSE', 'resource', 'launch', 'config', 'bin', 'spatial_dynamics')
 
 
 def test_a_build_without_a_compiler_installs_and_runs_with_one_warning(tmp_path):
