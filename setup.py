@@ -16,14 +16,18 @@ from setuptools.command.build_ext import build_ext
 EXECUTABLES = ('inverse_dynamics', 'demo', 'check_urdf', 'replay', 'sim')
 
 package_name = 'spatial_dynamics'
+HERE = os.path.dirname(os.path.abspath(__file__))
 #: The kernels generated from spatial_dynamics/algorithms (backends/codegen.py) as a C
-#: extension. -ffp-contract=off: no fused multiply-adds, so every operation rounds as in the
-#: Python backends. It reads numpy arrays through the numpy C API: numpy (its headers) is a
-#: build requirement (pyproject.toml, package.xml), added to the include path by BuildKernels.
+#: extension. The generated C is a build product, written by BuildKernels into the build
+#: directory (never into the sources): what it is generated from is what it depends on.
+#: -ffp-contract=off: no fused multiply-adds, so every operation rounds as in the Python
+#: backends. It reads numpy arrays through the numpy C API: numpy (its headers, and the
+#: generator's import of the package) is a build requirement (pyproject.toml, package.xml).
 KERNELS = Extension(
     package_name + '.backends._compiled',
     sources=[package_name + '/backends/_compiled.c'],
-    depends=[package_name + '/backends/_kernels_generated.h'],
+    depends=sorted(glob(package_name + '/algorithms/*.py')) + [
+        package_name + '/backends/codegen.py', package_name + '/backends/layout.py'],
     extra_compile_args=[] if os.name == 'nt' else ['-ffp-contract=off', '-pthread'],
     extra_link_args=[] if os.name == 'nt' else ['-pthread'],
 )
@@ -52,10 +56,31 @@ class BuildKernels(build_ext):
                 raise RuntimeError(f'numpy, whose C headers they need, is not importable at '
                                    f'build time ({err}); install numpy (Debian/Ubuntu: '
                                    f'python3-numpy)') from None
-            ext.include_dirs = [*ext.include_dirs, numpy.get_include()]
+            generated, digest = self._generate()
+            ext.include_dirs = [generated, *ext.include_dirs, numpy.get_include()]
+            ext.define_macros = [*ext.define_macros, ('KERNELS_SHA256', f'"{digest}"')]
             super().build_extension(ext)
         except Exception as err:     # the compiler failed (CompileError, LinkError)
             self._skip(err)
+
+    def _generate(self):
+        """Write ``_kernels_generated.h`` into the build directory; return it and its SHA-256.
+
+        The extension records the digest (``KERNELS_SHA256``): a test compares it with a
+        fresh generation, so a build older than its sources is found.
+        """
+        import hashlib
+        sys.path.insert(0, HERE)
+        try:
+            from spatial_dynamics.backends import codegen
+        finally:
+            sys.path.remove(HERE)
+        text = codegen.generate_c()
+        directory = os.path.join(os.path.abspath(self.build_temp), 'generated')
+        os.makedirs(directory, exist_ok=True)
+        with open(os.path.join(directory, codegen.HEADER), 'w', encoding='utf-8') as f:
+            f.write(text)
+        return directory, hashlib.sha256(text.encode('utf-8')).hexdigest()
 
     def get_outputs(self) -> list:
         """List the extensions built (none that failed)."""

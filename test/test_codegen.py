@@ -9,11 +9,29 @@ import pytest
 from spatial_dynamics.backends import codegen
 
 
-def test_the_committed_kernels_are_a_fresh_generation():
-    with open(codegen.TARGET, encoding='utf-8') as f:
-        committed = f.read()
-    assert committed == codegen.generate(), (
-        'backends/_kernels_generated.py is stale: run python -m spatial_dynamics.backends.codegen')
+def test_the_built_extension_is_compiled_from_the_current_source():
+    """The extension records the SHA-256 of the header it was built from: a fresh generation.
+
+    The generated kernels are build products (written into the build directory by setup.py);
+    a build older than a change to the algorithms fails here until the package is built again.
+    """
+    import hashlib
+    from spatial_dynamics.backends import compiled
+    if compiled.ext is None:
+        pytest.fail(f'the compiled kernels are not built: {compiled.FAILURE}')
+    fresh = hashlib.sha256(codegen.generate_c().encode('utf-8')).hexdigest()
+    assert compiled.ext.KERNELS_SHA256 == fresh, (
+        'the compiled kernels are older than spatial_dynamics/algorithms or backends/codegen.py:'
+        ' build the package again (colcon build / scripts/dev)')
+
+
+def test_the_generation_is_a_function_of_the_source_alone(tmp_path):
+    """Two generations are the same text, and the command writes exactly them."""
+    assert codegen.generate_c() == codegen.generate_c()
+    assert codegen.main([str(tmp_path)]) == 0
+    assert (tmp_path / codegen.HEADER).read_text(encoding='utf-8') == codegen.generate_c()
+    assert (tmp_path / codegen.LISTING).read_text(encoding='utf-8') == codegen.generate()
+    assert not (tmp_path / 'x' / 'y').exists() and codegen.main(['a', 'b']) == 2
 
 
 def test_every_arithmetic_statement_of_the_source_is_in_the_generated_kernels():
@@ -43,13 +61,6 @@ def test_code_outside_the_rules_is_refused(body, message):
     tree = ast.parse(f'def rnea_kernel(rows, vel, acc):\n    {body}\n')
     with pytest.raises(SyntaxError, match=message):
         codegen._ToFlat().visit(tree.body[0])
-
-
-def test_the_committed_c_kernels_are_a_fresh_generation():
-    with open(codegen.TARGET_C, encoding='utf-8') as f:
-        committed = f.read()
-    assert committed == codegen.generate_c(), (
-        'backends/_kernels_generated.h is stale: run python -m spatial_dynamics.backends.codegen')
 
 
 def test_every_arithmetic_assignment_is_a_c_statement_as_written():
@@ -93,7 +104,8 @@ def test_the_flat_python_kernels_compute_what_the_source_computes(rng):
     """The flat-array listing (the rewrite the C is printed from) run on Python floats."""
     import numpy as np
     import spatial_dynamics as sd
-    from spatial_dynamics.backends import _kernels_generated as flat, layout, python
+    from spatial_dynamics.backends import layout, python
+    flat = codegen.flat_module()
     from urdf_gen import random_tree_urdf
     model = sd.Model.from_urdf(random_tree_urdf(np.random.default_rng(5), 9, branching=True,
                                                 mimic=True))

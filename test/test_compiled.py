@@ -25,7 +25,7 @@ from conftest import random_state, robot_urdf_path
 import numpy as np
 import pytest
 import spatial_dynamics as sd
-from spatial_dynamics.backends import compiled, layout
+from spatial_dynamics.backends import codegen, compiled, layout
 
 ROBOTS = ['ur5', 'panda', 'talos', 'solo12']
 TOL = 1e-12
@@ -218,7 +218,7 @@ def test_the_batch_in_simd_lanes_gives_each_state_its_own_bits(ext, name, rng):
             assert np.isfinite(tau).all() and np.abs(tau).max() > 0.0
 
 
-#: Runs the scalar kernels and each lane width of _kernels_generated.h on the states of a
+#: Runs the scalar kernels and each lane width of the generated header on the states of a
 #: file (the widths this CPU has), without and with external forces (a table per state),
 #: and writes their torques.
 LANES_PROGRAM = r"""
@@ -285,7 +285,6 @@ def test_every_lane_width_gives_the_scalar_kernels_bits(name, rng, tmp_path):
     with the compiler that built the extension (-ffp-contract=off, as setup.py) and runs
     the scalar kernels and every width on the same states, without and with external forces.
     """
-    import os
     import shlex
     import subprocess
     import sysconfig
@@ -302,10 +301,11 @@ def test_every_lane_width_gives_the_scalar_kernels_bits(name, rng, tmp_path):
         f.write(np.concatenate([Q, QD, QDD]).tobytes())
         f.write(rng.normal(0.0, 5.0, (N, rows, 6)).tobytes())
     (tmp_path / 'lanes.c').write_text(LANES_PROGRAM)
-    here = os.path.dirname(os.path.abspath(compiled.__file__))
+    (tmp_path / codegen.HEADER).write_text(codegen.generate_c())
     cc = shlex.split(sysconfig.get_config_var('CC') or 'cc')
-    subprocess.run(cc + ['-O2', '-ffp-contract=off', '-I', here, str(tmp_path / 'lanes.c'),
-                         '-o', str(tmp_path / 'lanes'), '-lm'], check=True)
+    subprocess.run(cc + ['-O2', '-ffp-contract=off', '-I', str(tmp_path),
+                         str(tmp_path / 'lanes.c'), '-o', str(tmp_path / 'lanes'), '-lm'],
+                   check=True)
     run = subprocess.run([str(tmp_path / 'lanes'), str(tmp_path / 'in'), str(tmp_path / 'out')],
                          check=True, capture_output=True, text=True)
     widths = [int(w) for w in run.stderr.split()]

@@ -23,8 +23,8 @@ Two texts of the same equations:
   (one state, no numpy call overhead), on numpy arrays of shape (N,) (a batch, one numpy
   operation per term for all N states), on ``mpmath.mpf`` (the high-precision reference),
   and — translated statement for statement by :mod:`spatial_dynamics.backends.codegen` into
-  ``backends/_kernels_generated.py`` — compiled by numba. A change to an equation is made
-  here, once; the generated file is regenerated (a test fails until it is).
+  C when the package is built — compiled. A change to an equation is made here, once; the
+  next build compiles it (a test fails while the built kernels are older than the source).
 
 The kernels' text keeps to what the translation understands: per-body rows unpacked whole
 from ``rows[i]`` (the layout of :mod:`spatial_dynamics.backends.layout`), spatial vectors

@@ -35,7 +35,12 @@
 #include <pthread.h>
 #endif
 
-#include "_kernels_generated.h"
+/* Generated from spatial_dynamics/algorithms into the build directory by setup.py (on the
+ * include path), never a file of the sources. */
+#include <_kernels_generated.h>
+#ifndef KERNELS_SHA256
+#define KERNELS_SHA256 ""   /* setup.py defines the SHA-256 of the header it generated */
+#endif
 
 /* The interface this file offers to compiled.py, which refuses a build of another (a stale
  * extension left beside newer sources): raise it with every change of an entry. */
@@ -1231,6 +1236,7 @@ PyInit__compiled(void)
     if (PyModule_AddObject(m, "Kernels", (PyObject *)&KernelsType) < 0
             || PyModule_AddObject(m, "Door", (PyObject *)&DoorType) < 0
             || PyModule_AddIntConstant(m, "API", API) < 0
+            || PyModule_AddStringConstant(m, "KERNELS_SHA256", KERNELS_SHA256) < 0
             || PyModule_AddIntConstant(m, "WORK", WORK) < 0
             || PyModule_AddIntConstant(m, "MAX_THREADS", MAX_THREADS) < 0
             || PyModule_AddIntConstant(m, "MIN_WORK", MIN_WORK) < 0) {

@@ -7,8 +7,9 @@ The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
 :mod:`~spatial_dynamics.algorithms.momentum`, :mod:`~spatial_dynamics.algorithms.regressor`)
 are plain Python over tuples and lists. This module rewrites their syntax tree statement for
 statement onto flat float64 arrays (``_kernels_generated.py``, a readable listing the tests
-run) and prints the result as C (``_kernels_generated.h``, compiled into the extension
-``_compiled`` when the package is built: see ``setup.py``); nothing of the arithmetic changes
+run, :func:`flat_module`) and prints the result as C (``_kernels_generated.h``, written into
+the build directory and compiled into the extension ``_compiled`` when the package is built:
+see ``setup.py``); nothing of the arithmetic changes
 (same expressions, same order, no fused multiply-adds), so every backend computes the same
 numbers. The rewriting rules, each a change of storage only:
 
@@ -33,8 +34,11 @@ The RNEA kernels (with the components they call) are printed again on vectors of
 8 states (:class:`_ToCLanes`: SIMD across the states of a batch, GCC and Clang vector
 extensions), each lane doing the scalar kernel's operations in its order.
 
-Run ``python -m spatial_dynamics.backends.codegen`` after changing the source; tests
-compare the committed files with a fresh generation.
+Both are build products, not sources: a change to an algorithm is a change to its source
+here, and the next build compiles it (``setup.py`` lists the sources the extension depends
+on). ``python -m spatial_dynamics.backends.codegen [DIR]`` writes both files for reading;
+the extension records the SHA-256 of the header it was built from, which a test compares
+with a fresh generation (a build older than its sources fails it).
 """
 
 from __future__ import annotations
@@ -44,6 +48,7 @@ import inspect
 import os
 import sys
 import textwrap
+from typing import Optional, Sequence
 
 from . import layout
 from ..algorithms import components, crba, momentum, regressor, rnea
@@ -63,8 +68,10 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'crba_kernel': 'K, work, H',
               'momentum_kernel': 'K, q, qd, mom, ctq, work',
               'regressor_kernel': 'K, qd, qdd, gx, gy, gz, Y, axes, work'}
-TARGET = os.path.join(os.path.dirname(os.path.abspath(__file__)), '_kernels_generated.py')
-TARGET_C = os.path.join(os.path.dirname(TARGET), '_kernels_generated.h')
+#: The generated files' names. Build products, not sources: ``setup.py`` writes the header
+#: into its build directory when it compiles the extension; ``python -m
+#: spatial_dynamics.backends.codegen DIR`` writes both for reading.
+LISTING, HEADER = '_kernels_generated.py', '_kernels_generated.h'
 
 
 class _ToFlat(ast.NodeTransformer):
@@ -805,7 +812,7 @@ def generate() -> str:
 
 The flat-array form of the one source (the rules of :mod:`.codegen`), from which the C of
 ``_kernels_generated.h`` is printed; plain Python, run by the tests to check the rewriting.
-Change the source and run ``python -m spatial_dynamics.backends.codegen``.
+Change the source, not this listing: codegen prints it from the source.
 """
 import numpy as np
 
@@ -831,7 +838,7 @@ def generate_c() -> str:
  * SPDX-License-Identifier: Apache-2.0
  *
  * Kernels generated from spatial_dynamics.algorithms: do not edit.
- * Change the source and run `python -m spatial_dynamics.backends.codegen`.
+ * Change the source, not this header: setup.py generates it into the build directory.
  * Included by _compiled.c; compile without fused multiply-adds (-ffp-contract=off).
  */
 #ifndef SPATIAL_DYNAMICS_KERNELS_GENERATED_H
@@ -845,12 +852,27 @@ def generate_c() -> str:
             + '\n#endif  /* SPATIAL_DYNAMICS_KERNELS_GENERATED_H */\n')
 
 
-def main() -> int:
-    """Write ``_kernels_generated.py`` and ``_kernels_generated.h`` next to this module."""
-    for target, text in ((TARGET, generate()), (TARGET_C, generate_c())):
-        with open(target, 'w', encoding='utf-8') as f:
+def flat_module():
+    """Return the flat-array listing (:func:`generate`) as a module, to run it on floats."""
+    import types
+    module = types.ModuleType('spatial_dynamics.backends.' + LISTING[:-3])
+    exec(compile(generate(), LISTING, 'exec'), module.__dict__)
+    return module
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Write the listing and the C header into a directory (default ``build/generated``)."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if len(args) > 1 or args[:1] in (['-h'], ['--help']):
+        print('usage: python -m spatial_dynamics.backends.codegen [DIR]', file=sys.stderr)
+        return 2
+    directory = args[0] if args else os.path.join('build', 'generated')
+    os.makedirs(directory, exist_ok=True)
+    for name, text in ((LISTING, generate()), (HEADER, generate_c())):
+        path = os.path.join(directory, name)
+        with open(path, 'w', encoding='utf-8') as f:
             f.write(text)
-        print(f'wrote {target}')
+        print(f'wrote {path}')
     return 0
 
 
