@@ -291,7 +291,7 @@ class Plans:
             self.last_sent = now
 
     def on_state(self, t: float, q: np.ndarray) -> None:
-        """Take a measured state: pair it with its echo; send the replacement at half time."""
+        """Take a measured state: pair it with its echo."""
         key = round(t * 1e9)
         if key in self.seen:     # the simulator republishes the state it waits on
             return
@@ -299,17 +299,22 @@ class Plans:
         self.measured[key] = q
         self.last_q = q
         self._pair(key)
-        if self.replaced is None and t >= self.switch_at:
-            self.replaced = t + 0.01     # starts 10 ms ahead on the measured clock
-            hold = np.zeros(len(self.names))
-            self.pub.publish(plan_message(self.names, [(BACK_IN, self.q0, hold, hold)],
-                                          self.replaced))
 
     def _on_answer(self, msg) -> None:
+        """Take an answer (reliable: every one arrives); send the replacement at half time.
+
+        The switch follows the answers' stamps, not the measured states this process
+        watches best effort (a busy machine drops some, which delayed the switch).
+        """
         self.run.answers += 1
         key = msg.header.stamp.sec * 10 ** 9 + msg.header.stamp.nanosec
         self.desired[key] = np.array(msg.position)
         self._pair(key)
+        if self.replaced is None and key * 1e-9 >= self.switch_at:
+            self.replaced = key * 1e-9 + 0.01     # starts 10 ms ahead on the measured clock
+            hold = np.zeros(len(self.names))
+            self.pub.publish(plan_message(self.names, [(BACK_IN, self.q0, hold, hold)],
+                                          self.replaced))
 
     def _pair(self, key: int) -> None:
         if key in self.measured and key in self.desired:
