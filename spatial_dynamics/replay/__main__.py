@@ -48,12 +48,13 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from .. import friction_torque, Model, rnea
-from ..check import locked_item, read_description
+from ..check import read_description
 from .. import effort as effort_model
 from . import annotate, bags, differentiate, identify, report, splines
 from .recording import recording, Stages
 from .. import identification
-from .arguments import check_gravity, finite, load_model, one_line, positive, Refused
+from .arguments import (add_model_arguments, check_gravity, load_model, one_line, positive,
+                        Refused)
 from ..urdf import read_urdf_file
 from . import correction as correction_of
 
@@ -340,7 +341,7 @@ def parser() -> argparse.ArgumentParser:
                                 epilog='Exit status: 0 done, 1 refused (or an effort limit '
                                 'exceeded), 2 bad usage.')
     p.add_argument('bag', nargs='?', help='rosbag2 directory, or a .db3 / .mcap file')
-    p.add_argument('--urdf', required=True, help='URDF file (or .xacro)')
+    add_model_arguments(p)
     p.add_argument('--topic', default='/joint_states', help='sensor_msgs/JointState topic')
     p.add_argument('--out', default='replay_out', help='output directory (created)')
     p.add_argument('--identify', action='store_true',
@@ -372,12 +373,6 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv',
                    help='per-sample residual file (default %(default)s)')
     p.add_argument('--no-plots', action='store_true', help='write no PNG files')
-    p.add_argument('--gravity', type=finite, nargs=3, default=(0.0, 0.0, -9.81),
-                   metavar=('GX', 'GY', 'GZ'), help='m/s^2 in the base frame')
-    p.add_argument('--joints', nargs='+', metavar='J',
-                   help='model reduction: keep only these joints (the others are locked)')
-    p.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
-                   help='value (rad or m) of a joint locked by --joints')
     p.add_argument('--trajectory', metavar='FILE.yaml',
                    help='check a trajectory_msgs/JointTrajectory (YAML) against effort limits')
     p.add_argument('--trajectory-topic', metavar='TOPIC',
