@@ -167,13 +167,12 @@ def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
     if s['qd'] is not None:
         # the same zero-phase smoother on the measured velocity: without it the velocity
         # noise stays in the residual (test_replay: 0.08 instead of 0.05 N m)
-        qd = differentiate.derivatives(t, s['qd'], args.window, args.order, 0, spans)[0]
-        qdd, resampled = differentiate.derivatives(t, s['qd'], args.window, args.order, 1,
-                                                   spans)
+        (qd, qdd), resampled = differentiate.derivatives(t, s['qd'], args.window, args.order,
+                                                         (0, 1), spans)
         source = 'velocity'
     else:
-        qd, resampled = differentiate.derivatives(t, q, args.window, args.order, 1, spans)
-        qdd = differentiate.derivatives(t, q, args.window, args.order, 2, spans)[0]
+        (qd, qdd), resampled = differentiate.derivatives(t, q, args.window, args.order,
+                                                         (1, 2), spans)
         source = 'position (the bag has no velocities)'
     stages.done('differentiate')
     effort = effort_model.with_gravity(model, q, s['effort'], args.measured_effort,
