@@ -118,6 +118,10 @@ def layout(data: bytes) -> Optional[Layout]:
     return Layout(len(data), names, tuple(arrays), np.array(fixed, dtype=np.intp))
 
 
+#: Messages decoded at once from a list of byte strings.
+BLOCK = 4096
+
+
 def _runs(sizes: np.ndarray) -> List[Tuple[int, int]]:
     """Split message indices into runs ``[start, stop)`` of equal byte length."""
     edges = np.flatnonzero(np.diff(sizes)) + 1
@@ -243,11 +247,14 @@ def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bo
         if isinstance(messages, np.ndarray):
             block_run(messages, times, 0, stamp, out, keep)
         else:
-            sizes = np.fromiter((len(b) for b in messages), dtype=np.int64, count=N)
-            for start, stop in _runs(sizes):
-                block = np.frombuffer(b''.join(messages[start:stop]), dtype=np.uint8)
-                block_run(block.reshape(stop - start, -1), times[start:stop], start, stamp,
-                          out, keep)
+            sizes = np.fromiter(map(len, messages), dtype=np.int64, count=N)
+            for run_start, run_stop in _runs(sizes):
+                # in blocks that stay in the cache: 3 times faster than one of 65536 rows
+                for start in range(run_start, run_stop, BLOCK):
+                    stop = min(run_stop, start + BLOCK)
+                    block = np.frombuffer(b''.join(messages[start:stop]), dtype=np.uint8)
+                    block_run(block.reshape(stop - start, -1), times[start:stop], start,
+                              stamp, out, keep)
         kept = N
         if not keep.all():
             kept = int(keep.sum())
