@@ -62,14 +62,25 @@ from . import correction as correction_of
 NODE_THRESHOLD = 0.01
 
 
+#: Points per joint drawn at most (long recordings are decimated).
+PLOT_POINTS = 20000
+
+
 def plot_replay(out: str, topic: str, t: np.ndarray, names: Sequence[str], effort: np.ndarray,
                 tau: np.ndarray, residual: np.ndarray) -> None:
-    """Draw ``measured_vs_model.png`` and ``residual.png`` into ``out``."""
+    """Draw ``measured_vs_model.png`` and ``residual.png`` into ``out`` (decimated data)."""
     report.plot_joints(os.path.join(out, 'measured_vs_model.png'), t, names,
                        {'measured': effort, 'model (RNEA)': tau},
-                       f'{topic}: measured effort and model torque (N m or N)')
+                       f'{topic}: measured effort and model torque (N m or N)',
+                       max_points=len(t))
     report.plot_joints(os.path.join(out, 'residual.png'), t, names,
-                       {'measured - model': residual}, 'residual (N m or N)')
+                       {'measured - model': residual}, 'residual (N m or N)',
+                       max_points=len(t))
+
+
+def rms(x: np.ndarray) -> np.ndarray:
+    """Root mean square of each column of ``x`` (N, n), without an (N, n) temporary."""
+    return np.sqrt(np.einsum('ij,ij->j', x, x) / len(x))
 
 
 def mimic_notes(model: Model) -> List[str]:
@@ -107,6 +118,16 @@ def print_payload(payload, names: Sequence[str], args) -> None:
 
 def run_bag(args) -> int:
     """Compare measured efforts with the model over a bag; write the files; return 0."""
+    # the plotting child imports matplotlib while this process reads the bag
+    plotter = None if args.no_plots else report.start_child()
+    try:
+        return compare(args, plotter)
+    finally:
+        report.end_child(plotter)       # a refusal: the child ends without drawing
+
+
+def compare(args, plotter) -> int:
+    """:func:`run_bag` with its plotting child (from :func:`report.start_child`, or None)."""
     stages = Stages()
     model = load_model(args)
     names = model.joint_names
@@ -123,8 +144,7 @@ def run_bag(args) -> int:
     tau = rnea(model, q, qd, qdd, args.gravity)
     residual = effort - tau
     stages.done('rnea')
-    rms_measured = np.sqrt(np.mean(effort ** 2, axis=0))
-    rms_residual = np.sqrt(np.mean(residual ** 2, axis=0))
+    rms_measured, rms_residual = rms(effort), rms(residual)
     # what the fits see: this bag and the --also ones, each cleaned and differentiated alone
     train = {k: s[k] for k in ('q', 'qd', 'qdd', 'effort')}
     if args.also:
@@ -169,12 +189,13 @@ def run_bag(args) -> int:
         for j, r in enumerate(rows):
             r += [fit.damping[j], fit.friction[j], fit.armature[j], fit.rms_after[j]]
     report.write_summary(os.path.join(args.out, 'summary.csv'), rows, header)
-    plotter = None
     if not args.no_plots:
-        # The plots are drawn in a forked child while this process writes the residual: two
-        # cores, ~2 s saved on an hour of data.
-        plotter = report.in_child(plot_replay, args.out, args.topic, t - t[0], names,
-                                  effort, tau, residual)
+        # The plots are drawn in the child while this process writes the residual; it gets
+        # only the points drawn (decimated here, as plot_joints would).
+        step = max(1, len(t) // PLOT_POINTS)
+        plotter = report.run_in(plotter, plot_replay, args.out, args.topic,
+                                t[::step] - t[0], names, effort[::step], tau[::step],
+                                residual[::step])
     if args.residual == 'csv':
         report.write_csv(os.path.join(args.out, 'residual.csv'), ['t'] + list(names),
                          [t - t[0]] + [residual[:, j] for j in range(len(names))],
@@ -182,7 +203,7 @@ def run_bag(args) -> int:
     elif args.residual == 'npy':
         np.save(os.path.join(args.out, 'residual.npy'), np.column_stack((t - t[0], residual)))
     stages.done('write residual')
-    if plotter is not None:
+    if not args.no_plots:
         if not report.join_child(plotter):
             print('replay: drawing the plots failed (see above); the CSV files are complete',
                   file=sys.stderr)

@@ -232,23 +232,69 @@ def plot_joints(path: str, t: np.ndarray, names: Sequence[str], series: dict,
     plt.close(fig)
 
 
-def in_child(fn, *args):
-    """Start ``fn(*args)`` in a forked child process, or run it here where fork is missing.
+def prepare_plots() -> None:
+    """Import matplotlib (Agg) and pyplot: half a second of a plotting child's work."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot  # noqa: F401
 
-    Returns the process (for :func:`join_child`), or ``None`` when ``fn`` already ran. The
-    child shares this process's arrays without copying them (fork is copy-on-write).
+
+def _serve(conn, parent_end, prepare) -> None:
+    """A child of :func:`start_child`: prepare, then run the job sent (none: just end)."""
+    parent_end.close()      # the parent's end, inherited: else the pipe would never end
+    prepare()
+    try:
+        job = conn.recv()
+    except EOFError:        # the parent ended without a job (a refusal): nothing to draw
+        return
+    if job is not None:
+        fn, args = job
+        fn(*args)
+
+
+def start_child(prepare=prepare_plots):
+    """Fork a child that runs ``prepare()`` now and waits for a job (:func:`run_in`).
+
+    Forked before the bag is read, the child imports matplotlib on the second core while
+    this process reads on the first. Returns ``None`` where fork is missing (the job then
+    runs in this process).
     """
     import multiprocessing
     if 'fork' not in multiprocessing.get_all_start_methods():
+        return None
+    ctx = multiprocessing.get_context('fork')
+    receive, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_serve, args=(receive, send, prepare), daemon=True)
+    proc.start()
+    receive.close()
+    return proc, send
+
+
+def run_in(child, fn, *args):
+    """Run ``fn(*args)`` in a child of :func:`start_child` (pickled through its pipe).
+
+    Returns the process (for :func:`join_child`), or ``None`` when there is no child and
+    ``fn`` already ran here.
+    """
+    if child is None:
         fn(*args)
         return None
-    proc = multiprocessing.get_context('fork').Process(target=fn, args=args, daemon=True)
-    proc.start()
+    proc, send = child
+    send.send((fn, args))
+    send.close()
     return proc
 
 
+def end_child(child) -> None:
+    """Close the pipe of a child of :func:`start_child`: without a job sent, it ends."""
+    if child is not None:
+        child[1].close()
+
+
 def join_child(proc) -> bool:
-    """Wait for a process of :func:`in_child`; ``True`` when it succeeded."""
+    """Wait for a process of :func:`run_in`; ``True`` when it succeeded (or ran here)."""
+    if proc is None:
+        return True
     proc.join()
     return proc.exitcode == 0
 

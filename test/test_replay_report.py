@@ -1,11 +1,14 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""residual.csv's fixed-point writer: the same bytes as one digit at a time, on any threads.
+"""The replay's writers: residual.csv's fixed-point numbers, and the plotting child.
 
 The reference formats one digit per pass over the column (the writer's form before the
-four-digit table); the writer must produce the same bytes, and its numbers must read back
-as the values rounded to their decimals.
+four-digit table); the writer must produce the same bytes on any number of threads, and its
+numbers must read back as the values rounded to their decimals. The plotting child, forked
+before the bag is read, runs the job it is sent, or ends when none comes (a refusal).
 """
+
+import os
 
 import numpy as np
 import pytest
@@ -94,3 +97,42 @@ def test_write_csv_same_file_on_any_threads(tmp_path, monkeypatch):
     back = np.genfromtxt(str(tmp_path / '1.csv'), delimiter=',', skip_header=1)
     np.testing.assert_allclose(back[:, 0], t, atol=5e-7)
     np.testing.assert_allclose(back[:, 1:], r, atol=5e-5, rtol=1e-15)
+
+
+def noop():
+    pass
+
+
+def write_text(path, text):
+    with open(path, 'w') as f:
+        f.write(text)
+
+
+def fail():
+    raise RuntimeError('drawing failed')
+
+
+def test_child_runs_the_job_sent(tmp_path):
+    child = report.start_child(noop)
+    proc = report.run_in(child, write_text, str(tmp_path / 'job'), 'done')
+    assert report.join_child(proc)
+    assert (tmp_path / 'job').read_text() == 'done'
+    report.end_child(child)     # after the job: harmless
+
+
+def test_child_without_a_job_ends(tmp_path):
+    child = report.start_child(noop)
+    report.end_child(child)
+    child[0].join(timeout=30)
+    assert child[0].exitcode == 0
+
+
+def test_child_failure_is_reported(capfd):
+    child = report.start_child(noop)
+    assert not report.join_child(report.run_in(child, fail))
+    assert 'drawing failed' in capfd.readouterr().err
+
+
+def test_no_child_runs_the_job_here(tmp_path):
+    assert report.run_in(None, write_text, str(tmp_path / 'here'), 'x') is None
+    assert report.join_child(None) and os.path.exists(tmp_path / 'here')
