@@ -240,7 +240,7 @@ def prepare_plots() -> None:
 
 
 def _serve(conn, parent_end, prepare) -> None:
-    """A child of :func:`start_child`: prepare, then run the job sent (none: just end)."""
+    """Be the child of :func:`start_child`: prepare, then run the job sent (none: end)."""
     parent_end.close()      # the parent's end, inherited: else the pipe would never end
     prepare()
     try:
