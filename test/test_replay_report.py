@@ -136,3 +136,18 @@ def test_child_failure_is_reported(capfd):
 def test_no_child_runs_the_job_here(tmp_path):
     assert report.run_in(None, write_text, str(tmp_path / 'here'), 'x') is None
     assert report.join_child(None) and os.path.exists(tmp_path / 'here')
+
+
+def test_small_pages_within_the_command_only():
+    """The bag command turns numpy's huge-page advice off while it runs, then back."""
+    from spatial_dynamics.replay.__main__ import small_pages
+    setter = getattr(np._core.multiarray, '_set_madvise_hugepage', None)
+    if setter is None:
+        pytest.skip('this numpy has no huge-page switch')
+    previous = setter(True)
+    try:
+        with small_pages():
+            assert setter(False) is False       # off inside (the call returns the setting)
+        assert setter(True) is True             # and back on after
+    finally:
+        setter(previous)

@@ -41,6 +41,7 @@ topic or joint, nothing usable, rosbags missing; a trajectory exceeding an effor
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from typing import Dict, List, Optional, Sequence
@@ -81,6 +82,29 @@ def plot_replay(out: str, topic: str, t: np.ndarray, names: Sequence[str], effor
 def rms(x: np.ndarray) -> np.ndarray:
     """Root mean square of each column of ``x`` (N, n), without an (N, n) temporary."""
     return np.sqrt(np.einsum('ij,ij->j', x, x) / len(x))
+
+
+@contextlib.contextmanager
+def small_pages():
+    """Within: numpy does not ask the kernel for transparent huge pages for new arrays.
+
+    numpy marks every array of 4 MB or more ``madvise(MADV_HUGEPAGE)``; faulting such pages
+    in was erratic and slow on the 2-core VM the replay was timed on (system time of the
+    hour's replay 3.2-3.9 s, 0.9-1.0 s without; 1.2 GB of arrays took 0.46-3.8 s to touch,
+    0.6 s without). The command touches ~3 GB of fresh arrays once each, where huge pages
+    gain little. (``NUMPY_MADVISE_HUGEPAGE=0`` does the same, read when numpy is imported;
+    the switch used here is private to numpy, hence doing nothing where it is missing.)
+    """
+    try:
+        from numpy._core.multiarray import _set_madvise_hugepage
+    except ImportError:
+        yield
+        return
+    before = _set_madvise_hugepage(False)
+    try:
+        yield
+    finally:
+        _set_madvise_hugepage(before)
 
 
 def mimic_notes(model: Model) -> List[str]:
@@ -452,7 +476,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return annotate.run(args, load_model)
         if args.trajectory or args.trajectory_topic:
             return run_trajectory(args)
-        return run_bag(args)
+        with small_pages():
+            return run_bag(args)
     except (Refused, bags.BagError, bags.MissingDependency, ValueError) as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
     except OSError as err:

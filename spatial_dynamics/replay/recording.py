@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import sys
 import time
-from typing import Dict
+from typing import Dict, Tuple
 
 import numpy as np
 
@@ -52,23 +52,29 @@ class Progress:
 
 
 class Stages:
-    """Wall-clock time of each stage of the command (``--timings``)."""
+    """Wall-clock and CPU time of each stage of the command (``--timings``).
+
+    The CPU time is this process's, all its threads together (not a plotting child's): on a
+    shared machine it says what a stage costs when the wall-clock time is other work's.
+    """
 
     def __init__(self) -> None:
-        """Start the clock."""
-        self.times: Dict[str, float] = {}
-        self.start = time.perf_counter()
+        """Start the clocks."""
+        self.times: Dict[str, Tuple[float, float]] = {}
+        self.start = (time.perf_counter(), time.process_time())
 
     def done(self, stage: str) -> None:
-        """Record the time since the previous stage ended."""
-        now = time.perf_counter()
-        self.times[stage] = self.times.get(stage, 0.0) + now - self.start
+        """Record the times since the previous stage ended."""
+        now = (time.perf_counter(), time.process_time())
+        wall, cpu = self.times.get(stage, (0.0, 0.0))
+        self.times[stage] = (wall + now[0] - self.start[0], cpu + now[1] - self.start[1])
         self.start = now
 
     def text(self) -> str:
-        """Return the stages and their sum, one per line."""
-        lines = [f'  {k:<16} {v:8.3f} s' for k, v in self.times.items()]
-        return '\n'.join(lines + [f'  {"total":<16} {sum(self.times.values()):8.3f} s'])
+        """Return the stages and their sums, one per line: wall-clock s, CPU s."""
+        total = [sum(v[k] for v in self.times.values()) for k in (0, 1)]
+        return '\n'.join(f'  {k:<16} {w:8.3f} s  (cpu {c:6.3f} s)'
+                         for k, (w, c) in list(self.times.items()) + [('total', total)])
 
 
 def clean(js: bags.JointStates, window: float) -> Dict:
