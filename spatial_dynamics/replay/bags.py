@@ -21,7 +21,7 @@ import numpy as np
 from ..files import load_yaml, read_regular, regular_file
 from .cdr import (Batch, decode_joint_states, encode_joint_states, FIELDS, INSTALL_HINT,
                   JOINT_STATE, joint_states_from_raw, JointStates, layout, MissingDependency,
-                  typestore, verify_layout)
+                  typestore, verify_layout, view_bytes)
 
 __all__ = ['BagError', 'decode_joint_states', 'encode_joint_states', 'FIELDS', 'JOINT_STATE',
            'JOINT_TRAJECTORY', 'joint_states_from_raw', 'JointStates', 'layout',
@@ -275,19 +275,19 @@ def _mcap_records(buf: memoryview, channel_of: Dict[int, str], topic: str
             k = (end - o) // size
             if k > 1:
                 block = arr[o:o + k * size].reshape(k, size)
-                lengths = block[:, 1:9].copy().view('<u8')[:, 0]
+                lengths = view_bytes(block, 1, 8, '<u8')[:, 0]
                 same = (block[:, 0] == OP_MESSAGE) & (lengths == length)
                 k = int(np.argmin(same)) if not same.all() else k
             if k > 1:
                 block = block[:k]
-                chan = block[:, 9:11].copy().view('<u2')[:, 0]
+                chan = view_bytes(block, 9, 2, '<u2')[:, 0]
                 ids = [c for c, t in channel_of.items() if t == topic]
                 rows = np.isin(chan, ids)
                 if rows.any():
                     if single:
                         yield np.array(single_t, dtype=np.int64), single
                         single_t, single = [], []
-                    times = block[rows, 15:23].copy().view('<u8')[:, 0].astype(np.int64)
+                    times = view_bytes(block, 15, 8, '<u8')[rows, 0].astype(np.int64)
                     yield times, block[rows, MESSAGE_HEAD:]
                 o += k * size
                 continue

@@ -132,13 +132,26 @@ def _runs(sizes: np.ndarray) -> List[Tuple[int, int]]:
 def decode_run(block: np.ndarray, lay: Layout, stamps_ns: np.ndarray
                ) -> Tuple[np.ndarray, List[np.ndarray]]:
     """Read stamps (s) and the three double arrays of a (k, L) byte block of one layout."""
-    sec = block[:, 4:8].copy().view('<i4')[:, 0]
-    nsec = block[:, 8:12].copy().view('<u4')[:, 0]
+    sec = view_bytes(block, 4, 4, '<i4')[:, 0]
+    nsec = view_bytes(block, 8, 4, '<u4')[:, 0]
     stamp = sec.astype(np.float64) + nsec.astype(np.float64) * 1e-9
     zero = (sec == 0) & (nsec == 0)
     stamp[zero] = stamps_ns[zero] * 1e-9
-    arrays = [block[:, off:off + 8 * count].copy().view('<f8') for off, count in lay.arrays]
+    arrays = [view_bytes(block, off, 8 * count, '<f8') for off, count in lay.arrays]
     return stamp, arrays
+
+
+def view_bytes(block: np.ndarray, offset: int, size: int, dtype: str) -> np.ndarray:
+    """Bytes ``offset`` .. ``offset + size`` of each row of ``block`` read as ``dtype``.
+
+    A view where numpy can make one (rows of any stride; unaligned values are read as
+    such), else a copy: no pass over the bytes only to copy them.
+    """
+    part = block[:, offset:offset + size]
+    try:
+        return part.view(dtype)
+    except ValueError:
+        return part.copy().view(dtype)
 
 
 def _decode_generic(msg, stamp_ns: int) -> Tuple[float, Tuple[str, ...], List[np.ndarray]]:
@@ -189,17 +202,28 @@ def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bo
         skipped[reason] = skipped.get(reason, 0) + count
 
     def place(out, keep, rows, msg_names: Tuple[str, ...], arrays: List[np.ndarray]) -> None:
-        """Put the arrays of messages ``rows`` (all with ``msg_names``) into the columns."""
+        """Put the arrays of messages ``rows`` (all with ``msg_names``) into the columns.
+
+        ``rows``: a row index, an index array, or a slice (a whole block: then plain slices
+        where the names are in the columns' order, one pass instead of a gather/scatter).
+        """
         src = [j for j, name in enumerate(msg_names) if name in want]
         dst = [want[msg_names[j]] for j in src]
+        block = isinstance(rows, slice)
+        count = rows.stop - rows.start if block else int(np.size(rows))
+        if block and dst and dst == list(range(dst[0], dst[-1] + 1)):
+            dst = slice(dst[0], dst[-1] + 1)
         for k, a in enumerate(arrays):
             if a.shape[-1] == len(msg_names) and src:
-                where = np.ix_(rows, dst) if np.ndim(rows) else (rows, dst)
-                out[k][where] = a[..., src]
+                if block:
+                    out[k][rows, dst] = a if len(src) == a.shape[-1] else a[..., src]
+                else:
+                    where = np.ix_(rows, dst) if np.ndim(rows) else (rows, dst)
+                    out[k][where] = a[..., src]
             elif a.shape[-1] not in (0, len(msg_names)):
                 keep[rows] = False
                 skip(f'{FIELDS[k]} has {a.shape[-1]} values for {len(msg_names)} names',
-                     int(np.size(rows)))
+                     count)
 
     def generic(data: bytes, t_ns: int, i: int, stamp, out, keep) -> None:
         nonlocal store
@@ -227,10 +251,11 @@ def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bo
         fixed = block[:, lay.fixed]
         same = np.all(fixed == fixed[0], axis=1)
         rows = np.flatnonzero(same)
-        st, arrays = decode_run(block[rows] if len(rows) < len(block) else block, lay,
-                                times[rows])
-        stamp[start + rows] = st
-        place(out, keep, start + rows, lay.names, arrays)
+        whole = len(rows) == len(block)
+        st, arrays = decode_run(block if whole else block[rows], lay, times[rows])
+        where = slice(start, start + len(block)) if whole else start + rows
+        stamp[where] = st
+        place(out, keep, where, lay.names, arrays)
         counts['fast'] += len(rows)
         for r in np.flatnonzero(~same):
             generic(block[r].tobytes(), int(times[r]), start + int(r), stamp, out, keep)
