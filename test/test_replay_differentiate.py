@@ -82,6 +82,13 @@ def test_savgol_many_writes_into_the_given_arrays():
         assert (o[:100] == -1.0).all() and (o[400:] == -1.0).all()
 
 
+def test_savgol_many_refuses_outs_it_cannot_write_into():
+    y = RNG.standard_normal((50, 2, 3))
+    strided = np.empty((50, 4, 3))[:, ::2]         # (50, 2, 3) that cannot be (50, 6)
+    with pytest.raises(ValueError, match='C-contiguous'):
+        savgol_many(y, 0.01, 11, 2, (0,), [strided])
+
+
 def test_derivatives_equal_one_derivative_per_call():
     """Spans with a gap between, an uneven segment (resampled) and samples outside."""
     t = np.concatenate([np.arange(3000) * 1e-3,                      # uniform

@@ -74,6 +74,8 @@ def savgol_many(y: np.ndarray, dt: float, window: int, order: int, derivs: Seque
     if outs is None:
         outs = [np.empty(y.shape) for _ in derivs]
     res = [o.reshape(N, -1) for o in outs]      # views: the caller's arrays are written
+    if not all(np.may_share_memory(r, o) for r, o in zip(res, outs)):
+        raise ValueError('savgol_many: outs must be C-contiguous arrays of the shape of y')
     weights = [savgol_weights(window, order, d, dt)[::-1] for d in derivs]
 
     def column(j: int) -> None:
