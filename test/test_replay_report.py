@@ -141,7 +141,8 @@ def test_no_child_runs_the_job_here(tmp_path):
 def test_small_pages_within_the_command_only():
     """The bag command turns numpy's huge-page advice off while it runs, then back."""
     from spatial_dynamics.replay.__main__ import small_pages
-    setter = getattr(np._core.multiarray, '_set_madvise_hugepage', None)
+    core = getattr(np, '_core', None) or np.core             # numpy 2.x or 1.x
+    setter = getattr(core.multiarray, '_set_madvise_hugepage', None)
     if setter is None:
         pytest.skip('this numpy has no huge-page switch')
     previous = setter(True)
