@@ -235,20 +235,29 @@ def _sqlite_bag(staged: str, topic: str) -> Tuple[Optional[List[str]], int]:
     return [os.path.join(staged, f) for f in files], count
 
 
-def _sqlite_topics(paths: Sequence[str]) -> Dict[str, Tuple[str, int]]:
-    """:func:`topics` of sqlite3 files, read with the standard library (counts left 0)."""
+def _sqlite_topics(paths: Sequence[str], count: int) -> Tuple[Dict[str, Tuple[str, int]], int]:
+    """:func:`topics` of sqlite3 files (counts left 0), and ``count`` made a safe hint.
+
+    The metadata's message count only sizes the arrays (they grow when it is short), but a
+    bag's metadata may say anything: it is capped by the rows the files hold (the largest
+    message id, found in the index) and their size (16 bytes a message at least).
+    """
     import sqlite3
     found: Dict[str, Tuple[str, int]] = {}
+    rows = 0
     for path in paths:
         con = _sqlite_connect(path)
         try:
             for name, typ in con.execute('SELECT name, type FROM topics'):
                 found.setdefault(name, (typ, 0))
+            last = con.execute('SELECT max(id) FROM messages').fetchone()[0]
+            rows += last if isinstance(last, int) and last > 0 else 0
         except sqlite3.Error as err:
             raise _not_sqlite_bag(path, str(err)) from None
         finally:
             con.close()
-    return found
+    size = sum(os.path.getsize(p) for p in paths)
+    return found, max(0, min(count, rows, size // 16))
 
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
@@ -393,7 +402,8 @@ def read_joint_states(path: str, topic: str, names: Sequence[str], fast: bool = 
         try:
             files, total = _sqlite_bag(staged, topic)
             if files is not None:
-                check_topic(_sqlite_topics(files), topic, JOINT_STATE)
+                found, total = _sqlite_topics(files, total)
+                check_topic(found, topic, JOINT_STATE)
                 return decode_joint_states(_sqlite_batches(files, topic), names, fast,
                                            progress and (lambda k: progress(k, total)), total)
         finally:
