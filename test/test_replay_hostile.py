@@ -105,14 +105,15 @@ def test_bag_paths_with_uri_characters_read_their_own_data(tmp_path, storage):
         assert np.all(slow.position == value), name
 
 
+@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
 @pytest.mark.parametrize('claimed', [10 ** 15, 3, 0, 'many'])
-def test_metadata_message_counts_are_only_a_hint(tmp_path, claimed):
-    """A sqlite3 bag's metadata claiming 10**15 messages (or too few, or junk) reads its 100.
+def test_metadata_message_counts_are_only_a_hint(tmp_path, claimed, storage):
+    """A bag's metadata claiming 10**15 messages (or too few, or junk) reads its 100.
 
     The count sizes the arrays: taken as it is, 10**15 would ask for petabytes.
     """
     import yaml
-    bag = write_bag(tmp_path / 'bag', 0.3)
+    bag = write_bag(tmp_path / 'bag', 0.3, storage)
     meta_path = os.path.join(bag, 'metadata.yaml')
     with open(meta_path) as f:
         meta = yaml.safe_load(f)

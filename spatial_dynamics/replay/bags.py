@@ -125,11 +125,16 @@ def open_reader(path: str):
 
 
 def topics(reader) -> Dict[str, Tuple[str, int]]:
-    """Map each topic of an open reader to ``(message type, message count)``."""
+    """Map each topic of an open reader to ``(message type, message count)``.
+
+    A count is metadata.yaml's for a bag directory: one that is not a whole number ≥ 0
+    counts 0 (it only sizes arrays).
+    """
     out: Dict[str, Tuple[str, int]] = {}
     for c in reader.connections:
         typ, count = out.get(c.topic, (c.msgtype, 0))
-        out[c.topic] = (typ, count + c.msgcount)
+        usable = isinstance(c.msgcount, int) and c.msgcount > 0
+        out[c.topic] = (typ, count + (c.msgcount if usable else 0))
     return out
 
 
@@ -410,7 +415,10 @@ def read_joint_states(path: str, topic: str, names: Sequence[str], fast: bool = 
             shutil.rmtree(stage, ignore_errors=True)
     reader = open_reader(path)
     try:
-        total = topics(reader).get(topic, ('', 0))[1]
+        total = topics(reader).get(topic, ('', 0))[1]      # metadata.yaml's, for a bag dir
+        paths = storage_files(reader)[1]
+        if paths:       # only a size hint: capped by the files' size (16 bytes a message)
+            total = min(total, sum(os.path.getsize(p) for p in paths) // 16)
         return decode_joint_states(raw_batches(reader, topic, JOINT_STATE, fast), names, fast,
                                    progress and (lambda k: progress(k, total)), total)
     finally:
