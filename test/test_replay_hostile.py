@@ -105,6 +105,27 @@ def test_bag_paths_with_uri_characters_read_their_own_data(tmp_path, storage):
         assert np.all(slow.position == value), name
 
 
+@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
+@pytest.mark.parametrize('claimed', [10 ** 15, 3, 0, 'many'])
+def test_metadata_message_counts_are_only_a_hint(tmp_path, claimed, storage):
+    """A bag's metadata claiming 10**15 messages (or too few, or junk) reads its 100.
+
+    The count sizes the arrays: taken as it is, 10**15 would ask for petabytes.
+    """
+    import yaml
+    bag = write_bag(tmp_path / 'bag', 0.3, storage)
+    meta_path = os.path.join(bag, 'metadata.yaml')
+    with open(meta_path) as f:
+        meta = yaml.safe_load(f)
+    for entry in meta['rosbag2_bagfile_information']['topics_with_message_count']:
+        entry['message_count'] = claimed
+    with open(meta_path, 'w') as f:
+        yaml.safe_dump(meta, f)
+    js = bags.read_joint_states(bag, '/joint_states', UR5_JOINTS)
+    assert len(js.stamp) == 100 and js.fast == 100
+    assert np.all(js.position == 0.3) and np.all(js.effort == 1.0)
+
+
 def test_a_single_storage_file_with_uri_characters(tmp_path):
     """A .db3 file named pct%41.db3 beside pctA.db3 reads its own data."""
     for name, value in (('pct%41', 0.41), ('pctA', 0.65)):

@@ -41,6 +41,7 @@ topic or joint, nothing usable, rosbags missing; a trajectory exceeding an effor
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from typing import Dict, List, Optional, Sequence
@@ -48,12 +49,13 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from .. import friction_torque, Model, rnea
-from ..check import locked_item, read_description
+from ..check import read_description
 from .. import effort as effort_model
 from . import annotate, bags, differentiate, identify, report, splines
 from .recording import recording, Stages
 from .. import identification
-from .arguments import check_gravity, finite, load_model, one_line, positive, Refused
+from .arguments import (add_model_arguments, check_gravity, load_model, one_line, positive,
+                        Refused)
 from ..urdf import read_urdf_file
 from . import correction as correction_of
 
@@ -61,14 +63,51 @@ from . import correction as correction_of
 NODE_THRESHOLD = 0.01
 
 
+#: Points per joint drawn at most (long recordings are decimated).
+PLOT_POINTS = 20000
+
+
 def plot_replay(out: str, topic: str, t: np.ndarray, names: Sequence[str], effort: np.ndarray,
                 tau: np.ndarray, residual: np.ndarray) -> None:
-    """Draw ``measured_vs_model.png`` and ``residual.png`` into ``out``."""
+    """Draw ``measured_vs_model.png`` and ``residual.png`` into ``out`` (decimated data)."""
     report.plot_joints(os.path.join(out, 'measured_vs_model.png'), t, names,
                        {'measured': effort, 'model (RNEA)': tau},
-                       f'{topic}: measured effort and model torque (N m or N)')
+                       f'{topic}: measured effort and model torque (N m or N)',
+                       max_points=len(t))
     report.plot_joints(os.path.join(out, 'residual.png'), t, names,
-                       {'measured - model': residual}, 'residual (N m or N)')
+                       {'measured - model': residual}, 'residual (N m or N)',
+                       max_points=len(t))
+
+
+def rms(x: np.ndarray) -> np.ndarray:
+    """Root mean square of each column of ``x`` (N, n), without an (N, n) temporary."""
+    return np.sqrt(np.einsum('ij,ij->j', x, x) / len(x))
+
+
+@contextlib.contextmanager
+def small_pages():
+    """Within: numpy does not ask the kernel for transparent huge pages for new arrays.
+
+    numpy marks every array of 4 MB or more ``madvise(MADV_HUGEPAGE)``; faulting such pages
+    in was erratic and slow on the 2-core VM the replay was timed on (system time of the
+    hour's replay 3.2-3.9 s, 0.9-1.0 s without; 1.2 GB of arrays took 0.46-3.8 s to touch,
+    0.6 s without). The command touches ~3 GB of fresh arrays once each, where huge pages
+    gain little. (``NUMPY_MADVISE_HUGEPAGE=0`` does the same, read when numpy is imported;
+    the switch used here is private to numpy, hence doing nothing where it is missing.)
+    """
+    try:
+        from numpy._core.multiarray import _set_madvise_hugepage
+    except ImportError:
+        try:                    # numpy 1.x (Ubuntu 24.04's python3-numpy is 1.26)
+            from numpy.core.multiarray import _set_madvise_hugepage
+        except ImportError:
+            yield
+            return
+    before = _set_madvise_hugepage(False)
+    try:
+        yield
+    finally:
+        _set_madvise_hugepage(before)
 
 
 def mimic_notes(model: Model) -> List[str]:
@@ -106,6 +145,16 @@ def print_payload(payload, names: Sequence[str], args) -> None:
 
 def run_bag(args) -> int:
     """Compare measured efforts with the model over a bag; write the files; return 0."""
+    # the plotting child imports matplotlib while this process reads the bag
+    plotter = None if args.no_plots else report.start_child()
+    try:
+        return compare(args, plotter)
+    finally:
+        report.end_child(plotter)       # a refusal: the child ends without drawing
+
+
+def compare(args, plotter) -> int:
+    """:func:`run_bag` with its plotting child (from :func:`report.start_child`, or None)."""
     stages = Stages()
     model = load_model(args)
     names = model.joint_names
@@ -122,8 +171,7 @@ def run_bag(args) -> int:
     tau = rnea(model, q, qd, qdd, args.gravity)
     residual = effort - tau
     stages.done('rnea')
-    rms_measured = np.sqrt(np.mean(effort ** 2, axis=0))
-    rms_residual = np.sqrt(np.mean(residual ** 2, axis=0))
+    rms_measured, rms_residual = rms(effort), rms(residual)
     # what the fits see: this bag and the --also ones, each cleaned and differentiated alone
     train = {k: s[k] for k in ('q', 'qd', 'qdd', 'effort')}
     if args.also:
@@ -168,12 +216,13 @@ def run_bag(args) -> int:
         for j, r in enumerate(rows):
             r += [fit.damping[j], fit.friction[j], fit.armature[j], fit.rms_after[j]]
     report.write_summary(os.path.join(args.out, 'summary.csv'), rows, header)
-    plotter = None
     if not args.no_plots:
-        # The plots are drawn in a forked child while this process writes the residual: two
-        # cores, ~2 s saved on an hour of data.
-        plotter = report.in_child(plot_replay, args.out, args.topic, t - t[0], names,
-                                  effort, tau, residual)
+        # The plots are drawn in the child while this process writes the residual; it gets
+        # only the points drawn (decimated here, as plot_joints would).
+        step = max(1, len(t) // PLOT_POINTS)
+        plotter = report.run_in(plotter, plot_replay, args.out, args.topic,
+                                t[::step] - t[0], names, effort[::step], tau[::step],
+                                residual[::step])
     if args.residual == 'csv':
         report.write_csv(os.path.join(args.out, 'residual.csv'), ['t'] + list(names),
                          [t - t[0]] + [residual[:, j] for j in range(len(names))],
@@ -181,7 +230,7 @@ def run_bag(args) -> int:
     elif args.residual == 'npy':
         np.save(os.path.join(args.out, 'residual.npy'), np.column_stack((t - t[0], residual)))
     stages.done('write residual')
-    if plotter is not None:
+    if not args.no_plots:
         if not report.join_child(plotter):
             print('replay: drawing the plots failed (see above); the CSV files are complete',
                   file=sys.stderr)
@@ -340,7 +389,7 @@ def parser() -> argparse.ArgumentParser:
                                 epilog='Exit status: 0 done, 1 refused (or an effort limit '
                                 'exceeded), 2 bad usage.')
     p.add_argument('bag', nargs='?', help='rosbag2 directory, or a .db3 / .mcap file')
-    p.add_argument('--urdf', required=True, help='URDF file (or .xacro)')
+    add_model_arguments(p)
     p.add_argument('--topic', default='/joint_states', help='sensor_msgs/JointState topic')
     p.add_argument('--out', default='replay_out', help='output directory (created)')
     p.add_argument('--identify', action='store_true',
@@ -372,12 +421,6 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv',
                    help='per-sample residual file (default %(default)s)')
     p.add_argument('--no-plots', action='store_true', help='write no PNG files')
-    p.add_argument('--gravity', type=finite, nargs=3, default=(0.0, 0.0, -9.81),
-                   metavar=('GX', 'GY', 'GZ'), help='m/s^2 in the base frame')
-    p.add_argument('--joints', nargs='+', metavar='J',
-                   help='model reduction: keep only these joints (the others are locked)')
-    p.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
-                   help='value (rad or m) of a joint locked by --joints')
     p.add_argument('--trajectory', metavar='FILE.yaml',
                    help='check a trajectory_msgs/JointTrajectory (YAML) against effort limits')
     p.add_argument('--trajectory-topic', metavar='TOPIC',
@@ -436,7 +479,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return annotate.run(args, load_model)
         if args.trajectory or args.trajectory_topic:
             return run_trajectory(args)
-        return run_bag(args)
+        with small_pages():
+            return run_bag(args)
     except (Refused, bags.BagError, bags.MissingDependency, ValueError) as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
     except OSError as err:

@@ -6,40 +6,55 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import Optional, Sequence
+from typing import Callable, Optional, Sequence
 import warnings
 
 import numpy as np
 
 from .. import Model, URDFWarning
 from ..bounds import MAX_GRAVITY
-from ..check import read_description
+from ..check import locked_item, read_description
 
 
 class Refused(Exception):
     """The input cannot be used; the message says why (exit status 1)."""
 
 
-def finite(text: str) -> float:
-    """Parse a finite number (argparse type)."""
-    try:
-        x = float(text)
-    except ValueError:
-        x = float('nan')
-    if not math.isfinite(x):
-        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number')
-    return x
+def checked(parse: Callable[[str], float], ok: Callable[[float], bool], need: str):
+    """Return an argparse type: ``parse(text)`` if ``ok`` of it, else an error saying ``need``.
+
+    Text that does not parse is refused the same way (as ``nan``, which no check accepts).
+    """
+    def convert(text: str) -> float:
+        try:
+            x = parse(text)
+        except ValueError:
+            x = math.nan
+        if not ok(x):
+            raise argparse.ArgumentTypeError(f'{text!r}: need {need}')
+        return x
+    return convert
 
 
-def positive(text: str) -> float:
-    """Parse a finite number > 0 (argparse type)."""
-    try:
-        x = float(text)
-    except ValueError:
-        x = float('nan')
-    if not (x > 0.0 and math.isfinite(x)):
-        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number > 0')
-    return x
+#: A finite number (argparse type).
+finite = checked(float, math.isfinite, 'a finite number')
+#: A finite number > 0 (argparse type).
+positive = checked(float, lambda x: x > 0.0 and math.isfinite(x), 'a finite number > 0')
+
+
+def add_model_arguments(p: argparse.ArgumentParser) -> None:
+    """Declare the options of the model, the same in every replay command.
+
+    ``--urdf``, ``--joints``/``--locked`` (the model reduction, read by :func:`load_model`)
+    and ``--gravity`` (checked by :func:`check_gravity`).
+    """
+    p.add_argument('--urdf', required=True, help='URDF file (or .xacro)')
+    p.add_argument('--joints', nargs='+', metavar='J',
+                   help='model reduction: only these joints move (the others are locked)')
+    p.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
+                   help='value (rad or m) of a joint locked by --joints')
+    p.add_argument('--gravity', type=finite, nargs=3, default=(0.0, 0.0, -9.81),
+                   metavar=('GX', 'GY', 'GZ'), help='m/s^2 in the base frame')
 
 
 def check_gravity(p: argparse.ArgumentParser, gravity: Sequence[float]) -> None:

@@ -36,9 +36,9 @@ import numpy as np
 
 from .. import Model, rnea
 from ..bounds import MAX_TRAJECTORY_POINTS, MAX_TRAJECTORY_TIME
-from ..check import locked_item
 from ..excitation import Excitation, excitation
-from .arguments import check_gravity, finite, load_model, one_line, positive, Refused
+from .arguments import (add_model_arguments, check_gravity, checked, finite, load_model, one_line,
+                        positive, Refused)
 from . import report, splines
 
 #: Period (s) aimed at when ``--period`` is not given: the duration split into whole periods
@@ -74,15 +74,8 @@ def fraction(text: str) -> float:
     return x
 
 
-def harmonics(text: str) -> int:
-    """Parse the number of harmonics, 1 .. 50 (argparse type)."""
-    try:
-        k = int(text)
-    except ValueError:
-        k = 0
-    if not 1 <= k <= 50:
-        raise argparse.ArgumentTypeError(f'{text!r}: need a whole number 1 .. 50')
-    return k
+#: The number of harmonics, 1 .. 50 (argparse type).
+harmonics = checked(int, lambda k: 1 <= k <= 50, 'a whole number 1 .. 50')
 
 
 def parser() -> argparse.ArgumentParser:
@@ -91,7 +84,7 @@ def parser() -> argparse.ArgumentParser:
                 formatter_class=argparse.RawDescriptionHelpFormatter,
                 epilog='Exit status: 0 written and within the limits, 1 refused or a limit '
                 'exceeded, 2 bad usage.')
-    p.add_argument('--urdf', required=True, help='URDF file (or .xacro)')
+    add_model_arguments(p)
     p.add_argument('--duration', type=positive, required=True,
                    help='s: the period is repeated to fill it (at least one period)')
     p.add_argument('--out', required=True, metavar='PLAN.yaml',
@@ -108,12 +101,6 @@ def parser() -> argparse.ArgumentParser:
                    '0.25 m/s where none)')
     p.add_argument('--effort-fraction', type=fraction, default=0.6,
                    help='of the URDF effort limits, RNEA torque (default %(default)g)')
-    p.add_argument('--joints', nargs='+', metavar='J',
-                   help='model reduction: move only these joints (the others are locked)')
-    p.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
-                   help='value (rad or m) of a joint locked by --joints')
-    p.add_argument('--gravity', type=finite, nargs=3, default=(0.0, 0.0, -9.81),
-                   metavar=('GX', 'GY', 'GZ'), help='m/s^2 in the base frame')
     p.add_argument('--seed', type=int, default=0, help='of the start (default %(default)d)')
     p.add_argument('--rate', type=positive, default=10.0,
                    help='points per second written (default %(default)g: the controller\'s '
