@@ -274,12 +274,7 @@ read_strided(const char *p, Py_ssize_t n, Py_ssize_t step, int type, double *out
         }                                                                           \
     } while (0)
     switch (type) {
-    case NPY_DOUBLE:
-        if (step == (Py_ssize_t)sizeof(double))     /* contiguous: the common case */
-            memcpy(out, p, sizeof(double) * n);
-        else
-            READ(double);
-        return AS_DOUBLE;
+    case NPY_DOUBLE: READ(double); break;
     case NPY_FLOAT: READ(npy_float); return AS_FLOAT;
     case NPY_BOOL: READ(npy_bool); break;
     case NPY_BYTE: READ(npy_byte); break;
@@ -328,6 +323,10 @@ as_doubles(PyObject *obj, Py_ssize_t n, double *out)
         PyArrayObject *a = (PyArrayObject *)obj;
         if (PyArray_NDIM(a) != 1 || PyArray_DIM(a, 0) != n || !PyArray_ISNOTSWAPPED(a))
             return DECLINED;
+        if (PyArray_TYPE(a) == NPY_DOUBLE && PyArray_STRIDE(a, 0) == sizeof(double)) {
+            memcpy(out, PyArray_BYTES(a), sizeof(double) * n);  /* the common case */
+            return AS_DOUBLE;
+        }
         return read_strided(PyArray_BYTES(a), n, PyArray_STRIDE(a, 0), PyArray_TYPE(a), out);
     }
     if (PyList_CheckExact(obj) || PyTuple_CheckExact(obj)) {
@@ -449,20 +448,17 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     PyObject *results[2] = {NULL, NULL}, *out = NULL;
     Py_buffer fb = {0};
     const double *f = NULL;
-    int floats = 0, read = AS_DOUBLE;       /* joint vectors read from float32 */
-    for (int i = 0; i < 3; i++) {
-        if (i >= a->vectors) {
-            x[i] = h->zeros;
-        } else if (read != DECLINED) {
-            read = as_doubles(args[1 + i], n, x[i]);
-            floats += read == AS_FLOAT;
-        }
+    int floats = 0;         /* joint vectors read from float32 */
+    for (int i = 0; i < a->vectors; i++) {
+        const int read = as_doubles(args[1 + i], n, x[i]);
+        if (read == DECLINED)
+            goto declined;
+        floats += read == AS_FLOAT;
     }
-    if (read == DECLINED || (a->gravity && !as_doubles(args[1 + a->vectors], 3, g))) {
-        out = Py_None;
-        Py_INCREF(out);
-        goto done;
-    }
+    for (int i = a->vectors; i < 3; i++)
+        x[i] = h->zeros;
+    if (a->gravity && !as_doubles(args[1 + a->vectors], 3, g))
+        goto declined;
     if (nargs > fixed && args[fixed] != Py_None) {
         if (get_table(args[fixed], &fb, 0, "f_body") < 0)
             goto done;
@@ -473,7 +469,7 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         f = fb.buf;
     }
     const int single_precision = floats == a->vectors;
-    double *data[2] = {NULL, NULL};
+    double *data[2];
     for (int k = 0; k < count; k++) {
         results[k] = PyArray_SimpleNew(ndim, dims, single_precision ? NPY_FLOAT : NPY_DOUBLE);
         if (results[k] == NULL)
@@ -481,13 +477,23 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         data[k] = single_precision ? res + k * size
                                    : (double *)PyArray_DATA((PyArrayObject *)results[k]);
     }
-    run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, data[0], data[1], work);
+    run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, data[0],
+              count == 2 ? data[1] : NULL, work);
     for (int k = 0; single_precision && k < count; k++) {
         float *out32 = (float *)PyArray_DATA((PyArrayObject *)results[k]);
         for (Py_ssize_t i = 0; i < size; i++)
             out32[i] = (float)data[k][i];
     }
-    out = count == 1 ? Py_NewRef(results[0]) : PyTuple_Pack(2, results[0], results[1]);
+    if (count == 1) {
+        out = results[0];       /* its reference */
+        results[0] = NULL;
+    } else {
+        out = PyTuple_Pack(2, results[0], results[1]);
+    }
+    goto done;
+declined:
+    out = Py_None;
+    Py_INCREF(out);
 done:
     Py_XDECREF(results[0]);
     Py_XDECREF(results[1]);
@@ -773,9 +779,9 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     }
     if (ok) {
         Py_INCREF(kern);
-        PyObject *call[5] = {kern};
-        memcpy(call + 1, args + 1, sizeof(PyObject *) * nv);
-        call[1 + nv] = gravity;     /* read when the algorithm takes gravity */
+        /* kernels, the joint vectors, gravity (read when the algorithm takes it) */
+        PyObject *call[5] = {kern, args[1], nv > 1 ? args[2] : NULL, nv > 2 ? args[3] : NULL};
+        call[1 + nv] = gravity;
         PyObject *out = single(a, call, 1 + nv + a->gravity);
         Py_DECREF(kern);
         if (out != Py_None)
