@@ -468,7 +468,7 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         }
         f = fb.buf;
     }
-    const int single_precision = floats == a->vectors;
+    const int single_precision = may_float && floats == a->vectors;   /* res has room */
     double *data[2];
     for (int k = 0; k < count; k++) {
         results[k] = PyArray_SimpleNew(ndim, dims, single_precision ? NPY_FLOAT : NPY_DOUBLE);
