@@ -18,6 +18,7 @@ computed in float64 and their results rounded back to float32 once.
 from __future__ import annotations
 
 import importlib
+import math
 import os
 from typing import Optional
 import warnings
@@ -71,10 +72,10 @@ def _batch(entry, lay, vectors: tuple, middle: tuple, shape: tuple, results: int
     """
     n = lay.n
     batch = vectors[0].shape[:-1]
-    N = int(np.prod(batch, dtype=np.intp))
+    N = math.prod(batch)        # (np.prod takes ~2 µs: a batch of a few states feels it)
+    rows = [np.ascontiguousarray(x.reshape(N, n), dtype=np.float64) for x in vectors]
     outs = [np.empty((N,) + shape) for _ in range(results)]
-    entry(lay.kernels, N, *(np.ascontiguousarray(x.reshape(N, n), dtype=np.float64)
-                            for x in vectors), *middle, *outs, THREADS)
+    entry(lay.kernels, N, *rows, *middle, *outs, THREADS)
     dtype = vectors[0].dtype
     return [out.reshape(batch + shape).astype(dtype, copy=False) for out in outs]
 
