@@ -70,9 +70,12 @@ class BuildKernels(build_ext):
         fresh generation, so a build older than its sources is found.
         """
         import hashlib
+        import warnings
         sys.path.insert(0, HERE)
         try:
-            from spatial_dynamics.backends import codegen
+            with warnings.catch_warnings():   # the package's own warning about the
+                warnings.simplefilter('ignore')  # kernels this very build is making
+                from spatial_dynamics.backends import codegen
         finally:
             sys.path.remove(HERE)
         text = codegen.generate_c()

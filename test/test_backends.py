@@ -8,7 +8,9 @@
 - single states, batches (serial and parallel entries, broadcast, shared and per-sample
   wrenches), gravity variations, the Panda with its mimic finger, UR5, Talos, Solo12 and
   seeded random trees (revolute, continuous, prismatic, fixed, mimic);
-- non-float64 inputs run on numpy; without the extension the package imports and
+- float32 inputs run on the kernels in float64 and come back as float32, equal to the float64
+  result rounded once; mixed float32/float64 inputs give float64 (numpy's promotion);
+  longdouble runs on numpy; without the extension the package imports and
   ``backend='auto'`` runs on numpy, ``backend='compiled'`` says how to build it; nothing is
   compiled or cached at run time, and numba is never imported.
 
@@ -231,15 +233,113 @@ def test_validation_errors_are_the_numpy_ones(kernels):
         sd.rnea(model, z, z, z, backend='fortran')
 
 
-@pytest.mark.parametrize('dtype', [np.float32, np.longdouble])
-def test_other_float_dtypes_run_on_numpy(kernels, dtype, rng):
-    """Only float64 goes to the kernel: float32 and longdouble keep their dtype (numpy path)."""
+def test_longdouble_runs_on_numpy(kernels, rng):
+    """Run longdouble (asked for its precision) on numpy: its dtype, the numpy result."""
     model, _ = robot('panda')
-    q, qd, qdd = (x.astype(dtype) for x in random_state(rng, (3,), model.nq))
+    q, qd, qdd = (x.astype(np.longdouble) for x in random_state(rng, (3,), model.nq))
     for args in [(q, qd, qdd), (q[0], qd[0], qdd[0])]:
         tau = sd.rnea(model, *args, backend='compiled')
-        assert tau.dtype == dtype
+        assert tau.dtype == np.longdouble
         np.testing.assert_array_equal(tau, sd.rnea(model, *args, backend='numpy'))
+
+
+# each public function: how many joint vectors it takes, and whether it takes gravity
+FUNCTIONS = {'rnea': (3, True), 'gravity_torque': (1, True), 'bias_torque': (2, True),
+             'mass_matrix': (1, False), 'generalized_momentum': (2, False),
+             'regressor': (3, True)}
+
+
+def _call(name, model, vectors, gravity=None, **kwargs):
+    """Call the public function ``name`` with its joint vectors (and gravity if it takes it)."""
+    k, takes_gravity = FUNCTIONS[name]
+    extra = (gravity,) if takes_gravity and gravity is not None else ()
+    return getattr(sd, name)(model, *vectors[:k], *extra, **kwargs)
+
+
+def _arrays(out):
+    """Return the result of a public function as a list of arrays (momentum gives two)."""
+    return list(out) if isinstance(out, tuple) else [out]
+
+
+@pytest.mark.parametrize('name', list(FUNCTIONS))
+@pytest.mark.parametrize('backend', ['auto', 'compiled'])
+def test_float32_runs_on_the_kernels_in_float64(kernels, name, backend, rng):
+    """Run float32 on the float64 kernels: their result rounded once, returned as float32.
+
+    For one state and batches; ``backend='numpy'`` keeps float32 arithmetic (the benchmark's
+    float32 row).
+    """
+    model, _ = robot('panda')
+    wide = random_state(rng, (5,), model.nq)
+    narrow = [x.astype(np.float32) for x in wide]
+    same = [x.astype(np.float64) for x in narrow]    # the float32 numbers, in float64
+    for pick in (lambda x: x, lambda x: x[2], lambda x: x[1:2], lambda x: x[::2]):
+        got = _arrays(_call(name, model, [pick(x) for x in narrow], backend=backend))
+        want = _arrays(_call(name, model, [pick(x) for x in same], backend=backend))
+        for a, b in zip(got, want, strict=True):
+            assert a.dtype == np.float32 and b.dtype == np.float64 and a.shape == b.shape
+            np.testing.assert_array_equal(a, b.astype(np.float32))
+    # numpy: float32 arithmetic, a float32 result near the float64 one (but not the same)
+    slow = _arrays(_call(name, model, narrow, backend='numpy'))
+    fast = _arrays(_call(name, model, narrow, backend=backend))
+    for a, b in zip(slow, fast, strict=True):
+        assert a.dtype == np.float32
+        assert np.abs(a - b).max() <= 1e-4 * max(1.0, np.abs(b).max())
+    assert any(not np.array_equal(a, b) for a, b in zip(slow, fast))
+
+
+@pytest.mark.parametrize('name', list(FUNCTIONS))
+def test_mixed_dtypes_promote_as_numpy_does(kernels, name, rng):
+    """Promote as numpy: float32 with float64, lists or integers gives float64.
+
+    The float64 result of the same numbers; float32 gravity does not change the dtype.
+    """
+    model, _ = robot('ur5')
+    k = FUNCTIONS[name][0]
+    narrow = [x.astype(np.float32) for x in random_state(rng, (), model.nq)]
+    same = [x.astype(np.float64) for x in narrow]
+    g64, g32 = np.array([0.5, -0.25, -9.75]), np.array([0.5, -0.25, -9.75], np.float32)
+    want64 = _arrays(_call(name, model, same, g64))
+    want32 = _arrays(_call(name, model, narrow, g64))
+    for i in range(k if k > 1 else 0):    # one vector float64 (array, list), others float32
+        for form in (same[i], same[i].tolist()):
+            vectors = narrow[:i] + [form] + narrow[i + 1:]
+            for a, b in zip(_arrays(_call(name, model, vectors, g64)), want64, strict=True):
+                assert a.dtype == np.float64
+                np.testing.assert_array_equal(a, b)
+    ints = np.arange(model.nq) % 3 - 1
+    mixed = [ints] + narrow[1:]
+    for a, b in zip(_arrays(_call(name, model, mixed, g64)),
+                    _arrays(_call(name, model, [ints * 1.0] + same[1:], g64)), strict=True):
+        assert a.dtype == np.float64
+        np.testing.assert_array_equal(a, b)
+    for a, b in zip(_arrays(_call(name, model, narrow, g32)), want32, strict=True):
+        assert a.dtype == np.float32
+        np.testing.assert_array_equal(a, b)
+
+
+def test_float32_external_wrenches(kernels, rng):
+    """Give float32 states with f_ext in float32 or float64 a float32 result.
+
+    The float64 result rounded once (the wrenches convert to float64 exactly), for one state
+    and a batch.
+    """
+    model, _ = robot('ur5')
+    link = model.body_names[-1]
+    wide = random_state(rng, (4,), model.nq)
+    narrow = [x.astype(np.float32) for x in wide]
+    same = [x.astype(np.float64) for x in narrow]
+    w32 = np.array([0.5, -1.0, 2.0, 10.0, -3.0, 4.5], np.float32)
+    for pick in (lambda x: x[0], lambda x: x):
+        want = sd.rnea(model, *map(pick, same), f_ext={link: w32.astype(np.float64)})
+        for wrench in (w32, w32.astype(np.float64)):
+            for backend in ('auto', 'compiled'):
+                tau = sd.rnea(model, *map(pick, narrow), f_ext={link: wrench}, backend=backend)
+                assert tau.dtype == np.float32
+                np.testing.assert_array_equal(tau, want.astype(np.float32))
+        tau = sd.rnea(model, *map(pick, narrow), f_ext={link: w32}, backend='numpy')
+        assert tau.dtype == np.float32
+        assert np.abs(tau - want).max() <= 1e-4 * max(1.0, np.abs(want).max())
 
 
 def test_the_layout_is_the_backends_not_the_models(kernels):
@@ -297,7 +397,8 @@ def test_single_entry_refuses_wrong_lengths(kernels):
     z, g = np.zeros(n), (0.0, 0.0, -9.81)
     for args in ((np.zeros(n - 1), z, z, g), (z, np.zeros(n + 1), z, g), (z, z, z, g[:2]),
                  (np.zeros((1, n)), z, z, g), (z, z, [0.0] * n + [1.0], g),
-                 (z, z, z, np.zeros(3, np.float32)), (z.astype(np.float32), z, z, g),
+                 (z, z, z, np.zeros(3, np.float16)), (z.astype(np.float16), z, z, g),
+                 (z, z, z, np.zeros(3, np.longdouble)), (z.astype(np.longdouble), z, z, g),
                  (z, z, ['0'] * n, g), (z, z, b'\0' * n, g)):
         assert kernels.rnea(K, *args) is None
     with pytest.raises(ValueError, match=rf'q must have shape \(\.\.\., {n}\)'):
@@ -395,7 +496,7 @@ def test_a_stale_build_is_not_used():
         print(sd.backends.describe())
     ''')
     assert out.startswith('numpy (compiled kernels not built: /somewhere/_compiled.so is a '
-                          'stale build (API 0, not 2): build the package again)'), out
+                          'stale build (API 0, not 3): build the package again)'), out
 
 
 def test_numba_is_never_imported():

@@ -420,7 +420,7 @@ def test_the_doors_are_the_functions_entered_in_c(ext, rng):
 
 
 def test_arrays_the_entries_decline_take_the_general_path(ext, rng):
-    """Swapped bytes, float32 and batches of one state: None from the entry, the same answer."""
+    """Swapped bytes, float16, longdouble, batches of one state: None, and the same answer."""
     model = robot('ur5')
     n = model.nq
     kernels = layout.of(model).kernels
@@ -430,13 +430,64 @@ def test_arrays_the_entries_decline_take_the_general_path(ext, rng):
     assert ext.mass_matrix(kernels, swapped) is None
     np.testing.assert_array_equal(sd.rnea(model, swapped, qd, qdd), sd.rnea(model, q, qd, qdd))
     np.testing.assert_array_equal(sd.mass_matrix(model, swapped), sd.mass_matrix(model, q))
-    for declined in (q.astype(np.float32), q[None], q[:-1], np.append(q, 0.0),
-                     q.astype(np.complex128), q.astype(object)):
+    for declined in (q.astype(np.float16), q.astype(np.longdouble), q[None], q[:-1],
+                     np.append(q, 0.0), q.astype(np.complex128), q.astype(object),
+                     q.astype(np.float32).astype(np.dtype('>f4'))):
         assert ext.rnea(kernels, declined, qd, qdd, sd.GRAVITY) is None
         assert ext.gravity_torque(kernels, declined, sd.GRAVITY) is None
         assert ext.mass_matrix(kernels, declined) is None
     assert ext.rnea(kernels, q, qd, qdd, np.zeros(4)) is None
-    assert ext.rnea(kernels, q, qd, qdd, np.zeros(3, dtype=np.float32)) is None
+    assert ext.rnea(kernels, q, qd, qdd, np.zeros(3, dtype=np.float16)) is None
+
+
+def test_the_entries_take_float32_and_answer_in_float32(ext, rng):
+    """Read float32 arrays (any strides) and buffers in C, answer float32 when all are.
+
+    With every joint vector float32 the result is the float64 one rounded once to float32; a
+    float32 vector among float64 ones gives the float64 result of the same numbers, and
+    float32 gravity does not change the dtype.
+    """
+    model = robot('panda')
+    n = model.nq
+    kernels = layout.of(model).kernels
+    narrow = [x.astype(np.float32) for x in random_state(rng, (), n)]
+    same = [x.astype(np.float64) for x in narrow]
+    g = (0.1, -0.2, -9.8)
+    g32 = np.array(g, np.float32)
+    wide_g32 = g32.astype(np.float64)
+    strided = [np.repeat(x, 2)[::2] for x in narrow]
+    buffers = [array.array('f', x.tolist()) for x in narrow]
+    for vectors in (narrow, strided, buffers):
+        entries = [(ext.rnea(kernels, *vectors, g), ext.rnea(kernels, *same, g)),
+                   (ext.regressor(kernels, *vectors, g), ext.regressor(kernels, *same, g)),
+                   (ext.gravity_torque(kernels, vectors[0], g),
+                    ext.gravity_torque(kernels, same[0], g)),
+                   (ext.bias_torque(kernels, *vectors[:2], g),
+                    ext.bias_torque(kernels, *same[:2], g)),
+                   (ext.mass_matrix(kernels, vectors[0]), ext.mass_matrix(kernels, same[0]))]
+        entries += zip(ext.generalized_momentum(kernels, *vectors[:2]),
+                       ext.generalized_momentum(kernels, *same[:2]))
+        for got, want in entries:
+            assert got.dtype == np.float32 and want.dtype == np.float64
+            np.testing.assert_array_equal(got, want.astype(np.float32))
+    # float32 gravity: read as float64 numbers, no say in the dtype
+    for vectors, dtype in ((narrow, np.float32), (same, np.float64)):
+        tau = ext.rnea(kernels, *vectors, g32)
+        assert tau.dtype == dtype
+        np.testing.assert_array_equal(tau, ext.rnea(kernels, *same, wide_g32).astype(dtype))
+    # one float64 (or list, or integer) vector among float32 ones: float64
+    want = ext.rnea(kernels, *same, g)
+    for i in range(3):
+        for form in (same[i], same[i].tolist(), tuple(same[i].tolist())):
+            tau = ext.rnea(kernels, *narrow[:i], form, *narrow[i + 1:], g)
+            assert tau.dtype == np.float64
+            np.testing.assert_array_equal(tau, want)
+    # with an external force table
+    fb = np.zeros((model.NB + 1, 6))
+    fb[-1] = [0.5, -1.0, 2.0, 10.0, -3.0, 4.5]
+    tau = ext.rnea(kernels, *narrow, g, fb)
+    assert tau.dtype == np.float32
+    np.testing.assert_array_equal(tau, ext.rnea(kernels, *same, g, fb).astype(np.float32))
 
 
 def test_the_doors_answer_each_model_with_its_own_kernels(ext, rng):

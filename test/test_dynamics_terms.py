@@ -142,9 +142,19 @@ def test_arguments(rng):
     M = sd.mass_matrix(model, q)
     assert np.array_equal(sd.mass_matrix(model, q.tolist()), M)
     assert np.array_equal(sd.mass_matrix(model, tuple(q)), M)
-    M32 = sd.mass_matrix(model, q.astype(np.float32)[None])
+    q32 = q.astype(np.float32)
+    M32 = sd.mass_matrix(model, q32[None])
     assert M32.dtype == np.float32 and M32.shape == (1, 6, 6)
     assert np.abs(M32[0] - M).max() < 1e-4 * np.abs(M).max()
+    # float32 states run on the kernels: the float64 M of the same numbers, rounded once
+    # (numpy's backend computes in float32)
+    assert compiled.ext is not None, compiled.FAILURE
+    M_wide = sd.mass_matrix(model, q32.astype(np.float64))
+    np.testing.assert_array_equal(M32[0], M_wide.astype(np.float32))
+    np.testing.assert_array_equal(sd.mass_matrix(model, q32), M32[0])
+    M32_numpy = sd.mass_matrix(model, q32[None], backend='numpy')
+    assert M32_numpy.dtype == np.float32
+    assert np.abs(M32_numpy[0] - M).max() < 1e-4 * np.abs(M).max()
     assert sd.mass_matrix(model, np.zeros((2, 3, 6))).shape == (2, 3, 6, 6)
     with pytest.raises(ValueError, match=r'q must have shape \(\.\.\., 6\)'):
         sd.mass_matrix(model, np.zeros(5))

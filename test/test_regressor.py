@@ -158,9 +158,17 @@ def test_every_argument_form_rnea_takes():
     assert close(sd.regressor(model, q, qd[0], qdd[0].tolist(), g),
                  sd.regressor(model, q, np.tile(qd[0], (4, 1)), np.tile(qdd[0], (4, 1)), g,
                               backend='numpy'))
-    # float32 runs on numpy in float32, as rnea does
-    Y32 = sd.regressor(model, *(x.astype(np.float32) for x in (q, qd, qdd)), g)
+    # float32 runs on the kernels in float64 and comes back as float32, as rnea does
+    narrow = [x.astype(np.float32) for x in (q, qd, qdd)]
+    Y32 = sd.regressor(model, *narrow, g)
     assert Y32.dtype == np.float32 and close(Y32, ref, 1e-4)
+    np.testing.assert_array_equal(
+        Y32, sd.regressor(model, *(x.astype(np.float64) for x in narrow), g).astype(np.float32))
+    one = compiled.ext.regressor(kernels, *(x[0] for x in narrow), g)
+    assert one.dtype == np.float32
+    np.testing.assert_array_equal(one, Y32[0])
+    Y32_numpy = sd.regressor(model, *narrow, g, backend='numpy')     # float32 arithmetic
+    assert Y32_numpy.dtype == np.float32 and close(Y32_numpy, ref, 1e-4)
     with pytest.raises(ValueError, match='qd must have shape'):
         sd.regressor(model, q, qd[:, :3], qdd)
     with pytest.raises(ValueError, match='gravity must be a 3-vector'):

@@ -5,18 +5,22 @@
 ``backend=`` takes one of :data:`BACKENDS`, and means the same in every function:
 
 * ``'numpy'``: the one source of :mod:`spatial_dynamics.algorithms` on Python floats (one
-  state) or numpy arrays (a batch, any float dtype) — :mod:`.python`;
+  state) or numpy arrays (a batch, any float dtype, computed in that dtype) — :mod:`.python`;
 * ``'compiled'``: the C extension built with the package from the same source, for float64
-  (other float dtypes run on numpy) — :mod:`.compiled`; :class:`CompiledBackendUnavailable`
-  when the package was built without a C compiler;
+  and float32 — :mod:`.compiled`; :class:`CompiledBackendUnavailable` when the package was
+  built without a C compiler. float32 states are computed in float64 and the results
+  returned as float32 (the dtype passed comes back, more accurate than float32 arithmetic);
+  other float dtypes (``np.longdouble``, asked for its precision; float16) run on numpy;
 * ``'auto'``: compiled when the extension was built, else numpy.
 
-Nothing is compiled at run time. One state of any form (ndarray of float64 or integers with
-any strides, list, tuple, Python floats and ints, gravity as a tuple, list or array) goes to
-the extension's single-state entry as it is, converted once in C; a batch is made one
-C-contiguous float64 array and split over threads; anything else (other dtypes, wrong
-shapes) takes the general path, which validates and names the argument. The model's table is
-prepared once per model (:mod:`.layout`).
+The result's dtype is that of q, qd, qdd promoted by numpy (float32 only when all are
+float32; integers, lists and tuples count as float64); gravity and ``f_ext`` do not change
+it. Nothing is compiled at run time. One state of any form (ndarray of float64, float32 or
+integers with any strides, list, tuple, Python floats and ints, gravity as a tuple, list or
+array) goes to the extension's single-state entry as it is, converted once in C; a batch is
+made one C-contiguous float64 array and split over threads; anything else (other dtypes,
+wrong shapes) takes the general path, which validates and names the argument. The model's
+table is prepared once per model (:mod:`.layout`).
 """
 
 from __future__ import annotations
@@ -35,6 +39,7 @@ BACKENDS = ('auto', 'numpy', 'compiled')
 GRAVITY = (0.0, 0.0, -9.81)
 
 _F8 = np.dtype(np.float64)
+_KERNEL_DTYPES = compiled.DTYPES
 _ndarray = np.ndarray
 _NO_GRAVITY = (None, None, None)
 _layout_of = LAYOUTS.get                 # bound once: the fast path is ~1 µs
@@ -59,6 +64,17 @@ def kernels(model: Model, backend: str = 'auto'):
     """
     lay = _layout_of(id(model)) or layout.of(model)
     return lay.kernels if backend == 'auto' else _select(backend, lay)
+
+
+def _entered(model: Model, backend: str, entry, *args) -> tuple:
+    """Return ``model``'s layout, the kernels ``backend`` selects, and ``entry``'s answer.
+
+    ``entry`` is the extension's single-state function (or ``None``: not called); its answer
+    is ``None`` when there are no kernels or it declines the arguments (see :func:`kernels`).
+    """
+    lay = _layout_of(id(model)) or layout.of(model)
+    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
+    return lay, kern, (None if kern is None or entry is None else entry(kern, *args))
 
 
 def _select(backend: str, lay: layout.Layout):
@@ -94,23 +110,21 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         f_ext: link name → spatial force ``[n; f]`` (N m, N), angular first, acting on that
             link and expressed in that link's frame; shape (6,) or broadcastable to (..., 6).
         backend: ``'auto'`` (compiled when the package was built with its kernels),
-            ``'numpy'`` or ``'compiled'`` (float64 inputs; other dtypes run on numpy).
+            ``'numpy'`` or ``'compiled'`` (float64 and float32; other dtypes run on numpy).
 
     Returns:
         τ (N m or N), same shape as the broadcast inputs; float64, or the inputs' floating
         dtype.
     """
-    lay = _layout_of(id(model)) or layout.of(model)
-    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
+    lay, kern, tau = _entered(model, backend, None if f_ext else _c_rnea, q, qd, qdd, gravity)
+    if tau is not None:
+        return tau
     if not f_ext:
         if kern is not None:
-            tau = _c_rnea(kern, q, qd, qdd, gravity)
-            if tau is not None:
-                return tau
             if (type(q) is type(qd) is type(qdd) is _ndarray and q.ndim > 1
                     and q.shape == qd.shape == qdd.shape and q.shape[-1] == lay.n
-                    and q.dtype is qd.dtype is qdd.dtype is _F8):
-                # a batch of float64 states of one shape: no broadcasting to work out
+                    and q.dtype is qd.dtype is qdd.dtype and q.dtype in _KERNEL_DTYPES):
+                # a batch of states of one shape and dtype: no broadcasting to work out
                 g = GRAVITY if gravity is GRAVITY else _gravity(gravity)
                 if g[0] is not None:
                     if q.size == lay.n:     # one state with batch dimensions of 1
@@ -138,13 +152,10 @@ def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
     product (see :func:`~spatial_dynamics.algorithms.rnea.rnea_kernel`). ``q`` of shape (n,)
     or (..., n); returns τ of the same shape. Arguments as for :func:`rnea`.
     """
-    lay = _layout_of(id(model)) or layout.of(model)
-    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
-    if kern is not None:
-        tau = _c_gravity_torque(kern, q, gravity)
-        if tau is not None:
-            return tau
-    elif type(q) is _ndarray and q.dtype is _F8 and q.shape == lay.zeros.shape:
+    lay, kern, tau = _entered(model, backend, _c_gravity_torque, q, gravity)
+    if tau is not None:
+        return tau
+    if kern is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == lay.zeros.shape:
         return rnea(model, q, lay.zeros, lay.zeros, gravity, backend=backend)
     q = _vector(q, lay.n)
     zero = np.zeros(np.shape(q), dtype=q.dtype if q.dtype.kind == 'f' else np.float64)
@@ -158,13 +169,10 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     ``q``, ``qd`` of shape (n,) or (..., n), broadcast; returns τ of the broadcast shape.
     Arguments as for :func:`rnea`.
     """
-    lay = _layout_of(id(model)) or layout.of(model)
-    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
-    if kern is not None:
-        tau = _c_bias_torque(kern, q, qd, gravity)
-        if tau is not None:
-            return tau
-    elif (type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
+    lay, kern, tau = _entered(model, backend, _c_bias_torque, q, qd, gravity)
+    if tau is not None:
+        return tau
+    if (kern is None and type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
             and q.shape == qd.shape == lay.zeros.shape):
         return rnea(model, q, qd, lay.zeros, gravity, backend=backend)
     q, qd = _vector(q, lay.n), _vector(qd, lay.n)
@@ -181,14 +189,11 @@ def mass_matrix(model: Model, q, backend: str = 'auto') -> np.ndarray:
     ``τ = M(q) q̈ + bias_torque(q, q̇)``. ``q`` of shape (n,) or (..., n), arrays, lists or
     tuples; returns an array of shape (..., n, n), float64 or ``q``'s floating dtype.
     """
-    lay = _layout_of(id(model)) or layout.of(model)
-    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
-    if kern is not None:
-        H = _c_mass_matrix(kern, q)
-        if H is not None:
-            return H
+    lay, kern, H = _entered(model, backend, _c_mass_matrix, q)
+    if H is not None:
+        return H
     (q,) = as_joint_arrays(model, _vector(q, lay.n))
-    if kern is not None and q.dtype == np.float64:
+    if kern is not None and q.dtype in _KERNEL_DTYPES:
         return compiled.mass_matrix(lay, q)
     return python.mass_matrix(lay.rows, q)
 
@@ -201,14 +206,11 @@ def generalized_momentum(model: Model, q, qd, backend: str = 'auto') -> tuple:
     (see :mod:`spatial_dynamics.algorithms.momentum`). ``q``, ``qd`` of shape (n,) or
     (..., n), broadcast; returns two arrays of the broadcast shape.
     """
-    lay = _layout_of(id(model)) or layout.of(model)
-    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
-    if kern is not None:
-        out = _c_momentum(kern, q, qd)
-        if out is not None:
-            return out
+    lay, kern, out = _entered(model, backend, _c_momentum, q, qd)
+    if out is not None:
+        return out
     q, qd = as_joint_arrays(model, q, qd)
-    if kern is not None and q.dtype == np.float64:
+    if kern is not None and q.dtype in _KERNEL_DTYPES:
         return compiled.momentum(lay, q, qd)
     return python.momentum(lay.rows, q, qd)
 
@@ -224,15 +226,12 @@ def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     ``f_ext``: external wrenches do not depend on the inertias); float64, or the inputs'
     floating dtype.
     """
-    lay = _layout_of(id(model)) or layout.of(model)
-    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
-    if kern is not None:
-        Y = _c_regressor(kern, q, qd, qdd, gravity)
-        if Y is not None:
-            return Y
+    lay, kern, Y = _entered(model, backend, _c_regressor, q, qd, qdd, gravity)
+    if Y is not None:
+        return Y
     q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
     g = tuple(as_vector('gravity', gravity, 3).tolist())
-    if kern is not None and q.dtype == np.float64:
+    if kern is not None and q.dtype in _KERNEL_DTYPES:
         if q.size == q.shape[-1] > 0:       # one state with batch dimensions of 1
             Y = _c_regressor(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g)
             return Y.reshape(q.shape[:-1] + Y.shape)
@@ -276,7 +275,7 @@ def _rnea(model: Model, lay: layout.Layout, q, qd, qdd, gravity, f_ext,
     if fb:  # batched wrenches broadcast against the batch of states
         batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
         q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
-    if kern is not None and q.dtype == np.float64:
+    if kern is not None and q.dtype in _KERNEL_DTYPES:
         if q.size == q.shape[-1] > 0:
             # One state (maybe with batch dimensions of 1): the single-state entry.
             fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
@@ -313,12 +312,12 @@ def _doors() -> None:
     One state with the default or a given gravity, no ``f_ext`` and backend ``'auto'`` or
     ``'compiled'`` is answered in C without the Python frame of the function (~0.2 µs); any
     other call goes to the function itself, unchanged. Each door carries the function's
-    name, docstring and signature (``__wrapped__``).
+    name, docstring and signature (``__wrapped__``). The extension names the functions it
+    has an entry for (``ALGORITHMS``, in the order of the doors' kinds).
     """
     import functools
     g = globals()
-    for kind, name in enumerate(('rnea', 'gravity_torque', 'bias_torque', 'mass_matrix',
-                                 'generalized_momentum')):
+    for kind, name in enumerate(_ext.ALGORITHMS):
         function = g[name]
         g[name] = functools.update_wrapper(_ext.Door(function, kind, layout.KERNELS, GRAVITY),
                                            function)

@@ -5,15 +5,22 @@
  * spatial_dynamics/algorithms by codegen.py) as a CPython extension, built by setup.py.
  *
  * This file only moves data. A Kernels object holds a copy of a model's table (the rows of
- * backends/layout.py, prepared once in Python). The single-state entries (METH_FASTCALL)
- * read q, qd, qdd and gravity once each into C doubles: a 1-D numpy array of float64 or
- * integers (any strides) through the numpy C API, a list or tuple of Python floats and
- * ints, or another 1-D buffer of such numbers through the buffer protocol; anything else (a
- * batch, float32, a wrong length, other objects) returns None so that the Python caller
- * takes its general path, which validates and names the argument. Results are new numpy
- * arrays. The batch entries take C-contiguous float64 arrays prepared by the caller, release
- * the GIL and let POSIX threads claim the states chunk by chunk; the RNEA of a batch runs
- * several states at once in the SIMD lanes of _kernels_generated.h.
+ * backends/layout.py, prepared once in Python). Each algorithm is one row of ALGORITHMS
+ * (which joint vectors it reads, whether gravity and external forces, which generated
+ * kernel it runs); one generic single-state entry and one generic batch entry serve them
+ * all, as the module's functions rnea, mass_matrix, rnea_batch, ...
+ *
+ * The single-state entries (METH_FASTCALL) read q, qd, qdd and gravity once each into C
+ * doubles: a 1-D numpy array of float64, float32 or integers (any strides) through the
+ * numpy C API, a list or tuple of Python floats and ints, or another 1-D buffer of such
+ * numbers through the buffer protocol; anything else (a batch, float16, longdouble, a wrong
+ * length, other objects) returns None so that the Python caller takes its general path,
+ * which validates and names the argument. Results are new numpy arrays, float32 when every
+ * joint vector is float32 (the dtype numpy's promotion gives; computed in float64 and
+ * rounded once), else float64. The batch entries take C-contiguous float64 arrays prepared
+ * by the caller, release the GIL and let POSIX threads claim the states chunk by chunk
+ * (run_batch); the RNEA of a batch runs several states at once in the SIMD lanes of
+ * _kernels_generated.h.
  *
  * The numpy C API, version-targeted: built against numpy 2.x headers, the extension also
  * runs on numpy 1.23 and later (NPY_TARGET_VERSION; 1.23 is the oldest numpy for Python
@@ -23,6 +30,7 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <structmember.h>
 
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #define NPY_TARGET_VERSION NPY_1_23_API_VERSION
@@ -44,7 +52,7 @@
 
 /* The interface this file offers to compiled.py, which refuses a build of another (a stale
  * extension left beside newer sources): raise it with every change of an entry. */
-#define API 2
+#define API 3
 /* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
 #define STACK_DOUBLES 2048
 /* Largest number of threads of one batch; each gets at least MIN_WORK body-states (states x
@@ -67,8 +75,6 @@ typedef struct {
     long rows;          /* NB + 1 */
     long n;             /* joints (len(q)) */
     double *zeros;      /* n zeros: qd, qdd of the terms at rest */
-    npy_intp nn[2];     /* (n, n) and (n, 10 NB): the shapes of the results */
-    npy_intp ny[2];
 } KernelsObject;
 
 static PyTypeObject KernelsType;
@@ -130,8 +136,6 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     if (self->K != NULL)
         memcpy(self->K, K, sizeof(double) * rows * WIDTH);
     PyBuffer_Release(&v);
-    self->nn[0] = self->nn[1] = self->ny[0] = self->n;
-    self->ny[1] = 10 * (rows - 1);
     if (self->K == NULL || self->zeros == NULL) {
         Py_DECREF(self);
         return PyErr_NoMemory();
@@ -139,21 +143,9 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     return (PyObject *)self;
 }
 
-static PyObject *
-kernels_get_n(KernelsObject *self, void *closure)
-{
-    return PyLong_FromLong(self->n);
-}
-
-static PyObject *
-kernels_get_rows(KernelsObject *self, void *closure)
-{
-    return PyLong_FromLong(self->rows);
-}
-
-static PyGetSetDef kernels_getset[] = {
-    {"n", (getter)kernels_get_n, NULL, "number of joints (len(q))", NULL},
-    {"rows", (getter)kernels_get_rows, NULL, "rows of the table (NB + 1)", NULL},
+static PyMemberDef kernels_members[] = {
+    {"n", T_LONG, offsetof(KernelsObject, n), READONLY, "number of joints (len(q))"},
+    {"rows", T_LONG, offsetof(KernelsObject, rows), READONLY, "rows of the table (NB + 1)"},
     {NULL},
 };
 
@@ -165,14 +157,156 @@ static PyTypeObject KernelsType = {
     .tp_flags = Py_TPFLAGS_DEFAULT,
     .tp_new = kernels_new,
     .tp_dealloc = (destructor)kernels_dealloc,
-    .tp_getset = kernels_getset,
+    .tp_members = kernels_members,
 };
+
+/* ------------------------------------------------------------------------------------------
+ * The algorithms: one row each, read by the generic entries below */
+
+enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3 };   /* the generated kernel it runs */
+
+typedef struct {
+    const char *name;       /* the single-state entry (and the door's kind: the row) */
+    const char *batch;      /* the batch entry, or NULL */
+    int vectors;            /* joint vectors it reads: q, then qd, then qdd (the rest zero) */
+    int gravity;            /* 3 numbers after them */
+    int fext;               /* then, optionally, the external forces (rnea's f_body) */
+    int kernel;             /* results: RNEA tau (n,), CRBA H (n, n), MOMENTUM two (n,), */
+                            /* REGRESSOR Y (n, 10 NB) */
+    const char *outputs[2]; /* the batch entry's result arguments, as its errors name them */
+    const char *doc, *batch_doc;
+} Algorithm;
+
+static const Algorithm ALGORITHMS[] = {
+    {"rnea", "rnea_batch", 3, 1, 1, RNEA, {"tau"},
+     "rnea(kernels, q, qd, qdd, gravity, f_body=None) -> tau (n,), or None\n\n"
+     "One state: q, qd, qdd of n numbers each, gravity of 3 (m/s^2, root coordinates); f_body\n"
+     "a C-contiguous float64 array of rows x 6 (the external force [n; f] on each body, body\n"
+     "coordinates) or None. None when an argument is not such a state (the caller's general\n"
+     "path takes it). float32 when q, qd and qdd all are (computed in float64).",
+     "rnea_batch(kernels, N, q, qd, qdd, gravity, fext, tau, threads) -> None\n\n"
+     "N states: q, qd, qdd C-contiguous float64 of N x n numbers, gravity 3 numbers, fext None\n"
+     "or C-contiguous float64 of rows x 6 (shared) or N x rows x 6 numbers; writes tau (N x n).\n"
+     "Releases the GIL; up to `threads` threads."},
+    {"gravity_torque", NULL, 1, 1, 0, RNEA, {"tau"},
+     "gravity_torque(kernels, q, gravity) -> g(q) (n,), or None: rnea at qd = qdd = 0.", NULL},
+    {"bias_torque", NULL, 2, 1, 0, RNEA, {"tau"},
+     "bias_torque(kernels, q, qd, gravity) -> C(q, qd) qd + g(q) (n,), or None: rnea at "
+     "qdd = 0.", NULL},
+    {"mass_matrix", "mass_matrix_batch", 1, 0, 0, CRBA, {"H"},
+     "mass_matrix(kernels, q) -> M(q) (n, n), or None: the composite rigid body algorithm.",
+     "mass_matrix_batch(kernels, N, q, H, threads) -> None: M(q) of N states into H "
+     "(N x n x n)."},
+    {"generalized_momentum", "momentum_batch", 2, 0, 0, MOMENTUM, {"mom", "ctq"},
+     "generalized_momentum(kernels, q, qd) -> (M(q) qd, C(q, qd)^T qd), each (n,), or None.",
+     "momentum_batch(kernels, N, q, qd, mom, ctq, threads) -> None: M(q) qd and C^T qd of N\n"
+     "states into mom and ctq (N x n each)."},
+    {"regressor", "regressor_batch", 3, 1, 0, REGRESSOR, {"Y"},
+     "regressor(kernels, q, qd, qdd, gravity) -> Y (n, 10 NB), or None\n\n"
+     "The joint-torque regressor of one state (tau = Y pi, pi the ten inertial parameters of\n"
+     "each body); arguments as for rnea, None when one is not such a state.",
+     "regressor_batch(kernels, N, q, qd, qdd, gravity, Y, threads) -> None: the regressors of\n"
+     "N states (q, qd, qdd N x n each, gravity 3 numbers) into Y (N x n x 10 NB)."},
+};
+#define ALGORITHM_COUNT ((int)(sizeof ALGORITHMS / sizeof ALGORITHMS[0]))
+
+static const char *const VECTOR_NAMES[3] = {"q", "qd", "qdd"};
+
+/* The results of `kernel` for one state: how many (momentum's two, else one), their shape
+ * dims[:ndim] (returned), and dims[0] x dims[1] doubles each. */
+static int
+result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
+{
+    *count = kernel == MOMENTUM ? 2 : 1;
+    dims[0] = h->n;
+    dims[1] = kernel == CRBA ? h->n : (kernel == REGRESSOR ? 10 * (h->rows - 1) : 1);
+    return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
+}
+
+/* Scratch doubles of one state: the per-body rows, and the regressor's carried axes. */
+static Py_ssize_t
+work_size(int kernel, long rows)
+{
+    return rows * WORK + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * rows : 0);
+}
+
+/* One state through the generated kernels: the body transforms, then `kernel`'s passes.
+ * g: 3 numbers; f: rows x 6 external forces or NULL; out2: momentum's second result. */
+static void
+run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
+          const double *qdd, const double *g, const double *f, double *out1, double *out2,
+          double *work)
+{
+    xup_kernel(K, rows, q, work);
+    switch (kernel) {
+    case RNEA:
+        rnea_kernel(K, rows, q, qd, qdd, g[0], g[1], g[2], f, f != NULL, out1, work);
+        break;
+    case CRBA:
+        crba_kernel(K, rows, work, out1);
+        break;
+    case MOMENTUM:
+        momentum_kernel(K, rows, q, qd, out1, out2, work);
+        break;
+    default:
+        regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1, work + rows * WORK, work);
+    }
+}
 
 /* ------------------------------------------------------------------------------------------
  * Arguments */
 
-/* Read the 1-D buffer v (n items, any strides) as doubles: 1, or 0 for an item type this
- * entry leaves to the general path (float32, float16, longdouble, complex, objects, …). */
+/* What as_doubles made of an argument: not one state it reads (the caller's general path
+ * then decides), or the numbers, read from float32 or from anything else it reads. */
+enum { DECLINED = 0, AS_DOUBLE = 1, AS_FLOAT = 2 };
+
+/* The item types read, as numpy type numbers, their buffer-protocol codes and their sizes
+ * (same order); anything else (float16, longdouble, complex, objects, datetimes, …) is
+ * declined. */
+static const int READ_TYPES[] = {NPY_DOUBLE, NPY_FLOAT, NPY_BOOL, NPY_BYTE, NPY_UBYTE,
+                                 NPY_SHORT, NPY_USHORT, NPY_INT, NPY_UINT, NPY_LONG, NPY_ULONG,
+                                 NPY_LONGLONG, NPY_ULONGLONG};
+static const char READ_CODES[] = "df?bBhHiIlLqQ";
+static const Py_ssize_t READ_SIZES[] = {
+    sizeof(double), sizeof(float), sizeof(npy_bool), sizeof(npy_byte), sizeof(npy_ubyte),
+    sizeof(npy_short), sizeof(npy_ushort), sizeof(npy_int), sizeof(npy_uint), sizeof(npy_long),
+    sizeof(npy_ulong), sizeof(npy_longlong), sizeof(npy_ulonglong)};
+
+/* n items of numpy type `type` from p, `step` bytes apart, as doubles. */
+static int
+read_strided(const char *p, Py_ssize_t n, Py_ssize_t step, int type, double *out)
+{
+#define READ(ctype)                                                                 \
+    do {                                                                            \
+        for (Py_ssize_t i = 0; i < n; i++) {                                        \
+            ctype x;                                                                \
+            memcpy(&x, p + i * step, sizeof x);                                     \
+            out[i] = (double)x;                                                     \
+        }                                                                           \
+    } while (0)
+    switch (type) {
+    case NPY_DOUBLE: READ(double); break;
+    case NPY_FLOAT: READ(npy_float); return AS_FLOAT;
+    case NPY_BOOL: READ(npy_bool); break;
+    case NPY_BYTE: READ(npy_byte); break;
+    case NPY_UBYTE: READ(npy_ubyte); break;
+    case NPY_SHORT: READ(npy_short); break;
+    case NPY_USHORT: READ(npy_ushort); break;
+    case NPY_INT: READ(npy_int); break;
+    case NPY_UINT: READ(npy_uint); break;
+    case NPY_LONG: READ(npy_long); break;
+    case NPY_ULONG: READ(npy_ulong); break;
+    case NPY_LONGLONG: READ(npy_longlong); break;
+    case NPY_ULONGLONG: READ(npy_ulonglong); break;
+    default: return DECLINED;
+    }
+#undef READ
+    return AS_DOUBLE;
+}
+
+/* The 1-D buffer v (n items, any strides) by its format: a native single-item code of
+ * READ_CODES whose size is the C type's, else DECLINED (as numpy would see it: the same
+ * items as read_strided takes from an array). */
 static int
 read_buffer(const Py_buffer *v, double *out)
 {
@@ -183,93 +317,32 @@ read_buffer(const Py_buffer *v, double *out)
     if (*fmt == '@' || *fmt == '=' || *fmt == '>' || *fmt == '!')
 #endif
         fmt++;
-    if (fmt[0] == '\0' || fmt[1] != '\0')
-        return 0;
-    const char *p = (const char *)v->buf;
-    Py_ssize_t n = v->shape[0], step = v->strides[0];
-#define READ(ctype)                                                                 \
-    do {                                                                            \
-        if (v->itemsize != (Py_ssize_t)sizeof(ctype))                               \
-            return 0;                                                               \
-        for (Py_ssize_t i = 0; i < n; i++) {                                        \
-            ctype x;                                                                \
-            memcpy(&x, p + i * step, sizeof x);                                     \
-            out[i] = (double)x;                                                     \
-        }                                                                           \
-        return 1;                                                                   \
-    } while (0)
-    switch (fmt[0]) {
-    case 'd': READ(double);
-    case '?': READ(unsigned char);
-    case 'b': READ(signed char);
-    case 'B': READ(unsigned char);
-    case 'h': READ(short);
-    case 'H': READ(unsigned short);
-    case 'i': READ(int);
-    case 'I': READ(unsigned int);
-    case 'l': READ(long);
-    case 'L': READ(unsigned long);
-    case 'q': READ(long long);
-    case 'Q': READ(unsigned long long);
-    default: return 0;
-    }
-#undef READ
+    const char *code = fmt[0] != '\0' && fmt[1] == '\0' ? strchr(READ_CODES, fmt[0]) : NULL;
+    if (code == NULL || READ_SIZES[code - READ_CODES] != v->itemsize)
+        return DECLINED;
+    return read_strided(v->buf, v->shape[0], v->strides[0], READ_TYPES[code - READ_CODES], out);
 }
 
-/* The 1-D numpy array a of n items as doubles: 1, or 0 for an item type or byte order the
- * buffer protocol path would decline too (read_buffer: float32, float16, longdouble,
- * complex, objects, datetimes, swapped bytes, …), so both paths take the same arrays. */
-static int
-read_array(PyArrayObject *a, Py_ssize_t n, double *out)
-{
-    const char *p = PyArray_BYTES(a);
-    const npy_intp step = PyArray_STRIDE(a, 0);
-    if (!PyArray_ISNOTSWAPPED(a))
-        return 0;
-#define READ(ctype)                                                                 \
-    do {                                                                            \
-        for (Py_ssize_t i = 0; i < n; i++) {                                        \
-            ctype x;                                                                \
-            memcpy(&x, p + i * step, sizeof x);                                     \
-            out[i] = (double)x;                                                     \
-        }                                                                           \
-        return 1;                                                                   \
-    } while (0)
-    switch (PyArray_TYPE(a)) {
-    case NPY_DOUBLE:
-        if (step == (npy_intp)sizeof(double)) {     /* contiguous: the common case */
-            memcpy(out, p, sizeof(double) * n);
-            return 1;
-        }
-        READ(double);
-    case NPY_BOOL: READ(npy_bool);
-    case NPY_BYTE: READ(npy_byte);
-    case NPY_UBYTE: READ(npy_ubyte);
-    case NPY_SHORT: READ(npy_short);
-    case NPY_USHORT: READ(npy_ushort);
-    case NPY_INT: READ(npy_int);
-    case NPY_UINT: READ(npy_uint);
-    case NPY_LONG: READ(npy_long);
-    case NPY_ULONG: READ(npy_ulong);
-    case NPY_LONGLONG: READ(npy_longlong);
-    case NPY_ULONGLONG: READ(npy_ulonglong);
-    default: return 0;
-    }
-#undef READ
-}
-
-/* ``obj`` as n doubles: 1; 0 when it is not one state of n numbers this entry reads (the
- * caller's general path then decides); never an error. */
+/* ``obj`` as n doubles: AS_DOUBLE or AS_FLOAT (read from float32); DECLINED when it is not
+ * one state of n numbers this entry reads; never an error. Read: a 1-D numpy array of
+ * READ_TYPES in native byte order (any strides), a list or tuple of Python floats and ints,
+ * another 1-D buffer of such items. */
 static int
 as_doubles(PyObject *obj, Py_ssize_t n, double *out)
 {
     if (PyArray_Check(obj)) {
         PyArrayObject *a = (PyArrayObject *)obj;
-        return PyArray_NDIM(a) == 1 && PyArray_DIM(a, 0) == n && read_array(a, n, out);
+        if (PyArray_NDIM(a) != 1 || PyArray_DIM(a, 0) != n || !PyArray_ISNOTSWAPPED(a))
+            return DECLINED;
+        if (PyArray_TYPE(a) == NPY_DOUBLE && PyArray_STRIDE(a, 0) == sizeof(double)) {
+            memcpy(out, PyArray_BYTES(a), sizeof(double) * n);  /* the common case */
+            return AS_DOUBLE;
+        }
+        return read_strided(PyArray_BYTES(a), n, PyArray_STRIDE(a, 0), PyArray_TYPE(a), out);
     }
     if (PyList_CheckExact(obj) || PyTuple_CheckExact(obj)) {
         if (PySequence_Fast_GET_SIZE(obj) != n)
-            return 0;
+            return DECLINED;
         PyObject **items = PySequence_Fast_ITEMS(obj);
         for (Py_ssize_t i = 0; i < n; i++) {
             PyObject *x = items[i];
@@ -279,24 +352,24 @@ as_doubles(PyObject *obj, Py_ssize_t n, double *out)
                 out[i] = PyLong_AsDouble(x);
                 if (out[i] == -1.0 && PyErr_Occurred()) {
                     PyErr_Clear();
-                    return 0;
+                    return DECLINED;
                 }
             } else {
-                return 0;
+                return DECLINED;
             }
         }
-        return 1;
+        return AS_DOUBLE;
     }
     if (PyBytes_Check(obj) || PyByteArray_Check(obj) || !PyObject_CheckBuffer(obj))
-        return 0;
+        return DECLINED;
     Py_buffer v;
     if (PyObject_GetBuffer(obj, &v, PyBUF_STRIDES | PyBUF_FORMAT) < 0) {
         PyErr_Clear();
-        return 0;
+        return DECLINED;
     }
-    int ok = v.ndim == 1 && v.shape[0] == n && read_buffer(&v, out);
+    int read = v.ndim == 1 && v.shape[0] == n ? read_buffer(&v, out) : DECLINED;
     PyBuffer_Release(&v);
-    return ok;
+    return read;
 }
 
 static KernelsObject *
@@ -307,17 +380,6 @@ kernels_arg(PyObject *obj)
         return NULL;
     }
     return (KernelsObject *)obj;
-}
-
-/* A new C-contiguous float64 array of shape dims[:ndim] (what numpy.empty makes), and its
- * data in *data. */
-static PyObject *
-new_array(int ndim, npy_intp *dims, double **data)
-{
-    PyObject *out = PyArray_SimpleNew(ndim, dims, NPY_DOUBLE);
-    if (out != NULL)
-        *data = (double *)PyArray_DATA((PyArrayObject *)out);
-    return out;
 }
 
 /* Scratch of one call: `size` doubles on the stack (stack) or the heap. */
@@ -358,214 +420,96 @@ get_table(PyObject *obj, Py_buffer *v, int writable, const char *what)
 }
 
 /* ------------------------------------------------------------------------------------------
- * Single states */
+ * One state: the entry of every algorithm */
 
-PyDoc_STRVAR(rnea_doc,
-"rnea(kernels, q, qd, qdd, gravity, f_body=None) -> tau (n,), or None\n\n"
-"One state: q, qd, qdd of n numbers each, gravity of 3 (m/s^2, root coordinates); f_body\n"
-"a C-contiguous float64 array of rows x 6 (the external force [n; f] on each body, body\n"
-"coordinates) or None. None when an argument is not such a state (the caller's general\n"
-"path takes it).");
-
+/* args: kernels, the joint vectors, gravity (if the algorithm reads it), f_body (optional,
+ * if it takes one). None when a vector or gravity is not one state that as_doubles reads.
+ * The results are float32 when every joint vector is float32 (what numpy's promotion of
+ * them gives), computed in float64 and rounded once; else float64. */
 static PyObject *
-c_rnea(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 5 && nargs != 6) {
-        PyErr_SetString(PyExc_TypeError, "rnea takes 5 or 6 arguments");
+    const Py_ssize_t fixed = 1 + a->vectors + a->gravity;
+    if (nargs != fixed && !(a->fext && nargs == fixed + 1)) {
+        PyErr_Format(PyExc_TypeError,
+                     a->fext ? "%s takes %zd or %zd arguments" : "%s takes %zd arguments",
+                     a->name, fixed, fixed + 1);
         return NULL;
     }
     KernelsObject *h = kernels_arg(args[0]);
     if (h == NULL)
         return NULL;
     const Py_ssize_t n = h->n, rows = h->rows;
+    npy_intp dims[2];
+    int count;
+    const int ndim = result_shape(h, a->kernel, dims, &count);
+    const Py_ssize_t size = dims[0] * dims[1];
+    /* Room for float32 results, computed in doubles first, only when q may be float32. */
+    PyObject *q_arg = args[1];
+    const int may_float = PyArray_Check(q_arg)
+        ? PyArray_TYPE((PyArrayObject *)q_arg) == NPY_FLOAT
+        : !(PyList_CheckExact(q_arg) || PyTuple_CheckExact(q_arg));
     double stack[STACK_DOUBLES];
-    double *buf = scratch(stack, 3 * n + 3 + rows * WORK);
+    double *buf = scratch(stack, 3 * n + 3 + (may_float ? count * size : 0)
+                                 + work_size(a->kernel, rows));
     if (buf == NULL)
         return NULL;
-    double *q = buf, *qd = q + n, *qdd = qd + n, *g = qdd + n, *work = g + 3;
-    PyObject *out = NULL;
+    double *x[3] = {buf, buf + n, buf + 2 * n}, *g = buf + 3 * n, *res = g + 3;
+    double *work = res + (may_float ? count * size : 0);
+    PyObject *results[2] = {NULL, NULL}, *out = NULL;
     Py_buffer fb = {0};
-    double *tau;
-    int has_fext = nargs == 6 && args[5] != Py_None;
-    if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd)
-          && as_doubles(args[3], n, qdd) && as_doubles(args[4], 3, g))) {
-        out = Py_None;
-        Py_INCREF(out);
-        goto done;
+    const double *f = NULL;
+    int floats = 0;         /* joint vectors read from float32 */
+    for (int i = 0; i < a->vectors; i++) {
+        const int read = as_doubles(args[1 + i], n, x[i]);
+        if (read == DECLINED)
+            goto declined;
+        floats += read == AS_FLOAT;
     }
-    if (has_fext) {
-        if (get_table(args[5], &fb, 0, "f_body") < 0)
+    for (int i = a->vectors; i < 3; i++)
+        x[i] = h->zeros;
+    if (a->gravity && !as_doubles(args[1 + a->vectors], 3, g))
+        goto declined;
+    if (nargs > fixed && args[fixed] != Py_None) {
+        if (get_table(args[fixed], &fb, 0, "f_body") < 0)
             goto done;
         if (fb.len != (Py_ssize_t)sizeof(double) * rows * 6) {
             PyErr_SetString(PyExc_ValueError, "f_body must hold rows x 6 numbers");
             goto done;
         }
+        f = fb.buf;
     }
-    out = new_array(1, h->nn, &tau);
-    if (out == NULL)
-        goto done;
-    xup_kernel(h->K, rows, q, work);
-    rnea_kernel(h->K, rows, q, qd, qdd, g[0], g[1], g[2],
-                has_fext ? (const double *)fb.buf : NULL, has_fext, tau, work);
+    const int single_precision = may_float && floats == a->vectors;   /* res has room */
+    double *data[2];
+    for (int k = 0; k < count; k++) {
+        results[k] = PyArray_SimpleNew(ndim, dims, single_precision ? NPY_FLOAT : NPY_DOUBLE);
+        if (results[k] == NULL)
+            goto done;
+        data[k] = single_precision ? res + k * size
+                                   : (double *)PyArray_DATA((PyArrayObject *)results[k]);
+    }
+    run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, data[0],
+              count == 2 ? data[1] : NULL, work);
+    for (int k = 0; single_precision && k < count; k++) {
+        float *out32 = (float *)PyArray_DATA((PyArrayObject *)results[k]);
+        for (Py_ssize_t i = 0; i < size; i++)
+            out32[i] = (float)data[k][i];
+    }
+    if (count == 1) {
+        out = results[0];       /* its reference */
+        results[0] = NULL;
+    } else {
+        out = PyTuple_Pack(2, results[0], results[1]);
+    }
+    goto done;
+declined:
+    out = Py_None;
+    Py_INCREF(out);
 done:
-    if (has_fext && fb.obj != NULL)
+    Py_XDECREF(results[0]);
+    Py_XDECREF(results[1]);
+    if (fb.obj != NULL)
         PyBuffer_Release(&fb);
-    scratch_free(buf, stack);
-    return out;
-}
-
-/* RNEA with qd, qdd given or zero: the shared body of gravity_torque and bias_torque. */
-static PyObject *
-rnea_at_rest(PyObject *const *args, Py_ssize_t nargs, int with_qd, const char *name)
-{
-    if (nargs != (with_qd ? 4 : 3)) {
-        PyErr_Format(PyExc_TypeError, "%s takes %d arguments", name, with_qd ? 4 : 3);
-        return NULL;
-    }
-    KernelsObject *h = kernels_arg(args[0]);
-    if (h == NULL)
-        return NULL;
-    const Py_ssize_t n = h->n, rows = h->rows;
-    double stack[STACK_DOUBLES];
-    double *buf = scratch(stack, 2 * n + 3 + rows * WORK);
-    if (buf == NULL)
-        return NULL;
-    double *q = buf, *qd = q + n, *g = qd + n, *work = g + 3;
-    PyObject *out = NULL;
-    double *tau;
-    if (!(as_doubles(args[1], n, q) && (!with_qd || as_doubles(args[2], n, qd))
-          && as_doubles(args[with_qd ? 3 : 2], 3, g))) {
-        out = Py_None;
-        Py_INCREF(out);
-    } else if ((out = new_array(1, h->nn, &tau)) != NULL) {
-        xup_kernel(h->K, rows, q, work);
-        rnea_kernel(h->K, rows, q, with_qd ? qd : h->zeros, h->zeros, g[0], g[1], g[2], NULL,
-                    0, tau, work);
-    }
-    scratch_free(buf, stack);
-    return out;
-}
-
-PyDoc_STRVAR(gravity_torque_doc,
-"gravity_torque(kernels, q, gravity) -> g(q) (n,), or None: rnea at qd = qdd = 0.");
-
-static PyObject *
-c_gravity_torque(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
-{
-    return rnea_at_rest(args, nargs, 0, "gravity_torque");
-}
-
-PyDoc_STRVAR(bias_torque_doc,
-"bias_torque(kernels, q, qd, gravity) -> C(q, qd) qd + g(q) (n,), or None: rnea at qdd = 0.");
-
-static PyObject *
-c_bias_torque(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
-{
-    return rnea_at_rest(args, nargs, 1, "bias_torque");
-}
-
-PyDoc_STRVAR(mass_matrix_doc,
-"mass_matrix(kernels, q) -> M(q) (n, n), or None: the composite rigid body algorithm.");
-
-static PyObject *
-c_mass_matrix(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
-{
-    if (nargs != 2) {
-        PyErr_SetString(PyExc_TypeError, "mass_matrix takes 2 arguments");
-        return NULL;
-    }
-    KernelsObject *h = kernels_arg(args[0]);
-    if (h == NULL)
-        return NULL;
-    const Py_ssize_t n = h->n, rows = h->rows;
-    double stack[STACK_DOUBLES];
-    double *buf = scratch(stack, n + rows * WORK);
-    if (buf == NULL)
-        return NULL;
-    double *q = buf, *work = q + n;
-    PyObject *out = NULL;
-    double *H;
-    if (!as_doubles(args[1], n, q)) {
-        out = Py_None;
-        Py_INCREF(out);
-    } else if ((out = new_array(2, h->nn, &H)) != NULL) {
-        xup_kernel(h->K, rows, q, work);
-        crba_kernel(h->K, rows, work, H);
-    }
-    scratch_free(buf, stack);
-    return out;
-}
-
-PyDoc_STRVAR(generalized_momentum_doc,
-"generalized_momentum(kernels, q, qd) -> (M(q) qd, C(q, qd)^T qd), each (n,), or None.");
-
-static PyObject *
-c_generalized_momentum(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
-{
-    if (nargs != 3) {
-        PyErr_SetString(PyExc_TypeError, "generalized_momentum takes 3 arguments");
-        return NULL;
-    }
-    KernelsObject *h = kernels_arg(args[0]);
-    if (h == NULL)
-        return NULL;
-    const Py_ssize_t n = h->n, rows = h->rows;
-    double stack[STACK_DOUBLES];
-    double *buf = scratch(stack, 2 * n + rows * WORK);
-    if (buf == NULL)
-        return NULL;
-    double *q = buf, *qd = q + n, *work = qd + n;
-    PyObject *out = NULL, *mom = NULL, *ctq = NULL;
-    double *vm, *vc;
-    if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd))) {
-        out = Py_None;
-        Py_INCREF(out);
-        goto done;
-    }
-    if ((mom = new_array(1, h->nn, &vm)) == NULL || (ctq = new_array(1, h->nn, &vc)) == NULL)
-        goto done;
-    xup_kernel(h->K, rows, q, work);
-    momentum_kernel(h->K, rows, q, qd, vm, vc, work);
-    out = PyTuple_Pack(2, mom, ctq);
-done:
-    Py_XDECREF(mom);
-    Py_XDECREF(ctq);
-    scratch_free(buf, stack);
-    return out;
-}
-
-PyDoc_STRVAR(regressor_doc,
-"regressor(kernels, q, qd, qdd, gravity) -> Y (n, 10 NB), or None\n\n"
-"The joint-torque regressor of one state (tau = Y pi, pi the ten inertial parameters of\n"
-"each body); arguments as for rnea, None when one is not such a state.");
-
-static PyObject *
-c_regressor(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
-{
-    if (nargs != 5) {
-        PyErr_SetString(PyExc_TypeError, "regressor takes 5 arguments");
-        return NULL;
-    }
-    KernelsObject *h = kernels_arg(args[0]);
-    if (h == NULL)
-        return NULL;
-    const Py_ssize_t n = h->n, rows = h->rows;
-    double stack[STACK_DOUBLES];
-    double *buf = scratch(stack, 3 * n + 3 + rows * WORK + 6 * rows * rows);
-    if (buf == NULL)
-        return NULL;
-    double *q = buf, *qd = q + n, *qdd = qd + n, *g = qdd + n, *work = g + 3;
-    double *axes = work + rows * WORK;
-    PyObject *out = NULL;
-    double *Y;
-    if (!(as_doubles(args[1], n, q) && as_doubles(args[2], n, qd)
-          && as_doubles(args[3], n, qdd) && as_doubles(args[4], 3, g))) {
-        out = Py_None;
-        Py_INCREF(out);
-    } else if ((out = new_array(2, h->ny, &Y)) != NULL) {
-        xup_kernel(h->K, rows, q, work);
-        regressor_kernel(h->K, rows, qd, qdd, g[0], g[1], g[2], Y, axes, work);
-    }
     scratch_free(buf, stack);
     return out;
 }
@@ -573,13 +517,12 @@ c_regressor(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
 /* ------------------------------------------------------------------------------------------
  * Batches: contiguous slices of the states on threads, without the GIL */
 
-enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3 };
-
 typedef struct {
-    int kind;
+    int kernel;
     const double *K;
     long rows, n;
-    const double *q, *qd, *qdd, *fext;  /* (N, n) each; fext (1 or N, rows, 6) or NULL */
+    Py_ssize_t size;                     /* doubles of each result of one state */
+    const double *q, *qd, *qdd, *fext;  /* (N, n) each or NULL; fext (1 or N, rows, 6) or NULL */
     int fext_per_state;
     double g[3];
     double *out1, *out2;                 /* tau | H | mom, ctq | Y */
@@ -616,34 +559,22 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
     if (work == NULL)
         return -1;
 #ifdef SD_LANES
-    if (s->kind == RNEA) {
+    if (s->kernel == RNEA && s->qd != NULL && s->qdd != NULL) {
         /* several states at once (SIMD across states), the same bits as one by one */
         const double *f = s->fext ? s->fext + (s->fext_per_state ? lo : 0) * rows * 6 : NULL;
         long done = rnea_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
                                      s->qd + lo * n, s->qdd + lo * n, s->g[0], s->g[1],
-                                     s->g[2], f, s->fext_per_state, s->out1 + lo * n);
+                                     s->g[2], f, s->fext_per_state, s->out1 + lo * s->size);
         if (done < 0)
             return -1;
         lo += done;
     }
 #endif
     for (Py_ssize_t k = lo; k < hi; k++) {
-        const double *q = s->q + k * n;
-        xup_kernel(s->K, rows, q, work);
-        if (s->kind == RNEA) {
-            const double *f = s->fext ? s->fext + (s->fext_per_state ? k : 0) * rows * 6 : NULL;
-            rnea_kernel(s->K, rows, q, s->qd + k * n, s->qdd + k * n, s->g[0], s->g[1],
-                        s->g[2], f, f != NULL, s->out1 + k * n, work);
-        } else if (s->kind == CRBA) {
-            crba_kernel(s->K, rows, work, s->out1 + k * n * n);
-        } else if (s->kind == REGRESSOR) {
-            regressor_kernel(s->K, rows, s->qd + k * n, s->qdd + k * n, s->g[0], s->g[1],
-                             s->g[2], s->out1 + k * n * 10 * (rows - 1), work + rows * WORK,
-                             work);
-        } else {
-            momentum_kernel(s->K, rows, q, s->qd + k * n, s->out1 + k * n, s->out2 + k * n,
-                            work);
-        }
+        const double *f = s->fext ? s->fext + (s->fext_per_state ? k : 0) * rows * 6 : NULL;
+        run_state(s->kernel, s->K, rows, s->q + k * n, s->qd ? s->qd + k * n : NULL,
+                  s->qdd ? s->qdd + k * n : NULL, s->g, f, s->out1 + k * s->size,
+                  s->out2 ? s->out2 + k * s->size : NULL, work);
     }
     return 0;
 }
@@ -655,9 +586,7 @@ run_chunks(Batch *b)
 {
     const Slice *s = &b->job;
     const long rows = s->rows;
-    /* the regressor's carried axes after the per-body scratch */
-    double *work = malloc(sizeof(double) * (rows * WORK
-                                            + (s->kind == REGRESSOR ? 6 * rows * rows : 0)));
+    double *work = malloc(sizeof(double) * work_size(s->kernel, rows));
     for (;;) {
         Py_ssize_t lo = ATOMIC_ADD(&b->next, b->chunk) - b->chunk;
         if (lo >= b->N)
@@ -757,216 +686,103 @@ run_batch(const Slice *job, Py_ssize_t N, long threads)
     return 0;
 }
 
-/* Buffers of a batch call: inputs read-only, outputs writable; each C-contiguous float64
- * holding sizes[i] doubles. On an error none is held. */
-static int
-batch_buffers(PyObject *const *objs, Py_buffer *views, int count, const int *writable,
-              const Py_ssize_t *sizes, const char *const *names)
-{
-    for (int i = 0; i < count; i++) {
-        int ok = get_table(objs[i], &views[i], writable[i], names[i]) == 0;
-        if (ok && views[i].len != (Py_ssize_t)sizeof(double) * sizes[i]) {
-            PyBuffer_Release(&views[i]);
-            PyErr_Format(PyExc_ValueError, "%s must hold %zd numbers", names[i], sizes[i]);
-            ok = 0;
-        }
-        if (!ok) {
-            for (int j = 0; j < i; j++)
-                PyBuffer_Release(&views[j]);
-            return -1;
-        }
-    }
-    return 0;
-}
-
-static void
-release_all(Py_buffer *views, int count)
-{
-    for (int i = 0; i < count; i++)
-        PyBuffer_Release(&views[i]);
-}
-
-PyDoc_STRVAR(rnea_batch_doc,
-"rnea_batch(kernels, N, q, qd, qdd, gravity, fext, tau, threads) -> None\n\n"
-"N states: q, qd, qdd C-contiguous float64 of N x n numbers, gravity 3 numbers, fext None\n"
-"or C-contiguous float64 of rows x 6 (shared) or N x rows x 6 numbers; writes tau (N x n).\n"
-"Releases the GIL; up to `threads` threads.");
-
+/* args: kernels, N, the joint vectors (C-contiguous float64, N x n each), gravity (if the
+ * algorithm reads it), fext (if it takes one: None, or C-contiguous float64 of rows x 6 or
+ * N x rows x 6), the results (C-contiguous float64, writable), threads. */
 static PyObject *
-c_rnea_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 9) {
-        PyErr_SetString(PyExc_TypeError, "rnea_batch takes 9 arguments");
+    npy_intp dims[2];
+    int count;
+    const Py_ssize_t want = 3 + a->vectors + a->gravity + a->fext + (a->kernel == MOMENTUM);
+    if (nargs != want + 1) {
+        PyErr_Format(PyExc_TypeError, "%s takes %zd arguments", a->batch, want + 1);
         return NULL;
     }
     KernelsObject *h = kernels_arg(args[0]);
     Py_ssize_t N = PyLong_AsSsize_t(args[1]);
-    long threads = PyLong_AsLong(args[8]);
+    long threads = PyLong_AsLong(args[want]);
     if (h == NULL || PyErr_Occurred())
         return NULL;
-    Slice job = {.kind = RNEA, .K = h->K, .rows = h->rows, .n = h->n};
-    if (!as_doubles(args[5], 3, job.g)) {
+    result_shape(h, a->kernel, dims, &count);
+    Slice job = {.kernel = a->kernel, .K = h->K, .rows = h->rows, .n = h->n,
+                 .size = dims[0] * dims[1]};
+    Py_ssize_t next = 2 + a->vectors;
+    if (a->gravity && !as_doubles(args[next++], 3, job.g)) {
         PyErr_SetString(PyExc_TypeError, "gravity must be 3 numbers");
         return NULL;
     }
-    PyObject *objs[4] = {args[2], args[3], args[4], args[7]};
-    const int writable[4] = {0, 0, 0, 1};
-    const Py_ssize_t sizes[4] = {N * h->n, N * h->n, N * h->n, N * h->n};
-    const char *const names[4] = {"q", "qd", "qdd", "tau"};
-    Py_buffer v[5];
-    if (batch_buffers(objs, v, 4, writable, sizes, names) < 0)
-        return NULL;
-    int nviews = 4;
-    if (args[6] != Py_None) {
-        if (get_table(args[6], &v[4], 0, "fext") < 0) {
-            release_all(v, 4);
-            return NULL;
+    PyObject *fext = a->fext ? args[next++] : Py_None;
+    /* the buffers: the joint vectors, the results, then the external forces */
+    Py_buffer v[6];
+    int held = 0;
+    for (int i = 0; i < a->vectors + count; i++, held++) {
+        const int result = i >= a->vectors;
+        const char *name = result ? a->outputs[i - a->vectors] : VECTOR_NAMES[i];
+        const Py_ssize_t numbers = N * (result ? job.size : h->n);
+        if (get_table(result ? args[next + i - a->vectors] : args[2 + i], &v[i], result,
+                      name) < 0)
+            goto fail;
+        if (v[i].len != (Py_ssize_t)sizeof(double) * numbers) {
+            PyBuffer_Release(&v[i]);
+            PyErr_Format(PyExc_ValueError, "%s must hold %zd numbers", name, numbers);
+            goto fail;
         }
-        nviews = 5;
-        Py_ssize_t m = v[4].len / (Py_ssize_t)sizeof(double);
+    }
+    if (fext != Py_None) {
+        if (get_table(fext, &v[held], 0, "fext") < 0)
+            goto fail;
+        Py_ssize_t m = v[held++].len / (Py_ssize_t)sizeof(double);
         if (m != h->rows * 6 && m != N * h->rows * 6) {
-            release_all(v, 5);
             PyErr_SetString(PyExc_ValueError, "fext must hold rows x 6 or N x rows x 6 numbers");
-            return NULL;
+            goto fail;
         }
-        job.fext = v[4].buf;
+        job.fext = v[held - 1].buf;
         job.fext_per_state = m != h->rows * 6;
     }
-    job.q = v[0].buf;
-    job.qd = v[1].buf;
-    job.qdd = v[2].buf;
-    job.out1 = v[3].buf;
+    const double **vectors[3] = {&job.q, &job.qd, &job.qdd};
+    for (int i = 0; i < a->vectors; i++)
+        *vectors[i] = v[i].buf;
+    job.out1 = v[a->vectors].buf;
+    job.out2 = count == 2 ? v[a->vectors + 1].buf : NULL;
     int rc = run_batch(&job, N, threads);
-    release_all(v, nviews);
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&v[i]);
     if (rc < 0)
         return NULL;
     Py_RETURN_NONE;
+fail:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&v[i]);
+    return NULL;
 }
 
-PyDoc_STRVAR(mass_matrix_batch_doc,
-"mass_matrix_batch(kernels, N, q, H, threads) -> None: M(q) of N states into H (N x n x n).");
-
+/* The module's functions: `self` is the index of their row in ALGORITHMS (PyInit). */
 static PyObject *
-c_mass_matrix_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+c_single(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 5) {
-        PyErr_SetString(PyExc_TypeError, "mass_matrix_batch takes 5 arguments");
-        return NULL;
-    }
-    KernelsObject *h = kernels_arg(args[0]);
-    Py_ssize_t N = PyLong_AsSsize_t(args[1]);
-    long threads = PyLong_AsLong(args[4]);
-    if (h == NULL || PyErr_Occurred())
-        return NULL;
-    Slice job = {.kind = CRBA, .K = h->K, .rows = h->rows, .n = h->n};
-    PyObject *objs[2] = {args[2], args[3]};
-    const int writable[2] = {0, 1};
-    const Py_ssize_t sizes[2] = {N * h->n, N * h->n * h->n};
-    const char *const names[2] = {"q", "H"};
-    Py_buffer v[2];
-    if (batch_buffers(objs, v, 2, writable, sizes, names) < 0)
-        return NULL;
-    job.q = v[0].buf;
-    job.out1 = v[1].buf;
-    int rc = run_batch(&job, N, threads);
-    release_all(v, 2);
-    if (rc < 0)
-        return NULL;
-    Py_RETURN_NONE;
+    return single(&ALGORITHMS[PyLong_AsLong(self)], args, nargs);
 }
 
-PyDoc_STRVAR(momentum_batch_doc,
-"momentum_batch(kernels, N, q, qd, mom, ctq, threads) -> None: M(q) qd and C^T qd of N\n"
-"states into mom and ctq (N x n each).");
-
 static PyObject *
-c_momentum_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
+c_batch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 7) {
-        PyErr_SetString(PyExc_TypeError, "momentum_batch takes 7 arguments");
-        return NULL;
-    }
-    KernelsObject *h = kernels_arg(args[0]);
-    Py_ssize_t N = PyLong_AsSsize_t(args[1]);
-    long threads = PyLong_AsLong(args[6]);
-    if (h == NULL || PyErr_Occurred())
-        return NULL;
-    Slice job = {.kind = MOMENTUM, .K = h->K, .rows = h->rows, .n = h->n};
-    PyObject *objs[4] = {args[2], args[3], args[4], args[5]};
-    const int writable[4] = {0, 0, 1, 1};
-    const Py_ssize_t sizes[4] = {N * h->n, N * h->n, N * h->n, N * h->n};
-    const char *const names[4] = {"q", "qd", "mom", "ctq"};
-    Py_buffer v[4];
-    if (batch_buffers(objs, v, 4, writable, sizes, names) < 0)
-        return NULL;
-    job.q = v[0].buf;
-    job.qd = v[1].buf;
-    job.out1 = v[2].buf;
-    job.out2 = v[3].buf;
-    int rc = run_batch(&job, N, threads);
-    release_all(v, 4);
-    if (rc < 0)
-        return NULL;
-    Py_RETURN_NONE;
-}
-
-PyDoc_STRVAR(regressor_batch_doc,
-"regressor_batch(kernels, N, q, qd, qdd, gravity, Y, threads) -> None: the regressors of N\n"
-"states (q, qd, qdd N x n each, gravity 3 numbers) into Y (N x n x 10 NB).");
-
-static PyObject *
-c_regressor_batch(PyObject *module, PyObject *const *args, Py_ssize_t nargs)
-{
-    if (nargs != 8) {
-        PyErr_SetString(PyExc_TypeError, "regressor_batch takes 8 arguments");
-        return NULL;
-    }
-    KernelsObject *h = kernels_arg(args[0]);
-    Py_ssize_t N = PyLong_AsSsize_t(args[1]);
-    long threads = PyLong_AsLong(args[7]);
-    if (h == NULL || PyErr_Occurred())
-        return NULL;
-    Slice job = {.kind = REGRESSOR, .K = h->K, .rows = h->rows, .n = h->n};
-    if (!as_doubles(args[5], 3, job.g)) {
-        PyErr_SetString(PyExc_TypeError, "gravity must be 3 numbers");
-        return NULL;
-    }
-    PyObject *objs[4] = {args[2], args[3], args[4], args[6]};
-    const int writable[4] = {0, 0, 0, 1};
-    const Py_ssize_t sizes[4] = {N * h->n, N * h->n, N * h->n, N * h->n * 10 * (h->rows - 1)};
-    const char *const names[4] = {"q", "qd", "qdd", "Y"};
-    Py_buffer v[4];
-    if (batch_buffers(objs, v, 4, writable, sizes, names) < 0)
-        return NULL;
-    job.q = v[0].buf;
-    job.qd = v[1].buf;
-    job.qdd = v[2].buf;
-    job.out1 = v[3].buf;
-    int rc = run_batch(&job, N, threads);
-    release_all(v, 4);
-    if (rc < 0)
-        return NULL;
-    Py_RETURN_NONE;
+    return batch(&ALGORITHMS[PyLong_AsLong(self)], args, nargs);
 }
 
 /* ------------------------------------------------------------------------------------------
  * Door: a public function of spatial_dynamics entered in C
  *
- * Door(function, kind, kernels, gravity) is called as `function` is (same arguments, and it carries
- * its __doc__, __name__ and __wrapped__). One state with gravity given or default, no f_ext
- * (`gravity` when not given) and backend 'auto' or 'compiled', of a model whose Kernels are
- * in the dict `kernels`
- * (id(model) -> Kernels), runs here; every other call, or one whose arguments the entry
- * declines, is passed on to `function` unchanged (it validates, derives the table, runs
- * batches and the other backends). This saves the Python frame of `function` (~0.2 µs, a
- * fifth of a call) on the path users take most. The door keeps the last model it answered
- * (a weak reference) and its Kernels, so that a run of calls on one model skips the dict. */
-
-enum { D_RNEA = 0, D_GRAVITY = 1, D_BIAS = 2, D_MASS = 3, D_MOMENTUM = 4 };
-/* joint-vector arguments after the model, and whether gravity and f_ext come next */
-static const int door_vectors[] = {3, 1, 2, 1, 2};
-static const int door_gravity[] = {1, 1, 1, 0, 0};
-static const int door_fext[] = {1, 0, 0, 0, 0};
+ * Door(function, kind, kernels, gravity) is called as `function` is (same arguments, and it
+ * carries its __doc__, __name__ and __wrapped__); `kind` is the row of `function` in
+ * ALGORITHMS (the module's ALGORITHMS names them in order). One state with gravity given or
+ * default (`gravity` when not given), no f_ext and backend 'auto' or 'compiled', of a model
+ * whose Kernels are in the dict `kernels` (id(model) -> Kernels), runs here; every other
+ * call, or one whose arguments the entry declines, is passed on to `function` unchanged (it
+ * validates, derives the table, runs batches and the other backends). This saves the Python
+ * frame of `function` (~0.2 µs, a fifth of a call) on the path users take most. The door
+ * keeps the last model it answered (a weak reference) and its Kernels, so that a run of
+ * calls on one model skips the dict. */
 
 static PyObject *str_gravity, *str_f_ext, *str_backend, *str_auto, *str_compiled;
 
@@ -1013,24 +829,25 @@ static PyObject *
 door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames)
 {
     Py_ssize_t nargs = PyVectorcall_NARGS(nargsf);
-    const int kind = self->kind, nv = door_vectors[kind];
+    const Algorithm *a = &ALGORITHMS[self->kind];
+    const int nv = a->vectors;
     PyObject *gravity = self->gravity, *f_ext = NULL, *backend = NULL;
     Py_ssize_t nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
     int ok = nargs >= 1 + nv;
     /* optional arguments by position: gravity, f_ext, backend (those the function has) */
     Py_ssize_t k = 1 + nv;
-    if (ok && door_gravity[kind] && k < nargs)
+    if (ok && a->gravity && k < nargs)
         gravity = args[k++];
-    if (ok && door_fext[kind] && k < nargs)
+    if (ok && a->fext && k < nargs)
         f_ext = args[k++];
     if (ok && k < nargs)
         backend = args[k++];
     ok = ok && k == nargs;
     for (Py_ssize_t i = 0; ok && i < nkw; i++) {
         PyObject *name = PyTuple_GET_ITEM(kwnames, i), *value = args[nargs + i];
-        if (door_gravity[kind] && is_name(name, str_gravity))
+        if (a->gravity && is_name(name, str_gravity))
             gravity = value;
-        else if (door_fext[kind] && is_name(name, str_f_ext))
+        else if (a->fext && is_name(name, str_f_ext))
             f_ext = value;
         else if (is_name(name, str_backend))
             backend = value;
@@ -1067,28 +884,10 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     }
     if (ok) {
         Py_INCREF(kern);
-        PyObject *call[5] = {kern, args[1], NULL, NULL, NULL};
-        PyObject *out;
-        switch (kind) {
-        case D_RNEA:
-            call[2] = args[2], call[3] = args[3], call[4] = gravity;
-            out = c_rnea(NULL, call, 5);
-            break;
-        case D_GRAVITY:
-            call[2] = gravity;
-            out = c_gravity_torque(NULL, call, 3);
-            break;
-        case D_BIAS:
-            call[2] = args[2], call[3] = gravity;
-            out = c_bias_torque(NULL, call, 4);
-            break;
-        case D_MASS:
-            out = c_mass_matrix(NULL, call, 2);
-            break;
-        default:
-            call[2] = args[2];
-            out = c_generalized_momentum(NULL, call, 3);
-        }
+        /* kernels, the joint vectors, gravity (read when the algorithm takes it) */
+        PyObject *call[5] = {kern, args[1], nv > 1 ? args[2] : NULL, nv > 2 ? args[3] : NULL};
+        call[1 + nv] = gravity;
+        PyObject *out = single(a, call, 1 + nv + a->gravity);
         Py_DECREF(kern);
         if (out != Py_None)
             return out;        /* the answer, or an error (no memory) */
@@ -1106,8 +905,9 @@ door_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     if (!PyArg_ParseTupleAndKeywords(args, kwds, "OiO!O:Door", keywords, &function, &kind,
                                      &PyDict_Type, &kernels, &gravity))
         return NULL;
-    if (kind < D_RNEA || kind > D_MOMENTUM || !PyCallable_Check(function)) {
-        PyErr_SetString(PyExc_ValueError, "Door: a callable and a kind in 0..4");
+    if (kind < 0 || kind >= ALGORITHM_COUNT || !PyCallable_Check(function)) {
+        PyErr_Format(PyExc_ValueError, "Door: a callable and a kind in 0..%d",
+                     ALGORITHM_COUNT - 1);
         return NULL;
     }
     DoorObject *self = (DoorObject *)type->tp_alloc(type, 0);
@@ -1124,27 +924,28 @@ door_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     return (PyObject *)self;
 }
 
+/* Each reference a door holds, through `DO` (Py_VISIT for the collector, Py_CLEAR). */
+#define DOOR_REFERENCES(DO)                                                           \
+    do {                                                                              \
+        DO(self->function);                                                           \
+        DO(self->kernels);                                                            \
+        DO(self->gravity);                                                            \
+        DO(self->dict);                                                               \
+        DO(self->last_model);                                                         \
+        DO(self->last_kern);                                                          \
+    } while (0)
+
 static int
 door_traverse(DoorObject *self, visitproc visit, void *arg)
 {
-    Py_VISIT(self->function);
-    Py_VISIT(self->kernels);
-    Py_VISIT(self->gravity);
-    Py_VISIT(self->dict);
-    Py_VISIT(self->last_model);
-    Py_VISIT(self->last_kern);
+    DOOR_REFERENCES(Py_VISIT);
     return 0;
 }
 
 static int
 door_clear(DoorObject *self)
 {
-    Py_CLEAR(self->function);
-    Py_CLEAR(self->kernels);
-    Py_CLEAR(self->gravity);
-    Py_CLEAR(self->dict);
-    Py_CLEAR(self->last_model);
-    Py_CLEAR(self->last_kern);
+    DOOR_REFERENCES(Py_CLEAR);
     return 0;
 }
 
@@ -1187,32 +988,46 @@ static PyTypeObject DoorType = {
 /* ------------------------------------------------------------------------------------------
  * The module */
 
-static PyMethodDef methods[] = {
-    {"rnea", (PyCFunction)(void (*)(void))c_rnea, METH_FASTCALL, rnea_doc},
-    {"gravity_torque", (PyCFunction)(void (*)(void))c_gravity_torque, METH_FASTCALL,
-     gravity_torque_doc},
-    {"bias_torque", (PyCFunction)(void (*)(void))c_bias_torque, METH_FASTCALL, bias_torque_doc},
-    {"mass_matrix", (PyCFunction)(void (*)(void))c_mass_matrix, METH_FASTCALL,
-     mass_matrix_doc},
-    {"generalized_momentum", (PyCFunction)(void (*)(void))c_generalized_momentum,
-     METH_FASTCALL, generalized_momentum_doc},
-    {"regressor", (PyCFunction)(void (*)(void))c_regressor, METH_FASTCALL, regressor_doc},
-    {"rnea_batch", (PyCFunction)(void (*)(void))c_rnea_batch, METH_FASTCALL, rnea_batch_doc},
-    {"mass_matrix_batch", (PyCFunction)(void (*)(void))c_mass_matrix_batch, METH_FASTCALL,
-     mass_matrix_batch_doc},
-    {"momentum_batch", (PyCFunction)(void (*)(void))c_momentum_batch, METH_FASTCALL,
-     momentum_batch_doc},
-    {"regressor_batch", (PyCFunction)(void (*)(void))c_regressor_batch, METH_FASTCALL,
-     regressor_batch_doc},
-    {NULL, NULL, 0, NULL},
-};
+/* The functions' definitions, two a row of ALGORITHMS (single state, batch), filled in by
+ * PyInit; each function's `self` is its row's index, which c_single and c_batch read. */
+static PyMethodDef entries[2 * ALGORITHM_COUNT];
+
+/* Add the entries of ALGORITHMS to m, and ALGORITHMS: their names in order (the doors'
+ * kinds). */
+static int
+add_entries(PyObject *m)
+{
+    PyObject *names = PyTuple_New(ALGORITHM_COUNT), *module = PyModule_GetNameObject(m);
+    int ok = names != NULL && module != NULL;
+    for (int i = 0; ok && i < ALGORITHM_COUNT; i++) {
+        const Algorithm *a = &ALGORITHMS[i];
+        entries[2 * i] = (PyMethodDef){a->name, (PyCFunction)(void (*)(void))c_single,
+                                       METH_FASTCALL, a->doc};
+        entries[2 * i + 1] = (PyMethodDef){a->batch, (PyCFunction)(void (*)(void))c_batch,
+                                           METH_FASTCALL, a->batch_doc};
+        PyObject *index = PyLong_FromLong(i), *name = PyUnicode_FromString(a->name);
+        ok = index != NULL && name != NULL;
+        PyTuple_SET_ITEM(names, i, name);       /* NULL until ok: then names is dropped */
+        for (int e = 2 * i; ok && e < 2 * i + (a->batch ? 2 : 1); e++) {
+            PyObject *f = PyCFunction_NewEx(&entries[e], index, module);
+            ok = f != NULL && PyModule_AddObject(m, entries[e].ml_name, f) == 0;
+            if (!ok)
+                Py_XDECREF(f);
+        }
+        Py_XDECREF(index);
+    }
+    ok = ok && PyModule_AddObject(m, "ALGORITHMS", names) == 0;
+    if (!ok)
+        Py_XDECREF(names);
+    Py_XDECREF(module);
+    return ok ? 0 : -1;
+}
 
 static struct PyModuleDef module_def = {
     PyModuleDef_HEAD_INIT,
     .m_name = "spatial_dynamics.backends._compiled",
     .m_doc = PyDoc_STR("The generated kernels, compiled when the package is built."),
     .m_size = -1,
-    .m_methods = methods,
 };
 
 PyMODINIT_FUNC
@@ -1235,6 +1050,7 @@ PyInit__compiled(void)
     Py_INCREF(&DoorType);
     if (PyModule_AddObject(m, "Kernels", (PyObject *)&KernelsType) < 0
             || PyModule_AddObject(m, "Door", (PyObject *)&DoorType) < 0
+            || add_entries(m) < 0
             || PyModule_AddIntConstant(m, "API", API) < 0
             || PyModule_AddStringConstant(m, "KERNELS_SHA256", KERNELS_SHA256) < 0
             || PyModule_AddIntConstant(m, "WORK", WORK) < 0

@@ -12,12 +12,14 @@ numpy.
 
 The single-state entries are called by :mod:`spatial_dynamics.backends` directly; this module
 prepares the batches: one float64 C-contiguous copy of each input, the external forces as one
-(1 or N, NB + 1, 6) table, and the number of threads.
+(1 or N, NB + 1, 6) table, and the number of threads; float32 states (:data:`DTYPES`) are
+computed in float64 and their results rounded back to float32 once.
 """
 
 from __future__ import annotations
 
 import importlib
+import math
 import os
 from typing import Optional
 import warnings
@@ -25,7 +27,7 @@ import warnings
 import numpy as np
 
 #: The interface of ``_compiled.c`` this module speaks (its ``API``).
-API = 2
+API = 3
 
 try:
     ext = importlib.import_module(__package__ + '._compiled')
@@ -57,31 +59,43 @@ def kernels(table: np.ndarray):
     return None if ext is None else ext.Kernels(table)
 
 
-def _rows(x: np.ndarray, N: int, n: int) -> np.ndarray:
-    return np.ascontiguousarray(x.reshape(N, n), dtype=np.float64)
+#: The dtypes the kernels take: float64, and float32 computed in float64 and rounded back.
+DTYPES = (np.dtype(np.float64), np.dtype(np.float32))
+
+
+def _batch(entry, lay, vectors: tuple, middle: tuple, shape: tuple, results: int = 1) -> list:
+    """Run the batch ``entry`` on validated arrays ``vectors`` of one shape (..., n).
+
+    Each is made one C-contiguous float64 (N, n) copy (none when it is one already);
+    ``middle`` are the entry's arguments between the vectors and the results (gravity,
+    external forces). Returns ``results`` arrays of shape (...,) + ``shape`` in the vectors'
+    dtype (float32 rounded once from the float64 results).
+    """
+    n = lay.n
+    batch = vectors[0].shape[:-1]
+    N = math.prod(batch)        # (np.prod takes ~2 µs: a batch of a few states feels it)
+    rows = [np.ascontiguousarray(x.reshape(N, n), dtype=np.float64) for x in vectors]
+    outs = [np.empty((N,) + shape) for _ in range(results)]
+    entry(lay.kernels, N, *rows, *middle, *outs, THREADS)
+    dtype = vectors[0].dtype
+    return [out.reshape(batch + shape).astype(dtype, copy=False) for out in outs]
 
 
 def rnea(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
          f_body: dict) -> np.ndarray:
-    """τ from validated float64 arrays of one broadcast shape (..., n) (any strides).
+    """τ from validated arrays of one broadcast shape (..., n) (any strides, :data:`DTYPES`).
 
     ``gravity`` (gx, gy, gz) floats, m/s² in root coordinates; ``f_body`` maps a body index to
     its external force ``[n; f]`` in body coordinates, shape (6,) or broadcastable to
-    (..., 6). Returns τ of shape (..., n), float64.
+    (..., 6). Returns τ of shape (..., n) in ``q``'s dtype.
     """
-    n, rows = lay.n, lay.table.shape[0]
-    batch = q.shape[:-1]
-    N = int(np.prod(batch, dtype=np.intp))
     fext = None
     if f_body:
         shared = all(np.ndim(f) <= 1 for f in f_body.values())
-        fext = np.zeros(((1,) if shared else batch) + (rows, 6))
+        fext = np.zeros(((1,) if shared else q.shape[:-1]) + (lay.table.shape[0], 6))
         for b, f in f_body.items():
             fext[..., b, :] = f
-    tau = np.empty((N, n))
-    ext.rnea_batch(lay.kernels, N, _rows(q, N, n), _rows(qd, N, n), _rows(qdd, N, n), gravity,
-                   fext, tau, THREADS)
-    return tau.reshape(batch + (n,))
+    return _batch(ext.rnea_batch, lay, (q, qd, qdd), (gravity, fext), (lay.n,))[0]
 
 
 def f_body_table(lay, f_body: dict) -> np.ndarray:
@@ -93,33 +107,19 @@ def f_body_table(lay, f_body: dict) -> np.ndarray:
 
 
 def mass_matrix(lay, q: np.ndarray) -> np.ndarray:
-    """M(q) of shape (..., n, n) from a validated float64 array ``q`` of shape (..., n)."""
-    n = lay.n
-    batch = q.shape[:-1]
-    N = int(np.prod(batch, dtype=np.intp))
-    H = np.empty((N, n, n))
-    ext.mass_matrix_batch(lay.kernels, N, _rows(q, N, n), H, THREADS)
-    return H.reshape(batch + (n, n))
+    """M(q) of shape (..., n, n) from a validated array ``q`` of shape (..., n)."""
+    return _batch(ext.mass_matrix_batch, lay, (q,), (), (lay.n, lay.n))[0]
 
 
 def momentum(lay, q: np.ndarray, qd: np.ndarray) -> tuple:
-    """``(M q̇, Cᵀ q̇)``, each of shape (..., n), from validated float64 arrays (..., n)."""
-    n = lay.n
-    N = int(np.prod(q.shape[:-1], dtype=np.intp))
-    mom, ctq = np.empty((N, n)), np.empty((N, n))
-    ext.momentum_batch(lay.kernels, N, _rows(q, N, n), _rows(qd, N, n), mom, ctq, THREADS)
-    return mom.reshape(q.shape), ctq.reshape(q.shape)
+    """``(M q̇, Cᵀ q̇)``, each of shape (..., n), from validated arrays of one shape (..., n)."""
+    return tuple(_batch(ext.momentum_batch, lay, (q, qd), (), (lay.n,), results=2))
 
 
 def regressor(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple) -> np.ndarray:
-    """``Y`` of shape (..., n, 10 NB) from validated float64 arrays of one shape (..., n)."""
-    n, NB = lay.n, lay.table.shape[0] - 1
-    batch = q.shape[:-1]
-    N = int(np.prod(batch, dtype=np.intp))
-    Y = np.empty((N, n, 10 * NB))
-    ext.regressor_batch(lay.kernels, N, _rows(q, N, n), _rows(qd, N, n), _rows(qdd, N, n),
-                        gravity, Y, THREADS)
-    return Y.reshape(batch + (n, 10 * NB))
+    """``Y`` of shape (..., n, 10 NB) from validated arrays of one shape (..., n)."""
+    shape = (lay.n, 10 * (lay.table.shape[0] - 1))
+    return _batch(ext.regressor_batch, lay, (q, qd, qdd), (gravity,), shape)[0]
 
 
 def describe() -> str:
