@@ -56,11 +56,24 @@ def test_every_arithmetic_statement_of_the_source_is_in_the_generated_kernels():
     ('vel[i] = v', 'store a whole tuple'),
     ('a, b = acc[p]', 'acc holds 6 values'),
     ('a, b = rows[i]', 'unpack the whole row'),
+    ('x = f(*q)', r'\* only on a store read whole'),
 ])
 def test_code_outside_the_rules_is_refused(body, message):
     tree = ast.parse(f'def rnea_kernel(rows, vel, acc):\n    {body}\n')
     with pytest.raises(SyntaxError, match=message):
         codegen._ToFlat().visit(tree.body[0])
+
+
+def test_a_store_read_whole_into_a_call_and_a_product_stored_whole():
+    """``f(*vel[p])`` passes the six slots of vel[p]; ``frc[p] = f(…)`` stores each result."""
+    tree = ast.parse('def rnea_kernel(rows, vel, frc):\n'
+                     '    frc[p] = f(a, *vel[p + 1], b)\n')
+    flat = ast.unparse(codegen._ToFlat().visit(tree.body[0]))
+    slots = ', '.join(f'work[(p + 1) * WORK + VEL + {j}]' for j in range(6))
+    names = [f'stored1_{j}' for j in range(6)]
+    assert f"{', '.join(names)} = f(a, {slots}, b)" in flat, flat
+    for j, name in enumerate(names):
+        assert f'work[p * WORK + FRC + {j}] = {name}' in flat, flat
 
 
 def test_every_arithmetic_assignment_is_a_c_statement_as_written():

@@ -21,7 +21,7 @@ on floats or (N,) arrays and the compiled backend is generated from it.
 
 from __future__ import annotations
 
-from .components import I_motion, XT_force, XT_I_X
+from .components import I_motion, XT_force, XT_I_X_plus
 from .rnea import PR
 
 
@@ -43,24 +43,8 @@ def crba_kernel(rows, Xup, IC, H) -> None:
     for i in range(NB, 0, -1):
         (p, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
          _, _, _, _, _, _, _, _, _, _, _, _) = rows[i]
-        if p == 0:
-            continue
-        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
-        cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz = IC[i]
-        d0, d1, d2, d3, d4, d5, d6, d7, d8, d9 = XT_I_X(
-            e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
-            cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz)
-        cp = IC[p]
-        cp[0] += d0
-        cp[1] += d1
-        cp[2] += d2
-        cp[3] += d3
-        cp[4] += d4
-        cp[5] += d5
-        cp[6] += d6
-        cp[7] += d7
-        cp[8] += d8
-        cp[9] += d9
+        if p != 0:
+            IC[p] = XT_I_X_plus(*Xup[i], *IC[i], *IC[p])
     (_, _, n, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
      _, _, _, _, _, _, _, _, _, _, _, _) = rows[0]
     for i in range(1, NB + 1):

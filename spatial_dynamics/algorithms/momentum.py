@@ -21,7 +21,7 @@ generated from it).
 
 from __future__ import annotations
 
-from .components import I_motion, X_motion, XT_force
+from .components import I_motion, X_motion, XT_force_plus
 from .rnea import PR
 
 
@@ -42,9 +42,8 @@ def momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc) -> None:
         e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
         qdi = qd[k] if mul == 1.0 else mul * qd[k]
         # v_i = Xup_i v_λ(i) + S_i q̇_i
-        pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
         w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
-                                          rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2)
+                                          rx, ry, rz, *vel[p])
         if code == PR:
             v0, v1, v2 = v0 + ax * qdi, v1 + ay * qdi, v2 + az * qdi
         else:
@@ -72,15 +71,5 @@ def momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc) -> None:
                  + (v2 * ax - v0 * az) * f1 + (v0 * ay - v1 * ax) * f2)
         mom[k] = mom[k] + (t if mul == 1.0 else mul * t)
         ctq[k] = ctq[k] + (c if mul == 1.0 else mul * c)
-        if p == 0:
-            continue
-        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
-        g0, g1, g2, g3, g4, g5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22,
-                                          rx, ry, rz, n0, n1, n2, f0, f1, f2)
-        fp = frc[p]
-        fp[0] += g0
-        fp[1] += g1
-        fp[2] += g2
-        fp[3] += g3
-        fp[4] += g4
-        fp[5] += g5
+        if p != 0:
+            frc[p] = XT_force_plus(*Xup[i], n0, n1, n2, f0, f1, f2, *frc[p])

@@ -45,7 +45,7 @@ from typing import Sequence
 import numpy as np
 
 from .arguments import as_joint_arrays, as_vector
-from .components import X_motion
+from .components import cross, X_motion
 from .rnea import PR
 from ..joints import jcalc
 from ..model import Model
@@ -104,29 +104,23 @@ def regressor_kernel(rows, qd, qdd, gx, gy, gz, Y, axes, Xup, vel, acc) -> None:
         qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
 
         # v_i = Xup_i v_λ(i) + vJ,  a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ,  vJ = S_i q̇_i
-        pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
         w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
-                                          rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2)
-        pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
+                                          rx, ry, rz, *vel[p])
         a0, a1, a2, l0, l1, l2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
-                                          rx, ry, rz, pa0, pa1, pa2, pl0, pl1, pl2)
+                                          rx, ry, rz, *acc[p])
         j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
         if code == PR:
             v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
             l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
-            l0 += w1 * j2 - w2 * j1
-            l1 += w2 * j0 - w0 * j2
-            l2 += w0 * j1 - w1 * j0
+            c0, c1, c2 = cross(w0, w1, w2, j0, j1, j2)       # v × vJ
+            l0, l1, l2 = l0 + c0, l1 + c1, l2 + c2
             s0, s1, s2, s3, s4, s5 = zero, zero, zero, mul * ax, mul * ay, mul * az
         else:
             w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
             a0, a1, a2 = a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi
-            a0 += w1 * j2 - w2 * j1
-            a1 += w2 * j0 - w0 * j2
-            a2 += w0 * j1 - w1 * j0
-            l0 += v1 * j2 - v2 * j1
-            l1 += v2 * j0 - v0 * j2
-            l2 += v0 * j1 - v1 * j0
+            c0, c1, c2 = cross(w0, w1, w2, j0, j1, j2)       # v × vJ
+            d0, d1, d2 = cross(v0, v1, v2, j0, j1, j2)
+            a0, a1, a2, l0, l1, l2 = a0 + c0, a1 + c1, a2 + c2, l0 + d0, l1 + d1, l2 + d2
             s0, s1, s2, s3, s4, s5 = mul * ax, mul * ay, mul * az, zero, zero, zero
         vel[i] = (w0, w1, w2, v0, v1, v2)
         acc[i] = (a0, a1, a2, l0, l1, l2)

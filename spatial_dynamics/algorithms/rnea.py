@@ -40,7 +40,7 @@ from typing import Mapping, Optional, Sequence
 import numpy as np
 
 from .arguments import as_joint_arrays, as_vector, f_ext_in_bodies
-from .components import I_motion, X_motion, XT_force
+from .components import I_motion, X_motion, XT_force_plus
 from ..joints import jcalc
 from ..model import Model
 from ..spatial import crf, crm
@@ -224,18 +224,8 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
         else:
             t = ax * n0 + ay * n1 + az * n2
         tau[k] = tau[k] + (t if mul == 1.0 else mul * t)
-        if p == 0:
-            continue
-        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
-        g0, g1, g2, g3, g4, g5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22,
-                                          rx, ry, rz, n0, n1, n2, f0, f1, f2)
-        fp = frc[p]
-        fp[0] += g0
-        fp[1] += g1
-        fp[2] += g2
-        fp[3] += g3
-        fp[4] += g4
-        fp[5] += g5
+        if p != 0:
+            frc[p] = XT_force_plus(*Xup[i], n0, n1, n2, f0, f1, f2, *frc[p])
 
 
 # --------------------------------------------------------------------------------------------

@@ -328,8 +328,8 @@ class _ToC:
 
 
 #: The kernels printed a second time on lanes, and the arrays holding one value per state.
-LANE_SOURCES = (components.X_motion, components.XT_force, components.I_motion,
-                rnea.xup_kernel, rnea.rnea_kernel)
+LANE_SOURCES = (components.cross, components.X_motion, components.XT_force,
+                components.XT_force_plus, components.I_motion, rnea.xup_kernel, rnea.rnea_kernel)
 _LANE_ARRAYS = {'q', 'qd', 'qdd', 'f_body', 'tau', 'work'}
 
 

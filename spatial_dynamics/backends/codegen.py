@@ -20,6 +20,8 @@ source (Python backends)                        generated (flat arrays)
                                                 the integer columns; ``_`` skipped)
 ``x0, …, x5 = vel[p]`` (``Xup acc vel frc IC``) ``x0 = work[p * WORK + VEL + 0]; …``
 ``vel[i] = (x0, …, x5)``                        ``work[i * WORK + VEL + 0] = x0; …``
+``f(…, *vel[p], …)`` (a store read whole)       ``f(…, work[p * WORK + VEL + 0], …, … + 5], …)``
+``frc[p] = f(…)`` (a product stored whole)      ``s0, …, s5 = f(…)``, then stored as above
 ``fp = frc[p]`` then ``fp[j] += e``             ``work[p * WORK + FRC + j] += e``
 ``H[…] = …`` (any other array argument)         unchanged
 ``fe0, …, fe5 = f_body[i]``                     ``fe0 = f_body[i, 0]; …``
@@ -60,8 +62,9 @@ STORES = {'Xup': ('XUP', 0, 12), 'vel': ('VEL', 12, 6), 'acc': ('ACC', 18, 6),
           'frc': ('FRC', 24, 6), 'IC': ('ICS', 30, 10)}
 WORK = 40
 #: The functions translated, in order (a function is generated after those it calls).
-SOURCES = (components.X_motion, components.XT_force, components.I_motion, components.XT_I_X,
-           rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
+SOURCES = (components.cross, components.X_motion, components.XT_force, components.XT_force_plus,
+           components.I_motion, components.XT_I_X, components.XT_I_X_plus, rnea.xup_kernel,
+           rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
            regressor.regressor_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
@@ -80,6 +83,7 @@ class _ToFlat(ast.NodeTransformer):
 
     def __init__(self) -> None:
         self.aliases = {}   # name -> (store, index expression)
+        self.fresh = 0      # names made for a component's results stored whole
 
     # -- helpers -----------------------------------------------------------------------------
     @staticmethod
@@ -134,6 +138,16 @@ class _ToFlat(ast.NodeTransformer):
         if store and isinstance(target, ast.Name):               # fp = frc[p]
             self.aliases[target.id] = (store, value.slice)
             return None
+        if self._store_of(target) and isinstance(value, ast.Call):   # frc[p] = XT_…(…)
+            store = target.value.id
+            self.fresh += 1
+            names = [f'stored{self.fresh}_{j}' for j in range(STORES[store][2])]
+            call = ast.copy_location(ast.Assign(
+                [ast.Tuple([ast.Name(n, ast.Store()) for n in names], ast.Store())], value),
+                node)
+            return [call] + [ast.copy_location(ast.Assign(
+                [self._slot(store, target.slice, j)], ast.Name(n, ast.Load())), node)
+                for j, n in enumerate(names)]
         if self._store_of(target):                               # vel[i] = (…)
             if not isinstance(value, (ast.Tuple, ast.List)):
                 raise SyntaxError(f'line {node.lineno}: store a whole tuple')
@@ -187,7 +201,18 @@ class _ToFlat(ast.NodeTransformer):
                 and isinstance(node.args[0], ast.Name) and node.args[0].id == 'rows'):
             return ast.Subscript(ast.Attribute(ast.Name('K', ast.Load()), 'shape', ast.Load()),
                                  ast.Constant(0), ast.Load())
-        self.generic_visit(node)
+        args = []
+        for arg in node.args:                                    # f(…, *vel[p], …)
+            if isinstance(arg, ast.Starred):
+                store = self._store_of(arg.value)
+                if not store:
+                    raise SyntaxError(f'line {node.lineno}: * only on a store read whole')
+                index = self.visit(arg.value.slice)
+                args += [self._slot(store, index, j) for j in range(STORES[store][2])]
+            else:
+                args.append(self.visit(arg))
+        node.func, node.args = self.visit(node.func), args
+        node.keywords = [self.visit(k) for k in node.keywords]
         if isinstance(node.func, ast.Name) and node.func.id == 'nonzero':
             return ast.Compare(node.args[0], [ast.NotEq()], [ast.Constant(0.0)])
         return node
