@@ -515,7 +515,7 @@ done:
 }
 
 /* ------------------------------------------------------------------------------------------
- * Batches: contiguous slices of the states on threads, without the GIL */
+ * Batches: the states claimed chunk by chunk by threads, without the GIL */
 
 typedef struct {
     int kernel;

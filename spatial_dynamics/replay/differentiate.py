@@ -22,15 +22,13 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from math import factorial
-import os
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from ..backends.compiled import THREADS   # the CPUs this process may run on
+
 JITTER = 0.01   # relative spread of periods up to which a segment counts as uniform
-#: Threads of :func:`savgol_many`: the CPUs this process may run on.
-THREADS = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else (
-    os.cpu_count() or 1)
 
 
 def savgol_weights(window: int, order: int, deriv: int, dt: float, at: int = None

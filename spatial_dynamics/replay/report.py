@@ -21,10 +21,9 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from ..backends.compiled import THREADS   # the CPUs this process may run on
+
 CHUNK = 1 << 18          # rows formatted at once
-#: Threads of :func:`write_csv`: the CPUs this process may run on.
-THREADS = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else (
-    os.cpu_count() or 1)
 
 
 #: Largest |x| · 10**decimals written by the integer fast path: well inside int64 and exact
