@@ -73,7 +73,6 @@ ERD_FILES = {'panda': 'panda_description/urdf/panda.urdf',
 REFERENCE = 'pinocchio'
 #: Measured: PyBullet's calculateInverseDynamics is right on a 128-link chain, wrong beyond.
 PYBULLET_MAX_DOF = 128
-MOVABLE = ('revolute', 'continuous', 'prismatic')
 
 
 @dataclass(frozen=True)
@@ -110,7 +109,7 @@ class Robot:
     @property
     def mimic(self) -> dict:
         """``{mimic joint: (our q index, multiplier, offset)}``, resolved to a joint of q."""
-        return _mimic_table(self.xml, self.model.joint_names)
+        return _mimic_table(self.model.mimics, self.model.joint_names)
 
 
 @dataclass
@@ -184,14 +183,12 @@ def random_states(model: sd.Model, rng: np.random.Generator, N: int) -> tuple:
             rng.uniform(-5.0, 5.0, (N, n)))
 
 
-def _mimic_table(xml: str, joint_names) -> dict:
-    """``{mimic joint: (our q index, mult, offset)}`` with chains of mimics resolved."""
-    direct = {}
-    for joint in ET.fromstring(xml.encode()).findall('joint'):
-        tag = joint.find('mimic')
-        if tag is not None and joint.get('type') in MOVABLE:
-            direct[joint.get('name')] = (tag.get('joint'), float(tag.get('multiplier', 1.0)),
-                                         float(tag.get('offset', 0.0)))
+def _mimic_table(direct, joint_names) -> dict:
+    """``{mimic joint: (our q index, mult, offset)}`` with chains of mimics resolved.
+
+    ``direct`` is the model's record of the URDF's tags (``Model.mimics``: source,
+    multiplier, offset as written, a source may itself be a mimic joint).
+    """
     index = {name: k for k, name in enumerate(joint_names)}
     table = {}
     for name in direct:
