@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import os
 import stat
-from typing import Any, Union
+from typing import Any, Callable, Sequence, Union
 
 #: What a path is when it is not a regular file, by the test of its mode.
 _KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
@@ -157,3 +157,89 @@ def load_yaml(data: Union[str, bytes], what: str, max_nodes: int = MAX_YAML_NODE
         raise ValueError(f'{what}: the YAML is nested too deeply') from None
     finally:
         loader.dispose()
+
+
+def _same_file(a: Union[str, os.PathLike], b: Union[str, os.PathLike]) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.abspath(a) == os.path.abspath(b)
+
+
+def check_output(path: Union[str, os.PathLike], what: str,
+                 inputs: Sequence[Union[str, os.PathLike]] = ()) -> None:
+    """Refuse an output path before any work is done for it.
+
+    ``path`` must not be one of ``inputs`` (the files the command reads: writing over them
+    would lose what the output was made from), must not be a directory, a named pipe or any
+    other special file (writing would fail late or block forever), and its folder must exist
+    and be writable. ``ValueError`` names the file as ``what`` and says why.
+    """
+    for source in inputs:
+        if source is not None and _same_file(path, source):
+            raise ValueError(f'{what} {os.fspath(path)!r} is also an input of this command; '
+                             'choose another file (the input would be overwritten)')
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        info = None
+    except OSError as err:
+        raise ValueError(f'{what} {os.fspath(path)!r}: {err.strerror}') from None
+    if info is not None and not stat.S_ISREG(info.st_mode):
+        raise ValueError(f'{what} {os.fspath(path)!r} is not a regular file '
+                         f'({_kind(info.st_mode)})')
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ValueError(f'{what} {os.fspath(path)!r}: the folder {folder!r} does not exist')
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f'{what} {os.fspath(path)!r}: the folder {folder!r} is not writable')
+
+
+def write_atomic(path: Union[str, os.PathLike], data: Union[str, bytes, Callable[[Any], None]],
+                 what: str) -> None:
+    """Write ``data`` to ``path`` all or nothing: a temporary beside it, then a rename.
+
+    ``data`` is text (UTF-8), bytes, or a function that writes into the binary file object
+    it is given. A write that fails midway (a full disk, a quota) leaves ``path`` as it was
+    and removes the temporary; the rename replaces ``path`` in one step, so a reader sees
+    the old file or the new one, never half of one. The new file gets the permissions a
+    plain ``open(path, 'w')`` would have given it (kept from the file it replaces).
+    ``ValueError`` names the file as ``what`` and the reason.
+    """
+    import tempfile
+    target = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(target))
+    try:
+        fd, tmp = tempfile.mkstemp(prefix='.' + os.path.basename(target) + '.', suffix='.tmp',
+                                   dir=folder)
+    except OSError as err:
+        raise ValueError(f'cannot write {what} {target!r}: {err.strerror}') from None
+    try:
+        with os.fdopen(fd, 'wb') as f:
+            if callable(data):
+                data(f)
+            else:
+                f.write(data.encode('utf-8') if isinstance(data, str) else data)
+            f.flush()
+            os.fsync(f.fileno())
+        try:
+            mode = stat.S_IMODE(os.stat(target).st_mode)
+        except OSError:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask
+        os.chmod(tmp, mode)
+        os.replace(tmp, target)
+    except OSError as err:
+        _remove_quietly(tmp)
+        raise ValueError(f'cannot write {what} {target!r}: {err.strerror}') from None
+    except BaseException:
+        _remove_quietly(tmp)
+        raise
+
+
+def _remove_quietly(path: str) -> None:
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
