@@ -44,7 +44,9 @@ class Frame:
 class Model:
     """Immutable kinematic tree with flat per-body arrays (index 0 = fixed base).
 
-    Attributes (``NB`` moving bodies, ``n`` = ``len(joint_names)`` generalised coordinates):
+    ``NB`` moving bodies, ``n`` = ``len(joint_names)`` generalised coordinates.
+
+    Attributes:
         name: robot name.
         joint_names: movable, non-mimic joint names; the order of ``q``.
         body_names: (NB+1,) link name of each body (the link its joint moves).

@@ -45,7 +45,9 @@ RANK_RTOL = 1e-9
 class WrenchEstimate:
     """A wrench estimated from joint torques, and what the joints could not tell.
 
-    Attributes (leading batch dimensions ``...`` as the inputs):
+    Leading batch dimensions ``...`` as the inputs.
+
+    Attributes:
         wrench: (..., 6) ``[n; f]`` (N m, N) in the frame of the Jacobian's rows.
         sigma: (..., 6) singular values of J, descending (zeros beyond ``n``).
         U: (..., 6, 6) the wrench directions, column ``i`` with singular value ``sigma[i]``.

@@ -3,7 +3,7 @@
 """Parameter tables: one rule per check, typed frozen values, and documents that cannot drift.
 
 The mechanism (:mod:`spatial_dynamics.ros.parameters`) is checked without ROS; the nodes'
-tables are checked against the files users read: ``config/<node>.yaml`` and the README's
+tables are checked against the files users read: ``config/<node>.yaml`` and the user guide's
 parameter table of each node are exactly what the table generates (set ``UPDATE_DOCS=1`` to
 rewrite them after changing a table).
 """
@@ -96,10 +96,14 @@ def tables():
     return {'sim': SIM, 'inverse_dynamics': INVERSE_DYNAMICS}
 
 
+#: The user-guide page that carries each node's table.
+DOC_PAGE = {'sim': 'simulator.md', 'inverse_dynamics': 'node.md'}
+
+
 def readme_block(text: str, node: str) -> str:
     match = re.search(rf'<!-- parameters of {node}: [^\n]*-->\n(.*?)<!-- end of parameters of '
                       rf'{node} -->', text, re.S)
-    assert match, f'no parameter block of {node} in README.md'
+    assert match, f'no parameter block of {node} in doc/{DOC_PAGE[node]}'
     return match.group(1)
 
 
@@ -107,7 +111,7 @@ def readme_block(text: str, node: str) -> str:
 def test_config_file_and_readme_are_the_table(node):
     table = tables()[node]
     config = os.path.join(ROOT, 'config', f'{node}.yaml')
-    readme = os.path.join(ROOT, 'README.md')
+    readme = os.path.join(ROOT, 'doc', DOC_PAGE[node])
     with open(readme, encoding='utf-8') as f:
         text = f.read()
     if os.environ.get('UPDATE_DOCS'):
@@ -121,7 +125,7 @@ def test_config_file_and_readme_are_the_table(node):
             f.write(text)
     with open(config, encoding='utf-8') as f:
         assert f.read() == table.yaml(), f'config/{node}.yaml differs from its table'
-    assert readme_block(text, node) == table.markdown(), f'README table of {node} differs'
+    assert readme_block(text, node) == table.markdown(), f'the table of {node} in doc/{DOC_PAGE[node]} differs'
     # and every default in the file is what the node declares
     declared = yaml.safe_load(table.yaml())[node]['ros__parameters']
     for param in table.params:
