@@ -125,7 +125,8 @@ def test_config_file_and_readme_are_the_table(node):
             f.write(text)
     with open(config, encoding='utf-8') as f:
         assert f.read() == table.yaml(), f'config/{node}.yaml differs from its table'
-    assert readme_block(text, node) == table.markdown(), f'the table of {node} in doc/{DOC_PAGE[node]} differs'
+    assert readme_block(text, node) == table.markdown(), \
+        f'the table of {node} in doc/{DOC_PAGE[node]} differs'
     # and every default in the file is what the node declares
     declared = yaml.safe_load(table.yaml())[node]['ros__parameters']
     for param in table.params:
