@@ -26,8 +26,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 KERNELS = Extension(
     package_name + '.backends._compiled',
     sources=[package_name + '/backends/_compiled.c'],
+    # every module the generator reads or imports (test/test_build_depends.py checks it)
     depends=sorted(glob(package_name + '/algorithms/*.py')) + [
-        package_name + '/backends/codegen.py', package_name + '/backends/layout.py'],
+        package_name + '/' + f for f in ('backends/codegen.py', 'backends/c_printer.py',
+                                         'backends/layout.py', 'joints.py', 'spatial.py')],
     extra_compile_args=[] if os.name == 'nt' else ['-ffp-contract=off', '-pthread'],
     extra_link_args=[] if os.name == 'nt' else ['-pthread'],
 )
