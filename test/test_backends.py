@@ -12,7 +12,7 @@
   result rounded once; mixed float32/float64 inputs give float64 (numpy's promotion);
   longdouble runs on numpy; without the extension the package imports and
   ``backend='auto'`` runs on numpy, ``backend='compiled'`` says how to build it; nothing is
-  compiled or cached at run time, and numba is never imported.
+  compiled or cached at run time.
 
 The compiled tests fail (they do not skip) when the package was built without its kernels.
 """
@@ -497,23 +497,6 @@ def test_a_stale_build_is_not_used():
     ''')
     assert out.startswith('numpy (compiled kernels not built: /somewhere/_compiled.so is a '
                           'stale build (API 0, not 3): build the package again)'), out
-
-
-def test_numba_is_never_imported():
-    out = run_python(f'''
-        import sys
-        import numpy as np
-        import spatial_dynamics as sd
-        m = sd.Model.from_urdf({URDF!r})
-        print('after import:', 'numba' in sys.modules)
-        for backend in ('numpy', 'compiled', 'auto'):
-            sd.rnea(m, np.zeros(1), np.zeros(1), np.zeros(1), backend=backend)
-            sd.rnea(m, np.zeros((70, 1)), np.zeros(1), np.zeros(1), backend=backend)
-            sd.mass_matrix(m, np.zeros((3, 1)), backend=backend)
-        print('after the calls:', 'numba' in sys.modules)
-    ''')
-    assert 'after import: False' in out, out
-    assert 'after the calls: False' in out, out
 
 
 def test_nothing_is_compiled_or_written_at_run_time(kernels, tmp_path):

@@ -98,8 +98,6 @@ def test_imports_run_one_way(name, path):
             top = module.split('.')[0]
             if top in ROS and RANKS[here] < RANKS['ros']:
                 wrong.append(f'{module} (ROS, below the ros layer)')
-            if top in ('numba', 'llvmlite') and not name.startswith('backends'):
-                wrong.append(f'{module} (numba outside the backends)')
             continue
         there = layer(target)
         if there not in RANKS or (here, there) in ALLOWED_UPWARD:

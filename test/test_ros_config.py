@@ -60,14 +60,13 @@ def test_config_never_imports_rclpy():
         print('ROS:', sorted(m for m in sys.modules if m.split('.')[0] in
                              ('rclpy', 'rcl_interfaces', 'sensor_msgs', 'std_msgs',
                               'diagnostic_msgs', 'geometry_msgs')))
-        print('numba:', 'numba' in sys.modules)
     ''')
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         [ROOT] + [p for p in os.environ.get('PYTHONPATH', '').split(os.pathsep) if p]))
     proc = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
                           cwd=ROOT, env=env, timeout=120)
     assert proc.returncode == 0, proc.stderr
-    assert 'ROS: []' in proc.stdout and 'numba: False' in proc.stdout, proc.stdout
+    assert 'ROS: []' in proc.stdout, proc.stdout
 
 
 def _functions(path):

@@ -59,7 +59,7 @@ def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = 
 
     One plain-float inverse-dynamics call at q = qd = qdd = 0 follows, before the model is
     used: it proves the model computes (finite torques), and derives the backend's layout at
-    load time, not at the first live message. It never imports numba.
+    load time, not at the first live message.
     """
     text = urdf.lstrip('\ufeff \t\r\n')
     if not text:

@@ -22,7 +22,7 @@ Pure Python: rclpy is imported only by :meth:`Table.declare`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, make_dataclass, replace
+from dataclasses import dataclass, field, make_dataclass, replace
 import math
 import textwrap
 from typing import Any, Callable, Dict, Iterable, Mapping, Optional, Sequence, Tuple
@@ -239,11 +239,6 @@ class Table:
                 raise ParameterError(f'unknown parameter {name} of {self.node}')
             checked[self.by_name[name].field] = check(self.by_name[name], value)
         return replace(params, **checked)
-
-    @staticmethod
-    def as_dict(params: Any) -> Dict[str, Any]:
-        """``{field: value}`` of a ``Params``."""
-        return {f.name: getattr(params, f.name) for f in fields(params)}
 
     # -- declaration (rclpy) --------------------------------------------------------------------
     def descriptor(self, param: Param):

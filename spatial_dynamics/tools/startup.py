@@ -80,15 +80,6 @@ def proc_status_bytes(pid: int, key: str) -> int:
     raise RuntimeError(f'no {key} for pid {pid}')
 
 
-def numba_loaded(pid: int) -> bool:
-    """Whether the process ``pid`` has llvmlite (numba's compiler) mapped: numba imported."""
-    try:
-        with open(f'/proc/{pid}/maps') as f:
-            return any('llvmlite' in line for line in f)
-    except OSError:
-        return False
-
-
 @contextlib.contextmanager
 def bytecode_cache(path: str) -> Iterator[None]:
     """Cache the bytecode of the processes started inside in ``path`` (``PYTHONPYCACHEPREFIX``).
@@ -238,8 +229,7 @@ def run_once(executor, bench, model, urdf: str, backend: str, cache_dir: str, la
             'max_gap_ms': probe.max_gap * 1e3,
             'max_gap_end_s': probe.max_gap_at - started if probe.max_gap else None,
             'answers': probe.answers,
-            'wrong': probe.wrong, 'backend_in_use': probe.backend,
-            'numba_loaded': numba_loaded(proc.pid)}
+            'wrong': probe.wrong, 'backend_in_use': probe.backend}
     finally:
         row_exit = stop(proc)
         probe.close()
