@@ -44,14 +44,15 @@ import argparse
 import contextlib
 import os
 import sys
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .. import friction_torque, Model, rnea
 from ..check import read_description
 from .. import effort as effort_model
-from . import annotate, bags, differentiate, identify, report, splines
+from ..files import check_output
+from . import annotate, bags, differentiate, identify, report, splines, urdf_writer
 from .recording import recording, Stages
 from .. import identification
 from .arguments import (add_model_arguments, check_gravity, load_model, one_line, positive,
@@ -149,8 +150,11 @@ def run_bag(args) -> int:
     plotter = None if args.no_plots else report.start_child()
     try:
         return compare(args, plotter)
+    except BaseException:               # a refusal, Ctrl-C: the child ends, drawn or not
+        report.stop_child(plotter)
+        raise
     finally:
-        report.end_child(plotter)       # a refusal: the child ends without drawing
+        report.end_child(plotter)
 
 
 def compare(args, plotter) -> int:
@@ -159,12 +163,8 @@ def compare(args, plotter) -> int:
     model = load_model(args)
     names = model.joint_names
     stages.done('model')
-    if args.inertias:
-        for link in args.inertias:
-            if link not in model.frames:
-                raise Refused(f'--inertias: {link!r} is not a link of {model.name!r}')
-    if args.payload and args.payload not in model.frames:
-        raise Refused(f'--payload: {args.payload!r} is not a link of {model.name!r}')
+    check_links(args, model)
+    urdf_source = urdf_to_write(args, model)        # its problems said before any fit
     s = recording(args, args.bag, model, stages)
     js, t, q, qd, qdd, effort = (s[k] for k in ('js', 't', 'q', 'qd', 'qdd', 'effort'))
     spans, source, resampled = s['spans'], s['source'], s['resampled']
@@ -178,6 +178,8 @@ def compare(args, plotter) -> int:
         more = [recording(args, bag, model, stages) for bag in args.also]
         train = {k: np.concatenate([train[k]] + [m[k] for m in more]) for k in train}
         print(f'fitted on {args.bag} and {len(more)} more bag(s): {len(train["q"])} samples')
+    # read before the fits: a held-out bag that cannot be used is said before them
+    held_out = recording(args, args.validate, model, stages) if args.validate else None
     fq, fqd, fqdd, feffort = (train[k] for k in ('q', 'qd', 'qdd', 'effort'))
     fit = None
     if args.identify:
@@ -228,7 +230,8 @@ def compare(args, plotter) -> int:
                          [t - t[0]] + [residual[:, j] for j in range(len(names))],
                          [6] + [4] * len(names))
     elif args.residual == 'npy':
-        np.save(os.path.join(args.out, 'residual.npy'), np.column_stack((t - t[0], residual)))
+        report.write_npy(os.path.join(args.out, 'residual.npy'),
+                         np.column_stack((t - t[0], residual)))
     stages.done('write residual')
     if not args.no_plots:
         if not report.join_child(plotter):
@@ -281,7 +284,7 @@ def compare(args, plotter) -> int:
     if not args.no_plots:
         written += ['measured_vs_model.png', 'residual.png']
     if correction is not None:
-        written += corrected(args, model, correction, train, stages)
+        written += corrected(args, model, correction, train, stages, held_out, urdf_source)
     if excitation_warning:
         print(excitation_warning, file=sys.stderr)
     print(f'\nwritten to {args.out}: {", ".join(written)}')
@@ -290,8 +293,14 @@ def compare(args, plotter) -> int:
     return 0
 
 
-def corrected(args, model: Model, correction, data: Dict, stages: Stages) -> List[str]:
-    """Report a correction: inertias, residual before and after (held-out), files written."""
+def corrected(args, model: Model, correction, data: Dict, stages: Stages,
+              held_out: Optional[Dict] = None,
+              urdf_source: Optional[urdf_writer.Source] = None) -> List[str]:
+    """Report a correction: inertias, residual before and after (held-out), files written.
+
+    ``held_out`` is the ``--validate`` recording, ``urdf_source`` the ``--write-urdf`` one's
+    URDF (:func:`urdf_to_write`).
+    """
     written = ['parameters.csv', 'validation.csv']
     if correction.bodies:
         correction_of.print_inertias(correction)
@@ -303,9 +312,8 @@ def corrected(args, model: Model, correction, data: Dict, stages: Stages) -> Lis
     correction_of.write_parameters(correction, args.out)
     train = correction_of.residuals(correction, data, args.gravity)
     held = None
-    if args.validate:
-        held = correction_of.residuals(correction, recording(args, args.validate, model,
-                                                             stages), args.gravity)
+    if held_out is not None:
+        held = correction_of.residuals(correction, held_out, args.gravity)
         stages.done('validate')
     correction_of.print_validation(model.joint_names, train, held, args.out,
                                    not args.no_plots)
@@ -313,12 +321,9 @@ def corrected(args, model: Model, correction, data: Dict, stages: Stages) -> Lis
         written.append('identification.png')
     if args.write_urdf:
         if args.urdf.endswith('.xacro'):
-            text = read_description(args.urdf)
             print(f'note: {args.urdf} is a xacro file: {args.write_urdf} is its expansion '
                   'with the identified elements replaced')
-        else:
-            text = read_urdf_file(args.urdf)
-        for note in correction.write_urdf(text, args.write_urdf):
+        for note in correction.write_urdf(urdf_source, args.write_urdf):
             print(f'note: {note}')
         print(f'\ncorrected URDF: {args.write_urdf} (only the identified <inertial> and '
               '<dynamics> elements differ from ' + os.path.basename(args.urdf) + ')')
@@ -474,7 +479,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 '--trajectory or --trajectory-topic')
     check_gravity(p, args.gravity)
     try:
-        output_dir(args.out)      # before any computation: a bad --out is said at once
+        check_paths(args)         # before any computation: bad inputs and outputs said at once
         if args.annotate:
             return annotate.run(args, load_model)
         if args.trajectory or args.trajectory_topic:
@@ -489,7 +494,91 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except MemoryError:
         print('error: out of memory (a smaller --rate, a shorter bag or fewer joints?)',
               file=sys.stderr)
+    except KeyboardInterrupt:     # Ctrl-C: every file is whole or absent, the child ended
+        print('interrupted', file=sys.stderr)
+        return 130
     return 1
+
+
+# --------------------------------------------------------------------------------------------
+# Before any work: every input there, every output writable and no input
+
+def bag_options(args) -> List[Tuple[str, str]]:
+    """Return ``(option, path)`` of each bag the command reads (``'BAG'`` for the first)."""
+    found = [('BAG', args.bag)] + [('--also', bag) for bag in args.also] + [
+        ('--validate', args.validate)]
+    return [(option, path) for option, path in found if path]
+
+
+def output_files(args) -> List[str]:
+    """Return the names of the files a bag run writes into ``--out``."""
+    names = ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
+                               'none': []}[args.residual]
+    if not args.no_plots:
+        names += ['measured_vs_model.png', 'residual.png']
+    if args.inertias is not None or args.payload or args.identify:
+        names += ['parameters.csv', 'validation.csv']
+        names += [] if args.no_plots else ['identification.png']
+    return names
+
+
+def check_paths(args) -> None:
+    """Refuse, before any work, a bag that cannot be opened and an output that cannot be one.
+
+    Each bag (BAG, ``--also``, ``--validate``) must open (:func:`bags.check_bag`); ``--out``
+    must be a directory (it is created) outside every bag directory; ``--write-urdf`` and the
+    files written into ``--out`` must not be an input (``--urdf``, a bag, ``--trajectory``),
+    a directory, a named pipe or a device (:func:`check_output`). Refused names the option
+    and the path.
+    """
+    inputs = [args.urdf, args.trajectory] + [path for _, path in bag_options(args)]
+    for option, path in bag_options(args):
+        try:
+            bags.check_bag(path)
+        except bags.BagError as err:
+            raise Refused(str(err) if option == 'BAG' else f'{option} {err}') from None
+        real, out = os.path.realpath(path), os.path.realpath(args.out)
+        if os.path.isdir(path) and (out == real or out.startswith(real + os.sep)):
+            raise Refused(f'--out {args.out}: the output directory would be in the bag '
+                          f'{path!r}; choose another (a recording is left as it was made)')
+    if args.write_urdf:
+        check_output(args.write_urdf, '--write-urdf', inputs)
+    output_dir(args.out)
+    if args.annotate:
+        return
+    if args.trajectory or args.trajectory_topic:
+        names = ['trajectory.csv'] + ([] if args.no_plots else ['trajectory.png'])
+    else:
+        names = output_files(args)
+    for name in names:
+        check_output(os.path.join(args.out, name), 'output', inputs)
+
+
+def check_links(args, model: Model) -> None:
+    """Refuse a ``--payload`` or ``--inertias`` link that is none, or that no joint moves."""
+    for option, links in (('--payload', [args.payload] if args.payload else []),
+                          ('--inertias', args.inertias or [])):
+        for link in links:
+            try:
+                identification.link_to_body(model, link)
+            except ValueError as err:
+                raise Refused(f'{option}: {err}') from None
+
+
+def urdf_to_write(args, model: Model) -> Optional[urdf_writer.Source]:
+    """Return ``--urdf`` as ``--write-urdf`` will edit it (None without it); Refused if not.
+
+    Read and parsed before any fit (:func:`urdf_writer.prepare`): what the writer cannot
+    edit is said at once. A xacro file is its expansion.
+    """
+    if not args.write_urdf:
+        return None
+    text = read_description(args.urdf) if args.urdf.endswith('.xacro') else \
+        read_urdf_file(args.urdf)
+    try:
+        return urdf_writer.prepare(text, model, f'URDF file {args.urdf!r}')
+    except ValueError as err:
+        raise Refused(str(err)) from None
 
 
 def output_dir(path: str) -> None:
