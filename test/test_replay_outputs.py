@@ -315,3 +315,57 @@ def test_ctrl_c_ends_quietly_without_half_files_or_a_child(tmp_path, bag):
     child = int(pid_file.read_text())
     with pytest.raises(ProcessLookupError):
         os.kill(child, 0)
+
+
+# --------------------------------------------------------------------------------------------
+# Odd values of the other options
+
+@pytest.mark.parametrize('option', ['--payload', '--write-urdf', '--validate', '--urdf',
+                                    '--topic', '--out', '--joints', '--also'])
+def test_an_empty_value_is_a_usage_error(tmp_path, capsys, no_work, bag, option):
+    """'' is no link, file or joint: never ignored as if the option were not given."""
+    argv = [bag, '--urdf', robot_urdf_path('ur5'), '--identify', '--no-plots', '--out',
+            tmp_path / 'o']
+    argv = [a for k, a in enumerate(argv) if not (option in ('--urdf', '--out') and
+                                                  (a == option or argv[k - 1] == option))]
+    with pytest.raises(SystemExit) as usage:
+        main([str(a) for a in argv] + [option, ''])
+    assert usage.value.code == 2
+    assert f'{option}: an empty value' in capsys.readouterr().err
+
+
+def test_the_same_recording_twice_is_refused(tmp_path, capsys, no_work, bag):
+    urdf = robot_urdf_path('ur5')
+    line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+                            tmp_path / 'o', '--validate', os.path.join(bag, '.')])
+    assert '--validate' in line and 'same recording' in line and 'held-out' in line, line
+    line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+                            tmp_path / 'o', '--also', bag])
+    assert '--also' in line and 'same recording' in line, line
+
+
+def test_outputs_that_would_overwrite_a_bag_or_each_other_are_refused(tmp_path, capsys,
+                                                                     no_work, bag):
+    urdf = robot_urdf_path('ur5')
+    meta = os.path.join(bag, 'metadata.yaml')
+    before = open(meta, 'rb').read()
+    line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+                            tmp_path / 'o', '--write-urdf', meta])
+    assert '--write-urdf' in line and 'in the bag' in line, line
+    assert open(meta, 'rb').read() == before
+    line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+                            tmp_path / 'o', '--write-urdf', tmp_path / 'o' / 'summary.csv'])
+    assert '--write-urdf' in line and 'summary.csv' in line, line
+
+
+def test_a_trajectory_output_that_is_the_trajectory_is_refused(tmp_path, capsys):
+    plan = tmp_path / 'plan.yaml'
+    plan.write_text('joint_names: [shoulder_pan_joint]\npoints:\n- positions: [0.0]\n'
+                    '- positions: [0.5]\n  time_from_start: {sec: 2, nanosec: 0}\n')
+    out = tmp_path / 'o'
+    out.mkdir()
+    os.symlink(plan, out / 'trajectory.csv')
+    line = refused(capsys, ['--urdf', robot_urdf_path('ur5'), '--trajectory', plan,
+                            '--joints', 'shoulder_pan_joint', '--no-plots', '--out', out])
+    assert 'trajectory.csv' in line and 'also an input' in line, line
+    assert plan.read_text().startswith('joint_names')

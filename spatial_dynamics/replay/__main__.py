@@ -352,8 +352,13 @@ def run_trajectory(args) -> int:
             raise Refused(f'no messages on {args.trajectory_topic}')
         trajectories = [splines.from_message(m) for m in msgs]
         labels = [f'{args.trajectory_topic} #{k}' for k in range(len(msgs))]
+    bases = [os.path.join(args.out, 'trajectory' + (f'_{k}' if len(trajectories) > 1 else ''))
+             for k in range(len(trajectories))]
+    for base in bases:            # the names are known now: checked before any work
+        for ext in ('.csv',) + (() if args.no_plots else ('.png',)):
+            check_output(base + ext, 'output', input_files(args))
     exceeded = False
-    for k, (traj, label) in enumerate(zip(trajectories, labels)):
+    for traj, label, base in zip(trajectories, labels, bases):
         model = load_model(args, args.joints or list(traj.joint_names))
         unknown = [j for j in model.joint_names if j not in traj.joint_names]
         if unknown:
@@ -374,7 +379,6 @@ def run_trajectory(args) -> int:
             print(f'  joints not in the trajectory, locked: '
                   f'{", ".join(f"{j}={v:g}" for j, v in model.locked.items())}')
         print(report.table(report.EFFORT_HEADER, rows))
-        base = os.path.join(args.out, 'trajectory' + (f'_{k}' if len(trajectories) > 1 else ''))
         report.write_csv(base + '.csv', ['t'] + [f'tau_{n}' for n in model.joint_names],
                          [t] + [tau[:, j] for j in range(model.nq)], [6] + [4] * model.nq)
         if not args.no_plots:
@@ -478,6 +482,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         p.error('--inertias, --payload and --identify work on a recording, not with '
                 '--trajectory or --trajectory-topic')
     check_gravity(p, args.gravity)
+    for dest, value in vars(args).items():      # '' is no path, link, joint or topic
+        if value == '' or (isinstance(value, list) and '' in value):
+            p.error(('BAG' if dest == 'bag' else '--' + dest.replace('_', '-'))
+                    + ': an empty value')
     try:
         check_paths(args)         # before any computation: bad inputs and outputs said at once
         if args.annotate:
@@ -522,36 +530,61 @@ def output_files(args) -> List[str]:
     return names
 
 
+def input_files(args) -> List[str]:
+    """Return the files (and bag directories) the command reads."""
+    return [path for path in [args.urdf, args.trajectory] + [b for _, b in bag_options(args)]
+            if path]
+
+
+def _within(path: str, folder: str) -> bool:
+    """Tell whether ``path`` is ``folder`` or inside it (links resolved)."""
+    path, folder = os.path.realpath(path), os.path.realpath(folder)
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
 def check_paths(args) -> None:
     """Refuse, before any work, a bag that cannot be opened and an output that cannot be one.
 
-    Each bag (BAG, ``--also``, ``--validate``) must open (:func:`bags.check_bag`); ``--out``
-    must be a directory (it is created) outside every bag directory; ``--write-urdf`` and the
-    files written into ``--out`` must not be an input (``--urdf``, a bag, ``--trajectory``),
-    a directory, a named pipe or a device (:func:`check_output`). Refused names the option
-    and the path.
+    Each bag (BAG, ``--also``, ``--validate``) must open (:func:`bags.check_bag`) and be
+    given once (a held-out recording that is a training one checks nothing); ``--out`` must
+    be a directory (it is created); ``--write-urdf`` and the files written into ``--out``
+    must not be an input (``--urdf``, a bag, ``--trajectory``), in a bag directory, one
+    another, a directory, a named pipe or a device (:func:`check_output`). Refused names
+    the option and the path.
     """
-    inputs = [args.urdf, args.trajectory] + [path for _, path in bag_options(args)]
-    for option, path in bag_options(args):
+    given = bag_options(args)
+    inputs = input_files(args)
+    for k, (option, path) in enumerate(given):
         try:
             bags.check_bag(path)
         except bags.BagError as err:
             raise Refused(str(err) if option == 'BAG' else f'{option} {err}') from None
-        real, out = os.path.realpath(path), os.path.realpath(args.out)
-        if os.path.isdir(path) and (out == real or out.startswith(real + os.sep)):
-            raise Refused(f'--out {args.out}: the output directory would be in the bag '
-                          f'{path!r}; choose another (a recording is left as it was made)')
-    if args.write_urdf:
-        check_output(args.write_urdf, '--write-urdf', inputs)
-    output_dir(args.out)
-    if args.annotate:
-        return
+        for before, other in given[:k]:
+            if os.path.samefile(path, other):
+                raise Refused(f'{option} {path}: the same recording as {before} {other} ('
+                              + ('a held-out check needs another recording)'
+                                 if option == '--validate' else 'fitted once is enough)'))
     if args.trajectory or args.trajectory_topic:
         names = ['trajectory.csv'] + ([] if args.no_plots else ['trajectory.png'])
     else:
-        names = output_files(args)
-    for name in names:
-        check_output(os.path.join(args.out, name), 'output', inputs)
+        names = [] if args.annotate else output_files(args)
+    outputs = [('--out', args.out)] + [('output', os.path.join(args.out, n)) for n in names]
+    if args.write_urdf:
+        outputs.append(('--write-urdf', args.write_urdf))
+        for _, path in outputs[1:-1]:
+            if os.path.abspath(path) == os.path.abspath(args.write_urdf):
+                raise Refused(f'--write-urdf {args.write_urdf}: the command writes '
+                              f'{os.path.basename(path)} there (--out {args.out})')
+    for what, path in outputs:
+        for option, bag in given:
+            if os.path.isdir(bag) and _within(path, bag):
+                raise Refused(f'{what} {path}: in the bag {bag!r} ({option}); choose another '
+                              'place (a recording is left as it was made)')
+    if args.write_urdf:
+        check_output(args.write_urdf, '--write-urdf', inputs)
+    output_dir(args.out)
+    for what, path in outputs[1:len(names) + 1]:
+        check_output(path, what, inputs)
 
 
 def check_links(args, model: Model) -> None:
