@@ -369,3 +369,21 @@ def test_a_trajectory_output_that_is_the_trajectory_is_refused(tmp_path, capsys)
                             '--joints', 'shoulder_pan_joint', '--no-plots', '--out', out])
     assert 'trajectory.csv' in line and 'also an input' in line, line
     assert plan.read_text().startswith('joint_names')
+
+
+def test_plots_without_matplotlib_are_refused_before_any_work(tmp_path, capsys, no_work, bag,
+                                                               monkeypatch):
+    """Without matplotlib the drawing child died and the parent's job hit its closed pipe."""
+    monkeypatch.setitem(sys.modules, 'matplotlib', None)        # as if not installed
+    line = refused(capsys, [bag, '--urdf', robot_urdf_path('ur5'), '--out', tmp_path / 'o'])
+    assert 'matplotlib' in line and '--no-plots' in line, line
+
+
+def test_a_plotting_child_that_cannot_draw_says_so_in_one_line(tmp_path, capfd):
+    """A child whose preparation fails (a broken matplotlib): one line, the join fails."""
+    def broken():
+        raise ImportError('No module named matplotlib.pyplot')
+    child = report.start_child(broken)
+    assert not report.join_child(report.run_in(child, print, 'never drawn'))
+    err = capfd.readouterr().err
+    assert err == 'error: the plots need matplotlib: No module named matplotlib.pyplot\n', err

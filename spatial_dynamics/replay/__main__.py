@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.util
 import os
 import sys
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -233,8 +234,10 @@ def compare(args, plotter) -> int:
         report.write_npy(os.path.join(args.out, 'residual.npy'),
                          np.column_stack((t - t[0], residual)))
     stages.done('write residual')
+    drawn = not args.no_plots
     if not args.no_plots:
-        if not report.join_child(plotter):
+        drawn = report.join_child(plotter)
+        if not drawn:
             print('replay: drawing the plots failed (see above); the CSV files are complete',
                   file=sys.stderr)
         stages.done('plots (the rest)')
@@ -281,7 +284,7 @@ def compare(args, plotter) -> int:
         print_payload(payload, names, args)
     written = ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
                                  'none': []}[args.residual]
-    if not args.no_plots:
+    if drawn:
         written += ['measured_vs_model.png', 'residual.png']
     if correction is not None:
         written += corrected(args, model, correction, train, stages, held_out, urdf_source)
@@ -488,6 +491,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     + ': an empty value')
     try:
         check_paths(args)         # before any computation: bad inputs and outputs said at once
+        if not args.no_plots and importlib.util.find_spec('matplotlib') is None:
+            raise Refused('the plots need matplotlib (pip install matplotlib, or apt install '
+                          'python3-matplotlib); or --no-plots')
         if args.annotate:
             return annotate.run(args, load_model)
         if args.trajectory or args.trajectory_topic:

@@ -281,8 +281,9 @@ def _serve(conn, parent_end, prepare) -> None:
         if job is not None:
             fn, args = job
             fn(*args)
-    except (ValueError, OSError) as err:
-        print('error: ' + ' '.join(str(err).split()), file=sys.stderr)
+    except (ValueError, OSError, ImportError) as err:
+        what = 'the plots need matplotlib: ' if isinstance(err, ImportError) else ''
+        print(f'error: {what}' + ' '.join(str(err).split()), file=sys.stderr)
         sys.exit(1)
 
 
@@ -325,13 +326,16 @@ def run_in(child, fn, *args):
     """Run ``fn(*args)`` in a child of :func:`start_child` (pickled through its pipe).
 
     Returns the process (for :func:`join_child`), or ``None`` when there is no child and
-    ``fn`` already ran here.
+    ``fn`` already ran here. A child that has ended already (it said why) fails the join.
     """
     if child is None:
         fn(*args)
         return None
     proc, send = child
-    send.send((fn, args))
+    try:
+        send.send((fn, args))
+    except BrokenPipeError:
+        pass
     send.close()
     return proc
 
