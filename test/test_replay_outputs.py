@@ -209,7 +209,7 @@ def test_too_few_samples_say_why(tmp_path, capsys, bag, rows, said):
 # Every file whole or not at all
 
 def quota(limit):
-    """A preexec_fn: files of at most ``limit`` bytes (a quota; EFBIG past it)."""
+    """Return a preexec_fn: files of at most ``limit`` bytes (a quota; EFBIG past it)."""
     def set_limit():
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
         resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
@@ -344,8 +344,8 @@ def test_the_same_recording_twice_is_refused(tmp_path, capsys, no_work, bag):
     assert '--also' in line and 'same recording' in line, line
 
 
-def test_outputs_that_would_overwrite_a_bag_or_each_other_are_refused(tmp_path, capsys,
-                                                                     no_work, bag):
+def test_outputs_that_would_overwrite_a_bag_or_each_other_are_refused(
+        tmp_path, capsys, no_work, bag):
     urdf = robot_urdf_path('ur5')
     meta = os.path.join(bag, 'metadata.yaml')
     before = open(meta, 'rb').read()
@@ -371,8 +371,8 @@ def test_a_trajectory_output_that_is_the_trajectory_is_refused(tmp_path, capsys)
     assert plan.read_text().startswith('joint_names')
 
 
-def test_plots_without_matplotlib_are_refused_before_any_work(tmp_path, capsys, no_work, bag,
-                                                               monkeypatch):
+def test_plots_without_matplotlib_are_refused_before_any_work(
+        tmp_path, capsys, no_work, bag, monkeypatch):
     """Without matplotlib the drawing child died and the parent's job hit its closed pipe."""
     monkeypatch.setitem(sys.modules, 'matplotlib', None)        # as if not installed
     line = refused(capsys, [bag, '--urdf', robot_urdf_path('ur5'), '--out', tmp_path / 'o'])

@@ -31,7 +31,7 @@ from test_replay_outputs import motion_bag  # noqa: E402
 
 
 def variants(text: bytes) -> dict:
-    """The UR5 file as users' tools write it, each a file the loader reads."""
+    """Return the UR5 file as users' tools write it, each a file the loader reads."""
     declared = text[:text.index(b'?>') + 2]
     body = text[len(declared):]
     gazebo = b'xmlns:gazebo="http://gazebosim.org/schema"'
