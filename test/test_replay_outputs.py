@@ -304,7 +304,9 @@ def test_ctrl_c_ends_quietly_without_half_files_or_a_child(tmp_path, bag):
     run = subprocess.run([sys.executable, '-c', INTERRUPTED_RUN, str(pid_file), bag, '--urdf',
                           robot_urdf_path('ur5'), '--out', str(out)],
                          capture_output=True, text=True, timeout=HANG_GUARD, cwd=ROOT,
-                         env={**os.environ, 'PYTHONPATH': ROOT}, start_new_session=True)
+                         env={**os.environ, 'PYTHONPATH': ROOT}, start_new_session=True,
+                         # as from a terminal (a shell's background job would ignore it)
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert run.returncode == 130 and run.stderr == 'interrupted\n', run.stderr
     assert temporaries(out) == [] and not (out / 'residual.csv').exists()
     assert (out / 'summary.csv').read_text().startswith('joint,')

@@ -35,7 +35,10 @@ joint_trajectory_controller's splines at ``--rate`` and τ compared with the URD
 
 Exit status: 0 done (samples skipped are listed with the reason), 1 refused (no such bag,
 topic or joint, nothing usable, rosbags missing; a trajectory exceeding an effort limit),
-2 bad usage.
+2 bad usage, 130 interrupted (Ctrl-C: each file is whole or not there). Every input and
+output is checked before any work: an output that is an input, in a bag directory, a
+directory, a named pipe or a device is refused; every file is written to a temporary beside
+it and renamed.
 """
 
 from __future__ import annotations
@@ -399,7 +402,7 @@ def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog='replay', description=__doc__.split('\n\n')[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 epilog='Exit status: 0 done, 1 refused (or an effort limit '
-                                'exceeded), 2 bad usage.')
+                                'exceeded), 2 bad usage, 130 interrupted.')
     p.add_argument('bag', nargs='?', help='rosbag2 directory, or a .db3 / .mcap file')
     add_model_arguments(p)
     p.add_argument('--topic', default='/joint_states', help='sensor_msgs/JointState topic')
