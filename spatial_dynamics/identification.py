@@ -203,10 +203,22 @@ def mass_com_inertia(pi: np.ndarray) -> Tuple[float, np.ndarray, np.ndarray]:
 
 
 def link_to_body(model: Model, link: str) -> Tuple[int, np.ndarray]:
-    """``(body, T)``: parameters on ``link`` (its frame) add ``T @ π`` to ``body``'s (10×10)."""
+    """``(body, T)``: parameters on ``link`` (its frame) add ``T @ π`` to ``body``'s (10×10).
+
+    ``ValueError`` naming the link, and the links that can be used, when it is no link of
+    the model or moves with no joint (the fixed base, or a link fixed to it: no torque
+    depends on its inertia).
+    """
     frame = model.frames.get(link)
+    usable = (f'the links that move: {", ".join(model.body_names[1:])} (or a link fixed to '
+              'one of them)')
     if frame is None:
-        raise ValueError(f'link {link!r} is not a link of {model.name!r}')
+        raise ValueError(f'link {link!r} is not a link of {model.name!r}; {usable}')
+    if frame.body == 0:
+        where = ('is the fixed base' if link == model.body_names[0] else
+                 f'is fixed to the base {model.body_names[0]!r}')
+        raise ValueError(f'link {link!r} does not move with any joint (it {where}): no torque '
+                         f'depends on its inertia; {usable}')
     X = frame.lXb
     T = np.column_stack([_ten(X.T @ _spatial_inertia(e) @ X) for e in np.eye(10)])
     return frame.body, T

@@ -35,23 +35,28 @@ joint_trajectory_controller's splines at ``--rate`` and τ compared with the URD
 
 Exit status: 0 done (samples skipped are listed with the reason), 1 refused (no such bag,
 topic or joint, nothing usable, rosbags missing; a trajectory exceeding an effort limit),
-2 bad usage.
+2 bad usage, 130 interrupted (Ctrl-C: each file is whole or not there). Every input and
+output is checked before any work: an output that is an input, in a bag directory, a
+directory, a named pipe or a device is refused; every file is written to a temporary beside
+it and renamed.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.util
 import os
 import sys
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .. import friction_torque, Model, rnea
 from ..check import read_description
 from .. import effort as effort_model
-from . import annotate, bags, differentiate, identify, report, splines
+from ..files import check_output
+from . import annotate, bags, differentiate, identify, report, splines, urdf_writer
 from .recording import recording, Stages
 from .. import identification
 from .arguments import (add_model_arguments, check_gravity, load_model, one_line, positive,
@@ -149,8 +154,11 @@ def run_bag(args) -> int:
     plotter = None if args.no_plots else report.start_child()
     try:
         return compare(args, plotter)
+    except BaseException:               # a refusal, Ctrl-C: the child ends, drawn or not
+        report.stop_child(plotter)
+        raise
     finally:
-        report.end_child(plotter)       # a refusal: the child ends without drawing
+        report.end_child(plotter)
 
 
 def compare(args, plotter) -> int:
@@ -159,12 +167,8 @@ def compare(args, plotter) -> int:
     model = load_model(args)
     names = model.joint_names
     stages.done('model')
-    if args.inertias:
-        for link in args.inertias:
-            if link not in model.frames:
-                raise Refused(f'--inertias: {link!r} is not a link of {model.name!r}')
-    if args.payload and args.payload not in model.frames:
-        raise Refused(f'--payload: {args.payload!r} is not a link of {model.name!r}')
+    check_links(args, model)
+    urdf_source = urdf_to_write(args, model)        # its problems said before any fit
     s = recording(args, args.bag, model, stages)
     js, t, q, qd, qdd, effort = (s[k] for k in ('js', 't', 'q', 'qd', 'qdd', 'effort'))
     spans, source, resampled = s['spans'], s['source'], s['resampled']
@@ -178,6 +182,8 @@ def compare(args, plotter) -> int:
         more = [recording(args, bag, model, stages) for bag in args.also]
         train = {k: np.concatenate([train[k]] + [m[k] for m in more]) for k in train}
         print(f'fitted on {args.bag} and {len(more)} more bag(s): {len(train["q"])} samples')
+    # read before the fits: a held-out bag that cannot be used is said before them
+    held_out = recording(args, args.validate, model, stages) if args.validate else None
     fq, fqd, fqdd, feffort = (train[k] for k in ('q', 'qd', 'qdd', 'effort'))
     fit = None
     if args.identify:
@@ -228,10 +234,13 @@ def compare(args, plotter) -> int:
                          [t - t[0]] + [residual[:, j] for j in range(len(names))],
                          [6] + [4] * len(names))
     elif args.residual == 'npy':
-        np.save(os.path.join(args.out, 'residual.npy'), np.column_stack((t - t[0], residual)))
+        report.write_npy(os.path.join(args.out, 'residual.npy'),
+                         np.column_stack((t - t[0], residual)))
     stages.done('write residual')
+    drawn = not args.no_plots
     if not args.no_plots:
-        if not report.join_child(plotter):
+        drawn = report.join_child(plotter)
+        if not drawn:
             print('replay: drawing the plots failed (see above); the CSV files are complete',
                   file=sys.stderr)
         stages.done('plots (the rest)')
@@ -278,10 +287,10 @@ def compare(args, plotter) -> int:
         print_payload(payload, names, args)
     written = ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
                                  'none': []}[args.residual]
-    if not args.no_plots:
+    if drawn:
         written += ['measured_vs_model.png', 'residual.png']
     if correction is not None:
-        written += corrected(args, model, correction, train, stages)
+        written += corrected(args, model, correction, train, stages, held_out, urdf_source)
     if excitation_warning:
         print(excitation_warning, file=sys.stderr)
     print(f'\nwritten to {args.out}: {", ".join(written)}')
@@ -290,8 +299,14 @@ def compare(args, plotter) -> int:
     return 0
 
 
-def corrected(args, model: Model, correction, data: Dict, stages: Stages) -> List[str]:
-    """Report a correction: inertias, residual before and after (held-out), files written."""
+def corrected(args, model: Model, correction, data: Dict, stages: Stages,
+              held_out: Optional[Dict] = None,
+              urdf_source: Optional[urdf_writer.Source] = None) -> List[str]:
+    """Report a correction: inertias, residual before and after (held-out), files written.
+
+    ``held_out`` is the ``--validate`` recording, ``urdf_source`` the ``--write-urdf`` one's
+    URDF (:func:`urdf_to_write`).
+    """
     written = ['parameters.csv', 'validation.csv']
     if correction.bodies:
         correction_of.print_inertias(correction)
@@ -303,9 +318,8 @@ def corrected(args, model: Model, correction, data: Dict, stages: Stages) -> Lis
     correction_of.write_parameters(correction, args.out)
     train = correction_of.residuals(correction, data, args.gravity)
     held = None
-    if args.validate:
-        held = correction_of.residuals(correction, recording(args, args.validate, model,
-                                                             stages), args.gravity)
+    if held_out is not None:
+        held = correction_of.residuals(correction, held_out, args.gravity)
         stages.done('validate')
     correction_of.print_validation(model.joint_names, train, held, args.out,
                                    not args.no_plots)
@@ -313,12 +327,9 @@ def corrected(args, model: Model, correction, data: Dict, stages: Stages) -> Lis
         written.append('identification.png')
     if args.write_urdf:
         if args.urdf.endswith('.xacro'):
-            text = read_description(args.urdf)
             print(f'note: {args.urdf} is a xacro file: {args.write_urdf} is its expansion '
                   'with the identified elements replaced')
-        else:
-            text = read_urdf_file(args.urdf)
-        for note in correction.write_urdf(text, args.write_urdf):
+        for note in correction.write_urdf(urdf_source, args.write_urdf):
             print(f'note: {note}')
         print(f'\ncorrected URDF: {args.write_urdf} (only the identified <inertial> and '
               '<dynamics> elements differ from ' + os.path.basename(args.urdf) + ')')
@@ -347,8 +358,13 @@ def run_trajectory(args) -> int:
             raise Refused(f'no messages on {args.trajectory_topic}')
         trajectories = [splines.from_message(m) for m in msgs]
         labels = [f'{args.trajectory_topic} #{k}' for k in range(len(msgs))]
+    bases = [os.path.join(args.out, 'trajectory' + (f'_{k}' if len(trajectories) > 1 else ''))
+             for k in range(len(trajectories))]
+    for base in bases:            # the names are known now: checked before any work
+        for ext in ('.csv',) + (() if args.no_plots else ('.png',)):
+            check_output(base + ext, 'output', input_files(args))
     exceeded = False
-    for k, (traj, label) in enumerate(zip(trajectories, labels)):
+    for traj, label, base in zip(trajectories, labels, bases):
         model = load_model(args, args.joints or list(traj.joint_names))
         unknown = [j for j in model.joint_names if j not in traj.joint_names]
         if unknown:
@@ -369,7 +385,6 @@ def run_trajectory(args) -> int:
             print(f'  joints not in the trajectory, locked: '
                   f'{", ".join(f"{j}={v:g}" for j, v in model.locked.items())}')
         print(report.table(report.EFFORT_HEADER, rows))
-        base = os.path.join(args.out, 'trajectory' + (f'_{k}' if len(trajectories) > 1 else ''))
         report.write_csv(base + '.csv', ['t'] + [f'tau_{n}' for n in model.joint_names],
                          [t] + [tau[:, j] for j in range(model.nq)], [6] + [4] * model.nq)
         if not args.no_plots:
@@ -387,7 +402,7 @@ def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog='replay', description=__doc__.split('\n\n')[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 epilog='Exit status: 0 done, 1 refused (or an effort limit '
-                                'exceeded), 2 bad usage.')
+                                'exceeded), 2 bad usage, 130 interrupted.')
     p.add_argument('bag', nargs='?', help='rosbag2 directory, or a .db3 / .mcap file')
     add_model_arguments(p)
     p.add_argument('--topic', default='/joint_states', help='sensor_msgs/JointState topic')
@@ -473,8 +488,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         p.error('--inertias, --payload and --identify work on a recording, not with '
                 '--trajectory or --trajectory-topic')
     check_gravity(p, args.gravity)
+    for dest, value in vars(args).items():      # '' is no path, link, joint or topic
+        if value == '' or (isinstance(value, list) and '' in value):
+            p.error(('BAG' if dest == 'bag' else '--' + dest.replace('_', '-'))
+                    + ': an empty value')
     try:
-        output_dir(args.out)      # before any computation: a bad --out is said at once
+        check_paths(args)         # before any computation: bad inputs and outputs said at once
+        if not args.no_plots and importlib.util.find_spec('matplotlib') is None:
+            raise Refused('the plots need matplotlib (pip install matplotlib, or apt install '
+                          'python3-matplotlib); or --no-plots')
         if args.annotate:
             return annotate.run(args, load_model)
         if args.trajectory or args.trajectory_topic:
@@ -489,7 +511,116 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except MemoryError:
         print('error: out of memory (a smaller --rate, a shorter bag or fewer joints?)',
               file=sys.stderr)
+    except KeyboardInterrupt:     # Ctrl-C: every file is whole or absent, the child ended
+        print('interrupted', file=sys.stderr)
+        return 130
     return 1
+
+
+# --------------------------------------------------------------------------------------------
+# Before any work: every input there, every output writable and no input
+
+def bag_options(args) -> List[Tuple[str, str]]:
+    """Return ``(option, path)`` of each bag the command reads (``'BAG'`` for the first)."""
+    found = [('BAG', args.bag)] + [('--also', bag) for bag in args.also] + [
+        ('--validate', args.validate)]
+    return [(option, path) for option, path in found if path]
+
+
+def output_files(args) -> List[str]:
+    """Return the names of the files a bag run writes into ``--out``."""
+    names = ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
+                               'none': []}[args.residual]
+    if not args.no_plots:
+        names += ['measured_vs_model.png', 'residual.png']
+    if args.inertias is not None or args.payload or args.identify:
+        names += ['parameters.csv', 'validation.csv']
+        names += [] if args.no_plots else ['identification.png']
+    return names
+
+
+def input_files(args) -> List[str]:
+    """Return the files (and bag directories) the command reads."""
+    return [path for path in [args.urdf, args.trajectory] + [b for _, b in bag_options(args)]
+            if path]
+
+
+def _within(path: str, folder: str) -> bool:
+    """Tell whether ``path`` is ``folder`` or inside it (links resolved)."""
+    path, folder = os.path.realpath(path), os.path.realpath(folder)
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
+def check_paths(args) -> None:
+    """Refuse, before any work, a bag that cannot be opened and an output that cannot be one.
+
+    Each bag (BAG, ``--also``, ``--validate``) must open (:func:`bags.check_bag`) and be
+    given once (a held-out recording that is a training one checks nothing); ``--out`` must
+    be a directory (it is created); ``--write-urdf`` and the files written into ``--out``
+    must not be an input (``--urdf``, a bag, ``--trajectory``), in a bag directory, one
+    another, a directory, a named pipe or a device (:func:`check_output`). Refused names
+    the option and the path.
+    """
+    given = bag_options(args)
+    inputs = input_files(args)
+    for k, (option, path) in enumerate(given):
+        try:
+            bags.check_bag(path)
+        except bags.BagError as err:
+            raise Refused(str(err) if option == 'BAG' else f'{option} {err}') from None
+        for before, other in given[:k]:
+            if os.path.samefile(path, other):
+                raise Refused(f'{option} {path}: the same recording as {before} {other} ('
+                              + ('a held-out check needs another recording)'
+                                 if option == '--validate' else 'fitted once is enough)'))
+    if args.trajectory or args.trajectory_topic:
+        names = ['trajectory.csv'] + ([] if args.no_plots else ['trajectory.png'])
+    else:
+        names = [] if args.annotate else output_files(args)
+    outputs = [('--out', args.out)] + [('output', os.path.join(args.out, n)) for n in names]
+    if args.write_urdf:
+        outputs.append(('--write-urdf', args.write_urdf))
+        for _, path in outputs[1:-1]:
+            if os.path.abspath(path) == os.path.abspath(args.write_urdf):
+                raise Refused(f'--write-urdf {args.write_urdf}: the command writes '
+                              f'{os.path.basename(path)} there (--out {args.out})')
+    for what, path in outputs:
+        for option, bag in given:
+            if os.path.isdir(bag) and _within(path, bag):
+                raise Refused(f'{what} {path}: in the bag {bag!r} ({option}); choose another '
+                              'place (a recording is left as it was made)')
+    if args.write_urdf:
+        check_output(args.write_urdf, '--write-urdf', inputs)
+    output_dir(args.out)
+    for what, path in outputs[1:len(names) + 1]:
+        check_output(path, what, inputs)
+
+
+def check_links(args, model: Model) -> None:
+    """Refuse a ``--payload`` or ``--inertias`` link that is none, or that no joint moves."""
+    for option, links in (('--payload', [args.payload] if args.payload else []),
+                          ('--inertias', args.inertias or [])):
+        for link in links:
+            try:
+                identification.link_to_body(model, link)
+            except ValueError as err:
+                raise Refused(f'{option}: {err}') from None
+
+
+def urdf_to_write(args, model: Model) -> Optional[urdf_writer.Source]:
+    """Return ``--urdf`` as ``--write-urdf`` will edit it (None without it); Refused if not.
+
+    Read and parsed before any fit (:func:`urdf_writer.prepare`): what the writer cannot
+    edit is said at once. A xacro file is its expansion.
+    """
+    if not args.write_urdf:
+        return None
+    text = read_description(args.urdf) if args.urdf.endswith('.xacro') else \
+        read_urdf_file(args.urdf)
+    try:
+        return urdf_writer.prepare(text, model, f'URDF file {args.urdf!r}')
+    except ValueError as err:
+        raise Refused(str(err)) from None
 
 
 def output_dir(path: str) -> None:

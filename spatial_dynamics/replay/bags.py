@@ -23,8 +23,8 @@ from .cdr import (Batch, decode_joint_states, encode_joint_states, FIELDS, INSTA
                   JOINT_STATE, joint_states_from_raw, JointStates, layout, MissingDependency,
                   typestore, verify_layout, view_bytes)
 
-__all__ = ['BagError', 'decode_joint_states', 'encode_joint_states', 'FIELDS', 'JOINT_STATE',
-           'JOINT_TRAJECTORY', 'joint_states_from_raw', 'JointStates', 'layout',
+__all__ = ['BagError', 'check_bag', 'decode_joint_states', 'encode_joint_states', 'FIELDS',
+           'JOINT_STATE', 'JOINT_TRAJECTORY', 'joint_states_from_raw', 'JointStates', 'layout',
            'MissingDependency', 'open_reader', 'read_joint_states', 'read_messages',
            'serialize', 'typestore', 'verify_layout', 'write_bag']
 
@@ -100,6 +100,15 @@ def _stage(path: str) -> Tuple[str, str]:
         return _staged(path)
     except ValueError as err:      # BagError, and the safe reader's refusals name the file
         raise BagError(str(err)) from None
+
+
+def check_bag(path: str) -> None:
+    """Refuse a bag that cannot be opened, before any work: :class:`BagError` naming it.
+
+    The checks of :func:`_staged` (the path exists; a .db3 or .mcap file, or a directory
+    whose metadata.yaml names regular storage files), without reading a message.
+    """
+    shutil.rmtree(_stage(path)[1], ignore_errors=True)
 
 
 def open_reader(path: str):

@@ -14,13 +14,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import os
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from .. import identification
 from ..algorithms.regressor import PARAMETERS
 from ..backends import rnea
+from ..files import write_atomic
 from ..model import Model
 from . import report, urdf_writer
 
@@ -69,8 +70,11 @@ class Correction:
                              self.payload.pi[k], self.payload.sigma[k], 0.0])
         return rows
 
-    def write_urdf(self, text: bytes, path: str) -> List[str]:
-        """Write ``text`` (the URDF as read) with the identified elements replaced."""
+    def write_urdf(self, text: Union[bytes, urdf_writer.Source], path: str) -> List[str]:
+        """Write ``text`` (the URDF as read) with the identified elements replaced.
+
+        Written whole or not at all (:func:`~spatial_dynamics.files.write_atomic`).
+        """
         additions = None
         if self.payload is not None:
             additions = {self.payload.link: identification._spatial_inertia(self.payload.pi)}
@@ -81,8 +85,7 @@ class Correction:
                         for name, d, f in zip(self.model.joint_names, damping, friction)}
         out, notes = urdf_writer.corrected_urdf(text, self.model, self.bodies, additions,
                                                 dynamics)
-        with open(path, 'wb') as f:
-            f.write(out)
+        write_atomic(path, out, 'the corrected URDF')
         return notes
 
 
@@ -193,5 +196,7 @@ def print_validation(names: Sequence[str], train: Tuple[np.ndarray, np.ndarray],
         ax.legend(fontsize=8)
         ax.grid(True, axis='y', alpha=0.3)
         fig.tight_layout()
-        fig.savefig(os.path.join(out, 'identification.png'), dpi=80)
-        plt.close(fig)
+        try:
+            report.save_figure(fig, os.path.join(out, 'identification.png'))
+        finally:
+            plt.close(fig)

@@ -23,6 +23,9 @@ from ..model import Model
 from . import bags, differentiate
 from .arguments import Refused
 
+#: Fewest samples a recording may have (the differentiation needs a few around each one).
+MIN_SAMPLES = 5
+
 
 class Progress:
     """A one-line progress bar on stderr, drawn only when stderr is a terminal."""
@@ -129,9 +132,12 @@ def clean(js: bags.JointStates, window: float) -> Dict:
         skipped['repeated stamp (first kept)'] = int(repeated.sum())
         t = t[~repeated]
         idx = np.flatnonzero(~repeated) if idx is None else idx[~repeated]
-    if len(t) < 5:
-        raise Refused(f'only {len(t)} usable samples: ' + '; '.join(
-            f'{v} skipped, {k}' for k, v in skipped.items()))
+    if len(t) < MIN_SAMPLES:
+        messages = len(js.stamp) + sum(js.skipped.values())
+        raise Refused(f'only {len(t)} usable sample{"" if len(t) == 1 else "s"} of {messages} '
+                      f'message{"" if messages == 1 else "s"} on the topic (at least '
+                      f'{MIN_SAMPLES} are needed to differentiate)' + (': ' + '; '.join(
+                          f'{v} skipped, {k}' for k, v in skipped.items()) if skipped else ''))
     seg = differentiate.segments(t, window)
     if seg.dropped:
         skipped['in a stretch between gaps shorter than the window'] = seg.dropped
@@ -165,10 +171,13 @@ def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
     try:
         js = bags.read_joint_states(bag, args.topic, model.joint_names, fast=not args.generic,
                                     progress=bar)
+        stages.done('read+decode')
+        s = clean(js, args.window)
+    except (Refused, bags.BagError) as err:     # with --also and --validate: which bag
+        text = str(err)
+        raise Refused(text if bag in text else f'bag {bag}: {text}') from None
     finally:
         bar.close()
-    stages.done('read+decode')
-    s = clean(js, args.window)
     t, q, spans = s['t'], s['q'], s['spans']
     stages.done('clean+sort')
     if s['qd'] is not None:

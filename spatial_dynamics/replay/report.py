@@ -15,13 +15,17 @@ from __future__ import annotations
 
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
+import contextlib
 import math
 import os
+import signal
+import sys
 from typing import Optional, Sequence
 
 import numpy as np
 
 from ..backends.compiled import THREADS   # the CPUs this process may run on
+from ..files import write_atomic
 
 CHUNK = 1 << 18          # rows formatted at once
 
@@ -97,6 +101,7 @@ def write_csv(path: str, header: Sequence[str], columns: Sequence[np.ndarray],
 
     Chunks of :data:`CHUNK` rows are formatted on :data:`THREADS` threads (numpy releases
     the GIL in its loops) and written in order: the file does not depend on the threads.
+    Written whole or not at all (:func:`~spatial_dynamics.files.write_atomic`).
     """
     N = len(columns[0])
 
@@ -109,7 +114,7 @@ def write_csv(path: str, header: Sequence[str], columns: Sequence[np.ndarray],
         parts[-1] = np.full((b - a, 1), ord('\n'), dtype=np.uint8)
         return np.hstack(parts)         # C-contiguous bytes: written without a copy
 
-    with open(path, 'wb') as f:
+    def write(f) -> None:
         f.write((','.join(header) + '\n').encode())
         starts = range(0, N, CHUNK)
         if THREADS < 2 or len(starts) < 2:
@@ -125,17 +130,27 @@ def write_csv(path: str, header: Sequence[str], columns: Sequence[np.ndarray],
             while pending:
                 f.write(pending.popleft().result())
 
+    write_atomic(path, write, 'output file')
+
 
 def write_summary(path: str, rows: Sequence[Sequence], header: Sequence[str]) -> None:
-    """Write a small CSV (one row per joint): numbers with ``%.6g``, text as is."""
+    """Write a small CSV (one row per joint): numbers with ``%.6g``, text as is; whole or not."""
     def cell(v) -> str:
         if isinstance(v, str):
             return v
         return 'nan' if v is None or (isinstance(v, float) and math.isnan(v)) else f'{v:.6g}'
-    with open(path, 'w', encoding='utf-8') as f:
-        f.write(','.join(header) + '\n')
-        for r in rows:
-            f.write(','.join(cell(v) for v in r) + '\n')
+    write_atomic(path, ''.join(','.join(cell(v) for v in r) + '\n'
+                               for r in [header] + list(rows)), 'output file')
+
+
+def write_npy(path: str, array: np.ndarray) -> None:
+    """Write ``array`` as a ``.npy`` file (``np.save``), whole or not at all."""
+    write_atomic(path, lambda f: np.save(f, array), 'output file')
+
+
+def save_figure(fig, path: str, dpi: int = 80) -> None:
+    """Save a matplotlib figure as PNG, whole or not at all (a temporary, then a rename)."""
+    write_atomic(path, lambda f: fig.savefig(f, format='png', dpi=dpi), 'plot')
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
@@ -229,8 +244,10 @@ def plot_joints(path: str, t: np.ndarray, names: Sequence[str], series: dict,
     axes[0, 0].set_title(title)
     axes[-1, 0].set_xlabel('time (s)')
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    try:
+        save_figure(fig, path)
+    finally:
+        plt.close(fig)
 
 
 def prepare_plots() -> None:
@@ -240,25 +257,58 @@ def prepare_plots() -> None:
     import matplotlib.pyplot  # noqa: F401
 
 
+def _ended(signum, frame) -> None:
+    """SIGTERM in a plotting child: end as ``sys.exit`` does (a plot half written is removed)."""
+    raise SystemExit(128 + signum)
+
+
 def _serve(conn, parent_end, prepare) -> None:
-    """Be the child of :func:`start_child`: prepare, then run the job sent (none: end)."""
+    """Be the child of :func:`start_child`: prepare, then run the job sent (none: end).
+
+    Ctrl-C is the parent's (SIGINT is ignored here); the parent ends a child it no longer
+    needs with SIGTERM (:func:`stop_child`), which unwinds like ``sys.exit``: the temporary
+    of a plot being written is removed, nothing half written is left. A plot that cannot be
+    written (a full disk) is one line on stderr and exit status 1.
+    """
     parent_end.close()      # the parent's end, inherited: else the pipe would never end
-    prepare()
+    signal.signal(signal.SIGTERM, _ended)
     try:
-        job = conn.recv()
-    except EOFError:        # the parent ended without a job (a refusal): nothing to draw
+        prepare()
+        try:
+            job = conn.recv()
+        except EOFError:        # the parent ended without a job (a refusal): nothing to draw
+            return
+        if job is not None:
+            fn, args = job
+            fn(*args)
+    except (ValueError, OSError, ImportError) as err:
+        what = 'the plots need matplotlib: ' if isinstance(err, ImportError) else ''
+        print(f'error: {what}' + ' '.join(str(err).split()), file=sys.stderr)
+        sys.exit(1)
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """Within: SIGINT is ignored, so that a child forked here ignores it (not the parent)."""
+    try:
+        before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:          # not the main thread: no handler of this thread to change
+        yield
         return
-    if job is not None:
-        fn, args = job
-        fn(*args)
+    try:
+        yield
+    finally:
+        if before is not None:
+            signal.signal(signal.SIGINT, before)
 
 
 def start_child(prepare=prepare_plots):
     """Fork a child that runs ``prepare()`` now and waits for a job (:func:`run_in`).
 
     Forked before the bag is read, the child imports matplotlib on the second core while
-    this process reads on the first. Returns ``None`` where fork is missing (the job then
-    runs in this process).
+    this process reads on the first. It ignores Ctrl-C (a terminal sends SIGINT to both):
+    the parent, interrupted, ends it (:func:`stop_child`). Returns ``None`` where fork is
+    missing (the job then runs in this process).
     """
     import multiprocessing
     if 'fork' not in multiprocessing.get_all_start_methods():
@@ -266,7 +316,8 @@ def start_child(prepare=prepare_plots):
     ctx = multiprocessing.get_context('fork')
     receive, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_serve, args=(receive, send, prepare), daemon=True)
-    proc.start()
+    with _sigint_ignored():
+        proc.start()
     receive.close()
     return proc, send
 
@@ -275,13 +326,16 @@ def run_in(child, fn, *args):
     """Run ``fn(*args)`` in a child of :func:`start_child` (pickled through its pipe).
 
     Returns the process (for :func:`join_child`), or ``None`` when there is no child and
-    ``fn`` already ran here.
+    ``fn`` already ran here. A child that has ended already (it said why) fails the join.
     """
     if child is None:
         fn(*args)
         return None
     proc, send = child
-    send.send((fn, args))
+    try:
+        send.send((fn, args))
+    except BrokenPipeError:
+        pass
     send.close()
     return proc
 
@@ -290,6 +344,21 @@ def end_child(child) -> None:
     """Close the pipe of a child of :func:`start_child`: without a job sent, it ends."""
     if child is not None:
         child[1].close()
+
+
+def stop_child(child) -> None:
+    """End a child of :func:`start_child` now, whatever it is doing, and wait for it.
+
+    For a parent that stops early (Ctrl-C, a refusal): no child is left behind, and a plot
+    it was writing is abandoned whole (its temporary removed, see :func:`_serve`).
+    """
+    if child is None:
+        return
+    proc, send = child
+    send.close()
+    if proc.is_alive():
+        proc.terminate()
+    proc.join()
 
 
 def join_child(proc) -> bool:

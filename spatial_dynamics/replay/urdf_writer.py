@@ -19,8 +19,8 @@ are removed, which the notes say.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Tuple
-import xml.etree.ElementTree as ET
+import re
+from typing import Dict, List, Optional, Tuple, Union
 from xml.parsers import expat
 
 import numpy as np
@@ -57,22 +57,35 @@ def _tag_end(data: bytes, at: int) -> int:
     raise ValueError('unterminated tag')
 
 
+#: What may come before the XML declaration in a file the loader reads: a UTF-8 byte order
+#: mark (the reader drops it) and whitespace (the loader strips it; expat refuses both).
+_LEAD = re.compile(rb'(?:\xef\xbb\xbf)?[ \t\r\n]*')
+
+
 def _elements(data: bytes) -> Dict[Tuple[str, str], _Element]:
-    """Return the robot's links and joints by ``(tag, name)`` with their byte spans."""
+    """Return the robot's links and joints by ``(tag, name)`` with their byte spans.
+
+    As the loader reads the file: from its first ``<`` (a byte order mark and whitespace
+    before the XML declaration skipped), tags by their written names (an element of another
+    namespace, ``xacro:property``, is no ``link``), attributes as written (no defaults from a
+    DTD). ``ValueError`` when expat cannot parse it.
+    """
+    lead = _LEAD.match(data).end()
     parser = expat.ParserCreate()
+    parser.specified_attributes = True
     stack: List[Tuple[str, int, Optional[_Element]]] = []
     found: Dict[Tuple[str, str], _Element] = {}
 
     def start(tag, attrs):
-        at = parser.CurrentByteIndex
+        at = lead + parser.CurrentByteIndex
         element = None
         if len(stack) == 1 and tag in ('link', 'joint') and 'name' in attrs:
             element = _Element(tag, attrs['name'], at, _tag_end(data, at), 0, False, {})
-            found[(tag, attrs['name'])] = element
+            found.setdefault((tag, attrs['name']), element)
         stack.append((tag, at, element))
 
     def end(tag):
-        at = parser.CurrentByteIndex
+        at = lead + parser.CurrentByteIndex
         tag, begin, element = stack.pop()
         # expat reports an empty element's end at (or, in older versions, before) its start
         # tag's end, and any other element's at the '<' of its end tag
@@ -86,8 +99,47 @@ def _elements(data: bytes) -> Dict[Tuple[str, str], _Element]:
 
     parser.StartElementHandler = start
     parser.EndElementHandler = end
-    parser.Parse(data, True)
+    try:
+        parser.Parse(data[lead:], True)
+    except expat.ExpatError as err:
+        raise ValueError(f'not XML the writer can edit: {err}') from None
     return found
+
+
+@dataclass(frozen=True)
+class Source:
+    """The user's URDF as the writer edits it, read and checked before anything is fitted.
+
+    ``text`` is the file's bytes, ``elements`` its links and joints with their byte spans
+    (:func:`_elements`), ``inertia`` each link's spatial inertia (link frame) as the loader
+    reads it from these bytes.
+    """
+
+    text: bytes
+    elements: Dict[Tuple[str, str], _Element]
+    inertia: Dict[str, np.ndarray]
+
+
+def prepare(text: bytes, model: Model, what: str = 'the URDF') -> Source:
+    """Read ``text`` (of which ``model`` was loaded) as the writer will edit it.
+
+    ``ValueError`` naming the file as ``what`` when the writer cannot find one of the model's
+    links or joints in it, so that it is said before the fit, not after.
+    """
+    from ..urdf import _parse_urdf, _Report
+    try:
+        found = _elements(text)
+        # the bytes the loader was given: the reader drops a byte order mark
+        links = _parse_urdf(text[_LEAD.match(text).end():], _Report(strict=False))[1]
+    except ValueError as err:
+        raise ValueError(f'{what}: cannot write the corrected URDF: {err}') from None
+    missing = [f'{tag} {name!r}' for tag, names in (('link', model.frames),
+                                                    ('joint', model.joint_names))
+               for name in names if (tag, name) not in found]
+    if missing:
+        raise ValueError(f'{what}: cannot write the corrected URDF: the writer does not find '
+                         f'{", ".join(missing)} in the file')
+    return Source(text, found, {link.name: link.inertia for link in links})
 
 
 def _number(x: float) -> str:
@@ -114,15 +166,6 @@ def _realisable(inertia: np.ndarray) -> bool:
     return bool(w[0] >= -1e-12 * max(abs(w[-1]), 1e-300)) and inertia[3, 3] > 0.0
 
 
-def _link_inertia(text: bytes, element: Optional[_Element]) -> np.ndarray:
-    """Return the spatial inertia (link frame) of a link as the parser reads it."""
-    if element is None or 'inertial' not in element.children:
-        return np.zeros((6, 6))
-    from ..urdf import _parse_link
-    return _parse_link(ET.fromstring(text[element.start:element.end]), lambda message: None
-                       ).inertia
-
-
 def _indent_of(data: bytes, at: int) -> str:
     """Return the whitespace before the line's first character up to ``at``."""
     line = data.rfind(b'\n', 0, at) + 1
@@ -130,7 +173,7 @@ def _indent_of(data: bytes, at: int) -> str:
     return head.decode() if not head.strip() else ''
 
 
-def corrected_urdf(text: bytes, model: Model, body_inertia: Dict[int, np.ndarray],
+def corrected_urdf(text: Union[bytes, Source], model: Model, body_inertia: Dict[int, np.ndarray],
                    link_additions: Optional[Dict[str, np.ndarray]] = None,
                    dynamics: Optional[Dict[str, Tuple[float, float]]] = None
                    ) -> Tuple[bytes, List[str]]:
@@ -139,17 +182,16 @@ def corrected_urdf(text: bytes, model: Model, body_inertia: Dict[int, np.ndarray
     ``body_inertia``: body index → its identified 6×6 spatial inertia (body frame);
     ``link_additions``: link → a 6×6 spatial inertia (link frame) added to that link's own,
     a payload; ``dynamics``: joint → ``(damping, friction)`` for its ``<dynamics>``.
-    ``model`` is the one ``text`` was loaded as (same joints kept and locked).
+    ``model`` is the one ``text`` was loaded as (same joints kept and locked); ``text`` is
+    the file's bytes or their :class:`Source` from :func:`prepare`.
     """
-    found = _elements(text)
+    source = text if isinstance(text, Source) else prepare(text, model)
+    text, found = source.text, source.elements
     notes: List[str] = []
     new_inertial: Dict[str, Optional[np.ndarray]] = {}     # link -> inertia, None: remove
-    own: Dict[str, np.ndarray] = {}
 
     def link_inertia(name):
-        if name not in own:
-            own[name] = _link_inertia(text, found.get(('link', name)))
-        return own[name]
+        return source.inertia.get(name, np.zeros((6, 6)))
 
     for body, inertia in body_inertia.items():
         link = model.body_names[body]

@@ -1,0 +1,121 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The writers' guards: :func:`files.check_output` and :func:`files.write_atomic`.
+
+An output is refused before any work when it is an input, a directory, a named pipe or a
+device, or when its folder is missing; a write that fails midway (a writer that raises, a
+full disk at ``fsync``) leaves the file that was there as it was and no temporary beside it.
+"""
+
+import errno
+import os
+import stat
+
+import pytest
+
+from spatial_dynamics import files
+
+
+def listing(folder):
+    """Return the names in ``folder``, sorted (temporaries start with a dot)."""
+    return sorted(os.listdir(folder))
+
+
+def test_a_write_replaces_the_file_whole_and_keeps_its_permissions(tmp_path):
+    path = tmp_path / 'out.urdf'
+    path.write_bytes(b'old')
+    os.chmod(path, 0o640)
+    files.write_atomic(path, '<robot/>\n', 'the URDF')
+    assert path.read_bytes() == b'<robot/>\n'
+    assert stat.S_IMODE(os.stat(path).st_mode) == 0o640
+    assert listing(tmp_path) == ['out.urdf']
+    files.write_atomic(tmp_path / 'new.bin', b'\x00\x01', 'bytes')
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(os.stat(tmp_path / 'new.bin').st_mode) == 0o666 & ~umask
+    files.write_atomic(tmp_path / 'by_writer.csv', lambda f: f.write(b'a,b\n1,2\n'), 'csv')
+    assert (tmp_path / 'by_writer.csv').read_bytes() == b'a,b\n1,2\n'
+
+
+def test_a_writer_that_raises_midway_leaves_the_old_file_and_no_temporary(tmp_path):
+    path = tmp_path / 'residual.csv'
+    path.write_bytes(b'the old file\n')
+
+    def writer(f):
+        f.write(b'half of the new')
+        raise RuntimeError('the writer failed')
+    with pytest.raises(RuntimeError, match='the writer failed'):
+        files.write_atomic(path, writer, 'the residual')
+    assert path.read_bytes() == b'the old file\n'
+    assert listing(tmp_path) == ['residual.csv']
+
+    def interrupted(f):
+        f.write(b'half')
+        raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        files.write_atomic(path, interrupted, 'the residual')
+    assert path.read_bytes() == b'the old file\n'
+    assert listing(tmp_path) == ['residual.csv']
+
+
+@pytest.mark.parametrize('call', ['fsync', 'replace'])
+def test_a_full_disk_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch, call):
+    """ENOSPC at fsync (the data did not fit) or at the rename: one ValueError naming the file."""
+    path = tmp_path / 'robot.urdf'
+    path.write_bytes(b'<robot name="old"/>\n')
+
+    def full(*args):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    monkeypatch.setattr(os, call, full)
+    with pytest.raises(ValueError) as caught:
+        files.write_atomic(path, b'<robot name="new"/>\n' * 1000, 'corrected URDF')
+    monkeypatch.undo()
+    assert str(path) in str(caught.value) and 'No space left' in str(caught.value)
+    assert 'corrected URDF' in str(caught.value)
+    assert path.read_bytes() == b'<robot name="old"/>\n'
+    assert listing(tmp_path) == ['robot.urdf']
+
+
+def test_a_missing_folder_is_refused_by_the_write_too(tmp_path):
+    with pytest.raises(ValueError, match='cannot write plot'):
+        files.write_atomic(tmp_path / 'no' / 'x.png', b'x', 'plot')
+
+
+def test_an_output_that_is_an_input_is_refused(tmp_path):
+    urdf = tmp_path / 'robot.urdf'
+    urdf.write_text('<robot/>')
+    (tmp_path / 'sub').mkdir()
+    os.symlink(urdf, tmp_path / 'link.urdf')
+    for same in (urdf, tmp_path / 'sub' / '..' / 'robot.urdf', tmp_path / 'link.urdf',
+                 os.path.relpath(urdf)):
+        with pytest.raises(ValueError, match='also an input') as caught:
+            files.check_output(same, '--write-urdf', inputs=[str(urdf), None])
+        assert os.fspath(same) in str(caught.value)
+    files.check_output(tmp_path / 'other.urdf', '--write-urdf', inputs=[str(urdf)])
+    # an input that does not exist yet is compared by its absolute path
+    with pytest.raises(ValueError, match='also an input'):
+        files.check_output(tmp_path / 'x.csv', 'out', inputs=[os.path.relpath(tmp_path / 'x.csv')])
+
+
+@pytest.mark.parametrize('special, kind', [('fifo', 'named pipe'), ('dir', 'directory'),
+                                           ('/dev/full', 'character device'),
+                                           ('/dev/null', 'character device')])
+def test_special_files_are_refused_without_opening_them(tmp_path, special, kind):
+    """A FIFO would block the write forever, /dev/full fails it late, a directory cannot be one."""
+    path = {'fifo': tmp_path / 'out.urdf', 'dir': tmp_path}.get(special, special)
+    if special == 'fifo':
+        os.mkfifo(path)
+    with pytest.raises(ValueError, match=kind) as caught:
+        files.check_output(path, '--write-urdf')
+    assert os.fspath(path) in str(caught.value) and '--write-urdf' in str(caught.value)
+
+
+def test_a_missing_or_unusable_folder_is_refused(tmp_path):
+    with pytest.raises(ValueError, match='does not exist') as caught:
+        files.check_output(tmp_path / 'missing' / 'out.urdf', '--write-urdf')
+    assert os.fspath(tmp_path / 'missing') in str(caught.value)
+    (tmp_path / 'a_file').write_text('x')
+    with pytest.raises(ValueError, match='Not a directory|does not exist'):
+        files.check_output(tmp_path / 'a_file' / 'out.urdf', '--write-urdf')
+    files.check_output(tmp_path / 'fresh.urdf', '--write-urdf')     # a new file: fine
+    assert listing(tmp_path) == ['a_file']                          # and nothing created
