@@ -31,7 +31,7 @@ import numpy as np
 
 from . import compiled, layout, python
 from .layout import LAYOUTS
-from ..algorithms.arguments import as_joint_arrays, as_vector, f_ext_in_bodies
+from ..algorithms.arguments import as_joint_arrays, as_real_array, as_vector, f_ext_in_bodies
 from ..model import Model
 
 BACKENDS = ('auto', 'numpy', 'compiled')
@@ -134,7 +134,8 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         else:
             # numpy: one float64 state on Python floats (lists and tuples converted once)
             if not (type(q) is type(qd) is type(qdd) is _ndarray):
-                q, qd, qdd = _vector(q, lay.n), _vector(qd, lay.n), _vector(qdd, lay.n)
+                q, qd, qdd = (_vector(q, lay.n), _vector(qd, lay.n, 'qd'),
+                              _vector(qdd, lay.n, 'qdd'))
             if ((q.dtype is qd.dtype is qdd.dtype is _F8) and q.ndim == qd.ndim == qdd.ndim == 1
                     and len(q) == len(qd) == len(qdd) == lay.n):
                 gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
@@ -175,7 +176,7 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     if (kern is None and type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
             and q.shape == qd.shape == lay.zeros.shape):
         return rnea(model, q, qd, lay.zeros, gravity, backend=backend)
-    q, qd = _vector(q, lay.n), _vector(qd, lay.n)
+    q, qd = _vector(q, lay.n), _vector(qd, lay.n, 'qd')
     dtype = np.result_type(q, qd)
     zero = np.zeros(np.broadcast_shapes(np.shape(q), np.shape(qd)),
                     dtype=dtype if dtype.kind == 'f' else np.float64)
@@ -239,16 +240,19 @@ def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     return python.regressor(lay.rows, q, qd, qdd, g)
 
 
-def _vector(x, n: int):
-    """Return a list or tuple of ``n`` numbers as a float64 array, anything else as an array."""
+def _vector(x, n: int, what: str = 'q'):
+    """Return a list or tuple of ``n`` numbers as a float64 array, anything else as an array.
+
+    ``TypeError`` naming ``what`` when ``x`` is no array of real numbers (:func:`as_real_array`).
+    """
     if type(x) is _ndarray:
         return x
     if (type(x) is list or type(x) is tuple) and len(x) == n:
         try:
             return np.array(x, dtype=_F8)
         except (TypeError, ValueError):
-            pass        # not numbers: the general path names the argument
-    return np.asarray(x)
+            pass        # not numbers: as_real_array names the argument
+    return as_real_array(what, x)
 
 
 def _gravity(gravity):

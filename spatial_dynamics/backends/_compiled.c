@@ -304,12 +304,24 @@ read_strided(const char *p, Py_ssize_t n, Py_ssize_t step, int type, double *out
     return AS_DOUBLE;
 }
 
-/* The 1-D buffer v (n items, any strides) by its format: a native single-item code of
- * READ_CODES whose size is the C type's, else DECLINED (as numpy would see it: the same
- * items as read_strided takes from an array). */
+/* The items of a 1-D buffer v: shape and strides may be NULL (an exporter of a C-contiguous
+ * buffer may leave them out, as ctypes does), the items then follow each other. */
+static Py_ssize_t
+buffer_items(const Py_buffer *v)
+{
+    if (v->ndim != 1 || v->itemsize <= 0)
+        return -1;
+    return v->shape != NULL ? v->shape[0] : v->len / v->itemsize;
+}
+
+/* The 1-D buffer v (buffer_items items, any strides, no suboffsets) by its format: a native
+ * single-item code of READ_CODES whose size is the C type's, else DECLINED (as numpy would
+ * see it: the same items as read_strided takes from an array). */
 static int
 read_buffer(const Py_buffer *v, double *out)
 {
+    if (v->suboffsets != NULL && v->suboffsets[0] >= 0)
+        return DECLINED;        /* pointers to the items, not the items */
     const char *fmt = v->format ? v->format : "B";
 #if PY_LITTLE_ENDIAN
     if (*fmt == '@' || *fmt == '=' || *fmt == '<')
@@ -320,7 +332,8 @@ read_buffer(const Py_buffer *v, double *out)
     const char *code = fmt[0] != '\0' && fmt[1] == '\0' ? strchr(READ_CODES, fmt[0]) : NULL;
     if (code == NULL || READ_SIZES[code - READ_CODES] != v->itemsize)
         return DECLINED;
-    return read_strided(v->buf, v->shape[0], v->strides[0], READ_TYPES[code - READ_CODES], out);
+    const Py_ssize_t step = v->strides != NULL ? v->strides[0] : v->itemsize;
+    return read_strided(v->buf, buffer_items(v), step, READ_TYPES[code - READ_CODES], out);
 }
 
 /* ``obj`` as n doubles: AS_DOUBLE or AS_FLOAT (read from float32); DECLINED when it is not
@@ -367,7 +380,7 @@ as_doubles(PyObject *obj, Py_ssize_t n, double *out)
         PyErr_Clear();
         return DECLINED;
     }
-    int read = v.ndim == 1 && v.shape[0] == n ? read_buffer(&v, out) : DECLINED;
+    int read = buffer_items(&v) == n ? read_buffer(&v, out) : DECLINED;
     PyBuffer_Release(&v);
     return read;
 }
