@@ -9,6 +9,12 @@ import numpy as np
 from ..model import Model
 
 
+def check_model(model) -> None:
+    """``TypeError`` naming the argument ``model`` when it is no :class:`Model`."""
+    if not isinstance(model, Model):
+        raise TypeError(f'model must be a spatial_dynamics.Model, got {type(model).__name__}')
+
+
 def as_real_array(what: str, x) -> np.ndarray:
     """``x`` (an array, a list or tuple, a buffer) as a numpy array of real numbers.
 
@@ -33,6 +39,7 @@ def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) ->
     ``TypeError`` names the argument (``names``, in order) that is no array of real numbers,
     ``ValueError`` the one whose last dimension is not ``model.nq``.
     """
+    check_model(model)
     n = model.nq
     out = []
     for what, x in zip(names, arrays):

@@ -795,7 +795,8 @@ c_batch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
  * validates, derives the table, runs batches and the other backends). This saves the Python
  * frame of `function` (~0.2 µs, a fifth of a call) on the path users take most. The door
  * keeps the last model it answered (a weak reference) and its Kernels, so that a run of
- * calls on one model skips the dict. */
+ * calls on one model skips the dict; when that model is collected, the weak reference's
+ * callback lets go of its Kernels. */
 
 static PyObject *str_gravity, *str_f_ext, *str_backend, *str_auto, *str_compiled;
 
@@ -808,12 +809,13 @@ typedef struct {
     PyObject *gravity;    /* the default gravity */
     PyObject *dict;       /* __doc__, __name__, __wrapped__, … */
     PyObject *last_model; /* a weak reference to the model of the last call, or NULL */
-    PyObject *last_kern;  /* its Kernels */
+    PyObject *last_kern;  /* its Kernels (NULL once the model was collected) */
 } DoorObject;
 
-/* Whether the model of the last call is `model` (alive: its Kernels are still in the dict,
+/* Whether the model of the last call is `model`, alive (its Kernels are still in the dict,
  * removed only when the model is collected). Saves the dict look-up (~40 ns) of each call
- * on one model. */
+ * on one model. A dead reference is never the model: before Python 3.13 it reads as None,
+ * which a caller may well pass. */
 static int
 door_is_last(DoorObject *self, PyObject *model)
 {
@@ -828,9 +830,24 @@ door_is_last(DoorObject *self, PyObject *model)
     Py_DECREF(obj);
     return obj == model;
 #else
-    return PyWeakref_GET_OBJECT(self->last_model) == model;
+    PyObject *obj = PyWeakref_GET_OBJECT(self->last_model);
+    return obj != Py_None && obj == model;
 #endif
 }
+
+/* The callback of the weak reference to the last model (`door` the door): the model was
+ * collected, let go of its Kernels. The dead reference itself stays until the next model
+ * (door_is_last never takes it for one): it is the argument of this very call. */
+static PyObject *
+door_forget(PyObject *door, PyObject *ref)
+{
+    DoorObject *self = (DoorObject *)door;
+    if (self->last_model == ref)
+        Py_CLEAR(self->last_kern);
+    Py_RETURN_NONE;
+}
+
+static PyMethodDef door_forget_def = {"forget", door_forget, METH_O, NULL};
 
 static int
 is_name(PyObject *name, PyObject *interned)
@@ -849,23 +866,30 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     int ok = nargs >= 1 + nv;
     /* optional arguments by position: gravity, f_ext, backend (those the function has) */
     Py_ssize_t k = 1 + nv;
-    if (ok && a->gravity && k < nargs)
+    int given_gravity = ok && a->gravity && k < nargs;
+    if (given_gravity)
         gravity = args[k++];
     if (ok && a->fext && k < nargs)
         f_ext = args[k++];
     if (ok && k < nargs)
         backend = args[k++];
     ok = ok && k == nargs;
+    /* then by keyword; one given twice (by position too) is the function's TypeError */
     for (Py_ssize_t i = 0; ok && i < nkw; i++) {
         PyObject *name = PyTuple_GET_ITEM(kwnames, i), *value = args[nargs + i];
-        if (a->gravity && is_name(name, str_gravity))
+        if (a->gravity && is_name(name, str_gravity)) {
+            ok = !given_gravity;
+            given_gravity = 1;
             gravity = value;
-        else if (a->fext && is_name(name, str_f_ext))
+        } else if (a->fext && is_name(name, str_f_ext)) {
+            ok = f_ext == NULL;
             f_ext = value;
-        else if (is_name(name, str_backend))
+        } else if (is_name(name, str_backend)) {
+            ok = backend == NULL;
             backend = value;
-        else
+        } else {
             ok = 0;
+        }
     }
     if (ok && f_ext != NULL && f_ext != Py_None)
         ok = PyDict_CheckExact(f_ext) && PyDict_GET_SIZE(f_ext) == 0;
@@ -885,7 +909,9 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
             return NULL;
         ok = kern != NULL && PyObject_TypeCheck(kern, &KernelsType);
         if (ok) {
-            PyObject *ref = PyWeakref_NewRef(args[0], NULL);
+            PyObject *forget = PyCFunction_New(&door_forget_def, (PyObject *)self);
+            PyObject *ref = forget ? PyWeakref_NewRef(args[0], forget) : NULL;
+            Py_XDECREF(forget);     /* the reference holds it */
             if (ref == NULL) {
                 PyErr_Clear();      /* no weak references to it: no cache */
             } else {
