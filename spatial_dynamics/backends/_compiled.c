@@ -66,6 +66,20 @@
  * the thread count. */
 #define CHUNK_WORK 1024
 
+/* Largest count of doubles of one array or scratch: a few such counts add up, and times
+ * sizeof(double), without overflow in Py_ssize_t. */
+#define MAX_DOUBLES (PY_SSIZE_T_MAX / 64)
+
+/* a x b in *out, or -1 when either is negative or the product exceeds `most`. */
+static int
+checked_mul(Py_ssize_t a, Py_ssize_t b, Py_ssize_t most, Py_ssize_t *out)
+{
+    if (a < 0 || b < 0 || (a != 0 && b > most / a))
+        return -1;
+    *out = a * b;
+    return 0;
+}
+
 /* ------------------------------------------------------------------------------------------
  * Kernels: one model's table */
 
@@ -110,7 +124,8 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     const double *K = (const double *)v.buf;
     long rows = (long)v.shape[0];
     double n = K[QIDX];
-    int ok = n >= 0.0 && n <= 1e9 && n == (double)(long)n;
+    /* at most one joint per body (mimic joints share one), so n < rows */
+    int ok = n >= 0.0 && n < (double)rows && n == (double)(long)n;
     /* The kernels index q, the scratch and their parents by these columns: check them once,
      * so no table reaches the kernels that could make them read or write out of bounds. */
     for (long i = 1; ok && i < rows; i++) {
@@ -122,6 +137,15 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     if (!ok) {
         PyBuffer_Release(&v);
         PyErr_SetString(PyExc_ValueError, "Kernels: table rows are not a tree over its joints");
+        return NULL;
+    }
+    /* The sizes of one state (result_shape, work_size) fit MAX_DOUBLES each, so that no
+     * entry's sum of them overflows. */
+    Py_ssize_t size;
+    if (checked_mul(rows, 6 * (Py_ssize_t)rows + WORK, MAX_DOUBLES, &size) < 0
+            || checked_mul((Py_ssize_t)n, 10 * (Py_ssize_t)rows, MAX_DOUBLES, &size) < 0) {
+        PyBuffer_Release(&v);
+        PyErr_SetString(PyExc_ValueError, "Kernels: table too large");
         return NULL;
     }
     KernelsObject *self = (KernelsObject *)type->tp_alloc(type, 0);
@@ -219,7 +243,7 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 {
     *count = kernel == MOMENTUM ? 2 : 1;
     dims[0] = h->n;
-    dims[1] = kernel == CRBA ? h->n : (kernel == REGRESSOR ? 10 * (h->rows - 1) : 1);
+    dims[1] = kernel == CRBA ? h->n : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
     return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
 }
 
@@ -227,7 +251,7 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 static Py_ssize_t
 work_size(int kernel, long rows)
 {
-    return rows * WORK + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * rows : 0);
+    return (Py_ssize_t)rows * WORK + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * rows : 0);
 }
 
 /* One state through the generated kernels: the body transforms, then `kernel`'s passes.
@@ -249,7 +273,8 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
         momentum_kernel(K, rows, q, qd, out1, out2, work);
         break;
     default:
-        regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1, work + rows * WORK, work);
+        regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1,
+                         work + (Py_ssize_t)rows * WORK, work);
     }
 }
 
@@ -717,6 +742,13 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     long threads = PyLong_AsLong(args[want]);
     if (h == NULL || PyErr_Occurred())
         return NULL;
+    /* N states of `rows` bodies each: the chunks and threads count body-states (run_batch) */
+    Py_ssize_t body_states;
+    if (checked_mul(N, h->rows * 6, MAX_DOUBLES, &body_states) < 0) {
+        PyErr_Format(PyExc_ValueError, "%s: N must be 0 to %zd states, got %zd", a->batch,
+                     MAX_DOUBLES / (h->rows * 6), N);
+        return NULL;
+    }
     result_shape(h, a->kernel, dims, &count);
     Slice job = {.kernel = a->kernel, .K = h->K, .rows = h->rows, .n = h->n,
                  .size = dims[0] * dims[1]};
@@ -732,13 +764,20 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     for (int i = 0; i < a->vectors + count; i++, held++) {
         const int result = i >= a->vectors;
         const char *name = result ? a->outputs[i - a->vectors] : VECTOR_NAMES[i];
-        const Py_ssize_t numbers = N * (result ? job.size : h->n);
+        Py_ssize_t numbers;     /* -1: more than any buffer holds */
+        if (checked_mul(N, result ? job.size : h->n, PY_SSIZE_T_MAX / 8, &numbers) < 0)
+            numbers = -1;
         if (get_table(result ? args[next + i - a->vectors] : args[2 + i], &v[i], result,
                       name) < 0)
             goto fail;
-        if (v[i].len != (Py_ssize_t)sizeof(double) * numbers) {
+        if (v[i].len % (Py_ssize_t)sizeof(double) != 0
+                || v[i].len / (Py_ssize_t)sizeof(double) != numbers) {
             PyBuffer_Release(&v[i]);
-            PyErr_Format(PyExc_ValueError, "%s must hold %zd numbers", name, numbers);
+            if (numbers >= 0)
+                PyErr_Format(PyExc_ValueError, "%s must hold %zd numbers", name, numbers);
+            else
+                PyErr_Format(PyExc_ValueError, "%s must hold %zd x %zd numbers", name, N,
+                             result ? job.size : (Py_ssize_t)h->n);
             goto fail;
         }
     }
@@ -746,7 +785,8 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         if (get_table(fext, &v[held], 0, "fext") < 0)
             goto fail;
         Py_ssize_t m = v[held++].len / (Py_ssize_t)sizeof(double);
-        if (m != h->rows * 6 && m != N * h->rows * 6) {
+        if (v[held - 1].len % (Py_ssize_t)sizeof(double) != 0
+                || (m != h->rows * 6 && m != body_states)) {
             PyErr_SetString(PyExc_ValueError, "fext must hold rows x 6 or N x rows x 6 numbers");
             goto fail;
         }
@@ -758,7 +798,8 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         *vectors[i] = v[i].buf;
     job.out1 = v[a->vectors].buf;
     job.out2 = count == 2 ? v[a->vectors + 1].buf : NULL;
-    int rc = run_batch(&job, N, threads);
+    /* no state, or states without results (a model without joints): nothing to compute */
+    int rc = N == 0 || job.size == 0 ? 0 : run_batch(&job, N, threads);
     for (int i = 0; i < held; i++)
         PyBuffer_Release(&v[i]);
     if (rc < 0)
