@@ -52,7 +52,7 @@
 
 /* The interface this file offers to compiled.py, which refuses a build of another (a stale
  * extension left beside newer sources): raise it with every change of an entry. */
-#define API 3
+#define API 4
 /* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
 #define STACK_DOUBLES 2048
 /* Largest number of threads of one batch; each gets at least MIN_WORK body-states (states x
@@ -1043,6 +1043,21 @@ door_repr(DoorObject *self)
     return PyUnicode_FromFormat("<compiled door to %R>", self->function);
 }
 
+/* Pickled (and copied) by name, as functions are: the name of `function` in its module
+ * (`__module__`, which the door carries), where the door stands in for it; loading finds
+ * the door, or the plain function in a package built without the extension. */
+static PyObject *
+door_reduce(DoorObject *self, PyObject *Py_UNUSED(ignored))
+{
+    return PyObject_GetAttrString(self->function, "__qualname__");
+}
+
+static PyMethodDef door_methods[] = {
+    {"__reduce__", (PyCFunction)door_reduce, METH_NOARGS,
+     PyDoc_STR("The function's name: pickled and copied as the function is.")},
+    {NULL},
+};
+
 static PyGetSetDef door_getset[] = {
     {"__dict__", PyObject_GenericGetDict, PyObject_GenericSetDict, NULL, NULL},
     {NULL},
@@ -1063,6 +1078,7 @@ static PyTypeObject DoorType = {
     .tp_vectorcall_offset = offsetof(DoorObject, vectorcall),
     .tp_dictoffset = offsetof(DoorObject, dict),
     .tp_getset = door_getset,
+    .tp_methods = door_methods,
 };
 
 /* ------------------------------------------------------------------------------------------
