@@ -16,7 +16,7 @@ from typing import Mapping, Sequence, Union
 
 import numpy as np
 
-from .algorithms.arguments import as_joint_arrays, as_real_array
+from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
 from .model import Model
 
 PerJoint = Union[float, Sequence[float], Mapping[str, float], np.ndarray]
@@ -29,6 +29,7 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
     ``ValueError`` names the joint of an unknown name or a non-finite (or, with
     ``nonnegative``, negative) value.
     """
+    check_model(model)
     n = model.nq
     if isinstance(values, Mapping):
         out = np.full(n, float(default))

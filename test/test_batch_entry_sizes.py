@@ -97,7 +97,7 @@ def test_a_huge_batch_size_is_refused_not_run():
 
 
 def test_a_huge_batch_size_of_a_model_without_joints_is_refused_or_empty():
-    """n = 0: no buffer bounds N, and there is nothing to compute."""
+    """Without joints no buffer bounds N, and there is nothing to compute."""
     run_child('t.check_a_model_without_joints()')
 
 
@@ -123,7 +123,7 @@ def check_a_model_without_joints():
 
 
 def test_a_table_with_more_joints_than_bodies_is_refused():
-    """n is bounded by the bodies (a joint per body at most): n x n and n x 10 NB then fit."""
+    """A joint per body at most bounds n: n x n and n x 10 NB then fit."""
     import numpy as np
     ext = compiled.ext
     from spatial_dynamics.backends import layout

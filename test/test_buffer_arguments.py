@@ -110,7 +110,7 @@ def answer(function, args):
 
 
 def parameter(function, position):
-    """The name of ``function``'s parameter at ``position`` (the name its errors give)."""
+    """Return the name of ``function``'s parameter at ``position`` (its errors' name)."""
     return list(inspect.signature(function).parameters)[position]
 
 

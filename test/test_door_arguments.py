@@ -114,3 +114,23 @@ def test_an_argument_given_twice_is_a_type_error_warm_or_cold(name):
         twice = next(iter(keywords))
         assert outcomes[0] == outcomes[1] == (
             f"{name}() got multiple values for argument '{twice}'"), (given, keywords)
+
+
+def test_the_other_public_functions_name_the_model_and_f_ext_too():
+    """Functions without a door: the same TypeError for a model that is none, and f_ext."""
+    others = {'jacobian': lambda m: sd.jacobian(m, Z, 'a'),
+              'rnea_spatial': lambda m: sd.rnea_spatial(m, Z, Z, Z),
+              'friction_torque': lambda m: sd.friction_torque(m, Z, 0.1),
+              'clamp_to_effort_limits': lambda m: sd.clamp_to_effort_limits(m, Z),
+              'per_joint': lambda m: sd.per_joint(m, 'damping', 1.0)}
+    for name, function in others.items():
+        for bad in NOT_MODELS:
+            with pytest.raises(TypeError, match='^model must be a spatial_dynamics.Model'):
+                function(bad)
+    model = sd.Model.from_urdf(TWO_JOINTS)
+    for backend in BACKENDS:
+        for bad in ([('b', np.ones(6))], 'b', np.ones(6)):
+            with pytest.raises(TypeError, match='^f_ext must map link names'):
+                sd.rnea(model, Z, Z, Z, f_ext=bad, backend=backend)
+        with pytest.raises(TypeError, match=r"^f_ext\['b'\] must be an array of real"):
+            sd.rnea(model, Z, Z, Z, f_ext={'b': None}, backend=backend)

@@ -28,7 +28,7 @@ BATCHES = [(), (1,), (3,), (2, 3), (0,)]
 
 
 def backends():
-    """The backends to compare: numpy, and auto and compiled when the extension is built."""
+    """Return the backends to compare: numpy, and auto and compiled with the extension."""
     return [b for b in BACKENDS if b == 'numpy' or compiled.ext is not None]
 
 

@@ -4,6 +4,8 @@
 
 from __future__ import annotations
 
+from typing import Mapping
+
 import numpy as np
 
 from ..model import Model
@@ -71,6 +73,9 @@ def f_ext_in_bodies(model: Model, f_ext) -> dict:
     ``f_ext`` maps a link name to ``[n; f]`` (N m, N) in that link's frame, shape (6,) or
     (..., 6); wrenches on links of one body add up; those on the fixed base are dropped.
     """
+    if f_ext is not None and not isinstance(f_ext, Mapping):
+        raise TypeError('f_ext must map link names to wrenches [n; f], got '
+                        f'{type(f_ext).__name__}')
     fb = {}
     for link, f in (f_ext or {}).items():
         frame = model.frames.get(link)

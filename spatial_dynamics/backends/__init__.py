@@ -116,10 +116,13 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         τ (N m or N), same shape as the broadcast inputs; float64, or the inputs' floating
         dtype.
     """
-    lay, kern, tau = _entered(model, backend, None if f_ext else _c_rnea, q, qd, qdd, gravity)
+    # no wrenches: None or an empty dict (anything else, validated by f_ext_in_bodies)
+    no_wrench = f_ext is None or (type(f_ext) is dict and not f_ext)
+    lay, kern, tau = _entered(model, backend, _c_rnea if no_wrench else None, q, qd, qdd,
+                              gravity)
     if tau is not None:
         return tau
-    if not f_ext:
+    if no_wrench:
         if kern is not None:
             if (type(q) is type(qd) is type(qdd) is _ndarray and q.ndim > 1
                     and q.shape == qd.shape == qdd.shape and q.shape[-1] == lay.n
