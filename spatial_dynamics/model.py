@@ -11,7 +11,7 @@ Models are built from a URDF by :mod:`spatial_dynamics.urdf` (``Model.from_urdf`
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 import os
 from types import MappingProxyType
 from typing import Callable, Mapping, Optional, Sequence, Union
@@ -111,6 +111,15 @@ class Model:
                 value.setflags(write=False)
         object.__setattr__(self, 'frames', MappingProxyType(dict(self.frames)))
         object.__setattr__(self, 'locked', MappingProxyType(dict(self.locked)))
+
+    def __reduce__(self) -> tuple:
+        """Pickle (and deep-copy) by the fields: ``frames`` and ``locked`` as plain dicts.
+
+        The read-only views do not pickle; loading builds the record again (read-only arrays,
+        views), so a loaded model computes what the original does.
+        """
+        return (type(self), tuple(dict(v) if isinstance(v, MappingProxyType) else v
+                                  for v in (getattr(self, f.name) for f in fields(self))))
 
     @property
     def nq(self) -> int:

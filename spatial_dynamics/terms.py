@@ -16,6 +16,7 @@ from typing import Mapping, Sequence, Union
 
 import numpy as np
 
+from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
 from .model import Model
 
 PerJoint = Union[float, Sequence[float], Mapping[str, float], np.ndarray]
@@ -28,6 +29,7 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
     ``ValueError`` names the joint of an unknown name or a non-finite (or, with
     ``nonnegative``, negative) value.
     """
+    check_model(model)
     n = model.nq
     if isinstance(values, Mapping):
         out = np.full(n, float(default))
@@ -51,7 +53,7 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
 
 def armature_torque(armature: np.ndarray, qdd) -> np.ndarray:
     """Rotor inertia reflected through the gear: ``τ = armature · q̈``."""
-    return armature * np.asarray(qdd, dtype=float)
+    return armature * as_real_array('qdd', qdd).astype(float)
 
 
 def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:
@@ -63,7 +65,8 @@ def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:
     """
     if not threshold > 0.0 or not np.isfinite(threshold):
         raise ValueError(f'friction velocity threshold must be > 0, got {threshold}')
-    qd = np.asarray(qd, dtype=float)
+    (qd,) = as_joint_arrays(model, qd, names=('qd',))
+    qd = qd.astype(float)
     qidx, qmul = model.qidx[1:], model.qmul[1:]
     qd_body = qmul * qd[..., qidx]
     tau_body = model.body_damping[1:] * qd_body + model.body_friction[1:] * np.tanh(
@@ -79,6 +82,7 @@ def clamp_to_effort_limits(model: Model, tau) -> tuple[np.ndarray, np.ndarray]:
     Joints without a positive effort limit are left alone; ``saturated`` is a boolean array
     of τ's shape marking the clamped entries.
     """
-    tau = np.asarray(tau, dtype=float)
+    (tau,) = as_joint_arrays(model, tau, names=('tau',))
+    tau = tau.astype(float)
     limit = np.where(model.effort_limit > 0.0, model.effort_limit, np.inf)
     return np.clip(tau, -limit, limit), np.abs(tau) > limit

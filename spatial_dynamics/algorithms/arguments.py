@@ -4,20 +4,48 @@
 
 from __future__ import annotations
 
+from typing import Mapping
+
 import numpy as np
 
 from ..model import Model
 
 
-def as_joint_arrays(model: Model, *arrays) -> list:
+def check_model(model) -> None:
+    """``TypeError`` naming the argument ``model`` when it is no :class:`Model`."""
+    if not isinstance(model, Model):
+        raise TypeError(f'model must be a spatial_dynamics.Model, got {type(model).__name__}')
+
+
+def as_real_array(what: str, x) -> np.ndarray:
+    """``x`` (an array, a list or tuple, a buffer) as a numpy array of real numbers.
+
+    Booleans and integers are kept as they are (the caller promotes them). ``TypeError``
+    names ``what`` when ``x`` is no array of real numbers: strings, complex numbers, objects,
+    ``None``, ragged lists, a buffer numpy cannot read (suboffsets, an unknown format).
+    """
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError, BufferError) as err:
+        raise TypeError(f'{what} must be an array of real numbers, got '
+                        f'{type(x).__name__}: {err}') from None
+    if a.dtype.kind not in 'biuf':
+        raise TypeError(f'{what} must be an array of real numbers, got {type(x).__name__} '
+                        f'of dtype {a.dtype}')
+    return a
+
+
+def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) -> list:
     """``q, qd, qdd`` as arrays of one float dtype and broadcast shape (..., n).
 
-    ``ValueError`` names the argument whose last dimension is not ``model.nq``.
+    ``TypeError`` names the argument (``names``, in order) that is no array of real numbers,
+    ``ValueError`` the one whose last dimension is not ``model.nq``.
     """
+    check_model(model)
     n = model.nq
     out = []
-    for what, x in zip(('q', 'qd', 'qdd'), arrays):
-        a = np.asarray(x)
+    for what, x in zip(names, arrays):
+        a = as_real_array(what, x)
         if a.ndim == 0 or a.shape[-1] != n:
             raise ValueError(f'{what} must have shape (..., {n}) for the joints '
                              f'{model.joint_names}, got shape {a.shape}')
@@ -29,11 +57,14 @@ def as_joint_arrays(model: Model, *arrays) -> list:
 
 
 def as_vector(what: str, x, size: int) -> np.ndarray:
-    """``x`` as a float array of shape (size,); ``ValueError`` naming ``what`` otherwise."""
-    a = np.asarray(x, dtype=float)
+    """``x`` as a float array of shape (size,); ``ValueError`` naming ``what`` otherwise.
+
+    ``TypeError`` (:func:`as_real_array`) when ``x`` is no array of real numbers.
+    """
+    a = as_real_array(what, x)
     if a.shape != (size,):
         raise ValueError(f'{what} must be a {size}-vector, got shape {a.shape}')
-    return a
+    return a.astype(float)
 
 
 def f_ext_in_bodies(model: Model, f_ext) -> dict:
@@ -42,12 +73,15 @@ def f_ext_in_bodies(model: Model, f_ext) -> dict:
     ``f_ext`` maps a link name to ``[n; f]`` (N m, N) in that link's frame, shape (6,) or
     (..., 6); wrenches on links of one body add up; those on the fixed base are dropped.
     """
+    if f_ext is not None and not isinstance(f_ext, Mapping):
+        raise TypeError('f_ext must map link names to wrenches [n; f], got '
+                        f'{type(f_ext).__name__}')
     fb = {}
     for link, f in (f_ext or {}).items():
         frame = model.frames.get(link)
         if frame is None:
             raise ValueError(f'f_ext: unknown link {link!r}')
-        f = np.asarray(f, dtype=float)
+        f = as_real_array(f'f_ext[{link!r}]', f).astype(float)
         if f.shape[-1:] != (6,):
             raise ValueError(f'f_ext[{link!r}] must have shape (..., 6), got {f.shape}')
         if frame.body == 0:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .arguments import as_joint_arrays
+from .arguments import as_joint_arrays, check_model
 from ..joints import jcalc
 from ..model import Model
 
@@ -50,6 +50,7 @@ def jacobian(model: Model, q, link: str, frame: str = 'local') -> np.ndarray:
         J, shape (..., 6, n): rad/s and m/s per unit of q̇ (rows ``[ω; v]``, columns in the
         order of ``model.joint_names``; a mimic joint's column folded onto its source's).
     """
+    check_model(model)
     if frame not in FRAMES:
         raise ValueError(f'frame must be one of {list(FRAMES)}, got {frame!r}')
     at = model.frames.get(link)

@@ -31,7 +31,7 @@ import numpy as np
 
 from . import compiled, layout, python
 from .layout import LAYOUTS
-from ..algorithms.arguments import as_joint_arrays, as_vector, f_ext_in_bodies
+from ..algorithms.arguments import as_joint_arrays, as_real_array, as_vector, f_ext_in_bodies
 from ..model import Model
 
 BACKENDS = ('auto', 'numpy', 'compiled')
@@ -116,10 +116,13 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         τ (N m or N), same shape as the broadcast inputs; float64, or the inputs' floating
         dtype.
     """
-    lay, kern, tau = _entered(model, backend, None if f_ext else _c_rnea, q, qd, qdd, gravity)
+    # no wrenches: None or an empty dict (anything else, validated by f_ext_in_bodies)
+    no_wrench = f_ext is None or (type(f_ext) is dict and not f_ext)
+    lay, kern, tau = _entered(model, backend, _c_rnea if no_wrench else None, q, qd, qdd,
+                              gravity)
     if tau is not None:
         return tau
-    if not f_ext:
+    if no_wrench:
         if kern is not None:
             if (type(q) is type(qd) is type(qdd) is _ndarray and q.ndim > 1
                     and q.shape == qd.shape == qdd.shape and q.shape[-1] == lay.n
@@ -134,7 +137,8 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         else:
             # numpy: one float64 state on Python floats (lists and tuples converted once)
             if not (type(q) is type(qd) is type(qdd) is _ndarray):
-                q, qd, qdd = _vector(q, lay.n), _vector(qd, lay.n), _vector(qdd, lay.n)
+                q, qd, qdd = (_vector(q, lay.n), _vector(qd, lay.n, 'qd'),
+                              _vector(qdd, lay.n, 'qdd'))
             if ((q.dtype is qd.dtype is qdd.dtype is _F8) and q.ndim == qd.ndim == qdd.ndim == 1
                     and len(q) == len(qd) == len(qdd) == lay.n):
                 gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
@@ -175,7 +179,7 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     if (kern is None and type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
             and q.shape == qd.shape == lay.zeros.shape):
         return rnea(model, q, qd, lay.zeros, gravity, backend=backend)
-    q, qd = _vector(q, lay.n), _vector(qd, lay.n)
+    q, qd = _vector(q, lay.n), _vector(qd, lay.n, 'qd')
     dtype = np.result_type(q, qd)
     zero = np.zeros(np.broadcast_shapes(np.shape(q), np.shape(qd)),
                     dtype=dtype if dtype.kind == 'f' else np.float64)
@@ -239,16 +243,19 @@ def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     return python.regressor(lay.rows, q, qd, qdd, g)
 
 
-def _vector(x, n: int):
-    """Return a list or tuple of ``n`` numbers as a float64 array, anything else as an array."""
+def _vector(x, n: int, what: str = 'q'):
+    """Return a list or tuple of ``n`` numbers as a float64 array, anything else as an array.
+
+    ``TypeError`` naming ``what`` when ``x`` is no array of real numbers (:func:`as_real_array`).
+    """
     if type(x) is _ndarray:
         return x
     if (type(x) is list or type(x) is tuple) and len(x) == n:
         try:
             return np.array(x, dtype=_F8)
         except (TypeError, ValueError):
-            pass        # not numbers: the general path names the argument
-    return np.asarray(x)
+            pass        # not numbers: as_real_array names the argument
+    return as_real_array(what, x)
 
 
 def _gravity(gravity):

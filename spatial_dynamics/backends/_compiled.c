@@ -52,7 +52,7 @@
 
 /* The interface this file offers to compiled.py, which refuses a build of another (a stale
  * extension left beside newer sources): raise it with every change of an entry. */
-#define API 3
+#define API 4
 /* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
 #define STACK_DOUBLES 2048
 /* Largest number of threads of one batch; each gets at least MIN_WORK body-states (states x
@@ -65,6 +65,20 @@
  * holds back leaves the rest to the others, and the lanes group the same states whatever
  * the thread count. */
 #define CHUNK_WORK 1024
+
+/* Largest count of doubles of one array or scratch: a few such counts add up, and times
+ * sizeof(double), without overflow in Py_ssize_t. */
+#define MAX_DOUBLES (PY_SSIZE_T_MAX / 64)
+
+/* a x b in *out, or -1 when either is negative or the product exceeds `most`. */
+static int
+checked_mul(Py_ssize_t a, Py_ssize_t b, Py_ssize_t most, Py_ssize_t *out)
+{
+    if (a < 0 || b < 0 || (a != 0 && b > most / a))
+        return -1;
+    *out = a * b;
+    return 0;
+}
 
 /* ------------------------------------------------------------------------------------------
  * Kernels: one model's table */
@@ -110,7 +124,8 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     const double *K = (const double *)v.buf;
     long rows = (long)v.shape[0];
     double n = K[QIDX];
-    int ok = n >= 0.0 && n <= 1e9 && n == (double)(long)n;
+    /* at most one joint per body (mimic joints share one), so n < rows */
+    int ok = n >= 0.0 && n < (double)rows && n == (double)(long)n;
     /* The kernels index q, the scratch and their parents by these columns: check them once,
      * so no table reaches the kernels that could make them read or write out of bounds. */
     for (long i = 1; ok && i < rows; i++) {
@@ -122,6 +137,15 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     if (!ok) {
         PyBuffer_Release(&v);
         PyErr_SetString(PyExc_ValueError, "Kernels: table rows are not a tree over its joints");
+        return NULL;
+    }
+    /* The sizes of one state (result_shape, work_size) fit MAX_DOUBLES each, so that no
+     * entry's sum of them overflows. */
+    Py_ssize_t size;
+    if (checked_mul(rows, 6 * (Py_ssize_t)rows + WORK, MAX_DOUBLES, &size) < 0
+            || checked_mul((Py_ssize_t)n, 10 * (Py_ssize_t)rows, MAX_DOUBLES, &size) < 0) {
+        PyBuffer_Release(&v);
+        PyErr_SetString(PyExc_ValueError, "Kernels: table too large");
         return NULL;
     }
     KernelsObject *self = (KernelsObject *)type->tp_alloc(type, 0);
@@ -219,7 +243,7 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 {
     *count = kernel == MOMENTUM ? 2 : 1;
     dims[0] = h->n;
-    dims[1] = kernel == CRBA ? h->n : (kernel == REGRESSOR ? 10 * (h->rows - 1) : 1);
+    dims[1] = kernel == CRBA ? h->n : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
     return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
 }
 
@@ -227,7 +251,7 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 static Py_ssize_t
 work_size(int kernel, long rows)
 {
-    return rows * WORK + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * rows : 0);
+    return (Py_ssize_t)rows * WORK + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * rows : 0);
 }
 
 /* One state through the generated kernels: the body transforms, then `kernel`'s passes.
@@ -249,7 +273,8 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
         momentum_kernel(K, rows, q, qd, out1, out2, work);
         break;
     default:
-        regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1, work + rows * WORK, work);
+        regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1,
+                         work + (Py_ssize_t)rows * WORK, work);
     }
 }
 
@@ -304,12 +329,24 @@ read_strided(const char *p, Py_ssize_t n, Py_ssize_t step, int type, double *out
     return AS_DOUBLE;
 }
 
-/* The 1-D buffer v (n items, any strides) by its format: a native single-item code of
- * READ_CODES whose size is the C type's, else DECLINED (as numpy would see it: the same
- * items as read_strided takes from an array). */
+/* The items of a 1-D buffer v: shape and strides may be NULL (an exporter of a C-contiguous
+ * buffer may leave them out, as ctypes does), the items then follow each other. */
+static Py_ssize_t
+buffer_items(const Py_buffer *v)
+{
+    if (v->ndim != 1 || v->itemsize <= 0)
+        return -1;
+    return v->shape != NULL ? v->shape[0] : v->len / v->itemsize;
+}
+
+/* The 1-D buffer v (buffer_items items, any strides, no suboffsets) by its format: a native
+ * single-item code of READ_CODES whose size is the C type's, else DECLINED (as numpy would
+ * see it: the same items as read_strided takes from an array). */
 static int
 read_buffer(const Py_buffer *v, double *out)
 {
+    if (v->suboffsets != NULL && v->suboffsets[0] >= 0)
+        return DECLINED;        /* pointers to the items, not the items */
     const char *fmt = v->format ? v->format : "B";
 #if PY_LITTLE_ENDIAN
     if (*fmt == '@' || *fmt == '=' || *fmt == '<')
@@ -320,7 +357,8 @@ read_buffer(const Py_buffer *v, double *out)
     const char *code = fmt[0] != '\0' && fmt[1] == '\0' ? strchr(READ_CODES, fmt[0]) : NULL;
     if (code == NULL || READ_SIZES[code - READ_CODES] != v->itemsize)
         return DECLINED;
-    return read_strided(v->buf, v->shape[0], v->strides[0], READ_TYPES[code - READ_CODES], out);
+    const Py_ssize_t step = v->strides != NULL ? v->strides[0] : v->itemsize;
+    return read_strided(v->buf, buffer_items(v), step, READ_TYPES[code - READ_CODES], out);
 }
 
 /* ``obj`` as n doubles: AS_DOUBLE or AS_FLOAT (read from float32); DECLINED when it is not
@@ -367,7 +405,7 @@ as_doubles(PyObject *obj, Py_ssize_t n, double *out)
         PyErr_Clear();
         return DECLINED;
     }
-    int read = v.ndim == 1 && v.shape[0] == n ? read_buffer(&v, out) : DECLINED;
+    int read = buffer_items(&v) == n ? read_buffer(&v, out) : DECLINED;
     PyBuffer_Release(&v);
     return read;
 }
@@ -704,6 +742,13 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     long threads = PyLong_AsLong(args[want]);
     if (h == NULL || PyErr_Occurred())
         return NULL;
+    /* N states of `rows` bodies each: the chunks and threads count body-states (run_batch) */
+    Py_ssize_t body_states;
+    if (checked_mul(N, h->rows * 6, MAX_DOUBLES, &body_states) < 0) {
+        PyErr_Format(PyExc_ValueError, "%s: N must be 0 to %zd states, got %zd", a->batch,
+                     MAX_DOUBLES / (h->rows * 6), N);
+        return NULL;
+    }
     result_shape(h, a->kernel, dims, &count);
     Slice job = {.kernel = a->kernel, .K = h->K, .rows = h->rows, .n = h->n,
                  .size = dims[0] * dims[1]};
@@ -719,13 +764,20 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     for (int i = 0; i < a->vectors + count; i++, held++) {
         const int result = i >= a->vectors;
         const char *name = result ? a->outputs[i - a->vectors] : VECTOR_NAMES[i];
-        const Py_ssize_t numbers = N * (result ? job.size : h->n);
+        Py_ssize_t numbers;     /* -1: more than any buffer holds */
+        if (checked_mul(N, result ? job.size : h->n, PY_SSIZE_T_MAX / 8, &numbers) < 0)
+            numbers = -1;
         if (get_table(result ? args[next + i - a->vectors] : args[2 + i], &v[i], result,
                       name) < 0)
             goto fail;
-        if (v[i].len != (Py_ssize_t)sizeof(double) * numbers) {
+        if (v[i].len % (Py_ssize_t)sizeof(double) != 0
+                || v[i].len / (Py_ssize_t)sizeof(double) != numbers) {
             PyBuffer_Release(&v[i]);
-            PyErr_Format(PyExc_ValueError, "%s must hold %zd numbers", name, numbers);
+            if (numbers >= 0)
+                PyErr_Format(PyExc_ValueError, "%s must hold %zd numbers", name, numbers);
+            else
+                PyErr_Format(PyExc_ValueError, "%s must hold %zd x %zd numbers", name, N,
+                             result ? job.size : (Py_ssize_t)h->n);
             goto fail;
         }
     }
@@ -733,7 +785,8 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         if (get_table(fext, &v[held], 0, "fext") < 0)
             goto fail;
         Py_ssize_t m = v[held++].len / (Py_ssize_t)sizeof(double);
-        if (m != h->rows * 6 && m != N * h->rows * 6) {
+        if (v[held - 1].len % (Py_ssize_t)sizeof(double) != 0
+                || (m != h->rows * 6 && m != body_states)) {
             PyErr_SetString(PyExc_ValueError, "fext must hold rows x 6 or N x rows x 6 numbers");
             goto fail;
         }
@@ -745,7 +798,8 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         *vectors[i] = v[i].buf;
     job.out1 = v[a->vectors].buf;
     job.out2 = count == 2 ? v[a->vectors + 1].buf : NULL;
-    int rc = run_batch(&job, N, threads);
+    /* no state, or states without results (a model without joints): nothing to compute */
+    int rc = N == 0 || job.size == 0 ? 0 : run_batch(&job, N, threads);
     for (int i = 0; i < held; i++)
         PyBuffer_Release(&v[i]);
     if (rc < 0)
@@ -782,7 +836,8 @@ c_batch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
  * validates, derives the table, runs batches and the other backends). This saves the Python
  * frame of `function` (~0.2 µs, a fifth of a call) on the path users take most. The door
  * keeps the last model it answered (a weak reference) and its Kernels, so that a run of
- * calls on one model skips the dict. */
+ * calls on one model skips the dict; when that model is collected, the weak reference's
+ * callback lets go of its Kernels. */
 
 static PyObject *str_gravity, *str_f_ext, *str_backend, *str_auto, *str_compiled;
 
@@ -795,12 +850,13 @@ typedef struct {
     PyObject *gravity;    /* the default gravity */
     PyObject *dict;       /* __doc__, __name__, __wrapped__, … */
     PyObject *last_model; /* a weak reference to the model of the last call, or NULL */
-    PyObject *last_kern;  /* its Kernels */
+    PyObject *last_kern;  /* its Kernels (NULL once the model was collected) */
 } DoorObject;
 
-/* Whether the model of the last call is `model` (alive: its Kernels are still in the dict,
+/* Whether the model of the last call is `model`, alive (its Kernels are still in the dict,
  * removed only when the model is collected). Saves the dict look-up (~40 ns) of each call
- * on one model. */
+ * on one model. A dead reference is never the model: before Python 3.13 it reads as None,
+ * which a caller may well pass. */
 static int
 door_is_last(DoorObject *self, PyObject *model)
 {
@@ -815,9 +871,24 @@ door_is_last(DoorObject *self, PyObject *model)
     Py_DECREF(obj);
     return obj == model;
 #else
-    return PyWeakref_GET_OBJECT(self->last_model) == model;
+    PyObject *obj = PyWeakref_GET_OBJECT(self->last_model);
+    return obj != Py_None && obj == model;
 #endif
 }
+
+/* The callback of the weak reference to the last model (`door` the door): the model was
+ * collected, let go of its Kernels. The dead reference itself stays until the next model
+ * (door_is_last never takes it for one): it is the argument of this very call. */
+static PyObject *
+door_forget(PyObject *door, PyObject *ref)
+{
+    DoorObject *self = (DoorObject *)door;
+    if (self->last_model == ref)
+        Py_CLEAR(self->last_kern);
+    Py_RETURN_NONE;
+}
+
+static PyMethodDef door_forget_def = {"forget", door_forget, METH_O, NULL};
 
 static int
 is_name(PyObject *name, PyObject *interned)
@@ -836,23 +907,30 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     int ok = nargs >= 1 + nv;
     /* optional arguments by position: gravity, f_ext, backend (those the function has) */
     Py_ssize_t k = 1 + nv;
-    if (ok && a->gravity && k < nargs)
+    int given_gravity = ok && a->gravity && k < nargs;
+    if (given_gravity)
         gravity = args[k++];
     if (ok && a->fext && k < nargs)
         f_ext = args[k++];
     if (ok && k < nargs)
         backend = args[k++];
     ok = ok && k == nargs;
+    /* then by keyword; one given twice (by position too) is the function's TypeError */
     for (Py_ssize_t i = 0; ok && i < nkw; i++) {
         PyObject *name = PyTuple_GET_ITEM(kwnames, i), *value = args[nargs + i];
-        if (a->gravity && is_name(name, str_gravity))
+        if (a->gravity && is_name(name, str_gravity)) {
+            ok = !given_gravity;
+            given_gravity = 1;
             gravity = value;
-        else if (a->fext && is_name(name, str_f_ext))
+        } else if (a->fext && is_name(name, str_f_ext)) {
+            ok = f_ext == NULL;
             f_ext = value;
-        else if (is_name(name, str_backend))
+        } else if (is_name(name, str_backend)) {
+            ok = backend == NULL;
             backend = value;
-        else
+        } else {
             ok = 0;
+        }
     }
     if (ok && f_ext != NULL && f_ext != Py_None)
         ok = PyDict_CheckExact(f_ext) && PyDict_GET_SIZE(f_ext) == 0;
@@ -872,7 +950,9 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
             return NULL;
         ok = kern != NULL && PyObject_TypeCheck(kern, &KernelsType);
         if (ok) {
-            PyObject *ref = PyWeakref_NewRef(args[0], NULL);
+            PyObject *forget = PyCFunction_New(&door_forget_def, (PyObject *)self);
+            PyObject *ref = forget ? PyWeakref_NewRef(args[0], forget) : NULL;
+            Py_XDECREF(forget);     /* the reference holds it */
             if (ref == NULL) {
                 PyErr_Clear();      /* no weak references to it: no cache */
             } else {
@@ -963,6 +1043,21 @@ door_repr(DoorObject *self)
     return PyUnicode_FromFormat("<compiled door to %R>", self->function);
 }
 
+/* Pickled (and copied) by name, as functions are: the name of `function` in its module
+ * (`__module__`, which the door carries), where the door stands in for it; loading finds
+ * the door, or the plain function in a package built without the extension. */
+static PyObject *
+door_reduce(DoorObject *self, PyObject *Py_UNUSED(ignored))
+{
+    return PyObject_GetAttrString(self->function, "__qualname__");
+}
+
+static PyMethodDef door_methods[] = {
+    {"__reduce__", (PyCFunction)door_reduce, METH_NOARGS,
+     PyDoc_STR("The function's name: pickled and copied as the function is.")},
+    {NULL},
+};
+
 static PyGetSetDef door_getset[] = {
     {"__dict__", PyObject_GenericGetDict, PyObject_GenericSetDict, NULL, NULL},
     {NULL},
@@ -983,6 +1078,7 @@ static PyTypeObject DoorType = {
     .tp_vectorcall_offset = offsetof(DoorObject, vectorcall),
     .tp_dictoffset = offsetof(DoorObject, dict),
     .tp_getset = door_getset,
+    .tp_methods = door_methods,
 };
 
 /* ------------------------------------------------------------------------------------------

@@ -24,6 +24,7 @@ import numpy as np
 from . import compiled
 from ..algorithms.rnea import PR, RA
 from ..joints import PRISMATIC, REVOLUTE
+from ..algorithms.arguments import check_model
 from ..model import Model
 from ..spatial import plux_Er
 
@@ -91,9 +92,14 @@ KERNELS: dict = {}
 
 
 def of(model: Model) -> Layout:
-    """Return the :class:`Layout` of ``model``, derived on first use."""
+    """Return the :class:`Layout` of ``model``, derived on first use.
+
+    ``TypeError`` when ``model`` is no :class:`~spatial_dynamics.Model` (``None``, a name, a
+    table): the public functions' first argument.
+    """
     layout = LAYOUTS.get(id(model))
     if layout is None:
+        check_model(model)
         layout = LAYOUTS[id(model)] = derive(model)
         weakref.finalize(model, LAYOUTS.pop, id(model), None)
         if layout.kernels is not None:

@@ -44,9 +44,13 @@ def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
 
 
 def _columns(x: np.ndarray) -> list:
-    """Split a batch (..., n) into ``n`` contiguous (N,) columns, the kernels' joint scalars."""
-    n = x.shape[-1]
-    return list(np.ascontiguousarray(x.reshape(-1, n).T))
+    """Split a batch (..., n) into ``n`` contiguous (N,) columns, the kernels' joint scalars.
+
+    ``N`` is the product of the batch dimensions, so that n = 0 (a model without joints) has
+    N states too (``reshape(-1, 0)`` could not tell).
+    """
+    N = math.prod(x.shape[:-1])
+    return list(np.ascontiguousarray(x.reshape(N, x.shape[-1]).T))
 
 
 def _stacked(values: Sequence, N: int, dtype, shape: tuple) -> np.ndarray:
