@@ -474,9 +474,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 '--trajectory or --trajectory-topic')
     check_gravity(p, args.gravity)
     try:
-        output_dir(args.out)      # before any computation: a bad --out is said at once
-        if args.annotate:
+        if args.annotate:         # writes the annotated plan only: no --out directory
             return annotate.run(args, load_model)
+        output_dir(args.out)      # before any computation: a bad --out is said at once
         if args.trajectory or args.trajectory_topic:
             return run_trajectory(args)
         with small_pages():
