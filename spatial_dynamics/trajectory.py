@@ -84,7 +84,11 @@ def _number(value, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating,
                                                          np.integer)):
         raise TrajectoryError('malformed', f'{what}: need a number, got {value!r}')
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:     # an integer beyond float64 (YAML reads 1e400 digits as one)
+        raise TrajectoryError('out_of_bounds', f'{what}: {str(value)[:20]}... is beyond any '
+                              'float') from None
 
 
 def _time_from_start(p, k: int, what: str) -> float:
@@ -266,7 +270,7 @@ _DERIVATIVES = ((0, 'position', 'positions'), (1, 'velocity', 'velocities'),
 
 
 def _hull(b: np.ndarray) -> np.ndarray:
-    """max |Bernstein coefficient| on [0, 1] of power coefficients ``b`` (D+1, k): (k,).
+    """Return max |Bernstein coefficient| on [0, 1] of power coefficients ``b`` (D+1, k).
 
     A polynomial on [0, 1] lies within the hull of its Bernstein coefficients (and equals the
     first and the last at u = 0 and 1): this bounds max |p| from above.
@@ -288,7 +292,7 @@ def _polyval(b: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 def _exact_max(b: np.ndarray) -> np.ndarray:
-    """max |p(u)| over u in [0, 1] of each row of power coefficients ``b`` (k, D+1).
+    """Return max |p(u)| over u in [0, 1] of each row of power coefficients ``b`` (k, D+1).
 
     At u = 0, u = 1 or where p' = 0: the roots of p' (eigenvalues of its companion matrix,
     all rows of one degree at once) are candidates with their real parts clipped to [0, 1];

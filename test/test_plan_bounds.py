@@ -129,3 +129,16 @@ def test_a_plan_of_the_documented_maximum_is_no_alias_bomb(tmp_path):
     bomb.write_text('\n'.join(lines) + '\n')
     with pytest.raises(ValueError, match='alias bomb'):
         splines.from_yaml(str(bomb))
+
+
+def test_an_integer_beyond_float_is_refused_with_its_field():
+    """YAML reads 10**400 written in digits as an int: refused naming the field, no traceback."""
+    for field in ('positions', 'time_from_start'):
+        p = point(10**9, [0.0])
+        if field == 'positions':
+            p['positions'] = [10**400]
+        else:
+            p['time_from_start'] = {'sec': 10**400, 'nanosec': 0}
+        with pytest.raises(TrajectoryError, match=f'point 0 {field}') as err:
+            trajectory(['j1'], [p])
+        assert err.value.reason == 'out_of_bounds'
