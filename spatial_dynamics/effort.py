@@ -133,10 +133,10 @@ def annotate(model: Model, traj: Trajectory, tol: float, output: str = 'full',
     the end is a torque jump like an interior point where q̇ or q̈ jumps.
 
     Bounded: the plan may grow to :func:`max_points` points (``max_values`` values in all,
-    effort included; each point costs ``checks + 2`` model evaluations at most twice), the
-    intervals are checked :data:`CHUNK` at a time (``max_values`` None: the module's
-    :data:`MAX_ANNOTATED_VALUES`, the node's and ``replay --annotate``'s), and ``cancelled()`` (when given) is asked
-    between two chunks. :class:`AnnotationError` ``too_many_points`` (the tolerance asks for
+    effort included; each point costs ``checks + 2`` model evaluations at most twice; None:
+    :data:`MAX_ANNOTATED_VALUES`, the node's and ``replay --annotate``'s), the intervals are
+    checked :data:`CHUNK` at a time, and ``cancelled()`` (when given) is asked between two
+    chunks. :class:`AnnotationError` ``too_many_points`` (the tolerance asks for
     more) or ``superseded`` (cancelled).
     """
     if not tol > 0.0:

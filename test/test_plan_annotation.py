@@ -115,8 +115,8 @@ def test_replay_annotate_checks_the_effort_limits(tmp_path, capsys):
     assert np.any(peak > model.effort_limit)
 
 
-def test_replay_annotate_is_bounded_and_says_when_the_tolerance_is_not_met(tmp_path, capsys,
-                                                                          monkeypatch):
+def test_replay_annotate_is_bounded_and_says_when_the_tolerance_is_not_met(
+        tmp_path, capsys, monkeypatch):
     urdf, model = ur5()
     src = write_plan(tmp_path / 'plan.yaml', model.joint_names,
                      [point(0.0, Q0, np.zeros(6)), point(4.0, Q1, np.zeros(6))])
