@@ -149,14 +149,13 @@ class Answering:
             if not self._annotating(config):
                 return out
             if item.error is not None:   # the first point may do; the plan is not annotated
-                self._reject('annotated_trajectory', item.error[0],
-                             f'not annotated: {item.error[1]}')
+                self._reject_annotation(item.error[0], item.error[1])
                 return out
             stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
             try:
                 check_start(stamp or clock_ns, clock_ns)
             except TrajectoryError as err:
-                self._reject('annotated_trajectory', err.reason, f'not annotated: {err}')
+                self._reject_annotation(err.reason, str(err))
                 return out
             if item.prepared is not None:
                 out.annotate = Job(msg.header, item.prepared, config)
@@ -487,6 +486,11 @@ class Answering:
             return
         expiry = time.monotonic_ns() + int(config.params.external_wrench_timeout * 1e9)
         self.wrenches[link] = (wrench, expiry)
+
+    def _reject_annotation(self, reason: str, text: str) -> None:
+        self.totals.rejected[reason] += 1   # logged here: its own throttle
+        self.log.warn(f'annotated_trajectory: message rejected, not annotated ({reason}): '
+                      f'{text}', throttle_duration_sec=1.0)
 
     def _reject_wrench(self, reason: str, text: str) -> None:
         self.totals.wrenches_rejected[reason] += 1
