@@ -26,11 +26,12 @@ gravity-compensated drives.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Sequence, Tuple
+from typing import Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .backends import GRAVITY, gravity_torque, rnea
+from .bounds import MAX_TRAJECTORY_POINTS
 from .model import Model
 from .trajectory import coefficients, evaluate, Trajectory
 
@@ -42,6 +43,12 @@ MEASURED_EFFORT = ('full', 'gravity_compensated')
 CHECKS = 15
 #: Shortest interval :func:`annotate` makes, s (a 1 kHz controller's period).
 MIN_STEP = 1e-3
+#: Values (points x joints x (fields + effort)) an annotated plan may hold: 32 MB of float64,
+#: ~100 MB of YAML (below what ``--trajectory`` reads back); e.g. 222,222 points of a cubic
+#: plan of 6 joints.
+MAX_ANNOTATED_VALUES = 4_000_000
+#: Intervals :func:`annotate` checks at once (memory: CHUNK x (CHECKS + 2) x n floats).
+CHUNK = 4096
 _NS = 1_000_000_000
 
 
@@ -97,14 +104,40 @@ class Annotated:
     jumps: List[Tuple[float, float]]
 
 
+class AnnotationError(ValueError):
+    """A plan :func:`annotate` does not annotate; ``reason`` is a diagnostics counter key."""
+
+    def __init__(self, reason: str, message: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+def max_points(n: int, fields: int, max_values: Optional[int] = None) -> int:
+    """Points an annotated plan of ``n`` joints and ``fields`` arrays a point may hold."""
+    max_values = MAX_ANNOTATED_VALUES if max_values is None else max_values
+    return min(MAX_TRAJECTORY_POINTS, max_values // max(1, n * (fields + 1)))
+
+
 def annotate(model: Model, traj: Trajectory, tol: float, output: str = 'full',
              gravity: Sequence[float] = GRAVITY, min_step: float = MIN_STEP,
-             checks: int = CHECKS) -> Annotated:
+             checks: int = CHECKS, max_values: Optional[int] = None,
+             cancelled: Optional[Callable[[], bool]] = None) -> Annotated:
     """Resample ``traj`` until JTC's linear interpolation of effort is within ``tol``.
 
     ``traj`` names every joint of ``model`` (any order; extra joints refused). Intervals are
     bisected while the interpolated effort misses the model torque by more than ``tol``
     (N m or N) at one of ``checks`` evenly spaced interior points, down to ``min_step`` s.
+
+    The last point carries the torque of the state held after it (q̇ = q̈ = 0: what JTC goes
+    on applying once the plan ended); where that differs from the end of the last segment
+    the end is a torque jump like an interior point where q̇ or q̈ jumps.
+
+    Bounded: the plan may grow to :func:`max_points` points (``max_values`` values in all,
+    effort included; each point costs ``checks + 2`` model evaluations at most twice; None:
+    :data:`MAX_ANNOTATED_VALUES`, the node's and ``replay --annotate``'s), the intervals are
+    checked :data:`CHUNK` at a time, and ``cancelled()`` (when given) is asked between two
+    chunks. :class:`AnnotationError` ``too_many_points`` (the tolerance asks for
+    more) or ``superseded`` (cancelled).
     """
     if not tol > 0.0:
         raise ValueError(f'tolerance must be > 0 N m, got {tol}')
@@ -112,10 +145,25 @@ def annotate(model: Model, traj: Trajectory, tol: float, output: str = 'full',
         raise ValueError(f'the trajectory joints {list(traj.joint_names)} are not the model '
                          f'joints {list(model.joint_names)}')
     traj = traj.reordered(model.joint_names)
+    max_values = MAX_ANNOTATED_VALUES if max_values is None else max_values
+    fields = {'linear': 1, 'cubic': 2, 'quintic': 3}[traj.kind]
+    limit = max_points(len(model.joint_names), fields, max_values)
+
+    def too_many(count: int) -> AnnotationError:
+        return AnnotationError('too_many_points', f'{count:,} points with effort for '
+                               f'{len(model.joint_names)} joints, more than {limit:,} '
+                               f'({max_values:,} values): tolerance {tol:g} N m is too small '
+                               'for this plan')
+
+    if len(traj.time) > limit:
+        raise too_many(len(traj.time))
     c = coefficients(traj) if len(traj.time) > 1 else None
+    end = traj.time[-1]
 
     def effort_at(t, side='right'):
         q, qd, qdd = evaluate(traj, t, c, side)
+        held = (np.asarray(t) >= end)[..., None]      # the end and after: the held state
+        qd, qdd = np.where(held, 0.0, qd), np.where(held, 0.0, qdd)
         return model_effort(model, q, qd, qdd, output, gravity)
 
     times = list(traj.time)
@@ -124,24 +172,31 @@ def annotate(model: Model, traj: Trajectory, tol: float, output: str = 'full',
     max_error = 0.0
     short = []                                      # intervals at min_step still missing
     while todo:
-        a = np.array([i[0] for i in todo])
-        b = np.array([i[1] for i in todo])
-        ends = effort_at(np.stack([a, b], -1))      # (k, 2, n)
-        inner = a[:, None] + (b - a)[:, None] * s    # (k, checks)
-        line = ends[:, :1] + s[None, :, None] * (ends[:, 1:] - ends[:, :1])
-        error = np.abs(effort_at(inner) - line).max(axis=(1, 2))
         split = []
-        for (ai, bi), e in zip(todo, error):
-            if e <= tol:
-                max_error = max(max_error, float(e))
-            elif bi - ai > 2 * min_step:
-                m = 0.5 * (ai + bi)
-                times.append(m)
-                split += [(ai, m), (m, bi)]
-            else:
-                short.append((ai, bi, float(e)))
+        for first in range(0, len(todo), CHUNK):
+            if cancelled is not None and cancelled():
+                raise AnnotationError('superseded', 'a newer plan came before this one was '
+                                      'annotated')
+            chunk = todo[first:first + CHUNK]
+            a = np.array([i[0] for i in chunk])
+            b = np.array([i[1] for i in chunk])
+            ends = effort_at(np.stack([a, b], -1))      # (k, 2, n)
+            inner = a[:, None] + (b - a)[:, None] * s    # (k, checks)
+            line = ends[:, :1] + s[None, :, None] * (ends[:, 1:] - ends[:, :1])
+            error = np.abs(effort_at(inner) - line).max(axis=(1, 2))
+            for (ai, bi), e in zip(chunk, error):
+                if e <= tol:
+                    max_error = max(max_error, float(e))
+                elif bi - ai > 2 * min_step:
+                    m = 0.5 * (ai + bi)
+                    times.append(m)
+                    split += [(ai, m), (m, bi)]
+                else:
+                    short.append((ai, bi, float(e)))
+            if len(times) > limit:
+                raise too_many(len(times))
         todo = split
-    knots = set(traj.time[1:-1].tolist())
+    knots = set(traj.time[1:].tolist())
     jumps = sorted((ai, bi) for ai, bi, e in short if bi in knots)
     for ai, bi, e in short:
         if bi not in knots:                     # not at a jump: counts as a miss
@@ -151,8 +206,8 @@ def annotate(model: Model, traj: Trajectory, tol: float, output: str = 'full',
     q, qd, qdd = evaluate(traj, t, c)
     out = Trajectory(traj.joint_names, t, q, None if traj.velocities is None else qd,
                      None if traj.accelerations is None else qdd)
-    return Annotated(out, model_effort(model, q, qd, qdd, output, gravity), float(tol),
-                     max_error, [(float(a), float(b)) for a, b in jumps])
+    return Annotated(out, effort_at(t), float(tol), max_error,
+                     [(float(a), float(b)) for a, b in jumps])
 
 
 def message_dict(traj: Trajectory, effort: np.ndarray) -> dict:

@@ -23,6 +23,7 @@ message's fields and its clock in nanoseconds.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from math import comb, factorial
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -83,7 +84,11 @@ def _number(value, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating,
                                                          np.integer)):
         raise TrajectoryError('malformed', f'{what}: need a number, got {value!r}')
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:     # an integer beyond float64 (YAML reads 1e400 digits as one)
+        raise TrajectoryError('out_of_bounds', f'{what}: {str(value)[:20]}... is beyond any '
+                              'float') from None
 
 
 def _time_from_start(p, k: int, what: str) -> float:
@@ -192,7 +197,9 @@ def trajectory(joint_names: Sequence[str], points: Sequence, what: str = 'trajec
     vel, acc = stacked('velocities'), stacked('accelerations')
     if acc is not None and vel is None:
         acc = None      # the controller needs velocities to use accelerations
-    return Trajectory(names, t, np.array(fields['positions']), vel, acc)
+    traj = Trajectory(names, t, np.array(fields['positions']), vel, acc)
+    check_splines(traj, what)
+    return traj
 
 
 # --------------------------------------------------------------------------------------------
@@ -255,6 +262,117 @@ def evaluate(traj: Trajectory, t, c: Optional[np.ndarray] = None, side: str = 'r
     return q, qd, qdd
 
 
+#: Segments whose splines :func:`check_splines` bounds at once (memory: 6 x n floats each).
+_CHUNK = 1 << 15
+#: What each derivative of the spline is, with its bound (:data:`JOINT_BOUNDS`).
+_DERIVATIVES = ((0, 'position', 'positions'), (1, 'velocity', 'velocities'),
+                (2, 'acceleration', 'accelerations'))
+
+
+def _hull(b: np.ndarray) -> np.ndarray:
+    """Return max |Bernstein coefficient| on [0, 1] of power coefficients ``b`` (D+1, k).
+
+    A polynomial on [0, 1] lies within the hull of its Bernstein coefficients (and equals the
+    first and the last at u = 0 and 1): this bounds max |p| from above.
+    """
+    D = len(b) - 1
+    hull = np.zeros(b.shape[1:])
+    for k in range(D + 1):
+        bk = sum(comb(k, j) / comb(D, j) * b[j] for j in range(k + 1))
+        hull = np.maximum(hull, np.abs(bk))
+    return hull
+
+
+def _polyval(b: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Evaluate power coefficients ``b`` (k, D+1) at ``u`` (k, r): (k, r) (Horner)."""
+    p = np.zeros(u.shape, dtype=float) + b[:, -1:]
+    for j in range(b.shape[1] - 2, -1, -1):
+        p = p * u + b[:, j:j + 1]
+    return p
+
+
+def _exact_max(b: np.ndarray) -> np.ndarray:
+    """Return max |p(u)| over u in [0, 1] of each row of power coefficients ``b`` (k, D+1).
+
+    At u = 0, u = 1 or where p' = 0: the roots of p' (eigenvalues of its companion matrix,
+    all rows of one degree at once) are candidates with their real parts clipped to [0, 1];
+    a candidate that is no critical point is still a point of [0, 1], so the largest |p| over
+    the candidates is the maximum.
+    """
+    D = b.shape[1] - 1
+    ends = np.abs(np.stack([b[:, 0], b.sum(axis=1)], axis=1)).max(axis=1)
+    if D < 2:
+        return ends
+    d = b[:, 1:] * np.arange(1, D + 1)                 # p' (k, D), degree D - 1
+    scale = np.abs(d).max(axis=1)
+    best = ends.copy()
+    finite = np.isfinite(d).all(axis=1)
+    best[~finite] = np.inf
+    # the degree of p' in each row: its highest coefficient that is not rounding noise
+    degree = np.zeros(len(b), dtype=int)
+    for j in range(1, D):
+        degree[np.abs(d[:, j]) > 1e-13 * scale] = j
+    for g in range(1, D):
+        rows = np.flatnonzero((degree == g) & finite)
+        if not len(rows):
+            continue
+        lead = d[rows, g]
+        companion = np.zeros((len(rows), g, g))
+        companion[:, 0, :] = -d[rows, g - 1::-1][:, :g] / lead[:, None]
+        companion[:, np.arange(1, g), np.arange(g - 1)] = 1.0
+        u = np.clip(np.linalg.eigvals(companion).real, 0.0, 1.0)
+        best[rows] = np.maximum(best[rows], np.abs(_polyval(b[rows], u)).max(axis=1))
+    return best
+
+
+def check_splines(traj: Trajectory, what: str = 'trajectory') -> None:
+    """Refuse a trajectory whose splines ask, between its points, what no state may be.
+
+    For every segment and joint, the largest |q|, |q̇| and |q̈| of the spline over the segment
+    (:func:`coefficients`), found exactly (the polynomial's value at the ends and where its
+    derivative is zero: linear, cubic and quintic alike), is held to the bounds of a desired
+    state (:data:`~spatial_dynamics.bounds.JOINT_BOUNDS`): two points 1 µs apart 1 rad away
+    from each other ask 1e6 rad/s. The hull of the Bernstein coefficients bounds each
+    polynomial first; the roots are computed only where that hull reaches beyond the bound.
+    :class:`TrajectoryError` ``out_of_bounds`` names the segment, the joint and the value.
+    """
+    if len(traj.time) < 2:
+        return
+    for first in range(0, len(traj.time) - 1, _CHUNK):
+        last = min(first + _CHUNK, len(traj.time) - 1) + 1
+        part = Trajectory(traj.joint_names, traj.time[first:last], traj.positions[first:last],
+                          None if traj.velocities is None else traj.velocities[first:last],
+                          None if traj.accelerations is None
+                          else traj.accelerations[first:last])
+        _check_chunk(part, first, what)
+
+
+def _check_chunk(traj: Trajectory, first: int, what: str) -> None:
+    n = traj.positions.shape[1]
+    T = np.diff(traj.time)[None, :, None]
+    c = np.moveaxis(coefficients(traj), 1, 0)                # (6, k, n) in s
+    with np.errstate(over='ignore', invalid='ignore'):
+        for order, name, field in _DERIVATIVES:
+            # the order-th derivative in u = s / T: coefficient p is p!/(p-order)! c_p T^(p-order)
+            b = np.stack([comb(p, order) * factorial(order) * c[p] * T[0] ** (p - order)
+                          for p in range(order, 6)]).reshape(6 - order, -1)   # (D+1, k n)
+            bound, unit = JOINT_BOUNDS[field]
+            suspect = np.flatnonzero(~(_hull(b) <= bound))
+            if not len(suspect):
+                continue
+            peak = _exact_max(b[:, suspect].T)
+            bad = np.flatnonzero(~(peak <= bound))
+            if not len(bad):
+                continue
+            k, j = divmod(int(suspect[bad[0]]), n)
+            raise TrajectoryError(
+                'non_finite' if not np.isfinite(peak[bad[0]]) else 'out_of_bounds',
+                f'{what}: between point {first + k} ({traj.time[k]:.9g} s) and point '
+                f'{first + k + 1} ({traj.time[k + 1]:.9g} s) the {traj.kind} spline of '
+                f'{traj.joint_names[j]!r} reaches a {name} of {peak[bad[0]]:.3g} {unit}, '
+                f'beyond ±{bound:g} (points too close in time for their motion?)')
+
+
 Samples = Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
@@ -283,6 +401,7 @@ class _Plan:
     start_ns: int
     traj: Trajectory
     c: Optional[np.ndarray]
+    lead: Optional[Tuple[Trajectory, np.ndarray]] = None   # to a first point after 0
 
 
 class Follower:
@@ -292,10 +411,12 @@ class Follower:
       :class:`TrajectoryError`; what was followed stays), maps it by joint name onto the
       model's order and schedules it at its start: ``header.stamp``, or the receipt time when
       the stamp is zero. From that start on it replaces whatever was followed (trajectories
-      waiting for a later start are dropped); before it, the old one goes on.
+      waiting for a later start are dropped); before it, the old one goes on. It is
+      :func:`prepare` (the work a plan's size decides: done anywhere, on any thread) followed
+      by :meth:`schedule` (cheap: a fixed number of operations whatever the plan's size).
     * A first point with ``time_from_start > 0`` is reached from where the robot is meant to
       be at the start (the old trajectory sampled there, else the measured position), as JTC
-      interpolates from its current state.
+      interpolates from its current state; that segment is bounded as the plan's own are.
     * An empty trajectory stops following now: the measured position is held.
     * :meth:`sample` returns ``(q_d, q̇_d, q̈_d)`` at a stamp; after the last point the last
       position is held (q̇ = q̈ = 0); before anything started, ``None``.
@@ -310,6 +431,13 @@ class Follower:
         """Whether a trajectory (or a hold) is scheduled."""
         return bool(self._plans)
 
+    def ends_ns(self) -> Optional[int]:
+        """When the last scheduled trajectory ends (ns, the start's clock); None: nothing."""
+        if not self._plans:
+            return None
+        p = self._plans[-1]
+        return p.start_ns + int(round(p.traj.time[-1] * _NS))
+
     def clear(self) -> None:
         """Follow nothing (the model changed, the node deactivated)."""
         self._plans = []
@@ -322,50 +450,89 @@ class Follower:
         same clock; ``q_measured``: the last measured position in model order (or ``None``),
         held after an empty trajectory and the start of one whose first point is later.
         """
+        return self.schedule(prepare(joint_names, points, model_joint_names), start_ns,
+                             now_ns, model_joint_names, q_measured)
+
+    def schedule(self, prepared: Optional['Prepared'], start_ns: int, now_ns: int,
+                 model_joint_names: Sequence[str], q_measured=None) -> Optional[Trajectory]:
+        """Schedule what :func:`prepare` gave (``None``: stop); arguments as :meth:`accept`."""
         model_joint_names = tuple(model_joint_names)
         start = int(now_ns) if int(start_ns) == 0 else int(start_ns)
-        if abs(start - int(now_ns)) > MAX_TRAJECTORY_TIME * _NS:
-            raise TrajectoryError('start_out_of_bounds', f'header.stamp is '
-                                  f'{(start - int(now_ns)) / _NS:g} s from now, beyond '
-                                  f'±{MAX_TRAJECTORY_TIME:g} s (another clock?)')
+        check_start(start, now_ns)
         held = None if q_measured is None else np.array(q_measured, dtype=float)
         if held is not None and held.shape != (len(model_joint_names),):
             raise ValueError(f'q_measured must have {len(model_joint_names)} values, got '
                              f'{held.shape}')
-        if not len(points):
+        if prepared is None:
             if held is None:
                 state = self.sample(now_ns)
                 held = None if state is None else state[0]
             self._plans = [] if held is None else [
                 _Plan(int(now_ns), _hold(model_joint_names, held), None)]
             return None
-        traj = trajectory(joint_names, points)
-        unknown = [j for j in traj.joint_names if j not in model_joint_names]
-        if unknown:
-            raise TrajectoryError('unknown_joint', f'trajectory: joint(s) {unknown} are not '
-                                  'joints of the model')
-        missing = [j for j in model_joint_names if j not in traj.joint_names]
-        if missing:
-            raise TrajectoryError('missing_joint', f'trajectory: joint(s) {missing} of the '
-                                  'model are missing')
-        traj = traj.reordered(model_joint_names)
+        traj = prepared.traj
         kept = [p for p in self._plans if p.start_ns < start]
         if len(kept) >= MAX_QUEUED and all(p.start_ns > now_ns for p in kept[-MAX_QUEUED:]):
             raise TrajectoryError('start_out_of_bounds', f'{MAX_QUEUED} trajectories already '
                                   'wait for a later start')
+        lead = None
         if traj.time[0] > 0.0:
             before = _sample_plans(kept, start)
             if before is None:
                 q0 = held if held is not None else traj.positions[0]
                 before = (q0, np.zeros_like(q0), np.zeros_like(q0))
-            traj = _prepend(traj, *before)
-        self._plans = _prune(kept, now_ns) + [_Plan(start, traj, coefficients(traj)
-                                                    if len(traj.time) > 1 else None)]
+            first = Trajectory(traj.joint_names, traj.time[:1], traj.positions[:1],
+                               None if traj.velocities is None else traj.velocities[:1],
+                               None if traj.accelerations is None
+                               else traj.accelerations[:1])
+            path = _prepend(first, *before)
+            check_splines(path, 'trajectory: from the state at its start to its first point')
+            lead = (path, coefficients(path))
+        self._plans = _prune(kept, now_ns) + [_Plan(start, traj, prepared.c, lead)]
         return traj
 
     def sample(self, t_ns: int) -> Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """Return ``(q_d, q̇_d, q̈_d)`` (n,) each at ``t_ns``, or ``None`` before any start."""
         return _sample_plans(self._plans, int(t_ns))
+
+
+@dataclass
+class Prepared:
+    """A trajectory checked whole and mapped onto the model, with its splines' coefficients."""
+
+    traj: Trajectory
+    c: Optional[np.ndarray]
+
+
+def prepare(joint_names: Sequence[str], points: Sequence, model_joint_names: Sequence[str]
+            ) -> Optional[Prepared]:
+    """Validate a ``JointTrajectory``'s fields for the model (``None``: empty, a stop).
+
+    All the work a plan's size decides (:func:`trajectory`: every point and every spline;
+    the coefficients): a :class:`TrajectoryError` names what is refused.
+    """
+    if not len(points):
+        return None
+    model_joint_names = tuple(model_joint_names)
+    traj = trajectory(joint_names, points)
+    unknown = [j for j in traj.joint_names if j not in model_joint_names]
+    if unknown:
+        raise TrajectoryError('unknown_joint', f'trajectory: joint(s) {unknown} are not '
+                              'joints of the model')
+    missing = [j for j in model_joint_names if j not in traj.joint_names]
+    if missing:
+        raise TrajectoryError('missing_joint', f'trajectory: joint(s) {missing} of the '
+                              'model are missing')
+    traj = traj.reordered(model_joint_names)
+    return Prepared(traj, coefficients(traj) if len(traj.time) > 1 else None)
+
+
+def check_start(start_ns: int, now_ns: int) -> None:
+    """Refuse a start (``header.stamp``, ns) beyond a day from ``now_ns`` (another clock?)."""
+    if abs(int(start_ns) - int(now_ns)) > MAX_TRAJECTORY_TIME * _NS:
+        raise TrajectoryError('start_out_of_bounds', f'header.stamp is '
+                              f'{(int(start_ns) - int(now_ns)) / _NS:g} s from now, beyond '
+                              f'±{MAX_TRAJECTORY_TIME:g} s (another clock?)')
 
 
 def _hold(joint_names: Tuple[str, ...], q: np.ndarray) -> Trajectory:
@@ -384,8 +551,10 @@ def _prepend(traj: Trajectory, q, qd, qdd) -> Trajectory:
 def _sample_plans(plans: List[_Plan], t_ns: int):
     for p in reversed(plans):
         if p.start_ns <= t_ns:
-            q, qd, qdd = evaluate(p.traj, (t_ns - p.start_ns) / _NS, p.c)
-            return q, qd, qdd
+            t = (t_ns - p.start_ns) / _NS
+            if p.lead is not None and t < p.traj.time[0]:
+                return evaluate(p.lead[0], t, p.lead[1])
+            return evaluate(p.traj, t, p.c)
     return None
 
 

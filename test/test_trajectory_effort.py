@@ -94,13 +94,14 @@ def test_cubic_plan_reports_the_jumps_and_is_within_the_tolerance_elsewhere():
     result = effort.annotate(model, traj, tol)
     out = result.trajectory
     assert out.kind == 'cubic' and result.max_error <= tol
-    knots = traj.time[1:-1]
-    assert result.jumps and {b for a, b in result.jumps} <= set(knots.tolist())  # q̈ jumps
+    knots = traj.time[1:]     # q̈ jumps; at the end, from the last segment's to rest (held)
+    assert result.jumps and {b for a, b in result.jumps} <= set(knots.tolist())
+    assert result.jumps[-1][1] == traj.time[-1]
     dense = np.linspace(0.0, 4.0, 40001)
     near = np.zeros(dense.shape, dtype=bool)
     for a, b in result.jumps:
         assert effort.MIN_STEP <= b - a <= 2 * effort.MIN_STEP
-        near |= (dense > a) & (dense < b)
+        near |= (dense > a) & ((dense < b) | (dense == traj.time[-1]))
     model_tau = effort.model_effort(model, *evaluate(traj.reordered(model.joint_names),
                                                      dense))
     miss = np.abs(jtc_effort(out.time, result.effort, dense) - model_tau).max(axis=-1)

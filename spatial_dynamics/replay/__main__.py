@@ -493,12 +493,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             p.error(('BAG' if dest == 'bag' else '--' + dest.replace('_', '-'))
                     + ': an empty value')
     try:
+        if args.annotate:         # writes the annotated plan only: no --out directory
+            return annotate.run(args, load_model)
         check_paths(args)         # before any computation: bad inputs and outputs said at once
         if not args.no_plots and importlib.util.find_spec('matplotlib') is None:
             raise Refused('the plots need matplotlib (pip install matplotlib, or apt install '
                           'python3-matplotlib); or --no-plots')
-        if args.annotate:
-            return annotate.run(args, load_model)
         if args.trajectory or args.trajectory_topic:
             return run_trajectory(args)
         with small_pages():

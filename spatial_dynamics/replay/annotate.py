@@ -5,23 +5,32 @@
 The points are resampled by :func:`spatial_dynamics.effort.annotate` so that
 joint_trajectory_controller's linear interpolation of effort stays within ``--tolerance`` of
 the model torque (``--output`` part), and written in the message's YAML form, readable by
-``--trajectory`` again and publishable with ``ros2 topic pub``.
+``--trajectory`` again and publishable with ``ros2 topic pub``. The efforts are checked
+against the URDF effort limits as ``--trajectory`` checks its torques (``EXCEEDED``, exit 1);
+a tolerance the 1 ms steps cannot meet is said, exit 1. The output path is checked before
+any work (not an input, a writable regular file) and written atomically
+(:mod:`spatial_dynamics.files`); nothing else is written.
 """
 
 from __future__ import annotations
 
+import sys
+
 import yaml
 
-from .. import effort
-from . import splines
+from . import report, splines
+from .. import effort, files
 
 
 def run(args, load_model) -> int:
-    """Annotate ``args.trajectory`` into ``args.annotate``; print what was done; return 0.
+    """Annotate ``args.trajectory`` into ``args.annotate``; print what was done.
 
     ``load_model(args, joints)`` builds the model (the command's own, reduction included).
-    Errors are ``ValueError`` naming the file (exit 1 in the command).
+    Returns 0, or 1 when an effort exceeds its URDF limit or the tolerance is not met (the
+    file is written all the same, to be looked at). Errors are ``ValueError`` naming the file
+    (exit 1 in the command), raised before anything is written.
     """
+    files.check_output(args.annotate, '--annotate output', (args.trajectory, args.urdf))
     traj = splines.from_yaml(args.trajectory)
     model = load_model(args, args.joints or list(traj.joint_names))
     missing = [j for j in model.joint_names if j not in traj.joint_names]
@@ -32,21 +41,36 @@ def run(args, load_model) -> int:
     if extra:
         raise ValueError(f'{args.trajectory}: joint(s) {", ".join(extra)} are not movable '
                          'joints of the model (locked or unknown)')
-    result = effort.annotate(model, traj, args.tolerance, args.output, args.gravity)
-    doc = effort.message_dict(result.trajectory, result.effort)
     try:
-        with open(args.annotate, 'w', encoding='utf-8') as f:
-            yaml.safe_dump(doc, f, default_flow_style=None, sort_keys=False, width=1 << 16)
-    except OSError as err:
-        raise ValueError(f'{args.annotate}: {err.strerror}') from None
+        result = effort.annotate(model, traj, args.tolerance, args.output, args.gravity)
+    except effort.AnnotationError as err:
+        raise ValueError(f'{args.trajectory}: not annotated: {err}') from None
+    doc = effort.message_dict(result.trajectory, result.effort)
+    files.write_atomic(args.annotate, lambda f: f.write(yaml.safe_dump(
+        doc, default_flow_style=None, sort_keys=False, width=1 << 16).encode('utf-8')),
+        '--annotate output')
+    met = result.max_error <= args.tolerance
     print(f'{args.trajectory}: {len(traj.time)} points ({traj.kind}) -> {args.annotate}: '
           f'{len(result.trajectory.time)} points with effort ({args.output}); JTC\'s linear '
           f'interpolation of effort within {result.max_error:.3g} of the model torque '
-          f'(tolerance {args.tolerance:g} N m)')
+          f'(tolerance {args.tolerance:g} N m{"" if met else ", NOT met"})')
     if result.jumps:
         print(f'  the model torque jumps at {len(result.jumps)} point(s) (velocity or '
-              f'acceleration not continuous there: {traj.kind} interpolation), first at '
-              f'{result.jumps[0][1]:.6g} s; in the last {effort.MIN_STEP * 1e3:g} to '
-              f'{2 * effort.MIN_STEP * 1e3:g} ms before each the interpolated effort cannot '
-              'follow it')
-    return 0
+              f'acceleration not continuous there, or not at rest at the end: {traj.kind} '
+              f'interpolation), first at {result.jumps[0][1]:.6g} s; in the last '
+              f'{effort.MIN_STEP * 1e3:g} to {2 * effort.MIN_STEP * 1e3:g} ms before each the '
+              'interpolated effort cannot follow it')
+    rows, exceeded = report.effort_rows(model.joint_names, result.trajectory.time,
+                                        result.effort, model.effort_limit)
+    print(report.table(report.EFFORT_HEADER, rows))
+    status = 0
+    if exceeded:
+        print('error: an effort limit is exceeded (or an effort is not finite) in the annotated '
+              'plan', file=sys.stderr)
+        status = 1
+    if not met:
+        print(f'error: tolerance {args.tolerance:g} N m NOT met: JTC\'s interpolation misses '
+              f'the model torque by {result.max_error:.3g} N m at the shortest steps '
+              f'({effort.MIN_STEP * 1e3:g} ms)', file=sys.stderr)
+        status = 1
+    return status

@@ -9,7 +9,8 @@ message: a parameter change swaps the whole of it) and hands each answer to the 
 ``publish``. It reads the fields of the message types (``sensor_msgs/JointState``,
 ``trajectory_msgs/JointTrajectory``, ``geometry_msgs/WrenchStamped``) and never imports
 rclpy; the node (:mod:`spatial_dynamics.ros.node`) does the ROS part. All of it runs in the
-node's ``inputs`` callback group, one message at a time.
+node's ``inputs`` callback group, one message at a time; what a plan costs in proportion to
+its size (its conversion and checks, its effort for JTC) runs elsewhere (:mod:`.plans`).
 
 Every message is answered or rejected on its own: a rejected message (reason counted in
 diagnostics) produces no output, and nothing is published without fresh input, so a stale
@@ -38,14 +39,15 @@ from typing import NamedTuple, Optional, Tuple
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
-from spatial_dynamics.effort import annotate, with_gravity
+from spatial_dynamics.effort import with_gravity
 from spatial_dynamics.ros.config import Config, Output
 from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
 from spatial_dynamics.ros.diagnostics import Totals, Window
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
 from spatial_dynamics.ros.observer import (
     EstimateWindow, make_observer, measured_effort, observer_key, sample_time)
-from spatial_dynamics.trajectory import Follower, trajectory as to_trajectory, TrajectoryError
+from spatial_dynamics.ros.plans import Job, prepare_plan, PlanItem
+from spatial_dynamics.trajectory import check_start, Follower, TrajectoryError
 from spatial_dynamics.wrench import wrench_from_torques
 
 _WRENCH_FIELDS = ('torque.x', 'torque.y', 'torque.z', 'force.x', 'force.y', 'force.z')
@@ -73,13 +75,13 @@ class Answer(NamedTuple):
 class Out:
     """What one message gives to publish (each None when nothing): see :class:`Answering`."""
 
-    __slots__ = ('answer', 'estimate', 'wrench', 'annotated')
+    __slots__ = ('answer', 'estimate', 'wrench', 'annotate')
 
     def __init__(self) -> None:
         self.answer: Optional[Answer] = None
         self.estimate: Optional[tuple] = None     # (header, joints, τ_ext)
         self.wrench: Optional[tuple] = None       # (header, link, [n; f])
-        self.annotated: Optional[tuple] = None    # (header, effort.Annotated)
+        self.annotate: Optional[Job] = None       # a plan to annotate (off this thread)
 
 
 class Answering:
@@ -101,6 +103,7 @@ class Answering:
         self._measured_q: Optional[np.ndarray] = None   # the last measured position
         self._measured_stamp = 0     # its stamp (ns): the clock trajectories are sampled on
         self._measured_seen = False  # whether that clock has ticked (a simulator starts at 0)
+        self._pending_plan: Optional[PlanItem] = None   # came before that clock: waits
         self._answered_stamp = 0               # stamp (ns) of the measured state answered last
         self.observer = None              # MomentumObserver of the current model, when on
         self._observed: Optional[Config] = None   # the config the observer was checked for
@@ -125,63 +128,87 @@ class Answering:
                          with_terms)
         return out
 
-    def trajectory(self, config: Config, msg, now_ns: int, with_terms: bool = False) -> Out:
-        """Take a ``desired_trajectory``: a plan to follow, or (feedforward) one state.
+    def take_plan(self, config: Config, item: PlanItem, clock_ns: int,
+                  with_terms: bool = False) -> Out:
+        """Take a ``desired_trajectory`` checked off the answering path (:mod:`.plans`).
 
-        ``now_ns``: the node's clock, the plan's start when it is stamped 0 and no measured
-        state came yet.
+        Feedback modes: a plan to follow, scheduled at its stamp on the measured clock; one
+        that comes before the first measured state waits for it (its stamp is judged on that
+        clock, a simulator's too). Feedforward: its first point is the desired state,
+        answered at once. ``clock_ns``: the node's clock, the start of a plan stamped 0 in
+        feedforward. A plan scheduled (feedback) or checked whole (feedforward) is handed on
+        to be annotated when ``trajectory_effort_tolerance`` > 0: what is refused is not.
         """
         out = self._out = Out()
-        if config.params.control_mode in FEEDBACK_MODES:
-            self._follow(config.output, msg, now_ns)
-        else:   # feedforward: the first point is the desired state, answered at once
+        feedback = config.params.control_mode in FEEDBACK_MODES
+        msg = item.msg
+        item = self._current(config, item)
+        if not feedback and msg is not None and config.output is not None:
             self._on_desired(config, msg, 'desired_trajectory', trajectory_arrays,
                              (msg.joint_names, msg.points), with_terms)
-        if config.params.trajectory_effort_tolerance > 0.0 and config.output is not None:
-            self._annotate(config, msg)
+            if not self._annotating(config):
+                return out
+            if item.error is not None:   # the first point may do; the plan is not annotated
+                self._reject_annotation(item.error[0], item.error[1])
+                return out
+            stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+            try:
+                check_start(stamp or clock_ns, clock_ns)
+            except TrajectoryError as err:
+                self._reject_annotation(err.reason, str(err))
+                return out
+            if item.prepared is not None:
+                out.annotate = Job(msg.header, item.prepared, config)
+            return out
+        if not feedback:
+            self.window.received += 1
+        if item.error is not None:
+            reason, text = item.error
+            self._reject('desired_trajectory', reason, 'refused whole' + (
+                ', the trajectory followed before goes on' if feedback else '') + f': {text}')
+            return out
+        if not self._measured_seen:   # judged on the measured clock, once it ticks
+            if self._pending_plan is None:
+                self.log.info('desired_trajectory: waiting for the first joint_states: its '
+                              'stamp is the clock the plan starts on')
+            self._pending_plan = item
+            return out
+        self._schedule(config, item, self._measured_stamp)
         return out
 
-    def _annotate(self, config: Config, msg) -> None:
-        """Publish the plan with effort at every point, resampled for JTC (:mod:`~.effort`)."""
+    def _current(self, config: Config, item: PlanItem) -> PlanItem:
+        """``item``, checked again when the model or the mode changed since (rare)."""
+        if item.error is not None or item.config is config:
+            return item
         output = config.output
+        if (output is None or item.joints != output.joints
+                or (item.prepared is None and item.msg is not None
+                    and len(item.msg.points) and (
+                        config.params.control_mode in FEEDBACK_MODES
+                        or config.params.trajectory_effort_tolerance > 0.0))):
+            return prepare_plan(config, item.msg)
+        return item
+
+    def _annotating(self, config: Config) -> bool:
+        """Whether plans are annotated; an ``output: none`` is said (no model torque)."""
+        if not config.params.trajectory_effort_tolerance > 0.0 or config.output is None:
+            return False
         if config.params.output == 'none':
             self.totals.rejected['no_model_part'] += 1
             self.log.warn('annotated_trajectory: message rejected: output none has no model '
                           'torque to annotate the plan with', throttle_duration_sec=1.0)
-            return
-        try:
-            plan = to_trajectory(msg.joint_names, msg.points, 'desired_trajectory')
-            if set(plan.joint_names) != set(output.joints):
-                raise ValueError(f'names {list(plan.joint_names)}, the model has '
-                                 f'{list(output.joints)}: JTC gets effort for every joint')
-            done = annotate(output.model, plan, config.params.trajectory_effort_tolerance,
-                            config.params.output, config.params.gravity)
-        except (TrajectoryError, ValueError) as err:   # logged here: its own throttle
-            self.totals.rejected[getattr(err, 'reason', 'joints')] += 1
-            self.log.warn(f'annotated_trajectory: message rejected, not annotated: {err}',
-                          throttle_duration_sec=1.0)
-            return
-        self._out.annotated = (msg.header, done)
-        if done.jumps:
-            self.log.warn(f'annotated_trajectory: the model torque jumps at '
-                          f'{len(done.jumps)} point(s) (first at {done.jumps[0][1]:g} s): '
-                          'JTC\'s interpolation misses it there by more than the tolerance',
-                          throttle_duration_sec=1.0)
+            return False
+        return True
 
-    def _follow(self, output: Optional[Output], msg, clock_ns: int) -> None:
+    def _schedule(self, config: Config, item: PlanItem, now_ns: int) -> None:
         """Feedback modes: follow a whole trajectory, sampled at each measured stamp (JTC)."""
-        if output is None:
-            self._reject('desired_trajectory', 'no_model', 'no robot model loaded yet')
-            return
+        output, msg = config.output, item.msg
         start_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        # the measured clock, once a measured state came (sim time may be 0 at the start)
-        now_ns = self._measured_stamp if self._measured_seen else clock_ns
         q = self._measured_q
         if q is not None and len(q) != len(output.joints):   # measured on another model
             q = None
         try:
-            traj = self.follower.accept(msg.joint_names, msg.points, start_ns, now_ns,
-                                        output.joints, q)
+            traj = self.follower.schedule(item.prepared, start_ns, now_ns, output.joints, q)
         except TrajectoryError as err:
             self._reject('desired_trajectory', err.reason, f'refused whole, the trajectory '
                          f'followed before goes on: {err}')
@@ -191,7 +218,20 @@ class Answering:
         self.log.info(
             'desired_trajectory: stopped, holding the measured position' if traj is None else
             f'desired_trajectory: following {len(msg.points)} points ({traj.kind}, '
-            f'{traj.time[-1] - traj.time[0]:g} s) from {(start_ns or now_ns) * 1e-9:.9f} s')
+            f'{traj.time[-1]:g} s) from {(start_ns or now_ns) * 1e-9:.9f} s')
+        if traj is not None and self._annotating(config):
+            self._out.annotate = Job(msg.header, item.prepared, config)
+
+    def drain(self, annotator) -> None:
+        """Count what the annotation worker refused or clamped since (diagnostics thread)."""
+        while annotator.rejected:
+            self.totals.rejected[annotator.rejected.popleft()] += 1
+        names = []
+        while annotator.saturated:
+            names.append(annotator.saturated.popleft())
+        if names:
+            self.totals.saturated += 1
+            self.totals.saturated_joints.update(names)
 
     def _on_desired(self, config: Config, msg, topic: str, to_arrays, fields: tuple,
                     with_terms: bool) -> None:
@@ -258,6 +298,13 @@ class Answering:
         self._measured_q = measured[0]     # in output.joints order: held by an empty trajectory
         self._measured_stamp = stamp or self._measured_stamp
         self._measured_seen = True
+        if self._pending_plan is not None:   # a plan that came first starts on this clock
+            item, self._pending_plan = self._current(config, self._pending_plan), None
+            if item.error is not None:
+                self._reject('desired_trajectory', item.error[0], f'refused whole: '
+                             f'{item.error[1]}')
+            elif config.params.control_mode in FEEDBACK_MODES:
+                self._schedule(config, item, self._measured_stamp)
         if feedback:
             self._answer_measured(config, msg, measured, t0, with_terms)
         self._observing = (msg, measured)
@@ -270,6 +317,8 @@ class Answering:
         desired = None
         if self._following == output.joints:   # a trajectory, sampled at this measurement
             desired = self.follower.sample(stamp or self._measured_stamp)
+            if desired is not None:   # a followed plan is a live desired input (its end held)
+                self.totals.last_desired_ns = t0
         if desired is None:
             held = self.desired
             if held is None or held.joints != output.joints:
@@ -437,6 +486,11 @@ class Answering:
             return
         expiry = time.monotonic_ns() + int(config.params.external_wrench_timeout * 1e9)
         self.wrenches[link] = (wrench, expiry)
+
+    def _reject_annotation(self, reason: str, text: str) -> None:
+        self.totals.rejected[reason] += 1   # logged here: its own throttle
+        self.log.warn(f'annotated_trajectory: message rejected, not annotated ({reason}): '
+                      f'{text}', throttle_duration_sec=1.0)
 
     def _reject_wrench(self, reason: str, text: str) -> None:
         self.totals.wrenches_rejected[reason] += 1

@@ -3,9 +3,10 @@
 """What the package's nodes share: their QoS, endpoints and process around them.
 
 The ``inverse_dynamics`` node, the simulator and the latency baseline's relay make their
-subscriptions and publishers here (inputs best effort keep last 1, outputs reliable, QoS
-overrides on, no per-endpoint event handlers) and run in :func:`spin` (exit 0 on SIGINT and
-SIGTERM, 1 with one ``cannot start:`` line on a bad start-up configuration).
+subscriptions and publishers here (inputs best effort keep last 1, plans reliable keep last
+10, outputs reliable, QoS overrides on, no per-endpoint event handlers) and run in
+:func:`spin` (exit 0 on SIGINT and SIGTERM, 1 with one ``cannot start:`` line on a bad
+start-up configuration).
 """
 
 from __future__ import annotations
@@ -44,13 +45,29 @@ def output_qos() -> QoSProfile:
                       history=HistoryPolicy.KEEP_LAST, depth=10)
 
 
+def plan_qos() -> QoSProfile:
+    """Plan (``desired_trajectory``) QoS: reliable, keep last 10.
+
+    A plan is one large sample that must arrive whole: over best effort, Fast DDS drops a
+    sample whose fragments do not all arrive (a 9,000-point plan, ~650 KB, never did). Keep
+    last 10: plans queued for later starts sent in a burst. A new object per call, as
+    :func:`input_qos`. Best-effort publishers do not match it (``ros2 topic pub`` and
+    MoveIt publish reliable).
+    """
+    return QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
+                      history=HistoryPolicy.KEEP_LAST, depth=10)
+
+
 DESCRIPTION_QOS = QoSProfile(reliability=QoSReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL,
                              history=HistoryPolicy.KEEP_LAST, depth=1)
 
 
-def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1, group=None):
-    """Subscribe with :func:`input_qos`, QoS overrides enabled, no QoS event handlers.
+def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1, group=None,
+              qos: Optional[QoSProfile] = None, raw: bool = False):
+    """Subscribe with :func:`input_qos` (or ``qos``), QoS overrides on, no QoS event handlers.
+
+    ``raw``: the callback gets the serialized message (bytes), to be sized before converting.
 
     rclpy adds default event handlers (incompatible QoS / type warnings) per endpoint to the
     wait set, which costs every spin of the executor 5-12 µs per endpoint (measured with
@@ -59,7 +76,8 @@ def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1, group=
     the other end of an incompatible pair still reports it with its own default handlers.
     """
     return node.create_subscription(
-        msg_type, topic, callback, input_qos(depth), callback_group=group,
+        msg_type, topic, callback, input_qos(depth) if qos is None else qos,
+        callback_group=group, raw=raw,
         qos_overriding_options=QoSOverridingOptions.with_default_policies(),
         event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
 

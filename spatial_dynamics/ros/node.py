@@ -29,6 +29,7 @@ callback (the answer says whether it was accepted) while the answers go on in th
 from __future__ import annotations
 
 from array import array
+from collections import deque
 from dataclasses import replace
 import sys
 import time
@@ -43,11 +44,12 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 import spatial_dynamics as sd
 from spatial_dynamics.ros import messages
 from spatial_dynamics.ros.answering import Answering, Out
-from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, spin, subscribe
+from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, plan_qos, spin, subscribe
 from spatial_dynamics.ros.config import (
     build_output, Config, ConfigError, NODE_NAME, Output, PARAMETER_NAMES,
     PARAMETERS, PAYLOAD_PARAMETERS, prepare, reparse_needed)
@@ -55,6 +57,7 @@ from spatial_dynamics.ros.control import terms_names
 from spatial_dynamics.ros.descriptions import description_source, DescriptionParser, ParseRequest
 from spatial_dynamics.ros.diagnostics import (
     backend_text, feedforward_status, model_status, observer_status)
+from spatial_dynamics.ros.plans import Annotator, MAX_PLAN_BYTES, prepare_plan
 from std_msgs.msg import Float64MultiArray, String
 from trajectory_msgs.msg import JointTrajectory
 
@@ -79,6 +82,12 @@ class InverseDynamicsNode(Node):
         # the parse while the answers go on in theirs; the new ``Config`` is swapped in as one
         # reference, and each answer reads ``self.config`` once.
         self.inputs = MutuallyExclusiveCallbackGroup()
+        # Plans (desired_trajectory) are taken serialized, sized, converted and checked in a
+        # third group (a third thread), handed to the answering group through a queue and a
+        # guard condition, and annotated for JTC by a worker thread: what a plan costs in
+        # proportion to its size never runs where joint_states are answered.
+        self.plans = MutuallyExclusiveCallbackGroup()
+        self._plan_queue: deque = deque()
         self.config: Optional[Config] = None
         self.answering = Answering(self.get_logger())
         # Topic descriptions: parsed by a worker; the result is applied only if its
@@ -110,21 +119,26 @@ class InverseDynamicsNode(Node):
         self.estimate_pub = advertise(self, JointState, 'external_torque_estimate')
         self.wrench_pub = advertise(self, WrenchStamped, 'external_wrench_estimate')
         self.annotated_pub = advertise(self, JointTrajectory, 'annotated_trajectory')
+        self.annotator = Annotator(self.annotated_pub.publish, self.get_logger())
+        self._plan_ready = self.create_guard_condition(self._on_plans_ready,
+                                                       callback_group=self.inputs)
         self._estimate = JointState()
         self._commands = Float64MultiArray()
         self._efforts = JointState()
         self._terms = JointState()
         group = self.inputs
         subscribe(self, JointState, 'desired_joint_states', self._on_joint_state, group=group)
-        subscribe(self, JointTrajectory, 'desired_trajectory', self._on_trajectory, group=group)
+        subscribe(self, JointTrajectory, 'desired_trajectory', self._on_plan, group=self.plans,
+                  qos=plan_qos(), raw=True)
         subscribe(self, JointState, 'joint_states', self._on_measured, group=group)
         subscribe(self, WrenchStamped, 'external_wrenches', self._on_wrench, WRENCH_DEPTH,
                   group=group)
         self.create_timer(1.0, self._publish_diagnostics, callback_group=group)
 
     def destroy_node(self) -> None:
-        """Stop the description parser, then destroy the node."""
+        """Stop the description parser and the annotation worker, then destroy the node."""
         self._parser.stop()
+        self.annotator.stop()
         super().destroy_node()
 
     # -- parameters: validated on set, applied after ------------------------------------------
@@ -288,10 +302,29 @@ class InverseDynamicsNode(Node):
     def _on_joint_state(self, msg: JointState) -> None:
         self._send(self.answering.joint_state(self.config, msg, self._wants_terms()))
 
-    def _on_trajectory(self, msg: JointTrajectory) -> None:
-        self._send(self.answering.trajectory(self.config, msg,
-                                             self.get_clock().now().nanoseconds,
-                                             self._wants_terms()))
+    def _on_plan(self, raw: bytes) -> None:
+        """Size, convert and check a serialized plan; hand it to the answers (plans group)."""
+        config = self.config
+        size = len(raw)
+        msg = None
+        if size <= MAX_PLAN_BYTES:
+            try:
+                msg = deserialize_message(raw, JointTrajectory)
+            except Exception as err:  # a sample the type support cannot read
+                self._plan_queue.append(prepare_plan(config, None, 0)._replace(
+                    error=('malformed', f'cannot deserialize: {err!r}')))
+                self._plan_ready.trigger()
+                return
+        self._plan_queue.append(prepare_plan(config, msg, size))
+        self._plan_ready.trigger()
+
+    def _on_plans_ready(self) -> None:
+        """Schedule (or answer) the plans checked since, oldest first (inputs group)."""
+        while self._plan_queue:
+            item = self._plan_queue.popleft()
+            self._send(self.answering.take_plan(self.config, item,
+                                                self.get_clock().now().nanoseconds,
+                                                self._wants_terms()))
 
     def _on_measured(self, msg: JointState) -> None:
         config = self.config
@@ -312,8 +345,8 @@ class InverseDynamicsNode(Node):
             self._publish_estimate(*out.estimate)
         if out.wrench is not None:
             self.wrench_pub.publish(messages.wrench_stamped(*out.wrench))
-        if out.annotated is not None:
-            self.annotated_pub.publish(messages.joint_trajectory(*out.annotated))
+        if out.annotate is not None:
+            self.annotator.submit(out.annotate)
 
     def _publish(self, header, joints: Tuple[str, ...], q: np.ndarray, qd: np.ndarray,
                  tau: np.ndarray, terms: Optional[dict]) -> None:
@@ -355,6 +388,7 @@ class InverseDynamicsNode(Node):
         """Publish the ``robot model`` and ``feedforward`` statuses of the period that ended."""
         now_ns = time.monotonic_ns()
         answering = self.answering
+        answering.drain(self.annotator)
         window, estimates = answering.period()
         config = self.config
         output = config.output
@@ -380,7 +414,7 @@ def main(args: Optional[Sequence[str]] = None) -> int:
     # The node logs each URDF warning itself (once per description) and lists them in
     # /diagnostics: Python's own printing of them would repeat each one on stderr.
     warnings.filterwarnings('ignore', category=sd.URDFWarning)
-    return spin(InverseDynamicsNode, args)
+    return spin(InverseDynamicsNode, args, threads=3)
 
 
 if __name__ == '__main__':

@@ -1,0 +1,189 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The node's plans (``desired_trajectory``) off the answering path: their checks, their effort.
+
+A plan's size is decided by whoever publishes it, so nothing a plan costs in proportion to
+its size runs where ``joint_states`` are answered (STYLE habit 13):
+
+* the node takes each ``desired_trajectory`` message serialized, in its own callback group,
+  refuses one larger than :data:`MAX_PLAN_BYTES` before converting it, and converts and checks
+  the rest there (:func:`prepare_plan`: every point, every spline's bounds, the mapping onto
+  the model, the coefficients); the answering group only schedules what came out
+  (:meth:`~spatial_dynamics.ros.answering.Answering.take_plan`, a fixed cost);
+* the plan's effort for joint_trajectory_controller is computed by :class:`Annotator`, one
+  worker thread, bounded (:func:`~spatial_dynamics.effort.annotate`), the newest plan
+  superseding one not yet done; a refusal is counted in ``/diagnostics``.
+
+Pure Python and message types: no rclpy (the node gives the worker its ``publish``).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+import threading
+from typing import Callable, NamedTuple, Optional
+
+import numpy as np
+from spatial_dynamics import clamp_to_effort_limits
+from spatial_dynamics.bounds import MAX_TRAJECTORY_POINTS
+from spatial_dynamics.effort import annotate, AnnotationError
+from spatial_dynamics.ros.config import Config
+from spatial_dynamics.ros.control import FEEDBACK_MODES
+from spatial_dynamics.ros.messages import joint_trajectory
+from spatial_dynamics.trajectory import prepare, Prepared, TrajectoryError
+
+#: Largest serialized ``desired_trajectory`` converted, bytes: 128 per point of the most
+#: points a plan may have (a 6-joint plan with positions and velocities is ~120 bytes a
+#: point); a larger one is refused (``too_large``) before anything is built from it.
+MAX_PLAN_BYTES = 128 * MAX_TRAJECTORY_POINTS
+
+
+class PlanItem(NamedTuple):
+    """A ``desired_trajectory`` taken off the answering path, ready to be scheduled.
+
+    ``msg``: the message (None when refused before converting it); ``prepared``: the plan
+    checked and mapped onto ``joints`` (None: an empty plan, a stop; or feedforward, which
+    answers ``msg``'s first point); ``error``: ``(reason, text)`` when refused.
+    """
+
+    config: Config
+    msg: object
+    joints: Optional[tuple]
+    prepared: Optional[Prepared]
+    error: Optional[tuple]
+
+
+def prepare_plan(config: Config, msg, size: int = 0) -> PlanItem:
+    """Check a ``desired_trajectory`` whole for ``config``'s model (any thread, no state).
+
+    ``size``: its serialized bytes, refused (``too_large``) above :data:`MAX_PLAN_BYTES`
+    (``msg`` is then not needed: None). In the feedback modes, and in feedforward when the
+    plan is annotated, the plan is checked whole (:func:`~spatial_dynamics.trajectory.
+    prepare`); in feedforward its first point is the desired state.
+    """
+    output = config.output
+    if size > MAX_PLAN_BYTES:
+        return PlanItem(config, None, None, None, (
+            'too_large', f'{size:,} bytes serialized, more than {MAX_PLAN_BYTES:,} (a plan '
+            f'of at most {MAX_TRAJECTORY_POINTS:,} points): not converted'))
+    if output is None:
+        return PlanItem(config, msg, None, None, ('no_model', 'no robot model loaded yet'))
+    whole = (config.params.control_mode in FEEDBACK_MODES
+             or config.params.trajectory_effort_tolerance > 0.0)
+    if not whole:
+        return PlanItem(config, msg, output.joints, None, None)
+    try:
+        prepared = prepare(msg.joint_names, msg.points, output.joints)
+    except TrajectoryError as err:
+        return PlanItem(config, msg, output.joints, None, (err.reason, str(err)))
+    return PlanItem(config, msg, output.joints, prepared, None)
+
+
+class Job(NamedTuple):
+    """A plan to annotate: the received header, the plan in model order, the config."""
+
+    header: object
+    prepared: Prepared
+    config: Config
+
+
+class Annotator:
+    """One worker thread that annotates plans with effort for JTC, off the answering path.
+
+    ``submit`` replaces a plan not yet started and cancels the one being annotated (only the
+    newest plan matters: JTC follows it); each done plan is turned into its message and
+    handed to ``publish`` from the worker thread. The efforts are held to the URDF effort
+    limits as the node's answers are: clamped (and said) with ``clamp_to_effort_limits``,
+    else published and the joints beyond their limits named in a warning. A plan refused
+    (too many points for the tolerance, an effort not finite) is logged and its reason queued
+    in :attr:`rejected` for the diagnostics (drained by the answering side).
+    """
+
+    def __init__(self, publish: Callable[[object], None], log) -> None:
+        self._publish = publish
+        self.log = log
+        self.rejected: deque = deque()      # reasons, appended here, popped by diagnostics
+        self.saturated: deque = deque()     # joint names clamped, for the diagnostics
+        self._wake = threading.Condition()
+        self._job: Optional[Job] = None
+        self._generation = 0
+        self._stopped = False
+        self._thread: Optional[threading.Thread] = None
+
+    def submit(self, job: Job) -> None:
+        """Annotate ``job`` next; a plan pending or being annotated is dropped."""
+        with self._wake:
+            if self._stopped:
+                return
+            self._job = job
+            self._generation += 1
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, daemon=True,
+                                                name='annotated_trajectory')
+                self._thread.start()
+            self._wake.notify()
+
+    def stop(self) -> None:
+        """Let the worker end (it is a daemon: never waited for)."""
+        with self._wake:
+            self._stopped = True
+            self._job = None
+            self._generation += 1
+            self._wake.notify()
+
+    def _run(self) -> None:
+        while True:
+            with self._wake:
+                while self._job is None and not self._stopped:
+                    self._wake.wait()
+                if self._stopped:
+                    return
+                job, self._job = self._job, None
+                generation = self._generation
+            try:
+                msg = self.build(job, lambda: self._generation != generation)
+            except AnnotationError as err:
+                if err.reason != 'superseded':
+                    self._refuse(err.reason, str(err))
+                continue
+            except Exception as err:  # never lose the worker: report it as a rejection
+                self._refuse('compute_error', repr(err))
+                continue
+            if msg is not None and self._generation == generation:
+                self._publish(msg)
+
+    def build(self, job: Job, cancelled: Callable[[], bool] = lambda: False):
+        """Return ``annotated_trajectory`` of ``job`` (None: refused, reason queued)."""
+        output, params = job.config.output, job.config.params
+        done = annotate(output.model, job.prepared.traj, params.trajectory_effort_tolerance,
+                        params.output, params.gravity, cancelled=cancelled)
+        if not np.isfinite(done.effort).all():
+            self._refuse('non_finite_output', 'an effort is not finite')
+            return None
+        limit = output.model.effort_limit
+        over = np.flatnonzero(np.any(np.abs(done.effort) > np.where(limit > 0.0, limit,
+                                                                    np.inf), axis=0))
+        if len(over):
+            peaks = np.abs(done.effort).max(axis=0)
+            names = output.model.joint_names
+            text = ', '.join(f'{names[j]!r} {peaks[j]:.4g} > {limit[j]:g}' for j in over)
+            if output.clamp:
+                done.effort[:], _ = clamp_to_effort_limits(output.model, done.effort)
+                self.saturated.extend(names[j] for j in over)
+                self.log.warn(f'annotated_trajectory: effort clamped to the URDF effort limit '
+                              f'(clamp_to_effort_limits): {text}', throttle_duration_sec=1.0)
+            else:
+                self.log.warn(f'annotated_trajectory: effort beyond the URDF effort limit: '
+                              f'{text} (clamp_to_effort_limits is false)',
+                              throttle_duration_sec=1.0)
+        if done.jumps:
+            self.log.warn(f'annotated_trajectory: the model torque jumps at '
+                          f'{len(done.jumps)} point(s) (first at {done.jumps[0][1]:g} s): '
+                          'JTC\'s interpolation misses it there by more than the tolerance',
+                          throttle_duration_sec=1.0)
+        return joint_trajectory(job.header, done)
+
+    def _refuse(self, reason: str, text: str) -> None:
+        self.rejected.append(reason)
+        self.log.warn(f'annotated_trajectory: message rejected, not annotated ({reason}): '
+                      f'{text}', throttle_duration_sec=1.0)
