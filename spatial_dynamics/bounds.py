@@ -31,6 +31,10 @@ MAX_GRAVITY = 1e3
 MAX_TRAJECTORY_TIME = 86400.0
 #: Points of one trajectory.
 MAX_TRAJECTORY_POINTS = 1_000_000
+#: Largest serialized plan (``desired_trajectory``) the node converts, bytes: 128 per point
+#: of the most points a plan may have (a 6-joint plan with positions and velocities is ~120
+#: bytes a point); a larger one is refused before anything is built from it.
+MAX_PLAN_BYTES = 128 * MAX_TRAJECTORY_POINTS
 #: Samples computed from one trajectory (``replay --trajectory``): (duration × rate + 1).
 MAX_SAMPLES = 10_000_000
 

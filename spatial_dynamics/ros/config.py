@@ -27,8 +27,8 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
-from spatial_dynamics.bounds import MAX_GRAVITY
-from spatial_dynamics.effort import MEASURED_EFFORT
+from spatial_dynamics.bounds import MAX_GRAVITY, MAX_PLAN_BYTES
+from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
 from spatial_dynamics.ros.descriptions import (
     description_change, MAX_DESCRIPTION_BYTES, parse_description)
@@ -275,6 +275,15 @@ PARAMETERS = Table(NODE_NAME, [
         'controller\'s linear interpolation of effort between points stays within this '
         'tolerance of the model torque (N m, or N); remap it to a JTC\'s ~/joint_trajectory. '
         '0 = off. Live.'), unit='N m or N', bounds=(0.0, 1e4)),
+    Param('trajectory_max_bytes', 'int', MAX_PLAN_BYTES, (
+        'Largest desired_trajectory taken, serialized: a larger one is refused (too_large) '
+        'before it is converted, so its size never costs the answers. The default admits the '
+        'most points a plan may have. Read-only.'), unit='bytes',
+        bounds=(1024, 1 << 31), read_only=True),
+    Param('trajectory_annotation_max_values', 'int', MAX_ANNOTATED_VALUES, (
+        'Most values (points x joints x (fields + effort)) an annotated_trajectory may hold; '
+        'a plan whose tolerance would need more is refused (too_many_points) and counted in '
+        'diagnostics. Read-only.'), bounds=(1000, 10**8), read_only=True),
     Param('backend', 'string', 'auto', (
         'How tau is computed. "numpy": plain Python floats (~30-150 µs per call for 6-32 '
         'joints). "compiled" and "auto": the compiled kernels built with the package (~1-3 '

@@ -57,7 +57,7 @@ from spatial_dynamics.ros.control import terms_names
 from spatial_dynamics.ros.descriptions import description_source, DescriptionParser, ParseRequest
 from spatial_dynamics.ros.diagnostics import (
     backend_text, feedforward_status, model_status, observer_status)
-from spatial_dynamics.ros.plans import Annotator, MAX_PLAN_BYTES, prepare_plan
+from spatial_dynamics.ros.plans import Annotator, prepare_plan
 from std_msgs.msg import Float64MultiArray, String
 from trajectory_msgs.msg import JointTrajectory
 
@@ -307,7 +307,7 @@ class InverseDynamicsNode(Node):
         config = self.config
         size = len(raw)
         msg = None
-        if size <= MAX_PLAN_BYTES:
+        if size <= config.params.trajectory_max_bytes:
             try:
                 msg = deserialize_message(raw, JointTrajectory)
             except Exception as err:  # a sample the type support cannot read

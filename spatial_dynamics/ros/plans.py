@@ -6,8 +6,8 @@ A plan's size is decided by whoever publishes it, so nothing a plan costs in pro
 its size runs where ``joint_states`` are answered (STYLE habit 13):
 
 * the node takes each ``desired_trajectory`` message serialized, in its own callback group,
-  refuses one larger than :data:`MAX_PLAN_BYTES` before converting it, and converts and checks
-  the rest there (:func:`prepare_plan`: every point, every spline's bounds, the mapping onto
+  refuses one larger than ``trajectory_max_bytes`` before converting it, and converts and
+  checks the rest there (:func:`prepare_plan`: every point, every spline's bounds, the mapping onto
   the model, the coefficients); the answering group only schedules what came out
   (:meth:`~spatial_dynamics.ros.answering.Answering.take_plan`, a fixed cost);
 * the plan's effort for joint_trajectory_controller is computed by :class:`Annotator`, one
@@ -25,17 +25,11 @@ from typing import Callable, NamedTuple, Optional
 
 import numpy as np
 from spatial_dynamics import clamp_to_effort_limits
-from spatial_dynamics.bounds import MAX_TRAJECTORY_POINTS
 from spatial_dynamics.effort import annotate, AnnotationError
 from spatial_dynamics.ros.config import Config
 from spatial_dynamics.ros.control import FEEDBACK_MODES
 from spatial_dynamics.ros.messages import joint_trajectory
 from spatial_dynamics.trajectory import prepare, Prepared, TrajectoryError
-
-#: Largest serialized ``desired_trajectory`` converted, bytes: 128 per point of the most
-#: points a plan may have (a 6-joint plan with positions and velocities is ~120 bytes a
-#: point); a larger one is refused (``too_large``) before anything is built from it.
-MAX_PLAN_BYTES = 128 * MAX_TRAJECTORY_POINTS
 
 
 class PlanItem(NamedTuple):
@@ -56,16 +50,17 @@ class PlanItem(NamedTuple):
 def prepare_plan(config: Config, msg, size: int = 0) -> PlanItem:
     """Check a ``desired_trajectory`` whole for ``config``'s model (any thread, no state).
 
-    ``size``: its serialized bytes, refused (``too_large``) above :data:`MAX_PLAN_BYTES`
+    ``size``: its serialized bytes, refused (``too_large``) above ``trajectory_max_bytes``
     (``msg`` is then not needed: None). In the feedback modes, and in feedforward when the
     plan is annotated, the plan is checked whole (:func:`~spatial_dynamics.trajectory.
     prepare`); in feedforward its first point is the desired state.
     """
     output = config.output
-    if size > MAX_PLAN_BYTES:
+    limit = config.params.trajectory_max_bytes
+    if size > limit:
         return PlanItem(config, None, None, None, (
-            'too_large', f'{size:,} bytes serialized, more than {MAX_PLAN_BYTES:,} (a plan '
-            f'of at most {MAX_TRAJECTORY_POINTS:,} points): not converted'))
+            'too_large', f'{size:,} bytes serialized, more than trajectory_max_bytes '
+            f'{limit:,}: not converted'))
     if output is None:
         return PlanItem(config, msg, None, None, ('no_model', 'no robot model loaded yet'))
     whole = (config.params.control_mode in FEEDBACK_MODES
@@ -156,7 +151,8 @@ class Annotator:
         """Return ``annotated_trajectory`` of ``job`` (None: refused, reason queued)."""
         output, params = job.config.output, job.config.params
         done = annotate(output.model, job.prepared.traj, params.trajectory_effort_tolerance,
-                        params.output, params.gravity, cancelled=cancelled)
+                        params.output, params.gravity, cancelled=cancelled,
+                        max_values=params.trajectory_annotation_max_values)
         if not np.isfinite(done.effort).all():
             self._refuse('non_finite_output', 'an effort is not finite')
             return None
