@@ -173,3 +173,26 @@ def test_the_iteration_limit_reads_as_the_best_found(tmp_path):
     assert 'the best found within 2 iterations' in out, out
     assert 'Iteration limit reached' not in out
     assert 'converged' in run_quick(path, iterations=400)[1]
+
+
+def test_the_printed_commands_survive_the_shell(tmp_path):
+    """An --out with a space and a $: the printed goals, run by bash, are the YAML meant."""
+    import shutil
+    import subprocess
+    if shutil.which('bash') is None:
+        pytest.skip('bash is needed to run the printed command')
+    path = tmp_path / 'my plan $HOME.yaml'
+    status, out, err = run_quick(path)
+    assert status == 0, err
+    prefix = 'ros2 action send_goal /joint_trajectory_controller/follow_joint_trajectory ' \
+             'control_msgs/action/FollowJointTrajectory '
+    goals = [line.strip()[len(prefix):] for line in out.splitlines()
+             if line.strip().startswith(prefix)]
+    assert len(goals) == 2, out
+    said = [subprocess.run(['bash', '-c', f"printf '%s' {goal}"], cwd=tmp_path, check=True,
+                           capture_output=True, text=True).stdout for goal in goals]
+    start = load_yaml(said[0], 'start goal')['trajectory']
+    assert start['joint_names'] == WRISTS and len(start['points']) == 1
+    assert said[1] == '{trajectory: ' + path.read_text().rstrip('\n') + '}'
+    plan = load_yaml(said[1], 'plan goal')['trajectory']
+    assert plan['points'][0]['positions'] == start['points'][0]['positions']
