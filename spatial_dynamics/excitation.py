@@ -212,12 +212,12 @@ class Excitation:
 
     @property
     def converged(self) -> bool:
-        """Whether SLSQP converged (else the plan is the best it found when it stopped)."""
+        """Say whether SLSQP converged; if not, the plan is the best found when it stopped."""
         return self.status == 0
 
     @property
     def iteration_limit(self) -> bool:
-        """Whether SLSQP stopped at its iteration limit (the best found within it)."""
+        """Say whether SLSQP stopped at its iteration limit (the best found within it)."""
         return self.status == 9
 
     def evaluate(self, t) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -97,7 +97,7 @@ def test_the_largest_plan_allowed_is_written_and_checked(tmp_path, capsys):
 
 
 def urdf_with_limits(tmp_path, joint, lower, upper):
-    """The UR5's URDF with ``joint``'s lower and upper limits replaced; return its path."""
+    """Write the UR5's URDF with ``joint``'s lower and upper limits replaced; return its path."""
     with open(robot_urdf_path('ur5')) as f:
         text = f.read()
     head, sep, tail = text.partition(f'<joint name="{joint}" type="revolute">')
