@@ -185,7 +185,8 @@ class Excitation:
         rank: how many of them the trajectory determines (the rank of its ``W``).
         limits: the :class:`Limits` it was optimised within.
         iterations, message, status: SLSQP's (status 0: converged; 9: the iteration limit
-            was reached, the plan is the best found within it).
+            was reached, the plan is the best found within it; −1: SLSQP ended outside the
+            limits, the start is returned).
         samples: how many samples of one period ``cond_*`` and ``rank`` were computed at
             (:meth:`report_times`).
     """

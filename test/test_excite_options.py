@@ -51,6 +51,7 @@ def assert_refused(status, out, err, want_status, *words):
     (['--period', '0.1'], ['--rate 10 cannot represent', '--harmonics 5', '0.1 s period',
                            '--rate 200 at least']),
     (['--duration', '0.1'], ['cannot represent', '--duration']),
+    (['--period', '1e-10'], ['cannot represent', '1e-10 s period']),
     (['--period', '1001'], ['--period', 'at most 1000']),
     (['--duration', '86401'], ['--duration', 'a day']),
     (['--duration', '86400', '--period', '1000', '--rate', '1'],

@@ -166,16 +166,11 @@ def parser() -> argparse.ArgumentParser:
 
 
 def periods(duration: float, period: Optional[float]) -> Tuple[float, int]:
-    """Return ``(period, count)``: ``count`` periods fill ``duration`` (at least one).
-
-    The period is rounded to the nanosecond, the resolution of ``time_from_start``.
-    """
+    """Return ``(period, count)``: ``count`` periods fill ``duration`` (at least one)."""
     if period is None:
         count = max(1, round(duration / PERIOD))
-        period = duration / count
-    else:
-        count = max(1, math.ceil(duration / period - 1e-9))
-    return round(period * 1e9) / 1e9, count
+        return duration / count, count
+    return period, max(1, math.ceil(duration / period - 1e-9))
 
 
 def check_size(period: float, count: int, harmonics: int, rate: float, given: bool) -> None:
