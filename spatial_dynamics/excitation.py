@@ -64,6 +64,19 @@ MAX_MARGIN_FRACTION = 0.25
 SLACK = 0.005
 #: Finite-difference step in q and q̇ (rad, rad/s).
 STEP = 1e-6
+#: Points a written plan puts on each cycle of its highest harmonic, at least: twice
+#: Nyquist's two (:func:`min_rate`). joint_trajectory_controller's quintics through exact
+#: positions, velocities and accelerations four times a cycle follow a sinusoid within
+#: 2.3e-4 of its amplitude in position, 5e-4 in velocity and 2.2e-3 in acceleration (twice
+#: a cycle: 1.8e-2, 2e-2, 4.5e-2).
+POINTS_PER_CYCLE = 4
+#: The optimiser's iterations, at most (SLSQP's ``maxiter``; one takes ~0.02-0.1 s).
+MAX_ITERATIONS = 10_000
+#: The seeds accepted: NumPy's generator takes any whole number ≥ 0; these are 32 bits.
+MAX_SEED = 2 ** 32 - 1
+#: A value of the plan below this (rad, rad/s, rad/s², m ...) is the series' rounding noise
+#: about zero (rest at the ends): written as 0.
+NOISE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -89,8 +102,11 @@ def limits(model: Model, margin: float = 0.1, velocity_fraction: float = 0.8,
     :data:`MAX_MARGIN_FRACTION` of the range (a 4 cm gripper keeps some travel).
     """
     kinds = [model.joint_types.get(j, 'revolute') for j in model.joint_names]
-    lo = np.where(np.isfinite(model.lower), model.lower, -DEFAULT_HALF_RANGE)
-    hi = np.where(np.isfinite(model.upper), model.upper, DEFAULT_HALF_RANGE)
+    check_ranges(model)
+    bounded = np.isfinite(model.lower) & np.isfinite(model.upper) & np.array(
+        [k != 'continuous' for k in kinds], dtype=bool)
+    lo = np.where(bounded, model.lower, -DEFAULT_HALF_RANGE)
+    hi = np.where(bounded, model.upper, DEFAULT_HALF_RANGE)
     m = np.minimum(margin, MAX_MARGIN_FRACTION * (hi - lo))
     vmax = np.array([v if np.isfinite(v) and v > 0 else
                      DEFAULT_VELOCITY['prismatic' if k == 'prismatic' else 'revolute']
@@ -98,6 +114,40 @@ def limits(model: Model, margin: float = 0.1, velocity_fraction: float = 0.8,
     emax = np.where((model.effort_limit > 0) & np.isfinite(model.effort_limit),
                     model.effort_limit, np.inf)
     return Limits(lo + m, hi - m, velocity_fraction * vmax, effort_fraction * emax)
+
+
+def check_ranges(model: Model) -> None:
+    """Refuse a joint no excitation can move: ``ValueError`` naming it.
+
+    A joint whose lower limit is above its upper one has no position within its limits; one
+    whose limits are equal cannot move, so nothing its motion would tell can be found. A
+    continuous joint's limits are not read (URDF: it has none; exporters write 0 and 0).
+    """
+    for j, name in enumerate(model.joint_names):
+        if model.joint_types.get(name) == 'continuous':
+            continue
+        lo, hi = float(model.lower[j]), float(model.upper[j])
+        if lo > hi:
+            raise ValueError(f'joint {name!r}: its lower limit ({lo:g}) is above its upper '
+                             f'limit ({hi:g}), so no position is within them')
+        if lo == hi:
+            raise ValueError(f'joint {name!r}: its lower and upper limits are equal ({lo:g}), '
+                             'so it cannot move; lock it at that value instead of exciting it')
+
+
+def min_rate(period: float, harmonics: int) -> float:
+    """Return the lowest rate (Hz) of points that represents the series (``4 L / T``).
+
+    :data:`POINTS_PER_CYCLE` points a cycle of the highest harmonic (``L / T`` Hz), twice
+    Nyquist's rate: slower points alias the series (a period of 0.1 s at 10 Hz puts every
+    point at the same phase, a plan standing still).
+    """
+    return POINTS_PER_CYCLE * harmonics / period
+
+
+def period_points(period: float, rate: float) -> int:
+    """Return the points a period of ``period`` s has at ``rate`` Hz: ``⌈T · rate⌉``."""
+    return max(1, math.ceil(period * rate - 1e-9))
 
 
 def _basis(t: np.ndarray, omega: float, L: int) -> Tuple[np.ndarray, ...]:
@@ -134,7 +184,11 @@ class Excitation:
         base: the model's base parameters (structural: random states over the limits).
         rank: how many of them the trajectory determines (the rank of its ``W``).
         limits: the :class:`Limits` it was optimised within.
-        iterations, message: SLSQP's.
+        iterations, message, status: SLSQP's (status 0: converged; 9: the iteration limit
+            was reached, the plan is the best found within it; −1: SLSQP ended outside the
+            limits, the start is returned).
+        samples: how many samples of one period ``cond_*`` and ``rank`` were computed at
+            (:meth:`report_times`).
     """
 
     joint_names: Tuple[str, ...]
@@ -149,17 +203,33 @@ class Excitation:
     limits: Limits
     iterations: int
     message: str
+    status: int = 0
+    samples: int = 160
 
     @property
     def harmonics(self) -> int:
         """``L``, the number of harmonics."""
         return self.a.shape[1]
 
+    @property
+    def converged(self) -> bool:
+        """Say whether SLSQP converged; if not, the plan is the best found when it stopped."""
+        return self.status == 0
+
+    @property
+    def iteration_limit(self) -> bool:
+        """Say whether SLSQP stopped at its iteration limit (the best found within it)."""
+        return self.status == 9
+
     def evaluate(self, t) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return ``q``, ``q̇``, ``q̈`` (N, n) at times ``t`` (N,) s (periodic in ``t``)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         X = np.hstack([self.q0[:, None], self.a, self.b])
         return tuple(P @ X.T for P in _basis(t, 2 * math.pi / self.period, self.harmonics))
+
+    def report_times(self) -> np.ndarray:
+        """Return the times (s) of one period at which ``cond_*`` and ``rank`` were computed."""
+        return np.arange(self.samples) * self.period / self.samples
 
     def times(self, rate: float, periods: int = 1) -> np.ndarray:
         """Return evenly spaced times from 0 to ``periods · T`` inclusive, at least ``rate`` Hz."""
@@ -171,22 +241,46 @@ class Excitation:
         t = self.times(rate, periods)
         return (t,) + self.evaluate(t)
 
+    def point_times(self, rate: float) -> List[int]:
+        """Return the times (whole ns) of one period's points: ``m = ⌈T · rate⌉`` of them.
+
+        Spread evenly from 0 to before ``T`` (each rounded to the nanosecond), so every
+        period of a plan has its points at the same phases. ``ValueError`` when ``rate`` is
+        below :func:`min_rate` (the points would alias the series).
+        """
+        lowest = min_rate(self.period, self.harmonics)
+        if not (math.isfinite(rate) and rate >= lowest * (1.0 - 1e-12)):
+            raise ValueError(f'{rate:g} points a second cannot represent {self.harmonics} '
+                             f'harmonics of a {self.period:g} s period: at least {lowest:.4g} '
+                             f'({POINTS_PER_CYCLE} a cycle of the highest harmonic)')
+        period_ns = round(self.period * 1e9)
+        m = period_points(self.period, rate)
+        return [(2 * i * period_ns + m) // (2 * m) for i in range(m)]
+
     def to_points(self, rate: float, periods: int = 1) -> List[Dict]:
         """Return JointTrajectory points (positions, velocities, accelerations, time_from_start).
 
         The mapping form of ``trajectory_msgs/JointTrajectoryPoint`` that
-        :func:`spatial_dynamics.trajectory.trajectory` and ``ros2 action send_goal`` read;
-        times are whole nanoseconds.
+        :func:`spatial_dynamics.trajectory.trajectory` and ``ros2 action send_goal`` read.
+        One period's points (:meth:`point_times`) are computed once and repeated ``periods``
+        times, then the first again at the end: the plan is periodic exactly, value for value
+        and nanosecond for nanosecond, so the controller's splines are the same in every
+        period. Values below :data:`NOISE` in magnitude are 0 (rest at the ends); the
+        repeated points share their lists.
         """
-        t, q, qd, qdd = self.sample(rate, periods)
-        points = []
-        for k, tk in enumerate(t):
-            ns = int(round(tk * 1e9))
-            points.append({'positions': q[k].tolist(), 'velocities': qd[k].tolist(),
-                           'accelerations': qdd[k].tolist(),
-                           'time_from_start': {'sec': ns // 1_000_000_000,
-                                               'nanosec': ns % 1_000_000_000}})
-        return points
+        ns = self.point_times(rate)
+        period_ns = round(self.period * 1e9)
+        states = self.evaluate(np.array(ns, dtype=float) * 1e-9)
+        q, qd, qdd = (np.where(np.abs(x) < NOISE, 0.0, x).tolist() for x in states)
+
+        def point(i: int, t: int) -> Dict:
+            return {'positions': q[i], 'velocities': qd[i], 'accelerations': qdd[i],
+                    'time_from_start': {'sec': t // 1_000_000_000,
+                                        'nanosec': t % 1_000_000_000}}
+
+        points = [point(i, k * period_ns + t) for k in range(periods)
+                  for i, t in enumerate(ns)]
+        return points + [point(0, periods * period_ns)]
 
 
 class _Problem:
@@ -302,6 +396,17 @@ class _Problem:
         return np.vstack(out)
 
 
+def determined(model: Model, base: BaseParameters, states: Sequence[np.ndarray],
+               gravity: Sequence[float] = (0.0, 0.0, -9.81)) -> Tuple[int, float]:
+    """Return how many base parameters ``states`` ``(q, q̇, q̈)`` determine, and :func:`condition`.
+
+    The count is the rank of their stacked regressor (:func:`base_parameters` of them): the
+    number any least squares on their torques can tell apart.
+    """
+    return (base_parameters(model, states, gravity).rank,
+            condition(model, base, *states, gravity))
+
+
 def condition(model: Model, base: BaseParameters, q, qd, qdd,
               gravity: Sequence[float] = (0.0, 0.0, -9.81)) -> float:
     """Return ``cond(W D⁻¹)``: the scaled base regressor stacked over the states given."""
@@ -322,8 +427,9 @@ def excitation(model: Model, period: float = 10.0, harmonics: int = 5,
     ``period`` s, ``harmonics`` ``L``; ``samples`` (default ``8 L``, at least 40) the
     criterion's samples over the period, ``constraint_samples`` (default ``40 L``, at least
     100) the limits'. Deterministic for a given ``seed``. ``ValueError`` for arguments no
-    trajectory can have (a non-positive period, no harmonics, fractions outside (0, 1]) and
-    when no start within the limits exists (the effort limits cannot even hold the robot
+    trajectory can have (a non-positive period, no harmonics, fractions outside (0, 1], a
+    seed or ``maxiter`` out of range), for a joint that cannot move (:func:`check_ranges`)
+    and when no start within the limits exists (the effort limits cannot even hold the robot
     still in the middle of its ranges).
     """
     from scipy.optimize import minimize
@@ -337,9 +443,14 @@ def excitation(model: Model, period: float = 10.0, harmonics: int = 5,
             raise ValueError(f'{name} must be in (0, 1], got {f!r}')
     if not (math.isfinite(margin) and margin >= 0):
         raise ValueError(f'the margin must be a finite number ≥ 0, got {margin!r}')
+    if not (isinstance(seed, (int, np.integer)) and 0 <= seed <= MAX_SEED):
+        raise ValueError(f'the seed must be a whole number 0 .. {MAX_SEED}, got {seed!r}')
+    if not (isinstance(maxiter, (int, np.integer)) and 1 <= maxiter <= MAX_ITERATIONS):
+        raise ValueError(f'the iterations must be a whole number 1 .. {MAX_ITERATIONS:,}, '
+                         f'got {maxiter!r}')
     L = int(harmonics)
-    base = base_parameters(model, gravity=gravity, seed=seed) if base is None else base
     lim = limits(model, margin, velocity_fraction, effort_fraction)
+    base = base_parameters(model, gravity=gravity, seed=seed) if base is None else base
     samples = samples or max(40, 8 * L)
     problem = _Problem(model, base, lim, period, L, gravity, samples,
                        constraint_samples or max(100, 40 * L))
@@ -350,28 +461,25 @@ def excitation(model: Model, period: float = 10.0, harmonics: int = 5,
     result = minimize(problem.log_cond, z0, jac=True, method='SLSQP',
                       constraints=[{'type': 'ineq', 'fun': problem.constraints,
                                     'jac': problem.constraints_jacobian}],
-                      options={'maxiter': maxiter, 'ftol': 1e-6})
+                      options={'maxiter': int(maxiter), 'ftol': 1e-6})
     z = result.x
     if not (np.all(np.isfinite(z)) and problem.constraints(z).min() >= -1e-6):
         z = z0                  # SLSQP ended outside the limits: keep the start, say so
     t = np.arange(4 * samples) * period / (4 * samples)       # the report's samples
 
-    def coefficients(z):
-        return z.reshape(problem.n, -1) @ problem.E.T          # (n, 1 + 2L)
+    def states(z):
+        X = z.reshape(problem.n, -1) @ problem.E.T             # (n, 1 + 2L)
+        return X, tuple(P @ X.T for P in _basis(t, 2 * math.pi / period, L))
 
-    def cond(z):
-        X = coefficients(z)
-        return condition(model, base, *(P @ X.T for P in _basis(t, 2 * math.pi / period, L)),
-                         gravity)
-
-    X = coefficients(z)
-    states = tuple(P @ X.T for P in _basis(t, 2 * math.pi / period, L))
-    rank = base_parameters(model, states, gravity).rank
+    rank, cond = determined(model, base, states(z)[1], gravity)
+    X = states(z)[0]
     message = str(result.message) + ('' if z is result.x else
                                      ' (ended outside the limits: the start is returned)')
     return Excitation(tuple(model.joint_names), X[:, 0].copy(), X[:, 1:L + 1].copy(),
-                      X[:, L + 1:].copy(), float(period), cond(z0), cond(z), base, rank,
-                      lim, int(result.nit), message)
+                      X[:, L + 1:].copy(), float(period),
+                      condition(model, base, *states(z0)[1], gravity), cond, base, rank,
+                      lim, int(result.nit), message, int(result.status) if z is result.x
+                      else -1, len(t))
 
 
 def _start(problem: _Problem, seed: int) -> Optional[np.ndarray]:

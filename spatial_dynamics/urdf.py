@@ -14,7 +14,8 @@ The policy, for descriptions as they come out of CAD exporters:
   mimic of a missing joint, unsupported joint types;
 * **loaded exactly as written, with a** :class:`URDFWarning`: what is physically inconsistent
   but computable — an inertia that is not positive semi-definite or breaks the triangle
-  inequality, inertia on a massless link, negative damping or friction, no robot name;
+  inequality, inertia on a massless link, negative damping or friction, a lower limit
+  above the upper one, no robot name;
   ``strict=True`` refuses these too;
 * **silent**: rounding noise (``INERTIA_RTOL``, ``INERTIA_ATOL``), limits of any magnitude
   (``±1e16`` or ``inf`` meaning none), a non-unit axis (normalised, as every tool does).
@@ -430,6 +431,12 @@ def _from_robot(robot_name: str, links: list, joints: list,
             if value < 0.0:
                 report(f'joint {jname!r} <dynamics {attr}>: negative ({value:g}), so the '
                        'joint would gain energy')
+
+    for joint in joints:
+        lower, upper = joint.limit['lower'], joint.limit['upper']
+        if joint.type in ('revolute', 'prismatic') and lower > upper:
+            report(f'joint {joint.name!r} <limit>: lower ({lower:g}) is above upper '
+                   f'({upper:g}), so no position is within its limits')
 
     def per_joint(get, names=joint_names) -> np.ndarray:
         return np.array([get(joint_by_name[j]) for j in names], dtype=float)

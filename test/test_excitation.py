@@ -128,12 +128,13 @@ def test_usage_errors_are_one_line(argv, status, tmp_path, capsys):
 
 
 def test_out_unwritable_is_refused(tmp_path, capsys):
-    """An --out in a directory that does not exist: exit 1, one line, after the plan."""
+    """An --out in a directory that does not exist: exit 1, one line, before the plan."""
     status = excite.main(['--urdf', robot_urdf_path('ur5'), '--duration', '4',
                           '--harmonics', '2', '--iterations', '3',
                           '--out', str(tmp_path / 'no' / 'plan.yaml')])
-    err = capsys.readouterr().err
-    assert status == 1 and len(err.strip().splitlines()) == 1 and 'cannot write' in err
+    out, err = capsys.readouterr()
+    assert status == 1 and len(err.strip().splitlines()) == 1 and 'does not exist' in err
+    assert 'excitation of' not in out
 
 
 def test_effort_limit_binds_and_holds():

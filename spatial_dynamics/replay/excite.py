@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Plan an excitation trajectory for identification and write it for joint_trajectory_controller.
 
-    python -m spatial_dynamics.replay.excite --urdf URDF --duration 30 --out plan.yaml
+    python -m spatial_dynamics.replay excite --urdf URDF --duration 30 --out plan.yaml
         [--harmonics 5] [--period S] [--margin 0.1] [--velocity-fraction 0.8]
         [--effort-fraction 0.6] [--joints J ...] [--locked J=V ...] [--gravity GX GY GZ]
         [--seed 0] [--rate 10] [--controller joint_trajectory_controller] [--list]
@@ -12,14 +12,24 @@ Each joint follows a Fourier series of ``--harmonics`` harmonics of one period, 
 (:mod:`spatial_dynamics.excitation`) for the condition number of the base regressor within
 the joint ranges (less ``--margin``), ``--velocity-fraction`` of the velocity limits and
 ``--effort-fraction`` of the effort limits, at rest at both ends; the period is repeated to
-fill ``--duration``. The plan is written as a JointTrajectory (one YAML flow mapping: points
-at ``--rate`` Hz with positions, velocities, accelerations and time_from_start), read back,
-sampled like joint_trajectory_controller's quintic splines at 1 kHz and checked against the
-URDF's limits.
+fill ``--duration``. The plan is a JointTrajectory (one YAML flow mapping: points at
+``--rate`` Hz with positions, velocities, accelerations and time_from_start), the same
+points in every period. Before it is written it is read back (the reader of
+``replay --trajectory``), and judged as joint_trajectory_controller's quintic splines
+interpolate it: one period sampled at 1 kHz against the URDF's limits (every period is the
+same, point for point), and the base parameters it determines and its condition number
+from the same splines. Only a plan that keeps the limits and determines what its series
+does is written (a temporary file beside ``--out``, then renamed).
 
-Exit status: 0 written and within the limits, 1 refused (unreadable URDF, unknown joint, no
-motion within the limits, the file cannot be written) or a limit of the URDF exceeded by the
-plan as the controller interpolates it, 2 bad usage.
+The options are checked before any work: each number within its bounds, ``--rate`` high
+enough to represent the series (:func:`~spatial_dynamics.excitation.min_rate`), the plan no
+longer than a day and within :data:`MAX_PLAN_VALUES`, ``--out`` a file that can be written
+and not an input.
+
+Exit status: 0 written (within the limits, determining what the series does), 1 refused
+(unreadable URDF, unknown joint, a joint that cannot move, no motion within the limits,
+``--out`` not writable or an input) or a plan not written because it exceeds a limit of the
+URDF or determines fewer parameters than its series, 2 bad usage.
 """
 
 from __future__ import annotations
@@ -27,27 +37,42 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import re
+import shlex
 import sys
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .. import Model, rnea
-from ..bounds import MAX_TRAJECTORY_POINTS, MAX_TRAJECTORY_TIME
-from ..excitation import Excitation, excitation
+from ..bounds import MAX_TRAJECTORY_TIME
+from ..excitation import (determined, Excitation, excitation, MAX_ITERATIONS,
+                          MAX_SEED, min_rate, period_points, POINTS_PER_CYCLE)
+from ..files import check_output, load_yaml, write_atomic
+from ..trajectory import evaluate, sample, Trajectory, trajectory
 from .arguments import (add_model_arguments, check_gravity, checked, finite, load_model, one_line,
-                        positive, Refused)
-from . import report, splines
+                        Refused)
+from . import report
 
 #: Period (s) aimed at when ``--period`` is not given: the duration split into whole periods
 #: of about this length (a 0.1 Hz fundamental, Swevers et al. 1997).
 PERIOD = 10.0
-#: Rate (Hz) the written plan is checked at, as the controller interpolates it.
+#: Longest ``--period`` (s): the check samples one period at :data:`CHECK_RATE` (a million
+#: states at most), and its fundamental is 1 mHz.
+MAX_PERIOD = 1000.0
+#: Rate (Hz) the plan is checked at, as the controller interpolates it; the highest
+#: ``--rate`` too (a controller updates at 100 Hz to 1 kHz: closer points are not followed,
+#: and the check would step over them).
 CHECK_RATE = 1000.0
+#: Numbers (positions, velocities, accelerations) a plan carries, at most: it is read back
+#: whole before it is written, ~1 kB of memory and ~10 µs a number (10,000 points of 6
+#: joints, 17 min at 10 Hz: ~200 MB, ~2 s). The plan is periodic: send it again to run
+#: longer.
+MAX_PLAN_VALUES = 180_000
 #: ``ros2 action send_goal`` takes the goal as one shell argument: Linux caps one at 128 KiB.
 MAX_ARGUMENT = 128 * 1024
+#: A controller's name (ROS: tokens of letters, digits and _, not starting with a digit).
+CONTROLLER_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
 
 
 class _Parser(argparse.ArgumentParser):
@@ -74,24 +99,46 @@ def fraction(text: str) -> float:
     return x
 
 
+def controller_name(text: str) -> str:
+    """Parse a controller's ROS name (argparse type): it is printed into shell commands."""
+    if not CONTROLLER_NAME.fullmatch(text):
+        raise argparse.ArgumentTypeError(f'{text!r}: need a ROS name (letters, digits, _ and '
+                                         '/, not starting with a digit)')
+    return text.lstrip('/')
+
+
 #: The number of harmonics, 1 .. 50 (argparse type).
 harmonics = checked(int, lambda k: 1 <= k <= 50, 'a whole number 1 .. 50')
+#: The duration, s (argparse type).
+duration = checked(float, lambda x: 0.0 < x <= MAX_TRAJECTORY_TIME,
+                   f'a number of seconds > 0, at most {MAX_TRAJECTORY_TIME:g} (a day)')
+#: The period, s (argparse type).
+period_s = checked(float, lambda x: 0.0 < x <= MAX_PERIOD,
+                   f'a number of seconds > 0, at most {MAX_PERIOD:g}')
+#: Points a second (argparse type).
+rate = checked(float, lambda x: 0.0 < x <= CHECK_RATE,
+               f'a number of points a second > 0, at most {CHECK_RATE:g}')
+#: The optimiser's iterations (argparse type).
+iterations = checked(int, lambda k: 1 <= k <= MAX_ITERATIONS,
+                     f'a whole number 1 .. {MAX_ITERATIONS:,}')
+#: The seed of the start (argparse type).
+seed = checked(int, lambda k: 0 <= k <= MAX_SEED, f'a whole number 0 .. {MAX_SEED}')
 
 
 def parser() -> argparse.ArgumentParser:
     """Return the command's argument parser."""
     p = _Parser(prog='replay excite', description=__doc__.split('\n\n')[0],
                 formatter_class=argparse.RawDescriptionHelpFormatter,
-                epilog='Exit status: 0 written and within the limits, 1 refused or a limit '
-                'exceeded, 2 bad usage.')
+                epilog='Exit status: 0 written, 1 refused or not written (a limit exceeded, '
+                'fewer parameters determined than the series does), 2 bad usage.')
     add_model_arguments(p)
-    p.add_argument('--duration', type=positive, required=True,
+    p.add_argument('--duration', type=duration, required=True,
                    help='s: the period is repeated to fill it (at least one period)')
     p.add_argument('--out', required=True, metavar='PLAN.yaml',
                    help='the JointTrajectory written (one YAML flow mapping)')
     p.add_argument('--harmonics', type=harmonics, default=5,
                    help='harmonics of the Fourier series (default %(default)d)')
-    p.add_argument('--period', type=positive,
+    p.add_argument('--period', type=period_s,
                    help=f's (default: the duration in whole periods of about {PERIOD:g} s)')
     p.add_argument('--margin', type=non_negative, default=0.1,
                    help='rad or m kept from each end of a joint range, at most a quarter of '
@@ -101,14 +148,17 @@ def parser() -> argparse.ArgumentParser:
                    '0.25 m/s where none)')
     p.add_argument('--effort-fraction', type=fraction, default=0.6,
                    help='of the URDF effort limits, RNEA torque (default %(default)g)')
-    p.add_argument('--seed', type=int, default=0, help='of the start (default %(default)d)')
-    p.add_argument('--rate', type=positive, default=10.0,
-                   help='points per second written (default %(default)g: the controller\'s '
-                   'quintic splines through positions, velocities and accelerations follow '
-                   'the series closely; more points make a longer goal)')
-    p.add_argument('--iterations', type=int, default=100,
-                   help='of the optimiser, at most (default %(default)d)')
-    p.add_argument('--controller', default='joint_trajectory_controller',
+    p.add_argument('--seed', type=seed, default=0,
+                   help=f'of the start, 0 .. {MAX_SEED} (default %(default)d)')
+    p.add_argument('--rate', type=rate, default=10.0,
+                   help='points per second written (default %(default)g; at least '
+                   f'{POINTS_PER_CYCLE} x harmonics / period, at most {CHECK_RATE:g}): the '
+                   'controller\'s quintic splines through positions, velocities and '
+                   'accelerations follow the series closely; more points make a longer goal')
+    p.add_argument('--iterations', type=iterations, default=100,
+                   help=f'of the optimiser, at most (default %(default)d, 1 .. '
+                   f'{MAX_ITERATIONS:,}): it stops there with the best plan found')
+    p.add_argument('--controller', type=controller_name, default='joint_trajectory_controller',
                    help='name in the printed commands (default %(default)s)')
     p.add_argument('--list', action='store_true',
                    help='print every base parameter as its combination of standard ones')
@@ -123,11 +173,50 @@ def periods(duration: float, period: Optional[float]) -> Tuple[float, int]:
     return period, max(1, math.ceil(duration / period - 1e-9))
 
 
+def check_size(period: float, count: int, harmonics: int, rate: float, given: bool) -> None:
+    """``ValueError`` when the plan's points cannot represent the series or last too long.
+
+    ``given``: whether ``--period`` was (else the period comes from ``--duration``).
+    """
+    lowest = min_rate(period, harmonics)
+    if rate < lowest * (1.0 - 1e-12):
+        source = '--period' if given else '--duration in whole periods'
+        raise ValueError(f'--rate {rate:g} cannot represent --harmonics {harmonics} of a '
+                         f'{period:g} s period ({source}): its highest harmonic is '
+                         f'{harmonics / period:.4g} Hz and the controller\'s splines need '
+                         f'{POINTS_PER_CYCLE} points a cycle of it, so --rate {lowest:.4g} at '
+                         'least (or a longer --period, fewer --harmonics)')
+    if period * count > MAX_TRAJECTORY_TIME:
+        raise ValueError(f'{count} periods of {period:g} s ({period * count:g} s) are more '
+                         f'than a trajectory may last ({MAX_TRAJECTORY_TIME:g} s)')
+
+
+def check_values(period: float, count: int, rate: float, joints: int) -> None:
+    """:class:`Refused` when the plan would carry more than :data:`MAX_PLAN_VALUES` numbers."""
+    points = count * period_points(period, rate) + 1
+    if points * 3 * joints > MAX_PLAN_VALUES:
+        raise Refused(f'{period * count:g} s at {rate:g} Hz is {points:,} points of {joints} '
+                      f'joint{"s" if joints > 1 else ""}, more than a plan may carry '
+                      f'({MAX_PLAN_VALUES:,} positions, velocities and accelerations; it is '
+                      'read back whole before it is '
+                      'written): lower --duration or --rate (the plan is periodic: send it '
+                      'again to run longer)')
+
+
 # --------------------------------------------------------------------------------------------
 # The plan file
 
 def _number(x: float) -> str:
-    return '0.0' if abs(x) < 1e-12 else f'{x:.7g}'
+    """Return ``x`` to 7 significant digits as a YAML float: PyYAML (YAML 1.1) reads it back.
+
+    YAML 1.1 reads a number as a float only with a point in its mantissa and a sign on its
+    exponent: ``5e-05`` and ``1e+20`` would be strings, ``3`` an integer. So the point is
+    always written (``5.0e-05``, ``1.0e+20``, ``3.0``, ``-0.0``); Python writes the sign.
+    """
+    if not math.isfinite(x):
+        return '.nan' if math.isnan(x) else ('.inf' if x > 0 else '-.inf')
+    mantissa, e, exponent = f'{x:.7g}'.partition('e')
+    return (mantissa if '.' in mantissa else mantissa + '.0') + e + exponent
 
 
 def _numbers(values: Sequence[float]) -> str:
@@ -140,7 +229,7 @@ def _name(name: str) -> str:
 
 
 def plan_text(joint_names: Sequence[str], points: Sequence[dict]) -> str:
-    """Return a JointTrajectory as one YAML flow mapping, positions to 7 digits.
+    """Return a JointTrajectory as one YAML flow mapping, numbers to 7 digits.
 
     One mapping, so it can stand inside another: ``"{trajectory: $(cat PLAN.yaml)}"`` is
     the goal of ``ros2 action send_goal`` (compact: the goal is one shell argument).
@@ -156,36 +245,44 @@ def plan_text(joint_names: Sequence[str], points: Sequence[dict]) -> str:
             + ',\n'.join(lines) + ']}\n')
 
 
-def write_plan(path: str, text: str) -> None:
-    """Write ``text`` to ``path``; :class:`Refused` naming it when it cannot be written."""
+def read_back(text: str, what: str) -> Trajectory:
+    """Read a plan's text as ``replay --trajectory`` reads its file; :class:`Refused` if not.
+
+    :func:`~spatial_dynamics.files.load_yaml` and
+    :func:`~spatial_dynamics.trajectory.trajectory`: what the file will say, not what was
+    meant to be written.
+    """
     try:
-        with open(path, 'w', encoding='utf-8') as f:
-            f.write(text)
-    except OSError as err:
-        raise Refused(f'--out {path}: cannot write it ({err.strerror})') from None
+        doc = load_yaml(text, what)
+        return trajectory(doc['joint_names'], doc['points'], what=what)
+    except (ValueError, TypeError, KeyError) as err:
+        raise Refused(f'reading the plan back: {one_line(err)}') from None
 
 
 # --------------------------------------------------------------------------------------------
-# The check of the plan as the controller interpolates it
+# The judgement of the plan as the controller interpolates it
 
 def limit_rows(model: Model, t: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: np.ndarray
                ) -> Tuple[List[list], List[list], bool]:
     """Return the torque table's rows, the motion table's rows and whether a limit is exceeded.
 
     The torque table is ``replay --trajectory``'s (peak |τ|, when, limit, use); the motion
-    table holds each joint's range used and peak |q̇| against the URDF's limits.
+    table holds each joint's range used and peak |q̇| against the URDF's limits (a continuous
+    joint has no range, whatever its ``<limit>`` says).
     """
     torque, exceeded = report.effort_rows(model.joint_names, t, tau, model.effort_limit)
     motion = []
     vpeak = np.max(np.abs(qd), axis=0)
     for j, name in enumerate(model.joint_names):
         lo, hi, vmax = model.lower[j], model.upper[j], model.velocity_limit[j]
-        out = q[:, j].min() < lo - 1e-9 or q[:, j].max() > hi + 1e-9
+        ranged = (np.isfinite(lo) and np.isfinite(hi)
+                  and model.joint_types.get(name) != 'continuous')
+        out = ranged and (q[:, j].min() < lo - 1e-9 or q[:, j].max() > hi + 1e-9)
         has_v = vmax > 0 and np.isfinite(vmax)
         fast = bool(has_v and vpeak[j] > vmax)
         exceeded |= bool(out or fast)
         motion.append([name, f'{q[:, j].min():.4g} .. {q[:, j].max():.4g}',
-                       f'{lo:g} .. {hi:g}' if np.isfinite(lo) else 'continuous',
+                       f'{lo:g} .. {hi:g}' if ranged else 'continuous',
                        f'{vpeak[j]:.4g}', f'{vmax:g}' if has_v else '-',
                        f'{100 * vpeak[j] / vmax:.1f} %' if has_v else '-',
                        ' '.join(w for w, bad in (('OUT OF RANGE', out), ('TOO FAST', fast))
@@ -193,27 +290,76 @@ def limit_rows(model: Model, t: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: 
     return torque, motion, exceeded
 
 
-def check_plan(path: str, model: Model, gravity: Sequence[float]) -> bool:
-    """Read the plan back, sample it like the controller, print the tables; True if exceeded."""
-    try:
-        traj = splines.from_yaml(path)
-    except OSError as err:
-        raise Refused(f'{path}: {err.strerror}') from None
-    except ValueError as err:
-        raise Refused(f'reading the plan back: {err}') from None
+def first_period(traj: Trajectory, count: int) -> Tuple[Optional[Trajectory], str]:
+    """Return the plan's first period, and '' if every period repeats it; else why not.
+
+    Periodic: ``count · m + 1`` points, point ``k · m + i`` equal to point ``i`` (positions,
+    velocities, accelerations), ``k`` periods later, and the last equal to the first. Then
+    the controller's splines are the same in every period, and checking one checks all.
+    """
+    total = len(traj.time) - 1
+    if total < 1 or total % count:
+        return None, f'{len(traj.time)} points are not {count} periods of the same points'
+    m = total // count
+    span = traj.time[m] - traj.time[0]
+    for name, a in (('positions', traj.positions), ('velocities', traj.velocities),
+                    ('accelerations', traj.accelerations)):
+        if a is None:
+            return None, f'the plan has no {name}'
+        pattern = np.vstack([a[:m]] * count + [a[:1]])
+        if not np.array_equal(a, pattern):
+            k = int(np.flatnonzero((a != pattern).any(axis=1))[0])
+            return None, f'its point {k} ({name}) differs from point {k % m} a period before'
+    times = traj.time[0] + np.arange(count + 1)[:, None] * span
+    starts = traj.time[::m]
+    offsets = (traj.time[:-1].reshape(count, m) - starts[:-1, None])
+    if not (np.allclose(starts, times[:, 0], rtol=0.0, atol=2e-9)
+            and np.allclose(offsets, offsets[0], rtol=0.0, atol=2e-9)):
+        return None, 'its periods are not equally long, or their points not at the same times'
+    one = Trajectory(traj.joint_names, traj.time[:m + 1], traj.positions[:m + 1],
+                     traj.velocities[:m + 1], traj.accelerations[:m + 1])
+    return one, ''
+
+
+def check_plan(traj: Trajectory, count: int, plan: Excitation, model: Model,
+               gravity: Sequence[float], what: str) -> List[str]:
+    """Judge the plan read back as the controller interpolates it; return what is wrong.
+
+    Prints the limit tables of one period sampled at :data:`CHECK_RATE` (every period is
+    the same, :func:`first_period`), then the base parameters the splines determine and
+    their condition number, at the samples the series was judged at
+    (:attr:`~spatial_dynamics.excitation.Excitation.report_times`). Each entry of the list
+    returned is one reason the plan must not be run: a limit of the URDF exceeded, fewer base
+    parameters determined than the series does, the points not periodic.
+    """
     traj = traj.reordered(model.joint_names)
-    t, q, qd, qdd = splines.sample(traj, CHECK_RATE)
+    one, why = first_period(traj, count)
+    if one is None:
+        return [f'the plan read back is not periodic: {why}']
+    t, q, qd, qdd = sample(one, CHECK_RATE)
     tau = rnea(model, q, qd, qdd, gravity)
     torque, motion, exceeded = limit_rows(model, t, q, qd, tau)
-    print(f'\n{path}: {len(traj.time)} points, {traj.kind} interpolation, {t[-1]:.3f} s '
-          f'sampled at {CHECK_RATE:g} Hz ({len(t)} samples); torque = RNEA')
+    m = len(one.time) - 1
+    print(f'\n{what}: {len(traj.time)} points ({m} a period), {traj.kind} interpolation; one '
+          f'period of {t[-1]:.4g} s (all {count} are the same) sampled at {CHECK_RATE:g} Hz '
+          f'({len(t)} samples); torque = RNEA')
     print(report.table(report.EFFORT_HEADER, torque))
     print(report.table(['joint', 'range used', 'limits', 'peak |qd|', 'limit', 'use', ''],
                        motion))
-    print(f'  at rest at the start and the end: |qd| <= {np.abs(qd[[0, -1]]).max():.2g}, '
-          f'|qdd| <= {np.abs(qdd[[0, -1]]).max():.2g}; peak |qdd| '
-          + ', '.join(f'{x:.3g}' for x in np.abs(qdd).max(axis=0)))
-    return exceeded
+    print(f'  at rest at the start and the end of each period: |qd| <= '
+          f'{np.abs(qd[[0, -1]]).max():.2g}, |qdd| <= {np.abs(qdd[[0, -1]]).max():.2g}; '
+          'peak |qdd| ' + ', '.join(f'{x:.3g}' for x in np.abs(qdd).max(axis=0)))
+    rank, cond = determined(model, plan.base, evaluate(one, plan.report_times()), gravity)
+    print(f'as the controller interpolates it, the plan determines {rank} of the '
+          f'{plan.base.rank} base parameters any motion can (the series: {plan.rank}); '
+          f'condition number {cond:.4g} (the series: {plan.cond_after:.4g})')
+    wrong = []
+    if exceeded:
+        wrong.append('the plan exceeds a limit of the URDF (see the tables)')
+    if rank < plan.rank:
+        wrong.append(f'the plan determines {rank} base parameters, its series {plan.rank}: '
+                     'its points do not follow the series (raise --rate)')
+    return wrong
 
 
 # --------------------------------------------------------------------------------------------
@@ -230,17 +376,25 @@ def structural(plan: Excitation) -> List[str]:
 
 
 def print_plan(plan: Excitation, model: Model, count: int, args) -> None:
-    """Print the optimisation's outcome and what the plan determines."""
+    """Print the optimisation's outcome and what its series determines."""
     n_std = len(plan.base.names)
     print(f'excitation of {len(model.joint_names)} joints ({", ".join(model.joint_names)}): '
           f'{plan.harmonics} harmonics, period {plan.period:.4g} s x {count} = '
           f'{plan.period * count:.4g} s')
     if model.locked:
         print('  locked: ' + ', '.join(f'{j}={v:g}' for j, v in model.locked.items()))
+    if plan.converged:
+        outcome = f'optimised ({plan.iterations} iterations, converged)'
+    elif plan.iteration_limit:
+        outcome = (f'the best found within {plan.iterations} iterations (--iterations: the '
+                   'optimiser had not yet converged; more may lower it a little)')
+    else:
+        outcome = (f'the best found in {plan.iterations} iterations (the optimiser stopped: '
+                   f'{plan.message})')
     print(f'condition number of the base regressor (columns scaled to unit norm): '
           f'{plan.cond_before:.4g} at the start (seed {args.seed}), {plan.cond_after:.4g} '
-          f'optimised ({plan.iterations} iterations: {plan.message})')
-    print(f'base parameters: the plan determines {plan.rank} of the {plan.base.rank} any '
+          f'{outcome}')
+    print(f'base parameters: the series determines {plan.rank} of the {plan.base.rank} any '
           f'motion can (of {n_std} standard parameters)')
     if plan.rank < plan.base.rank:
         print(f'  warning: {plan.base.rank - plan.rank} base parameter(s) not excited: try '
@@ -259,7 +413,7 @@ def print_plan(plan: Excitation, model: Model, count: int, args) -> None:
 
 
 def print_commands(path: str, plan: Excitation, controller: str, size: int) -> None:
-    """Print how to run the plan with joint_trajectory_controller."""
+    """Print how to run the plan with joint_trajectory_controller (shell-quoted)."""
     action = (f'ros2 action send_goal /{controller}/follow_joint_trajectory '
               'control_msgs/action/FollowJointTrajectory')
     q0 = plan.evaluate(0.0)[0][0]
@@ -269,9 +423,9 @@ def print_commands(path: str, plan: Excitation, controller: str, size: int) -> N
     print('\nto run it (joint_trajectory_controller): the plan\'s first point is at time 0, so '
           'the robot must already be there; move it to that point first, slowly (10 s here; '
           'longer if it is far from it):')
-    print(f'  {action} "{start}"')
+    print(f'  {action} {shlex.quote(start)}')
     print('then record the joint states (ros2 bag record /joint_states) and send the plan:')
-    print(f'  {action} "{{trajectory: $(cat {path})}}"')
+    print(f'  {action} "{{trajectory: $(cat {shlex.quote(path)})}}"')
     if size > MAX_ARGUMENT:
         print(f'  note: the plan is {size // 1024} KiB, more than one shell argument carries '
               f'({MAX_ARGUMENT // 1024} KiB): lower --rate, or send it from a script')
@@ -279,16 +433,10 @@ def print_commands(path: str, plan: Excitation, controller: str, size: int) -> N
           'or its surroundings; try it in simulation first')
 
 
-def run(args) -> int:
-    """Plan, write, check; return the exit status (0 or 1)."""
+def run(args, period: float, count: int) -> int:
+    """Plan, judge, write; return the exit status (0 or 1)."""
     model = load_model(args)
-    period, count = periods(args.duration, args.period)
-    if period * count > MAX_TRAJECTORY_TIME:
-        raise Refused(f'{period * count:g} s is more than a trajectory may last '
-                      f'({MAX_TRAJECTORY_TIME:g} s)')
-    if period * count * args.rate + 1 > MAX_TRAJECTORY_POINTS:
-        raise Refused(f'{period * count:g} s at {args.rate:g} Hz is more than '
-                      f'{MAX_TRAJECTORY_POINTS:,} points: lower --rate')
+    check_values(period, count, args.rate, len(model.joint_names))
     try:
         plan = excitation(model, period, args.harmonics, args.gravity, args.margin,
                           args.velocity_fraction, args.effort_fraction, args.seed,
@@ -297,13 +445,18 @@ def run(args) -> int:
         raise Refused(str(err)) from None
     print_plan(plan, model, count, args)
     text = plan_text(model.joint_names, plan.to_points(args.rate, count))
-    write_plan(args.out, text)
-    print(f'\nwritten: {args.out} ({len(text) // 1024} KiB)')
-    exceeded = check_plan(args.out, model, args.gravity)
-    print_commands(args.out, plan, args.controller, len(text.encode()))
-    if exceeded:
-        print('error: the plan exceeds a limit of the URDF (see the tables)', file=sys.stderr)
+    wrong = check_plan(read_back(text, args.out), count, plan, model, args.gravity, args.out)
+    if wrong:
+        for reason in wrong:
+            print(f'error: {reason}', file=sys.stderr)
+        print(f'not written: {args.out}', file=sys.stderr)
         return 1
+    try:
+        write_atomic(args.out, text, '--out')
+    except ValueError as err:
+        raise Refused(str(err)) from None
+    print(f'\nwritten: {args.out} ({len(text) // 1024} KiB)')
+    print_commands(args.out, plan, args.controller, len(text.encode()))
     return 0
 
 
@@ -313,13 +466,19 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = p.parse_args(argv)
     if args.locked and not args.joints:
         p.error('--locked needs --joints (the joints moved)')
-    if args.iterations < 1:
-        p.error(f'--iterations: need a whole number >= 1, got {args.iterations}')
     check_gravity(p, args.gravity)
-    if os.path.isdir(args.out):
-        p.error(f'--out {args.out}: is a directory; name the file to write')
+    period, count = periods(args.duration, args.period)
     try:
-        return run(args)
+        check_size(period, count, args.harmonics, args.rate, args.period is not None)
+    except ValueError as err:
+        p.error(str(err))
+    try:
+        check_output(args.out, '--out', inputs=[args.urdf])
+    except ValueError as err:
+        print(f'error: {one_line(err)}', file=sys.stderr)
+        return 1
+    try:
+        return run(args, period, count)
     except Refused as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
     except MemoryError:
