@@ -41,7 +41,7 @@ class Log:
 
 
 def joint_state(names, q, effort, k):
-    """A measured JointState (duck-typed) at rest, stamped k ms after 100 s."""
+    """Return a measured JointState (duck-typed) at rest, stamped k ms after 100 s."""
     stamp = SimpleNamespace(sec=100, nanosec=k * 1_000_000)
     return SimpleNamespace(header=SimpleNamespace(stamp=stamp), name=list(names),
                            position=[float(x) for x in q], velocity=[0.0] * len(names),
@@ -49,7 +49,7 @@ def joint_state(names, q, effort, k):
 
 
 def status_after(q, effort, changes=()):
-    """The ``external torque`` status after 0.3 s at rest at ``q`` measuring ``effort``."""
+    """Return the ``external torque`` status after 0.3 s at rest at ``q``, given ``effort``."""
     text = open(robot_urdf_path('ur5')).read()
     params = {spec.name: spec.default for spec in config.PARAMETERS}
     params.update({'robot_description': text, 'observer_gain': GAIN,
@@ -71,7 +71,7 @@ def status_after(q, effort, changes=()):
 
 
 def status_at_rest(q):
-    """The status with the drives holding the weight (``effort`` = g(q)), nothing pushing."""
+    """Return the status with the drives holding the weight (``effort`` = g(q)), no push."""
     model = sd.Model.from_urdf(robot_urdf_path('ur5'))
     return (model,) + status_after(q, sd.gravity_torque(model, np.array(q)))
 
