@@ -88,6 +88,7 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     states, estimates, statuses, wrenches = [], [], [], []
     push = n.create_publisher(WrenchStamped, f'{NS}/applied_wrench', reliable)
     pushed_at = []      # the sim time at which the push was sent
+    stopped_at = []     # how many statuses had come when the trajectory stopped (hold)
 
     def desired_at(t):
         return trajectory(t) if t <= TRACK_UNTIL else (hold, 0 * hold, 0 * hold)
@@ -100,6 +101,8 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
         t = seconds(state.header.stamp)
         if not states or t > seconds(states[-1].header.stamp):
             states.append(state)
+        if t >= TRACK_UNTIL and not stopped_at:
+            stopped_at.append(len(statuses))
         if t >= PUSH_AT and not pushed_at:
             wrench = WrenchStamped()
             wrench.header.frame_id = LINK
@@ -184,10 +187,15 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
         assert (weak > 0) == ('could not observe' in s.message), (weak, s.message)
         if weak:
             assert s.level == WARN and float(kv['wrench sigma_min (lowest)']) < 0.02, s.message
+    # While tracking, no torque warning. Not judged between the stop and the push: the
+    # abrupt stop jumps the command, which the estimate shows for a step (the half-step
+    # offset above), and on a loaded machine a 1 s period holds so few steps that its RMS
+    # can pass the threshold.
+    tracking = statuses[:stopped_at[0]]
+    assert all('above external_torque_warn' not in s.message for s in tracking), [
+        s.message for s in tracking if s.level != OK]
+    assert all(s.level == OK for s in tracking if 'could not observe' not in s.message)
     before = statuses[:pushed_at[0][1]]
-    assert all(s.level == OK or 'above external_torque_warn' not in s.message
-               for s in before), [s.message for s in before]
-    assert all(s.level == OK for s in before if 'could not observe' not in s.message)
     assert any('could not observe' in s.message for s in before), [s.message for s in before]
     warning = next(s for s in statuses[pushed_at[0][1]:]
                    if 'above external_torque_warn' in s.message)
