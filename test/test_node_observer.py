@@ -44,6 +44,7 @@ END = 3.0                     # s of sim time: 1 s = 20 time constants after the
 GAIN = 20.0                   # 1/s, observer_gain (the default)
 WARN = b'\x01'                # diagnostic_msgs/DiagnosticStatus.WARN as rclpy gives it
 OK = b'\x00'
+TORQUE_WARNING = 'external torque above external_torque_warn'
 
 
 def contact_torque(model, q):
@@ -132,7 +133,7 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
             assert node.proc.poll() is None and sim.proc.poll() is None, 'a process exited'
             lockstep.kick()     # the desired state of step 0, until the first command
             ended = states and seconds(states[-1].header.stamp) >= END
-            warned = pushed_at and any('above external_torque_warn' in s.message
+            warned = pushed_at and any(TORQUE_WARNING in s.message
                                        for s in statuses[pushed_at[0][1]:])
             return ended and warned
         driver.spin_until(done, timeout=10 * TIMEOUT, what='the run and a diagnostics WARN')
@@ -192,13 +193,13 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     # offset above), and on a loaded machine a 1 s period holds so few steps that its RMS
     # can pass the threshold.
     tracking = statuses[:stopped_at[0]]
-    assert all('above external_torque_warn' not in s.message for s in tracking), [
+    assert all(TORQUE_WARNING not in s.message for s in tracking), [
         s.message for s in tracking if s.level != OK]
     assert all(s.level == OK for s in tracking if 'could not observe' not in s.message)
     before = statuses[:pushed_at[0][1]]
     assert any('could not observe' in s.message for s in before), [s.message for s in before]
     warning = next(s for s in statuses[pushed_at[0][1]:]
-                   if 'above external_torque_warn' in s.message)
+                   if TORQUE_WARNING in s.message)
     ref = contact_torque(model, hold)
     loudest = names[int(np.argmax(np.abs(ref)))]
     assert 'above external_torque_warn' in warning.message and loudest in warning.message

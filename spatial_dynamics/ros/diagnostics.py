@@ -298,5 +298,5 @@ def _wrench_text(wrench: Optional[dict], values: list) -> str:
     named = '; '.join(_direction(directions[:, i]) for i in range(directions.shape[1]))
     return (f"external wrench at {wrench['link']!r}: {wrench['weak']} of {wrench['count']} "
             f"samples could not observe every direction (rank {wrench['rank']}, sigma_min "
-            f"{wrench['sigma_min']:.3g}, {wrench['weak_loaded']} of them with an external "
-            f"torque above external_torque_warn); missing or underestimated: {named}")
+            f"{wrench['sigma_min']:.3g}, {wrench['weak_loaded']} of them loaded past "
+            f"external_torque_warn); missing or underestimated: {named}")
