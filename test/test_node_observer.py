@@ -19,6 +19,7 @@ from the estimate's 50 ms lag behind a moving Jᵀw; 3e-9 with computed torque).
 
 import os
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -43,6 +44,7 @@ END = 3.0                     # s of sim time: 1 s = 20 time constants after the
 GAIN = 20.0                   # 1/s, observer_gain (the default)
 WARN = b'\x01'                # diagnostic_msgs/DiagnosticStatus.WARN as rclpy gives it
 OK = b'\x00'
+TORQUE_WARNING = 'external torque above external_torque_warn'
 
 
 def contact_torque(model, q):
@@ -87,6 +89,7 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     states, estimates, statuses, wrenches = [], [], [], []
     push = n.create_publisher(WrenchStamped, f'{NS}/applied_wrench', reliable)
     pushed_at = []      # the sim time at which the push was sent
+    stopped_at = []     # how many statuses had come when the trajectory stopped (hold)
 
     def desired_at(t):
         return trajectory(t) if t <= TRACK_UNTIL else (hold, 0 * hold, 0 * hold)
@@ -99,6 +102,8 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
         t = seconds(state.header.stamp)
         if not states or t > seconds(states[-1].header.stamp):
             states.append(state)
+        if t >= TRACK_UNTIL and not stopped_at:
+            stopped_at.append(len(statuses))
         if t >= PUSH_AT and not pushed_at:
             wrench = WrenchStamped()
             wrench.header.frame_id = LINK
@@ -128,7 +133,8 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
             assert node.proc.poll() is None and sim.proc.poll() is None, 'a process exited'
             lockstep.kick()     # the desired state of step 0, until the first command
             ended = states and seconds(states[-1].header.stamp) >= END
-            warned = pushed_at and any(s.level == WARN for s in statuses[pushed_at[0][1]:])
+            warned = pushed_at and any(TORQUE_WARNING in s.message
+                                       for s in statuses[pushed_at[0][1]:])
             return ended and warned
         driver.spin_until(done, timeout=10 * TIMEOUT, what='the run and a diagnostics WARN')
     finally:
@@ -173,10 +179,27 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
         ref = contact_torque(model, np.array(by_stamp[t].position))
         error = np.linalg.norm(r[t] - ref) / np.linalg.norm(ref)
         assert error < 0.03, (t, error, r[t], ref)
-    # diagnostics: OK before the push, then WARN naming the joints above the threshold
+    # diagnostics: every status WARNs about the wrench's directions exactly when a sample of
+    # its period could not observe all six (σ_min < ε: the tracked path passes σ_min 0.017
+    # near t = 0.5 s), pushed or not; before the push no torque warning
+    for s in statuses:
+        kv = values(s)
+        weak = int(kv.get('wrench samples with weak directions', '0'))
+        assert (weak > 0) == ('could not observe' in s.message), (weak, s.message)
+        if weak:
+            assert s.level == WARN and float(kv['wrench sigma_min (lowest)']) < 0.02, s.message
+    # While tracking, no torque warning. Not judged between the stop and the push: the
+    # abrupt stop jumps the command, which the estimate shows for a step (the half-step
+    # offset above), and on a loaded machine a 1 s period holds so few steps that its RMS
+    # can pass the threshold.
+    tracking = statuses[:stopped_at[0]]
+    assert all(TORQUE_WARNING not in s.message for s in tracking), [
+        s.message for s in tracking if s.level != OK]
+    assert all(s.level == OK for s in tracking if 'could not observe' not in s.message)
     before = statuses[:pushed_at[0][1]]
-    assert all(s.level == OK for s in before), [s.message for s in before]
-    warning = next(s for s in statuses[pushed_at[0][1]:] if s.level == WARN)
+    assert any('could not observe' in s.message for s in before), [s.message for s in before]
+    warning = next(s for s in statuses[pushed_at[0][1]:]
+                   if TORQUE_WARNING in s.message)
     ref = contact_torque(model, hold)
     loudest = names[int(np.argmax(np.abs(ref)))]
     assert 'above external_torque_warn' in warning.message and loudest in warning.message
@@ -185,7 +208,7 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     assert kv['observer gain [1/s]'] == f'{GAIN:g}'
     # the virtual F/T sensor: the pushed wrench itself, in the tcp frame, within 3 % where
     # the arm is well conditioned (all six directions observed: no damping)
-    assert kv['wrench estimate link'] == LINK and kv['wrench samples with weak directions'] == '0'
+    assert kv['wrench estimate link'] == LINK
     assert wrenches and all(w.header.frame_id == LINK for w in wrenches)
     w_at = {seconds(w.header.stamp): w.wrench for w in wrenches}
     # one reading per estimate, at the measurement's stamp (the last ones may still have been
@@ -229,26 +252,37 @@ def test_measured_effort_gravity_compensated_adds_g_of_q(install, driver, tmp_pa
     k = [0]
 
     def send(effort):
+        """Publish the next sample (5 ms of stamps on) again and again until its estimate came.
+
+        Lockstep, so every sample is integrated however busy the machine: a best-effort input
+        dropped by the transport is sent again (one the node got twice is skipped as
+        ``repeated``), and a burst of drops never reads as a gap that restarts the observer.
+        """
         k[0] += 1
         msg = joint_state(names, q, zero, effort, k[0])
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(k[0] * 5_000_000,
-                                                                1_000_000_000)
-        measured.publish(msg)
-        driver.spin_for(0.004)
+        stamp = divmod(k[0] * 5_000_000, 1_000_000_000)
+        msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+
+        def estimated():
+            return estimates and (estimates[-1].header.stamp.sec,
+                                  estimates[-1].header.stamp.nanosec) == stamp
+        deadline = time.monotonic() + TIMEOUT
+        while not estimated():
+            assert time.monotonic() < deadline, f'no estimate of sample {k[0]}'
+            measured.publish(msg)
+            resend = time.monotonic() + 0.05
+            while time.monotonic() < resend and not estimated():
+                driver.executor.spin_once(timeout_sec=0.005)
 
     def run(effort, seconds=1.0):
-        """Publish the held arm at 200 Hz for ``seconds`` of its stamps; the last estimate."""
-        start = len(estimates)
+        """Send the held arm for ``seconds`` of its stamps (200 Hz); the last estimate."""
         for _ in range(int(seconds * 200)):
             send(effort)
-        driver.spin_until(lambda: len(estimates) > start + 100, what='estimates')
         return np.array(estimates[-1].effort)
     try:
         io.wait_connected()
         driver.spin_until(lambda: measured.get_subscription_count() >= 1, what='joint_states')
-        # until the node's subscription has matched this publisher (best effort: the first
-        # messages may be lost while discovery completes on its side)
-        driver.spin_until(lambda: send(zero) or estimates, what='a first estimate')
+        send(zero)    # sent until the node's subscription has matched this publisher
         # UR-like zeros, read as gravity compensated: nothing external (1 s = 20 time constants)
         np.testing.assert_allclose(run(zero), zero, rtol=0, atol=1e-6 * np.abs(g).max())
         # Franka-like g(q), read as full: nothing external either

@@ -80,16 +80,31 @@ def test_latency_benchmark_runs(tmp_path):
 
 
 @pytest.mark.ros
-def test_short_soak_memory_flat_and_every_message_answered(tmp_path):
-    """The CI soak: 30 s, RSS growth < 5 MB after warm-up and no missed answer.
+def test_short_soak_memory_flat_and_every_input_the_node_received_answered(tmp_path):
+    """The CI soak: 30 s at 2 kHz; RSS growth < 5 MB after warm-up, every input it got answered.
 
-    Inputs are best effort by contract; a deeper input queue (the QoS override users have)
-    keeps a busy CI machine's scheduling stalls from dropping messages before the node sees
-    them, so a miss here means the node lost or refused one.
+    2 kHz with the contract's best-effort keep-last-1 input is more than the node answers on a
+    busy 2-core machine (about 0.5 ms of CPU a message), so the transport drops inputs before
+    the node sees them: that is not the node's to prevent and is only reported. The node must
+    answer every input it received (its own totals: none of these valid inputs rejected), keep
+    its memory flat while overloaded, and exit cleanly.
     """
     install = colcon_install()
     proc = subprocess.run(
-        [sys.executable, '-m', 'spatial_dynamics.tools.soak', '--minutes', '0.5', '--rate', '500',
-         '--sample', '2', '--input-depth', '50'],
-        env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 120, cwd=tmp_path)
+        [sys.executable, '-m', 'spatial_dynamics.tools.soak', '--minutes', '0.5', '--rate',
+         '2000', '--sample', '2'],
+        env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 600, cwd=tmp_path)
     assert proc.returncode == 0 and 'PASS' in proc.stdout, proc.stdout + proc.stderr
+    assert 'FAIL' not in proc.stdout and ' and rejected 0 ' in proc.stdout, proc.stdout
+
+
+def test_soak_verdict_judges_what_the_node_controls():
+    """Inputs the transport lost are no failure; a rejection, growth or no load measured are."""
+    from spatial_dynamics.tools.soak import verdict
+    # the CI run on a loaded machine: 2633 inputs never reached the node, none rejected
+    assert verdict(0.02, 5.0, (1200, 0), (12367, 0), True) == []
+    assert 'rejected 3 of the 12370' in verdict(0.0, 5.0, (1200, 0), (12367, 3), True)[0]
+    assert 'grew +6.00 MB' in verdict(6.0, 5.0, (1200, 0), (12367, 0), True)[0]
+    assert 'nothing after the warm-up' in verdict(0.0, 5.0, (1200, 0), (1200, 0), True)[0]
+    assert 'never settled' in verdict(0.0, 5.0, (1200, 0), None, False)[0]
+    assert 'never settled' in verdict(0.0, 5.0, (1200, 0), (12367, 0), False)[0]

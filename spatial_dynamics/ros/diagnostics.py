@@ -225,7 +225,11 @@ def observer_status(output: Optional[Output], gain: float,
                     observer: Optional[MomentumObserver], window: EstimateWindow) -> Status:
     """Return the ``external torque`` status: RMS of the estimate per joint over the period.
 
-    WARN, naming the joints, when a joint's RMS exceeds ``external_torque_warn``.
+    WARN, naming the joints, when a joint's RMS exceeds ``external_torque_warn``; WARN, naming
+    the directions, when the virtual F/T sensor (``wrench_estimate.link``) had a sample in the
+    period where some direction of the wrench was unobservable or damped (fewer than six
+    joints, a singular pose), whether or not anything pushed: a wrench along it would be
+    missed or underestimated.
     """
     values = [('observer gain [1/s]', f'{gain:g}'),
               ('time constant [ms]', f'{1e3 / gain:.1f}' if gain > 0.0 else '')]
@@ -242,7 +246,7 @@ def observer_status(output: Optional[Output], gain: float,
     rms = window.rms()
     if rms is None or len(rms) != len(output.joints):
         return 'OK', 'no measured effort in this period (observer waiting)', values
-    wrench, loaded = _wrench_text(window.wrench, values)
+    wrench = _wrench_text(window.wrench, values)
     warn = output.external_torque_warn
     values += [(f'rms {joint}', f'{value:.4g}') for joint, value in zip(output.joints, rms)]
     values += [('warn above', ', '.join(f'{x:g}' for x in warn))]
@@ -252,31 +256,36 @@ def observer_status(output: Optional[Output], gain: float,
         return 'WARN', ('external torque above external_torque_warn: ' + ', '.join(
             f'{output.joints[i]} {rms[i]:.3g} (RMS) > {warn[i]:g}' for i in over)
             + (f'; {wrench}' if wrench else '')), values
-    if loaded:
+    if wrench:
         return 'WARN', wrench, values
     return 'OK', (f'largest RMS {rms[worst]:.3g} on {output.joints[worst]} '
-                  f'(warn above {warn[worst]:g})' + (f'; {wrench}' if wrench else '')), values
+                  f'(warn above {warn[worst]:g})'), values
 
 
 _AXES = ('n_x', 'n_y', 'n_z', 'f_x', 'f_y', 'f_z')
 
 
 def _direction(u: np.ndarray) -> str:
-    """Name a unit wrench by its largest components, e.g. ``'1 f_z'``."""
+    """Name a unit wrench by its largest components, e.g. ``'0.74 f_y -0.55 f_z 0.38 f_x'``.
+
+    A direction has no sign (the SVD gives either): the largest component is made positive,
+    so the same direction reads the same in every period.
+    """
+    u = u if u[np.argmax(np.abs(u))] >= 0.0 else -u
     parts = [(abs(c), f'{c:+.2g} {axis}') for c, axis in zip(u, _AXES) if abs(c) > 0.2]
     parts.sort(reverse=True)
     return ' '.join(text for _, text in parts).lstrip('+')
 
 
-def _wrench_text(wrench: Optional[dict], values: list) -> Tuple[str, bool]:
-    """Add the virtual F/T sensor's figures to ``values``; ``(text, loaded)``.
+def _wrench_text(wrench: Optional[dict], values: list) -> str:
+    """Add the virtual F/T sensor's figures to ``values``; return what it could not observe.
 
-    ``text`` names the directions it could not observe ('' when it observed all of them);
-    ``loaded``: some of those samples carried an external torque above the warning level
-    (WARN: a real wrench may be misread), else it is only said in the OK message.
+    The text names the weak directions of the period's last sample that had one, and how
+    many of those samples carried an external torque above ``external_torque_warn`` (a real
+    wrench that may have been misread); '' when every sample observed all six directions.
     """
     if wrench is None:
-        return '', False
+        return ''
     values += [('wrench estimate link', wrench['link']),
                ('wrench estimates', str(wrench['count'])),
                ('wrench rank (lowest)', str(wrench['rank'])),
@@ -284,10 +293,10 @@ def _wrench_text(wrench: Optional[dict], values: list) -> Tuple[str, bool]:
                ('wrench samples with weak directions', str(wrench['weak'])),
                ('of them loaded', str(wrench['weak_loaded']))]
     if not wrench['weak']:
-        return '', False
+        return ''
     directions = wrench['last_weak']
     named = '; '.join(_direction(directions[:, i]) for i in range(directions.shape[1]))
     return (f"external wrench at {wrench['link']!r}: {wrench['weak']} of {wrench['count']} "
             f"samples could not observe every direction (rank {wrench['rank']}, sigma_min "
-            f"{wrench['sigma_min']:.3g}); missing or underestimated: {named}",
-            wrench['weak_loaded'] > 0)
+            f"{wrench['sigma_min']:.3g}, {wrench['weak_loaded']} of them loaded past "
+            f"external_torque_warn); missing or underestimated: {named}")
