@@ -459,8 +459,7 @@ def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarra
     where, place, rest = [], [], []
     for j in range(n):
         mine = np.flatnonzero(touches[j, body_of])
-        run = len(mine) and np.array_equal(cols[mine], np.arange(cols[mine[0]],
-                                                                cols[mine[0]] + len(mine)))
+        run = len(mine) and np.array_equal(np.diff(cols[mine]), np.ones(len(mine) - 1))
         # a run of columns (a chain's joint j needs the bodies from j on) is read as a slice
         where.append(slice(cols[mine[0]], cols[mine[0]] + len(mine)) if run else cols[mine])
         own = np.arange(len(cols) + 3 * j, len(cols) + 3 * j + 3) if drives else []
@@ -610,7 +609,6 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
     """
     from threadpoolctl import threadpool_limits
     q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
-    n = q.shape[-1]
     if links is None:
         bodies = tuple(range(1, model.NB + 1))
     else:

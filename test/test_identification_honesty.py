@@ -19,7 +19,10 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 from conftest import robot_urdf_path  # noqa: E402
-from test_correction import EPS, motion, record, robot_bags  # noqa: E402, F401
+from test_correction import EPS, motion, record  # noqa: E402
+from test_correction import robot_bags as robot_bags_fixture  # noqa: E402
+
+robot_bags = robot_bags_fixture
 from test_identification import perturbed_ur5  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
@@ -169,3 +172,19 @@ def test_a_fit_stopped_at_its_limit_says_so(monkeypatch):
     monkeypatch.setattr(identification, 'EVALUATIONS', 1)
     stopped = identify_inertias(model, q, qd, qdd, tau)
     assert not stopped.converged and stopped.evaluations == 1 and stopped.message
+
+
+def test_a_bag_of_nan_efforts_is_refused_saying_so(robot_bags, tmp_path, capsys):
+    """Efforts all NaN: the refusal says NaN, not only 'empty'."""
+    from spatial_dynamics.replay import bags
+    model = robot_bags[0]
+    t, q, qd, qdd = motion(model.nq, 8, seconds=1.0)
+    t_ns = (1_700_000_000 * 10 ** 9 + np.arange(len(t)) * 2_000_000).astype(np.int64)
+    block = bags.encode_joint_states(model.joint_names, t_ns, q, qd, np.full(q.shape, np.nan))
+    bag = str(tmp_path / 'nan')
+    bags.write_bag(bag, 'sqlite3', [('/joint_states', bags.JOINT_STATE, t_ns,
+                                     [r.tobytes() for r in block])])
+    assert main([bag, '--urdf', robot_urdf_path('ur5'), '--out', str(tmp_path / 'o'),
+                 '--no-plots']) == 1
+    err = capsys.readouterr().err
+    assert 'JointState.effort is empty or NaN in every message' in err, err

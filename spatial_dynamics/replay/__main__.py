@@ -224,12 +224,9 @@ def compare(args, plotter) -> int:
     header = ['joint', 'samples', 'rms_measured', 'rms_residual']
     rows = [[n, len(t), rms_measured[j], rms_residual[j]] for j, n in enumerate(names)]
     if shown is not None:
-        header += ['damping', 'friction', 'armature', 'rms_residual_identified',
-                   'undetermined']
-        for j, r in enumerate(rows):
-            r += [correction.drives[0][j], correction.drives[1][j], correction.drives[2][j],
-                  rms_after[j], ' '.join(w for w, x in zip(identify.PARAMETERS, shown)
-                                         if np.isnan(x[j]))]
+        header += ['damping', 'friction', 'armature', 'rms_residual_identified']
+        for j, r in enumerate(rows):      # nan: undetermined (the URDF's value stays)
+            r += [shown[0][j], shown[1][j], shown[2][j], rms_after[j]]
     report.write_summary(os.path.join(args.out, 'summary.csv'), rows, header)
     if not args.no_plots:
         # The plots are drawn in the child while this process writes the residual; it gets
@@ -282,9 +279,11 @@ def compare(args, plotter) -> int:
                                                   f'{100 * drop:.0f} %']
     print(report.table(head, table_rows))
     if shown is not None:
-        what = ('fitted jointly with the inertias' if args.inertias is not None else
-                'fitted jointly with the payload' if args.payload else 'fitted to the residual')
-        print(f'\ndrives {what}, friction threshold {args.threshold:g} rad/s (m/s); '
+        what = ('the inertias fitted jointly with each drive' if args.inertias is not None
+                else 'the payload fitted jointly with each drive' if args.payload else
+                'each drive fitted to the residual')
+        print(f'\n{what} (damping, friction, armature: the table above and the parameters '
+              f'below are this one fit), friction threshold {args.threshold:g} rad/s (m/s); '
               'undetermined: the recording cannot tell it, the URDF\'s value stays:')
         for note in (fit.notes if fit is not None else []) + mimic_notes(model):
             print(f'  note: {note}')
@@ -309,7 +308,7 @@ def compare(args, plotter) -> int:
 
 
 def _value(x: float) -> str:
-    """A drive term for the table: 4 digits, or 'undetermined' (nan)."""
+    """Return a drive term for the table: 4 digits, or 'undetermined' (nan)."""
     return 'undetermined' if np.isnan(x) else f'{x:.4g}'
 
 

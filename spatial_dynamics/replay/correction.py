@@ -46,8 +46,11 @@ def robot_length(model: Model) -> float:
 
 
 def unrealistic(model: Model, body: int, inertia: np.ndarray) -> str:
-    """Say why a fitted body cannot be the link (its mass at the floor, its centre far outside
-    the robot), or return ''."""
+    """Say why a fitted body cannot be the link, or return ''.
+
+    It cannot when its mass is at the fit's floor (:data:`MASS_FLOOR`) or its centre of mass
+    lies farther from the link's frame than the robot is long (:func:`robot_length`).
+    """
     m, c, _ = identification.mass_com_inertia(identification._ten(inertia))
     length = max(robot_length(model), LENGTH_FLOOR)
     where = ', '.join(f'{x:.3g}' for x in c)
@@ -259,7 +262,8 @@ def write_parameters(correction: Correction, out: str) -> None:
     ``undetermined`` is 0 when the data determines the parameter by itself and 1 when it
     does not (it enters only combinations with others, or none: the value is the one nearest
     the URDF's that fits). A parameter no torque of the recording depends on has σ ``inf``
-    and the URDF's value. The drives' terms follow, one row each (link: the joint). Inertias are about the body frame's origin (the link frame of the
+    and the URDF's value. The drives' terms follow, one row each (link: the joint).
+    Inertias are about the body frame's origin (the link frame of the
     link that starts the body).
     """
     report.write_summary(os.path.join(out, 'parameters.csv'), correction.parameter_rows(),
