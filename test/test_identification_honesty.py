@@ -188,3 +188,11 @@ def test_a_bag_of_nan_efforts_is_refused_saying_so(robot_bags, tmp_path, capsys)
                  '--no-plots']) == 1
     err = capsys.readouterr().err
     assert 'JointState.effort is empty or NaN in every message' in err, err
+
+
+def test_a_value_is_printed_with_the_digits_its_sigma_allows():
+    """The payload's mass line: to σ's second significant digit, never more."""
+    from spatial_dynamics.replay.__main__ import to_sigma
+    assert to_sigma(1.498765, 0.0123) == '1.499'
+    assert to_sigma(1.498765, 2.3) == '1.5'
+    assert to_sigma(1234.5, 45.0) == '1234'

@@ -126,11 +126,19 @@ def mimic_notes(model: Model) -> List[str]:
 # --------------------------------------------------------------------------------------------
 # The bag command
 
+def to_sigma(x: float, sigma: float) -> str:
+    """Return ``x`` with the digits its σ allows (to σ's second significant digit)."""
+    if not (np.isfinite(sigma) and sigma > 0):
+        return f'{x:.5g}'
+    return f'{x:.{max(0, 1 - int(np.floor(np.log10(sigma))))}f}'
+
+
 def print_payload(payload, names: Sequence[str], args) -> None:
     """Print an identified payload: values with one σ, the node's parameters, a URDF tag."""
     s = payload.sigma
     rms = ', '.join(f'{n} {r:.3g}' for n, r in zip(names, payload.rms))
-    print(f'\npayload on {payload.link!r}: {payload.mass:.5g} kg (σ {s[0]:.2g}), centre of '
+    print(f'\npayload on {payload.link!r}: {to_sigma(payload.mass, s[0])} kg (σ {s[0]:.2g}), '
+          'centre of '
           f'mass {np.array2string(payload.com, precision=4)} m (link frame); residual RMS '
           f'per joint after the fit {rms}')
     print('\n# node parameters (the payload):')
