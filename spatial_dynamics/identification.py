@@ -383,9 +383,12 @@ def log_cholesky_jacobian(theta: np.ndarray) -> np.ndarray:
     return out
 
 
-#: Samples whose regressor rows are formed at once: the stacked regressor of an hour at 1 kHz
-#: would take gigabytes, its running triangle a few kilobytes.
-CHUNK = 20_000
+#: Samples whose regressor rows are formed at once: small enough that the rows stay in the
+#: cache and their buffers are reused (20 000 samples of a 7-joint arm took 78 MB, new pages
+#: each time: 9 µs a sample, 4 µs with 2 000); an hour at 1 kHz never lies in memory whole.
+CHUNK = 2048
+#: Samples whose torques are computed at once (a few MB).
+RNEA_CHUNK = 1 << 16
 
 
 def _drive_columns(qd: np.ndarray, qdd: np.ndarray, threshold: float) -> np.ndarray:
@@ -422,6 +425,21 @@ def predicted_torque(model: Model, q, qd, qdd, gravity, drives=None,
     return tau
 
 
+def _touches(model: Model) -> np.ndarray:
+    """Return (n, NB+1) bools: joint ``j``'s torque depends on body ``i``'s parameters.
+
+    Body ``i`` loads the joints of its ancestors and its own (RBDA's backward pass carries
+    ``fᵢ`` to the root): every other entry of the regressor's row ``j`` is zero.
+    """
+    touches = np.zeros((len(model.joint_names), model.NB + 1), dtype=bool)
+    for i in range(1, model.NB + 1):
+        b = i
+        while b > 0:
+            touches[model.qidx[b], i] = True
+            b = model.parent[b]
+    return touches
+
+
 def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarray,
                  pi0: np.ndarray, drive_threshold: Optional[float]) -> np.ndarray:
     """Return ``F`` with ``Fᵀ F = [A b]ᵀ [A b]``, the recording summed chunk by chunk.
@@ -429,37 +447,78 @@ def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarra
     ``A`` is the regressor's ``cols`` (then the drive columns), ``b`` the torque less what the
     other columns give with ``pi0``; then ``|A x − b|² = |F[:, :-1] x − F[:, -1]|²``: the fit
     runs on as many rows as unknowns, whatever the length of the recording. The Gram matrix
-    is summed (one matrix product per chunk: a QR of each chunk costs ten times more) and
-    factored at the end by an eigendecomposition after equilibrating its columns; it loses
-    the accuracy of directions the data barely sees, far below the regularisation that
-    decides those directions anyway (``test_identification``: the same fit as a QR of the
-    stacked rows).
+    is summed joint by joint, each joint's rows over only the columns its torque depends on
+    (:func:`_touches`; its own drive terms, the torque), and factored at the end by an
+    eigendecomposition after equilibrating its columns; it loses the accuracy of directions
+    the data barely sees, far below the regularisation that decides those directions anyway
+    (``test_identification``: the same fit as a QR of the stacked rows). The chunks are
+    shared by ``THREADS`` threads, each summing its own (every ``THREADS``-th chunk) in a
+    fixed order: the result does not depend on the timing. Call it with the BLAS on one
+    thread (:func:`identify_inertias` does): these threads are the parallelism.
     """
+    from concurrent.futures import ThreadPoolExecutor
     from scipy.linalg.blas import dsyrk
+    from .backends.compiled import THREADS
     q, qd, qdd = states
-    fixed = np.setdiff1d(np.arange(10 * model.NB), cols)
-    every = len(fixed) == 0 and np.array_equal(cols, np.arange(10 * model.NB))
     n = q.shape[-1]
-    width = len(cols) + (3 * n if drive_threshold is not None else 0) + 1
-    G = np.zeros((width, width))
-    for a in range(0, len(q), CHUNK):
-        part = slice(a, a + CHUNK)
-        Y = regressor(model, q[part], qd[part], qdd[part], gravity).reshape(-1, 10 * model.NB)
-        M = np.empty((len(Y), width))        # [A | drives | b], filled in place
-        M[:, :len(cols)] = Y if every else Y[:, cols]
-        if drive_threshold is not None:
-            M[:, len(cols):-1] = _drive_columns(qd[part], qdd[part], drive_threshold
-                                                ).reshape(len(Y), -1)
-        M[:, -1] = tau[part].reshape(-1)
-        if len(fixed):
-            M[:, -1] -= Y[:, fixed] @ pi0[fixed]
-        # Mᵀ M, its upper triangle (BLAS syrk: half of a matrix product's work)
-        G += dsyrk(1.0, M.T, trans=0)
-    G = np.triu(G) + np.triu(G, 1).T
+    fixed = np.setdiff1d(np.arange(10 * model.NB), cols)
+    drives = drive_threshold is not None
+    width = len(cols) + (3 * n if drives else 0) + 1
+    body_of = cols // 10 + 1
+    touches = _touches(model)
+    # per joint: the columns of Y it needs (positions in cols), its places in G, Y's fixed
+    # columns it needs
+    where, place, rest = [], [], []
+    for j in range(n):
+        mine = np.flatnonzero(touches[j, body_of])
+        run = len(mine) and np.array_equal(np.diff(cols[mine]), np.ones(len(mine) - 1))
+        # a run of columns (a chain's joint j needs the bodies from j on) is read as a slice
+        where.append(slice(cols[mine[0]], cols[mine[0]] + len(mine)) if run else cols[mine])
+        own = np.arange(len(cols) + 3 * j, len(cols) + 3 * j + 3) if drives else []
+        place.append(np.concatenate([mine, own, [width - 1]]).astype(int))
+        rest.append(fixed[touches[j, fixed // 10 + 1]])
+
+    def gram(chunks: range) -> np.ndarray:
+        G = np.zeros((width, width))
+        for a in chunks:
+            part = slice(a, a + CHUNK)
+            Y = regressor(model, q[part], qd[part], qdd[part], gravity)
+            for j in range(n):
+                k = len(place[j]) - (4 if drives else 1)
+                M = np.empty((len(Y), len(place[j])))      # [Y_j | drives_j | τ_j]
+                M[:, :k] = Y[:, j, where[j]]
+                if drives:
+                    M[:, k] = qd[part, j]
+                    np.tanh(qd[part, j] / drive_threshold, out=M[:, k + 1])
+                    M[:, k + 2] = qdd[part, j]
+                M[:, -1] = tau[part, j]
+                if len(rest[j]):
+                    M[:, -1] -= Y[:, j][:, rest[j]] @ pi0[rest[j]]
+                # Mᵀ M, its upper triangle (BLAS syrk: half of a matrix product's work)
+                S = dsyrk(1.0, M.T, trans=0)
+                G[np.ix_(place[j], place[j])] += np.triu(S) + np.triu(S, 1).T
+        return G
+
+    starts = range(0, len(q), CHUNK)
+    workers = max(1, min(THREADS, len(starts)))
+    if workers == 1:
+        G = gram(starts)
+    else:
+        with ThreadPoolExecutor(workers) as pool:
+            parts = list(pool.map(gram, [starts[w::workers] for w in range(workers)]))
+        G = sum(parts[1:], parts[0])
+    # a column no torque depends on (zero, or rounding noise: RTOL of the largest, as in
+    # base_parameters) stays exactly zero; factored with the others, the eigendecomposition
+    # would spread the rounding of the other directions into it, ~1e-12 of the largest
     d = np.sqrt(np.diag(G))
-    d[d == 0.0] = 1.0
-    w, V = np.linalg.eigh(G / d[:, None] / d[None, :])
-    return (np.sqrt(np.clip(w, 0.0, None))[:, None] * V.T) * d[None, :]
+    felt = d > RTOL * (d[:-1].max() if width > 1 else 0.0)
+    felt[-1] = True
+    F = np.zeros((width, width))
+    sub = np.ix_(felt, felt)
+    d = np.where(d[felt] > 0.0, d[felt], 1.0)
+    w, V = np.linalg.eigh(G[sub] / d[:, None] / d[None, :])
+    F[:len(w)][:, felt] = (np.sqrt(np.clip(w, 0.0, None))[:, None] * V.T) * d[None, :]
+    return F
 
 
 @dataclass(frozen=True)
@@ -473,12 +532,20 @@ class Inertias:
             (and drives).
         covariance: (10·len(bodies), 10·len(bodies)) the fitted parameters' covariance,
             from the residual and the regularised normal equations.
-        drives: ``(damping, friction, armature)`` per joint, or None.
+        drives: ``(damping, friction, armature)`` per joint, or None; what the recording
+            cannot tell is the URDF's ``<dynamics>`` (armature: 0, the node's default).
         drive_threshold: the friction's smooth-sign velocity, with ``drives``.
         undetermined: (10·len(bodies),) 0 when the data determines the parameter by itself,
             1 when it does not (it is in no combination the data sees, or only in
             combinations with others, and the regularisation toward the URDF chose its
             value): ``diag((AᵀA + W²)⁻¹ W²)``.
+        unexcited: (10·len(bodies),) True for a parameter no torque of the recording
+            depends on (its regressor column is zero): undetermined, σ infinite.
+        drive_sigma: ``(damping, friction, armature)`` σ per joint (inf: undetermined).
+        drive_unexcited: ``(damping, friction, armature)``, True where no torque of the
+            recording depends on the term (the joint never moves, or never accelerates):
+            the URDF's value is kept.
+        converged: False when the fit stopped at its evaluation limit; ``message`` says why.
     """
 
     pi: np.ndarray
@@ -489,16 +556,46 @@ class Inertias:
     drives: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
     drive_threshold: Optional[float] = None
     undetermined: Optional[np.ndarray] = None
+    unexcited: Optional[np.ndarray] = None
+    drive_sigma: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+    drive_unexcited: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+    converged: bool = True
+    evaluations: int = 0
+    message: str = ''
 
     @property
     def sigma(self) -> np.ndarray:
-        """One standard deviation of each fitted parameter (bodies in order, ten each)."""
-        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+        """One standard deviation of each fitted parameter (bodies in order, ten each).
+
+        Infinite for a parameter no torque depends on: the recording says nothing of it.
+        """
+        sigma = np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+        if self.unexcited is not None:
+            sigma[self.unexcited] = np.inf
+        return sigma
 
     def model(self, model: Model) -> Model:
         """Return ``model`` with the identified inertias (drives are not part of a model)."""
         return with_bodies(model, {i: _spatial_inertia(self.pi[10 * (i - 1):10 * i])
                                    for i in self.bodies})
+
+
+#: The inertial fit's evaluations at most, None: scipy's default (100 per unknown).
+EVALUATIONS: Optional[int] = None
+
+
+def _realisable_strictly(pi: np.ndarray) -> bool:
+    """Tell whether ten parameters are a body with a positive definite pseudo-inertia."""
+    w = np.linalg.eigvalsh(pseudo_inertia(pi))
+    return bool(w[0] > 1e-12 * w[-1])
+
+
+def drive_prior(model: Model) -> np.ndarray:
+    """Return (3n,) each joint's URDF damping, friction and armature 0, as the fit orders them."""
+    n = len(model.joint_names)
+    out = np.zeros(3 * n)
+    out[0::3], out[1::3] = model.damping, model.friction
+    return out
 
 
 def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[str]] = None,
@@ -507,73 +604,116 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
                       regularisation: float = 1e-3) -> Inertias:
     """Fit the inertial parameters of ``links`` (default: every moving body) to ``tau``.
 
-    Least squares (:func:`scipy.optimize.least_squares`, trust region, the exact Jacobian,
-    unscaled: scaling by the Jacobian's columns sends the barely excited ones flying) on
-    ``Y π(θ) (+ drives) − τ`` with every fitted body in the log-Cholesky
-    parameters ``θ`` (so each stays physically realisable whatever the data), plus
-    ``regularisation`` · (π − π_URDF), scaled by the regressor's column norms: where the data
-    says nothing (a combination no motion excites) the URDF's values stay. With
-    ``drive_threshold`` each joint's damping, Coulomb friction (``tanh(q̇/threshold)``) and
-    armature are fitted jointly. The recording is reduced chunk by chunk to a triangle
-    (:func:`_square_root`), so its length costs time, not memory.
+    Least squares on ``Y π (+ drives) − τ`` plus ``regularisation`` · (π − π_URDF), scaled
+    by the regressor's column norms: where the data says nothing (a combination no motion
+    excites) the URDF's values stay. With ``drive_threshold`` each joint's damping, Coulomb
+    friction (``tanh(q̇/threshold)``) and armature are fitted jointly; a drive term no torque
+    depends on keeps the URDF's value. The recording is reduced chunk by chunk to a triangle
+    (:func:`_square_root`), so its length costs time, not memory, and the fit that follows
+    works on that triangle only.
+
+    The problem is convex in π (a quadratic over the physically realisable bodies, whose
+    pseudo-inertias are positive semi-definite): its unconstrained minimum, one linear
+    solve, is the answer when every body is realisable there. Otherwise the fit goes on
+    from it (each body moved to the nearest realisable one) in the log-Cholesky parameters
+    ``θ`` (:func:`scipy.optimize.least_squares`, trust region, the exact Jacobian), which
+    keep every body realisable whatever the data.
     """
-    from scipy.optimize import least_squares
+    from threadpoolctl import threadpool_limits
     q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
-    n = q.shape[-1]
     if links is None:
         bodies = tuple(range(1, model.NB + 1))
     else:
         bodies = tuple(sorted({link_to_body(model, link)[0] for link in links}))
     pi0 = parameters(model)
     cols = np.concatenate([np.arange(10 * (i - 1), 10 * i) for i in bodies])
-    F = _square_root(model, (q, qd, qdd), tau, gravity, cols, pi0, drive_threshold)
+    # the BLAS on one thread: the Gram matrix's chunks are shared by the command's own
+    # threads (BLAS threads beside them only oversubscribe the cores: a 30 s bag took 129 s
+    # at load 4 with OpenBLAS's default, 16.6 s with one), and the fit works on matrices of
+    # a hundred columns, where threads cost more than they give
+    with threadpool_limits(limits=1, user_api='blas'):
+        F = _square_root(model, (q, qd, qdd), tau, gravity, cols, pi0, drive_threshold)
+        return _fit(model, (q, qd, qdd), tau, gravity, bodies, cols, pi0, F,
+                    drive_threshold, regularisation)
+
+
+def _fit(model: Model, states, tau, gravity, bodies, cols, pi0, F, drive_threshold,
+         regularisation) -> Inertias:
+    """:func:`identify_inertias` on the recording's triangle ``F`` (:func:`_square_root`)."""
+    from scipy.optimize import least_squares
+    q, qd, qdd = states
+    n = q.shape[-1]
     R, c = F[:, :-1], F[:, -1]
     nb = 10 * len(bodies)
     ndrive = R.shape[1] - nb
-    scale = np.linalg.norm(R[:, :nb], axis=0)            # = the column norms of A
-    weight = regularisation * np.where(scale > 0, scale, scale.max() or 1.0)
-    theta0 = np.concatenate([log_cholesky(pi0[10 * (i - 1):10 * i]) for i in bodies])
+    scale = np.linalg.norm(R, axis=0)          # = the column norms of A (0: no torque felt)
+    unexcited = scale[:nb] == 0.0
+    weight = regularisation * np.where(unexcited, scale[:nb].max() or 1.0, scale[:nb])
+    prior = np.concatenate([pi0[cols], drive_prior(model) if ndrive else []])
+    free = np.concatenate([np.ones(nb, dtype=bool), scale[nb:] > 0.0])   # the unknowns
+    Ru = R[:, free]
+    # the unconstrained minimum of |R x − c|² + |W (π − π_URDF)|² (drives unregularised)
+    top = c - R[:, ~free] @ prior[~free]
+    A = np.vstack([Ru, np.hstack([np.diag(weight), np.zeros((nb, Ru.shape[1] - nb))])])
+    with np.errstate(all='ignore'):
+        x, *_ = np.linalg.lstsq(A, np.concatenate([top, weight * pi0[cols]]), rcond=None)
+    blocks = range(len(bodies))
+    converged, evaluations, message = True, 0, ''
+    if not all(_realisable_strictly(x[10 * k:10 * k + 10]) for k in blocks):
+        def pi_of(t):
+            return np.concatenate([from_log_cholesky(t[10 * k:10 * k + 10]) for k in blocks])
 
-    def pi_of(x):
-        return np.concatenate([from_log_cholesky(x[10 * k:10 * k + 10])
-                               for k in range(len(bodies))])
+        def residual(t):
+            p = pi_of(t[:nb])
+            return np.concatenate([Ru @ np.concatenate([p, t[nb:]]) - top,
+                                   weight * (p - pi0[cols])])
 
-    def residual(x):
-        p = pi_of(x[:nb])
-        full = np.concatenate([p, x[nb:]])
-        return np.concatenate([R @ full - c, weight * (p - pi0[cols])])
+        def jacobian(t):
+            D = np.zeros((nb, nb))
+            for k in blocks:
+                D[10 * k:10 * k + 10, 10 * k:10 * k + 10] = log_cholesky_jacobian(
+                    t[10 * k:10 * k + 10])
+            return np.vstack([np.hstack([Ru[:, :nb] @ D, Ru[:, nb:]]),
+                              np.hstack([weight[:, None] * D, np.zeros((nb, len(t) - nb))])])
 
-    def jacobian(x):
-        D = np.zeros((nb, nb))
-        for k in range(len(bodies)):
-            D[10 * k:10 * k + 10, 10 * k:10 * k + 10] = log_cholesky_jacobian(
-                x[10 * k:10 * k + 10])
-        top = np.hstack([R[:, :nb] @ D, R[:, nb:]])
-        bottom = np.hstack([weight[:, None] * D, np.zeros((nb, ndrive))])
-        return np.vstack([top, bottom])
-
-    x0 = np.concatenate([theta0, np.zeros(ndrive)])
-    result = least_squares(residual, x0, jac=jacobian, method='trf', x_scale=1.0)
+        # from the unconstrained minimum, each body moved to the nearest realisable one
+        t0 = np.concatenate([log_cholesky(x[10 * k:10 * k + 10]) for k in blocks] + [x[nb:]])
+        result = least_squares(residual, t0, jac=jacobian, method='trf', x_scale=1.0,
+                               max_nfev=EVALUATIONS)
+        x = np.concatenate([pi_of(result.x[:nb]), result.x[nb:]])
+        converged, evaluations = result.status > 0, int(result.nfev)
+        message = result.message
     pi = pi0.copy()
-    fitted = pi_of(result.x[:nb])
-    pi[cols] = fitted
-    drives = None if not ndrive else tuple(result.x[nb + k::3] for k in range(3))
+    pi[cols] = x[:nb]
+    drives = drive_sigma = drive_unexcited = None
+    full = prior.copy()
+    full[free] = x
+    if ndrive:
+        drives = tuple(full[nb + k::3].copy() for k in range(3))
+        drive_unexcited = tuple(~free[nb + k::3] for k in range(3))
     found = Inertias(pi, bodies, np.zeros(n), np.zeros(n), np.zeros((nb, nb)), drives,
                      drive_threshold if ndrive else None)
     corrected = found.model(model)     # built once: each new model has its own kernels
     before, after = np.zeros(n), np.zeros(n)
-    for a in range(0, len(q), CHUNK):
-        part = slice(a, a + CHUNK)
+    for a in range(0, len(q), RNEA_CHUNK):
+        part = slice(a, a + RNEA_CHUNK)
         states = q[part], qd[part], qdd[part]
         before += np.sum((tau[part] - rnea(model, *states, gravity)) ** 2, axis=0)
         after += np.sum((tau[part] - predicted_torque(corrected, *states, gravity, drives,
                                                       drive_threshold)) ** 2, axis=0)
-    rows = tau.size
     # the covariance of the linearised, regularised estimate: s² (AᵀA + W²)⁻¹
-    s2 = float(after.sum()) / max(rows - R.shape[1], 1)
-    normal = R.T @ R
+    s2 = float(after.sum()) / max(tau.size - Ru.shape[1], 1)
+    normal = Ru.T @ Ru
     normal[np.arange(nb), np.arange(nb)] += weight ** 2
-    inverse = np.linalg.pinv(normal)[:nb, :nb]
+    inverse = np.linalg.pinv(normal)
+    undetermined = np.clip(np.diag(inverse)[:nb] * weight ** 2, 0.0, 1.0)
+    undetermined[unexcited] = 1.0
+    if ndrive:
+        variance = np.full(ndrive, np.inf)
+        variance[free[nb:]] = s2 * np.clip(np.diag(inverse)[nb:], 0.0, None)
+        drive_sigma = tuple(np.sqrt(variance[k::3]) for k in range(3))
     return replace(found, before=np.sqrt(before / len(q)), after=np.sqrt(after / len(q)),
-                   covariance=s2 * inverse,
-                   undetermined=np.clip(np.diag(inverse) * weight ** 2, 0.0, 1.0))
+                   covariance=s2 * inverse[:nb, :nb], undetermined=undetermined,
+                   unexcited=unexcited, drive_sigma=drive_sigma,
+                   drive_unexcited=drive_unexcited, converged=converged,
+                   evaluations=evaluations, message=message)

@@ -113,16 +113,15 @@ def test_a_corrected_urdf_predicts_held_out_motion(robot_bags, tmp_path, capsys)
     assert sum(row['held_out_urdf'] > 20 * NOISE for row in v.values()) >= 5, v
     corrected = sd.Model.from_urdf(urdf)
     assert not corrected.warnings
-    # the jointly fitted armature is printed with the drives; the node's block above it is
-    # the drives-only fit, so take the joint one
-    joint = text.split('fitted jointly with each drive')[1].split('\n')[0]
-    armature = [float(part.split()[-1]) for part in joint.split(':', 1)[1].split(';')]
+    # the node's block: the armature fitted jointly with the inertias
+    block = text.split('# node parameters')[1].split('armature: [')[1].split(']')[0]
+    armature = [float(x) for x in block.split(',')]
     predicted = (sd.rnea(corrected, q, qd, qdd) + sd.friction_torque(corrected, qd, EPS)
                  + np.array(armature) * qdd)
     error = np.sqrt(np.mean((predicted - true_torque(true, q, qd, qdd)) ** 2, axis=0))
     assert (error < 2 * NOISE).all(), error
     params = list(csv.DictReader(open(os.path.join(out, 'parameters.csv'))))
-    assert len(params) == 10 * model.NB
+    assert len(params) == 10 * model.NB + 3 * model.nq     # every body's ten, each drive's 3
     assert all(float(r['sigma']) >= 0.0 for r in params)
 
 

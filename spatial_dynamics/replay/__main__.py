@@ -51,6 +51,7 @@ import sys
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from .. import friction_torque, Model, rnea
 from ..check import read_description
@@ -130,17 +131,21 @@ def mimic_notes(model: Model) -> List[str]:
 # --------------------------------------------------------------------------------------------
 # The bag command
 
+def to_sigma(x: float, sigma: float) -> str:
+    """Return ``x`` with the digits its σ allows (to σ's second significant digit)."""
+    if not (np.isfinite(sigma) and sigma > 0):
+        return f'{x:.5g}'
+    return f'{x:.{max(0, 1 - int(np.floor(np.log10(sigma))))}f}'
+
+
 def print_payload(payload, names: Sequence[str], args) -> None:
     """Print an identified payload: values with one σ, the node's parameters, a URDF tag."""
     s = payload.sigma
     rms = ', '.join(f'{n} {r:.3g}' for n, r in zip(names, payload.rms))
-    print(f'\npayload on {payload.link!r}: {payload.mass:.5g} kg (σ {s[0]:.2g}), centre of '
+    print(f'\npayload on {payload.link!r}: {to_sigma(payload.mass, s[0])} kg (σ {s[0]:.2g}), '
+          'centre of '
           f'mass {np.array2string(payload.com, precision=4)} m (link frame); residual RMS '
           f'per joint after the fit {rms}')
-    if payload.drives is not None:
-        print('  fitted jointly with each drive (damping, friction, armature; the table '
-              'above fitted the drives without the payload, use these): ' + '; '.join(
-                  f'{n} {d:.3g} {f:.3g} {a:.3g}' for n, d, f, a in zip(names, *payload.drives)))
     print('\n# node parameters (the payload):')
     print(payload.node_parameters(), end='')
     print('\n<!-- URDF: the payload as an <inertial> in the frame of '
@@ -186,41 +191,56 @@ def compare(args, plotter) -> int:
     held_out = recording(args, args.validate, model, stages) if args.validate else None
     fq, fqd, fqdd, feffort = (train[k] for k in ('q', 'qd', 'qdd', 'effort'))
     fit = None
-    if args.identify:
-        fresidual = residual if not args.also else feffort - rnea(model, fq, fqd, fqdd,
-                                                                  args.gravity)
-        fit = identify.identify(fresidual, fqd, fqdd, args.threshold, names)
-        stages.done('identify')
-    payload = None
-    if args.payload:
-        payload = identification.identify_payload(
-            model, args.payload, fq, fqd, fqdd, feffort, args.gravity,
-            args.threshold if args.identify else None)
-        stages.done('payload')
     correction, excitation_warning = None, ''
-    if args.inertias is not None:
-        found = identification.identify_inertias(
-            model, fq, fqd, fqdd, feffort, args.inertias or None, args.gravity,
-            args.threshold if args.identify else None)
-        correction = correction_of.from_inertias(model, found, args.threshold)
-        excitation_warning = correction_of.undetermined_warning(
-            model, train, found.bodies, args.gravity)
-        stages.done('inertias')
-    elif payload is not None:
-        correction = correction_of.Correction(model, payload=payload, drives=payload.drives,
-                                              threshold=args.threshold)
-    elif fit is not None:
-        correction = correction_of.Correction(
-            model, drives=tuple(np.nan_to_num(x) for x in (fit.damping, fit.friction,
-                                                           fit.armature)),
-            threshold=args.threshold)
+    # the fits work on matrices of a hundred columns, or share their chunks among the
+    # command's own threads: BLAS threads beside those only oversubscribe the cores
+    with threadpool_limits(limits=1, user_api='blas'):
+        if args.identify and args.payload is None and args.inertias is None:
+            fresidual = residual if not args.also else feffort - rnea(model, fq, fqd, fqdd,
+                                                                      args.gravity)
+            fit = identify.identify(fresidual, fqd, fqdd, args.threshold, names)
+            correction = correction_of.from_drives(model, fit, args.threshold)
+            stages.done('identify')
+        payload = None
+        if args.payload:
+            payload = identification.identify_payload(
+                model, args.payload, fq, fqd, fqdd, feffort, args.gravity,
+                args.threshold if args.identify else None)
+            correction = correction_of.Correction(model, payload=payload,
+                                                  drives=payload.drives,
+                                                  threshold=args.threshold)
+            stages.done('payload')
+        if args.inertias is not None:
+            found = identification.identify_inertias(
+                model, fq, fqd, fqdd, feffort, args.inertias or None, args.gravity,
+                args.threshold if args.identify else None)
+            if not found.converged:
+                print(f'warning: the inertial fit stopped after {found.evaluations} '
+                      f'evaluations without converging ({found.message}): its values are '
+                      'its last step; judge them by the residual, and the links flagged below',
+                      file=sys.stderr)
+            correction = correction_of.from_inertias(model, found, args.threshold)
+            excitation_warning = correction_of.undetermined_warning(
+                model, train, found.bodies, args.gravity)
+            stages.done('inertias')
+    # one set of drive terms (the joint fit's when there is one), printed and written
+    shown = rms_after = None
+    if correction is not None and correction.drives is not None:
+        shown = correction.undetermined_drives()
+        if fit is not None:
+            rms_before, rms_after = fit.rms_before, fit.rms_after
+        elif args.inertias is not None:
+            rms_before, rms_after = found.before, found.after
+        else:
+            rms_before, rms_after = (rms(feffort - rnea(model, fq, fqd, fqdd, args.gravity))
+                                     if args.also else rms_residual), payload.rms
     report.ensure_dir(args.out)
     header = ['joint', 'samples', 'rms_measured', 'rms_residual']
     rows = [[n, len(t), rms_measured[j], rms_residual[j]] for j, n in enumerate(names)]
-    if fit is not None:
+    if shown is not None:
         header += ['damping', 'friction', 'armature', 'rms_residual_identified']
-        for j, r in enumerate(rows):
-            r += [fit.damping[j], fit.friction[j], fit.armature[j], fit.rms_after[j]]
+        for j, r in enumerate(rows):      # nan: undetermined (the URDF's value stays)
+            r += [shown[0][j], shown[1][j], shown[2][j], rms_after[j]]
     report.write_summary(os.path.join(args.out, 'summary.csv'), rows, header)
     if not args.no_plots:
         # The plots are drawn in the child while this process writes the residual; it gets
@@ -268,21 +288,26 @@ def compare(args, plotter) -> int:
     table_rows = [[n, f'{rms_measured[j]:.4g}', f'{rms_residual[j]:.4g}']
                   for j, n in enumerate(names)]
     head = ['joint', 'rms measured', 'rms residual']
-    if fit is not None:
+    if shown is not None:
         head += ['damping', 'friction', 'armature', 'rms identified', 'drop']
         for j, r in enumerate(table_rows):
-            drop = 1.0 - fit.rms_after[j] / fit.rms_before[j] if fit.rms_before[j] else 0.0
-            r += [f'{fit.damping[j]:.4g}', f'{fit.friction[j]:.4g}', f'{fit.armature[j]:.4g}',
-                  f'{fit.rms_after[j]:.4g}', f'{100 * drop:.0f} %']
+            drop = 1.0 - rms_after[j] / rms_before[j] if rms_before[j] else 0.0
+            r += [_value(x[j]) for x in shown] + [f'{rms_after[j]:.4g}',
+                                                  f'{100 * drop:.0f} %']
     print(report.table(head, table_rows))
-    if fit is not None:
-        print(f'\nidentified with friction threshold {args.threshold:g} rad/s (m/s):')
-        for note in fit.notes + mimic_notes(model):
+    if shown is not None:
+        what = ('the inertias fitted jointly with each drive' if args.inertias is not None
+                else 'the payload fitted jointly with each drive' if args.payload else
+                'each drive fitted to the residual')
+        print(f'\n{what} (damping, friction, armature: the table above and the parameters '
+              f'below are this one fit), friction threshold {args.threshold:g} rad/s (m/s); '
+              'undetermined: the recording cannot tell it, the URDF\'s value stays:')
+        for note in (fit.notes if fit is not None else []) + mimic_notes(model):
             print(f'  note: {note}')
         print('\n# node parameters (config/*.yaml):')
-        print(report.node_parameters(names, fit.armature, args.threshold))
+        print(report.node_parameters(names, shown[2], args.threshold))
         print('\n<!-- URDF: each joint\'s <dynamics> (read by friction_model: urdf) -->')
-        print(report.urdf_dynamics(names, fit.damping, fit.friction))
+        print(report.urdf_dynamics(names, shown[0], shown[1], model.damping, model.friction))
     if payload is not None:
         print_payload(payload, names, args)
     written = ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
@@ -299,6 +324,11 @@ def compare(args, plotter) -> int:
     return 0
 
 
+def _value(x: float) -> str:
+    """Return a drive term for the table: 4 digits, or 'undetermined' (nan)."""
+    return 'undetermined' if np.isnan(x) else f'{x:.4g}'
+
+
 def corrected(args, model: Model, correction, data: Dict, stages: Stages,
               held_out: Optional[Dict] = None,
               urdf_source: Optional[urdf_writer.Source] = None) -> List[str]:
@@ -310,11 +340,6 @@ def corrected(args, model: Model, correction, data: Dict, stages: Stages,
     written = ['parameters.csv', 'validation.csv']
     if correction.bodies:
         correction_of.print_inertias(correction)
-        if correction.drives is not None:
-            print('  fitted jointly with each drive (damping, friction, armature; the table '
-                  'above fitted the drives without the inertias, use these): ' + '; '.join(
-                      f'{n} {d:.3g} {f:.3g} {a:.3g}'
-                      for n, d, f, a in zip(model.joint_names, *correction.drives)))
     correction_of.write_parameters(correction, args.out)
     train = correction_of.residuals(correction, data, args.gravity)
     held = None

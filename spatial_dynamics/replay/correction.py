@@ -23,10 +23,45 @@ from ..algorithms.regressor import PARAMETERS
 from ..backends import rnea
 from ..files import write_atomic
 from ..model import Model
-from . import report, urdf_writer
+from . import identify, report, urdf_writer
 
 #: How many undetermined combinations the warning names (the rest are counted).
 NAMED = 8
+#: A fitted body lighter than this (kg) is at the fit's floor, not a link: never written.
+MASS_FLOOR = 1e-6
+#: The robot's length (m) counted at least, for the centre-of-mass check (a gimbal's joints
+#: may all sit at one point).
+LENGTH_FLOOR = 0.1
+
+
+def robot_length(model: Model) -> float:
+    """Return the robot's length laid out straight (m): every joint's and link's offset summed.
+
+    No point of the robot is farther than that from any of its frames; ``|X[3:, :3]|`` of a
+    Plücker transform is √2 times its translation's length (RBDA 2.24).
+    """
+    offsets = [model.Xtree[i] for i in range(1, model.NB + 1)]
+    offsets += [frame.lXb for frame in model.frames.values()]
+    return float(sum(np.linalg.norm(X[3:, :3]) for X in offsets) / np.sqrt(2.0))
+
+
+def unrealistic(model: Model, body: int, inertia: np.ndarray) -> str:
+    """Say why a fitted body cannot be the link, or return ''.
+
+    It cannot when its mass is at the fit's floor (:data:`MASS_FLOOR`) or its centre of mass
+    lies farther from the link's frame than the robot is long (:func:`robot_length`).
+    """
+    m, c, _ = identification.mass_com_inertia(identification._ten(inertia))
+    length = max(robot_length(model), LENGTH_FLOOR)
+    where = ', '.join(f'{x:.3g}' for x in c)
+    if m < MASS_FLOOR:
+        return (f'its identified mass {m:.3g} kg is at the fit\'s floor (centre of mass '
+                f'({where}) m)')
+    if np.linalg.norm(c) > length:
+        return (f'its identified centre of mass ({where}) m lies {np.linalg.norm(c):.3g} m '
+                f'from the link\'s frame, outside the robot ({length:.3g} m laid out straight; '
+                f'mass {m:.3g} kg)')
+    return ''
 
 
 @dataclass
@@ -37,9 +72,35 @@ class Correction:
     bodies: Dict[int, np.ndarray] = field(default_factory=dict)      # body -> 6×6 inertia
     sigma: Dict[int, np.ndarray] = field(default_factory=dict)       # body -> (10,) σ
     undetermined: Dict[int, np.ndarray] = field(default_factory=dict)   # body -> (10,) 0..1
+    unexcited: Dict[int, np.ndarray] = field(default_factory=dict)      # body -> (10,) bool
     payload: Optional[identification.Payload] = None
     drives: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
     threshold: float = 0.01
+    #: (damping, friction, armature): σ per joint (inf: undetermined, nan: not known) and
+    #: True where the recording cannot tell the term (``drives`` holds the URDF's value)
+    drive_sigma: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+    drive_undetermined: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
+
+    def shown(self, body: int) -> np.ndarray:
+        """Return body's ten parameters as reported: the URDF's where no torque tells them."""
+        pi0 = identification.parameters(self.model)[10 * (body - 1):10 * body]
+        new = identification._ten(self.bodies[body])
+        return np.where(self.unexcited.get(body, np.zeros(10, dtype=bool)), pi0, new)
+
+    def rejected(self) -> Dict[int, str]:
+        """Return the fitted bodies that are no link (:func:`unrealistic`), with why."""
+        out = {}
+        for body, value in sorted(self.bodies.items()):
+            why = unrealistic(self.model, body, value)
+            if why:
+                out[body] = why
+        return out
+
+    def undetermined_drives(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return ``(damping, friction, armature)`` with nan where the recording cannot tell."""
+        undetermined = self.drive_undetermined or tuple(
+            np.zeros(len(d), dtype=bool) for d in self.drives)
+        return tuple(np.where(u, np.nan, d) for d, u in zip(self.drives, undetermined))
 
     def corrected_model(self) -> Model:
         """Return the model with the identified inertias and payload."""
@@ -59,8 +120,8 @@ class Correction:
         """Return ``[link, parameter, urdf, identified, sigma, undetermined]`` rows."""
         pi0 = identification.parameters(self.model)
         rows = []
-        for body, value in sorted(self.bodies.items()):
-            new = identification._ten(value)
+        for body in sorted(self.bodies):
+            new = self.shown(body)
             for k, name in enumerate(PARAMETERS):
                 rows.append([self.model.body_names[body], name, pi0[10 * (body - 1) + k],
                              new[k], self.sigma[body][k], self.undetermined[body][k]])
@@ -68,6 +129,17 @@ class Correction:
             for k, name in enumerate(PARAMETERS):
                 rows.append([f'payload on {self.payload.link}', name, 0.0,
                              self.payload.pi[k], self.payload.sigma[k], 0.0])
+        if self.drives is not None:
+            prior = (self.model.damping, self.model.friction,
+                     np.zeros(len(self.model.joint_names)))
+            sigma = self.drive_sigma or tuple(np.full(len(d), np.nan) for d in self.drives)
+            shown = self.undetermined_drives()
+            for j, joint in enumerate(self.model.joint_names):
+                for k, name in enumerate(identify.PARAMETERS):
+                    unknown = bool(np.isnan(shown[k][j]))
+                    rows.append([joint, name, prior[k][j], prior[k][j] if unknown else
+                                 self.drives[k][j], np.inf if unknown else sigma[k][j],
+                                 1.0 if unknown else 0.0])
         return rows
 
     def write_urdf(self, text: Union[bytes, urdf_writer.Source], path: str) -> List[str]:
@@ -80,13 +152,22 @@ class Correction:
             additions = {self.payload.link: identification._spatial_inertia(self.payload.pi)}
         dynamics = None
         if self.drives is not None:
-            damping, friction, _ = self.drives
-            dynamics = {name: (max(d, 0.0), max(f, 0.0))
-                        for name, d, f in zip(self.model.joint_names, damping, friction)}
-        out, notes = urdf_writer.corrected_urdf(text, self.model, self.bodies, additions,
-                                                dynamics)
+            # what the recording cannot tell keeps the URDF's value (its element untouched
+            # when it tells neither damping nor friction)
+            damping, friction, _ = self.undetermined_drives()
+            dynamics = {name: (max(d, 0.0) if d == d else u_d, max(f, 0.0) if f == f else u_f)
+                        for name, d, f, u_d, u_f in zip(
+                            self.model.joint_names, damping, friction, self.model.damping,
+                            self.model.friction)
+                        if d == d or f == f}
+        rejected = self.rejected()
+        bodies = {i: v for i, v in self.bodies.items() if i not in rejected}
+        out, notes = urdf_writer.corrected_urdf(text, self.model, bodies, additions, dynamics)
         write_atomic(path, out, 'the corrected URDF')
-        return notes
+        return [f'link {self.model.body_names[i]!r} not written, the URDF\'s <inertial> kept: '
+                f'{why}; the fit did not find this link (give the URDF a rough <inertial> '
+                'for it, or record motion that loads it more)'
+                for i, why in rejected.items()] + notes
 
 
 def from_inertias(model: Model, found: identification.Inertias, threshold: float
@@ -97,7 +178,21 @@ def from_inertias(model: Model, found: identification.Inertias, threshold: float
               for i in found.bodies}
     sig = {i: sigma[10 * k:10 * k + 10] for k, i in enumerate(found.bodies)}
     share = {i: found.undetermined[10 * k:10 * k + 10] for k, i in enumerate(found.bodies)}
-    return Correction(model, bodies, sig, share, drives=found.drives, threshold=threshold)
+    unexcited = {i: found.unexcited[10 * k:10 * k + 10] for k, i in enumerate(found.bodies)}
+    return Correction(model, bodies, sig, share, unexcited, drives=found.drives,
+                      threshold=threshold, drive_sigma=found.drive_sigma,
+                      drive_undetermined=found.drive_unexcited)
+
+
+def from_drives(model: Model, fit: identify.Identified, threshold: float) -> Correction:
+    """Return the correction of a drives-only fit: what it cannot tell keeps the URDF's."""
+    values = (fit.damping, fit.friction, fit.armature)
+    unknown = tuple(np.isnan(x) for x in values)
+    prior = (model.damping, model.friction, np.zeros(len(model.joint_names)))
+    sigma = tuple(np.where(u, np.inf, fit.sigma[:, k]) for k, u in enumerate(unknown))
+    return Correction(model, drives=tuple(np.where(u, p, x) for x, u, p in
+                                          zip(values, unknown, prior)),
+                      threshold=threshold, drive_sigma=sigma, drive_undetermined=unknown)
 
 
 def rms(x: np.ndarray) -> np.ndarray:
@@ -131,26 +226,37 @@ def undetermined_warning(model: Model, data: Dict, bodies: Sequence[int], gravit
 def print_inertias(correction: Correction) -> None:
     """Print each fitted link's mass and centre of mass, before and after, with σ."""
     pi0 = identification.parameters(correction.model)
+    rejected = correction.rejected()
     rows = []
-    for body, value in sorted(correction.bodies.items()):
-        old, new = pi0[10 * (body - 1):10 * body], identification._ten(value)
+    for body in sorted(correction.bodies):
+        old, new = pi0[10 * (body - 1):10 * body], correction.shown(body)
         s = correction.sigma[body]
+        unexcited = correction.unexcited.get(body, np.zeros(10, dtype=bool))
 
         def com(p):
             c = p[1:4] / p[0] if p[0] > 0 else np.zeros(3)
             return np.where(np.abs(c) < 1e-9, 0.0, c)        # rounding noise as 0
-        alone = correction.undetermined[body][0] < 0.5
-        rows.append([correction.model.body_names[body], f'{old[0]:.4g}',
-                     f'{new[0]:.4g} ± {s[0]:.2g}' + ('' if alone else ' *'),
+        if unexcited[0]:
+            mass = f'{new[0]:.4g} undetermined'
+        else:
+            mass = f'{new[0]:.4g} ± {s[0]:.2g}' + (
+                '' if correction.undetermined[body][0] < 0.5 else ' *')
+        if body in rejected:
+            mass += ' NOT WRITTEN'
+        rows.append([correction.model.body_names[body], f'{old[0]:.4g}', mass,
                      ' '.join(f'{x:.4g}' for x in com(old)),
                      ' '.join(f'{x:.4g}' for x in com(new))])
     print('\nidentified inertias (bodies with the links fixed to them; centre of mass in the '
           'body frame, m; parameters.csv has all ten with one σ). * the recording does not '
           'determine this mass by itself, only in combinations with other parameters (the '
           'base parameters): the value is one consistent choice near the URDF\'s; judge the '
-          'fit by the residual below.')
+          'fit by the residual below. undetermined: no torque of the recording depends on '
+          'it (σ infinite); the URDF\'s value is shown, and the body written is the nearest '
+          'consistent one.')
     print(report.table(['link', 'mass URDF', 'mass identified (kg)', 'com URDF',
                         'com identified'], rows))
+    for body, why in rejected.items():
+        print(f'  {correction.model.body_names[body]}: NOT WRITTEN: {why}')
 
 
 def write_parameters(correction: Correction, out: str) -> None:
@@ -158,7 +264,9 @@ def write_parameters(correction: Correction, out: str) -> None:
 
     ``undetermined`` is 0 when the data determines the parameter by itself and 1 when it
     does not (it enters only combinations with others, or none: the value is the one nearest
-    the URDF's that fits). Inertias are about the body frame's origin (the link frame of the
+    the URDF's that fits). A parameter no torque of the recording depends on has σ ``inf``
+    and the URDF's value. The drives' terms follow, one row each (link: the joint).
+    Inertias are about the body frame's origin (the link frame of the
     link that starts the body).
     """
     report.write_summary(os.path.join(out, 'parameters.csv'), correction.parameter_rows(),

@@ -23,7 +23,7 @@ trajectories that excite all of them.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List
+from typing import List, Optional
 
 import numpy as np
 
@@ -37,7 +37,8 @@ RCOND = 1e-3
 class Identified:
     """Fitted ``damping``, ``friction``, ``armature`` (n,) and residual RMS before/after.
 
-    ``notes`` says per joint what could not be identified and why.
+    ``notes`` says per joint what could not be identified and why; a term not identified is
+    ``nan`` (its σ too).
     """
 
     damping: np.ndarray
@@ -46,6 +47,7 @@ class Identified:
     rms_before: np.ndarray
     rms_after: np.ndarray
     notes: List[str]
+    sigma: Optional[np.ndarray] = None      # (n, 3) one σ of each fitted term (nan: none)
 
 
 def regressor(qd: np.ndarray, qdd: np.ndarray, threshold: float) -> np.ndarray:
@@ -58,6 +60,7 @@ def identify(residual: np.ndarray, qd: np.ndarray, qdd: np.ndarray, threshold: f
     """Fit each joint's damping, Coulomb friction and armature to its residual (N, n)."""
     n = residual.shape[1]
     theta = np.full((n, 3), np.nan)
+    sigma = np.full((n, 3), np.nan)
     after = np.sqrt(np.mean(residual ** 2, axis=0))
     before = after.copy()
     notes = []
@@ -84,5 +87,8 @@ def identify(residual: np.ndarray, qd: np.ndarray, qdd: np.ndarray, threshold: f
             continue
         x, *_ = np.linalg.lstsq(A[:, use], r, rcond=None)
         theta[j, use] = x
-        after[j] = np.sqrt(np.mean((r - A[:, use] @ x) ** 2))
-    return Identified(theta[:, 0], theta[:, 1], theta[:, 2], before, after, notes)
+        fit = r - A[:, use] @ x
+        after[j] = np.sqrt(np.mean(fit ** 2))
+        s2 = fit @ fit / max(len(r) - int(use.sum()), 1)
+        sigma[j, use] = np.sqrt(s2 * np.diag(np.linalg.pinv(A[:, use].T @ A[:, use])))
+    return Identified(theta[:, 0], theta[:, 1], theta[:, 2], before, after, notes, sigma)

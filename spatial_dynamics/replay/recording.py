@@ -97,7 +97,8 @@ def clean(js: bags.JointStates, window: float) -> Dict:
         raise Refused(f'joint(s) {", ".join(never)} never have a position in the topic; keep '
                       'only the recorded joints with --joints (the others are locked)')
     if not np.isfinite(js.effort).any():
-        raise Refused('the topic has no measured effort (JointState.effort is empty)')
+        raise Refused('the topic has no measured effort: JointState.effort is empty or NaN in '
+                      'every message')
     has_velocity = bool(np.isfinite(js.velocity).any())
     fields = [('position', js.position), ('effort', js.effort)]
     if has_velocity:

@@ -201,24 +201,44 @@ def yaml_double(x: float) -> str:
 
 
 def node_parameters(names: Sequence[str], armature: np.ndarray, threshold: float) -> str:
-    """Node parameter YAML for the identified armature, with the URDF friction switched on."""
+    """Node parameter YAML for the identified armature, with the URDF friction switched on.
+
+    An armature the recording cannot tell (nan) is written as the node's default, 0.0, and
+    named in a comment.
+    """
     arm = ', '.join(yaml_double(0.0 if math.isnan(a) else max(a, 0.0)) for a in armature)
+    unknown = [n for n, a in zip(names, armature) if math.isnan(a)]
     return '\n'.join([
         'inverse_dynamics:',
         '  ros__parameters:',
         f'    joints: [{", ".join(repr(n).replace(chr(39), chr(34)) for n in names)}]',
-        f'    armature: [{arm}]',
+        f'    armature: [{arm}]'] + ([
+            f'    # armature undetermined (the recording cannot tell it; 0.0 is the node\'s '
+            f'default): {", ".join(unknown)}'] if unknown else []) + [
         '    friction_model: "urdf"',
         f'    friction_velocity_threshold: {yaml_double(threshold)}'])
 
 
-def urdf_dynamics(names: Sequence[str], damping: np.ndarray, friction: np.ndarray) -> str:
-    """``<dynamics>`` elements to put into each joint of the URDF (negative values as 0)."""
+def urdf_dynamics(names: Sequence[str], damping: np.ndarray, friction: np.ndarray,
+                  urdf_damping: np.ndarray, urdf_friction: np.ndarray) -> str:
+    """``<dynamics>`` elements to put into each joint of the URDF (negative values as 0).
+
+    A term the recording cannot tell (nan) keeps the URDF's value (``urdf_damping``,
+    ``urdf_friction``) and is named undetermined; a joint with neither told keeps its
+    element.
+    """
     lines = []
-    for n, d, f in zip(names, damping, friction):
-        d = 0.0 if math.isnan(d) else max(d, 0.0)
-        f = 0.0 if math.isnan(f) else max(f, 0.0)
-        lines.append(f'<!-- joint {n} --> <dynamics damping="{d:.6g}" friction="{f:.6g}"/>')
+    for n, d, f, ud, uf in zip(names, damping, friction, urdf_damping, urdf_friction):
+        unknown = [w for w, x in (('damping', d), ('friction', f)) if math.isnan(x)]
+        if len(unknown) == 2:
+            lines.append(f'<!-- joint {n}: damping and friction undetermined (the recording '
+                         f'cannot tell them): keep its <dynamics> (damping {ud:.6g}, friction '
+                         f'{uf:.6g}) -->')
+            continue
+        d = ud if math.isnan(d) else max(d, 0.0)
+        f = uf if math.isnan(f) else max(f, 0.0)
+        lines.append(f'<!-- joint {n} --> <dynamics damping="{d:.6g}" friction="{f:.6g}"/>'
+                     + (f' <!-- {unknown[0]} undetermined: the URDF\'s -->' if unknown else ''))
     return '\n'.join(lines)
 
 

@@ -195,10 +195,9 @@ def read_validation(path: str) -> Dict[str, Dict[str, float]]:
 
 
 def armature_of(text: str, names: Sequence[str]) -> np.ndarray:
-    """Return the jointly fitted armature from replay's printout (the drives' line)."""
-    line = text.split('fitted jointly with each drive')[1].split('\n')[0]
-    parts = line.split(':', 1)[1].split(';')
-    return np.array([float(p.split()[-1]) for p in parts])
+    """Return the armature of replay's node parameters block (the one set it prints)."""
+    line = text.split('# node parameters')[1].split('armature: [')[1].split(']')[0]
+    return np.array([float(x) for x in line.split(',')])
 
 
 def floor(true_text: bytes, joints, urdf: str, bag: str) -> np.ndarray:
