@@ -10,22 +10,23 @@ from ..model import Model
 
 
 def as_joint_arrays(model: Model, *arrays) -> list:
-    """``q, qd, qdd`` as arrays of one float dtype and broadcast shape (..., n).
+    """``q, qd, qdd`` as arrays of one float dtype, shapes (..., nq), (..., nv), (..., nv).
 
-    ``ValueError`` names the argument whose last dimension is not ``model.nq``.
+    The leading (batch) dimensions broadcast. ``ValueError`` names the argument whose last
+    dimension is not ``model.nq`` (``q``) or ``model.nv`` (``qd``, ``qdd``).
     """
-    n = model.nq
     out = []
     for what, x in zip(('q', 'qd', 'qdd'), arrays):
         a = np.asarray(x)
+        n = model.nq if what == 'q' else model.nv
         if a.ndim == 0 or a.shape[-1] != n:
             raise ValueError(f'{what} must have shape (..., {n}) for the joints '
                              f'{model.joint_names}, got shape {a.shape}')
         out.append(a)
     dtype = np.result_type(*out, np.float64) if not all(
         np.issubdtype(a.dtype, np.floating) for a in out) else np.result_type(*out)
-    shape = np.broadcast_shapes(*(a.shape for a in out))
-    return [np.broadcast_to(a.astype(dtype, copy=False), shape) for a in out]
+    batch = np.broadcast_shapes(*(a.shape[:-1] for a in out))
+    return [np.broadcast_to(a.astype(dtype, copy=False), batch + a.shape[-1:]) for a in out]
 
 
 def as_vector(what: str, x, size: int) -> np.ndarray:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arguments import as_joint_arrays
-from ..joints import jcalc
+from ..joints import jcalc, joint_coordinates, NV
 from ..model import Model
 
 #: Coordinates of :func:`jacobian`: the link's own frame, or the base (root link) axes with
@@ -57,13 +57,13 @@ def jacobian(model: Model, q, link: str, frame: str = 'local') -> np.ndarray:
         raise ValueError(f'link {link!r} is not a link of {model.name!r}')
     (q,) = as_joint_arrays(model, q)
     batch = q.shape[:-1]
-    J = np.zeros(batch + (6, model.nq), dtype=np.result_type(q, np.float64))
+    J = np.zeros(batch + (6, model.nv), dtype=np.result_type(q, np.float64))
     lXi = np.broadcast_to(at.lXb, batch + (6, 6))      # lXb, then lXj as i climbs to the base
     i = at.body
     while i > 0:
-        k, mul = model.qidx[i], model.qmul[i]
-        XJ, S_i = jcalc(model.jtype[i], model.axis[i], mul * q[..., k] + model.qoff[i])
-        J[..., :, k] += mul * (lXi @ S_i)               # column of joint i: lXi S_i
+        k, kv, mul, jt = model.qidx[i], model.vidx[i], model.qmul[i], model.jtype[i]
+        XJ, S_i = jcalc(jt, model.axis[i], joint_coordinates(jt, q, k, mul, model.qoff[i]))
+        J[..., :, kv:kv + NV[jt]] += mul * (lXi @ S_i)  # columns of joint i: lXi S_i
         lXi = lXi @ (XJ @ model.Xtree[i])               # lXλ(i) = lXi Xup_i
         i = model.parent[i]
     if frame == 'world':

@@ -122,21 +122,22 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     if not f_ext:
         if kern is not None:
             if (type(q) is type(qd) is type(qdd) is _ndarray and q.ndim > 1
-                    and q.shape == qd.shape == qdd.shape and q.shape[-1] == lay.n
+                    and qd.shape == qdd.shape and q.shape[:-1] == qd.shape[:-1]
+                    and q.shape[-1] == lay.n and qd.shape[-1] == lay.nv
                     and q.dtype is qd.dtype is qdd.dtype and q.dtype in _KERNEL_DTYPES):
                 # a batch of states of one shape and dtype: no broadcasting to work out
                 g = GRAVITY if gravity is GRAVITY else _gravity(gravity)
                 if g[0] is not None:
                     if q.size == lay.n:     # one state with batch dimensions of 1
                         return _c_rnea(kern, q.reshape(-1), qd.reshape(-1), qdd.reshape(-1),
-                                       g).reshape(q.shape)
+                                       g).reshape(qd.shape)
                     return compiled.rnea(lay, q, qd, qdd, g, {})
         else:
             # numpy: one float64 state on Python floats (lists and tuples converted once)
             if not (type(q) is type(qd) is type(qdd) is _ndarray):
-                q, qd, qdd = _vector(q, lay.n), _vector(qd, lay.n), _vector(qdd, lay.n)
+                q, qd, qdd = _vector(q, lay.n), _vector(qd, lay.nv), _vector(qdd, lay.nv)
             if ((q.dtype is qd.dtype is qdd.dtype is _F8) and q.ndim == qd.ndim == qdd.ndim == 1
-                    and len(q) == len(qd) == len(qdd) == lay.n):
+                    and len(q) == lay.n and len(qd) == len(qdd) == lay.nv):
                 gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
                 if gx is not None:
                     return np.array(python.rnea_rows(lay.rows, q.tolist(), qd.tolist(),
@@ -155,10 +156,10 @@ def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
     lay, kern, tau = _entered(model, backend, _c_gravity_torque, q, gravity)
     if tau is not None:
         return tau
-    if kern is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == lay.zeros.shape:
+    if kern is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == (lay.n,):
         return rnea(model, q, lay.zeros, lay.zeros, gravity, backend=backend)
-    q = _vector(q, lay.n)
-    zero = np.zeros(np.shape(q), dtype=q.dtype if q.dtype.kind == 'f' else np.float64)
+    (q,) = as_joint_arrays(model, _vector(q, lay.n))
+    zero = np.zeros(q.shape[:-1] + (lay.nv,), dtype=q.dtype)
     return rnea(model, q, zero, zero, gravity, backend=backend)
 
 
@@ -173,12 +174,10 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     if tau is not None:
         return tau
     if (kern is None and type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
-            and q.shape == qd.shape == lay.zeros.shape):
+            and q.shape == (lay.n,) and qd.shape == lay.zeros.shape):
         return rnea(model, q, qd, lay.zeros, gravity, backend=backend)
-    q, qd = _vector(q, lay.n), _vector(qd, lay.n)
-    dtype = np.result_type(q, qd)
-    zero = np.zeros(np.broadcast_shapes(np.shape(q), np.shape(qd)),
-                    dtype=dtype if dtype.kind == 'f' else np.float64)
+    q, qd = as_joint_arrays(model, _vector(q, lay.n), _vector(qd, lay.nv))
+    zero = np.zeros(qd.shape, dtype=qd.dtype)
     return rnea(model, q, qd, zero, gravity, backend=backend)
 
 
@@ -274,14 +273,14 @@ def _rnea(model: Model, lay: layout.Layout, q, qd, qdd, gravity, f_ext,
     fb = f_ext_in_bodies(model, f_ext)
     if fb:  # batched wrenches broadcast against the batch of states
         batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
-        q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
+        q, qd, qdd = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, qdd))
     if kern is not None and q.dtype in _KERNEL_DTYPES:
         if q.size == q.shape[-1] > 0:
             # One state (maybe with batch dimensions of 1): the single-state entry.
             fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
                     if fb else None)
             tau = _c_rnea(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g, fext)
-            return tau.reshape(q.shape)
+            return tau.reshape(qd.shape)
         return compiled.rnea(lay, q, qd, qdd, g, fb)
     return python.rnea(lay.rows, q, qd, qdd, g, fb)
 
