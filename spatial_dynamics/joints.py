@@ -13,7 +13,7 @@ know about a kind is here, so an algorithm asks the joint instead of branching o
   :data:`RX`, :data:`RY`, :data:`RZ` (the axis keeps its sign), any other axis :data:`RA`.
 * **Operations on scalar components** (:func:`joint_transform`, :func:`joint_motion`,
   :func:`joint_velocity`, :func:`joint_torque`, :func:`joint_ctq`, :func:`joint_axis`,
-  :func:`joint_project`): what the component kernels of :mod:`spatial_dynamics.algorithms`
+  :func:`joint_crba`): what the component kernels of :mod:`spatial_dynamics.algorithms`
   call per body, on any scalar kind (floats, (N,) arrays, mpmath); the compiled backend
   translates them with the kernels (:mod:`spatial_dynamics.backends.codegen`), and the C
   compiler inlines them. A joint's coordinates start at ``k`` in ``q`` and at ``kv`` in
@@ -151,81 +151,84 @@ def joint_transform(code, q, k, mul, off, ax, ay, az, t00, t01, t02, t10, t11, t
     ``r = r_t + E_tᵀ axis q``; free-flyer (RBDA §4.5) ``E_J = Rᵀ`` and ``r_J = p`` from
     ``q[k:k + 7] = (p, quaternion x y z w)``. ``m`` provides ``sin`` and ``cos``.
     """
-    if code == FF:
-        x, y, z, w = q[k + 3], q[k + 4], q[k + 5], q[k + 6]
-        s = 2.0 / (x * x + y * y + z * z + w * w)        # R of the normalised quaternion
-        xs, ys, zs = x * s, y * s, z * s
-        wx, wy, wz = w * xs, w * ys, w * zs
-        xx, xy, xz = x * xs, x * ys, x * zs
-        yy, yz, zz = y * ys, y * zs, z * zs
-        r00, r01, r02 = 1.0 - (yy + zz), xy - wz, xz + wy
-        r10, r11, r12 = xy + wz, 1.0 - (xx + zz), yz - wx
-        r20, r21, r22 = xz - wy, yz + wx, 1.0 - (xx + yy)
-        px, py, pz = q[k], q[k + 1], q[k + 2]
-        return (r00 * t00 + r10 * t10 + r20 * t20,           # E = Rᵀ E_t
-                r00 * t01 + r10 * t11 + r20 * t21,
-                r00 * t02 + r10 * t12 + r20 * t22,
-                r01 * t00 + r11 * t10 + r21 * t20,
-                r01 * t01 + r11 * t11 + r21 * t21,
-                r01 * t02 + r11 * t12 + r21 * t22,
-                r02 * t00 + r12 * t10 + r22 * t20,
-                r02 * t01 + r12 * t11 + r22 * t21,
-                r02 * t02 + r12 * t12 + r22 * t22,
-                rx + (t00 * px + t10 * py + t20 * pz),        # r = r_t + E_tᵀ p
-                ry + (t01 * px + t11 * py + t21 * pz),
-                rz + (t02 * px + t12 * py + t22 * pz))
-    qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
+    if code <= RA:          # revolute
+        qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
+        c, s = m.cos(qi), m.sin(qi)
+        if code == RZ:
+            s = az * s     # about ±Z
+            return (c * t00 + s * t10, c * t01 + s * t11, c * t02 + s * t12,
+                    c * t10 - s * t00, c * t11 - s * t01, c * t12 - s * t02,
+                    t20, t21, t22, rx, ry, rz)
+        if code == RX:
+            s = ax * s     # about ±X
+            return (t00, t01, t02,
+                    c * t10 + s * t20, c * t11 + s * t21, c * t12 + s * t22,
+                    c * t20 - s * t10, c * t21 - s * t11, c * t22 - s * t12,
+                    rx, ry, rz)
+        if code == RY:
+            s = ay * s     # about ±Y
+            return (c * t00 - s * t20, c * t01 - s * t21, c * t02 - s * t22,
+                    t10, t11, t12,
+                    s * t00 + c * t20, s * t01 + c * t21, s * t02 + c * t22,
+                    rx, ry, rz)
+        # general axis: E_J = R(axis, q)ᵀ = c 1 - s axis× + (1 - c) axis axisᵀ
+        C = 1.0 - c
+        j00, j11, j22 = c + C * ax * ax, c + C * ay * ay, c + C * az * az
+        cxy, cxz, cyz = C * ax * ay, C * ax * az, C * ay * az
+        sx, sy, sz = s * ax, s * ay, s * az
+        j01, j02, j10 = cxy + sz, cxz - sy, cxy - sz
+        j12, j20, j21 = cyz + sx, cxz + sy, cyz - sx
+        return (j00 * t00 + j01 * t10 + j02 * t20,
+                j00 * t01 + j01 * t11 + j02 * t21,
+                j00 * t02 + j01 * t12 + j02 * t22,
+                j10 * t00 + j11 * t10 + j12 * t20,
+                j10 * t01 + j11 * t11 + j12 * t21,
+                j10 * t02 + j11 * t12 + j12 * t22,
+                j20 * t00 + j21 * t10 + j22 * t20,
+                j20 * t01 + j21 * t11 + j22 * t21,
+                j20 * t02 + j21 * t12 + j22 * t22,
+                rx, ry, rz)
     if code == PR:
+        qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
         return (t00, t01, t02, t10, t11, t12, t20, t21, t22,
                 rx + (t00 * ax + t10 * ay + t20 * az) * qi,
                 ry + (t01 * ax + t11 * ay + t21 * az) * qi,
                 rz + (t02 * ax + t12 * ay + t22 * az) * qi)
-    c, s = m.cos(qi), m.sin(qi)
-    if code == RZ:
-        s = az * s     # about ±Z
-        return (c * t00 + s * t10, c * t01 + s * t11, c * t02 + s * t12,
-                c * t10 - s * t00, c * t11 - s * t01, c * t12 - s * t02,
-                t20, t21, t22, rx, ry, rz)
-    if code == RX:
-        s = ax * s     # about ±X
-        return (t00, t01, t02,
-                c * t10 + s * t20, c * t11 + s * t21, c * t12 + s * t22,
-                c * t20 - s * t10, c * t21 - s * t11, c * t22 - s * t12,
-                rx, ry, rz)
-    if code == RY:
-        s = ay * s     # about ±Y
-        return (c * t00 - s * t20, c * t01 - s * t21, c * t02 - s * t22,
-                t10, t11, t12,
-                s * t00 + c * t20, s * t01 + c * t21, s * t02 + c * t22,
-                rx, ry, rz)
-    # general axis: E_J = R(axis, q)ᵀ = c 1 - s axis× + (1 - c) axis axisᵀ
-    C = 1.0 - c
-    j00, j11, j22 = c + C * ax * ax, c + C * ay * ay, c + C * az * az
-    cxy, cxz, cyz = C * ax * ay, C * ax * az, C * ay * az
-    sx, sy, sz = s * ax, s * ay, s * az
-    j01, j02, j10 = cxy + sz, cxz - sy, cxy - sz
-    j12, j20, j21 = cyz + sx, cxz + sy, cyz - sx
-    return (j00 * t00 + j01 * t10 + j02 * t20,
-            j00 * t01 + j01 * t11 + j02 * t21,
-            j00 * t02 + j01 * t12 + j02 * t22,
-            j10 * t00 + j11 * t10 + j12 * t20,
-            j10 * t01 + j11 * t11 + j12 * t21,
-            j10 * t02 + j11 * t12 + j12 * t22,
-            j20 * t00 + j21 * t10 + j22 * t20,
-            j20 * t01 + j21 * t11 + j22 * t21,
-            j20 * t02 + j21 * t12 + j22 * t22,
-            rx, ry, rz)
+    # free-flyer
+    x, y, z, w = q[k + 3], q[k + 4], q[k + 5], q[k + 6]
+    s = 2.0 / (x * x + y * y + z * z + w * w)        # R of the normalised quaternion
+    xs, ys, zs = x * s, y * s, z * s
+    wx, wy, wz = w * xs, w * ys, w * zs
+    xx, xy, xz = x * xs, x * ys, x * zs
+    yy, yz, zz = y * ys, y * zs, z * zs
+    r00, r01, r02 = 1.0 - (yy + zz), xy - wz, xz + wy
+    r10, r11, r12 = xy + wz, 1.0 - (xx + zz), yz - wx
+    r20, r21, r22 = xz - wy, yz + wx, 1.0 - (xx + yy)
+    px, py, pz = q[k], q[k + 1], q[k + 2]
+    return (r00 * t00 + r10 * t10 + r20 * t20,           # E = Rᵀ E_t
+            r00 * t01 + r10 * t11 + r20 * t21,
+            r00 * t02 + r10 * t12 + r20 * t22,
+            r01 * t00 + r11 * t10 + r21 * t20,
+            r01 * t01 + r11 * t11 + r21 * t21,
+            r01 * t02 + r11 * t12 + r21 * t22,
+            r02 * t00 + r12 * t10 + r22 * t20,
+            r02 * t01 + r12 * t11 + r22 * t21,
+            r02 * t02 + r12 * t12 + r22 * t22,
+            rx + (t00 * px + t10 * py + t20 * pz),        # r = r_t + E_tᵀ p
+            ry + (t01 * px + t11 * py + t21 * pz),
+            rz + (t02 * px + t12 * py + t22 * pz))
 
 
 def joint_motion(code, dq, kv, mul, ax, ay, az, m0, m1, m2, m3, m4, m5):
     """``m + S dq`` for the joint's part of ``dq`` (``q̇`` or ``q̈``): a motion vector plus ``S q̇``."""
-    if code == FF:
-        return (m0 + dq[kv], m1 + dq[kv + 1], m2 + dq[kv + 2], m3 + dq[kv + 3], m4 + dq[kv + 4],
-                m5 + dq[kv + 5])
-    xi = dq[kv] if mul == 1.0 else mul * dq[kv]
+    if code <= RA:          # revolute
+        xi = dq[kv] if mul == 1.0 else mul * dq[kv]
+        return m0 + ax * xi, m1 + ay * xi, m2 + az * xi, m3, m4, m5
     if code == PR:
+        xi = dq[kv] if mul == 1.0 else mul * dq[kv]
         return m0, m1, m2, m3 + ax * xi, m4 + ay * xi, m5 + az * xi
-    return m0 + ax * xi, m1 + ay * xi, m2 + az * xi, m3, m4, m5
+    return (m0 + dq[kv], m1 + dq[kv + 1], m2 + dq[kv + 2], m3 + dq[kv + 3], m4 + dq[kv + 4],
+            m5 + dq[kv + 5])
 
 
 def joint_velocity(code, qd, kv, mul, ax, ay, az, w0, w1, w2, v0, v1, v2, a0, a1, a2, l0, l1,
@@ -235,30 +238,35 @@ def joint_velocity(code, qd, kv, mul, ax, ay, az, w0, w1, w2, v0, v1, v2, a0, a1
     ``[w; v]`` is ``Xup v_λ(i)``, ``[a; l]`` the acceleration so far; returns the body velocity
     then the acceleration with the velocity product ``v_i × vJ``.
     """
-    if code == FF:
-        j0, j1, j2, j3, j4, j5 = qd[kv], qd[kv + 1], qd[kv + 2], qd[kv + 3], qd[kv + 4], \
-            qd[kv + 5]
-        w0, w1, w2, v0, v1, v2 = w0 + j0, w1 + j1, w2 + j2, v0 + j3, v1 + j4, v2 + j5
+    if code <= RA:          # revolute
+        qdi = qd[kv] if mul == 1.0 else mul * qd[kv]
+        j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
+        w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
         return (w0, w1, w2, v0, v1, v2,
                 a0 + (w1 * j2 - w2 * j1), a1 + (w2 * j0 - w0 * j2), a2 + (w0 * j1 - w1 * j0),
-                l0 + ((w1 * j5 - w2 * j4) + (v1 * j2 - v2 * j1)),
-                l1 + ((w2 * j3 - w0 * j5) + (v2 * j0 - v0 * j2)),
-                l2 + ((w0 * j4 - w1 * j3) + (v0 * j1 - v1 * j0)))
-    qdi = qd[kv] if mul == 1.0 else mul * qd[kv]
-    j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
+                l0 + (v1 * j2 - v2 * j1), l1 + (v2 * j0 - v0 * j2), l2 + (v0 * j1 - v1 * j0))
     if code == PR:
+        qdi = qd[kv] if mul == 1.0 else mul * qd[kv]
+        j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
         v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
         return (w0, w1, w2, v0, v1, v2, a0, a1, a2,
                 l0 + (w1 * j2 - w2 * j1), l1 + (w2 * j0 - w0 * j2), l2 + (w0 * j1 - w1 * j0))
-    w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
+    j0, j1, j2, j3, j4, j5 = qd[kv], qd[kv + 1], qd[kv + 2], qd[kv + 3], qd[kv + 4], qd[kv + 5]
+    w0, w1, w2, v0, v1, v2 = w0 + j0, w1 + j1, w2 + j2, v0 + j3, v1 + j4, v2 + j5
     return (w0, w1, w2, v0, v1, v2,
             a0 + (w1 * j2 - w2 * j1), a1 + (w2 * j0 - w0 * j2), a2 + (w0 * j1 - w1 * j0),
-            l0 + (v1 * j2 - v2 * j1), l1 + (v2 * j0 - v0 * j2), l2 + (v0 * j1 - v1 * j0))
+            l0 + ((w1 * j5 - w2 * j4) + (v1 * j2 - v2 * j1)),
+            l1 + ((w2 * j3 - w0 * j5) + (v2 * j0 - v0 * j2)),
+            l2 + ((w0 * j4 - w1 * j3) + (v0 * j1 - v1 * j0)))
 
 
 def joint_torque(code, tau, kv, mul, ax, ay, az, n0, n1, n2, f0, f1, f2) -> None:
     """``τ += Sᵀ f`` into the joint's entries of ``tau`` (``mul`` times it for a mimic joint)."""
-    if code == FF:
+    if code <= RA:          # revolute
+        t = ax * n0 + ay * n1 + az * n2
+    elif code == PR:
+        t = ax * f0 + ay * f1 + az * f2
+    else:
         tau[kv] = tau[kv] + n0
         tau[kv + 1] = tau[kv + 1] + n1
         tau[kv + 2] = tau[kv + 2] + n2
@@ -266,10 +274,6 @@ def joint_torque(code, tau, kv, mul, ax, ay, az, n0, n1, n2, f0, f1, f2) -> None
         tau[kv + 4] = tau[kv + 4] + f1
         tau[kv + 5] = tau[kv + 5] + f2
         return
-    if code == PR:
-        t = ax * f0 + ay * f1 + az * f2
-    else:
-        t = ax * n0 + ay * n1 + az * n2
     tau[kv] = tau[kv] + (t if mul == 1.0 else mul * t)
 
 
@@ -299,19 +303,32 @@ def joint_ctq(code, ctq, kv, mul, ax, ay, az, w0, w1, w2, v0, v1, v2, n0, n1, n2
 
 def joint_axis(code, col, ax, ay, az):
     """Column ``col`` of ``S`` (6 scalars): ``[axis; 0]``, ``[0; axis]`` or the unit vector."""
-    if code == FF:
-        return (1.0 if col == 0 else 0.0, 1.0 if col == 1 else 0.0, 1.0 if col == 2 else 0.0,
-                1.0 if col == 3 else 0.0, 1.0 if col == 4 else 0.0, 1.0 if col == 5 else 0.0)
+    if code <= RA:          # revolute
+        return ax, ay, az, 0.0, 0.0, 0.0
     if code == PR:
         return 0.0, 0.0, 0.0, ax, ay, az
-    return ax, ay, az, 0.0, 0.0, 0.0
+    return (1.0 if col == 0 else 0.0, 1.0 if col == 1 else 0.0, 1.0 if col == 2 else 0.0,
+            1.0 if col == 3 else 0.0, 1.0 if col == 4 else 0.0, 1.0 if col == 5 else 0.0)
 
 
-def joint_project(code, col, ax, ay, az, F0, F1, F2, F3, F4, F5):
-    """``S[:, col]ᵀ F``: the joint's ``col``-th component of a force ``F`` (1 scalar)."""
-    if code == FF:
-        return (F0 if col == 0 else F1 if col == 1 else F2 if col == 2 else F3 if col == 3
-                else F4 if col == 4 else F5),
-    if code == PR:
-        return ax * F3 + ay * F4 + az * F5,
-    return ax * F0 + ay * F1 + az * F2,
+def joint_crba(code, H, n, row, kj, mm, both, ax, ay, az, F0, F1, F2, F3, F4, F5) -> None:
+    """``H[row, kj + d] += mm S[:, d]ᵀ F`` for each column ``d`` of the joint's ``S`` (CRBA).
+
+    ``H`` is ``n × n`` row-major; with ``both``, ``H[kj + d, row]`` gets the same (an entry
+    off the diagonal block: ``M`` is symmetric).
+    """
+    if code <= RA:          # revolute
+        t = ax * F0 + ay * F1 + az * F2
+    elif code == PR:
+        t = ax * F3 + ay * F4 + az * F5
+    else:
+        for d in range(6):
+            t = F0 if d == 0 else F1 if d == 1 else F2 if d == 2 else F3 if d == 3 else \
+                F4 if d == 4 else F5
+            H[row * n + kj + d] = H[row * n + kj + d] + mm * t
+            if both:
+                H[(kj + d) * n + row] = H[(kj + d) * n + row] + mm * t
+        return
+    H[row * n + kj] = H[row * n + kj] + mm * t
+    if both:
+        H[kj * n + row] = H[kj * n + row] + mm * t

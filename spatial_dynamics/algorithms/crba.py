@@ -24,7 +24,7 @@ on floats or (N,) arrays and the compiled backend is generated from it.
 from __future__ import annotations
 
 from .components import I_motion, XT_force, XT_I_X_plus
-from ..joints import joint_axis, joint_project
+from ..joints import joint_axis, joint_crba
 
 
 def crba_kernel(rows, Xup, IC, H) -> None:
@@ -61,9 +61,8 @@ def crba_kernel(rows, Xup, IC, H) -> None:
             F0, F1, F2, F3, F4, F5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
                                               s0, s1, s2, s3, s4, s5)
             k = kv + c
-            for d in range(dof):
-                (Hii,) = joint_project(code, d, ax, ay, az, F0, F1, F2, F3, F4, F5)
-                H[k * n + kv + d] = H[k * n + kv + d] + mul * mul * Hii
+            joint_crba(code, H, n, k, kv, mul * mul, False, ax, ay, az, F0, F1, F2, F3, F4, F5)
+            # j = i;  while λ(j) ≠ 0:  F = Xup_jᵀ F;  j = λ(j);  H_ij = H_ji = S_jᵀ F
             j = i
             pj = p
             while pj != 0:
@@ -71,10 +70,6 @@ def crba_kernel(rows, Xup, IC, H) -> None:
                 F0, F1, F2, F3, F4, F5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                                   rx, ry, rz, F0, F1, F2, F3, F4, F5)
                 j = pj
-                (pj, cj, _, kj, dj, bx, by, bz, _, _, _, _, _, _, _, _, _, _, _, _,
+                (pj, cj, _, kj, _, bx, by, bz, _, _, _, _, _, _, _, _, _, _, _, _,
                  _, _, _, _, _, _, _, _, _, _, mj, _) = rows[j]
-                for d in range(dj):
-                    (Hij,) = joint_project(cj, d, bx, by, bz, F0, F1, F2, F3, F4, F5)
-                    Hij = mul * mj * Hij
-                    H[k * n + kj + d] = H[k * n + kj + d] + Hij
-                    H[(kj + d) * n + k] = H[(kj + d) * n + k] + Hij
+                joint_crba(cj, H, n, k, kj, mul * mj, True, bx, by, bz, F0, F1, F2, F3, F4, F5)

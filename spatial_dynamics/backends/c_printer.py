@@ -27,7 +27,7 @@ _C_RESERVED = {'auto', 'case', 'char', 'const', 'default', 'double', 'enum', 'ex
 _C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'dq', 'f_body', 'tau', 'work', 'H', 'mom', 'ctq', 'Y',
              'axes'}
 #: Parameters that are integers: flags, and the joints' code, indices and column.
-_C_FLAGS = {'has_fext', 'code', 'k', 'kv', 'col'}
+_C_FLAGS = {'has_fext', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row'}
 #: ``len(x)`` of an array parameter: the number of velocity coordinates ``nv`` (``q̇``, ``τ``),
 #: ``nv * nv`` for M(q), ``nv * 10 NB`` for the regressor.
 _C_LENGTH = {'H': 'nv * nv', 'Y': 'nv * 10 * (rows - 1)'}

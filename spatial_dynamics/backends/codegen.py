@@ -55,7 +55,7 @@ from typing import Optional, Sequence
 
 from . import layout
 from .c_printer import _ToC, lanes_c
-from ..joints import (CODES, joint_axis, joint_ctq, joint_motion, joint_project, joint_torque,
+from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_torque,
                       joint_transform, joint_velocity)
 from ..algorithms import components, crba, momentum, regressor, rnea
 
@@ -70,7 +70,7 @@ WORK = 40
 SOURCES = (components.cross, components.X_motion, components.XT_force, components.XT_force_plus,
            components.I_motion, components.XT_I_X, components.XT_I_X_plus,
            joint_transform, joint_motion, joint_velocity, joint_torque, joint_ctq, joint_axis,
-           joint_project,
+           joint_crba,
            rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
            regressor.regressor_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
