@@ -138,6 +138,50 @@ def quaternion_matrix(quat) -> np.ndarray:
                      np.stack([xz - wy, yz + wx, 1.0 - (xx + yy)], -1)], -2)
 
 
+def joint_integrate(jtype: int, q: np.ndarray, v: np.ndarray, dt) -> np.ndarray:
+    """A joint's coordinates ``q`` (..., NQ) moved by its velocity ``v`` (..., NV) for ``dt``.
+
+    ``q + v dt`` for a 1-DoF joint; a free-flyer moves along the screw of its twist
+    (:func:`integrate_free_flyer`).
+    """
+    if jtype == FREE_FLYER:
+        return integrate_free_flyer(q, v, dt)
+    return q + v * dt
+
+
+def integrate_free_flyer(q: np.ndarray, v: np.ndarray, dt) -> np.ndarray:
+    """A free-flyer's pose moved by its twist ``v = [ω; v]`` (base frame) held for ``dt`` s.
+
+    ``q`` (..., 7) position and quaternion x y z w; returns the pose ``M exp(v dt)`` (..., 7):
+    the body moves along the screw of its twist (Pinocchio's ``integrate``, whose
+    ``v[:6]`` is the same twist linear first). This is not ``q + q̇ dt``: the twist is
+    the body's velocity, not the rate of its coordinates (``ṗ = R v``, and the quaternion's
+    rate is ``½ q ⊗ (ω, 0)``).
+    """
+    q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
+    w, u = v[..., :3] * dt, v[..., 3:6] * dt
+    t2 = np.sum(w * w, axis=-1)
+    t = np.sqrt(t2)
+    small = t < 1e-4
+    ts = np.where(small, 1.0, t)
+    # exp of the twist: rotation (w/t sin(t/2), cos(t/2)); translation V u with
+    # V = 1 + (1 - cos t)/t² w× + (t - sin t)/t³ w×² (Taylor series near t = 0)
+    half = np.where(small, 0.5 - t2 / 48.0, np.sin(ts / 2.0) / ts)
+    a = np.where(small, 0.5 - t2 / 24.0, (1.0 - np.cos(ts)) / (ts * ts))
+    b = np.where(small, 1.0 / 6.0 - t2 / 120.0, (ts - np.sin(ts)) / (ts * ts * ts))
+    wu = np.cross(w, u)
+    p_d = u + a[..., None] * wu + b[..., None] * np.cross(w, wu)
+    d_u, d_w = half[..., None] * w, np.cos(t / 2.0)
+    quat = q[..., 3:7] / np.linalg.norm(q[..., 3:7], axis=-1, keepdims=True)
+    c_u, c_w = quat[..., :3], quat[..., 3]
+    new_u = c_w[..., None] * d_u + d_w[..., None] * c_u + np.cross(c_u, d_u)
+    new_w = c_w * d_w - np.sum(c_u * d_u, axis=-1)
+    new = np.concatenate([new_u, new_w[..., None]], axis=-1)
+    new /= np.linalg.norm(new, axis=-1, keepdims=True)
+    p = q[..., :3] + np.einsum('...ij,...j->...i', quaternion_matrix(quat), p_d)
+    return np.concatenate([p, new], axis=-1)
+
+
 # --------------------------------------------------------------------------------------------
 # The operations on scalar components (the rules of algorithms/rnea.py): each branches on the
 # kernel code, so that the algorithms do not.

@@ -211,3 +211,142 @@ def test_floating_terms_equal_pinocchio_free_flyer(name, rng):
             for s in range(3):
                 ok, err = close(value[s], want[s])
                 assert ok, (backend, 'batch', s, err)
+
+
+# -- the other algorithms, identities, reduction, the command -------------------------------
+
+IDENTITY_ROBOTS = ('solo_description/robots/solo12.urdf', 'talos_data/robots/talos_full_v2.urdf',
+                   'g1_description/urdf/g1_29dof_rev_1_0.urdf')
+
+
+def floating_robot(name):
+    path = path_of(name)
+    return sd.Model.from_urdf(path, base='floating'), FloatingOracle(pinocchio_text(path))
+
+
+@pytest.mark.parametrize('name', IDENTITY_ROBOTS)
+def test_momentum_regressor_and_jacobian_equal_pinocchio(name, rng):
+    """M q̇ and Cᵀ q̇ (computeCoriolisMatrix), Y π = τ, and a foot's LOCAL Jacobian."""
+    model, oracle = floating_robot(name)
+    names = model.joint_names
+    q, v, a = random_floating_state(rng, model)
+    q_pin, v_pin, _ = oracle.expand(names, q, v, a)
+    P = oracle.velocity_map(names, q)
+    C = pin.computeCoriolisMatrix(oracle.model, oracle.data, q_pin, v_pin).copy()
+    _, _, _, M = oracle.terms(names, q, v, a)
+    pi = sd.algorithms.regressor.parameters(model)
+    for backend in ('numpy', 'compiled'):
+        mom, ctq = sd.generalized_momentum(model, q, v, backend=backend)
+        assert close(mom, M @ v)[0], backend
+        assert close(ctq, P.T @ C.T @ (P @ v))[0], backend
+        Y = sd.regressor(model, q, v, a, backend=backend)
+        assert close(Y @ pi, sd.rnea(model, q, v, a, backend=backend))[0], backend
+    link = model.body_names[-1]
+    J = sd.jacobian(model, q, link)
+    pin.computeJointJacobians(oracle.model, oracle.data, q_pin)
+    pin.updateFramePlacements(oracle.model, oracle.data)
+    fid = oracle.model.getFrameId(link, pin.FrameType.BODY)
+    J_pin = pin.getFrameJacobian(oracle.model, oracle.data, fid, pin.LOCAL)
+    assert close(J, np.vstack([J_pin[3:], J_pin[:3]]) @ P)[0]
+
+
+@pytest.mark.parametrize('name', IDENTITY_ROBOTS)
+def test_floating_identities(name, rng):
+    """M symmetric positive definite; M q̈ + (C q̇ + g) = τ; g = ∂V/∂q along q̇; and moving
+    the world frame changes nothing but the base pose (gravity turned with it)."""
+    model, oracle = floating_robot(name)
+    q, v, a = random_floating_state(rng, model)
+    M = sd.mass_matrix(model, q)
+    assert np.array_equal(M, M.T)
+    assert np.linalg.eigvalsh(M).min() > 0.0
+    assert close(M @ a + sd.bias_torque(model, q, v), sd.rnea(model, q, v, a))[0]
+    # g(q)ᵀ q̇ = dV/dt along the motion q(t) = integrate(q, q̇ t) (central difference)
+    h = 1e-5
+    V = [pin.computePotentialEnergy(oracle.model, oracle.data, oracle.expand(
+        model.joint_names, sd.integrate(model, q, v, s * h), v, a)[0]) for s in (1, -1)]
+    dV = (V[0] - V[1]) / (2 * h)
+    assert abs(sd.gravity_torque(model, q) @ v - dV) <= 1e-6 * max(1.0, abs(dV))
+    # a rigid motion (R, p) of the world: base pose (R p0 + p, R ⊗ quat), gravity R g
+    angle, axis = 0.7, np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    turn = np.r_[np.sin(angle / 2) * axis, np.cos(angle / 2)]
+    R = sd.joints.quaternion_matrix(turn)
+    moved = q.copy()
+    moved[:3] = R @ q[:3] + np.array([5.0, -3.0, 1.0])
+    u, w = q[3:6], q[6]
+    moved[3:6] = turn[3] * u + w * turn[:3] + np.cross(turn[:3], u)
+    moved[6] = turn[3] * w - turn[:3] @ u
+    g = np.array([0.0, 0.0, -9.81])
+    assert close(sd.rnea(model, moved, v, a, R @ g), sd.rnea(model, q, v, a, g))[0]
+    assert not close(sd.rnea(model, moved, v, a, g), sd.rnea(model, q, v, a, g))[0]
+
+
+def test_integrate_is_pinocchios(rng):
+    """sd.integrate moves the base along its twist as pin.integrate does (v linear first)."""
+    model, oracle = floating_robot('solo_description/robots/solo12.urdf')
+    for dt in (0.01, 1.0, 1e-7):
+        q, v, a = random_floating_state(rng, model)
+        q_pin, v_pin, _ = oracle.expand(model.joint_names, q, v, a)
+        ours = sd.integrate(model, q, v, dt)
+        theirs = pin.integrate(oracle.model, q_pin, v_pin * dt)
+        sign = np.sign(ours[6] * theirs[6]) or 1.0
+        assert np.allclose(ours[:3], theirs[:3], rtol=0, atol=1e-12)
+        assert np.allclose(ours[3:7], sign * theirs[3:7], rtol=0, atol=1e-12)
+        assert np.allclose(ours[7:], q[7:] + v[6:] * dt, rtol=0, atol=1e-15)
+    batch = sd.integrate(model, *random_floating_state(rng, model, (4,))[:2], 0.1)
+    assert batch.shape == (4, model.nq)
+    assert np.allclose(np.linalg.norm(batch[:, 3:7], axis=-1), 1.0)
+
+
+def test_reduction_keeps_the_free_flyer(rng):
+    """joints= and locked= on a floating base: the free-flyer stays, the rest as for a fixed
+    base; the reduced model is Pinocchio's reduced free-flyer model."""
+    path = path_of('solo_description/robots/solo12.urdf')
+    kept = ['FL_HFE', 'FL_KFE', 'HR_KFE']
+    model = sd.Model.from_urdf(path, base='floating', joints=kept, locked={'FL_HAA': 0.3})
+    assert model.joint_names == ('root_joint', *kept)
+    assert (model.nq, model.nv) == (10, 9)
+    full = sd.Model.from_urdf(path, base='floating')
+    q, v, a = random_floating_state(rng, model)
+    qf = np.zeros(full.nq)
+    qf[:7] = q[:7]
+    vf, af = np.zeros(full.nv), np.zeros(full.nv)
+    vf[:6], af[:6] = v[:6], a[:6]
+    at = {j: k for k, j in enumerate(full.joint_names)}
+    qf[6 + at['FL_HAA']] = 0.3
+    for k, j in enumerate(kept):
+        qf[6 + at[j]], vf[5 + at[j]], af[5 + at[j]] = q[7 + k], v[6 + k], a[6 + k]
+    tau_full = sd.rnea(full, qf, vf, af)
+    rows = [0, 1, 2, 3, 4, 5] + [5 + at[j] for j in kept]
+    for backend in ('numpy', 'compiled'):
+        assert close(sd.rnea(model, q, v, a, backend=backend), tau_full[rows])[0]
+
+
+def test_a_fixed_base_model_is_unchanged_by_the_option(rng):
+    """base='fixed' (the default) is today's model: nq == nv, no free-flyer, same torques."""
+    path = path_of('solo_description/robots/solo12.urdf')
+    fixed, default = (sd.Model.from_urdf(path, base='fixed'), sd.Model.from_urdf(path))
+    assert fixed.nq == fixed.nv == len(fixed.joint_names) == 12 and not fixed.floating
+    q, v, a = (rng.uniform(-1, 1, 12) for _ in range(3))
+    assert np.array_equal(sd.rnea(fixed, q, v, a), sd.rnea(default, q, v, a))
+    with pytest.raises(ValueError, match="base must be one of"):
+        sd.Model.from_urdf(path, base='flying')
+
+
+def test_shapes_are_named_when_wrong():
+    model = sd.Model.from_urdf(path_of('solo_description/robots/solo12.urdf'), base='floating')
+    with pytest.raises(ValueError, match=r'qd must have shape \(\.\.\., 18\)'):
+        sd.rnea(model, np.zeros(19), np.zeros(19), np.zeros(18))
+    with pytest.raises(ValueError, match=r'q must have shape \(\.\.\., 19\)'):
+        sd.gravity_torque(model, np.zeros(18))
+
+
+def test_summary_and_check_urdf_say_floating_base(capsys):
+    from spatial_dynamics import check
+    path = path_of('solo_description/robots/solo12.urdf')
+    model = sd.Model.from_urdf(path, base='floating')
+    assert 'floating base' in model.summary() and 'nq 19, nv 18' in model.summary()
+    assert 'floating base' not in sd.Model.from_urdf(path).summary()
+    assert check.main(['--base', 'floating', path]) == 0
+    out = capsys.readouterr().out
+    assert "floating base (link 'base_link' on the free-flyer joint 'root_joint'" in out
+    assert '18 dof (the base 6, the joints 12)' in out
