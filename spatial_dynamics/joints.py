@@ -56,7 +56,7 @@ _AXIS_E = (Erotx, Eroty, Erotz)
 
 
 def frame_axis(axis) -> tuple[int, float]:
-    """``(k, sign)`` when ``axis`` is exactly ``±`` the frame axis ``k`` (0, 1, 2), else (-1, 0)."""
+    """Return ``(k, sign)`` when ``axis`` is ``±`` the frame axis ``k`` (0, 1, 2), else (-1, 0)."""
     for k in range(3):
         if abs(axis[k]) == 1.0 and axis[(k + 1) % 3] == 0.0 and axis[(k + 2) % 3] == 0.0:
             return k, float(axis[k])
@@ -111,7 +111,7 @@ def jcalc(jtype: int, axis: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def joint_coordinates(jtype: int, q: np.ndarray, k: int, mul: float, off: float) -> np.ndarray:
-    """A joint's coordinates in ``q`` (..., nq), as :func:`jcalc` takes them.
+    """Return a joint's coordinates in ``q`` (..., nq), as :func:`jcalc` takes them.
 
     A 1-DoF joint's value ``mul q[k] + off`` (...); a free-flyer's ``q[k:k + 7]`` (..., 7).
     """
@@ -139,7 +139,7 @@ def quaternion_matrix(quat) -> np.ndarray:
 
 
 def joint_integrate(jtype: int, q: np.ndarray, v: np.ndarray, dt) -> np.ndarray:
-    """A joint's coordinates ``q`` (..., NQ) moved by its velocity ``v`` (..., NV) for ``dt``.
+    """Return a joint's coordinates ``q`` (..., NQ) moved by its velocity ``v`` (..., NV), ``dt``.
 
     ``q + v dt`` for a 1-DoF joint; a free-flyer moves along the screw of its twist
     (:func:`integrate_free_flyer`).
@@ -150,7 +150,7 @@ def joint_integrate(jtype: int, q: np.ndarray, v: np.ndarray, dt) -> np.ndarray:
 
 
 def integrate_free_flyer(q: np.ndarray, v: np.ndarray, dt) -> np.ndarray:
-    """A free-flyer's pose moved by its twist ``v = [ω; v]`` (base frame) held for ``dt`` s.
+    """Return a free-flyer's pose moved by its twist ``v = [ω; v]`` (base frame) for ``dt`` s.
 
     ``q`` (..., 7) position and quaternion x y z w; returns the pose ``M exp(v dt)`` (..., 7):
     the body moves along the screw of its twist (Pinocchio's ``integrate``, whose
@@ -264,7 +264,7 @@ def joint_transform(code, q, k, mul, off, ax, ay, az, t00, t01, t02, t10, t11, t
 
 
 def joint_motion(code, dq, kv, mul, ax, ay, az, m0, m1, m2, m3, m4, m5):
-    """``m + S dq`` for the joint's part of ``dq`` (``q̇`` or ``q̈``): a motion vector plus ``S q̇``."""
+    """``m + S dq`` for the joint's part of ``dq`` (``q̇`` or ``q̈``), ``m`` a motion vector."""
     if code <= RA:          # revolute
         xi = dq[kv] if mul == 1.0 else mul * dq[kv]
         return m0 + ax * xi, m1 + ay * xi, m2 + az * xi, m3, m4, m5

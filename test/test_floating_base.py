@@ -81,7 +81,7 @@ RTOL = 1e-12    # normwise, relative to max(1, |expected|)
 
 
 def pinocchio_text(path):
-    """The URDF text for Pinocchio: named if it is not, no leading space."""
+    """Return the URDF text for Pinocchio: named if it is not, no leading space."""
     with open(path, encoding='utf-8') as f:
         text = f.read().lstrip()
     return re.sub(r'<robot(?=[\s>/])(?![^>]*\bname=)', '<robot name="robot"', text, count=1)
@@ -184,7 +184,8 @@ def test_floating_terms_equal_pinocchio_free_flyer(name, rng):
     path = path_of(name)
     model = sd.Model.from_urdf(path, base='floating')
     assert model.joint_names[0] == 'root_joint'
-    assert (model.nq, model.nv) == (7 + len(model.joint_names) - 1, 6 + len(model.joint_names) - 1)
+    n = len(model.joint_names) - 1
+    assert (model.nq, model.nv) == (7 + n, 6 + n)
     oracle = FloatingOracle(pinocchio_text(path))
     names = model.joint_names
     assert sorted(names[1:]) == sorted(oracle.joints.keys() - oracle.mimic.keys())
@@ -252,8 +253,10 @@ def test_momentum_regressor_and_jacobian_equal_pinocchio(name, rng):
 
 @pytest.mark.parametrize('name', IDENTITY_ROBOTS)
 def test_floating_identities(name, rng):
-    """M symmetric positive definite; M q̈ + (C q̇ + g) = τ; g = ∂V/∂q along q̇; and moving
-    the world frame changes nothing but the base pose (gravity turned with it)."""
+    """M is SPD, M q̈ + (C q̇ + g) = τ, g = ∂V/∂q along q̇, the world frame does not matter.
+
+    Moving the world frame changes nothing but the base pose (and gravity, turned with it).
+    """
     model, oracle = floating_robot(name)
     q, v, a = random_floating_state(rng, model)
     M = sd.mass_matrix(model, q)
@@ -298,8 +301,10 @@ def test_integrate_is_pinocchios(rng):
 
 
 def test_reduction_keeps_the_free_flyer(rng):
-    """joints= and locked= on a floating base: the free-flyer stays, the rest as for a fixed
-    base; the reduced model is Pinocchio's reduced free-flyer model."""
+    """Reduce a floating base: the free-flyer stays, the rest as for a fixed base.
+
+    The reduced model's torques are the full model's rows at the locked value.
+    """
     path = path_of('solo_description/robots/solo12.urdf')
     kept = ['FL_HFE', 'FL_KFE', 'HR_KFE']
     model = sd.Model.from_urdf(path, base='floating', joints=kept, locked={'FL_HAA': 0.3})

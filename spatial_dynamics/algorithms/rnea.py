@@ -46,6 +46,7 @@ from ..joints import (jcalc, joint_coordinates, joint_motion, joint_torque, join
 from ..model import Model
 from ..spatial import crf, crm
 
+
 def nonzero(x) -> bool:
     """Tell whether a scalar or array component is not identically zero."""
     return bool(x != 0) if not isinstance(x, np.ndarray) else bool(x.any())

@@ -23,10 +23,10 @@ from ..algorithms.rnea import rnea_kernel, xup_kernel
 def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
     """τ as a list of ``nv`` scalars from the per-body ``rows`` of :mod:`.layout`.
 
-    ``q`` (``nq``), ``qd`` and ``qdd`` (``nv``) are sequences of scalars of one kind (floats, (N,) arrays or
-    ``mpmath.mpf``), ``gravity`` three of them; ``m`` provides their ``sin`` and ``cos``
-    (``math``, ``numpy`` or ``mpmath``). ``f_body`` maps a body index to its external force
-    ``[n; f]`` in body coordinates as 6 scalars.
+    ``q`` (``nq``), ``qd`` and ``qdd`` (``nv``) are sequences of scalars of one kind (floats,
+    (N,) arrays or ``mpmath.mpf``), ``gravity`` three of them; ``m`` provides their ``sin``
+    and ``cos`` (``math``, ``numpy`` or ``mpmath``). ``f_body`` maps a body index to its
+    external force ``[n; f]`` in body coordinates as 6 scalars.
     """
     gx, gy, gz = gravity
     slots = len(rows)
