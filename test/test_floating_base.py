@@ -355,3 +355,58 @@ def test_summary_and_check_urdf_say_floating_base(capsys):
     out = capsys.readouterr().out
     assert "floating base (link 'base_link' on the free-flyer joint 'root_joint'" in out
     assert '18 dof (the base 6, the joints 12)' in out
+
+
+def test_a_table_whose_free_flyer_overruns_q_is_refused():
+    """The compiled kernels bound a free-flyer's 7 coordinates of q and 6 of q̇ by the table."""
+    from spatial_dynamics.backends import compiled, layout
+    if compiled.ext is None:
+        pytest.skip('built without the compiled kernels')
+    model = sd.Model.from_urdf(path_of('solo_description/robots/solo12.urdf'), base='floating')
+    table = layout.of(model).table.copy()
+    compiled.ext.Kernels(table)
+    nq, nv = model.nq, model.nv
+    C = layout.COLUMN
+    for row, column, value in ((1, C['qidx'], nq - 6.0), (1, C['vidx'], nv - 5.0),
+                               (1, C['dof'], 1.0), (2, C['code'], 5.0), (2, C['dof'], 6.0),
+                               (2, C['vidx'], nv + 0.0), (0, C['vidx'], nq + 1.0)):
+        bad = table.copy()
+        bad[row, column] = value
+        with pytest.raises(ValueError, match='not a tree'):
+            compiled.ext.Kernels(bad)
+
+
+def test_batches_broadcast_and_run_in_lanes_bit_for_bit(rng):
+    """A batch of floating states (SIMD lanes) gives each state's single-call torques exactly.
+
+    q of shape (N, nq) broadcasts against one q̇ of shape (nv,).
+    """
+    model = sd.Model.from_urdf(path_of('talos_data/robots/talos_full_v2.urdf'), base='floating')
+    Q, V, A = random_floating_state(rng, model, (19,))
+    batch = sd.rnea(model, Q, V, A, backend='compiled')
+    single = np.array([sd.rnea(model, Q[s], V[s], A[s], backend='compiled') for s in range(19)])
+    assert np.array_equal(batch, single)
+    assert np.allclose(sd.rnea(model, Q, V, A, backend='numpy'), batch, rtol=0, atol=1e-9)
+    spread = sd.rnea(model, Q, V[0], A[0])
+    assert spread.shape == (19, model.nv)
+    assert np.array_equal(spread[3], sd.rnea(model, Q[3], V[0], A[0]))
+    assert sd.generalized_momentum(model, Q[:2], V[:2])[0].shape == (2, model.nv)
+    assert sd.regressor(model, Q[:2], V[:2], A[:2]).shape == (2, model.nv, 10 * model.NB)
+
+
+def test_external_wrenches_on_a_floating_base_equal_pinocchio(rng):
+    """f_ext on a foot and on the base itself, in their link frames, as Pinocchio's fext."""
+    model, oracle = floating_robot('solo_description/robots/solo12.urdf')
+    names = model.joint_names
+    q, v, a = random_floating_state(rng, model)
+    f_ext = {'FL_FOOT': rng.normal(size=6), 'base_link': rng.normal(size=6)}
+    forces = [pin.Force.Zero() for _ in range(oracle.model.njoints)]
+    for link, w in f_ext.items():
+        frame = oracle.model.frames[oracle.model.getFrameId(link, pin.FrameType.BODY)]
+        forces[frame.parentJoint] += frame.placement.act(pin.Force(w[3:], w[:3]))
+    q_pin, v_pin, a_pin = oracle.expand(names, q, v, a)
+    oracle.model.gravity.linear = np.array([0.0, 0.0, -9.81])
+    P = oracle.velocity_map(names, q)
+    expected = P.T @ pin.rnea(oracle.model, oracle.data, q_pin, v_pin, a_pin, forces)
+    for backend in ('numpy', 'compiled'):
+        assert close(sd.rnea(model, q, v, a, f_ext=f_ext, backend=backend), expected)[0]
