@@ -410,3 +410,31 @@ def test_external_wrenches_on_a_floating_base_equal_pinocchio(rng):
     expected = P.T @ pin.rnea(oracle.model, oracle.data, q_pin, v_pin, a_pin, forces)
     for backend in ('numpy', 'compiled'):
         assert close(sd.rnea(model, q, v, a, f_ext=f_ext, backend=backend), expected)[0]
+
+
+def test_the_flat_kernels_the_c_is_printed_from_compute_the_floating_source(rng):
+    """The generator's flat rewrite of the kernels (joints inlined by C) on a floating model."""
+    from spatial_dynamics.backends import codegen, layout, python
+    flat = codegen.flat_module()
+    model = sd.Model.from_urdf(path_of('talos_data/robots/talos_full_v2.urdf'), base='floating')
+    lay = layout.of(model)
+    q, v, a = random_floating_state(rng, model)
+    rows = lay.table.shape[0]
+    work = np.zeros(rows * flat.WORK)
+    tau = np.zeros(model.nv)
+    flat.xup_kernel(lay.table, q, work)
+    flat.rnea_kernel(lay.table, q, v, a, 0.5, 0.0, -9.8, np.zeros((1, 6)), False, tau, work)
+    assert tau.tolist() == python.rnea_rows(lay.rows, q.tolist(), v.tolist(), a.tolist(),
+                                            (0.5, 0.0, -9.8))
+    H = np.zeros(model.nv ** 2)
+    flat.crba_kernel(lay.table, work, H)
+    assert H.tolist() == python.mass_matrix_rows(lay.rows, q.tolist())
+    mom, ctq = np.zeros(model.nv), np.zeros(model.nv)
+    flat.momentum_kernel(lay.table, q, v, mom, ctq, work)
+    assert (mom.tolist(), ctq.tolist()) == python.momentum_rows(lay.rows, q.tolist(), v.tolist())
+    Y = np.zeros(model.nv * 10 * (rows - 1))
+    flat.xup_kernel(lay.table, q, work)
+    flat.regressor_kernel(lay.table, v, a, 0.5, 0.0, -9.8, Y, np.zeros(6 * rows * (rows + 5)),
+                          work)
+    assert Y.tolist() == python.regressor_rows(lay.rows, q.tolist(), v.tolist(), a.tolist(),
+                                               (0.5, 0.0, -9.8))

@@ -105,16 +105,21 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         model: the robot.
         q, qd, qdd: joint positions (rad, m), velocities and accelerations in the order of
             ``model.joint_names``; shape (n,) or (..., n), broadcast against each other;
-            arrays, lists or tuples of any real type.
-        gravity: gravitational acceleration (m/s²) in root-link coordinates, 3 numbers.
+            arrays, lists or tuples of any real type. A floating-base model's ``q`` has
+            ``model.nq`` numbers (the base's position and quaternion x y z w first), ``qd``
+            and ``qdd`` ``model.nv`` (the base's twist ``[ω; v]`` and its rate first, base
+            frame); see doc/floating_base.md.
+        gravity: gravitational acceleration (m/s²) in root-link coordinates (fixed base) or
+            world coordinates (floating base), 3 numbers.
         f_ext: link name → spatial force ``[n; f]`` (N m, N), angular first, acting on that
             link and expressed in that link's frame; shape (6,) or broadcastable to (..., 6).
         backend: ``'auto'`` (compiled when the package was built with its kernels),
             ``'numpy'`` or ``'compiled'`` (float64 and float32; other dtypes run on numpy).
 
     Returns:
-        τ (N m or N), same shape as the broadcast inputs; float64, or the inputs' floating
-        dtype.
+        τ (N m or N), shape (..., nv): the broadcast batch shape; float64, or the inputs'
+        floating dtype. A floating base's first six are the wrench ``[n; f]`` on the base,
+        in its frame.
     """
     lay, kern, tau = _entered(model, backend, None if f_ext else _c_rnea, q, qd, qdd, gravity)
     if tau is not None:
