@@ -365,13 +365,21 @@ def joint_crba(code, H, n, row, kj, mm, both, ax, ay, az, F0, F1, F2, F3, F4, F5
         t = ax * F0 + ay * F1 + az * F2
     elif code == PR:
         t = ax * F3 + ay * F4 + az * F5
-    else:
-        for d in range(6):
-            t = F0 if d == 0 else F1 if d == 1 else F2 if d == 2 else F3 if d == 3 else \
-                F4 if d == 4 else F5
-            H[row * n + kj + d] = H[row * n + kj + d] + mm * t
-            if both:
-                H[(kj + d) * n + row] = H[(kj + d) * n + row] + mm * t
+    else:       # free-flyer: S = 1, the six components of F
+        r = row * n + kj
+        H[r] = H[r] + mm * F0
+        H[r + 1] = H[r + 1] + mm * F1
+        H[r + 2] = H[r + 2] + mm * F2
+        H[r + 3] = H[r + 3] + mm * F3
+        H[r + 4] = H[r + 4] + mm * F4
+        H[r + 5] = H[r + 5] + mm * F5
+        if both:
+            H[kj * n + row] = H[kj * n + row] + mm * F0
+            H[(kj + 1) * n + row] = H[(kj + 1) * n + row] + mm * F1
+            H[(kj + 2) * n + row] = H[(kj + 2) * n + row] + mm * F2
+            H[(kj + 3) * n + row] = H[(kj + 3) * n + row] + mm * F3
+            H[(kj + 4) * n + row] = H[(kj + 4) * n + row] + mm * F4
+            H[(kj + 5) * n + row] = H[(kj + 5) * n + row] + mm * F5
         return
     H[row * n + kj] = H[row * n + kj] + mm * t
     if both:
