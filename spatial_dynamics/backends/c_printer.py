@@ -67,7 +67,7 @@ class _ToC:
         if isinstance(node, ast.Constant):
             return isinstance(node.value, (bool, int))
         if isinstance(node, ast.Name):
-            return node.id in self.ints
+            return node.id in self.ints or (node.id in self.params and node.id in _C_FLAGS)
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
             return node.func.id in ('int', 'len')
         if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Attribute):
