@@ -55,7 +55,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.tools.driving import demo_urdf
 from benchmarks.generate import chain_urdf, tree_urdf
-from spatial_dynamics.algorithms.rnea import PR, RA
+from spatial_dynamics.joints import PR, RA
 from spatial_dynamics.backends import layout, python as python_backend
 from spatial_dynamics.sim.robot import dynamics_only, mujoco_model
 
@@ -336,7 +336,7 @@ def pinocchio_reference_rows(robot: Robot, mp) -> tuple:
     q0 = P.pin.neutral(pm)
     joints, placements = list(pm.joints), list(pm.jointPlacements)
     inertias, parents = list(pm.inertias), list(pm.parents)
-    rows = [(-1, 0, robot.model.nq) + (0.0,) * (layout.WIDTH - 3)]
+    rows = [(-1, 0, robot.model.nq, robot.model.nv, 0) + (0.0,) * (layout.WIDTH - 5)]
     for j in range(1, pm.njoints):
         jm = joints[j]
         jd = jm.createData()
@@ -355,7 +355,7 @@ def pinocchio_reference_rows(robot: Robot, mp) -> tuple:
         Ib = [[Ic[a][b] + m * sum(cx[a][k] * cx[b][k] for k in range(3)) for b in range(3)]
               for a in range(3)]
         k, mult, off = P.K[j - 1], P.MUL[j - 1], P.OFF[j - 1]
-        rows.append((int(parents[j]), code, int(k)) + axis + Et + r + (m,)
+        rows.append((int(parents[j]), code, int(k), int(k), 1) + axis + Et + r + (m,)
                     + tuple(m * x for x in c)
                     + (Ib[0][0], Ib[0][1], Ib[0][2], Ib[1][1], Ib[1][2], Ib[2][2],
                        float(mult), float(off)))

@@ -11,6 +11,7 @@ imports rclpy; ``node`` is the ROS 2 shell around it.
 """
 
 from .model import Frame, Model, with_payload
+from .algorithms.configuration import integrate
 from .algorithms.jacobian import jacobian
 from .algorithms.rnea import rnea_spatial
 from .backends import (bias_torque, generalized_momentum, GRAVITY, gravity_torque,
@@ -20,7 +21,7 @@ from .urdf import URDFWarning
 
 __all__ = ['Frame', 'GRAVITY', 'Model', 'armature_torque', 'bias_torque',
            'clamp_to_effort_limits', 'friction_torque', 'generalized_momentum',
-           'gravity_torque', 'jacobian', 'mass_matrix',
+           'gravity_torque', 'integrate', 'jacobian', 'mass_matrix',
            'per_joint', 'regressor', 'rnea', 'rnea_spatial',
            'URDFWarning', 'with_payload']
 __version__ = '0.1.0'

@@ -73,7 +73,9 @@ def joint_lines(model: Model, types: Dict[str, str]) -> List[str]:
     rows = []
     for k, name in enumerate(model.joint_names):
         i = body[name]
-        limits = (model.lower[k], model.upper[k], model.velocity_limit[k], model.effort_limit[k])
+        kv = int(model.vidx[i])         # limits are per velocity coordinate
+        limits = (model.lower[kv], model.upper[kv], model.velocity_limit[kv],
+                  model.effort_limit[kv])
         mimics = []
         for m in followers.get(k, ()):
             if model.body_joints[m] != name:
@@ -104,9 +106,15 @@ def body_lines(model: Model) -> List[str]:
 
 def report(model: Model, types: Dict[str, str]) -> str:
     """Return the whole check as text: robot, joints, bodies, mass and warnings."""
-    lines = [f'robot {model.name!r}: {model.nq} dof, {model.NB} moving bodies, '
+    base = (f'floating base (link {model.body_names[1]!r} on the free-flyer joint '
+            f'{model.joint_names[0]!r}: q has {model.nq} numbers, position and quaternion x y z '
+            f'w first, q̇ {model.nv}, the base twist [ω; v] first), '
+            if model.floating else '')
+    dof = f'{model.nv} dof (the base 6, the joints {model.nv - 6})' if model.floating else \
+        f'{model.nq} dof'
+    lines = [f'robot {model.name!r}: {base}{dof}, {model.NB} moving bodies, '
              f'{len(model.frames)} links', '',
-             f'joints in q order ({model.nq}); limits in rad or m, /s, N m or N, '
+             f'joints in q order ({len(model.joint_names)}); limits in rad or m, /s, N m or N, '
              "'-' when not given:"]
     lines += joint_lines(model, types)
     if model.locked:
@@ -150,6 +158,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         'others are locked at 0 or at their --locked value')
     parser.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
                         help='value (rad or m) of a joint locked by --joints')
+    parser.add_argument('--base', choices=('fixed', 'floating'), default='fixed',
+                        help="'floating': the root link moves on a free-flyer joint "
+                        "(Model.from_urdf(..., base='floating'))")
     args = parser.parse_args(argv)
     locked = dict(args.locked)
     if locked and not args.joints:
@@ -158,7 +169,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         xml = read_description(args.urdf)
         with warnings.catch_warnings():
             warnings.simplefilter('ignore', URDFWarning)    # printed below, from the model
-            model = Model.from_urdf(xml, joints=args.joints, locked=locked or None)
+            model = Model.from_urdf(xml, joints=args.joints, locked=locked or None,
+                                    base=args.base)
     except ValueError as err:
         print(f'error: {err}', file=sys.stderr)
         return 1

@@ -18,6 +18,7 @@ from typing import Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
+from .joints import FREE_FLYER, NQ, NV
 from .spatial import mcI
 
 Source = Union[str, bytes, os.PathLike]
@@ -42,26 +43,36 @@ class Frame:
 
 @dataclass(frozen=True, eq=False)
 class Model:
-    """Immutable kinematic tree with flat per-body arrays (index 0 = fixed base).
+    """Immutable kinematic tree with flat per-body arrays (index 0 = fixed base or world).
 
-    ``NB`` moving bodies, ``n`` = ``len(joint_names)`` generalised coordinates.
+    ``NB`` moving bodies; ``nq`` position coordinates (``len(q)``) and ``nv`` velocity
+    coordinates (``len(q̇)``, ``len(q̈)``, ``len(τ)``). A fixed-base model has ``nq == nv ==
+    len(joint_names)``; a floating-base model (``base='floating'``) has body 0 the world and
+    body 1 the root link on a free-flyer joint (:mod:`spatial_dynamics.joints`), so
+    ``nq = 7 + n`` and ``nv = 6 + n`` for ``n`` joints besides it.
 
     Attributes:
         name: robot name.
-        joint_names: movable, non-mimic joint names; the order of ``q``.
+        joint_names: movable, non-mimic joint names (the free-flyer first, named
+            ``'root_joint'``, in a floating-base model); the order of ``q`` and ``q̇``.
         body_names: (NB+1,) link name of each body (the link its joint moves).
         body_joints: (NB+1,) name of each body's joint ('' for the base).
         NB: number of moving bodies.
         parent: (NB+1,) parent body index, ``parent[0] = -1``.
-        jtype: (NB+1,) joint kind per body (``joints.REVOLUTE``, ``PRISMATIC``; base ``FIXED``).
+        jtype: (NB+1,) joint kind per body (``joints.REVOLUTE``, ``PRISMATIC``,
+            ``FREE_FLYER``; body 0 ``FIXED``).
         axis: (NB+1, 3) unit joint axis in the body frame.
         Xtree: (NB+1, 6, 6) ``iXλ(i)`` at q = 0: parent body → body motion transform.
         inertia: (NB+1, 6, 6) spatial inertia of each body with its lumped links, body frame.
         qidx, qmul, qoff: (NB+1,) body ``i`` moves by ``qmul[i]·q[qidx[i]] + qoff[i]``
-            (mimic joints have ``qidx`` of their source); base entries are ``-1, 0, 0``.
+            (mimic joints have ``qidx`` of their source); base entries are ``-1, 0, 0``. A
+            free-flyer's coordinates are ``q[qidx[i]:qidx[i] + 7]`` (``qmul`` 1, ``qoff`` 0).
+        vidx: (NB+1,) first index of body ``i``'s joint in ``q̇``, ``q̈`` and ``τ`` (``qidx``
+            in a fixed-base model, where both are the same; ``-1`` for body 0).
         frames: link name → :class:`Frame` for every link, lumped or not.
-        effort_limit, velocity_limit, lower, upper, damping, friction: (n,) URDF
-            ``<limit>`` and ``<dynamics>`` values per joint of ``q`` (``nan`` when absent).
+        effort_limit, velocity_limit, lower, upper, damping, friction: (nv,) URDF
+            ``<limit>`` and ``<dynamics>`` values per velocity coordinate (``nan`` when
+            absent; a free-flyer's six entries ``nan``, and 0 for damping and friction).
         body_damping, body_friction: (NB+1,) ``<dynamics>`` of every body's joint, mimic
             joints included (0 when absent).
         lumped: links merged into a moving body by fixed (or locked) joints.
@@ -104,8 +115,11 @@ class Model:
     warnings: tuple = ()
     joint_types: Mapping[str, str] = field(default_factory=dict)
     mimics: Mapping[str, tuple] = field(default_factory=dict)
+    vidx: Optional[np.ndarray] = None
 
     def __post_init__(self) -> None:
+        if self.vidx is None:
+            object.__setattr__(self, 'vidx', np.array(self.qidx, dtype=np.intp))
         for name, value in vars(self).items():
             if isinstance(value, np.ndarray):
                 value.setflags(write=False)
@@ -123,13 +137,23 @@ class Model:
 
     @property
     def nq(self) -> int:
-        """Number of generalised coordinates, ``len(joint_names)``."""
-        return len(self.joint_names)
+        """Number of position coordinates ``len(q)``: 1 per joint, 7 for a free-flyer."""
+        return len(self.joint_names) + sum(NQ[int(k)] - 1 for k in self.jtype[1:])
+
+    @property
+    def nv(self) -> int:
+        """Number of velocity coordinates ``len(q̇) = len(τ)``: 1 per joint, 6 for a free-flyer."""
+        return len(self.joint_names) + sum(NV[int(k)] - 1 for k in self.jtype[1:])
+
+    @property
+    def floating(self) -> bool:
+        """Whether the base moves: the root link hangs on a free-flyer joint."""
+        return bool(self.NB) and int(self.jtype[1]) == FREE_FLYER
 
     @classmethod
     def from_urdf(cls, source: Source, joints: Optional[Sequence[str]] = None,
-                  locked: Optional[Mapping[str, float]] = None, strict: bool = False
-                  ) -> 'Model':
+                  locked: Optional[Mapping[str, float]] = None, strict: bool = False,
+                  base: str = 'fixed') -> 'Model':
         """Build a model from a URDF file path, an XML string or XML bytes (no meshes loaded).
 
         A ``str`` starting with ``<`` is XML, any other ``str`` (or ``os.PathLike``) a path of
@@ -150,18 +174,34 @@ class Model:
         damping or friction, no robot name) loads exactly as written, with a ``URDFWarning``
         per problem, also kept in ``model.warnings``; ``strict=True`` raises ``ValueError``
         for the first of them instead. Rounding noise (see ``INERTIA_ATOL``) is neither.
+
+        ``base='fixed'`` (default): the root link is fixed to the world. ``base='floating'``:
+        the root link moves on a free-flyer joint named ``'root_joint'`` (first in
+        ``joint_names``; ``q`` starts with the root link's position and unit quaternion x y z
+        w in the world, ``q̇`` with its twist ``[ω; v]`` in its own frame: see
+        :mod:`spatial_dynamics.joints` and doc/floating_base.md), so ``nq = 7 + n``,
+        ``nv = 6 + n`` and every algorithm returns the base's six rows too (the base wrench
+        in the root link's frame); gravity is then given in world coordinates.
         """
         from .urdf import model_from_urdf   # the parser builds on this module
-        return model_from_urdf(source, joints, locked, strict)
+        return model_from_urdf(source, joints, locked, strict, base)
 
     def summary(self) -> str:
         """One line for logs: dof, bodies kept, links lumped and pruned, locked joints."""
         locked = ', '.join(f'{j}={v:g}' for j, v in self.locked.items())
+        if self.floating:
+            return (f'{self.name}: floating base ({self.body_names[1]!r} on a free-flyer, '
+                    f'nq {self.nq}, nv {self.nv}), {self.nv - 6} joint dof, {self.NB} moving '
+                    f'bodies, {len(self.lumped)} links lumped by fixed joints'
+                    + (f', locked: {locked}' if locked else ''))
         return (f'{self.name}: {self.nq} dof, {self.NB} moving bodies, '
                 f'{len(self.lumped)} links lumped by fixed joints, {len(self.pruned)} links '
                 f'pruned (fixed to the base)' + (f', locked: {locked}' if locked else ''))
 
     def __repr__(self) -> str:
+        if self.floating:
+            return (f'Model(name={self.name!r}, floating base, nq={self.nq}, nv={self.nv}, '
+                    f'bodies={self.NB}, links={len(self.frames)})')
         return (f'Model(name={self.name!r}, dof={self.nq}, bodies={self.NB}, '
                 f'links={len(self.frames)})')
 

@@ -67,12 +67,12 @@ def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:
         raise ValueError(f'friction velocity threshold must be > 0, got {threshold}')
     (qd,) = as_joint_arrays(model, qd, names=('qd',))
     qd = qd.astype(float)
-    qidx, qmul = model.qidx[1:], model.qmul[1:]
-    qd_body = qmul * qd[..., qidx]
+    vidx, qmul = model.vidx[1:], model.qmul[1:]
+    qd_body = qmul * qd[..., vidx]
     tau_body = model.body_damping[1:] * qd_body + model.body_friction[1:] * np.tanh(
         qd_body / threshold)
-    fold = np.zeros((model.NB, model.nq))
-    fold[np.arange(model.NB), qidx] = qmul
+    fold = np.zeros((model.NB, model.nv))
+    fold[np.arange(model.NB), vidx] = qmul
     return tau_body @ fold
 
 

@@ -33,7 +33,7 @@ import warnings
 import numpy as np
 
 from .files import read_regular, size_text
-from .joints import FIXED, PRISMATIC, URDF_KINDS
+from .joints import FIXED, FREE_FLYER, PRISMATIC, URDF_KINDS
 from .model import finite, Frame, Model, rigid_body_inertia
 from .spatial import Eaxis, plux, rpy_to_R
 
@@ -72,12 +72,24 @@ class _Report:
         return tuple(self._messages)
 
 
+#: What ``Model.from_urdf(..., base=...)`` takes: the root link fixed to the world, or on a
+#: free-flyer joint.
+BASES = ('fixed', 'floating')
+#: The name of the free-flyer joint of a floating base (Pinocchio's).
+ROOT_JOINT = 'root_joint'
+#: The name of body 0 of a floating-base model, the world (Pinocchio's).
+WORLD = 'universe'
+
+
 def model_from_urdf(source: Source, joints: Optional[Sequence[str]] = None,
-                    locked: Optional[Mapping[str, float]] = None, strict: bool = False
-                    ) -> Model:
+                    locked: Optional[Mapping[str, float]] = None, strict: bool = False,
+                    base: str = 'fixed') -> Model:
     """Build a model from a URDF; see :meth:`Model.from_urdf <.model.Model.from_urdf>`."""
+    if base not in BASES:
+        raise ValueError(f'base must be one of {list(BASES)}, got {base!r}')
     report = _Report(strict)
-    model = _from_robot(*_parse_urdf(source, report), joints, locked, report)
+    model = _from_robot(*_parse_urdf(source, report), joints, locked, report,
+                        base == 'floating')
     for message in model.warnings:
         warnings.warn(message, URDFWarning, stacklevel=3)
     return model
@@ -326,7 +338,7 @@ def _joint_axis(joint: _Joint) -> np.ndarray:
 
 def _from_robot(robot_name: str, links: list, joints: list,
                 keep: Optional[Sequence[str]], locked: Optional[Mapping[str, float]],
-                report: _Report) -> Model:
+                report: _Report, floating: bool = False) -> Model:
     link_by_name = {}
     for link in links:
         if link.name in link_by_name:
@@ -340,7 +352,8 @@ def _from_robot(robot_name: str, links: list, joints: list,
         if joint.type not in URDF_KINDS:
             if joint.type in ('floating', 'planar'):
                 raise ValueError(f'joint {joint.name!r}: {joint.type} joints are not '
-                                 'supported (fixed-base, 1-DOF joints only)')
+                                 'supported (1-DOF joints only; a root link that moves is '
+                                 "loaded with base='floating')")
             raise ValueError(f'joint {joint.name!r}: unknown joint type {joint.type!r}')
         for role, link in (('parent', joint.parent), ('child', joint.child)):
             if link not in link_by_name:
@@ -365,14 +378,28 @@ def _from_robot(robot_name: str, links: list, joints: list,
                              + f' (links {cycle})')
         raise ValueError(f'several root links (a URDF is one tree): {roots}')
 
+    if floating and ROOT_JOINT in joint_by_name:
+        raise ValueError(f'joint {ROOT_JOINT!r}: the URDF has a joint of the name a floating '
+                         "base gives its free-flyer joint (base='floating')")
+    if floating and keep is not None and not isinstance(keep, str):
+        keep = [j for j in keep if j != ROOT_JOINT]     # the free-flyer is always kept
     mimics: dict = {}     # joint name -> its resolved source, mult, offset (_resolve_mimic)
     lock = _locked_values(joint_by_name, keep, locked, mimics)
 
     # Each link gets its body and the pose (R, p) of its frame in that body's frame;
-    # movable joints start new bodies, so parent[i] < i.
+    # movable joints start new bodies, so parent[i] < i. A floating base: body 0 is the
+    # world, body 1 the root link on a free-flyer joint (RBDA §4.5).
     body_names, body_joints, parent, jtype, axis, Xtree = [roots[0]], [''], [-1], [FIXED], \
         [np.zeros(3)], [np.eye(6)]
-    pose = {roots[0]: (0, np.eye(3), np.zeros(3))}
+    if floating:
+        body_names[0] = WORLD
+        body_names.append(roots[0])
+        body_joints.append(ROOT_JOINT)
+        parent.append(0)
+        jtype.append(FREE_FLYER)
+        axis.append(np.zeros(3))
+        Xtree.append(np.eye(6))
+    pose = {roots[0]: (len(body_names) - 1, np.eye(3), np.zeros(3))}
     order = [roots[0]]
     for joints_below in children.values():
         # Pinocchio's (and urdfdom's, so KDL's) order: children by joint name, byte-wise.
@@ -415,17 +442,26 @@ def _from_robot(robot_name: str, links: list, joints: list,
         inertia[b] += lXb.T @ link_by_name[name].inertia @ lXb
 
     # Generalised coordinates: movable non-mimic joints in body order; mimic joints follow
-    # their (transitively resolved) source: q_i = mult·q_src + offset.
+    # their (transitively resolved) source: q_i = mult·q_src + offset. A floating base's
+    # free-flyer comes first: 7 coordinates of q, 6 of q̇.
+    first = 2 if floating else 1        # the first body on a joint of the URDF
     joint_names = tuple(keep) if keep is not None else tuple(
-        j for j in body_joints[1:] if joint_by_name[j].mimic is None)
+        j for j in body_joints[first:] if joint_by_name[j].mimic is None)
     index = {j: k for k, j in enumerate(joint_names)}
-    qidx, qmul, qoff = [-1], [0.0], [0.0]
-    for jname in body_joints[1:]:
+    qidx, vidx, qmul, qoff = [-1], [-1], [0.0], [0.0]
+    if floating:
+        qidx.append(0)
+        vidx.append(0)
+        qmul.append(1.0)
+        qoff.append(0.0)
+    q0, v0 = (7, 6) if floating else (0, 0)
+    for jname in body_joints[first:]:
         src, mult, off = _resolve_mimic(jname, joint_by_name, mimics)
-        qidx.append(index[src])
+        qidx.append(q0 + index[src])
+        vidx.append(v0 + index[src])
         qmul.append(mult)
         qoff.append(off)
-    for jname in body_joints[1:]:
+    for jname in body_joints[first:]:
         for attr in ('damping', 'friction'):
             value = getattr(joint_by_name[jname], attr)
             if value < 0.0:
@@ -438,11 +474,16 @@ def _from_robot(robot_name: str, links: list, joints: list,
             report(f'joint {joint.name!r} <limit>: lower ({lower:g}) is above upper '
                    f'({upper:g}), so no position is within its limits')
 
-    def per_joint(get, names=joint_names) -> np.ndarray:
-        return np.array([get(joint_by_name[j]) for j in names], dtype=float)
+    def per_joint(get, names=joint_names, base=math.nan) -> np.ndarray:
+        """One value per velocity coordinate: the free-flyer's six ``base``."""
+        return np.array([base] * v0 + [get(joint_by_name[j]) for j in names], dtype=float)
+
+    def per_body(get) -> np.ndarray:
+        return np.r_[[0.0] * first, [get(joint_by_name[j]) for j in body_joints[first:]]]
 
     return Model(
-        name=robot_name, joint_names=joint_names, body_names=tuple(body_names),
+        name=robot_name, joint_names=((ROOT_JOINT,) if floating else ()) + joint_names,
+        body_names=tuple(body_names), vidx=np.array(vidx, dtype=np.intp),
         body_joints=tuple(body_joints), NB=NB, parent=np.array(parent, dtype=np.intp),
         jtype=np.array(jtype, dtype=np.intp), axis=np.array(axis), Xtree=np.array(Xtree),
         inertia=inertia, qidx=np.array(qidx, dtype=np.intp), qmul=np.array(qmul),
@@ -451,9 +492,10 @@ def _from_robot(robot_name: str, links: list, joints: list,
         velocity_limit=per_joint(lambda j: j.limit['velocity']),
         lower=per_joint(lambda j: j.limit['lower']),
         upper=per_joint(lambda j: j.limit['upper']),
-        damping=per_joint(lambda j: j.damping), friction=per_joint(lambda j: j.friction),
-        body_damping=np.r_[0.0, per_joint(lambda j: j.damping, body_joints[1:])],
-        body_friction=np.r_[0.0, per_joint(lambda j: j.friction, body_joints[1:])],
+        damping=per_joint(lambda j: j.damping, base=0.0),
+        friction=per_joint(lambda j: j.friction, base=0.0),
+        body_damping=per_body(lambda j: j.damping),
+        body_friction=per_body(lambda j: j.friction),
         lumped=tuple(n for n in order if pose[n][0] > 0 and body_names[pose[n][0]] != n),
         pruned=tuple(n for n in order[1:] if pose[n][0] == 0),
         locked={j: v for j, v in lock.items() if joint_by_name[j].mimic is None},

@@ -135,6 +135,7 @@ def test_the_flat_python_kernels_compute_what_the_source_computes(rng):
     assert H.tolist() == python.mass_matrix_rows(lay.rows, q.tolist())
     rows = lay.table.shape[0]
     Y = np.zeros(n * 10 * (rows - 1))
-    flat.regressor_kernel(lay.table, qd, qdd, 0.5, 0.0, -9.8, Y, np.zeros(6 * rows * rows), work)
+    flat.regressor_kernel(lay.table, qd, qdd, 0.5, 0.0, -9.8, Y, np.zeros(6 * rows * (rows + 5)),
+                          work)
     assert Y.tolist() == python.regressor_rows(lay.rows, q.tolist(), qd.tolist(), qdd.tolist(),
                                                (0.5, 0.0, -9.8))

@@ -36,24 +36,25 @@ def as_real_array(what: str, x) -> np.ndarray:
 
 
 def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) -> list:
-    """``q, qd, qdd`` as arrays of one float dtype and broadcast shape (..., n).
+    """``q, qd, qdd`` as arrays of one float dtype, shapes (..., nq), (..., nv), (..., nv).
 
-    ``TypeError`` names the argument (``names``, in order) that is no array of real numbers,
-    ``ValueError`` the one whose last dimension is not ``model.nq``.
+    The leading (batch) dimensions broadcast. ``TypeError`` names the argument (``names``, in
+    order) that is no array of real numbers, ``ValueError`` the one whose last dimension is
+    not ``model.nq`` (``q``) or ``model.nv`` (``qd``, ``qdd``).
     """
     check_model(model)
-    n = model.nq
     out = []
     for what, x in zip(names, arrays):
         a = as_real_array(what, x)
+        n = model.nq if what == 'q' else model.nv
         if a.ndim == 0 or a.shape[-1] != n:
             raise ValueError(f'{what} must have shape (..., {n}) for the joints '
                              f'{model.joint_names}, got shape {a.shape}')
         out.append(a)
     dtype = np.result_type(*out, np.float64) if not all(
         np.issubdtype(a.dtype, np.floating) for a in out) else np.result_type(*out)
-    shape = np.broadcast_shapes(*(a.shape for a in out))
-    return [np.broadcast_to(a.astype(dtype, copy=False), shape) for a in out]
+    batch = np.broadcast_shapes(*(a.shape[:-1] for a in out))
+    return [np.broadcast_to(a.astype(dtype, copy=False), batch + a.shape[-1:]) for a in out]
 
 
 def as_vector(what: str, x, size: int) -> np.ndarray:

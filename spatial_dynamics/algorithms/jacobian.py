@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arguments import as_joint_arrays, check_model
-from ..joints import jcalc
+from ..joints import jcalc, joint_coordinates, NV
 from ..model import Model
 
 #: Coordinates of :func:`jacobian`: the link's own frame, or the base (root link) axes with
@@ -27,27 +27,29 @@ FRAMES = ('local', 'world')
 
 
 def jacobian(model: Model, q, link: str, frame: str = 'local') -> np.ndarray:
-    """Return the 6×n Jacobian of ``link``'s frame: ``[ω; v] = J(q) q̇``, angular first.
+    """Return the 6×nv Jacobian of ``link``'s frame: ``[ω; v] = J(q) q̇``, angular first.
 
     Args:
         model: the robot.
-        q: joint positions (rad, m) in the order of ``model.joint_names``, shape (n,) or
-            (..., n).
+        q: joint positions (rad, m) in the order of ``model.joint_names``, shape (nq,) or
+            (..., nq).
         link: any URDF link of the model, including links lumped into a body by fixed joints
-            (``model.frames``) and the base (whose Jacobian is zero).
+            (``model.frames``) and the base (whose Jacobian is zero for a fixed base; the
+            free-flyer's columns are the identity in its own frame for a floating base).
         frame: the coordinates of ``ω`` and ``v``; ``v`` is always the velocity of the point
             at the link's origin.
 
             * ``'local'``: the link's frame (Pinocchio's ``LOCAL``; the body Jacobian).
               ``τ = Jᵀ w`` for a wrench ``w = [n; f]`` expressed in the link frame, as
               ``rnea``'s ``f_ext`` takes it.
-            * ``'world'``: the axes of the base (root link) frame, origin at the link's origin
+            * ``'world'``: the axes of the base (root link) frame, or of the world for a
+              floating base, origin at the link's origin
               (Pinocchio's ``LOCAL_WORLD_ALIGNED``; what KDL's ``ChainJntToJacSolver`` and
               MoveIt's ``getJacobian`` return, angular and linear rows swapped). Not
               Pinocchio's ``WORLD``, whose ``v`` is that of the point at the base origin.
 
     Returns:
-        J, shape (..., 6, n): rad/s and m/s per unit of q̇ (rows ``[ω; v]``, columns in the
+        J, shape (..., 6, nv): rad/s and m/s per unit of q̇ (rows ``[ω; v]``, columns in the
         order of ``model.joint_names``; a mimic joint's column folded onto its source's).
     """
     check_model(model)
@@ -58,13 +60,13 @@ def jacobian(model: Model, q, link: str, frame: str = 'local') -> np.ndarray:
         raise ValueError(f'link {link!r} is not a link of {model.name!r}')
     (q,) = as_joint_arrays(model, q)
     batch = q.shape[:-1]
-    J = np.zeros(batch + (6, model.nq), dtype=np.result_type(q, np.float64))
+    J = np.zeros(batch + (6, model.nv), dtype=np.result_type(q, np.float64))
     lXi = np.broadcast_to(at.lXb, batch + (6, 6))      # lXb, then lXj as i climbs to the base
     i = at.body
     while i > 0:
-        k, mul = model.qidx[i], model.qmul[i]
-        XJ, S_i = jcalc(model.jtype[i], model.axis[i], mul * q[..., k] + model.qoff[i])
-        J[..., :, k] += mul * (lXi @ S_i)               # column of joint i: lXi S_i
+        k, kv, mul, jt = model.qidx[i], model.vidx[i], model.qmul[i], model.jtype[i]
+        XJ, S_i = jcalc(jt, model.axis[i], joint_coordinates(jt, q, k, mul, model.qoff[i]))
+        J[..., :, kv:kv + NV[jt]] += mul * (lXi @ S_i)  # columns of joint i: lXi S_i
         lXi = lXi @ (XJ @ model.Xtree[i])               # lXλ(i) = lXi Xup_i
         i = model.parent[i]
     if frame == 'world':

@@ -22,11 +22,11 @@ generated from it).
 from __future__ import annotations
 
 from .components import I_motion, X_motion, XT_force_plus
-from .rnea import PR
+from ..joints import joint_ctq, joint_motion, joint_torque
 
 
 def momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc) -> None:
-    """``M(q) q̇`` into ``mom`` and ``Cᵀ(q, q̇) q̇`` into ``ctq`` (``n`` scalars each).
+    """``M(q) q̇`` into ``mom`` and ``Cᵀ(q, q̇) q̇`` into ``ctq`` (``nv`` scalars each).
 
     ``Xup`` are the transforms of :func:`~.rnea.xup_kernel` for ``q``; ``vel`` and ``frc``
     scratch with a slot per body.
@@ -37,17 +37,14 @@ def momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc) -> None:
         mom[k] = 0.0
         ctq[k] = 0.0
     for i in range(1, NB + 1):
-        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+        (p, code, _, kv, _, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
          mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, mul, _) = rows[i]
         e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
-        qdi = qd[k] if mul == 1.0 else mul * qd[k]
         # v_i = Xup_i v_λ(i) + S_i q̇_i
         w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                           rx, ry, rz, *vel[p])
-        if code == PR:
-            v0, v1, v2 = v0 + ax * qdi, v1 + ay * qdi, v2 + az * qdi
-        else:
-            w0, w1, w2 = w0 + ax * qdi, w1 + ay * qdi, w2 + az * qdi
+        w0, w1, w2, v0, v1, v2 = joint_motion(code, qd, kv, mul, ax, ay, az,
+                                              w0, w1, w2, v0, v1, v2)
         vel[i] = (w0, w1, w2, v0, v1, v2)
         # h_i = I_i v_i
         m0, m1, m2, k0, k1, k2 = I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz,
@@ -56,20 +53,12 @@ def momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc) -> None:
 
     # Backward pass: H_λ(i) += Xup_iᵀ H_i; p_i = S_iᵀ H_i, (Cᵀ q̇)_i = (v_i × S_i)ᵀ H_i
     for i in range(NB, 0, -1):
-        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+        (p, code, _, kv, _, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
          _, _, _, _, _, _, _, _, _, _, mul, _) = rows[i]
         n0, n1, n2, f0, f1, f2 = frc[i]
         w0, w1, w2, v0, v1, v2 = vel[i]
-        # v × S = [w × s_ω; w × s_v + v × s_ω] with S = [a; 0] (revolute) or [0; a]
-        c0, c1, c2 = w1 * az - w2 * ay, w2 * ax - w0 * az, w0 * ay - w1 * ax
-        if code == PR:
-            t = ax * f0 + ay * f1 + az * f2
-            c = c0 * f0 + c1 * f1 + c2 * f2
-        else:
-            t = ax * n0 + ay * n1 + az * n2
-            c = (c0 * n0 + c1 * n1 + c2 * n2 + (v1 * az - v2 * ay) * f0
-                 + (v2 * ax - v0 * az) * f1 + (v0 * ay - v1 * ax) * f2)
-        mom[k] = mom[k] + (t if mul == 1.0 else mul * t)
-        ctq[k] = ctq[k] + (c if mul == 1.0 else mul * c)
+        joint_torque(code, mom, kv, mul, ax, ay, az, n0, n1, n2, f0, f1, f2)
+        joint_ctq(code, ctq, kv, mul, ax, ay, az, w0, w1, w2, v0, v1, v2, n0, n1, n2, f0, f1,
+                  f2)
         if p != 0:
             frc[p] = XT_force_plus(*Xup[i], n0, n1, n2, f0, f1, f2, *frc[p])

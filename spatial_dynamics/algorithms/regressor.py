@@ -45,9 +45,8 @@ from typing import Sequence
 import numpy as np
 
 from .arguments import as_joint_arrays, as_vector
-from .components import cross, X_motion
-from .rnea import PR
-from ..joints import jcalc
+from .components import X_motion
+from ..joints import jcalc, joint_axis, joint_coordinates, joint_motion, joint_velocity, NV
 from ..model import Model
 from ..spatial import crm
 
@@ -80,16 +79,17 @@ def body_wrench_basis(v: np.ndarray, a: np.ndarray) -> np.ndarray:
 
 
 def regressor_kernel(rows, qd, qdd, gx, gy, gz, Y, axes, Xup, vel, acc) -> None:
-    """``Y`` (``n * 10 NB`` scalars, row-major) on scalar components, from the ``Xup`` of ``q``.
+    """``Y`` (``nv * 10 NB`` scalars, row-major) on scalar components, from the ``Xup`` of ``q``.
 
     The rules of :mod:`.rnea`: ``rows`` the layout's per-body rows, ``Xup`` the transforms of
     :func:`~.rnea.xup_kernel`, ``vel`` and ``acc`` scratch with a slot per body; ``axes``
-    scratch of ``6 (NB + 1)²`` scalars, where ``axes[6 (i (NB + 1) + j) + c]`` holds
+    scratch of ``6 (NB + 1) (NB + 6)`` scalars, where ``axes[6 (i (NB + 6) + j) + c]`` holds
     ``mul_j ⁱX_j S_j`` (the axis of joint ``j``, an ancestor of body ``i`` or ``i`` itself, in
-    body ``i``'s coordinates, times its mimic multiplier).
+    body ``i``'s coordinates, times its mimic multiplier), and slots ``NB + 1 .. NB + 5`` the
+    other five columns of a free-flyer's ``S``.
     """
     NB = len(rows) - 1
-    R = len(rows)
+    R = len(rows) + 5
     W = 10 * NB
     zero = 0.0 * gx
     for c in range(len(Y)):
@@ -97,31 +97,19 @@ def regressor_kernel(rows, qd, qdd, gx, gy, gz, Y, axes, Xup, vel, acc) -> None:
     vel[0] = (zero, zero, zero, zero, zero, zero)
     acc[0] = (zero, zero, zero, -gx, -gy, -gz)      # a_0 = -a_grav
     for i in range(1, NB + 1):
-        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+        (p, code, _, kv, _, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
          _, _, _, _, _, _, _, _, _, _, mul, _) = rows[i]
         e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
-        qdi = qd[k] if mul == 1.0 else mul * qd[k]
-        qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
 
         # v_i = Xup_i v_λ(i) + vJ,  a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ,  vJ = S_i q̇_i
         w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                           rx, ry, rz, *vel[p])
         a0, a1, a2, l0, l1, l2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                           rx, ry, rz, *acc[p])
-        j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
-        if code == PR:
-            v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
-            l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
-            c0, c1, c2 = cross(w0, w1, w2, j0, j1, j2)       # v × vJ
-            l0, l1, l2 = l0 + c0, l1 + c1, l2 + c2
-            s0, s1, s2, s3, s4, s5 = zero, zero, zero, mul * ax, mul * ay, mul * az
-        else:
-            w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
-            a0, a1, a2 = a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi
-            c0, c1, c2 = cross(w0, w1, w2, j0, j1, j2)       # v × vJ
-            d0, d1, d2 = cross(v0, v1, v2, j0, j1, j2)
-            a0, a1, a2, l0, l1, l2 = a0 + c0, a1 + c1, a2 + c2, l0 + d0, l1 + d1, l2 + d2
-            s0, s1, s2, s3, s4, s5 = mul * ax, mul * ay, mul * az, zero, zero, zero
+        a0, a1, a2, l0, l1, l2 = joint_motion(code, qdd, kv, mul, ax, ay, az,
+                                              a0, a1, a2, l0, l1, l2)
+        (w0, w1, w2, v0, v1, v2, a0, a1, a2, l0, l1, l2) = joint_velocity(
+            code, qd, kv, mul, ax, ay, az, w0, w1, w2, v0, v1, v2, a0, a1, a2, l0, l1, l2)
         vel[i] = (w0, w1, w2, v0, v1, v2)
         acc[i] = (a0, a1, a2, l0, l1, l2)
 
@@ -144,37 +132,42 @@ def regressor_kernel(rows, qd, qdd, gx, gy, gz, Y, axes, Xup, vel, acc) -> None:
         yz0, yz1, yz2 = q11 - q22, a2 - p01, a1 + p02
         zz0, zz1, zz2 = p12, -p02, a2
 
-        # Row of each joint j that moves body i (i and its ancestors), block i:
-        # (ⁱX_j S_j)ᵀ K_i, with ⁱX_j S_j = Xup_i (ᵖX_j S_j) carried from the parent's slots
+        # Row of each joint j that moves body i (i and its ancestors), block i, for each
+        # column c of S_j: (ⁱX_j S_j[:, c])ᵀ K_i, with ⁱX_j S_j = Xup_i (ᵖX_j S_j) carried from
+        # the parent's slots (slot j for a joint's first column, NB + c for a free-flyer's
+        # column c > 0: the root's, the one free-flyer of a model)
         j = i
         while j != 0:
-            (pj, _, kj, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
-             _, _, _, _, _, _, _, _, _, _, _, _) = rows[j]
-            if j == i:
-                t0, t1, t2, u0, u1, u2 = s0, s1, s2, s3, s4, s5
-            else:
-                c = 6 * (p * R + j)
-                t0, t1, t2, u0, u1, u2 = X_motion(
-                    e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
-                    axes[c], axes[c + 1], axes[c + 2], axes[c + 3], axes[c + 4], axes[c + 5])
-            c = 6 * (i * R + j)
-            axes[c] = t0
-            axes[c + 1] = t1
-            axes[c + 2] = t2
-            axes[c + 3] = u0
-            axes[c + 4] = u1
-            axes[c + 5] = u2
-            y = kj * W + 10 * (i - 1)
-            Y[y] = Y[y] + (u0 * al0 + u1 * al1 + u2 * al2)
-            Y[y + 1] = Y[y + 1] + ((al1 * t2 - al2 * t1) + (b00 * u0 + b10 * u1 + b20 * u2))
-            Y[y + 2] = Y[y + 2] + ((al2 * t0 - al0 * t2) + (b01 * u0 + b11 * u1 + b21 * u2))
-            Y[y + 3] = Y[y + 3] + ((al0 * t1 - al1 * t0) + (b02 * u0 + b12 * u1 + b22 * u2))
-            Y[y + 4] = Y[y + 4] + (t0 * xx0 + t1 * xx1 + t2 * xx2)
-            Y[y + 5] = Y[y + 5] + (t0 * xy0 + t1 * xy1 + t2 * xy2)
-            Y[y + 6] = Y[y + 6] + (t0 * yy0 + t1 * yy1 + t2 * yy2)
-            Y[y + 7] = Y[y + 7] + (t0 * xz0 + t1 * xz1 + t2 * xz2)
-            Y[y + 8] = Y[y + 8] + (t0 * yz0 + t1 * yz1 + t2 * yz2)
-            Y[y + 9] = Y[y + 9] + (t0 * zz0 + t1 * zz1 + t2 * zz2)
+            (pj, cj, _, kj, dj, bx, by, bz, _, _, _, _, _, _, _, _, _, _, _, _,
+             _, _, _, _, _, _, _, _, _, _, mj, _) = rows[j]
+            for col in range(dj):
+                sl = j if col == 0 else NB + col
+                if j == i:
+                    s0, s1, s2, s3, s4, s5 = joint_axis(cj, col, bx, by, bz)
+                    t0, t1, t2, u0, u1, u2 = mj * s0, mj * s1, mj * s2, mj * s3, mj * s4, mj * s5
+                else:
+                    c = 6 * (p * R + sl)
+                    t0, t1, t2, u0, u1, u2 = X_motion(
+                        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
+                        axes[c], axes[c + 1], axes[c + 2], axes[c + 3], axes[c + 4], axes[c + 5])
+                c = 6 * (i * R + sl)
+                axes[c] = t0
+                axes[c + 1] = t1
+                axes[c + 2] = t2
+                axes[c + 3] = u0
+                axes[c + 4] = u1
+                axes[c + 5] = u2
+                y = (kj + col) * W + 10 * (i - 1)
+                Y[y] = Y[y] + (u0 * al0 + u1 * al1 + u2 * al2)
+                Y[y + 1] = Y[y + 1] + ((al1 * t2 - al2 * t1) + (b00 * u0 + b10 * u1 + b20 * u2))
+                Y[y + 2] = Y[y + 2] + ((al2 * t0 - al0 * t2) + (b01 * u0 + b11 * u1 + b21 * u2))
+                Y[y + 3] = Y[y + 3] + ((al0 * t1 - al1 * t0) + (b02 * u0 + b12 * u1 + b22 * u2))
+                Y[y + 4] = Y[y + 4] + (t0 * xx0 + t1 * xx1 + t2 * xx2)
+                Y[y + 5] = Y[y + 5] + (t0 * xy0 + t1 * xy1 + t2 * xy2)
+                Y[y + 6] = Y[y + 6] + (t0 * yy0 + t1 * yy1 + t2 * yy2)
+                Y[y + 7] = Y[y + 7] + (t0 * xz0 + t1 * xz1 + t2 * xz2)
+                Y[y + 8] = Y[y + 8] + (t0 * yz0 + t1 * yz1 + t2 * yz2)
+                Y[y + 9] = Y[y + 9] + (t0 * zz0 + t1 * zz1 + t2 * zz2)
             j = pj
 
 
@@ -193,28 +186,28 @@ def regressor_spatial(model: Model, q, qd, qdd,
     a_grav = np.concatenate([np.zeros(3), as_vector('gravity', gravity, 3)])
     batch = q.shape[:-1]
     NB = model.NB
-    n = q.shape[-1]
-    Y = np.zeros(batch + (n, 10 * NB))
+    Y = np.zeros(batch + (model.nv, 10 * NB))
     v = [np.zeros(batch + (6,))] + [None] * NB
     a = [np.broadcast_to(-a_grav, batch + (6,))] + [None] * NB
     # axes[i]: the motion subspaces of body i and its moving ancestors in body i's frame,
     # (..., 6, depth), in the order of chain[i]
     axes, chain = [np.zeros(batch + (6, 0))] + [None] * NB, [[]] + [None] * NB
     for i in range(1, NB + 1):
-        k, mul, off = model.qidx[i], model.qmul[i], model.qoff[i]
-        XJ, S = jcalc(model.jtype[i], model.axis[i], mul * q[..., k] + off)
-        vJ = S * (mul * qd[..., k])[..., None]
+        k, kv, mul, jt = model.qidx[i], model.vidx[i], model.qmul[i], model.jtype[i]
+        XJ, S = jcalc(jt, model.axis[i], joint_coordinates(jt, q, k, mul, model.qoff[i]))
+        dofs = slice(kv, kv + NV[jt])
+        vJ = mul * (qd[..., dofs] @ S.T)
         Xup = XJ @ model.Xtree[i]
         p = model.parent[i]
         v[i] = _mv(Xup, v[p]) + vJ
-        a[i] = _mv(Xup, a[p]) + S * (mul * qdd[..., k])[..., None] + _mv(crm(v[i]), vJ)
-        own = np.broadcast_to(S, batch + (6,))[..., None]
+        a[i] = _mv(Xup, a[p]) + mul * (qdd[..., dofs] @ S.T) + _mv(crm(v[i]), vJ)
+        own = np.broadcast_to(S, batch + S.shape)
         axes[i] = np.concatenate([Xup @ axes[p], own], axis=-1) if chain[p] else own
-        chain[i] = chain[p] + [i]
-        # joint j's row, body i's columns: S_jᵀ (ʲX_i)* K_i = (ⁱX_j S_j)ᵀ K_i
+        chain[i] = chain[p] + [(i, col) for col in range(S.shape[1])]
+        # the row of joint j's column c, body i's columns: (ⁱX_j S_j[:, c])ᵀ K_i
         rows = np.swapaxes(axes[i], -1, -2) @ body_wrench_basis(v[i], a[i])
-        for r, j in enumerate(chain[i]):
-            Y[..., model.qidx[j], 10 * (i - 1):10 * i] += model.qmul[j] * rows[..., r, :]
+        for r, (j, col) in enumerate(chain[i]):
+            Y[..., model.vidx[j] + col, 10 * (i - 1):10 * i] += model.qmul[j] * rows[..., r, :]
     return Y
 
 

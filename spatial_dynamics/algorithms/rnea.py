@@ -41,13 +41,10 @@ import numpy as np
 
 from .arguments import as_joint_arrays, as_vector, f_ext_in_bodies
 from .components import I_motion, X_motion, XT_force_plus
-from ..joints import jcalc
+from ..joints import (jcalc, joint_coordinates, joint_motion, joint_torque, joint_transform,
+                      joint_velocity, NV)
 from ..model import Model
 from ..spatial import crf, crm
-
-#: Joint codes of the component kernels: revolute about ±x, ±y, ±z (the axis keeps its sign)
-#: or a general axis; prismatic.
-RX, RY, RZ, RA, PR = 0, 1, 2, 3, 4
 
 
 def nonzero(x) -> bool:
@@ -58,65 +55,26 @@ def nonzero(x) -> bool:
 def xup_kernel(rows, q, m, Xup) -> None:
     """Body transforms ``Xup_i = XJ(q_i) Xtree_i`` as ``(E (9 scalars), r (3))`` into ``Xup``.
 
-    RBDA table 4.1 for ``XJ`` and eq. 2.27 for the product ``(E_J, 0)(E_t, r_t)`` (revolute:
-    ``E = E_J E_t``, ``r = r_t``) or ``(1, axis q)(E_t, r_t)`` (prismatic: ``E = E_t``,
-    ``r = r_t + E_tᵀ axis q``). ``m`` provides ``sin`` and ``cos`` for the scalars of ``q``.
+    Each joint's :func:`~spatial_dynamics.joints.joint_transform` (RBDA table 4.1 and eq.
+    2.27). ``m`` provides ``sin`` and ``cos`` for the scalars of ``q``.
     """
     for i in range(1, len(rows)):
-        (_, code, k, ax, ay, az, t00, t01, t02, t10, t11, t12, t20, t21, t22, rx, ry, rz,
+        (_, code, k, _, _, ax, ay, az, t00, t01, t02, t10, t11, t12, t20, t21, t22, rx, ry, rz,
          _, _, _, _, _, _, _, _, _, _, mul, off) = rows[i]
-        qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
-        if code == PR:
-            Xup[i] = (t00, t01, t02, t10, t11, t12, t20, t21, t22,
-                      rx + (t00 * ax + t10 * ay + t20 * az) * qi,
-                      ry + (t01 * ax + t11 * ay + t21 * az) * qi,
-                      rz + (t02 * ax + t12 * ay + t22 * az) * qi)
-            continue
-        c, s = m.cos(qi), m.sin(qi)
-        if code == RZ:
-            s = az * s     # about ±Z
-            Xup[i] = (c * t00 + s * t10, c * t01 + s * t11, c * t02 + s * t12,
-                      c * t10 - s * t00, c * t11 - s * t01, c * t12 - s * t02,
-                      t20, t21, t22, rx, ry, rz)
-        elif code == RX:
-            s = ax * s     # about ±X
-            Xup[i] = (t00, t01, t02,
-                      c * t10 + s * t20, c * t11 + s * t21, c * t12 + s * t22,
-                      c * t20 - s * t10, c * t21 - s * t11, c * t22 - s * t12,
-                      rx, ry, rz)
-        elif code == RY:
-            s = ay * s     # about ±Y
-            Xup[i] = (c * t00 - s * t20, c * t01 - s * t21, c * t02 - s * t22,
-                      t10, t11, t12,
-                      s * t00 + c * t20, s * t01 + c * t21, s * t02 + c * t22,
-                      rx, ry, rz)
-        else:  # general axis: E_J = R(axis, q)ᵀ = c 1 - s axis× + (1 - c) axis axisᵀ
-            C = 1.0 - c
-            j00, j11, j22 = c + C * ax * ax, c + C * ay * ay, c + C * az * az
-            cxy, cxz, cyz = C * ax * ay, C * ax * az, C * ay * az
-            sx, sy, sz = s * ax, s * ay, s * az
-            j01, j02, j10 = cxy + sz, cxz - sy, cxy - sz
-            j12, j20, j21 = cyz + sx, cxz + sy, cyz - sx
-            Xup[i] = (j00 * t00 + j01 * t10 + j02 * t20,
-                      j00 * t01 + j01 * t11 + j02 * t21,
-                      j00 * t02 + j01 * t12 + j02 * t22,
-                      j10 * t00 + j11 * t10 + j12 * t20,
-                      j10 * t01 + j11 * t11 + j12 * t21,
-                      j10 * t02 + j11 * t12 + j12 * t22,
-                      j20 * t00 + j21 * t10 + j22 * t20,
-                      j20 * t01 + j21 * t11 + j22 * t21,
-                      j20 * t02 + j21 * t12 + j22 * t22,
-                      rx, ry, rz)
+        Xup[i] = joint_transform(code, q, k, mul, off, ax, ay, az, t00, t01, t02, t10, t11, t12,
+                                 t20, t21, t22, rx, ry, rz, m)
 
 
 def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, acc,
                 frc) -> None:
-    """RNEA on scalar components into ``tau`` (``model.nq`` scalars, any kind: see above).
+    """RNEA on scalar components into ``tau`` (``model.nv`` scalars, any kind: see above).
 
     ``rows`` are the per-body rows of :mod:`~spatial_dynamics.backends.layout` (row 0 the
     base), ``Xup`` the transforms of :func:`xup_kernel` for the same ``q``; ``vel``, ``acc``
     and ``frc`` are scratch with a slot per body. With ``has_fext``, ``f_body[i]`` is the
     external force ``[n; f]`` on body ``i`` in body coordinates (6 scalars, zeros if none).
+    What depends on the joint's kind (``S q̈``, ``S q̇`` and ``v_i × S q̇``, ``Sᵀ f``) the
+    joint computes (:mod:`spatial_dynamics.joints`).
 
     Terms that cannot change the answer are skipped: with q̇ = 0 every body velocity and
     velocity-product term is zero; with q̇ = q̈ = 0 (gravity only) every angular acceleration
@@ -144,7 +102,7 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
         tau[k] = zero
 
     for i in range(1, NB + 1):
-        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+        (p, code, _, kv, _, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
          mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, mul, _) = rows[i]
         e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
         if static:
@@ -157,8 +115,6 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
             n0, n1, n2 = hy * l2 - hz * l1, hz * l0 - hx * l2, hx * l1 - hy * l0
             f0, f1, f2 = mass * l0, mass * l1, mass * l2
         else:
-            qddi = qdd[k] if mul == 1.0 else mul * qdd[k]
-
             # a_i = Xup_i a_λ(i) + S_i q̈_i + v_i × vJ
             if p == 0 and weightless:
                 a0 = a1 = a2 = l0 = l1 = l2 = zero      # a_0 = 0
@@ -166,33 +122,19 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
                 pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
                 a0, a1, a2, l0, l1, l2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                                   rx, ry, rz, pa0, pa1, pa2, pl0, pl1, pl2)
-            if code == PR:
-                l0, l1, l2 = l0 + ax * qddi, l1 + ay * qddi, l2 + az * qddi
-            else:
-                a0, a1, a2 = a0 + ax * qddi, a1 + ay * qddi, a2 + az * qddi
+            a0, a1, a2, l0, l1, l2 = joint_motion(code, qdd, kv, mul, ax, ay, az,
+                                                  a0, a1, a2, l0, l1, l2)
 
             # f_i = I_i a_i + v_i ×* I_i v_i - f_ext_i, with I = [[Ibar, h×], [h×ᵀ, m 1]]
             w0 = w1 = w2 = v0 = v1 = v2 = zero
             if moving:
                 # v_i = Xup_i v_λ(i) + vJ,  vJ = S_i q̇_i
-                qdi = qd[k] if mul == 1.0 else mul * qd[k]
                 pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
                 w0, w1, w2, v0, v1, v2 = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                                   rx, ry, rz, pw0, pw1, pw2, pv0, pv1, pv2)
-                j0, j1, j2 = ax * qdi, ay * qdi, az * qdi
-                if code == PR:
-                    v0, v1, v2 = v0 + j0, v1 + j1, v2 + j2
-                    l0 += w1 * j2 - w2 * j1
-                    l1 += w2 * j0 - w0 * j2
-                    l2 += w0 * j1 - w1 * j0
-                else:
-                    w0, w1, w2 = w0 + j0, w1 + j1, w2 + j2
-                    a0 += w1 * j2 - w2 * j1
-                    a1 += w2 * j0 - w0 * j2
-                    a2 += w0 * j1 - w1 * j0
-                    l0 += v1 * j2 - v2 * j1
-                    l1 += v2 * j0 - v0 * j2
-                    l2 += v0 * j1 - v1 * j0
+                (w0, w1, w2, v0, v1, v2, a0, a1, a2, l0, l1, l2) = joint_velocity(
+                    code, qd, kv, mul, ax, ay, az, w0, w1, w2, v0, v1, v2, a0, a1, a2, l0, l1,
+                    l2)
                 vel[i] = (w0, w1, w2, v0, v1, v2)
             acc[i] = (a0, a1, a2, l0, l1, l2)
 
@@ -216,14 +158,10 @@ def rnea_kernel(rows, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, Xup, vel, a
 
     # Backward pass: τ_i = S_iᵀ f_i, f_λ(i) += Xup_iᵀ f_i
     for i in range(NB, 0, -1):
-        (p, code, k, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+        (p, code, _, kv, _, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
          _, _, _, _, _, _, _, _, _, _, mul, _) = rows[i]
         n0, n1, n2, f0, f1, f2 = frc[i]
-        if code == PR:
-            t = ax * f0 + ay * f1 + az * f2
-        else:
-            t = ax * n0 + ay * n1 + az * n2
-        tau[k] = tau[k] + (t if mul == 1.0 else mul * t)
+        joint_torque(code, tau, kv, mul, ax, ay, az, n0, n1, n2, f0, f1, f2)
         if p != 0:
             frc[p] = XT_force_plus(*Xup[i], n0, n1, n2, f0, f1, f2, *frc[p])
 
@@ -244,19 +182,20 @@ def rnea_spatial(model: Model, q, qd, qdd, gravity: Sequence[float] = (0.0, 0.0,
     a[0] = np.broadcast_to(-a_grav, batch + (6,))
     S = [None] * (NB + 1)
     for i in range(1, NB + 1):
-        k, mul, off = model.qidx[i], model.qmul[i], model.qoff[i]
-        XJ, S[i] = jcalc(model.jtype[i], model.axis[i], mul * q[..., k] + off)
-        vJ = S[i] * (mul * qd[..., k])[..., None]
+        k, kv, mul, jt = model.qidx[i], model.vidx[i], model.qmul[i], model.jtype[i]
+        XJ, S[i] = jcalc(jt, model.axis[i], joint_coordinates(jt, q, k, mul, model.qoff[i]))
+        dofs = slice(kv, kv + NV[jt])
+        vJ = mul * (qd[..., dofs] @ S[i].T)
         Xup[i] = XJ @ model.Xtree[i]
         p = model.parent[i]
         v[i] = _mv(Xup[i], v[p]) + vJ
-        a[i] = _mv(Xup[i], a[p]) + S[i] * (mul * qdd[..., k])[..., None] + _mv(crm(v[i]), vJ)
+        a[i] = _mv(Xup[i], a[p]) + mul * (qdd[..., dofs] @ S[i].T) + _mv(crm(v[i]), vJ)
         Iv = _mv(model.inertia[i], v[i])
         f[i] = _mv(model.inertia[i], a[i]) + _mv(crf(v[i]), Iv) - fb.get(i, 0.0)
-    tau = np.zeros(q.shape)
+    tau = np.zeros(qd.shape)
     for i in range(NB, 0, -1):
-        k = model.qidx[i]
-        tau[..., k] += model.qmul[i] * (f[i] @ S[i])
+        kv = model.vidx[i]
+        tau[..., kv:kv + NV[model.jtype[i]]] += model.qmul[i] * (f[i] @ S[i])
         p = model.parent[i]
         if p > 0:
             f[p] = f[p] + _mv(np.swapaxes(Xup[i], -1, -2), f[i])

@@ -105,16 +105,21 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         model: the robot.
         q, qd, qdd: joint positions (rad, m), velocities and accelerations in the order of
             ``model.joint_names``; shape (n,) or (..., n), broadcast against each other;
-            arrays, lists or tuples of any real type.
-        gravity: gravitational acceleration (m/s²) in root-link coordinates, 3 numbers.
+            arrays, lists or tuples of any real type. A floating-base model's ``q`` has
+            ``model.nq`` numbers (the base's position and quaternion x y z w first), ``qd``
+            and ``qdd`` ``model.nv`` (the base's twist ``[ω; v]`` and its rate first, base
+            frame); see doc/floating_base.md.
+        gravity: gravitational acceleration (m/s²) in root-link coordinates (fixed base) or
+            world coordinates (floating base), 3 numbers.
         f_ext: link name → spatial force ``[n; f]`` (N m, N), angular first, acting on that
             link and expressed in that link's frame; shape (6,) or broadcastable to (..., 6).
         backend: ``'auto'`` (compiled when the package was built with its kernels),
             ``'numpy'`` or ``'compiled'`` (float64 and float32; other dtypes run on numpy).
 
     Returns:
-        τ (N m or N), same shape as the broadcast inputs; float64, or the inputs' floating
-        dtype.
+        τ (N m or N), shape (..., nv): the broadcast batch shape; float64, or the inputs'
+        floating dtype. A floating base's first six are the wrench ``[n; f]`` on the base,
+        in its frame.
     """
     # no wrenches: None or an empty dict (anything else, validated by f_ext_in_bodies)
     no_wrench = f_ext is None or (type(f_ext) is dict and not f_ext)
@@ -125,22 +130,23 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     if no_wrench:
         if kern is not None:
             if (type(q) is type(qd) is type(qdd) is _ndarray and q.ndim > 1
-                    and q.shape == qd.shape == qdd.shape and q.shape[-1] == lay.n
+                    and qd.shape == qdd.shape and q.shape[:-1] == qd.shape[:-1]
+                    and q.shape[-1] == lay.n and qd.shape[-1] == lay.nv
                     and q.dtype is qd.dtype is qdd.dtype and q.dtype in _KERNEL_DTYPES):
                 # a batch of states of one shape and dtype: no broadcasting to work out
                 g = GRAVITY if gravity is GRAVITY else _gravity(gravity)
                 if g[0] is not None:
                     if q.size == lay.n:     # one state with batch dimensions of 1
                         return _c_rnea(kern, q.reshape(-1), qd.reshape(-1), qdd.reshape(-1),
-                                       g).reshape(q.shape)
+                                       g).reshape(qd.shape)
                     return compiled.rnea(lay, q, qd, qdd, g, {})
         else:
             # numpy: one float64 state on Python floats (lists and tuples converted once)
             if not (type(q) is type(qd) is type(qdd) is _ndarray):
-                q, qd, qdd = (_vector(q, lay.n), _vector(qd, lay.n, 'qd'),
-                              _vector(qdd, lay.n, 'qdd'))
+                q, qd, qdd = (_vector(q, lay.n), _vector(qd, lay.nv, 'qd'),
+                              _vector(qdd, lay.nv, 'qdd'))
             if ((q.dtype is qd.dtype is qdd.dtype is _F8) and q.ndim == qd.ndim == qdd.ndim == 1
-                    and len(q) == len(qd) == len(qdd) == lay.n):
+                    and len(q) == lay.n and len(qd) == len(qdd) == lay.nv):
                 gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
                 if gx is not None:
                     return np.array(python.rnea_rows(lay.rows, q.tolist(), qd.tolist(),
@@ -159,10 +165,10 @@ def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
     lay, kern, tau = _entered(model, backend, _c_gravity_torque, q, gravity)
     if tau is not None:
         return tau
-    if kern is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == lay.zeros.shape:
+    if kern is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == (lay.n,):
         return rnea(model, q, lay.zeros, lay.zeros, gravity, backend=backend)
-    q = _vector(q, lay.n)
-    zero = np.zeros(np.shape(q), dtype=q.dtype if q.dtype.kind == 'f' else np.float64)
+    (q,) = as_joint_arrays(model, _vector(q, lay.n))
+    zero = np.zeros(q.shape[:-1] + (lay.nv,), dtype=q.dtype)
     return rnea(model, q, zero, zero, gravity, backend=backend)
 
 
@@ -177,12 +183,10 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     if tau is not None:
         return tau
     if (kern is None and type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
-            and q.shape == qd.shape == lay.zeros.shape):
+            and q.shape == (lay.n,) and qd.shape == lay.zeros.shape):
         return rnea(model, q, qd, lay.zeros, gravity, backend=backend)
-    q, qd = _vector(q, lay.n), _vector(qd, lay.n, 'qd')
-    dtype = np.result_type(q, qd)
-    zero = np.zeros(np.broadcast_shapes(np.shape(q), np.shape(qd)),
-                    dtype=dtype if dtype.kind == 'f' else np.float64)
+    q, qd = as_joint_arrays(model, _vector(q, lay.n), _vector(qd, lay.nv, 'qd'))
+    zero = np.zeros(qd.shape, dtype=qd.dtype)
     return rnea(model, q, qd, zero, gravity, backend=backend)
 
 
@@ -281,14 +285,14 @@ def _rnea(model: Model, lay: layout.Layout, q, qd, qdd, gravity, f_ext,
     fb = f_ext_in_bodies(model, f_ext)
     if fb:  # batched wrenches broadcast against the batch of states
         batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
-        q, qd, qdd = (np.broadcast_to(x, batch + q.shape[-1:]) for x in (q, qd, qdd))
+        q, qd, qdd = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, qdd))
     if kern is not None and q.dtype in _KERNEL_DTYPES:
         if q.size == q.shape[-1] > 0:
             # One state (maybe with batch dimensions of 1): the single-state entry.
             fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
                     if fb else None)
             tau = _c_rnea(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g, fext)
-            return tau.reshape(q.shape)
+            return tau.reshape(qd.shape)
         return compiled.rnea(lay, q, qd, qdd, g, fb)
     return python.rnea(lay.rows, q, qd, qdd, g, fb)
 

@@ -52,7 +52,7 @@
 
 /* The interface this file offers to compiled.py, which refuses a build of another (a stale
  * extension left beside newer sources): raise it with every change of an entry. */
-#define API 4
+#define API 5
 /* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
 #define STACK_DOUBLES 2048
 /* Largest number of threads of one batch; each gets at least MIN_WORK body-states (states x
@@ -88,8 +88,33 @@ typedef struct {
     double *K;          /* rows x WIDTH, row-major */
     long rows;          /* NB + 1 */
     long n;             /* joints (len(q)) */
-    double *zeros;      /* n zeros: qd, qdd of the terms at rest */
+    double *zeros;      /* nv zeros: qd, qdd of the terms at rest */
+    long nv;            /* velocity coordinates (len(qd), len(tau)); n for a fixed base */
 } KernelsObject;
+
+/* Whether the rows of table K (rows x WIDTH) index q (nq numbers) and q̇ (nv numbers) within
+ * bounds, each body's parent before it: a 1-DoF joint one coordinate of each, a free-flyer
+ * (code FF) 7 of q and 6 of q̇ (the `dof` column), so that no table makes the kernels read or
+ * write out of bounds. */
+static int
+rows_fit(const double *K, long rows, double nq, double nv)
+{
+    int ok = nv >= 0.0 && nv <= nq && nv == (double)(long)nv;
+    double q_end = 0.0, v_end = 0.0;     /* every coordinate is some body's joint's */
+    for (long i = 1; ok && i < rows; i++) {
+        const double *row = K + i * WIDTH;
+        const double code = row[1], k = row[QIDX], kv = row[VIDX], dof = row[DOF];
+        const double width = code == FF ? 7.0 : 1.0;
+        ok = row[0] >= 0.0 && row[0] < (double)i && row[0] == (double)(long)row[0]
+             && code >= 0.0 && code <= (double)FF && code == (double)(long)code
+             && k >= 0.0 && k + width <= nq && k == (double)(long)k
+             && kv >= 0.0 && kv + dof <= nv && kv == (double)(long)kv
+             && dof == (code == FF ? 6.0 : 1.0);
+        q_end = k + width > q_end ? k + width : q_end;
+        v_end = kv + dof > v_end ? kv + dof : v_end;
+    }
+    return ok && q_end == nq && v_end == nv;
+}
 
 static PyTypeObject KernelsType;
 
@@ -124,16 +149,12 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     const double *K = (const double *)v.buf;
     long rows = (long)v.shape[0];
     double n = K[QIDX];
-    /* at most one joint per body (mimic joints share one), so n < rows */
-    int ok = n >= 0.0 && n < (double)rows && n == (double)(long)n;
+    /* at most one joint per body (mimic joints share one), each at most 7 coordinates of q
+     * (a free-flyer), so n < 7 rows */
+    int ok = n >= 0.0 && n < 7.0 * (double)rows && n == (double)(long)n;
     /* The kernels index q, the scratch and their parents by these columns: check them once,
      * so no table reaches the kernels that could make them read or write out of bounds. */
-    for (long i = 1; ok && i < rows; i++) {
-        const double *row = K + i * WIDTH;
-        ok = row[0] >= 0.0 && row[0] < (double)i && row[0] == (double)(long)row[0]
-             && row[1] >= 0.0 && row[1] <= (double)PR && row[1] == (double)(long)row[1]
-             && row[QIDX] >= 0.0 && row[QIDX] < n && row[QIDX] == (double)(long)row[QIDX];
-    }
+    ok = ok && rows_fit(K, rows, n, K[VIDX]);
     if (!ok) {
         PyBuffer_Release(&v);
         PyErr_SetString(PyExc_ValueError, "Kernels: table rows are not a tree over its joints");
@@ -155,8 +176,9 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     }
     self->rows = rows;
     self->n = (long)n;
+    self->nv = (long)K[VIDX];
     self->K = PyMem_Malloc(sizeof(double) * rows * WIDTH);
-    self->zeros = PyMem_Calloc(self->n + 1, sizeof(double));
+    self->zeros = PyMem_Calloc(self->nv + 1, sizeof(double));
     if (self->K != NULL)
         memcpy(self->K, K, sizeof(double) * rows * WIDTH);
     PyBuffer_Release(&v);
@@ -170,6 +192,7 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
 static PyMemberDef kernels_members[] = {
     {"n", T_LONG, offsetof(KernelsObject, n), READONLY, "number of joints (len(q))"},
     {"rows", T_LONG, offsetof(KernelsObject, rows), READONLY, "rows of the table (NB + 1)"},
+    {"nv", T_LONG, offsetof(KernelsObject, nv), READONLY, "velocity coordinates (len(qd))"},
     {NULL},
 };
 
@@ -242,8 +265,8 @@ static int
 result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 {
     *count = kernel == MOMENTUM ? 2 : 1;
-    dims[0] = h->n;
-    dims[1] = kernel == CRBA ? h->n : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
+    dims[0] = h->nv;
+    dims[1] = kernel == CRBA ? h->nv : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
     return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
 }
 
@@ -251,7 +274,8 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 static Py_ssize_t
 work_size(int kernel, long rows)
 {
-    return (Py_ssize_t)rows * WORK + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * rows : 0);
+    return (Py_ssize_t)rows * WORK
+        + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * ((Py_ssize_t)rows + 5) : 0);
 }
 
 /* One state through the generated kernels: the body transforms, then `kernel`'s passes.
@@ -488,18 +512,19 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         ? PyArray_TYPE((PyArrayObject *)q_arg) == NPY_FLOAT
         : !(PyList_CheckExact(q_arg) || PyTuple_CheckExact(q_arg));
     double stack[STACK_DOUBLES];
-    double *buf = scratch(stack, 3 * n + 3 + (may_float ? count * size : 0)
+    const Py_ssize_t nv = h->nv;
+    double *buf = scratch(stack, n + 2 * nv + 3 + (may_float ? count * size : 0)
                                  + work_size(a->kernel, rows));
     if (buf == NULL)
         return NULL;
-    double *x[3] = {buf, buf + n, buf + 2 * n}, *g = buf + 3 * n, *res = g + 3;
+    double *x[3] = {buf, buf + n, buf + n + nv}, *g = buf + n + 2 * nv, *res = g + 3;
     double *work = res + (may_float ? count * size : 0);
     PyObject *results[2] = {NULL, NULL}, *out = NULL;
     Py_buffer fb = {0};
     const double *f = NULL;
     int floats = 0;         /* joint vectors read from float32 */
     for (int i = 0; i < a->vectors; i++) {
-        const int read = as_doubles(args[1 + i], n, x[i]);
+        const int read = as_doubles(args[1 + i], i == 0 ? n : nv, x[i]);
         if (read == DECLINED)
             goto declined;
         floats += read == AS_FLOAT;
@@ -558,7 +583,7 @@ done:
 typedef struct {
     int kernel;
     const double *K;
-    long rows, n;
+    long rows, n, nv;                    /* q holds n numbers a state, qd and qdd nv */
     Py_ssize_t size;                     /* doubles of each result of one state */
     const double *q, *qd, *qdd, *fext;  /* (N, n) each or NULL; fext (1 or N, rows, 6) or NULL */
     int fext_per_state;
@@ -593,7 +618,7 @@ typedef struct {
 static int
 run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
 {
-    const long n = s->n, rows = s->rows;
+    const long n = s->n, nv = s->nv, rows = s->rows;
     if (work == NULL)
         return -1;
 #ifdef SD_LANES
@@ -601,7 +626,7 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
         /* several states at once (SIMD across states), the same bits as one by one */
         const double *f = s->fext ? s->fext + (s->fext_per_state ? lo : 0) * rows * 6 : NULL;
         long done = rnea_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
-                                     s->qd + lo * n, s->qdd + lo * n, s->g[0], s->g[1],
+                                     s->qd + lo * nv, s->qdd + lo * nv, s->g[0], s->g[1],
                                      s->g[2], f, s->fext_per_state, s->out1 + lo * s->size);
         if (done < 0)
             return -1;
@@ -610,8 +635,8 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
 #endif
     for (Py_ssize_t k = lo; k < hi; k++) {
         const double *f = s->fext ? s->fext + (s->fext_per_state ? k : 0) * rows * 6 : NULL;
-        run_state(s->kernel, s->K, rows, s->q + k * n, s->qd ? s->qd + k * n : NULL,
-                  s->qdd ? s->qdd + k * n : NULL, s->g, f, s->out1 + k * s->size,
+        run_state(s->kernel, s->K, rows, s->q + k * n, s->qd ? s->qd + k * nv : NULL,
+                  s->qdd ? s->qdd + k * nv : NULL, s->g, f, s->out1 + k * s->size,
                   s->out2 ? s->out2 + k * s->size : NULL, work);
     }
     return 0;
@@ -750,7 +775,7 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         return NULL;
     }
     result_shape(h, a->kernel, dims, &count);
-    Slice job = {.kernel = a->kernel, .K = h->K, .rows = h->rows, .n = h->n,
+    Slice job = {.kernel = a->kernel, .K = h->K, .rows = h->rows, .n = h->n, .nv = h->nv,
                  .size = dims[0] * dims[1]};
     Py_ssize_t next = 2 + a->vectors;
     if (a->gravity && !as_doubles(args[next++], 3, job.g)) {
@@ -764,8 +789,9 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     for (int i = 0; i < a->vectors + count; i++, held++) {
         const int result = i >= a->vectors;
         const char *name = result ? a->outputs[i - a->vectors] : VECTOR_NAMES[i];
+        const Py_ssize_t per_state = result ? job.size : (i == 0 ? h->n : h->nv);
         Py_ssize_t numbers;     /* -1: more than any buffer holds */
-        if (checked_mul(N, result ? job.size : h->n, PY_SSIZE_T_MAX / 8, &numbers) < 0)
+        if (checked_mul(N, per_state, PY_SSIZE_T_MAX / 8, &numbers) < 0)
             numbers = -1;
         if (get_table(result ? args[next + i - a->vectors] : args[2 + i], &v[i], result,
                       name) < 0)
@@ -777,7 +803,7 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
                 PyErr_Format(PyExc_ValueError, "%s must hold %zd numbers", name, numbers);
             else
                 PyErr_Format(PyExc_ValueError, "%s must hold %zd x %zd numbers", name, N,
-                             result ? job.size : (Py_ssize_t)h->n);
+                             per_state);
             goto fail;
         }
     }

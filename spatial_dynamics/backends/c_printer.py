@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ast
 
+from ..joints import joint_motion, joint_torque, joint_transform, joint_velocity
 from ..algorithms import components, rnea
 
 # --------------------------------------------------------------------------------------------
@@ -23,11 +24,13 @@ _C_RESERVED = {'auto', 'case', 'char', 'const', 'default', 'double', 'enum', 'ex
                'sizeof', 'static', 'struct', 'switch', 'typedef', 'union', 'unsigned', 'void',
                'volatile'}
 #: Parameters of the generated kernels that are arrays (the rest are doubles, or int flags).
-_C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'f_body', 'tau', 'work', 'H', 'mom', 'ctq', 'Y', 'axes'}
-_C_FLAGS = {'has_fext'}
-#: ``len(x)`` of an array parameter: the number of joints ``nq``, ``nq * nq`` for M(q),
-#: ``nq * 10 NB`` for the regressor.
-_C_LENGTH = {'H': 'nq * nq', 'Y': 'nq * 10 * (rows - 1)'}
+_C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'dq', 'f_body', 'tau', 'work', 'H', 'mom', 'ctq', 'Y',
+             'axes'}
+#: Parameters that are integers: flags, and the joints' code, indices and column.
+_C_FLAGS = {'has_fext', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row'}
+#: ``len(x)`` of an array parameter: the number of velocity coordinates ``nv`` (``q̇``, ``τ``),
+#: ``nv * nv`` for M(q), ``nv * 10 NB`` for the regressor.
+_C_LENGTH = {'H': 'nv * nv', 'Y': 'nv * 10 * (rows - 1)'}
 _C_OPS = {ast.Add: ('+', 10), ast.Sub: ('-', 10), ast.Mult: ('*', 11), ast.Div: ('/', 11)}
 _C_COMPARE = {ast.Eq: '==', ast.NotEq: '!=', ast.Lt: '<', ast.LtE: '<=', ast.Gt: '>',
               ast.GtE: '>='}
@@ -55,7 +58,7 @@ class _ToC:
         self.params = [a.arg for a in func.args.args]
         self.ints: set = set()
         self.doubles: set = set()
-        self.uses_nq = False
+        self.uses_nv = False
         self.temp = 0
         self.typed = False              # _infer has run
 
@@ -64,7 +67,7 @@ class _ToC:
         if isinstance(node, ast.Constant):
             return isinstance(node.value, (bool, int))
         if isinstance(node, ast.Name):
-            return node.id in self.ints
+            return node.id in self.ints or (node.id in self.params and node.id in _C_FLAGS)
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
             return node.func.id in ('int', 'len')
         if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Attribute):
@@ -74,6 +77,8 @@ class _ToC:
                     and self._is_int(node.right))
         if isinstance(node, ast.UnaryOp):
             return isinstance(node.op, ast.Not) or self._is_int(node.operand)
+        if isinstance(node, ast.IfExp):
+            return self._is_int(node.body) and self._is_int(node.orelse)
         return isinstance(node, (ast.Compare, ast.BoolOp))
 
     def _infer(self) -> None:
@@ -145,8 +150,8 @@ class _ToC:
             if name == 'int':
                 return f'(long){self.expr(node.args[0], 13)}'
             if name == 'len' and isinstance(node.args[0], ast.Name):
-                self.uses_nq = True
-                return _C_LENGTH.get(node.args[0].id, 'nq')
+                self.uses_nv = True
+                return _C_LENGTH.get(node.args[0].id, 'nv')
         elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
               and isinstance(node.func.value, ast.Name) and node.func.value.id == 'np'
               and node.func.attr in ('sin', 'cos')):
@@ -203,7 +208,14 @@ class _ToC:
             return [f'{pad}continue;']
         if isinstance(node, ast.Return) and isinstance(node.value, ast.Tuple):
             return [f'{pad}out[{j}] = {self._stored([None], v)};'
-                    for j, v in enumerate(node.value.elts)]
+                    for j, v in enumerate(node.value.elts)] + [f'{pad}return;']
+        if isinstance(node, ast.Return) and node.value is None:
+            return [f'{pad}return;']
+        if (isinstance(node, ast.Expr) and isinstance(node.value, ast.Call)
+                and isinstance(node.value.func, ast.Name) and node.value.func.id in self.returns
+                and self.returns[node.value.func.id] == 0):          # f(…) writing an array
+            args = ', '.join(self._arguments(node.value.func.id, node.value.args))
+            return [f'{pad}{node.value.func.id}{self.SUFFIX}({args});']
         if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
             return []                                                    # the docstring
         raise SyntaxError(f'line {getattr(node, "lineno", "?")}: no C for {ast.unparse(node)!r}')
@@ -256,9 +268,9 @@ class _ToC:
                 head = f'for ({i} = {self.expr(lo)}; {i} > {self.expr(hi)}; {i}--) {{'
             return [pad + head] + self.block(node.body, depth + 1) + [f'{pad}}}']
         if isinstance(it, ast.Name) and it.id in _C_ARRAYS:    # for x in qd: the joint values
-            self.uses_nq = True
+            self.uses_nv = True
             j = f'j{self._next()}_'
-            return ([f'{pad}for (long {j} = 0; {j} < {_C_LENGTH.get(it.id, "nq")}; {j}++) {{',
+            return ([f'{pad}for (long {j} = 0; {j} < {_C_LENGTH.get(it.id, "nv")}; {j}++) {{',
                      f'{pad}    {i} = {it.id}[{j}];']
                     + self.block(node.body, depth + 1) + [f'{pad}}}'])
         raise SyntaxError(f'line {node.lineno}: no C for {ast.unparse(node.iter)!r}')
@@ -303,12 +315,12 @@ class _ToC:
         for p in self.params:
             params += self._parameter(p, written)
         body = self.block(self.func.body, 1)
-        if name in self.returns:
+        if self.returns.get(name):
             params.append(f'{self.REAL} *out')
         used = {n.id for n in ast.walk(self.func) if isinstance(n, ast.Name)}
         head = [f'    (void){_c_name(p)};' for p in self.params if p not in used]
-        if self.uses_nq:
-            head.append('    const long nq = (long)K[QIDX];')
+        if self.uses_nv:
+            head.append('    const long nv = (long)K[VIDX];')
         kinds = {}
         for n in sorted(self.ints) + sorted(self.doubles):
             if n != '_':
@@ -329,7 +341,8 @@ class _ToC:
 
 #: The kernels printed a second time on lanes, and the arrays holding one value per state.
 LANE_SOURCES = (components.cross, components.X_motion, components.XT_force,
-                components.XT_force_plus, components.I_motion, rnea.xup_kernel, rnea.rnea_kernel)
+                components.XT_force_plus, components.I_motion, joint_transform, joint_motion,
+                joint_velocity, joint_torque, rnea.xup_kernel, rnea.rnea_kernel)
 _LANE_ARRAYS = {'q', 'qd', 'qdd', 'f_body', 'tau', 'work'}
 
 
@@ -465,33 +478,35 @@ static inline sd_vd{L} sd_cos{L}(sd_vd{L} x)
 
 {kernels}
 
-/* RNEA of the states [0, N - N % {L}) of a batch, {L} at a time: rows of Q, QD, QDD (n numbers
- * each) into the same rows of TAU, with the external forces F (rows x 6 numbers for every
- * state, or for each state with F_each) or none (NULL); `work` holds rows * WORK + 4 n +
- * 6 rows vectors. Each state's torques are, bit for bit, those of xup_kernel and rnea_kernel
- * on that state alone. */
+/* RNEA of the states [0, N - N % {L}) of a batch, {L} at a time: rows of Q (nq numbers each),
+ * QD, QDD (nv each) into the same rows of TAU (nv each), with the external forces F (rows x 6
+ * numbers for every state, or for each state with F_each) or none (NULL); `work` holds
+ * rows * WORK + nq + 3 nv + 6 rows vectors. Each state's torques are, bit for bit, those of
+ * xup_kernel and rnea_kernel on that state alone. */
 static void rnea_batch_lanes{L}(const double *K, long rows, long N, const double *Q,
     const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
     long F_each, double *TAU, sd_vd{L} *work)
 {{
-    const long n = (long)K[QIDX];
-    sd_vd{L} *q = work + rows * WORK, *qd = q + n, *qdd = qd + n, *tau = qdd + n;
-    sd_vd{L} *f_body = tau + n;
+    const long nq = (long)K[QIDX], nv = (long)K[VIDX];
+    sd_vd{L} *q = work + rows * WORK, *qd = q + nq, *qdd = qd + nv, *tau = qdd + nv;
+    sd_vd{L} *f_body = tau + nv;
     for (long b = 0; b + {L} <= N; b += {L}) {{
-        for (long k = 0; k < n; k++)
+        for (long k = 0; k < nq; k++)
+            for (int s = 0; s < {L}; s++)
+                q[k][s] = Q[(b + s) * nq + k];
+        for (long k = 0; k < nv; k++)
             for (int s = 0; s < {L}; s++) {{
-                q[k][s] = Q[(b + s) * n + k];
-                qd[k][s] = QD[(b + s) * n + k];
-                qdd[k][s] = QDD[(b + s) * n + k];
+                qd[k][s] = QD[(b + s) * nv + k];
+                qdd[k][s] = QDD[(b + s) * nv + k];
             }}
         for (long k = 0; F != NULL && k < rows * 6; k++)
             for (int s = 0; s < {L}; s++)
                 f_body[k][s] = F[(F_each ? b + s : 0) * rows * 6 + k];
         xup_kernel_lanes{L}(K, rows, q, work);
         rnea_kernel_lanes{L}(K, rows, q, qd, qdd, gx, gy, gz, f_body, F != NULL, tau, work);
-        for (long k = 0; k < n; k++)
+        for (long k = 0; k < nv; k++)
             for (int s = 0; s < {L}; s++)
-                TAU[(b + s) * n + k] = tau[k][s];
+                TAU[(b + s) * nv + k] = tau[k][s];
     }}
 }}
 """
@@ -521,7 +536,8 @@ static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q
     const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
     long F_each, double *TAU)
 {
-    const long n = (long)K[QIDX], size = 8 * (rows * WORK + 4 * n + 6 * rows);   /* doubles */
+    const long nq = (long)K[QIDX], nv = (long)K[VIDX];
+    const long size = 8 * (rows * WORK + nq + 3 * nv + 6 * rows);   /* doubles */
     long lanes = 2;
 #ifdef SD_AVX
     lanes = __builtin_cpu_supports("avx512f") ? 8 : __builtin_cpu_supports("avx") ? 4 : 2;

@@ -26,6 +26,7 @@ source (Python backends)                        generated (flat arrays)
 ``H[…] = …`` (any other array argument)         unchanged
 ``fe0, …, fe5 = f_body[i]``                     ``fe0 = f_body[i, 0]; …``
 ``nonzero(x)``, ``m.sin``, ``len(rows)``        ``x != 0.0``, ``np.sin``, ``K.shape[0]``
+``f(…, m)``, ``def f(…, m)`` (the sin/cos kind)  ``f(…)``, ``def f(…)``
 ==============================================  ==============================================
 
 The C is the flat text typed (:class:`_ToC`): integer names ``long``, the rest ``double``;
@@ -54,6 +55,8 @@ from typing import Optional, Sequence
 
 from . import layout
 from .c_printer import _ToC, lanes_c
+from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_torque,
+                      joint_transform, joint_velocity)
 from ..algorithms import components, crba, momentum, regressor, rnea
 
 #: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
@@ -62,9 +65,13 @@ STORES = {'Xup': ('XUP', 0, 12), 'vel': ('VEL', 12, 6), 'acc': ('ACC', 18, 6),
           'frc': ('FRC', 24, 6), 'IC': ('ICS', 30, 10)}
 WORK = 40
 #: The functions translated, in order (a function is generated after those it calls).
+#: The joints' operations (:mod:`spatial_dynamics.joints`) come first: the kernels call them,
+#: and the C compiler inlines them (``static inline``), as it does the components.
 SOURCES = (components.cross, components.X_motion, components.XT_force, components.XT_force_plus,
-           components.I_motion, components.XT_I_X, components.XT_I_X_plus, rnea.xup_kernel,
-           rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
+           components.I_motion, components.XT_I_X, components.XT_I_X_plus,
+           joint_transform, joint_motion, joint_velocity, joint_torque, joint_ctq, joint_axis,
+           joint_crba,
+           rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
            regressor.regressor_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
@@ -203,6 +210,8 @@ class _ToFlat(ast.NodeTransformer):
                                  ast.Constant(0), ast.Load())
         args = []
         for arg in node.args:                                    # f(…, *vel[p], …)
+            if isinstance(arg, ast.Name) and arg.id == 'm':
+                continue                                         # f(…, m): sin, cos are np's
             if isinstance(arg, ast.Starred):
                 store = self._store_of(arg.value)
                 if not store:
@@ -235,6 +244,7 @@ def _flat(fn) -> ast.FunctionDef:
     func.body = [s for s in func.body if not (isinstance(s, ast.Expr)
                                               and isinstance(s.value, ast.Constant))]
     func.returns = None
+    func.args.args = [a for a in func.args.args if a.arg != 'm']      # sin, cos are np's
     if fn.__name__ in SIGNATURES:
         func.args = ast.parse(f'def f({SIGNATURES[fn.__name__]}): pass').body[0].args
     func = _ToFlat().visit(func)
@@ -255,7 +265,7 @@ def _kernel_source(fn) -> str:
 
 def _constants() -> dict:
     """Return the constants the kernels name: joint codes and the scratch layout."""
-    consts = {name: getattr(rnea, name) for name in ('RX', 'RY', 'RZ', 'RA', 'PR')}
+    consts = dict(CODES)
     consts['WORK'] = WORK
     consts.update((const, offset) for const, offset, _ in STORES.values())
     return consts
@@ -282,14 +292,15 @@ import numpy as np
 
 def generate_c() -> str:
     """Return the text of ``_kernels_generated.h``: the same kernels as C functions."""
-    consts = dict(_constants(), WIDTH=layout.WIDTH, QIDX=layout.COLUMN['qidx'])
+    consts = dict(_constants(), WIDTH=layout.WIDTH, QIDX=layout.COLUMN['qidx'],
+                  VIDX=layout.COLUMN['vidx'], DOF=layout.COLUMN['dof'])
     funcs, returns = [], {}
     for fn in SOURCES:
         func = _flat(fn)
         func.body.insert(0, ast.Expr(ast.Constant(_summary(fn))))
         ret = [n for n in ast.walk(func) if isinstance(n, ast.Return)]
-        if ret:
-            returns[fn.__name__] = len(ret[0].value.elts)
+        if ret:     # how many values it returns (0: it writes into an array it is given)
+            returns[fn.__name__] = len(ret[0].value.elts) if ret[0].value is not None else 0
         funcs.append(_ToC(func, returns).function())
     header = '''\
 /* Copyright 2026 spatial_dynamics contributors

@@ -27,7 +27,7 @@ import warnings
 import numpy as np
 
 #: The interface of ``_compiled.c`` this module speaks (its ``API``).
-API = 4
+API = 5
 
 try:
     ext = importlib.import_module(__package__ + '._compiled')
@@ -64,17 +64,16 @@ DTYPES = (np.dtype(np.float64), np.dtype(np.float32))
 
 
 def _batch(entry, lay, vectors: tuple, middle: tuple, shape: tuple, results: int = 1) -> list:
-    """Run the batch ``entry`` on validated arrays ``vectors`` of one shape (..., n).
+    """Run the batch ``entry`` on validated arrays ``vectors`` of one batch shape (...).
 
-    Each is made one C-contiguous float64 (N, n) copy (none when it is one already);
+    Each is made one C-contiguous float64 (N, nq) or (N, nv) copy (none when it is one already);
     ``middle`` are the entry's arguments between the vectors and the results (gravity,
     external forces). Returns ``results`` arrays of shape (...,) + ``shape`` in the vectors'
     dtype (float32 rounded once from the float64 results).
     """
-    n = lay.n
     batch = vectors[0].shape[:-1]
     N = math.prod(batch)        # (np.prod takes ~2 µs: a batch of a few states feels it)
-    rows = [np.ascontiguousarray(x.reshape(N, n), dtype=np.float64) for x in vectors]
+    rows = [np.ascontiguousarray(x.reshape(N, x.shape[-1]), dtype=np.float64) for x in vectors]
     outs = [np.empty((N,) + shape) for _ in range(results)]
     entry(lay.kernels, N, *rows, *middle, *outs, THREADS)
     dtype = vectors[0].dtype
@@ -83,7 +82,7 @@ def _batch(entry, lay, vectors: tuple, middle: tuple, shape: tuple, results: int
 
 def rnea(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
          f_body: dict) -> np.ndarray:
-    """τ from validated arrays of one broadcast shape (..., n) (any strides, :data:`DTYPES`).
+    """τ (..., nv) from validated q (..., nq), qd, qdd (..., nv) (any strides, :data:`DTYPES`).
 
     ``gravity`` (gx, gy, gz) floats, m/s² in root coordinates; ``f_body`` maps a body index to
     its external force ``[n; f]`` in body coordinates, shape (6,) or broadcastable to
@@ -95,7 +94,7 @@ def rnea(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
         fext = np.zeros(((1,) if shared else q.shape[:-1]) + (lay.table.shape[0], 6))
         for b, f in f_body.items():
             fext[..., b, :] = f
-    return _batch(ext.rnea_batch, lay, (q, qd, qdd), (gravity, fext), (lay.n,))[0]
+    return _batch(ext.rnea_batch, lay, (q, qd, qdd), (gravity, fext), (lay.nv,))[0]
 
 
 def f_body_table(lay, f_body: dict) -> np.ndarray:
@@ -107,18 +106,18 @@ def f_body_table(lay, f_body: dict) -> np.ndarray:
 
 
 def mass_matrix(lay, q: np.ndarray) -> np.ndarray:
-    """M(q) of shape (..., n, n) from a validated array ``q`` of shape (..., n)."""
-    return _batch(ext.mass_matrix_batch, lay, (q,), (), (lay.n, lay.n))[0]
+    """M(q) of shape (..., nv, nv) from a validated array ``q`` of shape (..., nq)."""
+    return _batch(ext.mass_matrix_batch, lay, (q,), (), (lay.nv, lay.nv))[0]
 
 
 def momentum(lay, q: np.ndarray, qd: np.ndarray) -> tuple:
-    """``(M q̇, Cᵀ q̇)``, each of shape (..., n), from validated arrays of one shape (..., n)."""
-    return tuple(_batch(ext.momentum_batch, lay, (q, qd), (), (lay.n,), results=2))
+    """``(M q̇, Cᵀ q̇)``, each (..., nv), from validated q (..., nq) and qd (..., nv)."""
+    return tuple(_batch(ext.momentum_batch, lay, (q, qd), (), (lay.nv,), results=2))
 
 
 def regressor(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple) -> np.ndarray:
-    """``Y`` of shape (..., n, 10 NB) from validated arrays of one shape (..., n)."""
-    shape = (lay.n, 10 * (lay.table.shape[0] - 1))
+    """``Y`` of shape (..., nv, 10 NB) from validated q (..., nq), qd, qdd (..., nv)."""
+    shape = (lay.nv, 10 * (lay.table.shape[0] - 1))
     return _batch(ext.regressor_batch, lay, (q, qd, qdd), (gravity,), shape)[0]
 
 

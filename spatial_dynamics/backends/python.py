@@ -21,19 +21,19 @@ from ..algorithms.rnea import rnea_kernel, xup_kernel
 
 
 def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
-    """τ as a list of ``n`` scalars from the per-body ``rows`` of :mod:`.layout`.
+    """τ as a list of ``nv`` scalars from the per-body ``rows`` of :mod:`.layout`.
 
-    ``q, qd, qdd`` are sequences of ``n`` scalars of one kind (floats, (N,) arrays or
-    ``mpmath.mpf``), ``gravity`` three of them; ``m`` provides their ``sin`` and ``cos``
-    (``math``, ``numpy`` or ``mpmath``). ``f_body`` maps a body index to its external force
-    ``[n; f]`` in body coordinates as 6 scalars.
+    ``q`` (``nq``), ``qd`` and ``qdd`` (``nv``) are sequences of scalars of one kind (floats,
+    (N,) arrays or ``mpmath.mpf``), ``gravity`` three of them; ``m`` provides their ``sin``
+    and ``cos`` (``math``, ``numpy`` or ``mpmath``). ``f_body`` maps a body index to its
+    external force ``[n; f]`` in body coordinates as 6 scalars.
     """
     gx, gy, gz = gravity
     slots = len(rows)
     Xup, vel, acc, frc = [None] * slots, [None] * slots, [None] * slots, [None] * slots
     xup_kernel(rows, q, m, Xup)
     zero = 0.0 * gx
-    tau = [zero] * rows[0][2]
+    tau = [zero] * rows[0][3]
     fb = None
     if f_body:
         fb = [(zero,) * 6] * slots
@@ -63,41 +63,41 @@ def _stacked(values: Sequence, N: int, dtype, shape: tuple) -> np.ndarray:
 
 def rnea(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: np.ndarray,
          f_body: dict) -> np.ndarray:
-    """τ from validated arrays of one float dtype and broadcast shape (..., n)."""
+    """τ (..., nv) from validated arrays of one float dtype: q (..., nq), qd, qdd (..., nv)."""
     if q.dtype == np.float64 and q.size == q.shape[-1] > 0:
         # One state (maybe with batch dimensions of 1): plain floats beat the batch path's
         # fixed cost of one numpy call per term.
         fl = {b: np.reshape(f, -1)[-6:].tolist() for b, f in f_body.items()}
         tau = rnea_rows(rows, *(x.reshape(-1).tolist() for x in (q, qd, qdd)),
                         [float(x) for x in gravity], fl)
-        return np.array(tau).reshape(q.shape)
+        return np.array(tau).reshape(qd.shape)
     batch = q.shape[:-1]
     N = int(np.prod(batch, dtype=np.intp))
     fl = {b: list(np.broadcast_to(f, batch + (6,)).reshape(N, 6).T.astype(q.dtype))
           for b, f in f_body.items()}
     tau = rnea_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
                     [q.dtype.type(x) for x in gravity], fl, np)
-    return _stacked(tau, N, q.dtype, q.shape)
+    return _stacked(tau, N, q.dtype, qd.shape)
 
 
 def mass_matrix_rows(rows, q, m=math) -> list:
-    """M(q) as a list of ``n * n`` scalars (row-major) from the per-body ``rows``.
+    """M(q) as a list of ``nv * nv`` scalars (row-major) from the per-body ``rows``.
 
-    ``q`` is a sequence of ``n`` scalars of one kind (floats or (N,) arrays); ``m`` provides
+    ``q`` is a sequence of ``nq`` scalars of one kind (floats or (N,) arrays); ``m`` provides
     their ``sin`` and ``cos``.
     """
     slots = len(rows)
     Xup, IC = [None] * slots, [None] * slots
     xup_kernel(rows, q, m, Xup)
-    H = [0.0] * (rows[0][2] ** 2)
+    H = [0.0] * (rows[0][3] ** 2)
     crba_kernel(rows, Xup, IC, H)
     return H
 
 
 def mass_matrix(rows, q: np.ndarray) -> np.ndarray:
-    """M(q) of shape (..., n, n) from a validated float array ``q`` of shape (..., n)."""
-    n = q.shape[-1]
-    if q.dtype == np.float64 and q.size == n:
+    """M(q) of shape (..., nv, nv) from a validated float array ``q`` of shape (..., nq)."""
+    n = rows[0][3]
+    if q.dtype == np.float64 and q.size == q.shape[-1]:
         return np.array(mass_matrix_rows(rows, q.reshape(-1).tolist())).reshape(
             q.shape[:-1] + (n, n))
     batch = q.shape[:-1]
@@ -106,29 +106,28 @@ def mass_matrix(rows, q: np.ndarray) -> np.ndarray:
 
 
 def momentum_rows(rows, q, qd, m=math) -> tuple:
-    """``(M(q) q̇, Cᵀ(q, q̇) q̇)`` as two lists of ``n`` scalars from the per-body ``rows``."""
+    """``(M(q) q̇, Cᵀ(q, q̇) q̇)`` as two lists of ``nv`` scalars from the per-body ``rows``."""
     slots = len(rows)
     Xup, vel, frc = [None] * slots, [None] * slots, [None] * slots
     xup_kernel(rows, q, m, Xup)
-    n = rows[0][2]
+    n = rows[0][3]
     mom, ctq = [0.0] * n, [0.0] * n
     momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc)
     return mom, ctq
 
 
 def momentum(rows, q: np.ndarray, qd: np.ndarray) -> tuple:
-    """``(M q̇, Cᵀ q̇)``, each of shape (..., n), from validated arrays of shape (..., n)."""
-    n = q.shape[-1]
-    if q.dtype == np.float64 and q.size == n:
+    """``(M q̇, Cᵀ q̇)``, each of shape (..., nv), from validated q (..., nq), qd (..., nv)."""
+    if q.dtype == np.float64 and q.size == q.shape[-1]:
         mom, ctq = momentum_rows(rows, q.reshape(-1).tolist(), qd.reshape(-1).tolist())
-        return np.array(mom).reshape(q.shape), np.array(ctq).reshape(q.shape)
+        return np.array(mom).reshape(qd.shape), np.array(ctq).reshape(qd.shape)
     N = int(np.prod(q.shape[:-1], dtype=np.intp))
-    return tuple(_stacked(part, N, q.dtype, q.shape)
+    return tuple(_stacked(part, N, q.dtype, qd.shape)
                  for part in momentum_rows(rows, _columns(q), _columns(qd), np))
 
 
 def regressor_rows(rows, q, qd, qdd, gravity, m=math) -> list:
-    """Return the regressor ``Y`` as a list of ``n * 10 NB`` scalars (row-major) from ``rows``.
+    """Return the regressor ``Y`` as a list of ``nv * 10 NB`` scalars (row-major) from ``rows``.
 
     Arguments as for :func:`rnea_rows` (no external forces: they do not depend on π).
     """
@@ -136,17 +135,17 @@ def regressor_rows(rows, q, qd, qdd, gravity, m=math) -> list:
     slots = len(rows)
     Xup, vel, acc = [None] * slots, [None] * slots, [None] * slots
     xup_kernel(rows, q, m, Xup)
-    Y = [None] * (rows[0][2] * 10 * (slots - 1))
-    regressor_kernel(rows, qd, qdd, gx, gy, gz, Y, [None] * (6 * slots * slots), Xup, vel, acc)
+    Y = [None] * (rows[0][3] * 10 * (slots - 1))
+    regressor_kernel(rows, qd, qdd, gx, gy, gz, Y, [None] * (6 * slots * (slots + 5)), Xup, vel,
+                     acc)
     return Y
 
 
 def regressor(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
               gravity: Sequence[float]) -> np.ndarray:
-    """``Y`` of shape (..., n, 10 NB) from validated arrays of one float dtype, shape (..., n)."""
-    n = q.shape[-1]
-    shape = q.shape[:-1] + (n, 10 * (len(rows) - 1))
-    if q.dtype == np.float64 and q.size == n > 0:
+    """``Y`` (..., nv, 10 NB) from validated arrays of one float dtype (q (..., nq), qd, qdd)."""
+    shape = q.shape[:-1] + (rows[0][3], 10 * (len(rows) - 1))
+    if q.dtype == np.float64 and q.size == q.shape[-1] > 0:
         Y = regressor_rows(rows, *(x.reshape(-1).tolist() for x in (q, qd, qdd)),
                            [float(x) for x in gravity])
         return np.array(Y).reshape(shape)
