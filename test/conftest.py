@@ -211,3 +211,16 @@ def random_state(rng, shape, n, scale=(1.5, 2.0, 3.0)):
 def rng():
     """Return a seeded random generator."""
     return np.random.default_rng(20260121)
+
+
+def pytest_collection_modifyitems(config, items):
+    """Refuse a test that talks DDS (the ``driver`` fixture) without the ``ros`` marker.
+
+    The fast loop (``-m "not ros and not slow"``) must not start a node; a test that does and
+    is not marked would slip into it.
+    """
+    unmarked = [item.nodeid for item in items
+                if 'driver' in getattr(item, 'fixturenames', ())
+                and item.get_closest_marker('ros') is None]
+    if unmarked:
+        raise pytest.UsageError('DDS tests without the ros marker: ' + ', '.join(unmarked))

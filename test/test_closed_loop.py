@@ -20,6 +20,8 @@ import pytest
 
 RATIO = 20.0
 
+pytestmark = pytest.mark.ros      # the simulator and the node over real DDS
+
 
 @pytest.mark.parametrize('robot', ['demo_arm', 'ur5'])
 def test_feedforward_tracks_20x_better_than_pd_alone(install, tmp_path, robot):

@@ -92,6 +92,7 @@ def read_csv(path):
     return {r[key]: {k: float(v) for k, v in r.items() if k != key} for r in rows}
 
 
+@pytest.mark.slow
 def test_a_corrected_urdf_predicts_held_out_motion(robot_bags, tmp_path, capsys):
     """--inertias --identify --validate --write-urdf: the written URDF is the robot.
 

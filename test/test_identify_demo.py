@@ -24,6 +24,8 @@ pytest.importorskip('mujoco')
 pytest.importorskip('rosbags')
 pytest.importorskip('scipy')
 
+pytestmark = pytest.mark.slow     # the whole demonstration: minutes on 2 cores
+
 
 @pytest.fixture(scope='module')
 def figures(tmp_path_factory):

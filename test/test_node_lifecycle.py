@@ -60,7 +60,8 @@ def test_yaml_documents_every_parameter():
                         'external_wrench_timeout', 'backend', 'output', 'control_mode',
                         'kp', 'kd', 'measured_timeout', 'observer_gain',
                         'external_torque_warn', 'measured_effort', 'wrench_estimate.link',
-                        'wrench_estimate.epsilon', 'trajectory_effort_tolerance'}
+                        'wrench_estimate.epsilon', 'trajectory_effort_tolerance',
+                        'trajectory_max_bytes', 'trajectory_annotation_max_values'}
     for name in declared:
         # payload.link is written nested: 'payload:' then 'link:'
         *group, leaf = name.split('.')

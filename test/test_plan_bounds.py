@@ -105,6 +105,7 @@ def test_the_follower_refuses_a_first_point_it_could_only_reach_too_fast():
     assert follower.following
 
 
+@pytest.mark.slow
 def test_a_plan_of_the_documented_maximum_is_no_alias_bomb(tmp_path):
     """1,000,000 points (each an alias of one point: a small file) reach the plan's checks.
 

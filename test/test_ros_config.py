@@ -90,7 +90,8 @@ def test_every_parameter_is_in_the_params_file():
     for spec in config.PARAMETERS:
         key = spec.name.split('.')[-1]
         assert f'{key}:' in text, f'{spec.name} is not described in inverse_dynamics.yaml'
-    assert {s.name for s in config.PARAMETERS if s.read_only} == {'backend'}
+    assert {s.name for s in config.PARAMETERS if s.read_only} == {
+        'backend', 'trajectory_max_bytes', 'trajectory_annotation_max_values'}
     assert set(config.SLOW_PARAMETERS) <= set(config.PARAMETER_NAMES)
 
 

@@ -26,7 +26,7 @@ from benchmarks.generate import (chain_urdf, INERTIA_KINDS, JOINT_KINDS,  # noqa
                                  random_robot_urdf)
 from spatial_dynamics.joints import PRISMATIC
 
-pytestmark = pytest.mark.stress
+pytestmark = [pytest.mark.stress, pytest.mark.slow]
 
 EPS = float(np.finfo(float).eps)
 ZERO_G = (0.0, 0.0, 0.0)
