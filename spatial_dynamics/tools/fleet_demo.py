@@ -6,8 +6,8 @@
         [--wear-robot 1] [--wear-joint 2] [--onset 12] [--rate 0.05]
 
 Each robot is the UR5 of example-robot-data carrying its own payload on ``tool0`` (0.5 to
-2.5 kg), simulated by MuJoCo with the drives of :mod:`.identify_demo` and tracking, each day,
-a different motion (two sines per joint) with PD + feed-forward of the URDF without the
+2.5 kg), simulated by MuJoCo with the drives of :mod:`.identify_demo` and tracking, every
+day, its own program (two sines per joint) with PD + feed-forward of the URDF without the
 payload (each robot's URDF has its payload); the effort and velocity carry the identification demonstration's noise. From day
 ``onset`` on, the Coulomb friction of one joint of one robot rises by ``rate`` (a fraction
 of its value) a day. Written: ``OUT/rNN/robot.urdf`` (the URDF with the robot's payload) and ``OUT/rNN/dayDD`` (rosbag2, sqlite3), the layout ``fleet`` reads.
@@ -35,8 +35,8 @@ SUBSTEPS = 5        # controller steps per recorded sample (2.5 kHz)
 
 
 def simulate(true_text: str, model: sd.Model, motion: Motion, seconds: float,
-             friction: np.ndarray, seed: int) -> Dict[str, np.ndarray]:
-    """Track ``motion`` on the true robot; return ``t, q, qd, effort`` with noise at RATE."""
+             friction: np.ndarray) -> Dict[str, np.ndarray]:
+    """Track ``motion`` on the true robot; return ``t, q, qd, effort`` at RATE (no noise)."""
     from spatial_dynamics.sim.robot import SimulatedRobot
     damping, _, armature = drives(model.nq)
     robot = SimulatedRobot(true_text, timestep=1.0 / (RATE * SUBSTEPS), damping=damping,
@@ -53,9 +53,7 @@ def simulate(true_text: str, model: sd.Model, motion: Motion, seconds: float,
         if i % SUBSTEPS == 0:
             Q[i // SUBSTEPS], QD[i // SUBSTEPS], TAU[i // SUBSTEPS] = q, qd, tau
         robot.step(tau - friction * np.tanh(qd / EPS))
-    rng = np.random.default_rng(seed)
-    return {'t': np.arange(N) / RATE, 'q': Q, 'qd': QD + rng.normal(0.0, NOISE_QD, QD.shape),
-            'effort': TAU + rng.normal(0.0, NOISE_TAU, TAU.shape)}
+    return {'t': np.arange(N) / RATE, 'q': Q, 'qd': QD, 'effort': TAU}
 
 
 def friction_of(n: int, robot: int, day: int, wear) -> np.ndarray:
@@ -87,10 +85,17 @@ def make_fleet(out: str, robots: int = 4, days: int = 30, seconds: float = 4.0,
         with open(os.path.join(folder, 'robot.urdf'), 'wb') as f:
             f.write(truth)
         model = sd.Model.from_urdf(truth.decode())
+        motion, runs = Motion(model, seed + 1000 * r), {}
         for d in range(days):
-            motion = Motion(model, seed + 1000 * r + d)
-            rec = simulate(truth.decode(), model, motion, seconds,
-                           friction_of(model.nq, r, d, wear), seed + 1000 * r + d)
+            friction = friction_of(model.nq, r, d, wear)
+            if friction.tobytes() not in runs:      # the same program every day
+                runs[friction.tobytes()] = simulate(truth.decode(), model, motion, seconds,
+                                                    friction)
+            clean = runs[friction.tobytes()]
+            rng = np.random.default_rng(seed + 1000 * r + d)
+            rec = dict(clean, qd=clean['qd'] + rng.normal(0.0, NOISE_QD, clean['qd'].shape),
+                       effort=clean['effort'] + rng.normal(0.0, NOISE_TAU,
+                                                           clean['effort'].shape))
             t_ns = ((DAY0 + 86400 * d + 3600 * 8) * 10 ** 9
                     + np.round(rec['t'] * 1e9)).astype(np.int64)
             block = bags.encode_joint_states(names, t_ns, rec['q'], rec['qd'], rec['effort'])
