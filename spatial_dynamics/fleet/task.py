@@ -119,4 +119,3 @@ class _ModelArgs:
 
     def __init__(self, urdf: str) -> None:
         self.urdf, self.joints, self.locked = urdf, None, []
-

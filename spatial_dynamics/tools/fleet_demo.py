@@ -3,14 +3,15 @@
 """A simulated fleet: robots with different payloads, one daily bag each, one joint wearing.
 
     python -m spatial_dynamics.tools.fleet_demo OUT [--robots 4] [--days 30] [--seconds 4]
-        [--wear-robot 1] [--wear-joint 2] [--onset 12] [--rate 0.05]
+        [--wear-robot 2] [--wear-joint 3] [--onset 12] [--rate 0.05]
 
 Each robot is the UR5 of example-robot-data carrying its own payload on ``tool0`` (0.5 to
 2.5 kg), simulated by MuJoCo with the drives of :mod:`.identify_demo` and tracking, every
-day, its own program (two sines per joint) with PD + feed-forward of the URDF without the
-payload (each robot's URDF has its payload); the effort and velocity carry the identification demonstration's noise. From day
+day, its own program (two sines per joint) with PD + feed-forward of its URDF (which has the
+payload); the effort and velocity carry the identification demonstration's noise. From day
 ``onset`` on, the Coulomb friction of one joint of one robot rises by ``rate`` (a fraction
-of its value) a day. Written: ``OUT/rNN/robot.urdf`` (the URDF with the robot's payload) and ``OUT/rNN/dayDD`` (rosbag2, sqlite3), the layout ``fleet`` reads.
+of its value) a day. Written: ``OUT/rNN/robot.urdf`` (the URDF with the robot's payload)
+and ``OUT/rNN/dayDD`` (rosbag2, sqlite3), the layout ``fleet`` reads.
 """
 
 from __future__ import annotations
@@ -57,8 +58,10 @@ def simulate(true_text: str, model: sd.Model, motion: Motion, seconds: float,
 
 
 def friction_of(n: int, robot: int, day: int, wear) -> np.ndarray:
-    """Return the true Coulomb friction of ``robot`` on ``day`` (``wear``: robot, joint,
-    onset day, fraction a day)."""
+    """Return the true Coulomb friction of ``robot`` on ``day``.
+
+    ``wear``: the robot, the joint, the onset day (0-based) and the rise a day (a fraction).
+    """
     friction = drives(n)[1].copy()
     w_robot, w_joint, onset, rate = wear
     if robot == w_robot and day >= onset:
