@@ -22,6 +22,7 @@ RANKS = {
     '': 5,                  # the package itself: the public API (spatial_dynamics/__init__.py)
     'check': 6,             # a command on the library
     'replay': 6,            # recorded data and trajectories against the model (no rclpy)
+    'fleet': 6,             # a fleet's bags on a Dask cluster: replay's reading, summed fits
     'ros': 7,               # the node and its pure configuration
     'sim': 8,               # the simulated robot: robot.py pure (MuJoCo), node.py on ros/;
     #                         above ros (it reuses the node's readers and spin), below tools

@@ -1,0 +1,156 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Which bags belong to which robot: a manifest (CSV or YAML) or a folder ``ROBOT/…/BAG``.
+
+CSV: a header with ``robot,urdf,bag`` and optional option columns (``topic``, ``joints``
+(space-separated), ``threshold``, ``window``, ``order``, ``measured_effort``); ``bag`` may be
+a glob. YAML: a list of ``{robot, urdf, bags: [path or glob, ...], options: {...}}``. Paths
+are relative to the manifest's folder. A folder: each sub-folder is a robot, every bag below
+it (a directory holding ``metadata.yaml``, or a ``.db3``/``.mcap`` file outside one) is one
+of its bags, and the URDF is ``--urdf`` or the robot folder's ``robot.urdf``.
+"""
+
+from __future__ import annotations
+
+import csv
+import glob
+import io
+import os
+from typing import Dict, List, Optional
+
+from ..files import load_yaml, read_regular
+from .task import DEFAULTS, Task
+
+#: Largest manifest read (a fleet of thousands of bags is a few MB).
+MANIFEST_LIMIT = 64 << 20
+BAG_SUFFIXES = ('.db3', '.mcap')
+
+
+class ManifestError(ValueError):
+    """The manifest or folder cannot be used; the message names the file and the row."""
+
+
+def _option(name: str, value, where: str):
+    if name not in DEFAULTS:
+        raise ManifestError(f'{where}: unknown option {name!r} (known: '
+                            f'{", ".join(sorted(DEFAULTS))})')
+    try:
+        if name in ('threshold', 'window'):
+            x = float(value)
+            if not x > 0.0 or x == float('inf'):
+                raise ValueError
+            return x
+        if name == 'order':
+            x = int(value)
+            if not 2 <= x <= 6:
+                raise ValueError
+            return x
+        if name == 'joints':
+            return tuple(value.split() if isinstance(value, str) else value)
+        if name == 'gravity':
+            g = tuple(float(v) for v in (value.split() if isinstance(value, str) else value))
+            if len(g) != 3:
+                raise ValueError
+            return g
+        if name == 'measured_effort':
+            from ..effort import MEASURED_EFFORT
+            if value not in MEASURED_EFFORT:
+                raise ValueError
+        return str(value)
+    except (TypeError, ValueError):
+        raise ManifestError(f'{where}: option {name} = {value!r} is not valid') from None
+
+
+def _bags(pattern: str, base: str, where: str) -> List[str]:
+    path = os.path.join(base, os.path.expanduser(pattern))
+    found = sorted(glob.glob(path)) if glob.has_magic(path) else [path]
+    if not found:
+        raise ManifestError(f'{where}: no bag matches {pattern!r}')
+    return found
+
+
+def _urdf(path: str, base: str, where: str) -> str:
+    path = os.path.join(base, os.path.expanduser(str(path)))
+    if not os.path.isfile(path):
+        raise ManifestError(f'{where}: URDF {path!r} is not a file')
+    return path
+
+
+def _row(robot, urdf, patterns, options: Dict, base: str, where: str) -> List[Task]:
+    if not robot or not urdf or not patterns:
+        raise ManifestError(f'{where}: robot, urdf and bag are all needed')
+    opts = {k: _option(k, v, where) for k, v in options.items()
+            if v is not None and v != ''}
+    urdf = _urdf(urdf, base, where)
+    return [Task(str(robot), urdf, bag, opts)
+            for p in patterns for bag in _bags(str(p), base, where)]
+
+
+def read_manifest(path: str) -> List[Task]:
+    """Return the tasks of a CSV or YAML manifest; :class:`ManifestError` names the row."""
+    text = read_regular(path, f'manifest {path}', MANIFEST_LIMIT)
+    base = os.path.dirname(os.path.abspath(path))
+    tasks: List[Task] = []
+    if path.endswith(('.yaml', '.yml')):
+        doc = load_yaml(text, f'manifest {path}')
+        if isinstance(doc, dict) and 'robots' in doc:
+            doc = doc['robots']
+        if not isinstance(doc, list):
+            raise ManifestError(f'manifest {path}: a list of robots is needed')
+        for k, entry in enumerate(doc):
+            where = f'manifest {path}, robot {k + 1}'
+            if not isinstance(entry, dict):
+                raise ManifestError(f'{where}: a mapping (robot, urdf, bags) is needed')
+            patterns = entry.get('bags', entry.get('bag'))
+            if isinstance(patterns, str):
+                patterns = [patterns]
+            options = entry.get('options') or {}
+            if not isinstance(options, dict):
+                raise ManifestError(f'{where}: options must be a mapping')
+            tasks += _row(entry.get('robot'), entry.get('urdf'), patterns, options, base,
+                          where)
+    else:
+        try:
+            rows = list(csv.DictReader(io.StringIO(text.decode('utf-8'))))
+        except (UnicodeDecodeError, csv.Error) as err:
+            raise ManifestError(f'manifest {path}: not a CSV file ({err})') from None
+        for k, row in enumerate(rows):
+            where = f'manifest {path}, line {k + 2}'
+            options = {c: v for c, v in row.items() if c not in ('robot', 'urdf', 'bag')}
+            tasks += _row(row.get('robot'), row.get('urdf'), [row.get('bag')], options, base,
+                          where)
+    if not tasks:
+        raise ManifestError(f'manifest {path}: no bags')
+    return tasks
+
+
+def _is_bag_dir(path: str) -> bool:
+    return os.path.isfile(os.path.join(path, 'metadata.yaml'))
+
+
+def scan_folder(folder: str, urdf: Optional[str]) -> List[Task]:
+    """Return the tasks of a folder ``ROBOT/…/BAG`` (see the module's docstring)."""
+    tasks: List[Task] = []
+    for robot in sorted(os.listdir(folder)):
+        top = os.path.join(folder, robot)
+        if not os.path.isdir(top):
+            continue
+        own = os.path.join(top, 'robot.urdf')
+        robot_urdf = urdf or (own if os.path.isfile(own) else None)
+        found = []
+        for dirpath, dirnames, filenames in os.walk(top):
+            dirnames.sort()
+            if _is_bag_dir(dirpath):
+                found.append(dirpath)
+                dirnames[:] = []
+                continue
+            found += [os.path.join(dirpath, f) for f in sorted(filenames)
+                      if f.endswith(BAG_SUFFIXES)]
+        if not found:
+            continue
+        if robot_urdf is None:
+            raise ManifestError(f'robot {robot}: no --urdf and no {own}')
+        tasks += [Task(robot, robot_urdf, bag, {}) for bag in found]
+    if not tasks:
+        raise ManifestError(f'{folder}: no bags found in ROBOT/…/BAG')
+    return tasks
