@@ -77,6 +77,7 @@ def fleet_csv(folder):
         return f.read()
 
 
+@pytest.mark.slow
 def test_local_cluster_and_a_real_scheduler_equal_the_serial_run(fleet, tmp_path, capsys):
     pytest.importorskip('distributed')
     run([fleet, '--out', str(tmp_path / 's'), '--serial', '--no-plots'], capsys)
@@ -113,6 +114,7 @@ def test_local_cluster_and_a_real_scheduler_equal_the_serial_run(fleet, tmp_path
     assert fleet_csv(tmp_path / 'r') == fleet_csv(tmp_path / 's')
 
 
+@pytest.mark.slow
 def test_a_killed_worker_is_retried_and_the_results_are_the_same(fleet, tmp_path):
     pytest.importorskip('distributed')
     from distributed import Client, LocalCluster
