@@ -11,6 +11,8 @@ imports rclpy; ``node`` is the ROS 2 shell around it.
 """
 
 from .model import Frame, Model, with_payload
+from .base import (base_from_imu, base_from_odometry, BaseMotion, floating_twin,
+                   spatial_acceleration)
 from .algorithms.configuration import integrate
 from .algorithms.jacobian import jacobian
 from .algorithms.rnea import rnea_spatial
@@ -19,7 +21,8 @@ from .backends import (bias_torque, generalized_momentum, GRAVITY, gravity_torqu
 from .terms import armature_torque, clamp_to_effort_limits, friction_torque, per_joint
 from .urdf import URDFWarning
 
-__all__ = ['Frame', 'GRAVITY', 'Model', 'armature_torque', 'bias_torque',
+__all__ = ['BaseMotion', 'Frame', 'GRAVITY', 'Model', 'armature_torque', 'base_from_imu',
+           'base_from_odometry', 'bias_torque', 'floating_twin', 'spatial_acceleration',
            'clamp_to_effort_limits', 'friction_torque', 'generalized_momentum',
            'gravity_torque', 'integrate', 'jacobian', 'mass_matrix',
            'per_joint', 'regressor', 'rnea', 'rnea_spatial',
