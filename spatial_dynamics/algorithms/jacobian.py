@@ -59,6 +59,22 @@ def jacobian(model: Model, q, link: str, frame: str = 'local', *, base=None) -> 
     check_model(model)
     if frame not in FRAMES:
         raise ValueError(f'frame must be one of {list(FRAMES)}, got {frame!r}')
+    J, lX0 = local_jacobian(model, q, link)
+    if frame == 'world':
+        E = np.swapaxes(lX0[..., :3, :3], -1, -2)      # lX0 = [[E, 0], [-E r×, E]]: 0 ← l is Eᵀ
+        if base is not None and base.orientation is not None:
+            E = quaternion_matrix(base.orientation)[..., :, :] @ E     # world <- base <- link
+        J = np.concatenate([E @ J[..., :3, :], E @ J[..., 3:, :]], axis=-2)
+    return J
+
+
+def local_jacobian(model: Model, q, link: str) -> tuple[np.ndarray, np.ndarray]:
+    """Return ``(J, lX0)``: ``link``'s Jacobian in its own frame and its transform ``lX0``.
+
+    ``J`` (..., 6, nv) as :func:`jacobian` with ``frame='local'``; ``lX0`` (..., 6, 6) maps
+    motion vectors from base (body 0: the world of a floating base) to link coordinates, so
+    the link's orientation is ``lX0[:3, :3]ᵀ`` and its origin ``-E ᵀ`` of the lower block.
+    """
     at = model.frames.get(link)
     if at is None:
         raise ValueError(f'link {link!r} is not a link of {model.name!r}')
@@ -73,9 +89,4 @@ def jacobian(model: Model, q, link: str, frame: str = 'local', *, base=None) -> 
         J[..., :, kv:kv + NV[jt]] += mul * (lXi @ S_i)  # columns of joint i: lXi S_i
         lXi = lXi @ (XJ @ model.Xtree[i])               # lXλ(i) = lXi Xup_i
         i = model.parent[i]
-    if frame == 'world':
-        E = np.swapaxes(lXi[..., :3, :3], -1, -2)      # lX0 = [[E, 0], [-E r×, E]]: 0 ← l is Eᵀ
-        if base is not None and base.orientation is not None:
-            E = quaternion_matrix(base.orientation)[..., :, :] @ E     # world <- base <- link
-        J = np.concatenate([E @ J[..., :3, :], E @ J[..., 3:, :]], axis=-2)
-    return J
+    return J, lXi
