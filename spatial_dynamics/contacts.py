@@ -183,7 +183,7 @@ def _jacobian(model: Model, q: list, contacts: Sequence[Contact]) -> np.ndarray:
                 d = p_c - P[i]
                 if w >= row:
                     J[w:w + 3, kv:kv + 3] = Ri
-                J[w + 3:w + 6, kv:kv + 3] = np.cross(Ri.T, d).T     # -d× R = (R col) × d
+                J[w + 3:w + 6, kv:kv + 3] = _cross(Ri.T, d).T       # -d× R = (R col) × d
                 J[w + 3:w + 6, kv + 3:kv + 6] = Ri
             else:
                 pairs.append((w, i, p_c, c.kind == 'surface'))
@@ -197,7 +197,7 @@ def _jacobian(model: Model, q: list, contacts: Sequence[Contact]) -> np.ndarray:
         mul, kv = model.qmul[i], model.vidx[i]
         revolute = model.jtype[i] == REVOLUTE
         ang = (s * (mul * revolute)[:, None])
-        lin = np.where(revolute[:, None], np.cross(s, d), s) * mul[:, None]
+        lin = np.where(revolute[:, None], _cross(s, d), s) * mul[:, None]
         # J[w + a, kv] += ang[:, a] (surface contacts), J[w + 3 + a, kv] += lin[:, a]; a
         # mimic joint's column adds to its source's, so accumulate (bincount) rather than set
         a = np.arange(3)
@@ -206,6 +206,13 @@ def _jacobian(model: Model, q: list, contacts: Sequence[Contact]) -> np.ndarray:
         J += np.bincount(idx, np.r_[ang[surface].ravel(), lin.ravel()],
                          minlength=k * nv).reshape(k, nv)
     return J
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` over the last axis (np.cross without its axis bookkeeping)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
 
 
 def _Er(X: np.ndarray) -> tuple:
@@ -328,12 +335,22 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
     # contact-consistent: J_cᵀ = Q [R; 0], Q2ᵀ Sᵀ τ = Q2ᵀ b, λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
     w = np.sqrt(_weights(weights, n, 'joint'))
     Q, R = np.linalg.qr(Jc.T, mode='complete')
-    rank = int(np.sum(np.abs(np.diag(R)) > 1e-10 * max(1.0, np.abs(R).max()))) if len(Jc) else 0
+    d = np.abs(np.diagonal(R))
+    rank = int(np.sum(d > 1e-10 * max(1.0, d.max()))) if len(Jc) else 0
     Q1, Q2 = Q[:, :rank], Q[:, rank:]
-    tau = np.linalg.lstsq(Q2[6:].T / w, Q2.T @ b, rcond=None)[0] / w   # Q2ᵀ Sᵀ = Q2[6:]ᵀ
+    A, y = Q2[6:].T / w, Q2.T @ b                   # Q2ᵀ Sᵀ (τ / w) ... = Q2ᵀ b, Sᵀ = [0; 1]
+    try:        # the least-norm solution Aᵀ (A Aᵀ)⁻¹ y, A of full row rank (feasible base rows)
+        tau = A.T @ np.linalg.solve(A @ A.T, y) / w
+        if not np.allclose(A @ (tau * w), y, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(y).max())):
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:   # too few contacts to carry the base rows: least squares
+        tau = np.linalg.lstsq(A, y, rcond=None)[0] / w
     rest = b.copy()
     rest[6:] -= tau
-    lam = np.linalg.lstsq(Jc.T, rest, rcond=None)[0] if len(Jc) else Jc[:, 0]
+    if rank == len(Jc):             # λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
+        lam = np.linalg.solve(R[:rank], Q1.T @ rest)
+    else:                           # redundant contact rows: the least λ
+        lam = np.linalg.lstsq(Jc.T, rest, rcond=None)[0]
     return _result(contacts, b, Jc, tau, lam, 'torques', 'solved', rank)
 
 
