@@ -38,7 +38,8 @@ def main() -> None:
     qd, qdd = rng.normal(size=(2, model.nv)) * 0.1
     feet = [sd.Contact(f) for f in ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')]
     print(f'rnea (M q̈ + h):       {per_call(lambda: sd.rnea(model, q, qd, qdd)):8.1f} µs')
-    print(f'contact_jacobian:       {per_call(lambda: sd.contact_jacobian(model, q, feet)):8.1f} µs')
+    t = per_call(lambda: sd.contact_jacobian(model, q, feet))
+    print(f'contact_jacobian:       {t:8.1f} µs')
     for method in ('torques', 'forces', 'qp'):
         t = per_call(lambda: sd.contact_inverse_dynamics(model, q, qd, qdd, feet, method=method),
                      n=100 if method == 'qp' else 300)

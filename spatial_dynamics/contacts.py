@@ -209,7 +209,7 @@ def _jacobian(model: Model, q: list, contacts: Sequence[Contact]) -> np.ndarray:
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a × b`` over the last axis (np.cross without its axis bookkeeping)."""
+    """Return ``a × b`` over the last axis (np.cross without its axis bookkeeping)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)

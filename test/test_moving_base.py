@@ -106,7 +106,8 @@ def test_joint_rows_of_the_free_flyer(ur5, pin_ur5, backend):
                                            base=one), ref[k], rtol=1e-12, atol=1e-11)
     # gravity_torque and bias_torque: q̈ = 0 (and q̇ = 0) for the joints, the base moving
     zero = np.zeros((N, 6))
-    grav = np.array([pin.rnea(pm, pd, np.r_[0, 0, 0, quat[k], q[k]], to_pin(np.r_[v[k], 0 * qd[k]]),
+    grav = np.array([pin.rnea(pm, pd, np.r_[0, 0, 0, quat[k], q[k]],
+                              to_pin(np.r_[v[k], 0 * qd[k]]),
                               to_pin(np.r_[a[k], 0 * qd[k]]))[6:] for k in range(N)])
     np.testing.assert_allclose(sd.gravity_torque(ur5, q, backend=backend, base=base), grav,
                                rtol=1e-12, atol=1e-11)

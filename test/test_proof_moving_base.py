@@ -1,6 +1,6 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""The proof on the simulator: a UR5 on a prescribed moving base in MuJoCo, fed forward from an IMU.
+"""The proof on the simulator: a UR5 on a prescribed moving base in MuJoCo, fed from an IMU.
 
 ``python -m spatial_dynamics.tools.moving_base`` (2 s here): the base's acceleration in
 MuJoCo is the prescribed one, and the feed-forward of ``rnea(..., base=base_from_imu(...))``
