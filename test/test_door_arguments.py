@@ -87,7 +87,8 @@ def test_a_door_lets_go_of_a_collected_models_kernels():
 
 def duplicates(name):
     """Each way to give one of ``name``'s arguments twice: (positional, keywords)."""
-    parameters = list(inspect.signature(getattr(sd, name)).parameters.values())
+    parameters = [p for p in inspect.signature(getattr(sd, name)).parameters.values()
+                  if p.kind is not p.KEYWORD_ONLY]     # base=: by keyword only, never twice
     values = {'model': None, 'q': Z, 'qd': Z, 'qdd': Z, 'gravity': sd.GRAVITY,
               'f_ext': {'b': np.ones(6)}, 'backend': 'auto'}
     for k, twice in enumerate(parameters):

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arguments import as_joint_arrays, check_model
-from ..joints import jcalc, joint_coordinates, NV
+from ..joints import jcalc, joint_coordinates, NV, quaternion_matrix
 from ..model import Model
 
 #: Coordinates of :func:`jacobian`: the link's own frame, or the base (root link) axes with
@@ -26,7 +26,7 @@ from ..model import Model
 FRAMES = ('local', 'world')
 
 
-def jacobian(model: Model, q, link: str, frame: str = 'local') -> np.ndarray:
+def jacobian(model: Model, q, link: str, frame: str = 'local', *, base=None) -> np.ndarray:
     """Return the 6×nv Jacobian of ``link``'s frame: ``[ω; v] = J(q) q̇``, angular first.
 
     Args:
@@ -47,6 +47,10 @@ def jacobian(model: Model, q, link: str, frame: str = 'local') -> np.ndarray:
               (Pinocchio's ``LOCAL_WORLD_ALIGNED``; what KDL's ``ChainJntToJacSolver`` and
               MoveIt's ``getJacobian`` return, angular and linear rows swapped). Not
               Pinocchio's ``WORLD``, whose ``v`` is that of the point at the base origin.
+        base: a fixed-base model's :class:`~spatial_dynamics.base.BaseMotion`: with
+            ``frame='world'``, the rows are turned by its orientation into the world's axes
+            (the columns stay those of the joints: the base's own motion adds
+            ``lX0 v_base`` to the link's velocity).
 
     Returns:
         J, shape (..., 6, nv): rad/s and m/s per unit of q̇ (rows ``[ω; v]``, columns in the
@@ -55,6 +59,22 @@ def jacobian(model: Model, q, link: str, frame: str = 'local') -> np.ndarray:
     check_model(model)
     if frame not in FRAMES:
         raise ValueError(f'frame must be one of {list(FRAMES)}, got {frame!r}')
+    J, lX0 = local_jacobian(model, q, link)
+    if frame == 'world':
+        E = np.swapaxes(lX0[..., :3, :3], -1, -2)      # lX0 = [[E, 0], [-E r×, E]]: 0 ← l is Eᵀ
+        if base is not None and base.orientation is not None:
+            E = quaternion_matrix(base.orientation)[..., :, :] @ E     # world <- base <- link
+        J = np.concatenate([E @ J[..., :3, :], E @ J[..., 3:, :]], axis=-2)
+    return J
+
+
+def local_jacobian(model: Model, q, link: str) -> tuple[np.ndarray, np.ndarray]:
+    """Return ``(J, lX0)``: ``link``'s Jacobian in its own frame and its transform ``lX0``.
+
+    ``J`` (..., 6, nv) as :func:`jacobian` with ``frame='local'``; ``lX0`` (..., 6, 6) maps
+    motion vectors from base (body 0: the world of a floating base) to link coordinates, so
+    the link's orientation is ``lX0[:3, :3]ᵀ`` and its origin ``-E ᵀ`` of the lower block.
+    """
     at = model.frames.get(link)
     if at is None:
         raise ValueError(f'link {link!r} is not a link of {model.name!r}')
@@ -69,7 +89,4 @@ def jacobian(model: Model, q, link: str, frame: str = 'local') -> np.ndarray:
         J[..., :, kv:kv + NV[jt]] += mul * (lXi @ S_i)  # columns of joint i: lXi S_i
         lXi = lXi @ (XJ @ model.Xtree[i])               # lXλ(i) = lXi Xup_i
         i = model.parent[i]
-    if frame == 'world':
-        E = np.swapaxes(lXi[..., :3, :3], -1, -2)      # lX0 = [[E, 0], [-E r×, E]]: 0 ← l is Eᵀ
-        J = np.concatenate([E @ J[..., :3, :], E @ J[..., 3:, :]], axis=-2)
-    return J
+    return J, lXi

@@ -32,6 +32,7 @@ import numpy as np
 from . import compiled, layout, python
 from .layout import LAYOUTS
 from ..algorithms.arguments import as_joint_arrays, as_real_array, as_vector, f_ext_in_bodies
+from ..base import BaseMotion, floating_twin, twin_state
 from ..model import Model
 
 BACKENDS = ('auto', 'numpy', 'compiled')
@@ -98,7 +99,8 @@ def _check(backend: str) -> None:
 
 
 def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
-         f_ext: Optional[Mapping[str, np.ndarray]] = None, backend: str = 'auto') -> np.ndarray:
+         f_ext: Optional[Mapping[str, np.ndarray]] = None, backend: str = 'auto', *,
+         base: Optional[BaseMotion] = None) -> np.ndarray:
     """Joint torques/forces ``τ = M(q) q̈ + C(q, q̇) q̇ + g(q) - Σ Jᵀ f_ext`` (RBDA table 5.1).
 
     Args:
@@ -115,12 +117,18 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
             link and expressed in that link's frame; shape (6,) or broadcastable to (..., 6).
         backend: ``'auto'`` (compiled when the package was built with its kernels),
             ``'numpy'`` or ``'compiled'`` (float64 and float32; other dtypes run on numpy).
+        base: a fixed-base model's base motion (:class:`~spatial_dynamics.base.BaseMotion`:
+            its spatial velocity, spatial acceleration and orientation, batched like ``q``);
+            ``None``: the base is fixed. See :mod:`spatial_dynamics.base` for gravity.
 
     Returns:
         τ (N m or N), shape (..., nv): the broadcast batch shape; float64, or the inputs'
         floating dtype. A floating base's first six are the wrench ``[n; f]`` on the base,
         in its frame.
     """
+    if base is not None:
+        return _on_base(rnea, model, base, q, qd, qdd, gravity, f_ext=f_ext,
+                        backend=backend)[..., 6:]
     # no wrenches: None or an empty dict (anything else, validated by f_ext_in_bodies)
     no_wrench = f_ext is None or (type(f_ext) is dict and not f_ext)
     lay, kern, tau = _entered(model, backend, _c_rnea if no_wrench else None, q, qd, qdd,
@@ -155,13 +163,16 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
 
 
 def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
-                   backend: str = 'auto') -> np.ndarray:
+                   backend: str = 'auto', *, base: Optional[BaseMotion] = None) -> np.ndarray:
     """Generalized gravity ``g(q)``: the torque that holds the robot still at ``q``.
 
     ``rnea(model, q, 0, 0, gravity)``; the kernels then skip every velocity and acceleration
     product (see :func:`~spatial_dynamics.algorithms.rnea.rnea_kernel`). ``q`` of shape (n,)
-    or (..., n); returns τ of the same shape. Arguments as for :func:`rnea`.
+    or (..., n); returns τ of the same shape. Arguments as for :func:`rnea`; on a moving
+    ``base``, the torque that holds the joints still while the base moves.
     """
+    if base is not None:
+        return _on_base(rnea, model, base, q, None, None, gravity, backend=backend)[..., 6:]
     lay, kern, tau = _entered(model, backend, _c_gravity_torque, q, gravity)
     if tau is not None:
         return tau
@@ -173,12 +184,16 @@ def gravity_torque(model: Model, q, gravity: Sequence[float] = GRAVITY,
 
 
 def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
-                backend: str = 'auto') -> np.ndarray:
+                backend: str = 'auto', *, base: Optional[BaseMotion] = None) -> np.ndarray:
     """Bias forces ``C(q, q̇) q̇ + g(q)`` (Pinocchio's ``nonLinearEffects``): RNEA at q̈ = 0.
 
     ``q``, ``qd`` of shape (n,) or (..., n), broadcast; returns τ of the broadcast shape.
-    Arguments as for :func:`rnea`.
+    Arguments as for :func:`rnea`; on a moving ``base`` its motion is in the bias, and
+    ``rnea(q, q̇, q̈, base=b) = mass_matrix(q) q̈ + bias_torque(q, q̇, base=b)`` (``M`` does
+    not depend on the base's motion).
     """
+    if base is not None:
+        return _on_base(rnea, model, base, q, qd, None, gravity, backend=backend)[..., 6:]
     lay, kern, tau = _entered(model, backend, _c_bias_torque, q, qd, gravity)
     if tau is not None:
         return tau
@@ -224,7 +239,7 @@ def generalized_momentum(model: Model, q, qd, backend: str = 'auto') -> tuple:
 
 
 def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
-              backend: str = 'auto') -> np.ndarray:
+              backend: str = 'auto', *, base: Optional[BaseMotion] = None) -> np.ndarray:
     """Return the joint-torque regressor ``Y`` (..., n, 10·NB): ``rnea(...) = Y @ π``.
 
     ``π`` stacks the ten inertial parameters ``m, m c, Ī`` (:data:`~spatial_dynamics.
@@ -232,8 +247,11 @@ def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
     (:func:`~spatial_dynamics.algorithms.regressor.parameters` gives the model's own); see
     :mod:`spatial_dynamics.algorithms.regressor`. Arguments as for :func:`rnea` (no
     ``f_ext``: external wrenches do not depend on the inertias); float64, or the inputs'
-    floating dtype.
+    floating dtype. On a moving ``base`` the columns are those of the same bodies.
     """
+    if base is not None:
+        Y = _on_base(regressor, model, base, q, qd, qdd, gravity, backend=backend)
+        return Y[..., 6:, 10:]      # the twin's body 1 (the base) is none of model's bodies
     lay, kern, Y = _entered(model, backend, _c_regressor, q, qd, qdd, gravity)
     if Y is not None:
         return Y
@@ -245,6 +263,17 @@ def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
             return Y.reshape(q.shape[:-1] + Y.shape)
         return compiled.regressor(lay, q, qd, qdd, g)
     return python.regressor(lay.rows, q, qd, qdd, g)
+
+
+def _on_base(algorithm, model: Model, base: BaseMotion, q, qd, qdd, gravity, **options):
+    """Run ``algorithm`` for a fixed-base ``model`` on a moving ``base`` (all ``nv + 6`` rows).
+
+    The floating twin's (:func:`~spatial_dynamics.base.floating_twin`) with the base's rows
+    given by ``base``; the compiled kernels run it as any floating-base model.
+    """
+    twin = floating_twin(model)
+    q, qd, qdd, gravity = twin_state(model, base, q, qd, qdd, gravity)
+    return algorithm(twin, q, qd, qdd, gravity, **options)
 
 
 def _vector(x, n: int, what: str = 'q'):

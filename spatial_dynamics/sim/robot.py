@@ -86,19 +86,41 @@ def dynamics_only(xml: str) -> str:
     return ET.tostring(root, encoding='unicode')
 
 
-def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY):
+def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixed',
+                 imus: Optional[Mapping[str, tuple]] = None):
     """Load URDF text into MuJoCo as the URDF's rigid-body robot (see the module doc).
 
     No geometry, every link a body (``fusestatic`` off), ``dof_damping``,
     ``dof_frictionloss``, ``dof_armature`` and joint stiffness zero, every constraint
-    disabled, ``gravity`` (m/s², root-link coordinates). MuJoCo's joints keep their URDF
-    names; map them by name, never by position. ``ValueError`` when MuJoCo cannot load it.
+    disabled, ``gravity`` (m/s², root-link coordinates; world coordinates for a floating
+    base). MuJoCo's joints keep their URDF names; map them by name, never by position.
+    ``ValueError`` when MuJoCo cannot load it.
+
+    ``base='floating'``: the root link gets a free joint named ``'root_joint'`` (MuJoCo's
+    ``qpos`` position and quaternion **w x y z**, ``qvel`` the linear velocity in the world
+    frame then the angular velocity in the body frame). ``imus`` maps a name to ``(link,
+    position, quaternion x y z w)``: a site of that name at that pose in the link's frame,
+    with an accelerometer ``name + '_accelerometer'`` and a gyro ``name + '_gyro'``.
     """
     mujoco = import_mujoco()
+    if base not in ('fixed', 'floating'):
+        raise ValueError(f"base must be 'fixed' or 'floating', got {base!r}")
     try:
         spec = mujoco.MjSpec.from_string(dynamics_only(xml))
         spec.compiler.fusestatic = False
         spec.compiler.discardvisual = True
+        if base == 'floating':
+            spec.worldbody.first_body().add_freejoint(name='root_joint')
+        for name, (link, position, quat) in (imus or {}).items():
+            body = spec.body(link)
+            if body is None:
+                raise ValueError(f'imus[{name!r}]: no link {link!r}')
+            x, y, z, w = (float(c) for c in quat)
+            body.add_site(name=name, pos=[float(c) for c in position], quat=[w, x, y, z])
+            for kind, suffix in ((mujoco.mjtSensor.mjSENS_ACCELEROMETER, '_accelerometer'),
+                                 (mujoco.mjtSensor.mjSENS_GYRO, '_gyro')):
+                spec.add_sensor(name=name + suffix, type=kind,
+                                objtype=mujoco.mjtObj.mjOBJ_SITE, objname=name)
         m = spec.compile()
     except ValueError as err:
         raise ValueError(f'MuJoCo cannot load the URDF: {str(err).splitlines()[0]}') from None

@@ -1,0 +1,456 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Inverse dynamics of a floating-base robot in contact: joint torques **and** contact forces.
+
+A floating-base robot cannot push on its base with a motor: its equation of motion is::
+
+    M(q) q̈ + h(q, q̇) = Sᵀ τ + J_cᵀ λ,      Sᵀ = [0; 1] (the base's six rows have no motor)
+
+with ``J_c`` the Jacobian of the contact points (rows stacked, world axes) and ``λ`` their
+forces (or wrenches). ``M q̈ + h`` is one RNEA call (``rnea(model, q, q̇, q̈)``), so no ``M``
+is formed. Three ways to split it (:func:`contact_inverse_dynamics`):
+
+* **measured** contact forces (foot F/T sensors): ``τ = (M q̈ + h)_joints - J_c,jointsᵀ λ``,
+  and the base rows' residual ``(M q̈ + h)_base - J_c,baseᵀ λ`` says how consistent the
+  measurement is with the motion (zero for a perfect one);
+* **contact-consistent** (Mistry, Buchli & Schaal 2010; Righetti et al. 2013): the QR
+  decomposition ``J_cᵀ = [Q1 Q2] [R; 0]``; ``Q2ᵀ`` removes the contact forces, and the
+  minimum-norm (or ``W``-weighted) torques solve ``Q2ᵀ Sᵀ τ = Q2ᵀ (M q̈ + h)``; then
+  ``λ = R⁻¹ Q1ᵀ (M q̈ + h - Sᵀ τ)``. Or ``'forces'``: the least (weighted) contact forces
+  that carry the base rows, ``J_c,baseᵀ λ = (M q̈ + h)_base``, and the torques they leave;
+* **friction cones as a QP** (Clarabel, second-order cones: exact cones, no pyramid):
+  minimise ``½ τᵀ W τ + ½ ε |λ|²`` subject to all the rows of the equation and, per contact,
+  ``|f_t| ≤ μ f_n``; infeasible problems are reported, never answered with a base torque.
+
+Every answer says the base rows' residual (never a silent base torque) and which contacts
+violate their friction cone or pull on the ground, by how much (:class:`ContactResult`).
+
+Contacts (:class:`Contact`): a **point** contact on a link, at an offset in the link's frame,
+has a force ``f`` (3, world axes) at that point; a **surface** contact (a foot sole) has a
+wrench ``[n; f]`` (6, world axes, moment about the contact point). Each has a normal (world,
+default up) and a friction coefficient ``μ``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+import weakref
+from typing import Mapping, Optional, Sequence
+
+import numpy as np
+
+from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
+from .algorithms.rnea import xup_kernel
+from .backends import GRAVITY, layout, rnea
+from .joints import FREE_FLYER, REVOLUTE
+from .model import Model
+
+#: How :func:`contact_inverse_dynamics` splits the dynamics (see the module doc).
+METHODS = ('torques', 'forces', 'qp')
+KINDS = ('point', 'surface')
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A contact of a link with the environment.
+
+    Attributes:
+        link: a link of the model (lumped links too), by URDF name.
+        offset: the contact point in the link's frame (m).
+        kind: ``'point'`` (a force, 3 rows) or ``'surface'`` (a wrench, 6 rows).
+        normal: the contact normal in world axes, pointing into the robot (up for a floor).
+        mu: Coulomb friction coefficient (the cone's half-angle is ``atan(μ)``).
+        name: how results name it (the link's name by default).
+    """
+
+    link: str
+    offset: Sequence[float] = (0.0, 0.0, 0.0)
+    kind: str = 'point'
+    normal: Sequence[float] = (0.0, 0.0, 1.0)
+    mu: float = 0.7
+    name: str = ''
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f'contact {self.link!r}: kind must be one of {KINDS}, '
+                             f'got {self.kind!r}')
+        offset = as_real_array(f'contact {self.link!r} offset', self.offset).astype(float)
+        normal = as_real_array(f'contact {self.link!r} normal', self.normal).astype(float)
+        if offset.shape != (3,) or not np.isfinite(offset).all():
+            raise ValueError(f'contact {self.link!r}: offset must be 3 finite numbers (m), '
+                             f'got {self.offset}')
+        if normal.shape != (3,) or not np.linalg.norm(normal) > 0.0:
+            raise ValueError(f'contact {self.link!r}: normal must be a non-zero 3-vector, '
+                             f'got {self.normal}')
+        if not (np.isfinite(self.mu) and self.mu >= 0.0):
+            raise ValueError(f'contact {self.link!r}: mu must be a finite number >= 0, '
+                             f'got {self.mu}')
+        object.__setattr__(self, 'offset', offset)
+        object.__setattr__(self, 'normal', normal / np.linalg.norm(normal))
+        object.__setattr__(self, 'name', self.name or self.link)
+
+    @property
+    def rows(self) -> int:
+        """Rows of the contact in ``J_c`` and entries of its ``λ``: 3 (point) or 6 (surface)."""
+        return 3 if self.kind == 'point' else 6
+
+
+@dataclass(frozen=True)
+class Violation:
+    """A contact whose force breaks a condition: ``kind`` ``'unilateral'`` or ``'friction'``.
+
+    ``amount``: N by which the normal force is below zero (unilateral), or by which the
+    tangential force exceeds ``μ f_n`` (friction).
+    """
+
+    contact: str
+    kind: str
+    amount: float
+
+
+@dataclass
+class ContactResult:
+    """The answer of :func:`contact_inverse_dynamics` (one state).
+
+    Attributes:
+        tau: joint torques (N m, N), (nv - 6,), in ``model.joint_names[1:]``'s order.
+        forces: contact name -> its force (3,) or wrench ``[n; f]`` (6,), world axes, at the
+            contact point: what the environment exerts on the robot.
+        base_residual: ``(M q̈ + h - Sᵀ τ - J_cᵀ λ)`` of the base's six rows ``[n; f]`` (base
+            frame): the wrench on the base nothing provides (zero when consistent).
+        violations: each contact that pulls (``unilateral``) or slips (``friction``).
+        method: ``'measured'``, ``'torques'``, ``'forces'`` or ``'qp'``.
+        status: ``'solved'``, or why not (the QP's ``'infeasible'``, ...).
+        rank: the rank found of ``J_c`` (fewer than its rows: redundant contact rows).
+    """
+
+    tau: np.ndarray
+    forces: dict
+    base_residual: np.ndarray
+    violations: list = field(default_factory=list)
+    method: str = ''
+    status: str = 'solved'
+    rank: int = 0
+
+    @property
+    def feasible(self) -> bool:
+        """Solved, with the base rows met (1e-6 N, N m) and no contact violated."""
+        return (self.status == 'solved' and not self.violations
+                and bool(np.abs(self.base_residual).max() < 1e-6))
+
+    def summary(self) -> str:
+        """One line: the status, the base residual and each violation."""
+        parts = [f'{self.method}: {self.status}',
+                 f'base residual {np.abs(self.base_residual).max():.3g}']
+        parts += [f'{v.contact} {v.kind} by {v.amount:.3g} N' for v in self.violations]
+        return ', '.join(parts)
+
+
+def contact_jacobian(model: Model, q, contacts: Sequence[Contact]) -> np.ndarray:
+    """Return ``J_c`` (rows, nv): the contacts' rows stacked, world axes at the contact points.
+
+    A point contact's rows are the velocity of its point ``p_c``; a surface contact's
+    ``[ω; v_p]`` (Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame Jacobian at the point, angular
+    rows first). Column by column (RBDA eq. 4.10 in world axes): a revolute joint ``j`` on
+    the contact's path turns about ``s = R_j axis`` through ``p_j``, so its column is
+    ``[s; s × (p_c - p_j)]``; a prismatic one ``[0; s]``; the free-flyer's six are those of its
+    ``[ω; v]`` in the base frame, ``[R; -(p_c - p_b)× R]`` and ``[0; R]``.
+    """
+    check_model(model)
+    (q,) = as_joint_arrays(model, q)
+    if q.ndim != 1:
+        raise ValueError(f'contact_jacobian takes one state, got q of shape {q.shape}')
+    return _jacobian(model, q.tolist(), contacts)
+
+
+def _jacobian(model: Model, q: list, contacts: Sequence[Contact]) -> np.ndarray:
+    """:func:`contact_jacobian` of checked arguments, ``q`` a list of floats (one state)."""
+    nv = len(model.damping)
+    R, P = _placements(model, q)
+    k = sum(c.rows for c in contacts)
+    J = np.zeros((k, nv))
+    pairs, row = [], 0          # (row of the contact's ω, body) for the joints on each path
+    for c in contacts:
+        frame = model.frames[c.link]
+        i = b = frame.body
+        E_lb, r_lb = _Er(frame.lXb)
+        p_c = P[b] + R[b] @ (r_lb + E_lb.T @ c.offset)
+        w = row if c.kind == 'surface' else row - 3     # ω rows (skipped for a point)
+        while i > 0:
+            if model.jtype[i] == FREE_FLYER:
+                kv, Ri = model.vidx[i], R[i]
+                d = p_c - P[i]
+                if w >= row:
+                    J[w:w + 3, kv:kv + 3] = Ri
+                J[w + 3:w + 6, kv:kv + 3] = _cross(Ri.T, d).T       # -d× R = (R col) × d
+                J[w + 3:w + 6, kv + 3:kv + 6] = Ri
+            else:
+                pairs.append((w, i, p_c, c.kind == 'surface'))
+            i = model.parent[i]
+        row += c.rows
+    if pairs:
+        w, i, p_c, surface = zip(*pairs)
+        w, i, surface = np.array(w), np.array(i), np.array(surface)
+        s = np.einsum('nij,nj->ni', R[i], model.axis[i])       # joint axes, world
+        d = np.array(p_c) - P[i]
+        mul, kv = model.qmul[i], model.vidx[i]
+        revolute = model.jtype[i] == REVOLUTE
+        ang = (s * (mul * revolute)[:, None])
+        lin = np.where(revolute[:, None], _cross(s, d), s) * mul[:, None]
+        # J[w + a, kv] += ang[:, a] (surface contacts), J[w + 3 + a, kv] += lin[:, a]; a
+        # mimic joint's column adds to its source's, so accumulate (bincount) rather than set
+        a = np.arange(3)
+        idx = np.r_[((w[surface, None] + a) * nv + kv[surface, None]).ravel(),
+                    ((w[:, None] + 3 + a) * nv + kv[:, None]).ravel()]
+        J += np.bincount(idx, np.r_[ang[surface].ravel(), lin.ravel()],
+                         minlength=k * nv).reshape(k, nv)
+    return J
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Return ``a × b`` over the last axis (np.cross without its axis bookkeeping)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
+
+
+def _Er(X: np.ndarray) -> tuple:
+    """``(E, r)`` of a Plücker motion transform ``X = [[E, 0], [-E r×, E]]``."""
+    E = X[:3, :3]
+    rx = -E.T @ X[3:, :3]
+    return E, np.array([rx[2, 1], rx[0, 2], rx[1, 0]])
+
+
+def _skew(r: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def _placements(model: Model, q: list) -> tuple:
+    """Return every body's orientation ``R_i`` (world <- body) and origin ``p_i`` (world).
+
+    From the body transforms ``Xup_i = (E_i, r_i)`` of the one source
+    (:func:`~spatial_dynamics.algorithms.rnea.xup_kernel`): ``R_i = R_λ(i) E_iᵀ``,
+    ``p_i = p_λ(i) + R_λ(i) r_i``, for all bodies of one depth at once.
+    """
+    lay = layout.of(model)
+    rows = lay.rows
+    Xup = [None] * len(rows)
+    xup_kernel(rows, q, math, Xup)
+    Xup[0] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+    X = np.array(Xup)
+    Et, r = X[:, :9].reshape(-1, 3, 3).transpose(0, 2, 1), X[:, 9:]
+    R, P = np.empty((len(rows), 3, 3)), np.zeros((len(rows), 3))
+    R[0] = np.eye(3)
+    for bodies, parents in _depths(model):
+        Rp = R[parents]
+        R[bodies] = Rp @ Et[bodies]
+        P[bodies] = P[parents] + np.einsum('nij,nj->ni', Rp, r[bodies])
+    return R, P
+
+
+_levels: 'weakref.WeakKeyDictionary[Model, tuple]' = weakref.WeakKeyDictionary()
+
+
+def _depths(model: Model) -> tuple:
+    """Return ``((bodies, their parents), ...)`` by depth in the tree, once per model."""
+    levels = _levels.get(model)
+    if levels is None:
+        depth = [0] * (model.NB + 1)
+        for i in range(1, model.NB + 1):
+            depth[i] = depth[model.parent[i]] + 1
+        levels = tuple((np.array(b), model.parent[np.array(b)]) for b in (
+            [i for i in range(1, model.NB + 1) if depth[i] == d]
+            for d in range(1, max(depth) + 1)))
+        _levels[model] = levels
+    return levels
+
+
+def _contacts(model: Model, contacts) -> tuple:
+    """Check the model (floating) and the contacts; return the contacts as a tuple."""
+    check_model(model)
+    if not model.floating:
+        raise ValueError(f'{model.name!r} has a fixed base: contact inverse dynamics needs a '
+                         "floating base (Model.from_urdf(..., base='floating'))")
+    contacts = tuple(contacts)
+    names = set()
+    for c in contacts:
+        if not isinstance(c, Contact):
+            raise TypeError(f'contacts must be spatial_dynamics.Contact, got {type(c).__name__}')
+        if c.link not in model.frames:
+            raise ValueError(f'contact {c.name!r}: {c.link!r} is not a link of {model.name!r}')
+        if c.name in names:
+            raise ValueError(f'contact {c.name!r} is given twice (name contacts on one link)')
+        names.add(c.name)
+    return contacts
+
+
+def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contact],
+                             measured: Optional[Mapping[str, np.ndarray]] = None,
+                             method: str = 'torques', weights=None,
+                             gravity: Sequence[float] = GRAVITY,
+                             force_weight: float = 1e-6) -> ContactResult:
+    """Joint torques and contact forces that make a floating-base robot follow ``q̈``.
+
+    Args:
+        model: a floating-base model.
+        q, qd, qdd: one state (nq,), (nv,), (nv,): the desired base and joint accelerations.
+        contacts: the :class:`Contact` s in force.
+        measured: contact name -> measured force (3,) or wrench (6,) (world axes, at the
+            contact point) for every contact: τ directly, the base rows as a check.
+        method: without ``measured``: ``'torques'`` (contact-consistent, least ``τᵀ W τ``),
+            ``'forces'`` (least ``λᵀ W λ`` carrying the base rows) or ``'qp'`` (least
+            ``½ τᵀ W τ + ½ force_weight |λ|²`` inside the friction cones, Clarabel).
+        weights: ``W``, positive, one per joint (``'torques'``, ``'qp'``) or per contact row
+            (``'forces'``); default ones.
+        gravity: m/s², world coordinates.
+        force_weight: the QP's small weight on the contact forces (makes λ unique).
+
+    Returns:
+        a :class:`ContactResult`; ``ValueError`` for arguments that name no contact, model
+        or method, never a base torque in ``tau``.
+    """
+    contacts = _contacts(model, contacts)
+    q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
+    if q.ndim != 1:
+        raise ValueError(f'contact_inverse_dynamics takes one state, got q of shape {q.shape}')
+    if method not in METHODS:
+        raise ValueError(f'method must be one of {METHODS}, got {method!r}')
+    b = rnea(model, q, qd, qdd, gravity)               # M q̈ + h
+    Jc = contact_jacobian(model, q, contacts)
+    n = model.nv - 6
+    if measured is not None:
+        lam = _measured(contacts, measured)
+        return _result(contacts, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'measured', 'solved',
+                       np.linalg.matrix_rank(Jc) if len(Jc) else 0)
+    if method == 'qp':
+        return _qp(contacts, b, Jc, n, _weights(weights, n, 'joint'), force_weight)
+    if method == 'forces':
+        W = _weights(weights, len(Jc), 'contact row')
+        A = Jc[:, :6].T                                 # base rows: A λ = b_base
+        AWi = A / W
+        lam = AWi.T @ np.linalg.lstsq(AWi @ A.T, b[:6], rcond=None)[0] if len(Jc) else Jc[:, 0]
+        return _result(contacts, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'forces', 'solved',
+                       np.linalg.matrix_rank(Jc) if len(Jc) else 0)
+    # contact-consistent: J_cᵀ = Q [R; 0], Q2ᵀ Sᵀ τ = Q2ᵀ b, λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
+    w = np.sqrt(_weights(weights, n, 'joint'))
+    Q, R = np.linalg.qr(Jc.T, mode='complete')
+    d = np.abs(np.diagonal(R))
+    rank = int(np.sum(d > 1e-10 * max(1.0, d.max()))) if len(Jc) else 0
+    Q1, Q2 = Q[:, :rank], Q[:, rank:]
+    A, y = Q2[6:].T / w, Q2.T @ b                   # Q2ᵀ Sᵀ (τ / w) ... = Q2ᵀ b, Sᵀ = [0; 1]
+    try:        # the least-norm solution Aᵀ (A Aᵀ)⁻¹ y, A of full row rank (feasible base rows)
+        tau = A.T @ np.linalg.solve(A @ A.T, y) / w
+        if not np.allclose(A @ (tau * w), y, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(y).max())):
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:   # too few contacts to carry the base rows: least squares
+        tau = np.linalg.lstsq(A, y, rcond=None)[0] / w
+    rest = b.copy()
+    rest[6:] -= tau
+    if rank == len(Jc):             # λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
+        lam = np.linalg.solve(R[:rank], Q1.T @ rest)
+    else:                           # redundant contact rows: the least λ
+        lam = np.linalg.lstsq(Jc.T, rest, rcond=None)[0]
+    return _result(contacts, b, Jc, tau, lam, 'torques', 'solved', rank)
+
+
+def _weights(weights, size: int, what: str) -> np.ndarray:
+    """``weights`` as ``size`` positive numbers (ones by default); ``ValueError`` otherwise."""
+    if weights is None:
+        return np.ones(size)
+    w = np.broadcast_to(as_real_array('weights', weights).astype(float), (size,)) if np.ndim(
+        weights) == 0 else as_real_array('weights', weights).astype(float)
+    if w.shape != (size,) or not (np.isfinite(w).all() and (w > 0).all()):
+        raise ValueError(f'weights must be {size} positive numbers (one per {what}), got {w}')
+    return w
+
+
+def _measured(contacts, measured) -> np.ndarray:
+    """Stack the measured forces in the contacts' order; ``ValueError`` naming a missing one."""
+    if not isinstance(measured, Mapping):
+        raise TypeError('measured must map contact names to forces or wrenches, got '
+                        f'{type(measured).__name__}')
+    unknown = set(measured) - {c.name for c in contacts}
+    if unknown:
+        raise ValueError(f'measured: no contact named {sorted(unknown)}')
+    out = []
+    for c in contacts:
+        if c.name not in measured:
+            raise ValueError(f'measured: no force for contact {c.name!r}')
+        f = as_real_array(f'measured[{c.name!r}]', measured[c.name]).astype(float)
+        if f.shape != (c.rows,) or not np.isfinite(f).all():
+            raise ValueError(f'measured[{c.name!r}] must be {c.rows} finite numbers '
+                             f'({"[f]" if c.rows == 3 else "[n; f]"}, world axes), got {f}')
+        out.append(f)
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+def _result(contacts, b, Jc, tau, lam, method, status, rank) -> ContactResult:
+    """Assemble the result: forces by name, base residual, cone and unilateral checks."""
+    residual = b[:6] - Jc[:, :6].T @ lam
+    forces, violations, k = {}, [], 0
+    for c in contacts:
+        lam_c = lam[k:k + c.rows]
+        k += c.rows
+        forces[c.name] = lam_c
+        f = lam_c[-3:]
+        fn = float(c.normal @ f)
+        ft = float(np.linalg.norm(f - fn * c.normal))
+        if fn < 0.0:
+            violations.append(Violation(c.name, 'unilateral', -fn))
+        if ft > c.mu * max(fn, 0.0) + 1e-9 * max(1.0, abs(fn)):
+            violations.append(Violation(c.name, 'friction', ft - c.mu * max(fn, 0.0)))
+    return ContactResult(np.asarray(tau, dtype=float), forces, residual, violations, method,
+                         status, rank)
+
+
+def _tangents(normal: np.ndarray) -> tuple:
+    """Two unit vectors orthogonal to ``normal`` and to each other."""
+    t1 = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(normal, t1)
+
+
+def _qp(contacts, b, Jc, n, W, force_weight) -> ContactResult:
+    """Solve the friction-cone QP with Clarabel; see :func:`contact_inverse_dynamics`."""
+    try:
+        import clarabel
+        from scipy import sparse
+    except ImportError as err:
+        raise ImportError(f"method='qp' needs clarabel and scipy ({err}): pip install "
+                          'clarabel scipy') from None
+    k = len(Jc)
+    nx = n + k
+    if not (np.isfinite(force_weight) and force_weight > 0.0):
+        raise ValueError(f'force_weight must be a positive number, got {force_weight}')
+    P = sparse.diags(np.r_[W, np.full(k, force_weight)]).tocsc()
+    # equality (zero cone): [Sᵀ J_cᵀ] x = b, all nv rows
+    A_eq = np.zeros((len(b), nx))
+    A_eq[6:, :n] = np.eye(n)
+    A_eq[:, n:] = Jc.T
+    blocks, cones, row = [A_eq], [clarabel.ZeroConeT(len(b))], 0
+    for c in contacts:
+        t1, t2 = _tangents(c.normal)
+        G = np.zeros((3, nx))       # s = (μ n·f, t1·f, t2·f) in the second-order cone
+        j = n + row + c.rows - 3    # the force's entries of λ
+        G[0, j:j + 3], G[1, j:j + 3], G[2, j:j + 3] = c.mu * c.normal, t1, t2
+        blocks.append(-G)
+        cones.append(clarabel.SecondOrderConeT(3))
+        row += c.rows
+    A = sparse.csc_matrix(np.vstack(blocks))
+    rhs = np.r_[b, np.zeros(A.shape[0] - len(b))]
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    solution = clarabel.DefaultSolver(P, np.zeros(nx), A, rhs, cones, settings).solve()
+    status = str(solution.status)
+    x = np.array(solution.x)
+    if 'Solved' not in status or 'Almost' in status:
+        kind = ('infeasible: no contact forces inside the friction cones carry the base rows'
+                if 'Infeasible' in status else f'not solved ({status})')
+        nan = np.full(nx, np.nan)
+        result = _result(contacts, b, Jc, nan[:n], nan[n:], 'qp', kind, 0)
+        result.base_residual = b[:6].copy()     # nothing carries the base rows
+        result.violations = []
+        return result
+    return _result(contacts, b, Jc, x[:n], x[n:], 'qp', 'solved',
+                   int(np.linalg.matrix_rank(Jc)) if k else 0)

@@ -1,0 +1,235 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Inverse dynamics on contacts: ``M q̈ + h = Sᵀ τ + J_cᵀ λ`` for a floating-base robot.
+
+Oracles: Pinocchio's frame Jacobians (``LOCAL_WORLD_ALIGNED`` at a frame placed at the contact
+point) and ``pin.rnea``; physics: Solo12 standing on four feet and Talos on two soles carry
+their weight (the contact forces sum to ``m g``), the base rows hold to 1e-9, the torques are
+``rnea - J_cᵀ λ``; the friction-cone QP (Clarabel) stays inside the cones or says it cannot.
+"""
+
+import os
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from conftest import robot_urdf_path  # noqa: E402
+import spatial_dynamics as sd  # noqa: E402
+
+pin = pytest.importorskip('pinocchio')
+FEET = ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')
+SOLES = ('left_sole_link', 'right_sole_link')
+
+
+def to_pin(x):
+    """Our velocity ([ω; v] first) to Pinocchio's free-flyer order ([v; ω] first)."""
+    return np.concatenate([x[..., 3:6], x[..., 0:3], x[..., 6:]], axis=-1)
+
+
+@pytest.fixture(scope='module')
+def solo():
+    path = robot_urdf_path('solo12')
+    pm = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())
+    return sd.Model.from_urdf(path, base='floating'), pm
+
+
+@pytest.fixture(scope='module')
+def talos():
+    path = robot_urdf_path('talos_reduced')
+    pm = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())
+    return sd.Model.from_urdf(path, base='floating'), pm
+
+
+def mass(model):
+    return model.inertia[:, 3, 3].sum()
+
+
+def standing_solo(model):
+    """Solo12 on its four feet, knees bent, its trunk tilted a little (q, nq)."""
+    q = np.zeros(model.nq)
+    q[2], q[3:7] = 0.25, np.array([0.02, -0.03, 0.01, 1.0]) / np.sqrt(1.0014)
+    for k, name in enumerate(model.joint_names[1:]):
+        front = name.startswith('F')
+        q[7 + k] = {'HAA': 0.05, 'HFE': 0.8 if front else -0.8,
+                    'KFE': -1.6 if front else 1.6}[name[3:]]
+    return q
+
+
+def pin_contact_jacobian(pm, q, contacts):
+    """``J_c`` from Pinocchio: a frame at each contact point, LOCAL_WORLD_ALIGNED, [ω; v]."""
+    pm = pm.copy()
+    ids = []
+    for c in contacts:
+        parent = pm.frames[pm.getFrameId(c.link)]
+        placement = parent.placement * pin.SE3(np.eye(3), np.array(c.offset))
+        ids.append(pm.addFrame(pin.Frame(f'{c.name}_point', parent.parentJoint, parent.parentFrame
+                                         if hasattr(parent, 'parentFrame') else 0, placement,
+                                         pin.FrameType.OP_FRAME)))
+    pd = pm.createData()
+    pin.computeJointJacobians(pm, pd, q)
+    pin.framesForwardKinematics(pm, pd, q)
+    rows = []
+    for c, i in zip(contacts, ids):
+        J = to_pin(pin.getFrameJacobian(pm, pd, i, pin.LOCAL_WORLD_ALIGNED))  # our columns
+        J = np.r_[J[3:], J[:3]]                                               # rows [ω; v]
+        rows.append(J[3:] if c.kind == 'point' else J)
+    return np.vstack(rows)
+
+
+def test_contact_jacobian_against_pinocchio(solo, talos):
+    rng = np.random.default_rng(0)
+    for model, pm, links in ((*solo, FEET), (*talos, SOLES)):
+        q = rng.normal(size=model.nq) * 0.5
+        q[3:7] /= np.linalg.norm(q[3:7])
+        contacts = [sd.Contact(link, offset=rng.normal(size=3) * 0.05,
+                               kind=('point', 'surface')[k % 2]) for k, link in enumerate(links)]
+        np.testing.assert_allclose(sd.contact_jacobian(model, q, contacts),
+                                   pin_contact_jacobian(pm, q, contacts), atol=1e-12)
+
+
+@pytest.mark.parametrize('method', ['torques', 'forces', 'qp'])
+def test_solo12_standing_carries_its_weight(solo, method):
+    model, pm = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f, offset=(0.0, 0.0, -0.0)) for f in FEET]
+    r = sd.contact_inverse_dynamics(model, q, zero, zero, feet, method=method)
+    assert r.status == 'solved' and r.feasible, r.summary()
+    total = sum(r.forces.values())
+    np.testing.assert_allclose(total, [0.0, 0.0, mass(model) * 9.81], atol=1e-9)
+    assert np.abs(r.base_residual).max() < 1e-9
+    # τ = rnea - J_cᵀ λ, all from Pinocchio
+    lam = np.concatenate([r.forces[f] for f in FEET])
+    pd = pm.createData()
+    b = pin.rnea(pm, pd, q, np.zeros(pm.nv), np.zeros(pm.nv))
+    Jc = pin_contact_jacobian(pm, q, feet)
+    np.testing.assert_allclose(r.tau, b[6:] - (Jc.T @ lam)[6:], rtol=1e-10, atol=1e-10)
+
+
+def test_talos_on_two_soles_carries_its_weight(talos):
+    model, pm = talos
+    q = np.zeros(model.nq)
+    q[2], q[6] = 1.02, 1.0
+    zero = np.zeros(model.nv)
+    soles = [sd.Contact(s, kind='surface', mu=0.8) for s in SOLES]
+    for method in ('torques', 'forces', 'qp'):
+        r = sd.contact_inverse_dynamics(model, q, zero, zero, soles, method=method)
+        assert r.feasible, r.summary()
+        total = sum(w[3:] for w in r.forces.values())
+        np.testing.assert_allclose(total, [0.0, 0.0, mass(model) * 9.81], atol=1e-8)
+        assert np.abs(r.base_residual).max() < 1e-9
+        lam = np.concatenate([r.forces[s] for s in SOLES])
+        b = pin.rnea(pm, pm.createData(), q, np.zeros(pm.nv), np.zeros(pm.nv))
+        Jc = pin_contact_jacobian(pm, q, soles)
+        np.testing.assert_allclose(r.tau, b[6:] - (Jc.T @ lam)[6:], rtol=1e-9, atol=1e-9)
+
+
+def test_contact_consistent_torques_are_the_least_torques(solo):
+    # Moving (q̇, q̈ random): every torque that meets the equation with some λ is
+    # τ* + (null space of Q2ᵀ Sᵀ); τ* is the shortest of them.
+    model, pm = solo
+    rng = np.random.default_rng(1)
+    q = standing_solo(model)
+    qd, qdd = rng.normal(size=(2, model.nv))
+    feet = [sd.Contact(f) for f in FEET]
+    r = sd.contact_inverse_dynamics(model, q, qd, qdd, feet)
+    assert np.abs(r.base_residual).max() < 1e-9
+    Jc = sd.contact_jacobian(model, q, feet)
+    b = sd.rnea(model, q, qd, qdd)
+    lam = np.concatenate([r.forces[f] for f in FEET])
+    np.testing.assert_allclose(np.r_[np.zeros(6), r.tau] + Jc.T @ lam, b, atol=1e-9)
+    # another solution: λ + δ with J_c,baseᵀ δ = 0 changes τ by -J_c,jointsᵀ δ; never shorter
+    null = np.linalg.svd(Jc[:, :6].T)[2][6:]
+    for delta in rng.normal(size=(20, null.shape[0])) @ null:
+        assert np.linalg.norm(r.tau - Jc[:, 6:].T @ delta) >= np.linalg.norm(r.tau) - 1e-12
+
+
+def test_measured_contact_forces(solo):
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f) for f in FEET]
+    solved = sd.contact_inverse_dynamics(model, q, zero, zero, feet)
+    r = sd.contact_inverse_dynamics(model, q, zero, zero, feet, measured=solved.forces)
+    np.testing.assert_allclose(r.tau, solved.tau, atol=1e-10)
+    assert r.method == 'measured' and np.abs(r.base_residual).max() < 1e-9
+    # a sensor reading 5 N too little upwards on one foot: the base rows miss 5 N (base frame)
+    wrong = dict(solved.forces, FL_FOOT=solved.forces['FL_FOOT'] - [0.0, 0.0, 5.0])
+    r = sd.contact_inverse_dynamics(model, q, zero, zero, feet, measured=wrong)
+    R = sd.joints.quaternion_matrix(q[3:7])
+    np.testing.assert_allclose(R @ r.base_residual[3:], [0.0, 0.0, 5.0], atol=1e-9)
+    assert not r.feasible
+
+
+def test_friction_violations_are_reported(solo):
+    # A slippery floor (μ = 0.1): the least torques lean on the feet sideways; the result names
+    # each foot that slips and by how much.
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f, mu=0.1) for f in FEET]
+    r = sd.contact_inverse_dynamics(model, q, zero, zero, feet)
+    assert {v.contact for v in r.violations} == set(FEET)
+    for v in r.violations:
+        f = r.forces[v.contact]
+        assert v.kind == 'friction'
+        assert v.amount == pytest.approx(np.hypot(f[0], f[1]) - 0.1 * f[2], abs=1e-12)
+    # the cone QP finds forces inside the cones for the same stance
+    qp = sd.contact_inverse_dynamics(model, q, zero, zero, feet, method='qp')
+    assert qp.feasible, qp.summary()
+    for f in qp.forces.values():
+        assert np.hypot(f[0], f[1]) <= 0.1 * f[2] * (1 + 1e-6)
+
+
+def test_qp_reports_infeasibility(solo):
+    # Asking the trunk to accelerate sideways at 3 m/s² on ice (μ = 0.05): no forces in the
+    # cones can push it, and the answer says so instead of returning a base torque.
+    model, _ = solo
+    q = standing_solo(model)
+    qdd = np.zeros(model.nv)
+    qdd[4] = 3.0
+    feet = [sd.Contact(f, mu=0.05) for f in FEET]
+    r = sd.contact_inverse_dynamics(model, q, np.zeros(model.nv), qdd, feet, method='qp')
+    assert 'infeasible' in r.status and not r.feasible
+    assert np.isnan(r.tau).all()
+    assert np.abs(r.base_residual).max() > 1.0
+
+
+def test_unilateral_violation_is_reported(solo):
+    # Pulling the trunk down faster than gravity: the feet would have to pull on the floor.
+    model, _ = solo
+    q = standing_solo(model)
+    qdd = np.zeros(model.nv)
+    qdd[5] = -20.0
+    feet = [sd.Contact(f) for f in FEET]
+    r = sd.contact_inverse_dynamics(model, q, np.zeros(model.nv), qdd, feet)
+    kinds = {(v.contact, v.kind) for v in r.violations}
+    assert {(f, 'unilateral') for f in FEET} <= kinds
+    for v in r.violations:
+        if v.kind == 'unilateral':
+            assert v.amount == pytest.approx(-r.forces[v.contact][2], abs=1e-12)
+
+
+def test_bad_contact_arguments_are_refused(solo):
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    fixed = sd.Model.from_urdf(robot_urdf_path('solo12'))
+    with pytest.raises(ValueError, match='fixed base'):
+        sd.contact_inverse_dynamics(fixed, q[7:], zero[6:], zero[6:], [sd.Contact('FL_FOOT')])
+    with pytest.raises(ValueError, match="'nowhere' is not a link"):
+        sd.contact_inverse_dynamics(model, q, zero, zero, [sd.Contact('nowhere')])
+    with pytest.raises(ValueError, match='kind must be one of'):
+        sd.Contact('FL_FOOT', kind='line')
+    with pytest.raises(ValueError, match='mu must be'):
+        sd.Contact('FL_FOOT', mu=-1)
+    with pytest.raises(ValueError, match="no force for contact 'FR_FOOT'"):
+        sd.contact_inverse_dynamics(model, q, zero, zero,
+                                    [sd.Contact('FL_FOOT'), sd.Contact('FR_FOOT')],
+                                    measured={'FL_FOOT': [0, 0, 1.0]})
+    with pytest.raises(ValueError, match='method must be one of'):
+        sd.contact_inverse_dynamics(model, q, zero, zero, [sd.Contact('FL_FOOT')],
+                                    method='magic')
