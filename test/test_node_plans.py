@@ -191,7 +191,7 @@ def round_trips_until(driver, io, loop, n, done, start_ns):
 
 @pytest.fixture
 def small_bounds_node(install, tmp_path):
-    """The node with small plan bounds, so a plan beyond them is cheap to send here."""
+    """Start the node with small plan bounds, so a plan beyond them is cheap to send here."""
     proc = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
                                  '-p', 'input_timeout:=0.5',
                                  '-p', f'trajectory_max_bytes:={MAX_BYTES}',
