@@ -2,8 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """spatial_dynamics: inverse dynamics (RNEA) on Featherstone's spatial vector algebra.
 
-The core (``spatial``, ``joints``, ``model``, ``rnea``) is plain Python + numpy and never
-imports rclpy; ``node`` is the ROS 2 shell around it.
+The core (``spatial``, ``joints``, ``model``, ``urdf``, ``algorithms``, ``backends``) is
+plain Python + numpy (lxml for the URDF) and never imports rclpy; ``ros`` is the ROS 2 shell
+around it (the ``inverse_dynamics`` node), ``sim`` the simulated robot, ``replay`` the
+recorded data against the model, ``tools`` the demos and measurements on top of all of them.
 
     >>> import spatial_dynamics as sd
     >>> model = sd.Model.from_urdf('robot.urdf')          # doctest: +SKIP

@@ -106,3 +106,91 @@ def test_imports_run_one_way(name, path):
         if RANKS[there] > RANKS[here]:
             wrong.append(f'{module} (layer {there!r} is above {here!r})')
     assert not wrong, f'{name or "spatial_dynamics"} imports: {wrong}'
+
+
+def module_of(target: str, known) -> str:
+    """Return the module ``target`` names: itself, or the module an attribute is taken from."""
+    while target not in known and '.' in target:
+        target = target.rsplit('.', 1)[0]
+    return target
+
+
+def import_graph() -> dict:
+    """Return {module: the modules of the package it imports} (inside functions too).
+
+    A module's own packages are left out: Python imports them before the module itself,
+    whatever it writes (``from . import compiled`` names its package only as the place).
+    """
+    known = {name for name, _ in modules()}
+    graph = {}
+    for name, path in modules():
+        parents = {'.'.join(name.split('.')[:i]) for i in range(len(name.split('.')))}
+        edges = set()
+        for module in imports(name, path):
+            target = inside(module)
+            if target is None:
+                continue
+            target = module_of(target, known)
+            if target in known and target != name and target not in parents:
+                edges.add(target)
+        graph[name] = edges
+    return graph
+
+
+def cycles(graph: dict) -> list:
+    """Return the import cycles of ``graph``: its strongly connected parts of two or more.
+
+    Tarjan's algorithm, iterative; each part sorted, the parts sorted.
+    """
+    index, low, stack, on_stack, found = {}, {}, [], set(), []
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            v, edges = work[-1]
+            w = next(edges, None)
+            if w is not None:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on_stack.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                elif w in on_stack:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                part = []
+                while True:
+                    w = stack.pop()
+                    on_stack.discard(w)
+                    part.append(w)
+                    if w == v:
+                        break
+                if len(part) > 1:
+                    found.append(sorted(part))
+    return sorted(found)
+
+
+def test_cycles_are_found():
+    graph = {'a': {'b'}, 'b': {'c'}, 'c': {'a'}, 'd': {'a'}, 'e': {'e'}}
+    assert cycles(graph) == [['a', 'b', 'c']]
+    assert cycles({'a': {'b'}, 'b': set()}) == []
+
+
+def test_no_module_imports_one_that_imports_it_back():
+    """No import cycle between modules, lazy or under TYPE_CHECKING (all are read here).
+
+    A cycle makes the two modules one layer in disguise: neither can be read, tested or
+    imported first on its own. The one exception is :data:`ALLOWED_UPWARD` (inside a method).
+    """
+    graph = import_graph()
+    for low_module, high_module in ALLOWED_UPWARD:
+        graph[low_module].discard(high_module)
+    assert cycles(graph) == []

@@ -180,7 +180,7 @@ def test_on_set_only_validates_and_post_set_applies():
     node = InverseDynamicsNode(context=context)
     try:
         assert set(PARAMETER_NAMES) <= set(node._parameters)
-        output = node.output
+        robot = node.robot
         gravity = [Parameter('gravity', value=[0.0, -9.81, 0.0])]
         assert node._on_set_parameters(gravity).successful
         assert node.config.params.gravity == (0.0, 0.0, -9.81)
@@ -188,21 +188,21 @@ def test_on_set_only_validates_and_post_set_applies():
         node._on_parameters_set([Parameter('gravity', value=[0.0, -9.81, 0.0])])  # not it
         assert node.config.params.gravity == (0.0, 0.0, -9.81)
         node._on_parameters_set(gravity)
-        assert node.config.params.gravity == (0.0, -9.81, 0.0) and node.output.base is output.base
+        assert node.config.params.gravity == (0.0, -9.81, 0.0) and node.robot.base is robot.base
         # a description by parameter: validated (parsed) in on-set, swapped in post-set
         with open(PENDULUM_URDF) as f:
             text = f.read()
         change = [Parameter('robot_description', value=text)]
-        output = node.output
+        robot = node.robot
         assert node._on_set_parameters(change).successful
-        assert node.output is output and node.config.params.robot_description == ''
+        assert node.robot is robot and node.config.params.robot_description == ''
         node._on_parameters_set(change)
-        assert node.output.model.name == 'pendulum' and node.output.source == \
+        assert node.robot.model.name == 'pendulum' and node.robot.source == \
             'parameter robot_description'
         # through rclpy: both callbacks, in order; a refused change leaves all as it was
-        output = node.output
+        robot = node.robot
         assert not node.set_parameters([Parameter('payload.mass', value=-1.0)])[0].successful
-        assert node.output is output and node._pending is None
+        assert node.robot is robot and node._pending is None
         assert node.set_parameters([Parameter('gravity', value=[0.0, 0.0, -1.0])])[0].successful
         assert node.config.params.gravity == (0.0, 0.0, -1.0) and node._pending is None
     finally:

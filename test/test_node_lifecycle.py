@@ -295,10 +295,10 @@ def test_qos_override_changes_its_own_topic_only():
         subscriptions = {s.topic_name: s.qos_profile for s in node.subscriptions}
         publishers = {p.topic_name: p.qos_profile for p in node.publishers}
         assert subscriptions['/qos_test/desired_joint_states'].depth == 5
-        assert subscriptions['/qos_test/desired_trajectory'].depth == 1
-        for qos in (subscriptions['/qos_test/desired_joint_states'],
-                    subscriptions['/qos_test/desired_trajectory']):
-            assert qos.reliability == ReliabilityPolicy.BEST_EFFORT
+        assert subscriptions['/qos_test/desired_joint_states'].reliability == \
+            ReliabilityPolicy.BEST_EFFORT
+        plans = subscriptions['/qos_test/desired_trajectory']   # plan_qos(), untouched
+        assert (plans.depth, plans.reliability) == (10, ReliabilityPolicy.RELIABLE)
         assert publishers['/qos_test/effort_commands'].depth == 3
         assert publishers['/qos_test/feedforward_efforts'].depth == 10
         for topic in ('/qos_test/effort_commands', '/qos_test/feedforward_efforts'):

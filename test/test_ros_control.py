@@ -111,22 +111,22 @@ def test_prepare_checks_modes_and_gains(model):
     params = defaults(robot_description=text)
     cfg = config.prepare({}, params, None)
     assert (cfg.params.control_mode, cfg.params.output) == ('feedforward', 'full')
-    np.testing.assert_array_equal(cfg.output.gains.kp, np.zeros(len(model.joint_names)))
+    np.testing.assert_array_equal(cfg.robot.gains.kp, np.zeros(len(model.joint_names)))
     cfg = config.prepare(cfg.params, {'control_mode': 'pd_feedforward', 'output': 'none',
-                                      'kp': [100.0], 'measured_timeout': 0.2}, cfg.output)
+                                      'kp': [100.0], 'measured_timeout': 0.2}, cfg.robot)
     assert (cfg.params.control_mode, cfg.params.output, cfg.params.measured_timeout) == \
         ('pd_feedforward', 'none', 0.2)
-    np.testing.assert_array_equal(cfg.output.gains.kp, np.full(len(model.joint_names), 100.0))
+    np.testing.assert_array_equal(cfg.robot.gains.kp, np.full(len(model.joint_names), 100.0))
     # then back to feedforward while output is none: refused, naming both
     with pytest.raises(ConfigError, match="output 'none' and control_mode 'feedforward'"):
-        config.prepare(cfg.params, {'control_mode': 'feedforward'}, cfg.output)
+        config.prepare(cfg.params, {'control_mode': 'feedforward'}, cfg.robot)
     with pytest.raises(ConfigError, match='parameter kp: 3 values'):
-        config.prepare(cfg.params, {'kp': [1.0, 2.0, 3.0]}, cfg.output)
+        config.prepare(cfg.params, {'kp': [1.0, 2.0, 3.0]}, cfg.robot)
     # a description with another joint count is refused while kp has one value per joint
-    per_joint = config.prepare(cfg.params, {'kp': [1.0] * 8}, cfg.output)
+    per_joint = config.prepare(cfg.params, {'kp': [1.0] * 8}, cfg.robot)
     with pytest.raises(ConfigError, match='parameter kp: 8 values for the 1 joints'):
         config.prepare(per_joint.params, {'robot_description': open(
-            os.path.join(ROOT, 'config', 'pendulum.urdf')).read()}, per_joint.output)
+            os.path.join(ROOT, 'config', 'pendulum.urdf')).read()}, per_joint.robot)
     # without a model, what needs none is checked
     with pytest.raises(ConfigError, match='parameter kd'):
         config.prepare({}, defaults(kd=[-1.0]), None)
@@ -299,32 +299,35 @@ def test_each_term_is_its_part_of_the_dynamics(model):
 
 def test_feedback_status_names_the_stale_measured_state(model):
     text = open(DEMO_URDF).read()
-    out = config.prepare({}, defaults(robot_description=text), None).output
+    robot = config.prepare({}, defaults(robot_description=text), None).robot
     totals, window = diagnostics.Totals(), diagnostics.Window()
     now = window.start_ns + 2_000_000_000
     table = config.PARAMETERS
     settings = table.changed(table.defaults(),
                              {'control_mode': 'pd_feedforward', 'measured_timeout': 0.1})
-    level, message, values = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, values = diagnostics.feedforward_status(robot, window, totals, settings,
+                                                            {}, now)
     assert level == 'ERROR' and 'no measured state' in message
     totals.last_measured_ns = now - 50_000_000
-    level, message, _ = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, _ = diagnostics.feedforward_status(robot, window, totals, settings, {}, now)
     assert level == 'ERROR' and 'no desired state' in message
     totals.last_desired_ns = now - 10_000_000
     window.received = window.answered = 10
-    level, message, values = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, values = diagnostics.feedforward_status(robot, window, totals, settings,
+                                                            {}, now)
     assert (level, message) == ('OK', '5.0 Hz')
     assert dict(values)['control mode'] == 'pd_feedforward'
     totals.last_measured_ns = now - 200_000_000
-    level, message, values = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, values = diagnostics.feedforward_status(robot, window, totals, settings,
+                                                            {}, now)
     assert level == 'ERROR' and message.startswith('measured state stale'), message
     assert dict(values)['measured state stale'] == 'True'
     totals.last_measured_ns = now
     totals.last_desired_ns = now - 600_000_000
-    level, message, _ = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, _ = diagnostics.feedforward_status(robot, window, totals, settings, {}, now)
     assert level == 'ERROR' and message.startswith('desired state stale'), message
     # feedforward ignores the measured state
     settings = config.PARAMETERS.defaults()
     totals.last_input_ns = now
-    level, message, _ = diagnostics.feedforward_status(out, window, totals, settings, {}, now)
+    level, message, _ = diagnostics.feedforward_status(robot, window, totals, settings, {}, now)
     assert level == 'OK'

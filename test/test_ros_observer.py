@@ -24,7 +24,7 @@ from conftest import robot_urdf_path  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.ros.inputs import InputError  # noqa: E402
 from spatial_dynamics.ros.observer import (  # noqa: E402
-    check_observer_gain, check_warn, EstimateWindow, MAX_OBSERVER_GAIN, measured_effort,
+    check_warn, EstimateWindow, MAX_OBSERVER_GAIN, measured_effort,
     MomentumObserver, ObserverError, sample_time)
 from spatial_dynamics.tools.closed_loop import gains, start_point, Trajectory  # noqa: E402
 
@@ -199,11 +199,20 @@ def test_at_rest_holding_gravity_the_estimate_is_the_extra_torque():
     assert r == pytest.approx(extra, rel=1e-4)
 
 
-def test_parameters_and_measured_effort_refused_with_the_reason():
-    assert check_observer_gain(0.0) == 0.0 and check_observer_gain(20) == 20.0
+def test_the_observer_gain_is_checked_by_its_table_entry_alone():
+    """``observer_gain``'s bounds are written once, in the node's table: no second check."""
+    from spatial_dynamics.ros import config, observer
+    from spatial_dynamics.ros.parameters import ConfigError
+    defaults = config.PARAMETERS.defaults()
+    for good in (0.0, 20, MAX_OBSERVER_GAIN):
+        assert config.PARAMETERS.changed(defaults, {'observer_gain': good}).observer_gain == good
     for bad in (-1.0, math.nan, math.inf, MAX_OBSERVER_GAIN * 1.01):
-        with pytest.raises(ObserverError, match='observer_gain'):
-            check_observer_gain(bad)
+        with pytest.raises(ConfigError, match='observer_gain'):
+            config.PARAMETERS.changed(defaults, {'observer_gain': bad})
+    assert not hasattr(observer, 'check_observer_gain')
+
+
+def test_parameters_and_measured_effort_refused_with_the_reason():
     names = ('a', 'b', 'c')
     assert check_warn(names, [5.0]).tolist() == [5.0] * 3
     assert check_warn(names, [1.0, 2.0, 3.0]).tolist() == [1.0, 2.0, 3.0]

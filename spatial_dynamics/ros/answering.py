@@ -4,13 +4,14 @@
 
 :class:`Answering` holds what lives between messages (the held desired state, the followed
 trajectory, the external wrenches, the observer, the counters of diagnostics), checks each
-message against the current :class:`~spatial_dynamics.ros.config.Config` (read once per
-message: a parameter change swaps the whole of it) and hands each answer to the node's
-``publish``. It reads the fields of the message types (``sensor_msgs/JointState``,
-``trajectory_msgs/JointTrajectory``, ``geometry_msgs/WrenchStamped``) and never imports
-rclpy; the node (:mod:`spatial_dynamics.ros.node`) does the ROS part. All of it runs in the
-node's ``inputs`` callback group, one message at a time; what a plan costs in proportion to
-its size (its conversion and checks, its effort for JTC) runs elsewhere (:mod:`.plans`).
+message against the current :class:`~spatial_dynamics.ros.records.Config` (read once per
+message: a parameter change swaps the whole of it) and returns what to publish (an
+:class:`Out`): the node only publishes it. It reads the fields of the message types
+(``sensor_msgs/JointState``, ``trajectory_msgs/JointTrajectory``,
+``geometry_msgs/WrenchStamped``) and never imports rclpy; the node
+(:mod:`spatial_dynamics.ros.node`) does the ROS part. All of it runs in the node's ``inputs``
+callback group, one message at a time; what a plan costs in proportion to its size (its
+conversion and checks, its effort for JTC) runs elsewhere (:mod:`.plans`).
 
 Every message is answered or rejected on its own: a rejected message (reason counted in
 diagnostics) produces no output, and nothing is published without fresh input, so a stale
@@ -40,13 +41,13 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
 from spatial_dynamics.effort import with_gravity
-from spatial_dynamics.ros.config import Config, Output
 from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
 from spatial_dynamics.ros.diagnostics import Totals, Window
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
 from spatial_dynamics.ros.observer import (
     EstimateWindow, make_observer, measured_effort, observer_key, sample_time)
 from spatial_dynamics.ros.plans import Job, prepare_plan, PlanItem
+from spatial_dynamics.ros.records import Config, Robot
 from spatial_dynamics.trajectory import check_start, Follower, TrajectoryError
 from spatial_dynamics.wrench import wrench_from_torques
 
@@ -72,16 +73,21 @@ class Answer(NamedTuple):
     terms: Optional[dict]
 
 
-class Out:
-    """What one message gives to publish (each None when nothing): see :class:`Answering`."""
+class Out(NamedTuple):
+    """What one message gives to publish (each None when nothing): see :class:`Answering`.
 
-    __slots__ = ('answer', 'estimate', 'wrench', 'annotate')
+    ``answer``: the command; ``estimate``: ``(header, joints, τ_ext)``; ``wrench``:
+    ``(header, link, [n; f])``; ``annotate``: a plan to annotate (off the answering thread).
+    """
 
-    def __init__(self) -> None:
-        self.answer: Optional[Answer] = None
-        self.estimate: Optional[tuple] = None     # (header, joints, τ_ext)
-        self.wrench: Optional[tuple] = None       # (header, link, [n; f])
-        self.annotate: Optional[Job] = None       # a plan to annotate (off this thread)
+    answer: Optional[Answer] = None
+    estimate: Optional[tuple] = None
+    wrench: Optional[tuple] = None
+    annotate: Optional[Job] = None
+
+
+#: The result of a message that gives nothing to publish (rejected, or held for later).
+NOTHING = Out()
 
 
 class Answering:
@@ -89,13 +95,13 @@ class Answering:
 
     Each public method takes the current ``Config`` and a message and returns an :class:`Out`:
     what the node publishes (an answer; an observer estimate and a virtual F/T reading; a plan
-    annotated for JTC). It never calls into the node; ``log`` is the node's logger
-    (``info``/``warn`` with ``throttle_duration_sec``).
+    to annotate for JTC). The helpers return their part of it to the method, which puts it
+    in the ``Out``; nothing to publish is kept in between. It never calls into the node;
+    ``log`` is the node's logger (``info``/``warn`` with ``throttle_duration_sec``).
     """
 
     def __init__(self, log) -> None:
         self.log = log
-        self._out = Out()
         self._observing: Optional[tuple] = None   # (msg, (q, qd)) accepted by measured()
         self.desired: Optional[Held] = None    # the last good desired state (zero-order hold)
         self.follower = Follower()   # desired_trajectory in the feedback modes (JTC's rules)
@@ -121,12 +127,11 @@ class Answering:
 
     def joint_state(self, config: Config, msg, with_terms: bool = False) -> Out:
         """Take a ``desired_joint_states`` message (``with_terms``: compute the terms too)."""
-        out = self._out = Out()
-        self._on_desired(config, msg, 'desired_joint_states', joint_state_arrays,
-                         (msg.name, msg.position, msg.velocity,
-                          msg.effort if config.params.acceleration_source == 'effort' else None),
-                         with_terms)
-        return out
+        answer = self._on_desired(
+            config, msg, 'desired_joint_states', joint_state_arrays,
+            (msg.name, msg.position, msg.velocity,
+             msg.effort if config.params.acceleration_source == 'effort' else None), with_terms)
+        return Out(answer)
 
     def take_plan(self, config: Config, item: PlanItem, clock_ns: int,
                   with_terms: bool = False) -> Out:
@@ -139,49 +144,52 @@ class Answering:
         feedforward. A plan scheduled (feedback) or checked whole (feedforward) is handed on
         to be annotated when ``trajectory_effort_tolerance`` > 0: what is refused is not.
         """
-        out = self._out = Out()
         feedback = config.params.control_mode in FEEDBACK_MODES
         msg = item.msg
         item = self._current(config, item)
-        if not feedback and msg is not None and config.output is not None:
-            self._on_desired(config, msg, 'desired_trajectory', trajectory_arrays,
-                             (msg.joint_names, msg.points), with_terms)
-            if not self._annotating(config):
-                return out
-            if item.error is not None:   # the first point may do; the plan is not annotated
-                self._reject_annotation(item.error[0], item.error[1])
-                return out
-            stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-            try:
-                check_start(stamp or clock_ns, clock_ns)
-            except TrajectoryError as err:
-                self._reject_annotation(err.reason, str(err))
-                return out
-            if item.prepared is not None:
-                out.annotate = Job(msg.header, item.prepared, config)
-            return out
+        if not feedback and msg is not None and config.robot is not None:
+            answer = self._on_desired(config, msg, 'desired_trajectory', trajectory_arrays,
+                                      (msg.joint_names, msg.points), with_terms)
+            return Out(answer, annotate=self._annotation(config, item, clock_ns))
         if not feedback:
             self.window.received += 1
         if item.error is not None:
             reason, text = item.error
             self._reject('desired_trajectory', reason, 'refused whole' + (
                 ', the trajectory followed before goes on' if feedback else '') + f': {text}')
-            return out
+            return NOTHING
         if not self._measured_seen:   # judged on the measured clock, once it ticks
             if self._pending_plan is None:
                 self.log.info('desired_trajectory: waiting for the first joint_states: its '
                               'stamp is the clock the plan starts on')
             self._pending_plan = item
-            return out
-        self._schedule(config, item, self._measured_stamp)
-        return out
+            return NOTHING
+        return Out(annotate=self._schedule(config, item, self._measured_stamp))
+
+    def _annotation(self, config: Config, item: PlanItem, clock_ns: int) -> Optional[Job]:
+        """Feedforward: the plan whose first point was answered, to annotate (None: not)."""
+        if not self._annotating(config):
+            return None
+        if item.error is not None:   # the first point may do; the plan is not annotated
+            self._reject_annotation(item.error[0], item.error[1])
+            return None
+        msg = item.msg
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        try:
+            check_start(stamp or clock_ns, clock_ns)
+        except TrajectoryError as err:
+            self._reject_annotation(err.reason, str(err))
+            return None
+        if item.prepared is None:
+            return None
+        return Job(msg.header, item.prepared, config)
 
     def _current(self, config: Config, item: PlanItem) -> PlanItem:
         """``item``, checked again when the model or the mode changed since (rare)."""
         if item.error is not None or item.config is config:
             return item
-        output = config.output
-        if (output is None or item.joints != output.joints
+        robot = config.robot
+        if (robot is None or item.joints != robot.joints
                 or (item.prepared is None and item.msg is not None
                     and len(item.msg.points) and (
                         config.params.control_mode in FEEDBACK_MODES
@@ -191,7 +199,7 @@ class Answering:
 
     def _annotating(self, config: Config) -> bool:
         """Whether plans are annotated; an ``output: none`` is said (no model torque)."""
-        if not config.params.trajectory_effort_tolerance > 0.0 or config.output is None:
+        if not config.params.trajectory_effort_tolerance > 0.0 or config.robot is None:
             return False
         if config.params.output == 'none':
             self.totals.rejected['no_model_part'] += 1
@@ -200,27 +208,31 @@ class Answering:
             return False
         return True
 
-    def _schedule(self, config: Config, item: PlanItem, now_ns: int) -> None:
-        """Feedback modes: follow a whole trajectory, sampled at each measured stamp (JTC)."""
-        output, msg = config.output, item.msg
+    def _schedule(self, config: Config, item: PlanItem, now_ns: int) -> Optional[Job]:
+        """Feedback modes: follow a whole trajectory, sampled at each measured stamp (JTC).
+
+        Returns the plan to annotate, when it is followed and plans are annotated.
+        """
+        robot, msg = config.robot, item.msg
         start_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         q = self._measured_q
-        if q is not None and len(q) != len(output.joints):   # measured on another model
+        if q is not None and len(q) != len(robot.joints):   # measured on another model
             q = None
         try:
-            traj = self.follower.schedule(item.prepared, start_ns, now_ns, output.joints, q)
+            traj = self.follower.schedule(item.prepared, start_ns, now_ns, robot.joints, q)
         except TrajectoryError as err:
             self._reject('desired_trajectory', err.reason, f'refused whole, the trajectory '
                          f'followed before goes on: {err}')
-            return
-        self._following = output.joints
+            return None
+        self._following = robot.joints
         self.totals.last_desired_ns = time.monotonic_ns()
         self.log.info(
             'desired_trajectory: stopped, holding the measured position' if traj is None else
             f'desired_trajectory: following {len(msg.points)} points ({traj.kind}, '
             f'{traj.time[-1]:g} s) from {(start_ns or now_ns) * 1e-9:.9f} s')
         if traj is not None and self._annotating(config):
-            self._out.annotate = Job(msg.header, item.prepared, config)
+            return Job(msg.header, item.prepared, config)
+        return None
 
     def drain(self, annotator) -> None:
         """Count what the annotation worker refused or clamped since (diagnostics thread)."""
@@ -234,25 +246,26 @@ class Answering:
             self.totals.saturated_joints.update(names)
 
     def _on_desired(self, config: Config, msg, topic: str, to_arrays, fields: tuple,
-                    with_terms: bool) -> None:
-        """Hold a good desired state; in feedforward mode, answer it (or reject it whole)."""
+                    with_terms: bool) -> Optional[Answer]:
+        """Hold a good desired state; in feedforward mode, return its answer (None: none)."""
         t0 = time.monotonic_ns()
         answers = config.params.control_mode not in FEEDBACK_MODES
         if answers:
             self.window.received += 1
-        output = config.output
-        if output is None:
+        robot = config.robot
+        if robot is None:
             self._reject(topic, 'no_model', 'no robot model loaded yet')
-            return
+            return None
         try:
-            desired = to_arrays(output.model.joint_names, *fields)
+            desired = to_arrays(robot.model.joint_names, *fields)
         except InputError as err:
             self._reject(topic, err.reason, str(err))
-            return
-        self.desired = Held(output.joints, desired, t0)
+            return None
+        self.desired = Held(robot.joints, desired, t0)
         self.totals.last_desired_ns = t0
-        if answers:
-            self._respond(config, msg.header, topic, desired, None, t0, with_terms)
+        if not answers:
+            return None
+        return self._respond(config, msg.header, topic, desired, None, t0, with_terms)
 
     def measured(self, config: Config, msg, with_terms: bool = False) -> Out:
         """Check a measured state; in a feedback mode, answer it with the held desired one.
@@ -260,170 +273,182 @@ class Answering:
         The observer's update waits for :meth:`observe`, called once the answer is out: it
         never delays a command.
         """
-        out = self._out = Out()
         self._observing = None
-        self._measured_msg(config, msg, with_terms)
-        return out
-
-    def observe(self, config: Config, msg) -> Out:
-        """Update the observer with the measured state :meth:`measured` just accepted."""
-        out = self._out = Out()
-        if config.params.observer_gain <= 0.0:
-            self.observer = None
-        elif self._observing is not None and self._observing[0] is msg:
-            self._observe(config, msg, self._observing[1])
-        self._observing = None
-        return out
-
-    def _measured_msg(self, config: Config, msg, with_terms: bool) -> None:
         t0 = time.monotonic_ns()
         feedback = config.params.control_mode in FEEDBACK_MODES
         totals = self.totals
         totals.measured_received += 1
         if feedback:
             self.window.received += 1
-        output = config.output
-        if output is None:
+        robot = config.robot
+        if robot is None:
             self._reject_measured('no_model', 'no robot model loaded yet')
-            return
+            return NOTHING
         try:
-            measured = measured_arrays(output.joints, msg.name, msg.position, msg.velocity,
+            measured = measured_arrays(robot.joints, msg.name, msg.position, msg.velocity,
                                        feedback)
         except InputError as err:
             self._reject_measured(err.reason, str(err))
-            return
+            return NOTHING
         totals.last_measured_ns = t0
         self.window.measured += 1
         stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        self._measured_q = measured[0]     # in output.joints order: held by an empty trajectory
+        self._measured_q = measured[0]     # in robot.joints order: held by an empty trajectory
         self._measured_stamp = stamp or self._measured_stamp
         self._measured_seen = True
+        annotate = None
         if self._pending_plan is not None:   # a plan that came first starts on this clock
-            item, self._pending_plan = self._current(config, self._pending_plan), None
-            if item.error is not None:
-                self._reject('desired_trajectory', item.error[0], f'refused whole: '
-                             f'{item.error[1]}')
-            elif config.params.control_mode in FEEDBACK_MODES:
-                self._schedule(config, item, self._measured_stamp)
+            annotate = self._start_pending(config)
+        answer = None
         if feedback:
-            self._answer_measured(config, msg, measured, t0, with_terms)
+            answer = self._answer_measured(config, msg, measured, t0, with_terms)
         self._observing = (msg, measured)
+        return Out(answer, annotate=annotate)
+
+    def _start_pending(self, config: Config) -> Optional[Job]:
+        """Schedule the plan that waited for the measured clock; return it to annotate."""
+        item, self._pending_plan = self._current(config, self._pending_plan), None
+        if item.error is not None:
+            self._reject('desired_trajectory', item.error[0], f'refused whole: '
+                         f'{item.error[1]}')
+            return None
+        if config.params.control_mode in FEEDBACK_MODES:
+            return self._schedule(config, item, self._measured_stamp)
+        return None
+
+    def observe(self, config: Config, msg) -> Out:
+        """Update the observer with the measured state :meth:`measured` just accepted.
+
+        Returns its estimate and, with ``wrench_estimate.link``, the virtual F/T reading.
+        """
+        observing, self._observing = self._observing, None
+        if config.params.observer_gain <= 0.0:
+            self.observer = None
+            return NOTHING
+        if observing is None or observing[0] is not msg:
+            return NOTHING
+        q, qd = observing[1]
+        r = self._observe(config, msg, q, qd)
+        if r is None:
+            return NOTHING
+        header, link = msg.header, config.params.wrench_estimate_link
+        return Out(estimate=(header, config.robot.joints, r), wrench=(
+            (header, link, self._sense_wrench(config, q, r)) if link else None))
 
     def _answer_measured(self, config: Config, msg, measured: tuple, t0: int,
-                         with_terms: bool) -> None:
+                         with_terms: bool) -> Optional[Answer]:
         """Answer a good measured state with the held desired state (a feedback mode)."""
-        output, mode = config.output, config.params.control_mode
+        robot, mode = config.robot, config.params.control_mode
         stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         desired = None
-        if self._following == output.joints:   # a trajectory, sampled at this measurement
+        if self._following == robot.joints:   # a trajectory, sampled at this measurement
             desired = self.follower.sample(stamp or self._measured_stamp)
             if desired is not None:   # a followed plan is a live desired input (its end held)
                 self.totals.last_desired_ns = t0
         if desired is None:
             held = self.desired
-            if held is None or held.joints != output.joints:
+            if held is None or held.joints != robot.joints:
                 self._reject('joint_states', 'no_desired', f'{mode}: no desired '
                              'state for the model\'s joints yet')
-                return
+                return None
             age = (t0 - held.receipt_ns) * 1e-9
             if age > config.params.input_timeout:
                 self._reject('joint_states', 'desired_stale',
                              f'{mode}: the held desired state is {age:.3f} s old '
                              f'(input_timeout {config.params.input_timeout} s); not publishing')
-                return
+                return None
             desired = held.state
         if stamp != 0 and stamp == self._answered_stamp:
             self._reject('joint_states', 'repeated',
                          f'{mode}: the measured state stamped {stamp * 1e-9:.9f} '
                          's was answered already (one answer per measurement)')
-            return
+            return None
         self._answered_stamp = stamp
-        self._respond(config, msg.header, 'joint_states', desired, measured, t0, with_terms)
+        return self._respond(config, msg.header, 'joint_states', desired, measured, t0,
+                             with_terms)
 
-    def _observe(self, config: Config, msg, measured: tuple) -> None:
-        """Update the external-torque observer with a measured state; publish its estimate.
+    def _observe(self, config: Config, msg, q: np.ndarray, qd: Optional[np.ndarray]
+                 ) -> Optional[np.ndarray]:
+        """Update the external-torque observer with a measured state; return its estimate.
 
         A message without effort (or velocity) for every model joint only skips the update
-        (counted in diagnostics): not an error. The observer restarts when the model or a
-        parameter it depends on changes (:func:`~.observer.observer_key`).
+        (counted in diagnostics, None returned): not an error. The observer restarts when the
+        model or a parameter it depends on changes (:func:`~.observer.observer_key`).
         """
         skipped = self.estimates.skipped
-        output = config.output
-        q, qd = measured
+        robot = config.robot
         if qd is None:
             skipped['no_velocity'] += 1
-            return
+            return None
         try:
-            tau = measured_effort(output.joints, msg.name, msg.effort)
+            tau = measured_effort(robot.joints, msg.name, msg.effort)
         except InputError as err:
             skipped[err.reason if err.reason in skipped else 'no_effort'] += 1
-            return
+            return None
         measured_kind = config.params.measured_effort
         if measured_kind != 'full':   # e.g. UR: the drive reports the torque beyond gravity
-            tau = with_gravity(output.model, q, tau, measured_kind, config.params.gravity)
+            tau = with_gravity(robot.model, q, tau, measured_kind, config.params.gravity)
         observer = self._observer_for(config)
         t = sample_time(msg.header.stamp.sec, msg.header.stamp.nanosec)
         if t is None:
             skipped['unstamped'] += 1
-            return
+            return None
         try:
             r = observer.update(t, q, qd, tau)
         except Exception as err:  # never die on one message
             self.log.warn(f'external torque observer failed: {err!r}', throttle_duration_sec=1.0)
             observer.reset('compute error')
-            return
+            return None
         if r is None:
             skipped['repeated'] += 1
-            return
-        self._out.estimate = (msg.header, output.joints, r)
+            return None
         self.estimates.add(r)
-        if config.params.wrench_estimate_link:
-            self._sense_wrench(config, msg.header, q, r)
+        return r
 
     def _observer_for(self, config: Config):
         """Return the observer of ``config``: kept unless what it depends on changed."""
-        observer, output = self.observer, config.output
+        observer, robot = self.observer, config.robot
         if config is not self._observed:   # a new config: does the observer still hold?
-            key = observer_key(output, config.params)
+            key = observer_key(robot, config.params)
             if observer is None or key != self._observer_key:
-                observer = self.observer = make_observer(output, config.params)
+                observer = self.observer = make_observer(robot, config.params)
                 self._observer_key = key
-            observer.backend = output.backend
+            observer.backend = robot.backend
             self._observed = config
         return observer
 
-    def _sense_wrench(self, config: Config, header, q: np.ndarray, r: np.ndarray) -> None:
-        """Estimate the wrench at ``wrench_estimate.link`` that explains ``r`` (virtual F/T)."""
-        link, output = config.params.wrench_estimate_link, config.output
-        J = sd.jacobian(output.model, q, link, frame='local')
+    def _sense_wrench(self, config: Config, q: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Return the wrench [n; f] at ``wrench_estimate.link`` that explains ``r`` (F/T)."""
+        link, robot = config.params.wrench_estimate_link, config.robot
+        J = sd.jacobian(robot.model, q, link, frame='local')
         estimate = wrench_from_torques(J, r, config.params.wrench_estimate_epsilon)
-        self._out.wrench = (header, link, estimate.wrench)
         self.estimates.add_wrench(link, estimate,
-                                  bool(np.any(np.abs(r) > output.external_torque_warn)))
+                                  bool(np.any(np.abs(r) > robot.external_torque_warn)))
+        return estimate.wrench
 
     def _respond(self, config: Config, header, topic: str, desired: tuple,
-                 measured: Optional[tuple], t0: int, with_terms: bool) -> None:
-        """Compute and publish one answer (and its terms while subscribed), or reject it."""
-        output, params = config.output, config.params
+                 measured: Optional[tuple], t0: int, with_terms: bool) -> Optional[Answer]:
+        """Compute one answer (and its terms while subscribed); None when it is rejected."""
+        robot, params = config.robot, config.params
         try:
-            f_ext = self._active_wrenches(output, t0) if self.wrenches else None
-            dynamics = Dynamics(output.model, params.gravity, output.backend, output.armature,
-                                output.friction_threshold, f_ext)
+            f_ext = self._active_wrenches(robot, t0) if self.wrenches else None
+            dynamics = Dynamics(robot.model, params.gravity, robot.backend, robot.armature,
+                                robot.friction_threshold, f_ext)
             tau, terms = answer(dynamics, params.control_mode, params.output, desired, measured,
-                                output.gains, with_terms)
+                                robot.gains, with_terms)
         except Exception as err:  # never die on one message
             self._reject(topic, 'compute_error', f'rnea failed: {err!r}')
-            return
+            return None
         if not np.isfinite(tau).all():
             self._reject(topic, 'non_finite_output', 'torque is not finite (extreme input?)')
-            return
-        if output.clamp:
-            tau, saturated = sd.clamp_to_effort_limits(output.model, tau)
+            return None
+        if robot.clamp:
+            tau, saturated = sd.clamp_to_effort_limits(robot.model, tau)
             if saturated.any():
-                self._count_saturated(output, tau, saturated)
+                self._count_saturated(robot, tau, saturated)
         t1 = time.monotonic_ns()
-        self._out.answer = Answer(header, output.joints, desired[0], desired[1], tau, terms)
         self._count_answer(self.window, header.stamp, t0, t1)
+        return Answer(header, robot.joints, desired[0], desired[1], tau, terms)
 
     def _count_answer(self, window: Window, stamp, t0: int, t1: int) -> None:
         totals = self.totals
@@ -441,34 +466,37 @@ class Answering:
             if delay > window.delay_max_ns:
                 window.delay_max_ns = delay
 
-    def _count_saturated(self, output: Output, tau: np.ndarray, saturated: np.ndarray) -> None:
-        names = [output.joints[i] for i in np.flatnonzero(saturated)]
+    def _count_saturated(self, robot: Robot, tau: np.ndarray, saturated: np.ndarray) -> None:
+        names = [robot.joints[i] for i in np.flatnonzero(saturated)]
         self.totals.saturated += 1
         self.totals.saturated_joints.update(names)
         self.log.warn(
             'clamped to the URDF effort limit: '
-            + ', '.join(f'{name!r} at {tau[output.joints.index(name)]:+g}' for name in names),
+            + ', '.join(f'{name!r} at {tau[robot.joints.index(name)]:+g}' for name in names),
             throttle_duration_sec=1.0)
 
-    def _active_wrenches(self, output: Output, now_ns: int) -> Optional[dict]:
+    def _active_wrenches(self, robot: Robot, now_ns: int) -> Optional[dict]:
         """Link -> wrench of the unexpired external wrenches on links of the model."""
         wrenches = self.wrenches
         for link in [link for link, (_, expiry) in wrenches.items() if expiry < now_ns]:
             del wrenches[link]
-        frames = output.model.frames
+        frames = robot.model.frames
         return {link: f for link, (f, _) in wrenches.items() if link in frames} or None
 
     def wrench(self, config: Config, msg) -> None:
-        """Store (or, when zero, remove) the wrench on link ``header.frame_id``."""
+        """Store (or, when zero, remove) the wrench on link ``header.frame_id``.
+
+        Nothing to publish: the wrench enters the answers that follow.
+        """
         self.totals.wrenches_received += 1
         link = msg.header.frame_id
-        output = config.output
-        if output is None:
+        robot = config.robot
+        if robot is None:
             self._reject_wrench('no_model', f'{link!r}: no robot model loaded yet')
             return
-        if link not in output.model.frames:
+        if link not in robot.model.frames:
             self._reject_wrench('unknown_link', f'header.frame_id {link!r} is not a link of '
-                                f'robot {output.model.name!r}')
+                                f'robot {robot.model.name!r}')
             return
         t, f = msg.wrench.torque, msg.wrench.force
         wrench = np.array([t.x, t.y, t.z, f.x, f.y, f.z])   # [n; f], angular first

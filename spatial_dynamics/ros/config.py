@@ -3,10 +3,11 @@
 """The node's configuration, without ROS: its parameter table, and a change made a Config.
 
 Pure Python + numpy + the library (no rclpy import), so all of it is tested without a ROS
-graph (``test/test_ros_config.py``, ``test/test_node_config.py``). The node
-(:mod:`spatial_dynamics.ros.node`) declares the parameters of :data:`PARAMETERS`, calls
-:func:`prepare` to validate a change (its on-set callback) and swaps in the resulting
-:class:`Config` (its post-set callback); everything an answer needs is one :class:`Output`.
+graph (``test/test_ros_config.py``). The node (:mod:`spatial_dynamics.ros.node`) declares the
+parameters of :data:`PARAMETERS`, calls :func:`prepare` to validate a change (its on-set
+callback) and swaps in the resulting :class:`~.records.Config` (its post-set callback);
+everything an answer needs is one :class:`~.records.Robot` (:func:`build_robot`). The
+records themselves are :mod:`spatial_dynamics.ros.records`' (a leaf: this module imports it).
 
 Robot descriptions (which source wins, how one is read and parsed) are
 :mod:`spatial_dynamics.ros.descriptions`'; this module only asks it for a model.
@@ -19,9 +20,7 @@ first answer, or numpy, with the reason, in a package built without them
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 import math
-import time
 from typing import Any, Callable, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
@@ -39,6 +38,7 @@ from spatial_dynamics.ros.control import (
 from spatial_dynamics.ros.parameters import ConfigError, distinct, one_of, Param, Table
 from spatial_dynamics.ros.observer import (
     check_warn, MAX_EXTERNAL_TORQUE_WARN, MAX_OBSERVER_GAIN, ObserverError)
+from spatial_dynamics.ros.records import Config, Payload, Robot
 
 NODE_NAME = 'inverse_dynamics'
 ACCELERATION_SOURCES = ('effort', 'none')
@@ -60,9 +60,6 @@ DEFAULT_OBSERVER_GAIN = 20.0
 #: period above which diagnostics WARN. 5 N m is 1 kg at 0.5 m, a payload an arm's model
 #: should know about; set it per joint for a robot with small wrist joints.
 DEFAULT_EXTERNAL_TORQUE_WARN = 5.0
-
-#: Plain-float calls timed at load for the ``plain call time`` of the diagnostics.
-TIMED_CALLS = 7
 
 # Bounds beyond which a value cannot be physical: refused with the bound named, instead of
 # being accepted and then making every answer non-finite.
@@ -100,9 +97,10 @@ PARAMETER_FILE_HEADER = (
     'Generated from the table in spatial_dynamics/ros/config.py (test/test_parameters.py '
     'checks it).\n'
     'Parameters of the `inverse_dynamics` node (spatial_dynamics). Every parameter the node\n'
-    'declares is listed here; all of them but `backend` can be changed while the node runs\n'
-    '(`ros2 param set /inverse_dynamics <name> <value>`). Each change is validated first and\n'
-    'rejected with a reason if it is unusable; a rejected change leaves everything as it was.\n'
+    'declares is listed here; all of them but those marked read-only can be changed while the\n'
+    'node runs (`ros2 param set /inverse_dynamics <name> <value>`). Each change is validated\n'
+    'first and rejected with a reason if it is unusable; a rejected change leaves everything\n'
+    'as it was.\n'
     '\n'
     'Topics (relative names; remap them, e.g. effort_commands:=/effort_controller/commands):\n'
     '  in   desired_joint_states  sensor_msgs/JointState           best effort, keep last 1\n'
@@ -303,31 +301,6 @@ DESCRIPTION_PARAMETERS = ('robot_description', 'robot_description_file')
 # --------------------------------------------------------------------------------------------
 # Validators: each returns the usable value or raises ConfigError naming the parameter
 
-@dataclass(frozen=True)
-class Payload:
-    """A rigid payload on ``link`` (``''`` = none): kg, m (link frame), kg m² about the com."""
-
-    link: str = ''
-    mass: float = 0.0
-    com: Tuple[float, ...] = (0.0, 0.0, 0.0)
-    inertia: Tuple[float, ...] = (0.0,) * 6
-
-    def __str__(self) -> str:
-        if not self.link:
-            return 'none'
-        return (f'{self.mass:g} kg on {self.link!r}, com {list(self.com)} m, inertia '
-                f'{list(self.inertia)} kg m^2')
-
-    def apply(self, model: 'sd.Model') -> 'sd.Model':
-        """Return ``model`` with the payload (:func:`~spatial_dynamics.with_payload`)."""
-        if not self.link:
-            return model
-        try:
-            return sd.with_payload(model, self.link, self.mass, self.com, self.inertia)
-        except ValueError as err:
-            raise ConfigError(f'parameter payload.*: {err}')
-
-
 def locked_positions(params) -> dict:
     """``locked_joints`` with ``locked_positions`` (empty = all 0) as {name: value}.
 
@@ -363,22 +336,6 @@ def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
 # --------------------------------------------------------------------------------------------
 # Backend choice
 
-def plain_call_seconds(model: 'sd.Model', calls: int = TIMED_CALLS) -> float:
-    """Median time (s) of one plain-float RNEA call (backend 'numpy') on a moving state.
-
-    ``q = qd = qdd = 0.5`` (rad, rad/s, rad/s², or m...): a state at rest (``qd = 0``) takes
-    the algorithm's static shortcut and costs half as much, which is not what answers cost.
-    """
-    x = np.full(len(model.joint_names), 0.5)
-    sd.rnea(model, x, x, x, backend='numpy')       # derives the layout: not timed
-    times = []
-    for _ in range(calls):
-        t0 = time.perf_counter()
-        sd.rnea(model, x, x, x, backend='numpy')
-        times.append(time.perf_counter() - t0)
-    return sorted(times)[len(times) // 2]       # np.median would import numpy.ma (~30 ms)
-
-
 def resolve_backend(setting: str) -> str:
     """``'numpy'`` or ``'compiled'``: what ``backend`` = ``setting`` runs on in this process.
 
@@ -394,66 +351,21 @@ def resolve_backend(setting: str) -> str:
 # --------------------------------------------------------------------------------------------
 # What an answer needs, and how a parameter change produces it
 
-@dataclass(frozen=True)
-class Output:
-    """Everything an answer needs, swapped as one object between two messages.
-
-    ``base`` is the (reduced) model of the URDF, ``model`` the same with the payload; ``tau``
-    is in the order of ``joints`` (= ``model.joint_names``). ``armature`` is ``None`` or (n,),
-    ``friction_threshold`` is ``None`` (friction_model none) or the smooth-sign velocity.
-    ``backend`` is what the answers run on (``'numpy'`` or ``'compiled'``, see
-    :func:`resolve_backend`). ``plain_call_s``: one plain-float call of ``base``, measured at
-    load.
-    """
-
-    urdf: str
-    source: str
-    base: 'sd.Model'
-    model: 'sd.Model'
-    joints: Tuple[str, ...]
-    joints_param: Tuple[str, ...]
-    locked: Tuple[Tuple[str, float], ...]
-    payload: Payload
-    armature: Optional[np.ndarray] = None
-    friction_threshold: Optional[float] = None
-    clamp: bool = False
-    backend: str = 'numpy'
-    setting: str = 'auto'
-    plain_call_s: float = 0.0
-    gains: Optional[Gains] = None
-    external_torque_warn: Optional[np.ndarray] = None
-
-
-@dataclass(frozen=True)
-class Config:
-    """The checked parameters and what an answer needs, swapped in as one (see :func:`prepare`).
-
-    ``params`` is the table's frozen ``Params`` (one field per parameter, under the
-    parameter's name with ``.`` as ``_``): what the answers read.
-    """
-
-    params: object
-    output: Optional[Output]
-    new_description: bool = False
-    kept_file: str = ''
-
-
-def _base_model(params, current: Optional[Output], urdf: str, source: str,
-                joints: Tuple[str, ...], locked: dict) -> Tuple['sd.Model', float]:
-    """Return the (reduced) model of ``urdf`` and its plain-float call time (reused if same)."""
+def _base_model(params, current: Optional[Robot], urdf: str, source: str,
+                joints: Tuple[str, ...], locked: dict) -> 'sd.Model':
+    """Return the (reduced) model of ``urdf``: ``current``'s when nothing it depends on changed."""
     if (current is not None and urdf is current.urdf and joints == current.joints_param
             and tuple(locked.items()) == current.locked):
-        return current.base, current.plain_call_s
+        return current.base
     if locked and not joints:
         raise ConfigError(f'parameter locked_joints: {list(locked)} lock joints only '
                           'when the joints parameter lists the joints to keep')
-    base = parse_description(urdf, source, joints, locked, params.strict_urdf)
-    return base, plain_call_seconds(base)
+    return parse_description(urdf, source, joints, locked, params.strict_urdf)
 
 
-def build_output(params, current: Optional[Output], urdf: Optional[str] = None,
-                 source: Optional[str] = None) -> Output:
-    """Build the :class:`Output` for ``params``; the URDF is re-parsed only when needed.
+def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
+                source: Optional[str] = None) -> Robot:
+    """Build the :class:`~.records.Robot` for ``params``; the URDF is re-parsed only when needed.
 
     ``urdf`` None keeps the description of ``current``. Reads nothing of the node, so the
     description parser's thread may call it. Raises :class:`ConfigError`.
@@ -464,7 +376,7 @@ def build_output(params, current: Optional[Output], urdf: Optional[str] = None,
                       params.payload_inertia)
     locked = locked_positions(params)
     joints = tuple(params.joints or ())
-    base, plain_call_s = _base_model(params, current, urdf, source, joints, locked)
+    base = _base_model(params, current, urdf, source, joints, locked)
     if params.strict_urdf and base.warnings:
         raise ConfigError(
             f'parameter strict_urdf: {source} has {len(base.warnings)} URDF warning(s) '
@@ -479,18 +391,16 @@ def build_output(params, current: Optional[Output], urdf: Optional[str] = None,
             f'parameter wrench_estimate.link: {params.wrench_estimate_link!r} is not a link of '
             f'robot {base.name!r} ({source})')
     setting = params.backend
-    gains = model_gains(base, params)
-    warn = _observer_check(check_warn, base.joint_names, params.external_torque_warn)
-    output = Output(
+    return Robot(
         urdf=urdf, source=source, base=base, model=payload.apply(base),
         joints=tuple(base.joint_names), joints_param=joints, locked=tuple(locked.items()),
         payload=payload, armature=check_armature(base, params.armature),
         friction_threshold=(params.friction_velocity_threshold
                             if params.friction_model == 'urdf' else None),
         clamp=params.clamp_to_effort_limits, setting=setting,
-        backend=resolve_backend(setting), plain_call_s=plain_call_s,
-        gains=gains, external_torque_warn=warn)
-    return output
+        backend=resolve_backend(setting), gains=model_gains(base, params),
+        external_torque_warn=_observer_check(check_warn, base.joint_names,
+                                             params.external_torque_warn))
 
 
 def _check_without_model(params) -> None:
@@ -530,13 +440,13 @@ def check_control(params) -> Tuple[str, str]:
         raise ConfigError(str(err)) from None
 
 
-def prepare(previous, changes: Mapping[str, Any], current: Optional[Output]) -> Config:
+def prepare(previous, changes: Mapping[str, Any], current: Optional[Robot]) -> Config:
     """Validate ``changes`` to the parameters ``previous``; the result is swapped in as a whole.
 
     ``previous`` is the ``Params`` in use (None or empty at start-up, when ``changes`` holds
     the start-up values by name); ``changes`` are raw values by parameter name, checked by
     the table (:data:`PARAMETERS`: type, bounds, choices, length, rules), then together and
-    against the model. ``current`` is the output in use (None: no model yet). Parses a new
+    against the model. ``current`` is the robot in use (None: no model yet). Parses a new
     description when the changes make one current (:func:`description_change`) or change the
     model's parameters. Changes nothing; raises :class:`ConfigError` when a value cannot be
     used.
@@ -547,14 +457,14 @@ def prepare(previous, changes: Mapping[str, Any], current: Optional[Output]) -> 
     else:
         params = PARAMETERS.changed(previous, changes)
     urdf, source, kept_file = description_change(previous, params, changes)
-    output = current
+    robot = current
     if urdf is not None or current is not None:
-        output = build_output(params, current, urdf, source)
+        robot = build_robot(params, current, urdf, source)
     else:
         locked_positions(params)
         _check_without_model(params)
     check_control(params)
-    return Config(params=params, output=output, new_description=urdf is not None,
+    return Config(params=params, robot=robot, new_description=urdf is not None,
                   kept_file=kept_file)
 
 

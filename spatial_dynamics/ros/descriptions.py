@@ -13,15 +13,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import threading
-from typing import Callable, List, Optional, Sequence, Tuple, TYPE_CHECKING
+from typing import Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.ros.parameters import ConfigError
+from spatial_dynamics.ros.records import Robot
 from spatial_dynamics.urdf import read_description as read_urdf_description
-
-if TYPE_CHECKING:
-    from spatial_dynamics.ros.config import Output
 
 #: Largest robot_description_file read, bytes (the largest URDF of example-robot-data is
 #: < 1 MiB).
@@ -127,29 +125,29 @@ def description_change(previous: dict, params: dict, changes: dict
 
 @dataclass(frozen=True)
 class ParseRequest:
-    """A description from the topic to build an :class:`Output` from, with its context.
+    """A description from the topic to build a :class:`~.records.Robot` from, with its context.
 
     ``generation`` identifies the request: the node applies the result only if no other
     description came (or a parameter took precedence) since; ``params`` and ``current`` are
-    the node's parameters and output when the message arrived.
+    the node's parameters and robot when the message arrived.
     """
 
     generation: int
     urdf: str
     params: dict
-    current: Optional[Output]
+    current: Optional[Robot]
 
 
 class DescriptionParser:
-    """One worker thread that builds outputs from topic descriptions, off the answering path.
+    """One worker thread that builds robots from topic descriptions, off the answering path.
 
     ``submit`` replaces any request not yet started (only the newest description matters);
-    each finished request is queued with its result (an :class:`Output` or a
+    each finished request is queued with its result (a :class:`~.records.Robot` or a
     :class:`ConfigError`) and ``notify()`` is called, from the worker thread, so the node can
     pick it up in its executor (a guard condition). The thread starts with the first request.
     """
 
-    def __init__(self, build: Callable[[ParseRequest], Output], notify: Callable[[], None]
+    def __init__(self, build: Callable[[ParseRequest], Robot], notify: Callable[[], None]
                  ) -> None:
         self._build = build
         self._notify = notify

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections import Counter
 import time
-from typing import Dict, List, Optional, Tuple, TYPE_CHECKING
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 from spatial_dynamics import backends
@@ -19,9 +19,7 @@ from spatial_dynamics.ros.config import NODE_REASONS, URDF_WARNINGS_LISTED, WREN
 from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
 from spatial_dynamics.ros.inputs import REASONS
 from spatial_dynamics.ros.observer import EstimateWindow, MomentumObserver
-
-if TYPE_CHECKING:
-    from spatial_dynamics.ros.config import Output
+from spatial_dynamics.ros.records import Robot
 
 
 # --------------------------------------------------------------------------------------------
@@ -70,34 +68,33 @@ class Totals:
 Status = Tuple[str, str, List[Tuple[str, str]]]
 
 
-def backend_text(output: Output) -> str:
+def backend_text(robot: Robot) -> str:
     """Name what the answers run on, for logs and diagnostics (the backend's name first)."""
-    if output.backend == 'compiled':
+    if robot.backend == 'compiled':
         return backends.describe('compiled')
-    if output.setting != 'numpy':
+    if robot.setting != 'numpy':
         return f'numpy (compiled kernels unavailable: {backends.compiled.FAILURE})'
     return 'numpy'
 
 
-def model_status(output: Optional[Output], totals: Totals, strict: bool,
+def model_status(robot: Optional[Robot], totals: Totals, strict: bool,
                  backend: str) -> Status:
     """Return the ``robot model`` status: what is loaded, from where, backend, warnings."""
     rejections = [('descriptions rejected', str(totals.descriptions_rejected)),
                   ('last rejection', totals.last_description_error)]
-    if output is None:
+    if robot is None:
         return 'ERROR', 'waiting for robot_description', rejections
     # WARN while the loaded description has URDF warnings: the torques are those of the
     # file as written, but the file is physically inconsistent somewhere.
-    model, urdf_warnings = output.model, output.base.warnings
+    model, urdf_warnings = robot.model, robot.base.warnings
     message = f'robot {model.name!r} loaded, {len(model.joint_names)} DOF'
     if urdf_warnings:
         message += f', {len(urdf_warnings)} URDF warning(s)'
     values = [('robot name', model.name), ('dof', str(len(model.joint_names))),
               ('model joints', ', '.join(model.joint_names)),
-              ('output joints', ', '.join(output.joints)), ('source', output.source),
-              ('summary', output.base.summary()), ('backend', backend),
-              ('backend setting', output.setting),
-              ('plain call time [us]', f'{output.plain_call_s * 1e6:.1f}')]
+              ('output joints', ', '.join(robot.joints)), ('source', robot.source),
+              ('summary', robot.base.summary()), ('backend', backend),
+              ('backend setting', robot.setting)]
     values += rejections + [('strict urdf', str(bool(strict))),
                             ('urdf warnings', str(len(urdf_warnings)))]
     values += [(f'urdf warning {i}', text)
@@ -129,12 +126,12 @@ def _feedback_state(params, totals: Totals, now_ns: int) -> Optional[Tuple[str, 
     return None
 
 
-def _input_state(output: Optional[Output], window: Window, params, period: float,
+def _input_state(robot: Optional[Robot], window: Window, params, period: float,
                  age: Optional[float], totals: Optional[Totals] = None, now_ns: int = 0
                  ) -> Tuple[str, str]:
     """Level and message of the ``feedforward`` status."""
     rejected_now = window.received - window.answered
-    if output is None:
+    if robot is None:
         return 'ERROR', 'no robot model'
     if params.control_mode in FEEDBACK_MODES and totals is not None:
         stale = _feedback_state(params, totals, now_ns)
@@ -162,19 +159,19 @@ def _window_values(window: Window, period: float) -> List[Tuple[str, str]]:
     ]
 
 
-def _terms_values(output: Output) -> List[Tuple[str, str]]:
-    return [('payload', str(output.payload)),
-            ('armature', 'none' if output.armature is None else str(output.armature.tolist())),
-            ('friction model', 'none' if output.friction_threshold is None
-             else f'urdf (threshold {output.friction_threshold:g})'),
-            ('clamp to effort limits', str(output.clamp))] + (
-        [] if output.gains is None else
-        [('kp', str(output.gains.kp.tolist())), ('kd', str(output.gains.kd.tolist())),
+def _terms_values(robot: Robot) -> List[Tuple[str, str]]:
+    return [('payload', str(robot.payload)),
+            ('armature', 'none' if robot.armature is None else str(robot.armature.tolist())),
+            ('friction model', 'none' if robot.friction_threshold is None
+             else f'urdf (threshold {robot.friction_threshold:g})'),
+            ('clamp to effort limits', str(robot.clamp))] + (
+        [] if robot.gains is None else
+        [('kp', str(robot.gains.kp.tolist())), ('kd', str(robot.gains.kd.tolist())),
          ('continuous joints', ', '.join(name for name, c in zip(
-             output.joints, output.gains.continuous) if c))])
+             robot.joints, robot.gains.continuous) if c))])
 
 
-def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
+def feedforward_status(robot: Optional[Robot], window: Window, totals: Totals,
                        params, wrenches: Dict[str, tuple], now_ns: int) -> Status:
     """Return the ``feedforward`` status: rates, compute time, delays, staleness, rejections.
 
@@ -184,7 +181,7 @@ def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
     period = max((now_ns - window.start_ns) * 1e-9, 1e-9)
     last = totals.last_input_ns
     age = None if last is None else (now_ns - last) * 1e-9
-    level, message = _input_state(output, window, params, period, age, totals, now_ns)
+    level, message = _input_state(robot, window, params, period, age, totals, now_ns)
     measured_age = _age(totals.last_measured_ns, now_ns)
     values = _window_values(window, period) + [
         ('last input age [s]', '' if age is None else f'{age:.3f}'),
@@ -206,8 +203,8 @@ def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
                for reason, count in totals.measured_rejected.items()]
     values += [('gravity [m/s^2]', str(list(params.gravity))),
                ('acceleration source', params.acceleration_source)]
-    if output is not None:
-        values += _terms_values(output)
+    if robot is not None:
+        values += _terms_values(robot)
     values += [
         ('saturated', str(totals.saturated)),
         ('saturated joints', ', '.join(f'{name}: {count}' for name, count
@@ -221,7 +218,7 @@ def feedforward_status(output: Optional[Output], window: Window, totals: Totals,
     return level, message, values
 
 
-def observer_status(output: Optional[Output], gain: float,
+def observer_status(output: Optional[Robot], gain: float,
                     observer: Optional[MomentumObserver], window: EstimateWindow) -> Status:
     """Return the ``external torque`` status: RMS of the estimate per joint over the period.
 

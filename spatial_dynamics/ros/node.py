@@ -5,11 +5,11 @@
 A thin shell, like robot_state_publisher: it declares the parameters of the table in
 :mod:`spatial_dynamics.ros.config` (documented in ``config/inverse_dynamics.yaml`` and the
 README, generated from it), validates a change into a whole new
-:class:`~spatial_dynamics.ros.config.Config` in the on-set callback and swaps it in (one
+:class:`~spatial_dynamics.ros.records.Config` in the on-set callback and swaps it in (one
 reference) in the post-set callback, and hands each input message with the current ``Config``
 to :class:`~spatial_dynamics.ros.answering.Answering`, which computes the answer
-(:mod:`spatial_dynamics.ros.control`) and gives it back to be published. With the defaults
-(``control_mode: feedforward``, ``output: full``) that is
+(:mod:`spatial_dynamics.ros.control`) and returns what to publish; the node only publishes
+it. With the defaults (``control_mode: feedforward``, ``output: full``) that is
 ``tau = ID(model, q, qd, qdd, f_ext) + armature·qdd + friction(qd)`` (RBDA §5.3) of each
 desired state; the feedback modes answer each measured ``joint_states`` message instead.
 
@@ -20,10 +20,12 @@ The robot description comes from, in this order of precedence: the ``robot_descr
 parameter (URDF XML), the ``robot_description_file`` parameter (a path, read by
 :mod:`spatial_dynamics.files`), the ``robot_description`` topic. A new one is parsed completely
 (:mod:`spatial_dynamics.ros.descriptions`) and swapped in between two messages only if it
-loads. Two callback groups run in two threads: the inputs and diagnostics in ``inputs``, the
-parameter services, the description topic and the parser's notifications in rclpy's default
-group, which alone writes ``config``; a description set by parameter is parsed in its
-callback (the answer says whether it was accepted) while the answers go on in the other.
+loads. Three callback groups run in three threads: the inputs and diagnostics in ``inputs``;
+the plans (``desired_trajectory``, sized, converted and checked: :mod:`.plans`) in
+``plans``; the parameter services, the description topic and the parser's notifications in
+rclpy's default group, which alone writes ``config``. A description set by parameter is
+parsed in its callback (the answer says whether it was accepted) while the answers go on in
+theirs.
 """
 
 from __future__ import annotations
@@ -51,13 +53,14 @@ from spatial_dynamics.ros import messages
 from spatial_dynamics.ros.answering import Answering, Out
 from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, plan_qos, spin, subscribe
 from spatial_dynamics.ros.config import (
-    build_output, Config, ConfigError, NODE_NAME, Output, PARAMETER_NAMES,
-    PARAMETERS, PAYLOAD_PARAMETERS, prepare, reparse_needed)
+    build_robot, ConfigError, NODE_NAME, PARAMETER_NAMES, PARAMETERS, PAYLOAD_PARAMETERS,
+    prepare, reparse_needed)
 from spatial_dynamics.ros.control import terms_names
 from spatial_dynamics.ros.descriptions import description_source, DescriptionParser, ParseRequest
 from spatial_dynamics.ros.diagnostics import (
     backend_text, feedforward_status, model_status, observer_status)
 from spatial_dynamics.ros.plans import Annotator, prepare_plan
+from spatial_dynamics.ros.records import Config, Robot
 from std_msgs.msg import Float64MultiArray, String
 from trajectory_msgs.msg import JointTrajectory
 
@@ -75,9 +78,9 @@ class InverseDynamicsNode(Node):
         for param in PARAMETERS:   # the values are checked by _prepare, below
             self.declare_parameter(param.name, _UNSET[param.type] if param.default is None
                                    else param.default, PARAMETERS.descriptor(param))
-        # Two callback groups, two threads (spin's MultiThreadedExecutor): the answering one
-        # (inputs, diagnostics) and rclpy's default one (parameter services, the description
-        # topic, the parser's notifications), which alone writes
+        # Callback groups, each its thread (spin's MultiThreadedExecutor): the answering one
+        # (inputs, diagnostics), the plans' one (below) and rclpy's default one (parameter
+        # services, the description topic, the parser's notifications), which alone writes
         # ``config``. A parameter change that parses a description waits in its callback for
         # the parse while the answers go on in theirs; the new ``Config`` is swapped in as one
         # reference, and each answer reads ``self.config`` once.
@@ -101,13 +104,13 @@ class InverseDynamicsNode(Node):
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
         self._make_endpoints()
-        if self.output is None:
+        if self.robot is None:
             self._warn_waiting()
 
     @property
-    def output(self) -> Optional[Output]:
-        """The model and terms answers are computed with now (None: no model yet)."""
-        return self.config.output
+    def robot(self) -> Optional[Robot]:
+        """The robot the answers are computed for now (None: no model yet)."""
+        return self.config.robot
 
     def _make_endpoints(self) -> None:
         self.commands_pub = advertise(self, Float64MultiArray, 'effort_commands')
@@ -177,7 +180,7 @@ class InverseDynamicsNode(Node):
         config = self.config
         if config is None:
             return prepare({}, changes, None)
-        return prepare(config.params, changes, config.output)
+        return prepare(config.params, changes, config.robot)
 
     def _configure(self, changes: dict) -> None:
         """Validate ``changes`` against the current state, then apply all of them at once."""
@@ -192,7 +195,7 @@ class InverseDynamicsNode(Node):
                                    f'{config.params.output}')
         if config.new_description:
             self._description_generation += 1   # a topic description still parsing is stale
-        self._set_output(config, bool(set(PAYLOAD_PARAMETERS) & changes.keys()))
+        self._swap_in(config, bool(set(PAYLOAD_PARAMETERS) & changes.keys()))
         if config.kept_file:
             self.get_logger().info(
                 f'robot_description_file {config.kept_file!r} checked and kept: '
@@ -200,16 +203,16 @@ class InverseDynamicsNode(Node):
                 'robot_description is cleared')
         self._follow_topic()
 
-    def _set_output(self, config: Config, payload_changed: bool = False) -> None:
+    def _swap_in(self, config: Config, payload_changed: bool = False) -> None:
         """Swap ``config`` in (one reference); log a new model or payload."""
         previous = self.config
-        before = None if previous is None else previous.output
-        output = config.output
+        before = None if previous is None else previous.robot
+        robot = config.robot
         self.config = config
-        if output is not None and (before is None or output.base is not before.base):
-            self._log_model(output, before)
-        elif output is not None and payload_changed:
-            self.get_logger().info(f'payload: {output.payload}')
+        if robot is not None and (before is None or robot.base is not before.base):
+            self._log_model(robot, before)
+        elif robot is not None and payload_changed:
+            self.get_logger().info(f'payload: {robot.payload}')
 
     # -- the robot_description topic --------------------------------------------------------
 
@@ -241,12 +244,12 @@ class InverseDynamicsNode(Node):
         self._description_generation += 1
         config = self.config
         self._parser.submit(ParseRequest(self._description_generation, urdf, config.params,
-                                         config.output))
+                                         config.robot))
 
-    def _build_from_topic(self, request: ParseRequest) -> Output:
-        """Worker thread: the :class:`Output` of a topic description (ConfigError if bad)."""
-        return build_output(request.params, request.current, request.urdf,
-                            'topic robot_description')
+    def _build_from_topic(self, request: ParseRequest) -> Robot:
+        """Worker thread: the :class:`~.records.Robot` of a topic description (ConfigError)."""
+        return build_robot(request.params, request.current, request.urdf,
+                           'topic robot_description')
 
     def _on_parsed(self) -> None:
         """Executor: swap in a parsed topic description, unless something newer came since."""
@@ -263,7 +266,7 @@ class InverseDynamicsNode(Node):
                     f'robot description rejected, keeping the current model: {result}')
                 self.answering.totals.description_rejected(str(result))
                 continue
-            self._set_output(replace(self.config, output=result))
+            self._swap_in(replace(self.config, robot=result))
 
     def _rebuilt(self, request: ParseRequest, result):
         """Rebuild ``result`` for the current parameters; None when it is parsed again."""
@@ -272,23 +275,24 @@ class InverseDynamicsNode(Node):
             self._submit_topic(request.urdf)   # again, with the current parameters
             return None
         try:   # the same model: only the cheap parts again
-            return build_output(params, result)
+            return build_robot(params, result)
         except ConfigError as err:
             return err
 
-    def _log_model(self, out: Output, previous: Optional[Output]) -> None:
+    def _log_model(self, robot: Robot, previous: Optional[Robot]) -> None:
         """Log what was loaded; each URDF warning once per new description text."""
+        model = robot.model
         self.get_logger().info(
-            f'robot {out.model.name!r} from {out.source}: {len(out.model.joint_names)} DOF; '
-            f'output joints {list(out.joints)}')
-        self.get_logger().info(f'model: {out.base.summary()}; backend: '
-                               f'{backend_text(out)}; payload: {out.payload}')
-        if out.backend != 'compiled' and out.setting != 'numpy' and previous is None:
-            self.get_logger().warn(f'backend {out.setting}: compiled kernels unavailable, '
+            f'robot {model.name!r} from {robot.source}: {len(model.joint_names)} DOF; '
+            f'output joints {list(robot.joints)}')
+        self.get_logger().info(f'model: {robot.base.summary()}; backend: '
+                               f'{backend_text(robot)}; payload: {robot.payload}')
+        if robot.backend != 'compiled' and robot.setting != 'numpy' and previous is None:
+            self.get_logger().warn(f'backend {robot.setting}: compiled kernels unavailable, '
                                    f'answering on numpy: {sd.backends.compiled.FAILURE}')
-        if previous is None or out.urdf != previous.urdf:
-            for warning in out.base.warnings:
-                self.get_logger().warn(f'URDF warning ({out.source}): {warning}')
+        if previous is None or robot.urdf != previous.urdf:
+            for warning in robot.base.warnings:
+                self.get_logger().warn(f'URDF warning ({robot.source}): {warning}')
 
     def _warn_waiting(self) -> None:
         self.get_logger().warn(
@@ -391,20 +395,20 @@ class InverseDynamicsNode(Node):
         answering.drain(self.annotator)
         window, estimates = answering.period()
         config = self.config
-        output = config.output
-        if output is None:
+        robot = config.robot
+        if robot is None:
             self._warn_waiting()
-        backend = '' if output is None else backend_text(output)
+        backend = '' if robot is None else backend_text(robot)
         statuses = [
-            ('robot model', model_status(output, answering.totals, config.params.strict_urdf,
+            ('robot model', model_status(robot, answering.totals, config.params.strict_urdf,
                                          backend)),
-            ('feedforward', feedforward_status(output, window, answering.totals, config.params,
+            ('feedforward', feedforward_status(robot, window, answering.totals, config.params,
                                                answering.wrenches, now_ns)),
-            ('external torque', observer_status(output, config.params.observer_gain,
+            ('external torque', observer_status(robot, config.params.observer_gain,
                                                 answering.observer, estimates))]
         name = self.get_fully_qualified_name().lstrip('/')  # 'inverse_dynamics' in the root ns
         diagnostics = messages.diagnostic_array(
-            name, '' if output is None else output.model.name, statuses,
+            name, '' if robot is None else robot.model.name, statuses,
             self.get_clock().now().to_msg())
         self.diagnostics_pub.publish(diagnostics)
 

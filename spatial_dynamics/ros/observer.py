@@ -38,17 +38,16 @@ gives ``r = (1 − e^{−K_O t}) τ_ext`` at the samples after it.
 from __future__ import annotations
 
 import math
-from typing import Callable, Optional, Sequence, Tuple, TYPE_CHECKING
+from typing import Callable, Optional, Sequence, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import MAX_EFFORT
 from spatial_dynamics.ros.inputs import InputError, name_index
+from spatial_dynamics.ros.records import Robot
 
-if TYPE_CHECKING:       # config imports this module
-    from spatial_dynamics.ros.config import Output
-
-#: ``observer_gain`` K_O (1/s) at most: a time constant of 1 ms, one sample at 1 kHz. Beyond
+#: ``observer_gain`` K_O (1/s) at most (the bound of its entry in the node's parameter table,
+#: which checks it): a time constant of 1 ms, one sample at 1 kHz. Beyond
 #: it the estimate is the raw difference quotient of the momentum (differentiated
 #: velocities, all their noise) at any joint_states rate a node can take.
 MAX_OBSERVER_GAIN = 1000.0
@@ -69,16 +68,6 @@ Friction = Callable[[np.ndarray], np.ndarray]
 
 class ObserverError(ValueError):
     """An observer parameter that cannot be used; the message names it."""
-
-
-def check_observer_gain(value: float) -> float:
-    """``observer_gain`` K_O in 1/s: finite, from 0 (off) to :data:`MAX_OBSERVER_GAIN`."""
-    if not (math.isfinite(value) and 0.0 <= value <= MAX_OBSERVER_GAIN):
-        raise ObserverError(
-            f'parameter observer_gain: {value} is not a finite value from 0 (off) to '
-            f'{MAX_OBSERVER_GAIN:g} 1/s (a time constant of at least 1 ms; beyond it the '
-            'estimate is the differentiated momentum)')
-    return float(value)
 
 
 def check_warn(joint_names: Optional[Sequence[str]], values: Sequence[float]) -> np.ndarray:
@@ -275,7 +264,7 @@ class EstimateWindow:
 # --------------------------------------------------------------------------------------------
 # The node's observer: what it depends on
 
-def observer_key(output: Output, params) -> tuple:
+def observer_key(robot: Robot, params) -> tuple:
     """Return what the estimate depends on; the node restarts the observer when it changes.
 
     The model (the base, by identity: a parameter change that does not re-parse keeps it),
@@ -283,16 +272,16 @@ def observer_key(output: Output, params) -> tuple:
     that restarts it (``measured_timeout``) and what the measured effort holds; not the
     backend (the compiled kernels compute the same numbers).
     """
-    armature = None if output.armature is None else output.armature.tobytes()
-    return (id(output.base), output.payload, armature, output.friction_threshold,
+    armature = None if robot.armature is None else robot.armature.tobytes()
+    return (id(robot.base), robot.payload, armature, robot.friction_threshold,
             tuple(params.gravity), params.observer_gain, params.measured_timeout,
             params.measured_effort)
 
 
-def make_observer(output: Output, params) -> MomentumObserver:
-    """Return the observer of ``output``'s model (payload included) with the node's terms."""
-    model, threshold = output.model, output.friction_threshold
+def make_observer(robot: Robot, params) -> MomentumObserver:
+    """Return the observer of ``robot``'s model (payload included) with the node's terms."""
+    model, threshold = robot.model, robot.friction_threshold
     friction = None if threshold is None else (
         lambda qd: sd.friction_torque(model, qd, threshold))
-    return MomentumObserver(model, params.observer_gain, output.armature, friction,
-                            params.gravity, params.measured_timeout, output.backend)
+    return MomentumObserver(model, params.observer_gain, robot.armature, friction,
+                            params.gravity, params.measured_timeout, robot.backend)

@@ -26,9 +26,9 @@ from typing import Callable, NamedTuple, Optional
 import numpy as np
 from spatial_dynamics import clamp_to_effort_limits
 from spatial_dynamics.effort import annotate, AnnotationError
-from spatial_dynamics.ros.config import Config
 from spatial_dynamics.ros.control import FEEDBACK_MODES
 from spatial_dynamics.ros.messages import joint_trajectory
+from spatial_dynamics.ros.records import Config
 from spatial_dynamics.trajectory import prepare, Prepared, TrajectoryError
 
 
@@ -55,23 +55,23 @@ def prepare_plan(config: Config, msg, size: int = 0) -> PlanItem:
     plan is annotated, the plan is checked whole (:func:`~spatial_dynamics.trajectory.
     prepare`); in feedforward its first point is the desired state.
     """
-    output = config.output
+    robot = config.robot
     limit = config.params.trajectory_max_bytes
     if size > limit:
         return PlanItem(config, None, None, None, (
             'too_large', f'{size:,} bytes serialized, more than trajectory_max_bytes '
             f'{limit:,}: not converted'))
-    if output is None:
+    if robot is None:
         return PlanItem(config, msg, None, None, ('no_model', 'no robot model loaded yet'))
     whole = (config.params.control_mode in FEEDBACK_MODES
              or config.params.trajectory_effort_tolerance > 0.0)
     if not whole:
-        return PlanItem(config, msg, output.joints, None, None)
+        return PlanItem(config, msg, robot.joints, None, None)
     try:
-        prepared = prepare(msg.joint_names, msg.points, output.joints)
+        prepared = prepare(msg.joint_names, msg.points, robot.joints)
     except TrajectoryError as err:
-        return PlanItem(config, msg, output.joints, None, (err.reason, str(err)))
-    return PlanItem(config, msg, output.joints, prepared, None)
+        return PlanItem(config, msg, robot.joints, None, (err.reason, str(err)))
+    return PlanItem(config, msg, robot.joints, prepared, None)
 
 
 class Job(NamedTuple):
@@ -149,22 +149,22 @@ class Annotator:
 
     def build(self, job: Job, cancelled: Callable[[], bool] = lambda: False):
         """Return ``annotated_trajectory`` of ``job`` (None: refused, reason queued)."""
-        output, params = job.config.output, job.config.params
-        done = annotate(output.model, job.prepared.traj, params.trajectory_effort_tolerance,
+        robot, params = job.config.robot, job.config.params
+        done = annotate(robot.model, job.prepared.traj, params.trajectory_effort_tolerance,
                         params.output, params.gravity, cancelled=cancelled,
                         max_values=params.trajectory_annotation_max_values)
         if not np.isfinite(done.effort).all():
             self._refuse('non_finite_output', 'an effort is not finite')
             return None
-        limit = output.model.effort_limit
+        limit = robot.model.effort_limit
         over = np.flatnonzero(np.any(np.abs(done.effort) > np.where(limit > 0.0, limit,
                                                                     np.inf), axis=0))
         if len(over):
             peaks = np.abs(done.effort).max(axis=0)
-            names = output.model.joint_names
+            names = robot.model.joint_names
             text = ', '.join(f'{names[j]!r} {peaks[j]:.4g} > {limit[j]:g}' for j in over)
-            if output.clamp:
-                done.effort[:], _ = clamp_to_effort_limits(output.model, done.effort)
+            if robot.clamp:
+                done.effort[:], _ = clamp_to_effort_limits(robot.model, done.effort)
                 self.saturated.extend(names[j] for j in over)
                 self.log.warn(f'annotated_trajectory: effort clamped to the URDF effort limit '
                               f'(clamp_to_effort_limits): {text}', throttle_duration_sec=1.0)

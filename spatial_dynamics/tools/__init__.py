@@ -1,6 +1,10 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Tools on top of the library and the node: benchmark, demo, latency, soak, generators.
+"""Tools on top of the library and the node: demos, measurements and their helpers.
 
-They use everything and nothing uses them: ``python -m spatial_dynamics.tools.<name>``.
+``demo``, ``closed_loop`` and ``identify_demo`` (what the package does, end to end);
+``latency``, ``soak`` and ``startup`` (what the node costs, over time, to start); ``relay``
+(the trivial node ``latency`` compares with) and ``driving`` (what they share). They use
+everything and nothing uses them: ``python -m spatial_dynamics.tools.<name>``. The benchmark
+and the robot generators are not installed: ``benchmarks/`` in the checkout.
 """
