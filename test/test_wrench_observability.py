@@ -55,18 +55,18 @@ def status_after(q, effort, changes=()):
     params.update({'robot_description': text, 'observer_gain': GAIN,
                    'wrench_estimate.link': LINK, **dict(changes)})
     cfg = config.prepare({}, params, None)
-    output = cfg.output
-    assert tuple(output.joints) == tuple(output.model.joint_names)
+    robot = cfg.robot
+    assert tuple(robot.joints) == tuple(robot.model.joint_names)
     log = Log()
     answering = Answering(log)
     for k in range(300):
-        msg = joint_state(output.joints, q, effort, k)
+        msg = joint_state(robot.joints, q, effort, k)
         answering.measured(cfg, msg)
         out = answering.observe(cfg, msg)
         assert out.wrench is not None and out.wrench[1] == LINK
     assert not log.warnings, log.warnings
     _, estimates = answering.period()
-    level, message, values = observer_status(output, GAIN, answering.observer, estimates)
+    level, message, values = observer_status(robot, GAIN, answering.observer, estimates)
     return level, message, dict(values)
 
 

@@ -218,7 +218,7 @@ def feedforward_status(robot: Optional[Robot], window: Window, totals: Totals,
     return level, message, values
 
 
-def observer_status(output: Optional[Robot], gain: float,
+def observer_status(robot: Optional[Robot], gain: float,
                     observer: Optional[MomentumObserver], window: EstimateWindow) -> Status:
     """Return the ``external torque`` status: RMS of the estimate per joint over the period.
 
@@ -232,7 +232,7 @@ def observer_status(output: Optional[Robot], gain: float,
               ('time constant [ms]', f'{1e3 / gain:.1f}' if gain > 0.0 else '')]
     if gain <= 0.0:
         return 'OK', 'observer off (observer_gain 0)', values
-    if output is None:
+    if robot is None:
         return 'OK', 'no robot model', values
     values += [('estimates', str(window.count))]
     values += [(f'skipped {reason}', str(count)) for reason, count in window.skipped.items()]
@@ -241,21 +241,21 @@ def observer_status(output: Optional[Robot], gain: float,
                    ('restarts', str(observer.resets)),
                    ('last restart', observer.reset_reason)]
     rms = window.rms()
-    if rms is None or len(rms) != len(output.joints):
+    if rms is None or len(rms) != len(robot.joints):
         return 'OK', 'no measured effort in this period (observer waiting)', values
     wrench = _wrench_text(window.wrench, values)
-    warn = output.external_torque_warn
-    values += [(f'rms {joint}', f'{value:.4g}') for joint, value in zip(output.joints, rms)]
+    warn = robot.external_torque_warn
+    values += [(f'rms {joint}', f'{value:.4g}') for joint, value in zip(robot.joints, rms)]
     values += [('warn above', ', '.join(f'{x:g}' for x in warn))]
     over = np.flatnonzero(rms > warn)
     worst = int(np.argmax(rms / warn))
     if over.size:
         return 'WARN', ('external torque above external_torque_warn: ' + ', '.join(
-            f'{output.joints[i]} {rms[i]:.3g} (RMS) > {warn[i]:g}' for i in over)
+            f'{robot.joints[i]} {rms[i]:.3g} (RMS) > {warn[i]:g}' for i in over)
             + (f'; {wrench}' if wrench else '')), values
     if wrench:
         return 'WARN', wrench, values
-    return 'OK', (f'largest RMS {rms[worst]:.3g} on {output.joints[worst]} '
+    return 'OK', (f'largest RMS {rms[worst]:.3g} on {robot.joints[worst]} '
                   f'(warn above {warn[worst]:g})'), values
 
 
