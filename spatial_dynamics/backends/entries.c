@@ -51,7 +51,8 @@ const Algorithm ALGORITHMS[] = {
      "regressor_batch(kernels, N, q, qd, qdd, gravity, Y, threads) -> None: the regressors of\n"
      "N states (q, qd, qdd N x n each, gravity 3 numbers) into Y (N x n x 10 NB)."},
 };
-const int ALGORITHM_COUNT = (int)(sizeof ALGORITHMS / sizeof ALGORITHMS[0]);
+#define ROWS (sizeof ALGORITHMS / sizeof ALGORITHMS[0])
+const int ALGORITHM_COUNT = (int)ROWS;
 
 static const char *const VECTOR_NAMES[3] = {"q", "qd", "qdd"};
 
@@ -289,7 +290,7 @@ c_batch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 
 /* The functions' definitions, two a row of ALGORITHMS (single state, batch), filled in by
  * entries_add; each function's `self` is its row's index, which c_single and c_batch read. */
-static PyMethodDef entries[2 * (sizeof ALGORITHMS / sizeof ALGORITHMS[0])];
+static PyMethodDef entries[2 * ROWS];
 
 /* Add the entries of ALGORITHMS to m, and ALGORITHMS: their names in order (the doors'
  * kinds). */
