@@ -20,17 +20,25 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 #: The kernels generated from spatial_dynamics/algorithms (backends/codegen.py) as a C
 #: extension. The generated C is a build product, written by BuildKernels into the build
 #: directory (never into the sources): what it is generated from is what it depends on.
-#: -ffp-contract=off: no fused multiply-adds, so every operation rounds as in the Python
-#: backends. It reads numpy arrays through the numpy C API: numpy (its headers, and the
-#: generator's import of the package) is a build requirement (pyproject.toml, package.xml).
+#: The extension is one C file a job around the private header _compiled.h (which lists
+#: them); only kernels.c includes the generated header. -ffp-contract=off: no fused
+#: multiply-adds, so every operation rounds as in the Python backends. -fvisibility=hidden:
+#: the files' shared functions stay inside the shared object (direct calls, no PLT; only
+#: PyInit__compiled is exported). It reads numpy arrays through the numpy C API: numpy (its
+#: headers, and the generator's import of the package) is a build requirement
+#: (pyproject.toml, package.xml).
 KERNELS = Extension(
     package_name + '.backends._compiled',
-    sources=[package_name + '/backends/_compiled.c'],
-    # every module the generator reads or imports (test/test_build_depends.py checks it)
-    depends=sorted(glob(package_name + '/algorithms/*.py')) + [
+    # every C file in backends/ is a source or a dependency (test/test_build_depends.py)
+    sources=[package_name + '/backends/' + f for f in (
+        '_compiled.c', 'arguments.c', 'door.c', 'entries.c', 'kernels.c', 'threads.c')],
+    # the private header, and every module the generator reads or imports
+    depends=[package_name + '/backends/_compiled.h'] + sorted(
+        glob(package_name + '/algorithms/*.py')) + [
         package_name + '/' + f for f in ('backends/codegen.py', 'backends/c_printer.py',
                                          'backends/layout.py', 'joints.py', 'spatial.py')],
-    extra_compile_args=[] if os.name == 'nt' else ['-ffp-contract=off', '-pthread'],
+    extra_compile_args=[] if os.name == 'nt' else ['-ffp-contract=off', '-fvisibility=hidden',
+                                                   '-pthread'],
     extra_link_args=[] if os.name == 'nt' else ['-pthread'],
 )
 

@@ -1,0 +1,227 @@
+/* Copyright 2026 spatial_dynamics contributors
+ * SPDX-License-Identifier: Apache-2.0
+ *
+ * Kernels: a model's table, and the generated kernels run on it. A Kernels object holds a
+ * copy of a model's table (the rows of backends/layout.py, prepared once in Python), checked
+ * once so that no table makes the kernels read or write out of bounds. run_state runs one
+ * state through the kernels of _kernels_generated.h, run_states a slice of a batch (the RNEA
+ * several states at once in SIMD lanes). The only file of the extension that includes the
+ * generated header: the others know its kernels by RNEA, CRBA, MOMENTUM, REGRESSOR.
+ */
+#include "_compiled.h"
+#include <structmember.h>
+
+#include <stddef.h>
+#include <string.h>
+
+/* Generated from spatial_dynamics/algorithms into the build directory by setup.py (on the
+ * include path), never a file of the sources. */
+#include <_kernels_generated.h>
+#ifndef KERNELS_SHA256
+#define KERNELS_SHA256 ""   /* setup.py defines the SHA-256 of the header it generated */
+#endif
+
+/* Whether the rows of table K (rows x WIDTH) index q (nq numbers) and q̇ (nv numbers) within
+ * bounds, each body's parent before it: a 1-DoF joint one coordinate of each, a free-flyer
+ * (code FF) 7 of q and 6 of q̇ (the `dof` column), so that no table makes the kernels read or
+ * write out of bounds. */
+static int
+rows_fit(const double *K, long rows, double nq, double nv)
+{
+    int ok = nv >= 0.0 && nv <= nq && nv == (double)(long)nv;
+    double q_end = 0.0, v_end = 0.0;     /* every coordinate is some body's joint's */
+    for (long i = 1; ok && i < rows; i++) {
+        const double *row = K + i * WIDTH;
+        const double code = row[1], k = row[QIDX], kv = row[VIDX], dof = row[DOF];
+        const double width = code == FF ? 7.0 : 1.0;
+        ok = row[0] >= 0.0 && row[0] < (double)i && row[0] == (double)(long)row[0]
+             && code >= 0.0 && code <= (double)FF && code == (double)(long)code
+             && k >= 0.0 && k + width <= nq && k == (double)(long)k
+             && kv >= 0.0 && kv + dof <= nv && kv == (double)(long)kv
+             && dof == (code == FF ? 6.0 : 1.0);
+        q_end = k + width > q_end ? k + width : q_end;
+        v_end = kv + dof > v_end ? kv + dof : v_end;
+    }
+    return ok && q_end == nq && v_end == nv;
+}
+
+static void
+kernels_dealloc(KernelsObject *self)
+{
+    PyMem_Free(self->K);
+    PyMem_Free(self->zeros);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyObject *
+kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
+{
+    PyObject *table;
+    static char *keywords[] = {"table", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O:Kernels", keywords, &table))
+        return NULL;
+    Py_buffer v;
+    if (PyObject_GetBuffer(table, &v, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
+        return NULL;
+    const char *fmt = v.format ? v.format : "B";
+    if (*fmt == '@' || *fmt == '=' || *fmt == '<')
+        fmt++;
+    if (strcmp(fmt, "d") != 0 || v.ndim != 2 || v.shape[1] != WIDTH || v.shape[0] < 1) {
+        PyBuffer_Release(&v);
+        PyErr_Format(PyExc_ValueError,
+                     "Kernels: table must be a C-contiguous float64 array of shape (NB + 1, %d)",
+                     (int)WIDTH);
+        return NULL;
+    }
+    const double *K = (const double *)v.buf;
+    long rows = (long)v.shape[0];
+    double n = K[QIDX];
+    /* at most one joint per body (mimic joints share one), each at most 7 coordinates of q
+     * (a free-flyer), so n < 7 rows */
+    int ok = n >= 0.0 && n < 7.0 * (double)rows && n == (double)(long)n;
+    /* The kernels index q, the scratch and their parents by these columns: check them once,
+     * so no table reaches the kernels that could make them read or write out of bounds. */
+    ok = ok && rows_fit(K, rows, n, K[VIDX]);
+    if (!ok) {
+        PyBuffer_Release(&v);
+        PyErr_SetString(PyExc_ValueError, "Kernels: table rows are not a tree over its joints");
+        return NULL;
+    }
+    /* The sizes of one state (result_shape, work_size) fit MAX_DOUBLES each, so that no
+     * entry's sum of them overflows. */
+    Py_ssize_t size;
+    if (checked_mul(rows, 6 * (Py_ssize_t)rows + WORK, MAX_DOUBLES, &size) < 0
+            || checked_mul((Py_ssize_t)n, 10 * (Py_ssize_t)rows, MAX_DOUBLES, &size) < 0) {
+        PyBuffer_Release(&v);
+        PyErr_SetString(PyExc_ValueError, "Kernels: table too large");
+        return NULL;
+    }
+    KernelsObject *self = (KernelsObject *)type->tp_alloc(type, 0);
+    if (self == NULL) {
+        PyBuffer_Release(&v);
+        return NULL;
+    }
+    self->rows = rows;
+    self->n = (long)n;
+    self->nv = (long)K[VIDX];
+    self->K = PyMem_Malloc(sizeof(double) * rows * WIDTH);
+    self->zeros = PyMem_Calloc(self->nv + 1, sizeof(double));
+    if (self->K != NULL)
+        memcpy(self->K, K, sizeof(double) * rows * WIDTH);
+    PyBuffer_Release(&v);
+    if (self->K == NULL || self->zeros == NULL) {
+        Py_DECREF(self);
+        return PyErr_NoMemory();
+    }
+    return (PyObject *)self;
+}
+
+static PyMemberDef kernels_members[] = {
+    {"n", T_LONG, offsetof(KernelsObject, n), READONLY, "number of joints (len(q))"},
+    {"rows", T_LONG, offsetof(KernelsObject, rows), READONLY, "rows of the table (NB + 1)"},
+    {"nv", T_LONG, offsetof(KernelsObject, nv), READONLY, "velocity coordinates (len(qd))"},
+    {NULL},
+};
+
+PyTypeObject KernelsType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "spatial_dynamics.backends._compiled.Kernels",
+    .tp_doc = PyDoc_STR("Kernels(table): a model's table (backends/layout.py), copied once."),
+    .tp_basicsize = sizeof(KernelsObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_new = kernels_new,
+    .tp_dealloc = (destructor)kernels_dealloc,
+    .tp_members = kernels_members,
+};
+
+/* ------------------------------------------------------------------------------------------
+ * The generated kernels on one state, or on a slice of a batch */
+
+/* The results of `kernel` for one state: how many (momentum's two, else one), their shape
+ * dims[:ndim] (returned), and dims[0] x dims[1] doubles each. */
+int
+result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
+{
+    *count = kernel == MOMENTUM ? 2 : 1;
+    dims[0] = h->nv;
+    dims[1] = kernel == CRBA ? h->nv : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
+    return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
+}
+
+/* Scratch doubles of one state: the per-body rows, and the regressor's carried axes. */
+Py_ssize_t
+work_size(int kernel, long rows)
+{
+    return (Py_ssize_t)rows * WORK
+        + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * ((Py_ssize_t)rows + 5) : 0);
+}
+
+/* One state through the generated kernels: the body transforms, then `kernel`'s passes.
+ * g: 3 numbers; f: rows x 6 external forces or NULL; out2: momentum's second result. */
+void
+run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
+          const double *qdd, const double *g, const double *f, double *out1, double *out2,
+          double *work)
+{
+    xup_kernel(K, rows, q, work);
+    switch (kernel) {
+    case RNEA:
+        rnea_kernel(K, rows, q, qd, qdd, g[0], g[1], g[2], f, f != NULL, out1, work);
+        break;
+    case CRBA:
+        crba_kernel(K, rows, work, out1);
+        break;
+    case MOMENTUM:
+        momentum_kernel(K, rows, q, qd, out1, out2, work);
+        break;
+    default:
+        regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1,
+                         work + (Py_ssize_t)rows * WORK, work);
+    }
+}
+
+/* The states [lo, hi) of job s with the scratch `work`: 0, or -1 without memory. */
+int
+run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
+{
+    const long n = s->n, nv = s->nv, rows = s->rows;
+    if (work == NULL)
+        return -1;
+#ifdef SD_LANES
+    if (s->kernel == RNEA && s->qd != NULL && s->qdd != NULL) {
+        /* several states at once (SIMD across states), the same bits as one by one */
+        const double *f = s->fext ? s->fext + (s->fext_per_state ? lo : 0) * rows * 6 : NULL;
+        long done = rnea_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
+                                     s->qd + lo * nv, s->qdd + lo * nv, s->g[0], s->g[1],
+                                     s->g[2], f, s->fext_per_state, s->out1 + lo * s->size);
+        if (done < 0)
+            return -1;
+        lo += done;
+    }
+#endif
+    for (Py_ssize_t k = lo; k < hi; k++) {
+        const double *f = s->fext ? s->fext + (s->fext_per_state ? k : 0) * rows * 6 : NULL;
+        run_state(s->kernel, s->K, rows, s->q + k * n, s->qd ? s->qd + k * nv : NULL,
+                  s->qdd ? s->qdd + k * nv : NULL, s->g, f, s->out1 + k * s->size,
+                  s->out2 ? s->out2 + k * s->size : NULL, work);
+    }
+    return 0;
+}
+
+/* Add Kernels to the module m, with the generated header's SHA-256 and its WORK (scratch
+ * doubles a body). */
+int
+kernels_add(PyObject *m)
+{
+    if (PyType_Ready(&KernelsType) < 0)
+        return -1;
+    Py_INCREF(&KernelsType);
+    if (PyModule_AddObject(m, "Kernels", (PyObject *)&KernelsType) < 0) {
+        Py_DECREF(&KernelsType);
+        return -1;
+    }
+    if (PyModule_AddStringConstant(m, "KERNELS_SHA256", KERNELS_SHA256) < 0
+            || PyModule_AddIntConstant(m, "WORK", WORK) < 0)
+        return -1;
+    return 0;
+}
