@@ -308,7 +308,7 @@ def generate_c() -> str:
  *
  * Kernels generated from spatial_dynamics.algorithms: do not edit.
  * Change the source, not this header: setup.py generates it into the build directory.
- * Included by _compiled.c; compile without fused multiply-adds (-ffp-contract=off).
+ * Included by kernels.c; compile without fused multiply-adds (-ffp-contract=off).
  */
 #ifndef SPATIAL_DYNAMICS_KERNELS_GENERATED_H
 #define SPATIAL_DYNAMICS_KERNELS_GENERATED_H
