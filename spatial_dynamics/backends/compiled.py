@@ -4,11 +4,11 @@
 
 ``setup.py`` compiles ``_compiled.c`` and its units; ``kernels.c`` includes
 ``_kernels_generated.h``, the kernels that :mod:`.codegen` prints from
-:mod:`spatial_dynamics.algorithms` into the build directory: the same statements in the same order, without fused multiply-adds, so the results agree with
-the Python backends to a few ulps (to the bit on the same libm). Nothing is compiled at run
-time. A build without a C compiler installs without the extension: then :data:`ext` is
-``None``, :data:`FAILURE` says why, importing warns once, and ``backend='auto'`` runs on
-numpy.
+:mod:`spatial_dynamics.algorithms` into the build directory: the same statements in the same
+order, without fused multiply-adds, so the results agree with the Python backends to a few
+ulps (to the bit on the same libm). Nothing is compiled at run time. A build without a C
+compiler installs without the extension: then :data:`ext` is ``None``, :data:`FAILURE` says
+why, importing warns once, and ``backend='auto'`` runs on numpy.
 
 The single-state entries are called by :mod:`spatial_dynamics.backends` directly; this module
 prepares the batches: one float64 C-contiguous copy of each input, the external forces as one
