@@ -18,24 +18,13 @@ import os
 import subprocess
 import sys
 
+from conftest import TWO_JOINTS
 import numpy as np
 import pytest
 import spatial_dynamics as sd
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
-#: One link on one revolute joint, and a second on a prismatic one: small enough to read.
-TWO_JOINTS = """<robot name="two">
-  <link name="base"/>
-  <link name="a"><inertial><origin xyz="0.1 0 0.2"/><mass value="2"/>
-    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.3"/></inertial></link>
-  <link name="b"><inertial><origin xyz="0 0.1 0"/><mass value="1"/>
-    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/>
-    <axis xyz="0 1 0"/><limit effort="10" velocity="1" lower="-3" upper="3"/></joint>
-  <joint name="j2" type="prismatic"><parent link="a"/><child link="b"/><origin xyz="0 0 0.5"/>
-    <axis xyz="1 0 0"/><limit effort="10" velocity="1" lower="-3" upper="3"/></joint>
-</robot>"""
 #: A single link: no joint, q of length 0.
 NO_JOINTS = '<robot name="one"><link name="base"/></robot>'
 

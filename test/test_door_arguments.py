@@ -13,22 +13,12 @@
 import gc
 import inspect
 
+from conftest import TWO_JOINTS
 import numpy as np
 import pytest
 import spatial_dynamics as sd
 from spatial_dynamics.backends import compiled
 
-TWO_JOINTS = """<robot name="two">
-  <link name="base"/>
-  <link name="a"><inertial><origin xyz="0.1 0 0.2"/><mass value="2"/>
-    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.3"/></inertial></link>
-  <link name="b"><inertial><origin xyz="0 0.1 0"/><mass value="1"/>
-    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/>
-    <axis xyz="0 1 0"/><limit effort="10" velocity="1" lower="-3" upper="3"/></joint>
-  <joint name="j2" type="prismatic"><parent link="a"/><child link="b"/><origin xyz="0 0 0.5"/>
-    <axis xyz="1 0 0"/><limit effort="10" velocity="1" lower="-3" upper="3"/></joint>
-</robot>"""
 Z = [0.0, 0.0]
 #: The functions the door enters, with one state's joint vectors.
 DOORS = {'rnea': 3, 'gravity_torque': 1, 'bias_torque': 2, 'mass_matrix': 1,

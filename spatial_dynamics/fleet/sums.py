@@ -20,7 +20,7 @@ from typing import Dict, Iterable, Sequence
 
 import numpy as np
 
-from ..replay.identify import Identified, PARAMETERS, RCOND, regressor
+from ..replay.identify import Identified, missing_note, RCOND, regressor
 
 
 @dataclass
@@ -97,11 +97,7 @@ def solve(s: Sums, names: Sequence[str]) -> Identified:
             if np.sqrt(max(lam[0], 0.0)) > RCOND * np.sqrt(lam[-1]):
                 break
             use[k[np.argmin(scale[k])]] = False
-        missing = [PARAMETERS[k] for k in range(3) if not use[k]]
-        if missing:
-            notes.append(f'{names[j]}: {", ".join(missing)} not identified (the joint\'s '
-                         + ('velocity never left zero' if not use[0] and not use[1] else
-                            'motion does not separate it from the other terms') + ')')
+        notes += missing_note(names[j], use)
         if not use.any():
             continue
         k = np.flatnonzero(use)

@@ -55,6 +55,16 @@ def regressor(qd: np.ndarray, qdd: np.ndarray, threshold: float) -> np.ndarray:
     return np.column_stack((qd, np.tanh(qd / threshold), qdd))
 
 
+def missing_note(joint: str, use: np.ndarray) -> List[str]:
+    """Return the note (a list of one, or none) naming the drive terms ``use`` leaves out."""
+    missing = [PARAMETERS[k] for k in range(3) if not use[k]]
+    if not missing:
+        return []
+    why = ('velocity never left zero' if not use[0] and not use[1] else
+           'motion does not separate it from the other terms')
+    return [f'{joint}: {", ".join(missing)} not identified (the joint\'s {why})']
+
+
 def identify(residual: np.ndarray, qd: np.ndarray, qdd: np.ndarray, threshold: float,
              names) -> Identified:
     """Fit each joint's damping, Coulomb friction and armature to its residual (N, n)."""
@@ -78,11 +88,7 @@ def identify(residual: np.ndarray, qd: np.ndarray, qdd: np.ndarray, threshold: f
                 break
             weakest = np.flatnonzero(use)[np.argmin(scale[use])]
             use[weakest] = False
-        missing = [PARAMETERS[k] for k in range(3) if not use[k]]
-        if missing:
-            notes.append(f'{names[j]}: {", ".join(missing)} not identified (the joint\'s '
-                         + ('velocity never left zero' if not use[0] and not use[1] else
-                            'motion does not separate it from the other terms') + ')')
+        notes += missing_note(names[j], use)
         if not use.any():
             continue
         x, *_ = np.linalg.lstsq(A[:, use], r, rcond=None)
