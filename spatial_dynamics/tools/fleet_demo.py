@@ -27,7 +27,7 @@ import spatial_dynamics as sd
 from spatial_dynamics.model import rigid_body_inertia
 from spatial_dynamics.replay import bags
 from spatial_dynamics.replay.urdf_writer import corrected_urdf
-from .identify_demo import drives, EPS, Motion, NOISE_QD, NOISE_TAU, pd_gains, RATE, ROBOTS
+from .identify_demo import drives, Motion, NOISE_QD, NOISE_TAU, record, ROBOTS
 from .startup import example_robot
 
 #: The first day's midnight (UTC), s since the epoch: 2026-10-01.
@@ -38,23 +38,7 @@ SUBSTEPS = 5        # controller steps per recorded sample (2.5 kHz)
 def simulate(true_text: str, model: sd.Model, motion: Motion, seconds: float,
              friction: np.ndarray) -> Dict[str, np.ndarray]:
     """Track ``motion`` on the true robot; return ``t, q, qd, effort`` at RATE (no noise)."""
-    from spatial_dynamics.sim.robot import SimulatedRobot
-    damping, _, armature = drives(model.nq)
-    robot = SimulatedRobot(true_text, timestep=1.0 / (RATE * SUBSTEPS), damping=damping,
-                           armature=armature)
-    q0, qd0, _ = motion(0.0)
-    robot.set_state(q0, qd0)
-    kp, kd = pd_gains(model, q0, 10.0)
-    N = int(seconds * RATE)
-    Q, QD, TAU = (np.empty((N, model.nq)) for _ in range(3))
-    for i in range(N * SUBSTEPS):
-        qr, qdr, qddr = motion(i / (RATE * SUBSTEPS))
-        q, qd = robot.q, robot.qd
-        tau = sd.rnea(model, qr, qdr, qddr) + kp * (qr - q) + kd * (qdr - qd)
-        if i % SUBSTEPS == 0:
-            Q[i // SUBSTEPS], QD[i // SUBSTEPS], TAU[i // SUBSTEPS] = q, qd, tau
-        robot.step(tau - friction * np.tanh(qd / EPS))
-    return {'t': np.arange(N) / RATE, 'q': Q, 'qd': QD, 'effort': TAU}
+    return record(true_text, None, model, motion, seconds, friction, SUBSTEPS)
 
 
 def friction_of(n: int, robot: int, day: int, wear) -> np.ndarray:

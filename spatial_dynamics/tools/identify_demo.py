@@ -142,31 +142,44 @@ def pd_gains(model: sd.Model, q0: np.ndarray, frequency: float):
     return m * w * w, 2.0 * m * w
 
 
+def record(true_text: str, joints, model: sd.Model, motion: Motion, seconds: float,
+           friction: np.ndarray, substeps: int = SUBSTEPS) -> Dict[str, np.ndarray]:
+    """Track ``motion`` on the true robot with PD + feed-forward of ``model``, noise-free.
+
+    The true robot is ``true_text`` with the drives' damping and armature (:func:`drives`) and
+    the Coulomb ``friction`` per joint, stepped ``substeps`` times per recorded sample. Returns
+    ``t`` (s), ``q``, ``qd`` and ``effort`` (the drive torque) at RATE.
+    """
+    from spatial_dynamics.sim.robot import SimulatedRobot
+    damping, _, armature = drives(model.nq)
+    robot = SimulatedRobot(true_text, joints=joints, timestep=1.0 / (RATE * substeps),
+                           damping=damping, armature=armature)
+    q0, qd0, _ = motion(0.0)
+    robot.set_state(q0, qd0)
+    kp, kd = pd_gains(model, q0, 10.0)
+    N = int(seconds * RATE)
+    Q, QD, TAU = (np.empty((N, model.nq)) for _ in range(3))
+    for i in range(N * substeps):
+        qr, qdr, qddr = motion(i / (RATE * substeps))
+        q, qd = robot.q, robot.qd
+        tau = sd.rnea(model, qr, qdr, qddr) + kp * (qr - q) + kd * (qdr - qd)
+        if i % substeps == 0:
+            Q[i // substeps], QD[i // substeps], TAU[i // substeps] = q, qd, tau
+        robot.step(tau - friction * np.tanh(qd / EPS))
+    return {'t': np.arange(N) / RATE, 'q': Q, 'qd': QD, 'effort': TAU}
+
+
 def simulate(true_text: bytes, joints, user_model: sd.Model, motion: Motion, seconds: float,
              seed: int) -> Dict[str, np.ndarray]:
     """Track ``motion`` on the true robot with PD + feed-forward of the user's model.
 
     Returns ``t`` (s), ``q``, ``qd`` (noisy) and ``effort`` (drive torque plus noise) at RATE.
     """
-    from spatial_dynamics.sim.robot import SimulatedRobot
-    damping, friction, armature = drives(user_model.nq)
-    robot = SimulatedRobot(true_text.decode(), joints=joints,
-                           timestep=1.0 / (RATE * SUBSTEPS), damping=damping,
-                           armature=armature)
-    q0, qd0, _ = motion(0.0)
-    robot.set_state(q0, qd0)
-    kp, kd = pd_gains(user_model, q0, 10.0)
-    N = int(seconds * RATE)
-    Q, QD, TAU = (np.empty((N, user_model.nq)) for _ in range(3))
-    for i in range(N * SUBSTEPS):
-        qr, qdr, qddr = motion(i / (RATE * SUBSTEPS))
-        q, qd = robot.q, robot.qd
-        tau = sd.rnea(user_model, qr, qdr, qddr) + kp * (qr - q) + kd * (qdr - qd)
-        if i % SUBSTEPS == 0:
-            Q[i // SUBSTEPS], QD[i // SUBSTEPS], TAU[i // SUBSTEPS] = q, qd, tau
-        robot.step(tau - friction * np.tanh(qd / EPS))
+    _, friction, _ = drives(user_model.nq)
+    data = record(true_text.decode(), joints, user_model, motion, seconds, friction)
     rng = np.random.default_rng(seed)
-    return {'t': np.arange(N) / RATE, 'q': Q, 'qd': QD + rng.normal(0.0, NOISE_QD, QD.shape),
+    QD, TAU = data['qd'], data['effort']
+    return {'t': data['t'], 'q': data['q'], 'qd': QD + rng.normal(0.0, NOISE_QD, QD.shape),
             'effort': TAU + rng.normal(0.0, NOISE_TAU, TAU.shape)}
 
 
