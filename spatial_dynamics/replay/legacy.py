@@ -99,7 +99,7 @@ def parser() -> argparse.ArgumentParser:
 
 
 def check(p: argparse.ArgumentParser, args) -> None:
-    """The old command's checks of its options, their texts as they were (usage, exit 2)."""
+    """Check the options as the old command did, with its texts (usage errors, exit 2)."""
     if args.trajectory and args.trajectory_topic:
         p.error('--trajectory and --trajectory-topic exclude each other')
     if not args.trajectory and not args.bag:
