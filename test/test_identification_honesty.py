@@ -87,13 +87,14 @@ def test_the_pasted_node_parameters_and_urdf_reproduce_the_fit(robot_bags, tmp_p
     """
     model, true, train, held, _ = robot_bags
     out, urdf = str(tmp_path / 'out'), str(tmp_path / 'corrected.urdf')
-    assert main([train, '--urdf', robot_urdf_path('ur5'), '--out', out, '--inertias',
-                 '--identify', '--threshold', str(EPS), '--write-urdf', urdf,
+    assert main(['identify', train, '--urdf', robot_urdf_path('ur5'), '--out', out,
+                 '--inertias', '--drives', '--threshold', str(EPS), '--write-urdf', urdf,
                  '--no-plots', '--residual', 'none']) == 0
     text = capsys.readouterr().out
     armature = joint_block(text)
     written = sd.Model.from_urdf(urdf)
-    data = recording(parser().parse_args([train, '--urdf', urdf]), train, written, Stages())
+    data = recording(parser().parse_args(['residual', train, '--urdf', urdf]), train, written,
+                     Stages())
     q, qd, qdd = data['q'], data['qd'], data['qdd']
     tau = (sd.rnea(written, q, qd, qdd) + sd.friction_torque(written, qd, EPS)
            + armature * qdd)
@@ -118,7 +119,7 @@ def ur5_with_dynamics(path, joint, damping, friction):
     return str(path)
 
 
-@pytest.mark.parametrize('fit', [['--identify'], ['--inertias', '--identify']])
+@pytest.mark.parametrize('fit', [[], ['--inertias', '--drives']])
 def test_a_joint_never_moved_keeps_the_urdf_dynamics(fit, robot_bags, tmp_path, capsys):
     """wrist_3 held still: its damping, friction and armature are undetermined, not 0."""
     model, true, *_ = robot_bags
@@ -126,7 +127,7 @@ def test_a_joint_never_moved_keeps_the_urdf_dynamics(fit, robot_bags, tmp_path, 
     bag = record(tmp_path / 'still', true, *motion(model.nq, 7, only=(0, 1, 2, 3, 4)),
                  seed=16)
     out, written = str(tmp_path / 'out'), str(tmp_path / 'corrected.urdf')
-    assert main([bag, '--urdf', urdf, '--out', out, *fit, '--threshold', str(EPS),
+    assert main(['identify', bag, '--urdf', urdf, '--out', out, *fit, '--threshold', str(EPS),
                  '--write-urdf', written, '--no-plots', '--residual', 'none']) == 0
     text = capsys.readouterr().out
     again = sd.Model.from_urdf(written)

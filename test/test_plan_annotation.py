@@ -106,8 +106,7 @@ def test_replay_annotate_checks_the_effort_limits(tmp_path, capsys):
     src = write_plan(tmp_path / 'fast.yaml', model.joint_names,
                      [point(0.0, Q0, np.zeros(6)), point(0.2, Q1, np.zeros(6))])
     out = tmp_path / 'out.yaml'
-    assert main(['--urdf', urdf, '--trajectory', src, '--annotate', str(out),
-                 '--out', str(tmp_path / 'o')]) == 1
+    assert main(['annotate', src, '--urdf', urdf, '--out', str(out)]) == 1
     text = capsys.readouterr()
     assert 'EXCEEDED' in text.out and 'effort limit' in text.err
     written = yaml.safe_load(out.read_text())     # written, for a look, but the exit says no
@@ -122,8 +121,8 @@ def test_replay_annotate_is_bounded_and_says_when_the_tolerance_is_not_met(
                      [point(0.0, Q0, np.zeros(6)), point(4.0, Q1, np.zeros(6))])
     out = tmp_path / 'out.yaml'
     # 1e-300 N m cannot be met at the 1 ms steps: said, exit 1
-    assert main(['--urdf', urdf, '--trajectory', src, '--annotate', str(out),
-                 '--tolerance', '1e-300', '--out', str(tmp_path / 'o')]) == 1
+    assert main(['annotate', src, '--urdf', urdf, '--out', str(out),
+                 '--tolerance', '1e-300']) == 1
     text = capsys.readouterr()
     assert 'tolerance 1e-300 N m NOT met' in text.err
     # a 2000 s plan at 1e-9 N m is too many points: refused, nothing written (the bound of
@@ -132,8 +131,8 @@ def test_replay_annotate_is_bounded_and_says_when_the_tolerance_is_not_met(
     long = write_plan(tmp_path / 'long.yaml', model.joint_names,
                       [point(0.0, Q0, np.zeros(6)), point(2000.0, Q1, np.zeros(6))])
     out2 = tmp_path / 'out2.yaml'
-    assert main(['--urdf', urdf, '--trajectory', long, '--annotate', str(out2),
-                 '--tolerance', '1e-9', '--out', str(tmp_path / 'o')]) == 1
+    assert main(['annotate', long, '--urdf', urdf, '--out', str(out2),
+                 '--tolerance', '1e-9']) == 1
     assert 'too small for this plan' in capsys.readouterr().err
     assert not out2.exists()
 
@@ -146,7 +145,7 @@ def test_replay_annotate_output_is_checked_first_and_written_alone(tmp_path, cap
     before = open(src).read()
     for target in (src, urdf):           # an output that is an input: refused, untouched
         text = open(target).read()
-        assert main(['--urdf', urdf, '--trajectory', src, '--annotate', target]) == 1
+        assert main(['annotate', src, '--urdf', urdf, '--out', target]) == 1
         assert 'also an input' in capsys.readouterr().err
         assert open(target).read() == text
     assert open(src).read() == before
@@ -159,7 +158,7 @@ def test_replay_annotate_output_is_checked_first_and_written_alone(tmp_path, cap
         return real(path, data, what)
 
     monkeypatch.setattr(sd.files, 'write_atomic', spy)
-    assert main(['--urdf', urdf, '--trajectory', src, '--annotate', 'out.yaml']) == 0
+    assert main(['annotate', src, '--urdf', urdf, '--out', 'out.yaml']) == 0
     assert written == ['out.yaml'] and os.path.exists('out.yaml')
     assert not os.path.exists('replay_out')
     assert sorted(os.listdir(tmp_path)) == ['out.yaml', 'plan.yaml']

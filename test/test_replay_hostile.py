@@ -144,12 +144,14 @@ def test_fifo_as_storage_file_or_metadata_is_refused_at_once(tmp_path):
     db = next((tmp_path / 'bag').glob('*.db3'))
     os.remove(db)
     os.mkfifo(db)
-    status, out, err = replay(bag, '--urdf', urdf, '--no-plots', '--out', tmp_path / 'o')
+    status, out, err = replay('residual', bag, '--urdf', urdf, '--no-plots', '--out',
+                              tmp_path / 'o')
     assert status == 1 and 'not a regular file' in one_line(err) and 'named pipe' in err, err
     bag2 = write_bag(tmp_path / 'bag2', 0.1)
     os.remove(tmp_path / 'bag2' / 'metadata.yaml')
     os.mkfifo(tmp_path / 'bag2' / 'metadata.yaml')
-    status, out, err = replay(bag2, '--urdf', urdf, '--no-plots', '--out', tmp_path / 'o')
+    status, out, err = replay('residual', bag2, '--urdf', urdf, '--no-plots', '--out',
+                              tmp_path / 'o')
     assert status == 1 and 'metadata.yaml' in one_line(err) and 'named pipe' in err, err
 
 
@@ -165,7 +167,8 @@ def test_a_database_that_is_not_a_bag_is_one_line(tmp_path, damage):
         con.execute("UPDATE messages SET data = 'some text'")
     con.commit()
     con.close()
-    status, out, err = replay(bag, '--urdf', urdf, '--no-plots', '--out', tmp_path / 'o')
+    status, out, err = replay('residual', bag, '--urdf', urdf, '--no-plots', '--out',
+                              tmp_path / 'o')
     assert status == 1 and 'not a rosbag2 sqlite3 database' in one_line(err), err
 
 
@@ -175,10 +178,10 @@ def test_out_that_cannot_be_a_directory_is_refused_before_the_computation(tmp_pa
     a_file = tmp_path / 'file'
     a_file.write_text('x')
     for out in (a_file, '/proc/spatial_dynamics_out'):
-        status, stdout, err = replay(bag, '--urdf', urdf, '--no-plots', '--out', out)
+        status, stdout, err = replay('residual', bag, '--urdf', urdf, '--no-plots', '--out', out)
         assert status == 1 and f'--out {out}' in one_line(err), err
         assert stdout == ''          # refused before anything was computed
-        status, stdout, err = replay('--urdf', urdf, '--trajectory', tmp_path / 'none.yaml',
+        status, stdout, err = replay('trajectory', tmp_path / 'none.yaml', '--urdf', urdf,
                                      '--out', out)
         assert status == 1 and f'--out {out}' in one_line(err), err
 
@@ -205,8 +208,8 @@ BAD_PLANS = {
 @pytest.mark.parametrize('case', sorted(BAD_PLANS))
 def test_bad_trajectory_files_are_one_line(tmp_path, case):
     text, expected = BAD_PLANS[case]
-    status, out, err = replay('--urdf', robot_urdf_path('ur5'), '--trajectory',
-                              _plan(tmp_path, text), '--no-plots', '--out', tmp_path / 'o')
+    status, out, err = replay('trajectory', _plan(tmp_path, text), '--urdf',
+                              robot_urdf_path('ur5'), '--no-plots', '--out', tmp_path / 'o')
     assert status == 1 and expected in one_line(err), err
 
 
@@ -216,7 +219,7 @@ def test_trajectory_that_is_not_a_regular_file_is_refused_at_once(tmp_path, spec
             'directory': tmp_path}[special]
     if special == 'fifo':
         os.mkfifo(path)
-    status, out, err = replay('--urdf', robot_urdf_path('ur5'), '--trajectory', path,
+    status, out, err = replay('trajectory', path, '--urdf', robot_urdf_path('ur5'),
                               '--no-plots', '--out', tmp_path / 'o')
     assert status == 1 and 'not a regular file' in one_line(err), err
 
@@ -241,8 +244,8 @@ def test_yaml_alias_bomb_is_refused_by_its_budget(tmp_path):
     path = _plan(tmp_path, bomb)
     code = ('import resource, sys; resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30)); '
             'from spatial_dynamics.replay.__main__ import main; sys.exit(main(sys.argv[1:]))')
-    run = subprocess.run([sys.executable, '-c', code, '--urdf', robot_urdf_path('ur5'),
-                          '--trajectory', str(path), '--no-plots', '--out', str(tmp_path / 'o')],
+    run = subprocess.run([sys.executable, '-c', code, 'trajectory', str(path), '--urdf',
+                          robot_urdf_path('ur5'), '--no-plots', '--out', str(tmp_path / 'o')],
                          capture_output=True, text=True, timeout=HANG_GUARD,
                          env={**os.environ, 'PYTHONPATH': ROOT})
     assert run.returncode == 1 and 'alias' in one_line(run.stderr), run.stderr
@@ -262,7 +265,7 @@ def test_load_yaml_equals_pyyaml_safe_load_on_real_documents():
 def test_gravity_that_is_not_finite_or_absurd_is_usage(tmp_path):
     plan = _plan(tmp_path, PLAN)
     for g in (['nan', 'nan', 'nan'], ['0', '0', '1e300']):
-        status, out, err = replay('--urdf', robot_urdf_path('ur5'), '--trajectory', plan,
+        status, out, err = replay('trajectory', plan, '--urdf', robot_urdf_path('ur5'),
                                   '--no-plots', '--out', tmp_path / 'o', '--gravity', *g)
         assert status == 2 and '--gravity' in err and 'Traceback' not in err, err
 
@@ -276,8 +279,8 @@ def test_non_finite_torque_fails_the_check(tmp_path, monkeypatch, capsys):
         tau[5, 1] = np.nan
         return tau
     monkeypatch.setattr(cli, 'rnea', poisoned)
-    status = cli.main(['--urdf', robot_urdf_path('ur5'), '--trajectory',
-                       str(_plan(tmp_path, PLAN)), '--no-plots', '--out', str(tmp_path / 'o')])
+    status = cli.main(['trajectory', str(_plan(tmp_path, PLAN)), '--urdf',
+                       robot_urdf_path('ur5'), '--no-plots', '--out', str(tmp_path / 'o')])
     out, err = capsys.readouterr()
     assert status == 1
     line = next(x for x in out.splitlines() if 'shoulder_lift_joint' in x)

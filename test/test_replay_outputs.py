@@ -116,7 +116,7 @@ def test_write_urdf_that_cannot_be_written_is_refused_before_any_work(
               'fifo': tmp_path / 'fifo.urdf'}[case]
     if case == 'fifo':
         os.mkfifo(target)
-    line = refused(capsys, [bag, '--urdf', robot_urdf_path('ur5'), '--identify', '--no-plots',
+    line = refused(capsys, ['identify', bag, '--urdf', robot_urdf_path('ur5'), '--no-plots',
                             '--out', tmp_path / 'o', '--write-urdf', target])
     assert '--write-urdf' in line and str(target) in line, line
 
@@ -126,14 +126,14 @@ def test_outputs_that_are_inputs_are_refused_before_any_work(tmp_path, capsys, n
     shutil.copy(robot_urdf_path('ur5'), urdf)
     before = urdf.read_bytes()
     for same in (urdf, tmp_path / '.' / 'robot.urdf'):
-        line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+        line = refused(capsys, ['identify', bag, '--urdf', urdf, '--no-plots', '--out',
                                 tmp_path / 'o', '--write-urdf', same])
         assert 'also an input' in line and str(same) in line, line
     assert urdf.read_bytes() == before
     # the bag's own directory (or a folder inside it) is no output directory
     files = sorted(os.listdir(bag))
     for out in (bag, os.path.join(bag, 'plots')):
-        line = refused(capsys, [bag, '--urdf', urdf, '--no-plots', '--out', out])
+        line = refused(capsys, ['residual', bag, '--urdf', urdf, '--no-plots', '--out', out])
         assert '--out' in line and 'bag' in line, line
     assert sorted(os.listdir(bag)) == files
     # residual.csv that is the bag (a link left in the output folder): never written through
@@ -142,7 +142,7 @@ def test_outputs_that_are_inputs_are_refused_before_any_work(tmp_path, capsys, n
     out = tmp_path / 'o2'
     out.mkdir()
     os.symlink(db3, out / 'residual.csv')
-    line = refused(capsys, [db3, '--urdf', urdf, '--no-plots', '--out', out])
+    line = refused(capsys, ['residual', db3, '--urdf', urdf, '--no-plots', '--out', out])
     assert 'residual.csv' in line and 'also an input' in line, line
     assert os.path.getsize(db3) == size
 
@@ -154,17 +154,17 @@ def test_missing_bags_are_refused_before_any_work(tmp_path, capsys, no_work, bag
     urdf = robot_urdf_path('ur5')
     for option in ('--validate', '--also'):
         missing = tmp_path / f'missing{option}'
-        line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+        line = refused(capsys, ['identify', bag, '--urdf', urdf, '--no-plots', '--out',
                                 tmp_path / 'o', option, missing])
         assert option in line and str(missing) in line and 'no such bag' in line, line
-    line = refused(capsys, [tmp_path / 'nothing', '--urdf', urdf, '--no-plots', '--out',
-                            tmp_path / 'o'])
+    line = refused(capsys, ['residual', tmp_path / 'nothing', '--urdf', urdf, '--no-plots',
+                            '--out', tmp_path / 'o'])
     assert str(tmp_path / 'nothing') in line and 'no such bag' in line, line
 
 
 def test_a_held_out_bag_of_other_joints_is_refused_before_the_fit(tmp_path, capsys, no_fit, bag):
     other = motion_bag(tmp_path / 'other', names=[f'other_{k}' for k in range(6)])
-    line = refused(capsys, [bag, '--urdf', robot_urdf_path('ur5'), '--identify', '--no-plots',
+    line = refused(capsys, ['identify', bag, '--urdf', robot_urdf_path('ur5'), '--no-plots',
                             '--out', tmp_path / 'o', '--validate', other])
     assert str(other) in line and 'shoulder_pan_joint' in line, line
 
@@ -179,8 +179,8 @@ def test_a_held_out_bag_of_other_joints_is_refused_before_the_fit(tmp_path, caps
 def test_a_link_no_joint_moves_is_refused_naming_it(tmp_path, capsys, no_work, bag, option,
                                                     links, named, why):
     """The root and the links fixed to it carry nothing a recording can tell; say so up front."""
-    line = refused(capsys, [bag, '--urdf', robot_urdf_path('ur5'), '--no-plots', '--out',
-                            tmp_path / 'o', option, *links])
+    line = refused(capsys, ['identify', bag, '--urdf', robot_urdf_path('ur5'), '--no-plots',
+                            '--out', tmp_path / 'o', option, *links])
     assert f'{option}: link {named!r}' in line and why in line, line
     assert 'shoulder_link' in line and 'wrist_3_link' in line, line    # what can be used
 
@@ -199,8 +199,8 @@ def test_the_library_refuses_a_fixed_link_too():
                                         (3, 'only 3 usable samples ')])
 def test_too_few_samples_say_why(tmp_path, capsys, bag, rows, said):
     short = motion_bag(tmp_path / 'short', rows=rows)
-    line = refused(capsys, [short, '--urdf', robot_urdf_path('ur5'), '--no-plots', '--out',
-                            tmp_path / 'o'])
+    line = refused(capsys, ['residual', short, '--urdf', robot_urdf_path('ur5'), '--no-plots',
+                            '--out', tmp_path / 'o'])
     assert said in line and str(short) in line and 'at least 5' in line, line
     assert not line.rstrip().endswith(':'), line
 
@@ -222,7 +222,7 @@ def test_a_write_urdf_that_fails_midway_leaves_the_old_file(tmp_path, bag):
     target = tmp_path / 'corrected.urdf'
     old = b'<?xml version="1.0"?>\n<robot name="previous_fit"/>\n'
     target.write_bytes(old)
-    status, out, err = replay(bag, '--urdf', urdf, '--identify', '--no-plots', '--residual',
+    status, out, err = replay('identify', bag, '--urdf', urdf, '--no-plots', '--residual',
                               'none', '--out', tmp_path / 'o', '--write-urdf', target,
                               preexec_fn=quota(os.path.getsize(urdf) // 2))
     lines = err.strip().splitlines()
@@ -236,8 +236,8 @@ def test_a_residual_that_fails_midway_leaves_the_old_file(tmp_path, bag):
     out = tmp_path / 'o'
     out.mkdir()
     (out / 'residual.csv').write_bytes(b't,old\n')
-    status, stdout, err = replay(bag, '--urdf', robot_urdf_path('ur5'), '--no-plots', '--out',
-                                 out, preexec_fn=quota(20000))
+    status, stdout, err = replay('residual', bag, '--urdf', robot_urdf_path('ur5'), '--no-plots',
+                                 '--out', out, preexec_fn=quota(20000))
     lines = err.strip().splitlines()
     assert status == 1 and len(lines) == 1 and 'residual.csv' in lines[0], err
     assert (out / 'residual.csv').read_bytes() == b't,old\n'
@@ -256,12 +256,12 @@ def test_every_file_of_the_command_is_written_whole_or_not_at_all(tmp_path, bag,
     def full(fd):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
     monkeypatch.setattr(os, 'fsync', full)
-    line = refused(capsys, [bag, '--urdf', robot_urdf_path('ur5'), '--no-plots', '--out', out,
-                            '--residual', 'npy'])
+    line = refused(capsys, ['residual', bag, '--urdf', robot_urdf_path('ur5'), '--no-plots',
+                            '--out', out, '--residual', 'npy'])
     assert 'summary.csv' in line and 'No space left' in line, line
     monkeypatch.setattr(report, 'write_summary', lambda *args: None)
-    line = refused(capsys, [bag, '--urdf', robot_urdf_path('ur5'), '--no-plots', '--out', out,
-                            '--residual', 'npy'])
+    line = refused(capsys, ['residual', bag, '--urdf', robot_urdf_path('ur5'), '--no-plots',
+                            '--out', out, '--residual', 'npy'])
     assert 'residual.npy' in line and 'No space left' in line, line
     t = np.arange(10.0)
     with pytest.raises(ValueError, match='residual.png'):
@@ -301,8 +301,8 @@ sys.exit(main(sys.argv[2:]))
 def test_ctrl_c_ends_quietly_without_half_files_or_a_child(tmp_path, bag):
     """Interrupted while residual.csv is written (and the plots drawn in the child)."""
     out, pid_file = tmp_path / 'o', tmp_path / 'child.pid'
-    run = subprocess.run([sys.executable, '-c', INTERRUPTED_RUN, str(pid_file), bag, '--urdf',
-                          robot_urdf_path('ur5'), '--out', str(out)],
+    run = subprocess.run([sys.executable, '-c', INTERRUPTED_RUN, str(pid_file), 'residual', bag,
+                          '--urdf', robot_urdf_path('ur5'), '--out', str(out)],
                          capture_output=True, text=True, timeout=HANG_GUARD, cwd=ROOT,
                          env={**os.environ, 'PYTHONPATH': ROOT}, start_new_session=True,
                          # as from a terminal (a shell's background job would ignore it)
@@ -326,7 +326,7 @@ def test_ctrl_c_ends_quietly_without_half_files_or_a_child(tmp_path, bag):
                                     '--topic', '--out', '--joints', '--also'])
 def test_an_empty_value_is_a_usage_error(tmp_path, capsys, no_work, bag, option):
     """'' is no link, file or joint: never ignored as if the option were not given."""
-    argv = [bag, '--urdf', robot_urdf_path('ur5'), '--identify', '--no-plots', '--out',
+    argv = ['identify', bag, '--urdf', robot_urdf_path('ur5'), '--no-plots', '--out',
             tmp_path / 'o']
     argv = [a for k, a in enumerate(argv) if not (option in ('--urdf', '--out') and
                                                   (a == option or argv[k - 1] == option))]
@@ -338,10 +338,10 @@ def test_an_empty_value_is_a_usage_error(tmp_path, capsys, no_work, bag, option)
 
 def test_the_same_recording_twice_is_refused(tmp_path, capsys, no_work, bag):
     urdf = robot_urdf_path('ur5')
-    line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+    line = refused(capsys, ['identify', bag, '--urdf', urdf, '--no-plots', '--out',
                             tmp_path / 'o', '--validate', os.path.join(bag, '.')])
     assert '--validate' in line and 'same recording' in line and 'held-out' in line, line
-    line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+    line = refused(capsys, ['identify', bag, '--urdf', urdf, '--no-plots', '--out',
                             tmp_path / 'o', '--also', bag])
     assert '--also' in line and 'same recording' in line, line
 
@@ -351,11 +351,11 @@ def test_outputs_that_would_overwrite_a_bag_or_each_other_are_refused(
     urdf = robot_urdf_path('ur5')
     meta = os.path.join(bag, 'metadata.yaml')
     before = open(meta, 'rb').read()
-    line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+    line = refused(capsys, ['identify', bag, '--urdf', urdf, '--no-plots', '--out',
                             tmp_path / 'o', '--write-urdf', meta])
     assert '--write-urdf' in line and 'in the bag' in line, line
     assert open(meta, 'rb').read() == before
-    line = refused(capsys, [bag, '--urdf', urdf, '--identify', '--no-plots', '--out',
+    line = refused(capsys, ['identify', bag, '--urdf', urdf, '--no-plots', '--out',
                             tmp_path / 'o', '--write-urdf', tmp_path / 'o' / 'summary.csv'])
     assert '--write-urdf' in line and 'summary.csv' in line, line
 
@@ -367,7 +367,7 @@ def test_a_trajectory_output_that_is_the_trajectory_is_refused(tmp_path, capsys)
     out = tmp_path / 'o'
     out.mkdir()
     os.symlink(plan, out / 'trajectory.csv')
-    line = refused(capsys, ['--urdf', robot_urdf_path('ur5'), '--trajectory', plan,
+    line = refused(capsys, ['trajectory', plan, '--urdf', robot_urdf_path('ur5'),
                             '--joints', 'shoulder_pan_joint', '--no-plots', '--out', out])
     assert 'trajectory.csv' in line and 'also an input' in line, line
     assert plan.read_text().startswith('joint_names')
@@ -377,7 +377,8 @@ def test_plots_without_matplotlib_are_refused_before_any_work(
         tmp_path, capsys, no_work, bag, monkeypatch):
     """Without matplotlib the drawing child died and the parent's job hit its closed pipe."""
     monkeypatch.setitem(sys.modules, 'matplotlib', None)        # as if not installed
-    line = refused(capsys, [bag, '--urdf', robot_urdf_path('ur5'), '--out', tmp_path / 'o'])
+    line = refused(capsys, ['residual', bag, '--urdf', robot_urdf_path('ur5'), '--out',
+                            tmp_path / 'o'])
     assert 'matplotlib' in line and '--no-plots' in line, line
 
 

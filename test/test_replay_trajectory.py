@@ -100,7 +100,7 @@ def test_torque_along_the_trajectory_equals_pinocchio(tmp_path, capsys):
                            [np.zeros(6), RNG.uniform(-1, 1, 6), RNG.uniform(-1, 1, 6)],
                            [0.0, 1.5, 3.0])
     out = str(tmp_path / 'out')
-    assert main(['--urdf', urdf, '--trajectory', path, '--out', out, '--rate', '200',
+    assert main(['trajectory', path, '--urdf', urdf, '--out', out, '--rate', '200',
                  '--no-plots']) == 0
     text = capsys.readouterr().out
     assert 'quintic interpolation' in text and 'peak |tau|' in text
@@ -122,13 +122,13 @@ def test_exceeded_limit_exits_1_and_names_the_joint(tmp_path, capsys):
     urdf = robot_urdf_path('ur5')
     fast = trajectory_yaml(tmp_path / 'fast.yaml', UR5,
                            [np.zeros(6), np.full(6, 3.0), np.zeros(6)], [0.0, 0.15, 0.3])
-    assert main(['--urdf', urdf, '--trajectory', fast, '--out', str(tmp_path / 'o'),
+    assert main(['trajectory', fast, '--urdf', urdf, '--out', str(tmp_path / 'o'),
                  '--no-plots']) == 1
     captured = capsys.readouterr()
     assert 'EXCEEDED' in captured.out and 'effort limit is exceeded' in captured.err
     slow = trajectory_yaml(tmp_path / 'slow.yaml', UR5,
                            [np.zeros(6), np.full(6, 0.2)], [0.0, 5.0])
-    assert main(['--urdf', urdf, '--trajectory', slow, '--out', str(tmp_path / 'o')]) == 0
+    assert main(['trajectory', slow, '--urdf', urdf, '--out', str(tmp_path / 'o')]) == 0
     assert os.path.exists(tmp_path / 'o' / 'trajectory.png')
 
 
@@ -165,10 +165,10 @@ def test_bad_trajectory_files_exit_1(tmp_path, capsys):
     bad.write_text('joint_names: [shoulder_pan_joint]\npoints:\n'
                    '- positions: [0.0]\n  time_from_start: {sec: 1, nanosec: 0}\n'
                    '- positions: [1.0]\n  time_from_start: {sec: 0, nanosec: 0}\n')
-    assert main(['--urdf', urdf, '--trajectory', str(bad), '--out', str(tmp_path)]) == 1
+    assert main(['trajectory', str(bad), '--urdf', urdf, '--out', str(tmp_path)]) == 1
     assert 'time_from_start must increase' in capsys.readouterr().err
     unknown = trajectory_yaml(tmp_path / 'u.yaml', ['nope'], [[0.0], [1.0]], [0.0, 1.0])
-    assert main(['--urdf', urdf, '--trajectory', unknown, '--out', str(tmp_path)]) == 1
+    assert main(['trajectory', unknown, '--urdf', urdf, '--out', str(tmp_path)]) == 1
     assert 'nope' in capsys.readouterr().err
 
 

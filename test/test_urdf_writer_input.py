@@ -90,7 +90,7 @@ def test_write_urdf_of_a_file_with_whitespace_and_namespaces(tmp_path, capsys):
         b'<link name="forearm_link">\n    <xacro:property name="l" value="0.39"/>'))
     bag = motion_bag(tmp_path / 'bag')
     out = tmp_path / 'corrected.urdf'
-    assert main([bag, '--urdf', str(urdf), '--identify', '--no-plots', '--residual', 'none',
+    assert main(['identify', bag, '--urdf', str(urdf), '--no-plots', '--residual', 'none',
                  '--out', str(tmp_path / 'o'), '--write-urdf', str(out)]) == 0
     capsys.readouterr()
     corrected = sd.Model.from_urdf(str(out))
@@ -112,7 +112,7 @@ def test_the_writers_view_is_prepared_before_the_fit(tmp_path, capsys, monkeypat
     monkeypatch.setattr(urdf_writer, '_elements', cannot)
     urdf = tmp_path / 'robot.urdf'
     shutil.copy(robot_urdf_path('ur5'), urdf)
-    status = main([motion_bag(tmp_path / 'bag'), '--urdf', str(urdf), '--identify',
+    status = main(['identify', motion_bag(tmp_path / 'bag'), '--urdf', str(urdf),
                    '--no-plots', '--out', str(tmp_path / 'o'), '--write-urdf',
                    str(tmp_path / 'corrected.urdf')])
     err = capsys.readouterr().err.strip().splitlines()

@@ -2,26 +2,29 @@
 # SPDX-License-Identifier: Apache-2.0
 """Inverse dynamics over a recording: measured effort against the model, and a trajectory check.
 
-    python -m spatial_dynamics.replay BAG --urdf URDF [--topic /joint_states] [--out DIR]
-                                      [--identify] [--threshold 0.01] [--window 0.05]
-                                      [--inertias [LINK ...] | --payload LINK]
+    python -m spatial_dynamics.replay residual BAG --urdf URDF [--topic /joint_states]
+                                      [--out DIR] [--window 0.05] [--residual csv|npy|none]
+    python -m spatial_dynamics.replay identify BAG --urdf URDF [--threshold 0.01]
+                                      [--inertias [LINK ...] | --payload LINK] [--drives]
                                       [--also BAG ...] [--validate BAG]
                                       [--write-urdf OUT.urdf]
-    python -m spatial_dynamics.replay --urdf URDF --trajectory FILE.yaml [--rate 1000]
+    python -m spatial_dynamics.replay trajectory FILE.yaml --urdf URDF [--rate 1000]
+    python -m spatial_dynamics.replay trajectory BAG --topic /arm/joint_trajectory --urdf URDF
+    python -m spatial_dynamics.replay annotate FILE.yaml --urdf URDF --out OUT.yaml
     python -m spatial_dynamics.replay excite --urdf URDF --duration 30 --out plan.yaml
-    python -m spatial_dynamics.replay BAG --urdf URDF --trajectory-topic /arm/joint_trajectory
     ros2 run spatial_dynamics replay ...
 
 A bag (rosbag2, sqlite3 or MCAP; no ROS installation needed) gives q, q̇ and the measured
 effort by joint name; q̈ comes from a zero-phase Savitzky-Golay derivative of q̇ (of q when
 the bag has no velocities). The model torque is the rigid-body RNEA for the whole bag in one
 batched call. Written to DIR: summary.csv (per joint), residual.csv (per sample: t, measured
-- model per joint), measured_vs_model.png, residual.png. ``--identify`` fits per-joint
-damping, Coulomb friction (tanh(q̇/threshold), as the node) and armature to the residual.
+- model per joint), measured_vs_model.png, residual.png (``residual``). ``identify`` fits
+per-joint damping, Coulomb friction (tanh(q̇/threshold), as the node) and armature to the
+residual.
 
-``--inertias [LINK ...]`` fits the inertial parameters of the links (default all moving ones;
-physically consistent, regularised toward the URDF; with ``--identify`` jointly with the
-drives) and warns, naming them, about the combinations the recording does not determine;
+``identify --inertias [LINK ...]`` fits the inertial parameters of the links (default all
+moving ones; physically consistent, regularised toward the URDF; with ``--drives`` jointly
+with the drives) and warns, naming them, about the combinations the recording does not determine;
 ``--payload LINK`` fits a payload. What was identified is checked on a held-out recording
 (``--validate BAG``: the residual with the URDF and with the correction, validation.csv,
 identification.png), listed with one σ (parameters.csv), and ``--write-urdf OUT.urdf``
@@ -30,8 +33,12 @@ writes the URDF with only the identified ``<inertial>`` and ``<dynamics>`` repla
 ``excite`` plans a motion that determines every base parameter (:mod:`.excite`), for
 joint_trajectory_controller to execute while the bag is recorded.
 
-A trajectory (``--trajectory`` YAML or ``--trajectory-topic``) is sampled like
-joint_trajectory_controller's splines at ``--rate`` and τ compared with the URDF effort limits.
+A trajectory (``trajectory`` of a YAML file, or of a bag's ``--topic``) is sampled like
+joint_trajectory_controller's splines at ``--rate`` and τ compared with the URDF effort limits;
+``annotate`` writes a plan with the effort for joint_trajectory_controller (:mod:`.annotate`).
+
+The old spellings (``replay BAG --identify``, ``replay --trajectory F``, ...: no subcommand)
+run their new one for one more release, with a deprecation line (:mod:`.legacy`).
 
 Exit status: 0 done (samples skipped are listed with the reason), 1 refused (no such bag,
 topic or joint, nothing usable, rosbags missing; a trajectory exceeding an effort limit),
@@ -45,10 +52,11 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import importlib.util
 import os
 import sys
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, NamedTuple, Optional, Sequence, Tuple
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -57,10 +65,10 @@ from .. import friction_torque, Model, rnea
 from ..check import read_description
 from .. import effort as effort_model
 from ..files import check_output
-from . import annotate, bags, differentiate, identify, report, splines, urdf_writer
+from . import annotate, bags, differentiate, excite, identify, report, splines, urdf_writer
 from .recording import recording, Stages
 from .. import identification
-from .arguments import (add_model_arguments, check_gravity, load_model, one_line, positive,
+from .arguments import (check_model, load_model, model_parser, one_line, Parser, positive,
                         Refused)
 from ..urdf import read_urdf_file
 from . import correction as correction_of
@@ -153,67 +161,148 @@ def print_payload(payload, names: Sequence[str], args) -> None:
     print(payload.urdf_inertial())
 
 
-def run_bag(args) -> int:
-    """Compare measured efforts with the model over a bag; write the files; return 0."""
-    # the plotting child imports matplotlib while this process reads the bag
-    plotter = None if args.no_plots else report.start_child()
-    try:
-        return compare(args, plotter)
-    except BaseException:               # a refusal, Ctrl-C: the child ends, drawn or not
-        report.stop_child(plotter)
-        raise
-    finally:
-        report.end_child(plotter)
+class Fitted(NamedTuple):
+    """What ``replay identify`` fitted: the correction and what is said of it."""
+
+    correction: correction_of.Correction
+    #: The drive terms shown (damping, friction, armature; nan: undetermined), or None.
+    shown: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]]
+    #: Residual RMS per joint before and after the fit (None without drive terms).
+    rms_before: Optional[np.ndarray]
+    rms_after: Optional[np.ndarray]
+    #: The joint fit of the drives alone (its notes are printed), or None.
+    fit: Optional[identify.Identified]
+    payload: Optional[identification.Payload]
+    #: What the recording does not determine (said on stderr at the end), or ''.
+    warning: str
 
 
-def compare(args, plotter) -> int:
-    """:func:`run_bag` with its plotting child (from :func:`report.start_child`, or None)."""
+class Residual(NamedTuple):
+    """Measured effort against the model's torque over a recording."""
+
+    tau: np.ndarray
+    residual: np.ndarray
+    rms_measured: np.ndarray
+    rms_residual: np.ndarray
+
+
+def run_residual(args) -> int:
+    """``replay residual``: the model against the bag's efforts; the files; return 0."""
+    return run_bag(args, None)
+
+
+def run_identify(args) -> int:
+    """``replay identify``: the residual, the fits, the held-out check; return 0."""
+    return run_bag(args, fits)
+
+
+def run_bag(args, fit) -> int:
+    """Compare measured efforts with the model over a bag, ``fit`` (or None) to identify."""
+    check_paths(args)         # before any computation: bad inputs and outputs said at once
+    check_matplotlib(args)
+    with small_pages():
+        # the plotting child imports matplotlib while this process reads the bag
+        plotter = None if args.no_plots else report.start_child()
+        try:
+            return compare(args, plotter, fit)
+        except BaseException:               # a refusal, Ctrl-C: the child ends, drawn or not
+            report.stop_child(plotter)
+            raise
+        finally:
+            report.end_child(plotter)
+
+
+def check_matplotlib(args) -> None:
+    """Refuse plots without matplotlib, before any work."""
+    if not args.no_plots and importlib.util.find_spec('matplotlib') is None:
+        raise Refused('the plots need matplotlib (pip install matplotlib, or apt install '
+                      'python3-matplotlib); or --no-plots')
+
+
+def compare(args, plotter, fit=None) -> int:
+    """:func:`run_bag` with its plotting child (from :func:`report.start_child`, or None).
+
+    The jobs in turn: the recording read (:func:`recording`), the residual
+    (:func:`residual_of`), the fits when ``fit`` (:func:`fits`), the residual's files
+    (:func:`write_residual`), the report (:func:`print_recording`, :func:`print_table`,
+    :func:`print_fits`, :func:`corrected`).
+    """
     stages = Stages()
     model = load_model(args)
-    names = model.joint_names
     stages.done('model')
-    check_links(args, model)
-    urdf_source = urdf_to_write(args, model)        # its problems said before any fit
+    if fit is not None:
+        check_links(args, model)
+        urdf_source = urdf_to_write(args, model)    # its problems said before any fit
     s = recording(args, args.bag, model, stages)
-    js, t, q, qd, qdd, effort = (s[k] for k in ('js', 't', 'q', 'qd', 'qdd', 'effort'))
-    spans, source, resampled = s['spans'], s['source'], s['resampled']
-    tau = rnea(model, q, qd, qdd, args.gravity)
-    residual = effort - tau
+    res = residual_of(model, s, args.gravity)
     stages.done('rnea')
-    rms_measured, rms_residual = rms(effort), rms(residual)
-    # what the fits see: this bag and the --also ones, each cleaned and differentiated alone
-    train = {k: s[k] for k in ('q', 'qd', 'qdd', 'effort')}
-    if args.also:
-        more = [recording(args, bag, model, stages) for bag in args.also]
-        train = {k: np.concatenate([train[k]] + [m[k] for m in more]) for k in train}
-        print(f'fitted on {args.bag} and {len(more)} more bag(s): {len(train["q"])} samples')
-    # read before the fits: a held-out bag that cannot be used is said before them
-    held_out = recording(args, args.validate, model, stages) if args.validate else None
+    fitted = train = held_out = None
+    if fit is not None:
+        # what the fits see: this bag and the --also ones, each cleaned and differentiated
+        train = {k: s[k] for k in ('q', 'qd', 'qdd', 'effort')}
+        if args.also:
+            more = [recording(args, bag, model, stages) for bag in args.also]
+            train = {k: np.concatenate([train[k]] + [m[k] for m in more]) for k in train}
+            print(f'fitted on {args.bag} and {len(more)} more bag(s): {len(train["q"])} '
+                  'samples')
+        # read before the fits: a held-out bag that cannot be used is said before them
+        held_out = recording(args, args.validate, model, stages) if args.validate else None
+        fitted = fit(args, model, train, res, stages)
+    drawn = write_residual(args, model.joint_names, s, res, fitted, plotter, stages)
+    print_recording(args, model, s)
+    print_table(model.joint_names, res, fitted)
+    written = residual_files(args.residual, drawn)
+    if fitted is not None:
+        print_fits(args, model, fitted)
+        written += corrected(args, model, fitted.correction, train, stages, held_out,
+                             urdf_source)
+        if fitted.warning:
+            print(fitted.warning, file=sys.stderr)
+    print(f'\nwritten to {args.out}: {", ".join(written)}')
+    if args.timings:
+        print('stages:\n' + stages.text(), file=sys.stderr)
+    return 0
+
+
+def residual_of(model: Model, s: Dict, gravity) -> Residual:
+    """Return the model's torque (RNEA, one batched call) and the residual over ``s``."""
+    tau = rnea(model, s['q'], s['qd'], s['qdd'], gravity)
+    residual = s['effort'] - tau
+    return Residual(tau, residual, rms(s['effort']), rms(residual))
+
+
+def fits(args, model: Model, train: Dict, res: Residual, stages: Stages) -> Fitted:
+    """Fit what ``replay identify`` asks to ``train`` (the bag, with ``--also``'s).
+
+    The drives alone (:func:`identify.identify`, the default), or ``--payload`` or
+    ``--inertias`` (with ``--drives``, jointly with each joint's damping, friction and
+    armature). ``res`` is the bag's residual (the drives' fit without ``--also``).
+    """
     fq, fqd, fqdd, feffort = (train[k] for k in ('q', 'qd', 'qdd', 'effort'))
-    fit = None
+    names = model.joint_names
+    drives = args.drives or (args.payload is None and args.inertias is None)
+    threshold = args.threshold if drives else None
+    fit = payload = found = None
     correction, excitation_warning = None, ''
     # the fits work on matrices of a hundred columns, or share their chunks among the
     # command's own threads: BLAS threads beside those only oversubscribe the cores
     with threadpool_limits(limits=1, user_api='blas'):
-        if args.identify and args.payload is None and args.inertias is None:
-            fresidual = residual if not args.also else feffort - rnea(model, fq, fqd, fqdd,
-                                                                      args.gravity)
+        if args.payload is None and args.inertias is None:
+            fresidual = res.residual if not args.also else feffort - rnea(
+                model, fq, fqd, fqdd, args.gravity)
             fit = identify.identify(fresidual, fqd, fqdd, args.threshold, names)
             correction = correction_of.from_drives(model, fit, args.threshold)
             stages.done('identify')
-        payload = None
-        if args.payload:
+        elif args.payload:
             payload = identification.identify_payload(
-                model, args.payload, fq, fqd, fqdd, feffort, args.gravity,
-                args.threshold if args.identify else None)
+                model, args.payload, fq, fqd, fqdd, feffort, args.gravity, threshold)
             correction = correction_of.Correction(model, payload=payload,
                                                   drives=payload.drives,
                                                   threshold=args.threshold)
             stages.done('payload')
-        if args.inertias is not None:
+        else:
             found = identification.identify_inertias(
-                model, fq, fqd, fqdd, feffort, args.inertias or None, args.gravity,
-                args.threshold if args.identify else None)
+                model, fq, fqd, fqdd, feffort, args.inertias or None, args.gravity, threshold)
             if not found.converged:
                 print(f'warning: the inertial fit stopped after {found.evaluations} '
                       f'evaluations without converging ({found.message}): its values are '
@@ -224,58 +313,81 @@ def compare(args, plotter) -> int:
                 model, train, found.bodies, args.gravity)
             stages.done('inertias')
     # one set of drive terms (the joint fit's when there is one), printed and written
-    shown = rms_after = None
-    if correction is not None and correction.drives is not None:
+    shown = rms_before = rms_after = None
+    if correction.drives is not None:
         shown = correction.undetermined_drives()
         if fit is not None:
             rms_before, rms_after = fit.rms_before, fit.rms_after
-        elif args.inertias is not None:
+        elif found is not None:
             rms_before, rms_after = found.before, found.after
         else:
             rms_before, rms_after = (rms(feffort - rnea(model, fq, fqd, fqdd, args.gravity))
-                                     if args.also else rms_residual), payload.rms
+                                     if args.also else res.rms_residual), payload.rms
+    return Fitted(correction, shown, rms_before, rms_after, fit, payload, excitation_warning)
+
+
+def write_residual(args, names: Sequence[str], s: Dict, res: Residual,
+                   fitted: Optional[Fitted], plotter, stages: Stages) -> bool:
+    """Write summary.csv, the residual file and the plots into ``--out``; True if drawn.
+
+    The plots are drawn in the plotting child while this process writes the residual.
+    """
+    t, effort = s['t'], s['effort']
     report.ensure_dir(args.out)
     header = ['joint', 'samples', 'rms_measured', 'rms_residual']
-    rows = [[n, len(t), rms_measured[j], rms_residual[j]] for j, n in enumerate(names)]
-    if shown is not None:
+    rows = [[n, len(t), res.rms_measured[j], res.rms_residual[j]] for j, n in enumerate(names)]
+    if fitted is not None and fitted.shown is not None:
         header += ['damping', 'friction', 'armature', 'rms_residual_identified']
         for j, r in enumerate(rows):      # nan: undetermined (the URDF's value stays)
-            r += [shown[0][j], shown[1][j], shown[2][j], rms_after[j]]
+            r += [fitted.shown[0][j], fitted.shown[1][j], fitted.shown[2][j],
+                  fitted.rms_after[j]]
     report.write_summary(os.path.join(args.out, 'summary.csv'), rows, header)
     if not args.no_plots:
-        # The plots are drawn in the child while this process writes the residual; it gets
-        # only the points drawn (decimated here, as plot_joints would).
+        # the child gets only the points drawn (decimated here, as plot_joints would)
         step = max(1, len(t) // PLOT_POINTS)
         plotter = report.run_in(plotter, plot_replay, args.out, args.topic,
-                                t[::step] - t[0], names, effort[::step], tau[::step],
-                                residual[::step])
+                                t[::step] - t[0], names, effort[::step], res.tau[::step],
+                                res.residual[::step])
     if args.residual == 'csv':
         report.write_csv(os.path.join(args.out, 'residual.csv'), ['t'] + list(names),
-                         [t - t[0]] + [residual[:, j] for j in range(len(names))],
+                         [t - t[0]] + [res.residual[:, j] for j in range(len(names))],
                          [6] + [4] * len(names))
     elif args.residual == 'npy':
         report.write_npy(os.path.join(args.out, 'residual.npy'),
-                         np.column_stack((t - t[0], residual)))
+                         np.column_stack((t - t[0], res.residual)))
     stages.done('write residual')
-    drawn = not args.no_plots
-    if not args.no_plots:
-        drawn = report.join_child(plotter)
-        if not drawn:
-            print('replay: drawing the plots failed (see above); the CSV files are complete',
-                  file=sys.stderr)
-        stages.done('plots (the rest)')
+    if args.no_plots:
+        return False
+    drawn = report.join_child(plotter)
+    if not drawn:
+        print('replay: drawing the plots failed (see above); the CSV files are complete',
+              file=sys.stderr)
+    stages.done('plots (the rest)')
+    return drawn
 
+
+def residual_files(residual: str, drawn: bool) -> List[str]:
+    """Return the names of the residual's files written (``--residual``, plots drawn)."""
+    return ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
+                              'none': []}[residual] + (
+        ['measured_vs_model.png', 'residual.png'] if drawn else [])
+
+
+def print_recording(args, model: Model, s: Dict) -> None:
+    """Print what was read of the bag and how q̈ was found."""
+    js, t = s['js'], s['t']
     window = differentiate.window_samples(args.window, s['period'])
     rate = 1.0 / s['period']
     print(f'{args.bag} {args.topic}: {len(js.stamp) + sum(js.skipped.values())} messages, '
           f'{len(t)} samples used over {t[-1] - t[0]:.3f} s at {rate:.6g} Hz '
-          f'(median period), {len(spans)} stretch(es) between gaps')
+          f'(median period), {len(s["spans"])} stretch(es) between gaps')
     print(f'model: {model.summary()}; torque = rigid-body RNEA only (no URDF <dynamics>, no '
           'armature)')
-    print(f'q_dd from the {source}: Savitzky-Golay order {args.order}, window {window} '
+    print(f'q_dd from the {s["source"]}: Savitzky-Golay order {args.order}, window {window} '
           f'samples ({window / rate:.3g} s), cut-off about '
           f'{differentiate.cutoff(window, args.order, rate):.3g} Hz, zero phase'
-          + (f'; {resampled} stretch(es) with uneven stamps resampled' if resampled else ''))
+          + (f'; {s["resampled"]} stretch(es) with uneven stamps resampled'
+             if s['resampled'] else ''))
     if s['out_of_order']:
         print(f'{s["out_of_order"]} stamp(s) earlier than the one before: samples sorted by '
               'header stamp')
@@ -285,16 +397,27 @@ def compare(args, plotter) -> int:
             print(f'  {count} sample(s): {reason}')
     if js.generic:
         print(f'{js.generic} message(s) of a different layout read by rosbags\' deserialiser')
-    table_rows = [[n, f'{rms_measured[j]:.4g}', f'{rms_residual[j]:.4g}']
+
+
+def print_table(names: Sequence[str], res: Residual, fitted: Optional[Fitted]) -> None:
+    """Print the residual RMS per joint (and the drive terms fitted, the drop)."""
+    table_rows = [[n, f'{res.rms_measured[j]:.4g}', f'{res.rms_residual[j]:.4g}']
                   for j, n in enumerate(names)]
     head = ['joint', 'rms measured', 'rms residual']
-    if shown is not None:
+    if fitted is not None and fitted.shown is not None:
+        before, after = fitted.rms_before, fitted.rms_after
         head += ['damping', 'friction', 'armature', 'rms identified', 'drop']
         for j, r in enumerate(table_rows):
-            drop = 1.0 - rms_after[j] / rms_before[j] if rms_before[j] else 0.0
-            r += [_value(x[j]) for x in shown] + [f'{rms_after[j]:.4g}',
-                                                  f'{100 * drop:.0f} %']
+            drop = 1.0 - after[j] / before[j] if before[j] else 0.0
+            r += [_value(x[j]) for x in fitted.shown] + [f'{after[j]:.4g}',
+                                                         f'{100 * drop:.0f} %']
     print(report.table(head, table_rows))
+
+
+def print_fits(args, model: Model, fitted: Fitted) -> None:
+    """Print the drive terms as node parameters and URDF ``<dynamics>``, and the payload."""
+    names = model.joint_names
+    shown = fitted.shown
     if shown is not None:
         what = ('the inertias fitted jointly with each drive' if args.inertias is not None
                 else 'the payload fitted jointly with each drive' if args.payload else
@@ -302,26 +425,14 @@ def compare(args, plotter) -> int:
         print(f'\n{what} (damping, friction, armature: the table above and the parameters '
               f'below are this one fit), friction threshold {args.threshold:g} rad/s (m/s); '
               'undetermined: the recording cannot tell it, the URDF\'s value stays:')
-        for note in (fit.notes if fit is not None else []) + mimic_notes(model):
+        for note in (fitted.fit.notes if fitted.fit is not None else []) + mimic_notes(model):
             print(f'  note: {note}')
         print('\n# node parameters (config/*.yaml):')
         print(report.node_parameters(names, shown[2], args.threshold))
         print('\n<!-- URDF: each joint\'s <dynamics> (read by friction_model: urdf) -->')
         print(report.urdf_dynamics(names, shown[0], shown[1], model.damping, model.friction))
-    if payload is not None:
-        print_payload(payload, names, args)
-    written = ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
-                                 'none': []}[args.residual]
-    if drawn:
-        written += ['measured_vs_model.png', 'residual.png']
-    if correction is not None:
-        written += corrected(args, model, correction, train, stages, held_out, urdf_source)
-    if excitation_warning:
-        print(excitation_warning, file=sys.stderr)
-    print(f'\nwritten to {args.out}: {", ".join(written)}')
-    if args.timings:
-        print('stages:\n' + stages.text(), file=sys.stderr)
-    return 0
+    if fitted.payload is not None:
+        print_payload(fitted.payload, names, args)
 
 
 def _value(x: float) -> str:
@@ -365,24 +476,29 @@ def corrected(args, model: Model, correction, data: Dict, stages: Stages,
 
 
 # --------------------------------------------------------------------------------------------
-# The trajectory command
+# The trajectory and annotate commands
 
 def run_trajectory(args) -> int:
-    """Check trajectories against the effort limits; 1 when one is exceeded."""
-    if args.trajectory:
+    """``replay trajectory``: check a plan, or a bag's plans, against the effort limits.
+
+    Returns 1 when a limit is exceeded (or a torque is not finite), else 0.
+    """
+    check_paths(args)
+    check_matplotlib(args)
+    if not args.topic:
         try:
-            trajectories = [splines.from_yaml(args.trajectory)]
+            trajectories = [splines.from_yaml(args.source)]
         except OSError as err:
-            raise Refused(f'{args.trajectory}: {err.strerror}') from None
+            raise Refused(f'{args.source}: {err.strerror}') from None
         except ValueError as err:
             raise Refused(str(err)) from None
-        labels = [os.path.basename(args.trajectory)]
+        labels = [os.path.basename(args.source)]
     else:
-        msgs = bags.read_messages(args.bag, args.trajectory_topic, bags.JOINT_TRAJECTORY)
+        msgs = bags.read_messages(args.source, args.topic, bags.JOINT_TRAJECTORY)
         if not msgs:
-            raise Refused(f'no messages on {args.trajectory_topic}')
+            raise Refused(f'no messages on {args.topic}')
         trajectories = [splines.from_message(m) for m in msgs]
-        labels = [f'{args.trajectory_topic} #{k}' for k in range(len(msgs))]
+        labels = [f'{args.topic} #{k}' for k in range(len(msgs))]
     bases = [os.path.join(args.out, 'trajectory' + (f'_{k}' if len(trajectories) > 1 else ''))
              for k in range(len(trajectories))]
     for base in bases:            # the names are known now: checked before any work
@@ -422,112 +538,186 @@ def run_trajectory(args) -> int:
     return 0
 
 
-def parser() -> argparse.ArgumentParser:
-    """Return the command's argument parser."""
-    p = argparse.ArgumentParser(prog='replay', description=__doc__.split('\n\n')[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter,
-                                epilog='Exit status: 0 done, 1 refused (or an effort limit '
-                                'exceeded), 2 bad usage, 130 interrupted.')
-    p.add_argument('bag', nargs='?', help='rosbag2 directory, or a .db3 / .mcap file')
-    add_model_arguments(p)
+def run_annotate(args) -> int:
+    """``replay annotate``: write the plan with effort for JTC (:mod:`.annotate`)."""
+    return annotate.run(args, load_model)
+
+
+# --------------------------------------------------------------------------------------------
+# The command line: one function declares a subcommand, COMMANDS registers it
+
+def recording_parser() -> argparse.ArgumentParser:
+    """Return a parent parser of what reads a recording and writes its residual (no help)."""
+    p = argparse.ArgumentParser(add_help=False)
+    p.add_argument('bag', metavar='BAG', help='rosbag2 directory, or a .db3 / .mcap file')
     p.add_argument('--topic', default='/joint_states', help='sensor_msgs/JointState topic')
     p.add_argument('--out', default='replay_out', help='output directory (created)')
-    p.add_argument('--identify', action='store_true',
-                   help='fit damping, friction and armature per joint to the residual')
-    p.add_argument('--payload', metavar='LINK',
-                   help="identify a rigid payload on LINK (mass, centre of mass, inertia) "
-                        "against the URDF without it; with --identify, jointly with each "
-                        "joint's damping, friction and armature")
-    p.add_argument('--inertias', nargs='*', metavar='LINK',
-                   help='identify the inertial parameters of these links (default: every '
-                   'moving one), physically consistent, regularised toward the URDF; with '
-                   '--identify jointly with the drives')
-    p.add_argument('--also', nargs='+', metavar='BAG', default=[],
-                   help='more recordings to fit on (--identify, --payload, --inertias) with '
-                   'BAG; the files written are of BAG')
-    p.add_argument('--validate', metavar='BAG',
-                   help='a held-out recording: the residual with the URDF and with what was '
-                   'identified (--inertias, --payload, --identify)')
-    p.add_argument('--write-urdf', metavar='OUT.urdf',
-                   help='write the URDF with only the identified <inertial> and <dynamics> '
-                   'elements replaced')
-    p.add_argument('--threshold', type=positive, default=NODE_THRESHOLD,
-                   help='friction velocity threshold, rad/s or m/s (default: the node\'s, '
-                   '%(default)g)')
     p.add_argument('--window', type=positive, default=0.05,
                    help='Savitzky-Golay window, s (default %(default)g)')
     p.add_argument('--order', type=int, choices=range(2, 7), default=3,
                    help='Savitzky-Golay polynomial order (default %(default)d)')
-    p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv',
-                   help='per-sample residual file (default %(default)s)')
-    p.add_argument('--no-plots', action='store_true', help='write no PNG files')
-    p.add_argument('--trajectory', metavar='FILE.yaml',
-                   help='check a trajectory_msgs/JointTrajectory (YAML) against effort limits')
-    p.add_argument('--trajectory-topic', metavar='TOPIC',
-                   help='check every JointTrajectory of this topic of BAG')
-    p.add_argument('--rate', type=positive, default=1000.0,
-                   help='trajectory sampling rate, Hz (default %(default)g)')
-    p.add_argument('--friction-model', choices=('none', 'urdf'), default='none',
-                   help='trajectory check: add the URDF <dynamics> friction (as the node)')
     p.add_argument('--measured-effort', choices=effort_model.MEASURED_EFFORT, default='full',
                    help='what the bag\'s effort is: link-side torque with gravity (full: '
                    'Franka, KUKA) or gravity_compensated (UR); default %(default)s')
-    p.add_argument('--annotate', metavar='OUT.yaml',
-                   help='with --trajectory: write it with effort filled for '
-                   'joint_trajectory_controller (resampled to --tolerance)')
-    p.add_argument('--tolerance', type=positive, default=0.1,
-                   help='--annotate: |JTC\'s linear interpolation of effort - model torque|, '
-                   'N m (default %(default)g)')
-    p.add_argument('--output', choices=effort_model.OUTPUTS, default='full',
-                   help='--annotate: the torque written (default %(default)s)')
+    p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv',
+                   help='per-sample residual file (default %(default)s)')
+    p.add_argument('--no-plots', action='store_true', help='write no PNG files')
     p.add_argument('--generic', action='store_true',
                    help='read every message through rosbags (no numpy fast path)')
     p.add_argument('--timings', action='store_true', help='print stage times to stderr')
     return p
 
 
+def add_threshold(p: argparse.ArgumentParser) -> None:
+    """Declare ``--threshold``, the friction velocity threshold (the node's by default)."""
+    p.add_argument('--threshold', type=positive, default=NODE_THRESHOLD,
+                   help='friction velocity threshold, rad/s or m/s (default: the node\'s, '
+                   '%(default)g)')
+
+
+def add_command(sub, name: str, work, parents: List[argparse.ArgumentParser], summary: str,
+                description: str) -> argparse.ArgumentParser:
+    """Add the subcommand ``name`` that runs ``work(args)`` (:func:`run`); return its parser.
+
+    ``summary`` is its line in ``replay --help``; ``description`` heads its own ``--help``.
+    The model options come from one parent parser (:func:`model_parser`), then ``parents``.
+    """
+    p = sub.add_parser(name, parents=[model_parser()] + parents, help=summary,
+                       description=description, epilog=EXIT_STATUS)
+    p.set_defaults(run=functools.partial(run, work, p))
+    return p
+
+
+def residual_command(sub) -> None:
+    """``replay residual BAG``: the model's torque against the measured effort."""
+    add_command(sub, 'residual', run_residual, [recording_parser()],
+                'residual of the model against a bag\'s measured effort',
+                'Measured effort against the rigid-body model (RNEA) over a bag: summary.csv '
+                '(per joint), residual.csv (per sample) and plots in --out.')
+
+
+def identify_command(sub) -> None:
+    """``replay identify BAG``: the drives, a payload or the inertias fitted to a bag."""
+    p = add_command(sub, 'identify', run_identify, [recording_parser()],
+                    'fit the drives, a payload or the inertias to bags',
+                    'Fit each joint\'s damping, Coulomb friction and armature (the default), a '
+                    '--payload or the --inertias (--drives: jointly with the drives) to BAG '
+                    '(and --also\'s); check on --validate, write the corrected URDF '
+                    '(--write-urdf). Written to --out: the residual\'s files (as residual '
+                    'writes them), parameters.csv, validation.csv, identification.png.')
+    what = p.add_mutually_exclusive_group()
+    what.add_argument('--payload', metavar='LINK',
+                      help='identify a rigid payload on LINK (mass, centre of mass, inertia) '
+                      'against the URDF without it')
+    what.add_argument('--inertias', nargs='*', metavar='LINK',
+                      help='identify the inertial parameters of these links (default: every '
+                      'moving one), physically consistent, regularised toward the URDF')
+    p.add_argument('--drives', action='store_true',
+                   help='with --payload or --inertias: fit each joint\'s damping, friction '
+                   'and armature jointly with them (alone, the default fit)')
+    p.add_argument('--also', nargs='+', metavar='BAG', default=[],
+                   help='more recordings to fit on with BAG; the files written are of BAG')
+    p.add_argument('--validate', metavar='BAG',
+                   help='a held-out recording: the residual with the URDF and with what was '
+                   'identified')
+    p.add_argument('--write-urdf', metavar='OUT.urdf',
+                   help='write the URDF with only the identified <inertial> and <dynamics> '
+                   'elements replaced')
+    add_threshold(p)
+
+
+def trajectory_command(sub) -> None:
+    """``replay trajectory PLAN.yaml`` (or ``BAG --topic T``): τ against the effort limits."""
+    p = add_command(sub, 'trajectory', run_trajectory, [],
+                    'check a plan, or a bag\'s plans, against effort limits',
+                    'Sample a plan (trajectory_msgs/JointTrajectory YAML), or every '
+                    'JointTrajectory of --topic in a bag, as joint_trajectory_controller\'s '
+                    'splines at --rate; compare the torque with the URDF effort limits '
+                    '(exit 1 when one is exceeded); trajectory.csv and a plot in --out.')
+    p.add_argument('source', metavar='PLAN.yaml|BAG',
+                   help='a trajectory_msgs/JointTrajectory (YAML), or a bag with --topic')
+    p.add_argument('--topic', metavar='TOPIC',
+                   help='check every JointTrajectory of this topic of the bag')
+    p.add_argument('--out', default='replay_out', help='output directory (created)')
+    p.add_argument('--rate', type=positive, default=1000.0,
+                   help='sampling rate, Hz (default %(default)g)')
+    p.add_argument('--friction-model', choices=('none', 'urdf'), default='none',
+                   help='add the URDF <dynamics> friction (as the node)')
+    add_threshold(p)
+    p.add_argument('--no-plots', action='store_true', help='write no PNG files')
+
+
+def annotate_command(sub) -> None:
+    """``replay annotate PLAN.yaml --out OUT.yaml``: the plan with effort for JTC."""
+    p = add_command(sub, 'annotate', run_annotate, [],
+                    'fill a plan\'s effort for joint_trajectory_controller',
+                    'Write the plan with effort filled for joint_trajectory_controller, '
+                    'resampled so that its linear interpolation of effort stays within '
+                    '--tolerance of the model torque; the efforts checked against the URDF '
+                    'limits (exit 1). Only --out is written.')
+    p.add_argument('plan', metavar='PLAN.yaml', help='a trajectory_msgs/JointTrajectory (YAML)')
+    p.add_argument('--out', required=True, metavar='OUT.yaml', help='the annotated plan')
+    p.add_argument('--tolerance', type=positive, default=0.1,
+                   help='|JTC\'s linear interpolation of effort - model torque|, N m (default '
+                   '%(default)g)')
+    p.add_argument('--output', choices=effort_model.OUTPUTS, default='full',
+                   help='the torque written (default %(default)s)')
+
+
+#: The subcommands, in the order of ``replay --help``: each a function of the subparsers.
+COMMANDS = (residual_command, identify_command, trajectory_command, annotate_command,
+            excite.command)
+
+#: The positional arguments as --help names them.
+POSITIONALS = {'bag': 'BAG', 'source': 'PLAN.yaml|BAG', 'plan': 'PLAN.yaml'}
+#: What the exit status says, in every --help.
+EXIT_STATUS = ('Exit status: 0 done, 1 refused (or an effort limit exceeded), 2 bad usage, '
+               '130 interrupted.')
+
+
+def parser() -> argparse.ArgumentParser:
+    """Return the command's argument parser: one subparser a job."""
+    return parser_and_commands()[0]
+
+
+def parser_and_commands() -> Tuple[argparse.ArgumentParser, Dict[str, argparse.ArgumentParser]]:
+    """Return the command's argument parser and its subcommands' parsers by name."""
+    p = Parser(prog='replay', description=__doc__.split('\n\n')[0],
+               formatter_class=argparse.RawDescriptionHelpFormatter,
+               epilog='Each command has its --help. ' + EXIT_STATUS)
+    sub = p.add_subparsers(dest='command', required=True, title='commands')
+    for command in COMMANDS:
+        command(sub)
+    return p, sub.choices
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Run the command; return the exit status (0, 1 or 2). ``excite ...``: plan a motion."""
+    """Run the command; return the exit status (0, 1, 2 or 130).
+
+    An old spelling (no subcommand: ``replay BAG --identify ...``) runs its new one, said in
+    a deprecation line (:mod:`.legacy`).
+    """
     argv = sys.argv[1:] if argv is None else list(argv)
-    if argv[:1] == ['excite']:
-        from . import excite
-        return excite.main(argv[1:])
-    p = parser()
+    p, commands = parser_and_commands()
+    if argv and argv[0] not in commands and argv[0] not in ('-h', '--help'):
+        from . import legacy
+        argv = legacy.new_spelling(argv, commands)
     args = p.parse_args(argv)
-    if args.trajectory and args.trajectory_topic:
-        p.error('--trajectory and --trajectory-topic exclude each other')
-    if not args.trajectory and not args.bag:
-        p.error('a BAG is needed (or --trajectory FILE.yaml)')
-    if args.locked and not args.joints:
-        p.error('--locked needs --joints (the joints kept movable)')
-    if args.annotate and not args.trajectory:
-        p.error('--annotate needs --trajectory FILE.yaml')
-    identifies = args.inertias is not None or args.payload or args.identify
-    if (args.validate or args.write_urdf or args.also) and not identifies:
-        p.error('--validate, --write-urdf and --also need something identified: --inertias, '
-                '--payload or --identify')
-    if args.inertias is not None and args.payload:
-        p.error('--inertias and --payload exclude each other (--inertias fits the payload '
-                'with the link that holds it)')
-    if identifies and (args.trajectory or args.trajectory_topic):
-        p.error('--inertias, --payload and --identify work on a recording, not with '
-                '--trajectory or --trajectory-topic')
-    check_gravity(p, args.gravity)
+    return args.run(args)
+
+
+def run(work, p: argparse.ArgumentParser, args) -> int:
+    """Check what the parser cannot (usage errors by ``p``), run ``work(args)``.
+
+    Refusals, missing files and a lack of memory are one line on stderr, exit 1;
+    Ctrl-C is ``interrupted``, exit 130 (every file is whole or absent, the child ended).
+    """
+    check_model(p, args)
     for dest, value in vars(args).items():      # '' is no path, link, joint or topic
         if value == '' or (isinstance(value, list) and '' in value):
-            p.error(('BAG' if dest == 'bag' else '--' + dest.replace('_', '-'))
-                    + ': an empty value')
+            p.error(POSITIONALS.get(dest, '--' + dest.replace('_', '-')) + ': an empty value')
     try:
-        if args.annotate:         # writes the annotated plan only: no --out directory
-            return annotate.run(args, load_model)
-        check_paths(args)         # before any computation: bad inputs and outputs said at once
-        if not args.no_plots and importlib.util.find_spec('matplotlib') is None:
-            raise Refused('the plots need matplotlib (pip install matplotlib, or apt install '
-                          'python3-matplotlib); or --no-plots')
-        if args.trajectory or args.trajectory_topic:
-            return run_trajectory(args)
-        with small_pages():
-            return run_bag(args)
+        return work(args)
     except (Refused, bags.BagError, bags.MissingDependency, ValueError) as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
     except OSError as err:
@@ -547,18 +737,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 def bag_options(args) -> List[Tuple[str, str]]:
     """Return ``(option, path)`` of each bag the command reads (``'BAG'`` for the first)."""
-    found = [('BAG', args.bag)] + [('--also', bag) for bag in args.also] + [
-        ('--validate', args.validate)]
+    if args.command == 'trajectory':
+        return [('BAG', args.source)] if args.topic else []
+    found = [('BAG', args.bag)] + [('--also', bag) for bag in vars(args).get('also', [])] + [
+        ('--validate', vars(args).get('validate'))]
     return [(option, path) for option, path in found if path]
 
 
 def output_files(args) -> List[str]:
-    """Return the names of the files a bag run writes into ``--out``."""
+    """Return the names of the files the command writes into ``--out``."""
+    if args.command == 'trajectory':
+        return ['trajectory.csv'] + ([] if args.no_plots else ['trajectory.png'])
     names = ['summary.csv'] + {'csv': ['residual.csv'], 'npy': ['residual.npy'],
                                'none': []}[args.residual]
     if not args.no_plots:
         names += ['measured_vs_model.png', 'residual.png']
-    if args.inertias is not None or args.payload or args.identify:
+    if args.command == 'identify':
         names += ['parameters.csv', 'validation.csv']
         names += [] if args.no_plots else ['identification.png']
     return names
@@ -566,8 +760,8 @@ def output_files(args) -> List[str]:
 
 def input_files(args) -> List[str]:
     """Return the files (and bag directories) the command reads."""
-    return [path for path in [args.urdf, args.trajectory] + [b for _, b in bag_options(args)]
-            if path]
+    plan = [args.source] if args.command == 'trajectory' and not args.topic else []
+    return [path for path in [args.urdf] + plan + [b for _, b in bag_options(args)] if path]
 
 
 def _within(path: str, folder: str) -> bool:
@@ -582,9 +776,9 @@ def check_paths(args) -> None:
     Each bag (BAG, ``--also``, ``--validate``) must open (:func:`bags.check_bag`) and be
     given once (a held-out recording that is a training one checks nothing); ``--out`` must
     be a directory (it is created); ``--write-urdf`` and the files written into ``--out``
-    must not be an input (``--urdf``, a bag, ``--trajectory``), in a bag directory, one
-    another, a directory, a named pipe or a device (:func:`check_output`). Refused names
-    the option and the path.
+    must not be an input (``--urdf``, a bag, a plan), in a bag directory, one another, a
+    directory, a named pipe or a device (:func:`check_output`). Refused names the option and
+    the path.
     """
     given = bag_options(args)
     inputs = input_files(args)
@@ -598,24 +792,22 @@ def check_paths(args) -> None:
                 raise Refused(f'{option} {path}: the same recording as {before} {other} ('
                               + ('a held-out check needs another recording)'
                                  if option == '--validate' else 'fitted once is enough)'))
-    if args.trajectory or args.trajectory_topic:
-        names = ['trajectory.csv'] + ([] if args.no_plots else ['trajectory.png'])
-    else:
-        names = [] if args.annotate else output_files(args)
+    names = output_files(args)
+    write_urdf = vars(args).get('write_urdf')
     outputs = [('--out', args.out)] + [('output', os.path.join(args.out, n)) for n in names]
-    if args.write_urdf:
-        outputs.append(('--write-urdf', args.write_urdf))
+    if write_urdf:
+        outputs.append(('--write-urdf', write_urdf))
         for _, path in outputs[1:-1]:
-            if os.path.abspath(path) == os.path.abspath(args.write_urdf):
-                raise Refused(f'--write-urdf {args.write_urdf}: the command writes '
+            if os.path.abspath(path) == os.path.abspath(write_urdf):
+                raise Refused(f'--write-urdf {write_urdf}: the command writes '
                               f'{os.path.basename(path)} there (--out {args.out})')
     for what, path in outputs:
         for option, bag in given:
             if os.path.isdir(bag) and _within(path, bag):
                 raise Refused(f'{what} {path}: in the bag {bag!r} ({option}); choose another '
                               'place (a recording is left as it was made)')
-    if args.write_urdf:
-        check_output(args.write_urdf, '--write-urdf', inputs)
+    if write_urdf:
+        check_output(write_urdf, '--write-urdf', inputs)
     output_dir(args.out)
     for what, path in outputs[1:len(names) + 1]:
         check_output(path, what, inputs)

@@ -1,12 +1,12 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""``replay --trajectory plan.yaml --annotate out.yaml``: the plan with ``effort`` filled.
+"""``replay annotate plan.yaml --out out.yaml``: the plan with ``effort`` filled.
 
 The points are resampled by :func:`spatial_dynamics.effort.annotate` so that
 joint_trajectory_controller's linear interpolation of effort stays within ``--tolerance`` of
 the model torque (``--output`` part), and written in the message's YAML form, readable by
-``--trajectory`` again and publishable with ``ros2 topic pub``. The efforts are checked
-against the URDF effort limits as ``--trajectory`` checks its torques (``EXCEEDED``, exit 1);
+``replay trajectory`` again and publishable with ``ros2 topic pub``. The efforts are checked
+against the URDF effort limits as ``replay trajectory`` checks its torques (``EXCEEDED``, exit 1);
 a tolerance the 1 ms steps cannot meet is said, exit 1. The output path is checked before
 any work (not an input, a writable regular file) and written atomically
 (:mod:`spatial_dynamics.files`); nothing else is written.
@@ -23,34 +23,34 @@ from .. import effort, files
 
 
 def run(args, load_model) -> int:
-    """Annotate ``args.trajectory`` into ``args.annotate``; print what was done.
+    """Annotate ``args.plan`` into ``args.out``; print what was done.
 
     ``load_model(args, joints)`` builds the model (the command's own, reduction included).
     Returns 0, or 1 when an effort exceeds its URDF limit or the tolerance is not met (the
     file is written all the same, to be looked at). Errors are ``ValueError`` naming the file
     (exit 1 in the command), raised before anything is written.
     """
-    files.check_output(args.annotate, '--annotate output', (args.trajectory, args.urdf))
-    traj = splines.from_yaml(args.trajectory)
+    files.check_output(args.out, '--out', (args.plan, args.urdf))
+    traj = splines.from_yaml(args.plan)
     model = load_model(args, args.joints or list(traj.joint_names))
     missing = [j for j in model.joint_names if j not in traj.joint_names]
     if missing:
-        raise ValueError(f'{args.trajectory}: joint(s) {", ".join(missing)} not in the '
+        raise ValueError(f'{args.plan}: joint(s) {", ".join(missing)} not in the '
                          'trajectory')
     extra = [j for j in traj.joint_names if j not in model.joint_names]
     if extra:
-        raise ValueError(f'{args.trajectory}: joint(s) {", ".join(extra)} are not movable '
+        raise ValueError(f'{args.plan}: joint(s) {", ".join(extra)} are not movable '
                          'joints of the model (locked or unknown)')
     try:
         result = effort.annotate(model, traj, args.tolerance, args.output, args.gravity)
     except effort.AnnotationError as err:
-        raise ValueError(f'{args.trajectory}: not annotated: {err}') from None
+        raise ValueError(f'{args.plan}: not annotated: {err}') from None
     doc = effort.message_dict(result.trajectory, result.effort)
-    files.write_atomic(args.annotate, lambda f: f.write(yaml.safe_dump(
+    files.write_atomic(args.out, lambda f: f.write(yaml.safe_dump(
         doc, default_flow_style=None, sort_keys=False, width=1 << 16).encode('utf-8')),
-        '--annotate output')
+        '--out')
     met = result.max_error <= args.tolerance
-    print(f'{args.trajectory}: {len(traj.time)} points ({traj.kind}) -> {args.annotate}: '
+    print(f'{args.plan}: {len(traj.time)} points ({traj.kind}) -> {args.out}: '
           f'{len(result.trajectory.time)} points with effort ({args.output}); JTC\'s linear '
           f'interpolation of effort within {result.max_error:.3g} of the model torque '
           f'(tolerance {args.tolerance:g} N m{"" if met else ", NOT met"})')

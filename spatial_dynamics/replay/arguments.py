@@ -20,6 +20,26 @@ class Refused(Exception):
     """The input cannot be used; the message says why (exit status 1)."""
 
 
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors may be one line (``one_line=True``).
+
+    The subcommands of ``replay`` are made of this class (argparse makes a subparser of its
+    parent's class); ``excite`` says its usage errors in one line on stderr, without the
+    usage, as it did as a command of its own.
+    """
+
+    def __init__(self, *args, one_line: bool = False, **kwargs) -> None:
+        """Make the parser; ``one_line``: a usage error is ``PROG: error: MESSAGE`` alone."""
+        super().__init__(*args, **kwargs)
+        self.one_line = one_line
+
+    def error(self, message: str):
+        """Print the usage error and exit with status 2."""
+        if not self.one_line:
+            super().error(message)
+        self.exit(2, f'{self.prog}: error: {" ".join(message.split())}\n')
+
+
 def checked(parse: Callable[[str], float], ok: Callable[[float], bool], need: str):
     """Return an argparse type: ``parse(text)`` if ``ok`` of it, else an error saying ``need``.
 
@@ -55,6 +75,20 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
                    help='value (rad or m) of a joint locked by --joints')
     p.add_argument('--gravity', type=finite, nargs=3, default=(0.0, 0.0, -9.81),
                    metavar=('GX', 'GY', 'GZ'), help='m/s^2 in the base frame')
+
+
+def model_parser() -> argparse.ArgumentParser:
+    """Return a parent parser of the model options (:func:`add_model_arguments`), no help."""
+    p = argparse.ArgumentParser(add_help=False)
+    add_model_arguments(p)
+    return p
+
+
+def check_model(p: argparse.ArgumentParser, args) -> None:
+    """Exit with a usage error of ``p`` when the model options cannot be one model."""
+    if args.locked and not args.joints:
+        p.error('--locked needs --joints (the joints kept movable)')
+    check_gravity(p, args.gravity)
 
 
 def check_gravity(p: argparse.ArgumentParser, gravity: Sequence[float]) -> None:

@@ -35,6 +35,7 @@ URDF or determines fewer parameters than its series, 2 bad usage.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import re
@@ -50,7 +51,7 @@ from ..excitation import (determined, Excitation, excitation, MAX_ITERATIONS,
                           MAX_SEED, min_rate, period_points, POINTS_PER_CYCLE)
 from ..files import check_output, load_yaml, write_atomic
 from ..trajectory import evaluate, sample, Trajectory, trajectory
-from .arguments import (add_model_arguments, check_gravity, checked, finite, load_model, one_line,
+from .arguments import (check_model, checked, finite, load_model, model_parser, one_line, Parser,
                         Refused)
 from . import report
 
@@ -73,14 +74,6 @@ MAX_PLAN_VALUES = 180_000
 MAX_ARGUMENT = 128 * 1024
 #: A controller's name (ROS: tokens of letters, digits and _, not starting with a digit).
 CONTROLLER_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
-
-
-class _Parser(argparse.ArgumentParser):
-    """An argument parser whose usage errors are one line on stderr (exit status 2)."""
-
-    def error(self, message: str):
-        """Print ``replay excite: error: MESSAGE`` and exit with status 2."""
-        self.exit(2, f'{self.prog}: error: {" ".join(message.split())}\n')
 
 
 def non_negative(text: str) -> float:
@@ -125,13 +118,31 @@ iterations = checked(int, lambda k: 1 <= k <= MAX_ITERATIONS,
 seed = checked(int, lambda k: 0 <= k <= MAX_SEED, f'a whole number 0 .. {MAX_SEED}')
 
 
+#: How ``replay excite`` is made: its parser's description, epilog and error style.
+PARSER = dict(description=__doc__.split('\n\n')[0],
+              formatter_class=argparse.RawDescriptionHelpFormatter, one_line=True,
+              epilog='Exit status: 0 written, 1 refused or not written (a limit exceeded, '
+              'fewer parameters determined than the series does), 2 bad usage.')
+
+
+def command(sub) -> None:
+    """Register ``replay excite`` with the subparsers ``sub`` of ``replay``."""
+    p = sub.add_parser('excite', parents=[model_parser()],
+                       help='plan a motion that determines every base parameter',
+                       **PARSER)
+    add_arguments(p)
+    p.set_defaults(run=functools.partial(start, p))
+
+
 def parser() -> argparse.ArgumentParser:
-    """Return the command's argument parser."""
-    p = _Parser(prog='replay excite', description=__doc__.split('\n\n')[0],
-                formatter_class=argparse.RawDescriptionHelpFormatter,
-                epilog='Exit status: 0 written, 1 refused or not written (a limit exceeded, '
-                'fewer parameters determined than the series does), 2 bad usage.')
-    add_model_arguments(p)
+    """Return the argument parser of ``replay excite`` alone."""
+    p = Parser(prog='replay excite', parents=[model_parser()], **PARSER)
+    add_arguments(p)
+    return p
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Declare the options of ``replay excite`` but the model's (a parent parser's)."""
     p.add_argument('--duration', type=duration, required=True,
                    help='s: the period is repeated to fill it (at least one period)')
     p.add_argument('--out', required=True, metavar='PLAN.yaml',
@@ -162,7 +173,6 @@ def parser() -> argparse.ArgumentParser:
                    help='name in the printed commands (default %(default)s)')
     p.add_argument('--list', action='store_true',
                    help='print every base parameter as its combination of standard ones')
-    return p
 
 
 def periods(duration: float, period: Optional[float]) -> Tuple[float, int]:
@@ -463,10 +473,12 @@ def run(args, period: float, count: int) -> int:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the command; return the exit status (0, 1 or 2)."""
     p = parser()
-    args = p.parse_args(argv)
-    if args.locked and not args.joints:
-        p.error('--locked needs --joints (the joints moved)')
-    check_gravity(p, args.gravity)
+    return start(p, p.parse_args(argv))
+
+
+def start(p: argparse.ArgumentParser, args) -> int:
+    """Check the options (usage errors by ``p``), plan; return the exit status (0 or 1)."""
+    check_model(p, args)
     period, count = periods(args.duration, args.period)
     try:
         check_size(period, count, args.harmonics, args.rate, args.period is not None)
