@@ -83,11 +83,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 n = generate(bag, storage, args.seconds, args.rate)
                 print(f'{storage}: wrote {n} messages in {time.perf_counter() - start:.1f} s '
                       f'({_size(bag) / 2 ** 20:.0f} MiB)', flush=True)
-            cmd = [sys.executable, '-m', 'spatial_dynamics.replay', bag, '--urdf', URDF,
+            fits = args.identify or args.inertias
+            cmd = [sys.executable, '-m', 'spatial_dynamics.replay',
+                   'identify' if fits else 'residual', bag, '--urdf', URDF,
                    '--joints', *JOINTS, '--out', os.path.join(work, f'out_{storage}'),
                    '--timings', '--residual', args.residual] + (
-                       ['--identify'] if args.identify else []) + (
-                       ['--inertias'] if args.inertias else [])
+                       ['--inertias'] if args.inertias else []) + (
+                       ['--drives'] if args.identify and args.inertias else [])
             env = dict(os.environ, PYTHONPATH=os.pathsep.join(
                 [ROOT] + ([os.environ['PYTHONPATH']] if 'PYTHONPATH' in os.environ else [])))
             print(f'{storage}: timing {" ".join(cmd[1:])}', flush=True)

@@ -150,3 +150,14 @@ def test_a_bad_bag_is_one_line_and_the_rest_finish(fleet, tmp_path, capsys):
 def test_a_missing_manifest_is_refused(tmp_path, capsys):
     assert main([str(tmp_path / 'none.csv'), '--out', str(tmp_path / 'o')]) == 1
     assert 'error: manifest' in capsys.readouterr().err
+
+
+def test_replay_fleet_is_the_fleet_command(fleet, tmp_path, capsys):
+    """``replay fleet`` (the subcommand) writes what ``python -m spatial_dynamics.fleet`` does."""
+    from spatial_dynamics.replay.__main__ import main as replay
+    status, out = run([fleet, '--out', str(tmp_path / 'a'), '--serial', '--no-plots'], capsys)
+    assert replay(['fleet', fleet, '--out', str(tmp_path / 'b'), '--serial',
+                   '--no-plots']) == status == command.DRIFTED
+    assert fleet_csv(tmp_path / 'a') == fleet_csv(tmp_path / 'b')
+    assert replay(['fleet', str(tmp_path / 'missing.yaml'), '--out', str(tmp_path / 'c'),
+                   '--serial']) == 1

@@ -1,11 +1,15 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Inverse dynamics over recorded data: bags of joint states, and trajectories.
+"""Inverse dynamics over recorded data: bags of joint states, plans, fleets.
 
-``python -m spatial_dynamics.replay BAG --urdf URDF`` compares measured efforts with the
-model's torque over a whole recording, identifies per-joint damping, Coulomb friction and
-armature (``--identify``), and checks a ``JointTrajectory`` against the effort limits
-(``--trajectory``). Modules: :mod:`.bags` (rosbag2 without ROS), :mod:`.differentiate`,
-:mod:`.identify`, :mod:`.splines`, :mod:`.report`; the command in :mod:`.__main__`, the
-benchmark in :mod:`.bench`. Nothing here imports rclpy.
+``python -m spatial_dynamics.replay COMMAND``: ``residual`` compares measured efforts with
+the model's torque over a whole recording, ``identify`` fits the drives (damping, Coulomb
+friction, armature), a payload or link inertias and writes a corrected URDF, ``trajectory``
+checks a ``JointTrajectory`` against the effort limits, ``annotate`` fills its effort for
+joint_trajectory_controller, ``excite`` plans a motion for identification, ``fleet`` runs a
+fleet's bags on a Dask cluster (:mod:`spatial_dynamics.fleet`). Modules: :mod:`.bags`
+(rosbag2 without ROS), :mod:`.cdr`, :mod:`.recording`, :mod:`.differentiate`,
+:mod:`.identify`, :mod:`.correction`, :mod:`.urdf_writer`, :mod:`.splines`, :mod:`.report`;
+the command in :mod:`.__main__`, the old spellings in :mod:`.legacy`. Nothing here imports
+rclpy.
 """

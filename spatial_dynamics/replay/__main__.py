@@ -664,9 +664,20 @@ def annotate_command(sub) -> None:
                    help='the torque written (default %(default)s)')
 
 
+def fleet_command(sub) -> None:
+    """``replay fleet SOURCE``: every bag of a fleet on a Dask cluster, trends and wear."""
+    from ..fleet import command as fleet
+    p = sub.add_parser('fleet', help='a fleet\'s bags on a Dask cluster: drive trends, wear',
+                       description=fleet.__doc__.split('\n\n')[0],
+                       epilog='Exit status: 0 nothing drifted, 3 something drifted, 1 refused, '
+                       '2 bad usage.')
+    fleet.add_arguments(p)
+    p.set_defaults(run=fleet.run)
+
+
 #: The subcommands, in the order of ``replay --help``: each a function of the subparsers.
 COMMANDS = (residual_command, identify_command, trajectory_command, annotate_command,
-            excite.command)
+            excite.command, fleet_command)
 
 #: The positional arguments as --help names them.
 POSITIONALS = {'bag': 'BAG', 'source': 'PLAN.yaml|BAG', 'plan': 'PLAN.yaml'}

@@ -15,7 +15,7 @@ the joint ranges (less ``--margin``), ``--velocity-fraction`` of the velocity li
 fill ``--duration``. The plan is a JointTrajectory (one YAML flow mapping: points at
 ``--rate`` Hz with positions, velocities, accelerations and time_from_start), the same
 points in every period. Before it is written it is read back (the reader of
-``replay --trajectory``), and judged as joint_trajectory_controller's quintic splines
+``replay trajectory``), and judged as joint_trajectory_controller's quintic splines
 interpolate it: one period sampled at 1 kHz against the URDF's limits (every period is the
 same, point for point), and the base parameters it determines and its condition number
 from the same splines. Only a plan that keeps the limits and determines what its series
@@ -256,7 +256,7 @@ def plan_text(joint_names: Sequence[str], points: Sequence[dict]) -> str:
 
 
 def read_back(text: str, what: str) -> Trajectory:
-    """Read a plan's text as ``replay --trajectory`` reads its file; :class:`Refused` if not.
+    """Read a plan's text as ``replay trajectory`` reads its file; :class:`Refused` if not.
 
     :func:`~spatial_dynamics.files.load_yaml` and
     :func:`~spatial_dynamics.trajectory.trajectory`: what the file will say, not what was
@@ -276,7 +276,7 @@ def limit_rows(model: Model, t: np.ndarray, q: np.ndarray, qd: np.ndarray, tau: 
                ) -> Tuple[List[list], List[list], bool]:
     """Return the torque table's rows, the motion table's rows and whether a limit is exceeded.
 
-    The torque table is ``replay --trajectory``'s (peak |τ|, when, limit, use); the motion
+    The torque table is ``replay trajectory``'s (peak |τ|, when, limit, use); the motion
     table holds each joint's range used and peak |q̇| against the URDF's limits (a continuous
     joint has no range, whatever its ``<limit>`` says).
     """
