@@ -29,7 +29,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 #: (pyproject.toml, package.xml).
 KERNELS = Extension(
     package_name + '.backends._compiled',
-    # every C file in backends/ is a source or a dependency (test/test_build_depends.py)
+    # every C file in backends/ is a source or a dependency (test/test_compiled_build_depends.py)
     sources=[package_name + '/backends/' + f for f in (
         '_compiled.c', 'arguments.c', 'door.c', 'entries.c', 'kernels.c', 'threads.c')],
     # the private header, and every module the generator reads or imports

@@ -451,7 +451,7 @@ def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarra
     (:func:`_touches`; its own drive terms, the torque), and factored at the end by an
     eigendecomposition after equilibrating its columns; it loses the accuracy of directions
     the data barely sees, far below the regularisation that decides those directions anyway
-    (``test_identification``: the same fit as a QR of the stacked rows). The chunks are
+    (``test_ident_inertias``: the same fit as a QR of the stacked rows). The chunks are
     shared by ``THREADS`` threads, each summing its own (every ``THREADS``-th chunk) in a
     fixed order: the result does not depend on the timing. Call it with the BLAS on one
     thread (:func:`identify_inertias` does): these threads are the parallelism.

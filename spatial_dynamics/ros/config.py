@@ -3,7 +3,7 @@
 """The node's configuration, without ROS: its parameter table, and a change made a Config.
 
 Pure Python + numpy + the library (no rclpy import), so all of it is tested without a ROS
-graph (``test/test_ros_config.py``). The node (:mod:`spatial_dynamics.ros.node`) declares the
+graph (``test/test_node_config.py``). The node (:mod:`spatial_dynamics.ros.node`) declares the
 parameters of :data:`PARAMETERS`, calls :func:`prepare` to validate a change (its on-set
 callback) and swaps in the resulting :class:`~.records.Config` (its post-set callback);
 everything an answer needs is one :class:`~.records.Robot` (:func:`build_robot`). The
@@ -94,8 +94,8 @@ PARAMETER_FILE_HEADER = (
     'Copyright 2026 spatial_dynamics contributors\n'
     'SPDX-License-Identifier: Apache-2.0\n'
     '\n'
-    'Generated from the table in spatial_dynamics/ros/config.py (test/test_parameters.py '
-    'checks it).\n'
+    'Generated from the table in spatial_dynamics/ros/config.py '
+    '(test/test_node_parameter_tables.py checks it).\n'
     'Parameters of the `inverse_dynamics` node (spatial_dynamics). Every parameter the node\n'
     'declares is listed here; all of them but those marked read-only can be changed while the\n'
     'node runs (`ros2 param set /inverse_dynamics <name> <value>`). Each change is validated\n'
@@ -131,7 +131,7 @@ PARAMETER_FILE_HEADER = (
     '  qos_overrides./desired_joint_states.subscription.reliability: reliable'
 )
 
-#: Every parameter of the node, each written once (test/test_parameters.py keeps
+#: Every parameter of the node, each written once (test/test_node_parameter_tables.py keeps
 #: config/inverse_dynamics.yaml and the README's table equal to it).
 PARAMETERS = Table(NODE_NAME, [
     Param('robot_description', 'string', '', (

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """What one answer of the node is, without ROS: output choice, control law, term split.
 
-Pure Python + numpy + the library (no rclpy import), tested in ``test/test_ros_control.py``.
+Pure Python + numpy + the library (no rclpy import), tested in ``test/test_node_control_laws.py``.
 
 **Model part** (parameter ``output``), joint-space, SI units, order of ``model.joint_names``:
 

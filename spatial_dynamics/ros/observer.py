@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """External joint torques from measured effort: the generalized-momentum observer (no ROS).
 
-Pure Python + numpy + the library (no rclpy import), tested in ``test/test_ros_observer.py``
+Pure Python + numpy + the library (no rclpy import), tested in ``test/test_node_observer_laws.py``
 on a simulated robot. The robot, as the node models it (SI units, order of
 ``model.joint_names``)::
 

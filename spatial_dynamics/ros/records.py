@@ -5,7 +5,7 @@
 A leaf of the ros layer: the modules that build these records (:mod:`.config`), read them
 (:mod:`.answering`, :mod:`.plans`, :mod:`.observer`, :mod:`.diagnostics`) or hand them
 around (:mod:`.descriptions`) all import it, and it imports none of them
-(``test/test_layers.py`` refuses an import cycle). Pure: numpy and the library.
+(``test/test_lint_layers.py`` refuses an import cycle). Pure: numpy and the library.
 
 ``Robot`` is the robot the answers are computed for (its model with the payload, its joints,
 the per-joint terms and gains, the backend), ``Config`` the table's checked ``Params`` with

@@ -112,7 +112,7 @@ PARAMETERS = Table(NODE_NAME, [
     '\n'
     'Parameters of the `sim` node (spatial_dynamics), all read-only (set at start-up):\n'
     '  ros2 run spatial_dynamics sim --ros-args --params-file config/sim.yaml\n'
-    'Generated from the table in spatial_dynamics/sim/node.py (test/test_parameters.py '
+    'Generated from the table in spatial_dynamics/sim/node.py (test/test_node_parameter_tables.py '
     'checks it).'))
 
 

@@ -27,7 +27,7 @@ HUGE = [2 ** 60 + 1, 2 ** 61 + 3, 2 ** 62 // 3 + 1, (2 ** 63 - 1) // 8 + 1, 2 **
 def run_child(what):
     """Run ``what`` in a child process; fail with its output when it fails or crashes."""
     code = ('import sys; sys.path.insert(0, %r); import faulthandler; faulthandler.enable(); '
-            'import test_batch_entry_sizes as t; %s' % (HERE, what))
+            'import test_compiled_batch_sizes as t; %s' % (HERE, what))
     done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                           timeout=600)
     assert done.returncode == 0, (done.returncode, done.stdout[-3000:], done.stderr[-6000:])

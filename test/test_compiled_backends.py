@@ -32,7 +32,7 @@ from spatial_dynamics.backends import compiled, layout
 from urdf_gen import random_tree_urdf
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TOL_PIN = 1e-10      # Nm (N for prismatic joints), as test_oracle_pinocchio.py
+TOL_PIN = 1e-10      # Nm (N for prismatic joints), as test_core_pinocchio.py
 ULPS = 64            # compiled vs numpy: ULPS * eps * max(1, max |tau|)
 ROBOTS = ['panda', 'ur5', 'talos', 'talos_reduced', 'solo12']
 GRAVITIES = {'g': (0.0, 0.0, -9.81), 'no_g': (0.0, 0.0, 0.0), 'g_oblique': (1.3, -2.1, -9.5)}

@@ -18,7 +18,7 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 from conftest import robot_urdf_path  # noqa: E402
-from test_identification import perturbed_ur5  # noqa: E402
+from test_ident_inertias import perturbed_ur5  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.model import rigid_body_inertia  # noqa: E402

@@ -20,7 +20,7 @@ from spatial_dynamics.algorithms.regressor import parameters
 from spatial_dynamics.identification import base_parameters, identify_inertias, random_states
 from spatial_dynamics.replay import excite, splines
 from spatial_dynamics.trajectory import sample
-from test_identification import perturbed_ur5
+from test_ident_inertias import perturbed_ur5
 
 VELOCITY, EFFORT = 0.8, 0.6           # the fractions asked for below
 

@@ -19,11 +19,11 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 from conftest import robot_urdf_path  # noqa: E402
-from test_correction import EPS, motion, record  # noqa: E402
-from test_correction import robot_bags as robot_bags_fixture  # noqa: E402
+from test_ident_correction import EPS, motion, record  # noqa: E402
+from test_ident_correction import robot_bags as robot_bags_fixture  # noqa: E402
 
 robot_bags = robot_bags_fixture
-from test_identification import perturbed_ur5  # noqa: E402
+from test_ident_inertias import perturbed_ur5  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics import identification  # noqa: E402

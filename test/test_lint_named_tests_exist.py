@@ -30,8 +30,8 @@ def texts():
 
 
 def test_named_tests_are_found():
-    assert NAMED.findall('tested in ``test/test_ros_config.py``, test_node_config.py.') == [
-        'test_ros_config.py', 'test_node_config.py']
+    assert NAMED.findall('tested in ``test/test_node_config.py``, test_node_config.py.') == [
+        'test_node_config.py', 'test_node_config.py']
 
 
 def test_every_test_file_named_exists():

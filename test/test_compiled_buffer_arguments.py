@@ -181,7 +181,7 @@ def check_every_buffer(urdf):
 def run_child(what):
     """Run ``what`` in a child process; fail with its output when it fails or crashes."""
     code = ('import sys; sys.path.insert(0, %r); import faulthandler; faulthandler.enable(); '
-            'import test_buffer_arguments as t; %s' % (HERE, what))
+            'import test_compiled_buffer_arguments as t; %s' % (HERE, what))
     done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                           timeout=600)
     assert done.returncode == 0, (done.returncode, done.stdout[-3000:], done.stderr[-6000:])

@@ -25,7 +25,7 @@ import spatial_dynamics as sd
 from spatial_dynamics.backends import compiled, layout, python as python_backend
 from urdf_gen import random_tree_urdf
 
-TOL = 1e-10                   # Nm or N, against Pinocchio (as test_oracle_pinocchio.py)
+TOL = 1e-10                   # Nm or N, against Pinocchio (as test_core_pinocchio.py)
 REL = 64 * np.finfo(float).eps   # against rnea_spatial, relative to the largest torque
 GRAVITIES = {'g': (0.0, 0.0, -9.81), 'g_oblique': (1.3, -2.1, -9.5), 'no_g': (0.0, 0.0, 0.0)}
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
