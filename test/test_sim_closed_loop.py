@@ -53,6 +53,10 @@ def test_feedforward_tracks_20x_better_than_pd_alone(install, tmp_path, robot):
     assert os.path.join(install.prefix, 'lib', 'spatial_dynamics', 'sim') in proc.stdout
     assert os.path.join(install.prefix, 'lib', 'spatial_dynamics', 'inverse_dynamics') \
         in proc.stdout
+    # not on a terminal (a log): the table's header once, above the first law's row
+    lines = proc.stdout.splitlines()
+    heads = [k for k, line in enumerate(lines) if line.startswith('law ') and 't [s]' in line]
+    assert len(heads) == 1 and lines[heads[0] + 1].startswith('PD alone'), proc.stdout
 
 
 def test_a_whole_plan_replaced_mid_way_is_followed_without_a_relay(install, tmp_path):

@@ -485,8 +485,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         for k in picks:
             name, settings = LAWS[k]
             runs.append(run_law(name, settings, urdf, model, args, (rclpy, JointState), show))
-            if not live:
-                print(table(runs, model.joint_names)[-1], flush=True)
+            if not live:      # a log: the header with the first row, then each row
+                lines = table(runs, model.joint_names)
+                print('\n'.join(lines if len(runs) == 1 else lines[-1:]), flush=True)
     except KeyboardInterrupt:
         print('interrupted')
         status = 1
