@@ -165,7 +165,13 @@ _XML_VERSION = re.compile(rb'^(\s*<\?xml\s+version\s*=\s*)(["\'])[^"\']*\2')
 
 def _parse_urdf(source: Source, report: _Report) -> tuple:
     """Return ``(robot name, [_Link], [_Joint])`` of a URDF path, XML string or XML bytes."""
-    from lxml import etree
+    try:
+        from lxml import etree
+    except ImportError:
+        raise ModuleNotFoundError(
+            'reading a URDF needs lxml, which is not installed: pip install lxml (Debian and '
+            'Ubuntu: apt install python3-lxml; ROS: rosdep key python3-lxml)',
+            name='lxml') from None
 
     if isinstance(source, os.PathLike):
         source = os.fspath(source)

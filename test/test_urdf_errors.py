@@ -346,3 +346,19 @@ def test_a_file_that_is_not_utf8_is_a_value_error(tmp_path):
     path.write_bytes(arm().replace('name="bad"', 'name="b\xe4d"').encode('latin-1'))
     with pytest.raises(ValueError, match='malformed URDF XML'):
         sd.Model.from_urdf(str(path))
+
+
+def test_without_lxml_the_loader_says_what_to_install():
+    """The package imports without lxml; loading a URDF says to install it, in one sentence."""
+    code = ('import sys; sys.modules["lxml"] = None; sys.modules["lxml.etree"] = None\n'
+            'import spatial_dynamics as sd\n'
+            'try:\n'
+            '    sd.Model.from_urdf("<robot name=\\"r\\"><link name=\\"a\\"/></robot>")\n'
+            'except ModuleNotFoundError as err:\n'
+            '    print(err)\n')
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                         cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    assert run.returncode == 0, run.stderr
+    assert 'needs lxml' in run.stdout and 'pip install lxml' in run.stdout, run.stdout
