@@ -224,7 +224,7 @@ def floor(true_text: bytes, joints, urdf: str, bag: str) -> np.ndarray:
     from spatial_dynamics.replay.__main__ import parser
     from spatial_dynamics.replay.recording import recording, Stages
     true = sd.Model.from_urdf(true_text.decode(), joints=joints)
-    args = parser().parse_args([bag, '--urdf', urdf])
+    args = parser().parse_args(['residual', bag, '--urdf', urdf])
     data = recording(args, bag, true, Stages())
     damping, friction, armature = drives(true.nq)
     q, qd, qdd = data['q'], data['qd'], data['qdd']
@@ -282,8 +282,9 @@ def prove(robot: str, urdf: str, seconds: float, out: str, seed: int = 1,
     held_bag = write_bag(os.path.join(out, 'held_out'), names,
                          simulate(truth, joints, model, held, seconds / 2, seed + 1))
     corrected = os.path.join(out, 'corrected.urdf')
-    a = run_replay([train_bag, '--urdf', urdf, *keep, '--out', os.path.join(out, 'fit'),
-                    '--inertias', '--identify', '--validate', held_bag, '--write-urdf',
+    a = run_replay(['identify', train_bag, '--urdf', urdf, *keep, '--out',
+                    os.path.join(out, 'fit'), '--inertias', '--drives', '--validate', held_bag,
+                    '--write-urdf',
                     corrected, '--no-plots', '--residual', 'none'])
     if a['status'] != 0:
         raise RuntimeError(f'replay --inertias failed: {a["err"]}')
@@ -299,8 +300,9 @@ def prove(robot: str, urdf: str, seconds: float, out: str, seed: int = 1,
     payload_only = true_urdf(text, model, payload_link, seed, links_off=False)
     bag = write_bag(os.path.join(out, 'payload'), names,
                     simulate(payload_only, joints, model, held, seconds / 2, seed + 2))
-    b = run_replay([bag, '--urdf', urdf, *keep, '--out', os.path.join(out, 'payload_fit'),
-                    '--payload', payload_link, '--identify', '--no-plots', '--residual',
+    b = run_replay(['identify', bag, '--urdf', urdf, *keep, '--out',
+                    os.path.join(out, 'payload_fit'), '--payload', payload_link, '--drives',
+                    '--no-plots', '--residual',
                     'none'])
     if b['status'] != 0:
         raise RuntimeError(f'replay --payload failed: {b["err"]}')
@@ -325,8 +327,9 @@ def prove(robot: str, urdf: str, seconds: float, out: str, seed: int = 1,
     poor = Motion(model, seed + 200, only=(0, 1))
     bag = write_bag(os.path.join(out, 'poor'), names,
                     simulate(truth, joints, model, poor, seconds / 2, seed + 3))
-    d = run_replay([bag, '--urdf', urdf, *keep, '--out', os.path.join(out, 'poor_fit'),
-                    '--inertias', '--validate', held_bag, '--no-plots', '--residual', 'none'])
+    d = run_replay(['identify', bag, '--urdf', urdf, *keep, '--out',
+                    os.path.join(out, 'poor_fit'), '--inertias', '--validate', held_bag,
+                    '--no-plots', '--residual', 'none'])
     warning = next((line for line in d['err'].splitlines() if line.startswith('warning')), '')
     vp = read_validation(os.path.join(out, 'poor_fit', 'validation.csv'))
     figures['poor_warning'] = warning
