@@ -18,6 +18,7 @@ import yaml
 
 sys.path.insert(0, os.path.dirname(__file__))
 from conftest import robot_urdf_path  # noqa: E402
+from test_replay_outputs import motion_bag  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.replay import bags  # noqa: E402
@@ -25,7 +26,6 @@ from spatial_dynamics.replay.__main__ import main, parser  # noqa: E402
 
 pytest.importorskip('rosbags')
 COMMANDS = ['residual', 'identify', 'trajectory', 'annotate', 'excite']
-RATE = 250.0
 UR5 = robot_urdf_path('ur5')
 
 
@@ -71,26 +71,6 @@ def test_usage_errors_of_the_subcommands(argv, words, capsys):
 
 # --------------------------------------------------------------------------------------------
 # The old spellings: the same run as the new one, plus a deprecation line
-
-def motion_bag(path):
-    """Write a 4 s UR5 recording (two sines a joint, torque = RNEA + drives)."""
-    model = sd.Model.from_urdf(UR5)
-    rng = np.random.default_rng(3)
-    t = np.arange(int(RATE * 4.0)) / RATE
-    amp = rng.uniform(0.5, 1.0, model.nq)
-    w1, w2 = 2 * np.pi * rng.uniform(0.2, 0.5, model.nq), 2 * np.pi * rng.uniform(1.5, 2.5,
-                                                                                  model.nq)
-    T = t[:, None]
-    q = amp * (np.sin(w1 * T) + 0.3 * np.sin(w2 * T))
-    qd = amp * (w1 * np.cos(w1 * T) + 0.3 * w2 * np.cos(w2 * T))
-    qdd = -amp * (w1 ** 2 * np.sin(w1 * T) + 0.3 * w2 ** 2 * np.sin(w2 * T))
-    tau = sd.rnea(model, q, qd, qdd) + 0.5 * qd + np.tanh(qd / 0.01) + 0.05 * qdd
-    t_ns = (1_700_000_000 * 10 ** 9 + np.arange(len(t)) * int(1e9 / RATE)).astype(np.int64)
-    block = bags.encode_joint_states(model.joint_names, t_ns, q, qd, tau)
-    bags.write_bag(str(path), 'sqlite3', [('/joint_states', bags.JOINT_STATE, t_ns,
-                                           [r.tobytes() for r in block])])
-    return str(path)
-
 
 def trajectory_bag(path):
     """Write a bag of two JointTrajectory messages on /traj, the second beyond the limits."""

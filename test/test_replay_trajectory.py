@@ -12,7 +12,7 @@ import yaml
 sys.path.insert(0, os.path.dirname(__file__))
 from conftest import robot_urdf_path  # noqa: E402
 
-from spatial_dynamics.replay import bags, splines  # noqa: E402
+from spatial_dynamics.replay import splines  # noqa: E402
 from spatial_dynamics.replay.__main__ import main  # noqa: E402
 from spatial_dynamics.replay.report import write_csv  # noqa: E402
 
@@ -134,23 +134,8 @@ def test_exceeded_limit_exits_1_and_names_the_joint(tmp_path, capsys):
 
 def test_trajectory_topic_of_a_bag(tmp_path, capsys):
     pytest.importorskip('rosbags')
-    store = bags.typestore()
-    JT = store.types[bags.JOINT_TRAJECTORY]
-    P = store.types['trajectory_msgs/msg/JointTrajectoryPoint']
-    Header, Time = store.types['std_msgs/msg/Header'], store.types['builtin_interfaces/msg/Time']
-    D = store.types['builtin_interfaces/msg/Duration']
-
-    def msg(target, seconds):
-        points = [P(positions=np.asarray(q, float), velocities=np.zeros(6),
-                    accelerations=np.array([], float), effort=np.array([], float),
-                    time_from_start=D(sec=int(s), nanosec=int((s % 1) * 1e9)))
-                  for q, s in ((np.zeros(6), 0.0), (target, seconds))]
-        return bags.serialize(JT(header=Header(stamp=Time(sec=0, nanosec=0), frame_id=''),
-                                 joint_names=UR5, points=points), bags.JOINT_TRAJECTORY)
-
-    raw = [msg(np.full(6, 0.3), 4.0), msg(np.full(6, 3.0), 0.2)]
-    bag = str(tmp_path / 'bag')
-    bags.write_bag(bag, 'mcap', [('/traj', bags.JOINT_TRAJECTORY, np.array([1, 2]), raw)])
+    from test_replay_subcommands import trajectory_bag
+    bag = trajectory_bag(tmp_path / 'bag')
     assert main([bag, '--urdf', robot_urdf_path('ur5'), '--trajectory-topic', '/traj',
                  '--out', str(tmp_path / 'o'), '--no-plots']) == 1
     text = capsys.readouterr().out
