@@ -187,8 +187,8 @@ def test_the_bags_base_gives_the_residual_of_a_moving_base(bag, tmp_path, capsys
     assert rms['fixed'].max() > 5.0
     # with it: what the Savitzky-Golay derivative of the joints (and of the base's 100 Hz
     # twist, linearly interpolated) leaves
-    assert rms['--base-imu'].max() < 0.02, rms['--base-imu']
-    assert rms['--base-odometry'].max() < 0.05, rms['--base-odometry']
+    assert rms['--base-imu'].max() < 0.01, rms['--base-imu']
+    assert rms['--base-odometry'].max() < 0.02, rms['--base-odometry']
 
 
 @pytest.mark.parametrize('option', ['--base-odometry', '--base-imu'])
