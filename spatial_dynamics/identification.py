@@ -422,7 +422,7 @@ def with_bodies(model: Model, inertias) -> Model:
 def predicted_torque(model: Model, q, qd, qdd, gravity, drives=None,
                      threshold: Optional[float] = None,
                      base: Optional[BaseMotion] = None) -> np.ndarray:
-    """Return ``rnea(model)`` (on ``base`` if given) plus, with ``drives``, :func:`drive_torque`."""
+    """Return ``rnea(model)`` (on ``base``) plus, with ``drives``, :func:`drive_torque`."""
     tau = rnea(model, q, qd, qdd, gravity, base=base)
     if drives is not None:
         tau = tau + drive_torque(qd, qdd, drives, threshold)

@@ -19,9 +19,9 @@ import weakref
 import numpy as np
 
 from ..files import load_yaml, read_regular, regular_file
-from .cdr import (Batch, decode_fixed, decode_joint_states, encode_joint_states, FIELDS, INSTALL_HINT,
-                  JOINT_STATE, joint_states_from_raw, JointStates, layout, MissingDependency,
-                  Stamped, typestore, verify_layout, view_bytes)
+from .cdr import (Batch, decode_fixed, decode_joint_states, encode_joint_states, FIELDS,
+                  INSTALL_HINT, JOINT_STATE, joint_states_from_raw, JointStates, layout,
+                  MissingDependency, Stamped, typestore, verify_layout, view_bytes)
 
 __all__ = ['BagError', 'check_bag', 'decode_joint_states', 'encode_joint_states', 'FIELDS',
            'JOINT_STATE', 'JOINT_TRAJECTORY', 'joint_states_from_raw', 'JointStates', 'layout',

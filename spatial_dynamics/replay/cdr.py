@@ -345,7 +345,7 @@ IMU = 'sensor_msgs/msg/Imu'
 
 
 def _odometry_doubles(msg) -> List[float]:
-    """The 85 doubles of a deserialised Odometry, in CDR order."""
+    """Return the 85 doubles of a deserialised Odometry, in CDR order."""
     p, t = msg.pose.pose, msg.twist.twist
     return [p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
             p.orientation.z, p.orientation.w, *msg.pose.covariance, t.linear.x, t.linear.y,
@@ -353,7 +353,7 @@ def _odometry_doubles(msg) -> List[float]:
 
 
 def _imu_doubles(msg) -> List[float]:
-    """The 37 doubles of a deserialised Imu, in CDR order."""
+    """Return the 37 doubles of a deserialised Imu, in CDR order."""
     o, w, f = msg.orientation, msg.angular_velocity, msg.linear_acceleration
     return [o.x, o.y, o.z, o.w, *msg.orientation_covariance, w.x, w.y, w.z,
             *msg.angular_velocity_covariance, f.x, f.y, f.z, *msg.linear_acceleration_covariance]
@@ -389,7 +389,7 @@ class Stamped:
     generic: int = 0
 
     def field(self, name: str) -> np.ndarray:
-        """Return a field (``'orientation'``, ``'angular'``, ...) as (N, 3) or (N, 4)."""
+        """Return one of the fields, ``'orientation'``, ``'angular'``, ...: (N, 3) or (N, 4)."""
         return self.values[:, FIXED_MESSAGES[self.msgtype][3][name]]
 
 
