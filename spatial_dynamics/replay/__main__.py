@@ -4,6 +4,7 @@
 
     python -m spatial_dynamics.replay residual BAG --urdf URDF [--topic /joint_states]
                                       [--out DIR] [--window 0.05] [--residual csv|npy|none]
+                                      [--base-odometry TOPIC | --base-imu TOPIC]
     python -m spatial_dynamics.replay identify BAG --urdf URDF [--threshold 0.01]
                                       [--inertias [LINK ...] | --payload LINK] [--drives]
                                       [--also BAG ...] [--validate BAG]
@@ -20,7 +21,8 @@ the bag has no velocities). The model torque is the rigid-body RNEA for the whol
 batched call. Written to DIR: summary.csv (per joint), residual.csv (per sample: t, measured
 - model per joint), measured_vs_model.png, residual.png (``residual``). ``identify`` fits
 per-joint damping, Coulomb friction (tanh(q̇/threshold), as the node) and armature to the
-residual.
+residual. On a moving base (a mobile manipulator) ``--base-odometry`` or ``--base-imu`` reads
+the base's motion from the same bag (:mod:`.base_topics`); it goes to RNEA and every fit.
 
 ``identify --inertias [LINK ...]`` fits the inertial parameters of the links (default all
 moving ones; physically consistent, regularised toward the URDF; with ``--drives`` jointly
