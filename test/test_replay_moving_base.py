@@ -243,11 +243,16 @@ def test_a_base_topic_that_does_not_cover_the_joints_is_refused(
     assert '--base-odometry /odom' in err and said in err, err
 
 
-def test_a_link_option_without_its_topic_is_a_usage_error(bag, tmp_path, capsys):
+@pytest.mark.parametrize('options, said', [
+    (['--imu-link', 'base_link'], '--imu-link needs --base-imu'),
+    (['--base-imu', '/imu', '--base-odometry', '/odom'],
+     '--base-odometry and --base-imu: give one'),
+])
+def test_base_options_that_do_not_go_together_are_a_usage_error(bag, capsys, options, said):
     with pytest.raises(SystemExit) as exit_:
-        main(['residual', bag, '--urdf', robot_urdf_path('ur5'), '--imu-link', 'base_link'])
+        main(['residual', bag, '--urdf', robot_urdf_path('ur5')] + options)
     assert exit_.value.code == 2
-    assert '--imu-link needs --base-imu' in capsys.readouterr().err
+    assert said in capsys.readouterr().err
 
 
 def test_a_frame_that_is_no_link_is_refused_naming_it(bag, tmp_path, capsys):

@@ -44,13 +44,12 @@ def add_base_arguments(p) -> None:
     """Declare ``--base-odometry``/``--base-imu`` (one of them) and their links."""
     g = p.add_argument_group('moving base (a mobile manipulator: the base\'s motion from the '
                              'same bag)')
-    which = g.add_mutually_exclusive_group()
-    which.add_argument('--base-odometry', metavar='TOPIC',
-                       help='nav_msgs/Odometry of the base: its twist (differentiated like '
-                       'the joints) and orientation (for gravity)')
-    which.add_argument('--base-imu', metavar='TOPIC',
-                       help='sensor_msgs/Imu on the base: gyro and accelerometer (gravity '
-                       'included)')
+    g.add_argument('--base-odometry', metavar='TOPIC',
+                   help='nav_msgs/Odometry of the base: its twist (differentiated like the '
+                   'joints) and orientation (for gravity)')
+    g.add_argument('--base-imu', metavar='TOPIC',
+                   help='sensor_msgs/Imu on the base: gyro and accelerometer (gravity '
+                   'included); instead of --base-odometry')
     g.add_argument('--odometry-link', metavar='LINK',
                    help='the link the odometry\'s twist is of (default: its child_frame_id)')
     g.add_argument('--imu-link', metavar='LINK',
@@ -58,7 +57,14 @@ def add_base_arguments(p) -> None:
 
 
 def check_base_arguments(p, args) -> None:
-    """Exit with a usage error for a link option without its topic."""
+    """Exit with a usage error for both topics, or a link option without its topic.
+
+    One topic gives the whole motion: the IMU's (gravity in it, the linear velocity, which
+    no joint torque depends on, not needed) or the odometry's; both would be two answers.
+    """
+    if getattr(args, 'base_odometry', None) and getattr(args, 'base_imu', None):
+        p.error('--base-odometry and --base-imu: give one (each gives the whole motion of the '
+                'base)')
     for link, topic in (('odometry_link', 'base_odometry'), ('imu_link', 'base_imu')):
         if getattr(args, link, None) and not getattr(args, topic, None):
             p.error(f'--{link.replace("_", "-")} needs --{topic.replace("_", "-")}')
