@@ -27,6 +27,7 @@ import numpy as np
 
 from .algorithms.regressor import parameters, PARAMETERS
 from .backends import regressor, rnea
+from .base import BaseMotion
 from .model import Model
 
 #: A pivot of ``R`` below ``RTOL`` times the largest counts as zero (the rank's threshold).
@@ -268,19 +269,21 @@ class Payload:
 
 def identify_payload(model: Model, link: str, q, qd, qdd, tau,
                      gravity: Sequence[float] = (0.0, 0.0, -9.81),
-                     drive_threshold: Optional[float] = None) -> Payload:
+                     drive_threshold: Optional[float] = None,
+                     base: Optional[BaseMotion] = None) -> Payload:
     """Fit a rigid payload on ``link`` to measured torques ``tau`` (N, n), by least squares.
 
     ``model`` is the robot without the payload; the residual ``tau − rnea(model)`` is
     ``Y_body T π`` for the payload's ten parameters ``π`` in the link frame
     (:func:`link_to_body`). With ``drive_threshold`` (the smooth-sign velocity, rad/s) each
     joint's damping, Coulomb friction and armature (the node's drive terms) are fitted in the
-    same least squares, so they cannot absorb the payload. Raises ``ValueError`` when the
-    states cannot tell the payload (the columns are rank deficient).
+    same least squares, so they cannot absorb the payload. ``base``: the base's motion at
+    each sample (a mobile manipulator), as for :func:`~spatial_dynamics.rnea`. Raises
+    ``ValueError`` when the states cannot tell the payload (the columns are rank deficient).
     """
     q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
     body, T = link_to_body(model, link)
-    Y_all = regressor(model, q, qd, qdd, gravity)
+    Y_all = regressor(model, q, qd, qdd, gravity, base=base)
     Y = Y_all[..., 10 * (body - 1):10 * body] @ T
     r = tau - Y_all @ parameters(model)
     A, b = Y.reshape(-1, 10), r.reshape(-1)
@@ -417,12 +420,23 @@ def with_bodies(model: Model, inertias) -> Model:
 
 
 def predicted_torque(model: Model, q, qd, qdd, gravity, drives=None,
-                     threshold: Optional[float] = None) -> np.ndarray:
-    """Return ``rnea(model)`` plus, with ``drives``, :func:`drive_torque`."""
-    tau = rnea(model, q, qd, qdd, gravity)
+                     threshold: Optional[float] = None,
+                     base: Optional[BaseMotion] = None) -> np.ndarray:
+    """Return ``rnea(model)`` (on ``base``) plus, with ``drives``, :func:`drive_torque`."""
+    tau = rnea(model, q, qd, qdd, gravity, base=base)
     if drives is not None:
         tau = tau + drive_torque(qd, qdd, drives, threshold)
     return tau
+
+
+def base_rows(base: Optional[BaseMotion], rows) -> Optional[BaseMotion]:
+    """Return the base's motion at samples ``rows`` (an index or slice) of a recording."""
+    if base is None:
+        return None
+
+    def part(x):
+        return x if x is None or x.ndim == 1 else x[rows]
+    return BaseMotion(part(base.v), part(base.a), part(base.orientation), base.gravity_included)
 
 
 def _touches(model: Model) -> np.ndarray:
@@ -441,7 +455,8 @@ def _touches(model: Model) -> np.ndarray:
 
 
 def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarray,
-                 pi0: np.ndarray, drive_threshold: Optional[float]) -> np.ndarray:
+                 pi0: np.ndarray, drive_threshold: Optional[float],
+                 base: Optional[BaseMotion] = None) -> np.ndarray:
     """Return ``F`` with ``Fᵀ F = [A b]ᵀ [A b]``, the recording summed chunk by chunk.
 
     ``A`` is the regressor's ``cols`` (then the drive columns), ``b`` the torque less what the
@@ -482,7 +497,8 @@ def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarra
         G = np.zeros((width, width))
         for a in chunks:
             part = slice(a, a + CHUNK)
-            Y = regressor(model, q[part], qd[part], qdd[part], gravity)
+            Y = regressor(model, q[part], qd[part], qdd[part], gravity,
+                          base=base_rows(base, part))
             for j in range(n):
                 k = len(place[j]) - (4 if drives else 1)
                 M = np.empty((len(Y), len(place[j])))      # [Y_j | drives_j | τ_j]
@@ -601,7 +617,8 @@ def drive_prior(model: Model) -> np.ndarray:
 def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[str]] = None,
                       gravity: Sequence[float] = (0.0, 0.0, -9.81),
                       drive_threshold: Optional[float] = None,
-                      regularisation: float = 1e-3) -> Inertias:
+                      regularisation: float = 1e-3,
+                      base: Optional[BaseMotion] = None) -> Inertias:
     """Fit the inertial parameters of ``links`` (default: every moving body) to ``tau``.
 
     Least squares on ``Y π (+ drives) − τ`` plus ``regularisation`` · (π − π_URDF), scaled
@@ -617,7 +634,8 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
     solve, is the answer when every body is realisable there. Otherwise the fit goes on
     from it (each body moved to the nearest realisable one) in the log-Cholesky parameters
     ``θ`` (:func:`scipy.optimize.least_squares`, trust region, the exact Jacobian), which
-    keep every body realisable whatever the data.
+    keep every body realisable whatever the data. ``base``: the base's motion at each sample
+    (a mobile manipulator), as for :func:`~spatial_dynamics.rnea`.
     """
     from threadpoolctl import threadpool_limits
     q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
@@ -632,13 +650,13 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
     # at load 4 with OpenBLAS's default, 16.6 s with one), and the fit works on matrices of
     # a hundred columns, where threads cost more than they give
     with threadpool_limits(limits=1, user_api='blas'):
-        F = _square_root(model, (q, qd, qdd), tau, gravity, cols, pi0, drive_threshold)
+        F = _square_root(model, (q, qd, qdd), tau, gravity, cols, pi0, drive_threshold, base)
         return _fit(model, (q, qd, qdd), tau, gravity, bodies, cols, pi0, F,
-                    drive_threshold, regularisation)
+                    drive_threshold, regularisation, base)
 
 
 def _fit(model: Model, states, tau, gravity, bodies, cols, pi0, F, drive_threshold,
-         regularisation) -> Inertias:
+         regularisation, base: Optional[BaseMotion] = None) -> Inertias:
     """:func:`identify_inertias` on the recording's triangle ``F`` (:func:`_square_root`)."""
     from scipy.optimize import least_squares
     q, qd, qdd = states
@@ -698,9 +716,10 @@ def _fit(model: Model, states, tau, gravity, bodies, cols, pi0, F, drive_thresho
     for a in range(0, len(q), RNEA_CHUNK):
         part = slice(a, a + RNEA_CHUNK)
         states = q[part], qd[part], qdd[part]
-        before += np.sum((tau[part] - rnea(model, *states, gravity)) ** 2, axis=0)
+        on = base_rows(base, part)
+        before += np.sum((tau[part] - rnea(model, *states, gravity, base=on)) ** 2, axis=0)
         after += np.sum((tau[part] - predicted_torque(corrected, *states, gravity, drives,
-                                                      drive_threshold)) ** 2, axis=0)
+                                                      drive_threshold, on)) ** 2, axis=0)
     # the covariance of the linearised, regularised estimate: s² (AᵀA + W²)⁻¹
     s2 = float(after.sum()) / max(tau.size - Ru.shape[1], 1)
     normal = Ru.T @ Ru

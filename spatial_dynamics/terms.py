@@ -24,31 +24,51 @@ PerJoint = Union[float, Sequence[float], Mapping[str, float], np.ndarray]
 
 def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
               nonnegative: bool = False) -> np.ndarray:
-    """Expand a scalar, a list in joint order, or a {joint name: value} map to an (n,) array.
+    """Expand a scalar, a list in joint order, or a {joint name: value} map to an (nv,) array.
+
+    The array is in the order of q̇ and τ, ready for :func:`armature_torque` and the like.
+    A fixed-base model: one value per joint of ``model.joint_names``. A floating-base model
+    (``base='floating'``): the values are those of its actuated joints
+    (``model.joint_names[1:]``, rows 6 on); the free-flyer ``'root_joint'`` has no drive,
+    so the six base rows (the wrench on the base) are 0. A list may then also hold all
+    ``nv`` numbers with the six base rows 0 (Pinocchio's ``model.armature``).
 
     ``ValueError`` names the joint of an unknown name or a non-finite (or, with
-    ``nonnegative``, negative) value.
+    ``nonnegative``, negative) value, and the free-flyer given a value.
     """
     check_model(model)
-    n = model.nq
+    names = model.joint_names[1:] if model.floating else model.joint_names
+    base = model.nv - len(names)        # the free-flyer's rows: 6, or 0 on a fixed base
+    n = len(names)
     if isinstance(values, Mapping):
         out = np.full(n, float(default))
         for name, v in values.items():
-            if name not in model.joint_names:
+            if base and name == model.joint_names[0]:
+                raise ValueError(f'{what}: {name!r} is the floating base\'s free-flyer, which '
+                                 'has no drive (its six rows, the wrench on the base, are 0)')
+            if name not in names:
                 raise ValueError(f'{what}: unknown joint {name!r}')
-            out[model.joint_names.index(name)] = float(v)
+            out[names.index(name)] = float(v)
     else:
         out = np.asarray(values, dtype=float)
         if out.ndim == 0:
             out = np.full(n, float(out))
+        if base and out.shape == (model.nv,):
+            if np.any(out[:base] != 0.0):
+                raise ValueError(f'{what}: {model.nv} values whose first {base} (the '
+                                 f'free-flyer {model.joint_names[0]!r}: the base, which has '
+                                 f'no drive) are not 0: {out[:base]}; give the {n} of the '
+                                 'actuated joints')
+            out = out[base:]
         if out.shape != (n,):
-            raise ValueError(f'{what}: expected {n} values for {model.joint_names}, '
-                             f'got {out.shape[0] if out.ndim == 1 else out.shape}')
-    for name, v in zip(model.joint_names, out):
+            raise ValueError(f'{what}: expected {n} values for {names}'
+                             + (f' (or {model.nv} with the base\'s six 0 first)' if base else '')
+                             + f', got {out.shape[0] if out.ndim == 1 else out.shape}')
+    for name, v in zip(names, out):
         if not np.isfinite(v) or (nonnegative and v < 0.0):
             raise ValueError(f'{what}: joint {name!r} has the value {v}, need a finite '
                              + ('non-negative ' if nonnegative else '') + 'number')
-    return out
+    return np.concatenate([np.zeros(base), out])
 
 
 def armature_torque(armature: np.ndarray, qdd) -> np.ndarray:

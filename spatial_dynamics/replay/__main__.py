@@ -4,6 +4,7 @@
 
     python -m spatial_dynamics.replay residual BAG --urdf URDF [--topic /joint_states]
                                       [--out DIR] [--window 0.05] [--residual csv|npy|none]
+                                      [--base-odometry TOPIC | --base-imu TOPIC]
     python -m spatial_dynamics.replay identify BAG --urdf URDF [--threshold 0.01]
                                       [--inertias [LINK ...] | --payload LINK] [--drives]
                                       [--also BAG ...] [--validate BAG]
@@ -20,7 +21,8 @@ the bag has no velocities). The model torque is the rigid-body RNEA for the whol
 batched call. Written to DIR: summary.csv (per joint), residual.csv (per sample: t, measured
 - model per joint), measured_vs_model.png, residual.png (``residual``). ``identify`` fits
 per-joint damping, Coulomb friction (tanh(q̇/threshold), as the node) and armature to the
-residual.
+residual. On a moving base (a mobile manipulator) ``--base-odometry`` or ``--base-imu`` reads
+the base's motion from the same bag (:mod:`.base_topics`); it goes to RNEA and every fit.
 
 ``identify --inertias [LINK ...]`` fits the inertial parameters of the links (default all
 moving ones; physically consistent, regularised toward the URDF; with ``--drives`` jointly
@@ -65,7 +67,8 @@ from .. import friction_torque, Model, rnea
 from ..check import read_description
 from .. import effort as effort_model
 from ..files import check_output
-from . import annotate, bags, differentiate, excite, identify, report, splines, urdf_writer
+from . import (annotate, bags, base_topics, differentiate, excite, identify, report, splines,
+               urdf_writer)
 from .recording import recording, Stages
 from .. import identification
 from .arguments import (check_model, load_model, model_parser, one_line, Parser, positive,
@@ -243,8 +246,11 @@ def compare(args, plotter, fit=None) -> int:
         if args.also:
             more = [recording(args, bag, model, stages) for bag in args.also]
             train = {k: np.concatenate([train[k]] + [m[k] for m in more]) for k in train}
+            train['base'] = base_topics.joined([s['base']] + [m['base'] for m in more])
             print(f'fitted on {args.bag} and {len(more)} more bag(s): {len(train["q"])} '
                   'samples')
+        else:
+            train['base'] = s['base']
         # read before the fits: a held-out bag that cannot be used is said before them
         held_out = recording(args, args.validate, model, stages) if args.validate else None
         fitted = fit(args, model, train, res, stages)
@@ -266,7 +272,7 @@ def compare(args, plotter, fit=None) -> int:
 
 def residual_of(model: Model, s: Dict, gravity) -> Residual:
     """Return the model's torque (RNEA, one batched call) and the residual over ``s``."""
-    tau = rnea(model, s['q'], s['qd'], s['qdd'], gravity)
+    tau = rnea(model, s['q'], s['qd'], s['qdd'], gravity, base=s['base'])
     residual = s['effort'] - tau
     return Residual(tau, residual, rms(s['effort']), rms(residual))
 
@@ -278,7 +284,7 @@ def fits(args, model: Model, train: Dict, res: Residual, stages: Stages) -> Fitt
     ``--inertias`` (with ``--drives``, jointly with each joint's damping, friction and
     armature). ``res`` is the bag's residual (the drives' fit without ``--also``).
     """
-    fq, fqd, fqdd, feffort = (train[k] for k in ('q', 'qd', 'qdd', 'effort'))
+    fq, fqd, fqdd, feffort, base = (train[k] for k in ('q', 'qd', 'qdd', 'effort', 'base'))
     names = model.joint_names
     drives = args.drives or (args.payload is None and args.inertias is None)
     threshold = args.threshold if drives else None
@@ -289,20 +295,22 @@ def fits(args, model: Model, train: Dict, res: Residual, stages: Stages) -> Fitt
     with threadpool_limits(limits=1, user_api='blas'):
         if args.payload is None and args.inertias is None:
             fresidual = res.residual if not args.also else feffort - rnea(
-                model, fq, fqd, fqdd, args.gravity)
+                model, fq, fqd, fqdd, args.gravity, base=base)
             fit = identify.identify(fresidual, fqd, fqdd, args.threshold, names)
             correction = correction_of.from_drives(model, fit, args.threshold)
             stages.done('identify')
         elif args.payload:
             payload = identification.identify_payload(
-                model, args.payload, fq, fqd, fqdd, feffort, args.gravity, threshold)
+                model, args.payload, fq, fqd, fqdd, feffort, args.gravity, threshold,
+                base=base)
             correction = correction_of.Correction(model, payload=payload,
                                                   drives=payload.drives,
                                                   threshold=args.threshold)
             stages.done('payload')
         else:
             found = identification.identify_inertias(
-                model, fq, fqd, fqdd, feffort, args.inertias or None, args.gravity, threshold)
+                model, fq, fqd, fqdd, feffort, args.inertias or None, args.gravity, threshold,
+                base=base)
             if not found.converged:
                 print(f'warning: the inertial fit stopped after {found.evaluations} '
                       f'evaluations without converging ({found.message}): its values are '
@@ -321,7 +329,8 @@ def fits(args, model: Model, train: Dict, res: Residual, stages: Stages) -> Fitt
         elif found is not None:
             rms_before, rms_after = found.before, found.after
         else:
-            rms_before, rms_after = (rms(feffort - rnea(model, fq, fqd, fqdd, args.gravity))
+            rms_before, rms_after = (rms(feffort - rnea(model, fq, fqd, fqdd, args.gravity,
+                                                        base=base))
                                      if args.also else res.rms_residual), payload.rms
     return Fitted(correction, shown, rms_before, rms_after, fit, payload, excitation_warning)
 
@@ -388,6 +397,12 @@ def print_recording(args, model: Model, s: Dict) -> None:
           f'{differentiate.cutoff(window, args.order, rate):.3g} Hz, zero phase'
           + (f'; {s["resampled"]} stretch(es) with uneven stamps resampled'
              if s['resampled'] else ''))
+    if s['base'] is not None:
+        print('base: moving, its motion from '
+              + (f'--base-odometry {args.base_odometry} (twist differentiated with the same '
+                 'filter, orientation for gravity)' if args.base_odometry else
+                 f'--base-imu {args.base_imu} (gyro differentiated with the same filter, '
+                 'accelerometer with gravity in it)') + ', interpolated to the joint stamps')
     if s['out_of_order']:
         print(f'{s["out_of_order"]} stamp(s) earlier than the one before: samples sorted by '
               'header stamp')
@@ -565,6 +580,7 @@ def recording_parser() -> argparse.ArgumentParser:
     p.add_argument('--generic', action='store_true',
                    help='read every message through rosbags (no numpy fast path)')
     p.add_argument('--timings', action='store_true', help='print stage times to stderr')
+    base_topics.add_base_arguments(p)
     return p
 
 
@@ -724,6 +740,7 @@ def run(work, p: argparse.ArgumentParser, args) -> int:
     Ctrl-C is ``interrupted``, exit 130 (every file is whole or absent, the child ended).
     """
     check_model(p, args)
+    base_topics.check_base_arguments(p, args)
     for dest, value in vars(args).items():      # '' is no path, link, joint or topic
         if value == '' or (isinstance(value, list) and '' in value):
             p.error(POSITIONALS.get(dest, '--' + dest.replace('_', '-')) + ': an empty value')

@@ -19,9 +19,9 @@ import weakref
 import numpy as np
 
 from ..files import load_yaml, read_regular, regular_file
-from .cdr import (Batch, decode_joint_states, encode_joint_states, FIELDS, INSTALL_HINT,
-                  JOINT_STATE, joint_states_from_raw, JointStates, layout, MissingDependency,
-                  typestore, verify_layout, view_bytes)
+from .cdr import (Batch, decode_fixed, decode_joint_states, encode_joint_states, FIELDS,
+                  INSTALL_HINT, JOINT_STATE, joint_states_from_raw, JointStates, layout,
+                  MissingDependency, Stamped, typestore, verify_layout, view_bytes)
 
 __all__ = ['BagError', 'check_bag', 'decode_joint_states', 'encode_joint_states', 'FIELDS',
            'JOINT_STATE', 'JOINT_TRAJECTORY', 'joint_states_from_raw', 'JointStates', 'layout',
@@ -430,6 +430,15 @@ def read_joint_states(path: str, topic: str, names: Sequence[str], fast: bool = 
             total = min(total, sum(os.path.getsize(p) for p in paths) // 16)
         return decode_joint_states(raw_batches(reader, topic, JOINT_STATE, fast), names, fast,
                                    progress and (lambda k: progress(k, total)), total)
+    finally:
+        reader.close()
+
+
+def read_stamped(path: str, topic: str, msgtype: str) -> Stamped:
+    """Read an Odometry or Imu topic of a bag into arrays (:func:`.cdr.decode_fixed`)."""
+    reader = open_reader(path)
+    try:
+        return decode_fixed(raw_batches(reader, topic, msgtype), msgtype)
     finally:
         reader.close()
 

@@ -335,3 +335,174 @@ def encode_joint_states(names: Sequence[str], stamp_ns: np.ndarray, position=Non
         if a is not None:
             block[:, off:off + 8 * count] = np.ascontiguousarray(a, dtype='<f8').view(np.uint8)
     return block
+
+
+# --------------------------------------------------------------------------------------------
+# Messages of fixed size after their strings: nav_msgs/Odometry and sensor_msgs/Imu
+
+ODOMETRY = 'nav_msgs/msg/Odometry'
+IMU = 'sensor_msgs/msg/Imu'
+
+
+def _odometry_doubles(msg) -> List[float]:
+    """Return the 85 doubles of a deserialised Odometry, in CDR order."""
+    p, t = msg.pose.pose, msg.twist.twist
+    return [p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
+            p.orientation.z, p.orientation.w, *msg.pose.covariance, t.linear.x, t.linear.y,
+            t.linear.z, t.angular.x, t.angular.y, t.angular.z, *msg.twist.covariance]
+
+
+def _imu_doubles(msg) -> List[float]:
+    """Return the 37 doubles of a deserialised Imu, in CDR order."""
+    o, w, f = msg.orientation, msg.angular_velocity, msg.linear_acceleration
+    return [o.x, o.y, o.z, o.w, *msg.orientation_covariance, w.x, w.y, w.z,
+            *msg.angular_velocity_covariance, f.x, f.y, f.z, *msg.linear_acceleration_covariance]
+
+
+#: Per type: the strings after the stamp (header.frame_id, ...), the doubles that follow
+#: them, the doubles of a deserialised message, and where each field is among the doubles.
+FIXED_MESSAGES = {
+    ODOMETRY: (('frame_id', 'child_frame_id'), 85, _odometry_doubles,
+               {'position': slice(0, 3), 'orientation': slice(3, 7),
+                'linear': slice(43, 46), 'angular': slice(46, 49)}),
+    IMU: (('frame_id',), 37, _imu_doubles,
+          {'orientation': slice(0, 4), 'angular_velocity': slice(13, 16),
+           'linear_acceleration': slice(25, 28)}),
+}
+
+
+@dataclass
+class Stamped:
+    """Messages of one fixed-size type (:data:`FIXED_MESSAGES`) as arrays, sorted by stamp.
+
+    ``stamp`` (N,) s: ``header.stamp``, or the bag's receive time when the stamp is zero;
+    ``values`` (N, k): the message's doubles in CDR order (:meth:`field` picks one);
+    ``frames``: the strings of the first message (``frame_id``, ``child_frame_id``).
+    """
+
+    msgtype: str
+    stamp: np.ndarray
+    values: np.ndarray
+    frames: Tuple[str, ...]
+    skipped: Dict[str, int] = field(default_factory=dict)
+    fast: int = 0
+    generic: int = 0
+
+    def field(self, name: str) -> np.ndarray:
+        """Return one of the fields, ``'orientation'``, ``'angular'``, ...: (N, 3) or (N, 4)."""
+        return self.values[:, FIXED_MESSAGES[self.msgtype][3][name]]
+
+
+def fixed_layout(data: bytes, msgtype: str) -> Optional[Tuple[int, Tuple[str, ...], np.ndarray]]:
+    """Return ``(offset of the doubles, strings, offsets of the shared bytes)`` or None.
+
+    For a little-endian CDR message of ``msgtype`` (:data:`FIXED_MESSAGES`): the stamp, the
+    strings, then the doubles aligned to 8 that end the message. None if it is not one.
+    """
+    strings, count = FIXED_MESSAGES[msgtype][:2]
+    if len(data) < 16 or data[:2] != b'\x00\x01':
+        return None
+    fixed = list(range(4))
+    o = 12
+    found = []
+    try:
+        for _ in strings:
+            o += -(o - 4) % 4
+            n = int.from_bytes(data[o:o + 4], 'little')
+            if n < 1 or o + 4 + n > len(data):
+                return None
+            fixed.extend(range(o, o + 4 + n))
+            found.append(data[o + 4:o + 3 + n].decode('utf-8'))
+            o += 4 + n
+    except UnicodeDecodeError:
+        return None
+    o += -(o - 4) % 8
+    if o + 8 * count != len(data):
+        return None
+    return o, tuple(found), np.array(fixed, dtype=np.intp)
+
+
+def decode_fixed(batches: Iterable[Batch], msgtype: str) -> Stamped:
+    """Decode batches ``(bag times ns, messages)`` of Odometry or Imu into :class:`Stamped`.
+
+    As :func:`decode_joint_states`: runs of messages of one byte length whose strings equal
+    the first one's are read as numpy views; any other message goes through ``rosbags``'
+    deserialiser, and one that cannot be deserialised is skipped and counted.
+    """
+    count, doubles_of = FIXED_MESSAGES[msgtype][1:3]
+    stamps: List[np.ndarray] = []
+    values: List[np.ndarray] = []
+    frames: Optional[Tuple[str, ...]] = None
+    skipped: Dict[str, int] = {}
+    counts = {'fast': 0, 'generic': 0}
+    store = None
+
+    def generic(data: bytes, t_ns: int) -> None:
+        nonlocal store, frames
+        if store is None:
+            store = typestore()
+        try:
+            msg = store.deserialize_cdr(data, msgtype)
+        except Exception as err:   # rosbags raises several types for bad bytes
+            reason = f'cannot be deserialised ({type(err).__name__})'
+            skipped[reason] = skipped.get(reason, 0) + 1
+            return
+        sec, nsec = msg.header.stamp.sec, msg.header.stamp.nanosec
+        stamps.append(np.array([sec + nsec * 1e-9 if (sec or nsec) else t_ns * 1e-9]))
+        values.append(np.array([doubles_of(msg)], dtype=np.float64))
+        if frames is None:
+            frames = (msg.header.frame_id,) + ((msg.child_frame_id,)
+                                               if msgtype == ODOMETRY else ())
+        counts['generic'] += 1
+
+    def block_run(block: np.ndarray, times: np.ndarray) -> None:
+        nonlocal frames
+        lay = fixed_layout(block[0].tobytes(), msgtype)
+        if lay is None:
+            for r in range(len(block)):
+                generic(block[r].tobytes(), int(times[r]))
+            return
+        offset, strings, fixed = lay
+        frames = strings if frames is None else frames
+        shared = block[:, fixed]
+        same = np.all(shared == shared[0], axis=1)
+        rows = np.flatnonzero(same)
+        part = block[rows]
+        sec = view_bytes(part, 4, 4, '<i4')[:, 0]
+        nsec = view_bytes(part, 8, 4, '<u4')[:, 0]
+        stamp = sec.astype(np.float64) + nsec.astype(np.float64) * 1e-9
+        zero = (sec == 0) & (nsec == 0)
+        stamp[zero] = times[rows][zero] * 1e-9
+        stamps.append(stamp)
+        values.append(np.array(view_bytes(part, offset, 8 * count, '<f8'), dtype=np.float64))
+        counts['fast'] += len(rows)
+        for r in np.flatnonzero(~same):
+            generic(block[r].tobytes(), int(times[r]))
+
+    for times, messages in batches:
+        if isinstance(messages, np.ndarray):
+            block_run(messages, times)
+            continue
+        sizes = np.fromiter(map(len, messages), dtype=np.int64, count=len(times))
+        for start, stop in _runs(sizes):
+            block = np.frombuffer(b''.join(messages[start:stop]), dtype=np.uint8)
+            block_run(block.reshape(stop - start, -1), times[start:stop])
+    stamp = np.concatenate(stamps) if stamps else np.zeros(0)
+    order = np.argsort(stamp, kind='stable')
+    return Stamped(msgtype, stamp[order],
+                   np.concatenate(values)[order] if values else np.zeros((0, count)),
+                   frames or (), skipped, **counts)
+
+
+def verify_fixed(data: bytes, msgtype: str) -> bool:
+    """Check the fast path's reading of one Odometry or Imu against ``rosbags``'."""
+    lay = fixed_layout(data, msgtype)
+    if lay is None:
+        return False
+    fast = decode_fixed([(np.zeros(1, dtype=np.int64),
+                          np.frombuffer(data, dtype=np.uint8)[None, :])], msgtype)
+    msg = typestore().deserialize_cdr(data, msgtype)
+    frames = (msg.header.frame_id,) + ((msg.child_frame_id,) if msgtype == ODOMETRY else ())
+    stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+    return (fast.fast == 1 and fast.frames == frames and fast.stamp[0] == stamp
+            and np.array_equal(fast.values[0], FIXED_MESSAGES[msgtype][2](msg)))

@@ -111,10 +111,10 @@ class Correction:
                 identification._spatial_inertia(T @ self.payload.pi)
         return identification.with_bodies(self.model, bodies)
 
-    def predict(self, q, qd, qdd, gravity) -> np.ndarray:
-        """Return the corrected robot's torque (rigid body and drives)."""
+    def predict(self, q, qd, qdd, gravity, base=None) -> np.ndarray:
+        """Return the corrected robot's torque (rigid body on ``base`` if given, drives)."""
         return identification.predicted_torque(self.corrected_model(), q, qd, qdd, gravity,
-                                               self.drives, self.threshold)
+                                               self.drives, self.threshold, base)
 
     def parameter_rows(self) -> List[list]:
         """Return ``[link, parameter, urdf, identified, sigma, undetermined]`` rows."""
@@ -201,10 +201,14 @@ def rms(x: np.ndarray) -> np.ndarray:
 
 
 def residuals(correction: Correction, data: Dict, gravity) -> Tuple[np.ndarray, np.ndarray]:
-    """Return the RMS residual per joint of the URDF's model and of the corrected one."""
+    """Return the RMS residual per joint of the URDF's model and of the corrected one.
+
+    ``data['base']`` (if there and not None) is the base's motion at each sample.
+    """
     q, qd, qdd, effort = (data[k] for k in ('q', 'qd', 'qdd', 'effort'))
-    before = rms(effort - rnea(correction.model, q, qd, qdd, gravity))
-    after = rms(effort - correction.predict(q, qd, qdd, gravity))
+    base = data.get('base')
+    before = rms(effort - rnea(correction.model, q, qd, qdd, gravity, base=base))
+    after = rms(effort - correction.predict(q, qd, qdd, gravity, base))
     return before, after
 
 

@@ -20,7 +20,7 @@ import numpy as np
 from .. import effort as effort_model
 from ..bounds import JOINT_BOUNDS
 from ..model import Model
-from . import bags, differentiate
+from . import bags, base_topics, differentiate
 from .arguments import Refused
 
 #: Fewest samples a recording may have (the differentiation needs a few around each one).
@@ -164,9 +164,10 @@ def clean(js: bags.JointStates, window: float) -> Dict:
 def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
     """Read, clean and differentiate ``bag``: ``{t, q, qd, qdd, effort, ...}`` for the model.
 
-    ``effort`` is what the model's torque is compared with (``--measured-effort``); the rest
-    of the keys are :func:`clean`'s and ``js`` (the messages read), ``source`` and
-    ``resampled`` (how q̈ was found).
+    ``effort`` is what the model's torque is compared with (``--measured-effort``); ``base``
+    the base's motion at each sample (``--base-odometry``/``--base-imu``,
+    :func:`.base_topics.base_motion`) or None; the rest of the keys are :func:`clean`'s and
+    ``js`` (the messages read), ``source`` and ``resampled`` (how q̈ was found).
     """
     bar = Progress('reading')
     try:
@@ -192,6 +193,13 @@ def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
                                                          (1, 2), spans)
         source = 'position (the bag has no velocities)'
     stages.done('differentiate')
+    try:
+        base = base_topics.base_motion(args, bag, model, t, spans)
+    except Refused as err:
+        raise Refused(f'bag {bag}: {err}') from None
+    if base is not None:
+        stages.done('base')
     effort = effort_model.with_gravity(model, q, s['effort'], args.measured_effort,
                                        args.gravity)
-    return dict(s, qd=qd, qdd=qdd, effort=effort, js=js, source=source, resampled=resampled)
+    return dict(s, qd=qd, qdd=qdd, effort=effort, js=js, source=source, resampled=resampled,
+                base=base)
