@@ -2,8 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """Sphinx configuration: the user guide (Markdown, MyST) and the API reference (autodoc).
 
-Built by plain Sphinx (``sphinx-build -W -b html doc build/doc``, what CI runs) and by
-rosdoc2, which finds this file at ``doc/conf.py`` and wraps it.
+Built by plain Sphinx (``sphinx-build -W -b html doc build/doc``, test/test_lint_docs.py) and
+by rosdoc2 (docs.ros.org; ``rosdoc2 build --package-path .``, test/test_lint_rosdoc2.py), which
+``rosdoc2.yaml`` points at this folder and which wraps this file in a conf.py of its own: the
+same pages either way.
 """
 
 import os

@@ -33,8 +33,8 @@ def rosdoc2():
 def built(tmp_path_factory):
     """Run ``rosdoc2 build`` on a copy of the package; return (the run, its output folder)."""
     command = rosdoc2()
-    if command is None:
-        pytest.skip('rosdoc2 is not installed (.ci/requirements.txt lists it)')
+    assert command is not None, 'no rosdoc2 beside this Python or on PATH: ' \
+        '.ci/requirements.txt lists it (scripts/dev installs it into .venv)'
     work = tmp_path_factory.mktemp('rosdoc2')
     package = work / 'spatial_dynamics'
     shutil.copytree(ROOT, package, ignore=BUILT, symlinks=True)

@@ -18,8 +18,9 @@ class Recorder:
     """Work that blocks on its first item until released, and records what it saw."""
 
     def __init__(self):
-        self.started, self.release, self.finished = (threading.Event(), threading.Event(),
-                                                      threading.Event())
+        self.started = threading.Event()
+        self.release = threading.Event()
+        self.finished = threading.Event()
         self.seen = []       # (item, cancelled() when the work ended)
 
     def __call__(self, item, cancelled):

@@ -11,8 +11,9 @@ its size runs where ``joint_states`` are answered (STYLE habit 13):
   the model, the coefficients); the answering group only schedules what came out
   (:meth:`~spatial_dynamics.ros.answering.Answering.take_plan`, a fixed cost);
 * the plan's effort for joint_trajectory_controller is computed by :class:`Annotator`, one
-  worker thread (:class:`~spatial_dynamics.ros.worker.Newest`), bounded (:func:`~spatial_dynamics.effort.annotate`), the newest plan
-  superseding one not yet done; a refusal is counted in ``/diagnostics``.
+  worker thread (:class:`~spatial_dynamics.ros.worker.Newest`), bounded
+  (:func:`~spatial_dynamics.effort.annotate`), the newest plan superseding one not yet done;
+  a refusal is counted in ``/diagnostics``.
 
 Pure Python and message types: no rclpy (the node gives the worker its ``publish``).
 """
