@@ -14,7 +14,7 @@
 * ``text`` blocks are what a command printed; each page names the command beside it.
 
 Also: every local link of a page points at a file that exists, and the doc tree builds with
-Sphinx, warnings as errors, as rosdoc2 builds it.
+Sphinx, warnings as errors (rosdoc2's build of the same pages: test_lint_rosdoc2.py).
 """
 
 import argparse

@@ -19,6 +19,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.ros.parameters import ConfigError
 from spatial_dynamics.ros.records import Robot
+from spatial_dynamics.ros.worker import Newest
 from spatial_dynamics.urdf import read_description as read_urdf_description
 
 #: Largest robot_description_file read, bytes (the largest URDF of example-robot-data is
@@ -144,63 +145,49 @@ class DescriptionParser:
     ``submit`` replaces any request not yet started (only the newest description matters);
     each finished request is queued with its result (a :class:`~.records.Robot` or a
     :class:`ConfigError`) and ``notify()`` is called, from the worker thread, so the node can
-    pick it up in its executor (a guard condition). The thread starts with the first request.
+    pick it up in its executor (a guard condition). The thread
+    (:class:`~spatial_dynamics.ros.worker.Newest`) starts with the first request.
     """
 
     def __init__(self, build: Callable[[ParseRequest], Robot], notify: Callable[[], None]
                  ) -> None:
         self._build = build
         self._notify = notify
-        self._wake = threading.Condition()
-        self._request: Optional[ParseRequest] = None
+        self._lock = threading.Lock()
         self._done: List[Tuple[ParseRequest, object]] = []
-        self._stopped = False
-        self._thread: Optional[threading.Thread] = None
+        self._worker: Newest[ParseRequest] = Newest(self._parse, 'robot_description parser')
 
     def submit(self, request: ParseRequest) -> None:
         """Parse ``request`` next (dropping a request that has not started yet)."""
-        with self._wake:
-            if self._stopped:
-                return
-            self._request = request
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._run, daemon=True,
-                                                name='robot_description parser')
-                self._thread.start()
-            self._wake.notify()
+        self._worker.submit(request)
 
     def finished(self) -> List[Tuple[ParseRequest, object]]:
         """Return (and forget) the finished requests with their results, oldest first."""
-        with self._wake:
+        with self._lock:
             done, self._done = self._done, []
         return done
 
     def stop(self) -> None:
         """Let the worker end after the request it is on (it is a daemon: never waited for)."""
-        with self._wake:
-            self._stopped = True
-            self._request = None
-            self._wake.notify()
+        self._worker.stop()
 
-    def _run(self) -> None:
-        while True:
-            with self._wake:
-                while self._request is None and not self._stopped:
-                    self._wake.wait()
-                if self._stopped:
-                    return
-                request, self._request = self._request, None
-            try:
-                result = self._build(request)
-            except ConfigError as err:
-                result = err
-            except Exception as err:  # never lose the worker: report it as a rejection
-                result = ConfigError(f'topic robot_description: {err!r}')
-            with self._wake:
-                if self._stopped:
-                    return
-                self._done.append((request, result))
-            try:
-                self._notify()
-            except Exception:  # the context is gone: the node is shutting down
+    def _parse(self, request: ParseRequest, cancelled: Callable[[], bool]) -> None:
+        """Worker thread: queue ``request`` with its result and notify the node.
+
+        A result is queued even when a newer request came meanwhile: the node drops it by its
+        ``generation``; after :meth:`stop` nothing is.
+        """
+        try:
+            result = self._build(request)
+        except ConfigError as err:
+            result = err
+        except Exception as err:  # never lose the worker: report it as a rejection
+            result = ConfigError(f'topic robot_description: {err!r}')
+        with self._lock:
+            if self._worker.stopped:
                 return
+            self._done.append((request, result))
+        try:
+            self._notify()
+        except Exception:  # the context is gone: the node is shutting down
+            self._worker.stop()

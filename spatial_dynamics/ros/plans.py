@@ -11,8 +11,9 @@ its size runs where ``joint_states`` are answered (STYLE habit 13):
   the model, the coefficients); the answering group only schedules what came out
   (:meth:`~spatial_dynamics.ros.answering.Answering.take_plan`, a fixed cost);
 * the plan's effort for joint_trajectory_controller is computed by :class:`Annotator`, one
-  worker thread, bounded (:func:`~spatial_dynamics.effort.annotate`), the newest plan
-  superseding one not yet done; a refusal is counted in ``/diagnostics``.
+  worker thread (:class:`~spatial_dynamics.ros.worker.Newest`), bounded
+  (:func:`~spatial_dynamics.effort.annotate`), the newest plan superseding one not yet done;
+  a refusal is counted in ``/diagnostics``.
 
 Pure Python and message types: no rclpy (the node gives the worker its ``publish``).
 """
@@ -20,7 +21,6 @@ Pure Python and message types: no rclpy (the node gives the worker its ``publish
 from __future__ import annotations
 
 from collections import deque
-import threading
 from typing import Callable, NamedTuple, Optional
 
 import numpy as np
@@ -29,6 +29,7 @@ from spatial_dynamics.effort import annotate, AnnotationError
 from spatial_dynamics.ros.control import FEEDBACK_MODES
 from spatial_dynamics.ros.messages import joint_trajectory
 from spatial_dynamics.ros.records import Config
+from spatial_dynamics.ros.worker import Newest
 from spatial_dynamics.trajectory import prepare, Prepared, TrajectoryError
 
 
@@ -99,53 +100,29 @@ class Annotator:
         self.log = log
         self.rejected: deque = deque()      # reasons, appended here, popped by diagnostics
         self.saturated: deque = deque()     # joint names clamped, for the diagnostics
-        self._wake = threading.Condition()
-        self._job: Optional[Job] = None
-        self._generation = 0
-        self._stopped = False
-        self._thread: Optional[threading.Thread] = None
+        self._worker: Newest[Job] = Newest(self._annotate, 'annotated_trajectory')
 
     def submit(self, job: Job) -> None:
         """Annotate ``job`` next; a plan pending or being annotated is dropped."""
-        with self._wake:
-            if self._stopped:
-                return
-            self._job = job
-            self._generation += 1
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._run, daemon=True,
-                                                name='annotated_trajectory')
-                self._thread.start()
-            self._wake.notify()
+        self._worker.submit(job)
 
     def stop(self) -> None:
         """Let the worker end (it is a daemon: never waited for)."""
-        with self._wake:
-            self._stopped = True
-            self._job = None
-            self._generation += 1
-            self._wake.notify()
+        self._worker.stop()
 
-    def _run(self) -> None:
-        while True:
-            with self._wake:
-                while self._job is None and not self._stopped:
-                    self._wake.wait()
-                if self._stopped:
-                    return
-                job, self._job = self._job, None
-                generation = self._generation
-            try:
-                msg = self.build(job, lambda: self._generation != generation)
-            except AnnotationError as err:
-                if err.reason != 'superseded':
-                    self._refuse(err.reason, str(err))
-                continue
-            except Exception as err:  # never lose the worker: report it as a rejection
-                self._refuse('compute_error', repr(err))
-                continue
-            if msg is not None and self._generation == generation:
-                self._publish(msg)
+    def _annotate(self, job: Job, cancelled: Callable[[], bool]) -> None:
+        """Worker thread: publish ``job`` annotated, unless a newer plan came meanwhile."""
+        try:
+            msg = self.build(job, cancelled)
+        except AnnotationError as err:
+            if err.reason != 'superseded':
+                self._refuse(err.reason, str(err))
+            return
+        except Exception as err:  # never lose the worker: report it as a rejection
+            self._refuse('compute_error', repr(err))
+            return
+        if msg is not None and not cancelled():
+            self._publish(msg)
 
     def build(self, job: Job, cancelled: Callable[[], bool] = lambda: False):
         """Return ``annotated_trajectory`` of ``job`` (None: refused, reason queued)."""

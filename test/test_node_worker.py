@@ -1,0 +1,100 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The node's worker thread (spatial_dynamics.ros.worker): the newest item wins, stop cancels.
+
+Both of the node's workers (the plan annotator, the topic description parser) are this one
+thread; no DDS here. The waits are events with generous limits, never a duration asserted.
+"""
+
+import threading
+
+from spatial_dynamics.ros import descriptions, plans
+from spatial_dynamics.ros.worker import Newest
+
+WAIT = 60.0   # a limit for a stuck thread, never reached when the code is right
+
+
+class Recorder:
+    """Work that blocks on its first item until released, and records what it saw."""
+
+    def __init__(self):
+        self.started = threading.Event()
+        self.release = threading.Event()
+        self.finished = threading.Event()
+        self.seen = []       # (item, cancelled() when the work ended)
+
+    def __call__(self, item, cancelled):
+        if not self.seen:
+            self.started.set()
+            assert self.release.wait(WAIT)
+        self.seen.append((item, cancelled()))
+        self.finished.set()
+
+
+def test_the_newest_waiting_item_replaces_the_others_and_cancels_the_current_one():
+    work = Recorder()
+    worker = Newest(work, 'test worker')
+    worker.submit(1)
+    assert work.started.wait(WAIT)
+    for item in (2, 3, 4):
+        worker.submit(item)
+    work.release.set()
+    while len(work.seen) < 2:
+        work.finished.clear()
+        assert work.finished.wait(WAIT)
+    worker.stop()
+    assert work.seen == [(1, True), (4, False)]   # 2 and 3 never started; 1 was superseded
+
+
+def test_stop_cancels_the_current_item_drops_the_waiting_one_and_ends_the_thread():
+    work = Recorder()
+    worker = Newest(work, 'test worker')
+    worker.submit('current')
+    assert work.started.wait(WAIT)
+    worker.submit('waiting')
+    worker.stop()
+    worker.submit('after')                        # refused: stopped
+    work.release.set()
+    worker._thread.join(WAIT)
+    assert not worker._thread.is_alive() and worker.stopped
+    assert work.seen == [('current', True)]
+
+
+def test_the_annotator_publishes_the_newest_plan_only():
+    published = []
+    started, release = threading.Event(), threading.Event()
+
+    class Annotator(plans.Annotator):
+        def build(self, job, cancelled=lambda: False):
+            if job == 'first':
+                started.set()
+                assert release.wait(WAIT)
+            return f'annotated {job}'
+
+    done = threading.Event()
+    annotator = Annotator(lambda msg: (published.append(msg), done.set()), log=None)
+    annotator.submit('first')
+    assert started.wait(WAIT)
+    annotator.submit('second')
+    release.set()
+    assert done.wait(WAIT)
+    annotator.stop()
+    assert published == ['annotated second']      # 'first' finished after it was superseded
+
+
+def test_the_parser_delivers_nothing_after_stop():
+    started, release = threading.Event(), threading.Event()
+    notified = []
+
+    def build(request):
+        started.set()
+        assert release.wait(WAIT)
+        return request.urdf
+
+    parser = descriptions.DescriptionParser(build, lambda: notified.append(1))
+    parser.submit(descriptions.ParseRequest(1, 'urdf', {}, None))
+    assert started.wait(WAIT)
+    parser.stop()
+    release.set()
+    parser._worker._thread.join(WAIT)
+    assert parser.finished() == [] and notified == []
