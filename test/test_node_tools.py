@@ -51,6 +51,30 @@ def test_plot_skipped_with_a_note_without_matplotlib(monkeypatch, tmp_path):
 
 
 @pytest.mark.ros
+def test_demo_duration_counts_from_the_first_answer(monkeypatch):
+    """``--duration 1`` shows a second of answers however long the node takes to start."""
+    clock = [100.0]
+    monkeypatch.setattr(demo.time, 'monotonic', lambda: clock[0])
+    recorder, start = demo.Recorder(), clock[0]
+    clock[0] += 30.0                      # a cold start on a busy machine, no answer yet
+    assert not demo.over(recorder, 1.0, start)
+    recorder.first = clock[0]
+    clock[0] += 0.5
+    assert not demo.over(recorder, 1.0, start)
+    clock[0] += 0.5
+    assert demo.over(recorder, 1.0, start)
+    assert not demo.over(recorder, None, start)         # until Ctrl-C
+
+
+def test_demo_ends_when_the_node_never_answers(monkeypatch, capsys):
+    clock = [0.0]
+    monkeypatch.setattr(demo.time, 'monotonic', lambda: clock[0])
+    recorder = demo.Recorder()
+    clock[0] = demo.STARTUP_LIMIT + 1.0
+    assert demo.over(recorder, None, 0.0)
+    assert 'no answer within' in capsys.readouterr().err
+
+
 def test_demo_runs_the_installed_node_and_writes_the_plot(tmp_path):
     pytest.importorskip('matplotlib')
     install = colcon_install()

@@ -11,8 +11,9 @@ when the package is found on ``AMENT_PREFIX_PATH``, as ``ros2 run`` would, else
 (consistent: q̇ = dq/dt, q̈ = dq̇/dt) as sensor_msgs/JointState with q̈ in the effort field (the
 node's default ``acceleration_source: effort``). The torques the node answers on
 ``feedforward_efforts`` are shown as a table refreshed in place, until Ctrl-C or
-``--duration`` s. Then τ over time is written as a PNG (needs matplotlib; without it the plot
-is skipped with a note).
+``--duration`` s counted from the node's first answer (a node that has not answered within
+:data:`STARTUP_LIMIT` s, or has exited, ends the demo with a message). Then τ over time is
+written as a PNG (needs matplotlib; without it the plot is skipped with a note).
 """
 
 from __future__ import annotations
@@ -27,13 +28,16 @@ from typing import List, Optional, Sequence, Tuple
 from .driving import node_command, pyplot, redraw, robot_model, save_figure, Sinusoids, start, stop
 
 NAMESPACE = '/spatial_dynamics_demo'
+#: s of wall time the node has to answer first (a cold start on a busy machine takes a few).
+STARTUP_LIMIT = 60.0
 
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog='python -m spatial_dynamics.tools.demo',
                                      description=__doc__.split('\n\n')[0])
     parser.add_argument('--duration', type=float, default=None,
-                        help='seconds to run (default: until Ctrl-C)')
+                        help='seconds of answers to show, counted from the node\'s first '
+                        'answer (default: until Ctrl-C)')
     parser.add_argument('--rate', type=float, default=100.0,
                         help='publish rate of the trajectory, Hz (default 100)')
     parser.add_argument('--plot', default=os.path.join('out', 'demo_torques.png'),
@@ -50,6 +54,7 @@ class Recorder:
 
     def __init__(self) -> None:
         self.t: List[float] = []
+        self.first: Optional[float] = None    # time.monotonic() of the first answer
         self.tau: List[Tuple[float, ...]] = []
         self.names: Tuple[str, ...] = ()
         self.latency_ms: List[float] = []
@@ -58,6 +63,8 @@ class Recorder:
 
     def on_answer(self, msg) -> None:
         now = time.time_ns()
+        if self.first is None:
+            self.first = time.monotonic()
         self.t.append(time.monotonic() - self.t0)
         self.tau.append(tuple(msg.effort))
         self.names = tuple(msg.name)
@@ -70,6 +77,17 @@ class Recorder:
                 for kv in status.values:
                     if kv.key == 'compute time mean [us]':
                         self.compute_us = kv.value
+
+
+def over(recorder: Recorder, duration: Optional[float], start_time: float) -> bool:
+    """Whether the demo has shown ``duration`` s of answers (or waited too long for one)."""
+    now = time.monotonic()
+    if recorder.first is None:
+        if now - start_time > STARTUP_LIMIT:
+            print(f'the node gave no answer within {STARTUP_LIMIT:.0f} s', file=sys.stderr)
+            return True
+        return False
+    return duration is not None and now - recorder.first >= duration
 
 
 def table(recorder: Recorder, q, qd, qdd, names: Sequence[str], rate: float) -> List[str]:
@@ -152,7 +170,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     next_show = start_time
     k = 0
     try:
-        while args.duration is None or time.monotonic() - start_time < args.duration:
+        while not over(recorder, args.duration, start_time):
             if node_proc.poll() is not None:
                 print(f'the node exited with status {node_proc.returncode}', file=sys.stderr)
                 break
