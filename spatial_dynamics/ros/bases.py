@@ -23,8 +23,9 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
 ``base_input.timeout`` is refused, reason named in /diagnostics, never computed on a fixed base):
 
 * ``base/imu`` (``sensor_msgs/Imu``): ``linear_acceleration`` is the specific force
-  ``r̈ − g`` and ``angular_velocity`` ``ω`` in the IMU's frame, which is ``base_input.imu_link`` (its
-  placement from the URDF; ``header.frame_id`` that link or empty). ``ω̇`` is taken as zero.
+  ``r̈ − g`` and ``angular_velocity`` ``ω`` in the IMU's frame, which is
+  ``base_input.imu_link`` (its placement from the URDF; ``header.frame_id`` that link or
+  empty). ``ω̇`` is taken as zero.
 * ``base/pose`` (``geometry_msgs/PoseStamped``): the root link's pose in the world
   (``header.frame_id``, any), a unit quaternion (x y z w) within :data:`QUATERNION_TOLERANCE`.
 * ``base/twist`` (``geometry_msgs/TwistStamped``): the twist of the root link (or, moving, of a
@@ -40,7 +41,6 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass, field
-import math
 from typing import List, Optional, Tuple
 
 import numpy as np
@@ -131,8 +131,8 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
         if params.base_input_source == 'imu':
             link = params.base_input_imu_link
             if not link:
-                raise ConfigError("parameter base_input.imu_link: base_input.source 'imu' needs the link "
-                                  'the IMU is mounted on')
+                raise ConfigError("parameter base_input.imu_link: base_input.source 'imu' "
+                                  'needs the link the IMU is mounted on')
             try:
                 sd.base_from_imu(model, link, np.zeros(3), np.zeros(3))
             except ValueError as err:
@@ -282,7 +282,8 @@ class BaseInputs:
             age = (now_ns - self.flags.receipt_ns) * 1e-9
             if age > params.base_input_timeout:
                 raise InputError('contacts_stale', f'contact_states is {age:.3f} s old '
-                                 f'(base_input.timeout {params.base_input_timeout} s); not publishing')
+                                 f'(base_input.timeout {params.base_input_timeout} s); '
+                                 'not publishing')
             if len(self.flags.value) == len(links):
                 flags = self.flags.value
         return tuple(sd.Contact(link, kind=params.contacts_kind, mu=params.contacts_mu)
@@ -407,7 +408,8 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
         if age is None:
             problems.append(f'no {topic} yet')
         elif age > params.base_input_timeout:
-            problems.append(f'{topic} stale ({age:.2f} s, base_input.timeout {params.base_input_timeout} s)')
+            problems.append(f'{topic} stale ({age:.2f} s, base_input.timeout '
+                            f'{params.base_input_timeout} s)')
     values += [(f'{topic} received', str(count)) for topic, count in inputs.received.items()]
     values += [(f'rejected {key}', str(count)) for key, count in inputs.rejected.items()]
     if params.base == 'floating':
@@ -433,10 +435,3 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
     if warnings:
         return 'WARN', '; '.join(warnings), values
     return 'OK', f'base {params.base}: inputs fresh', values
-
-
-def check_timeout(name: str, value: float) -> float:
-    """A positive, finite timeout (s)."""
-    if not (math.isfinite(value) and value > 0.0):
-        raise ConfigError(f'parameter {name}: need a positive number of seconds, got {value}')
-    return value

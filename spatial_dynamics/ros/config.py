@@ -290,7 +290,8 @@ PARAMETERS = Table(NODE_NAME, [
     Param('base', 'string', 'fixed', (
         '"fixed": the root link is fixed to the world (an arm on a table). "moving": the '
         'fixed-base model on a moving base (mobile manipulator, ship), its motion from '
-        'base/imu or base/pose + base/twist (base_input.source); efforts = rnea(..., base=motion). '
+        'base/imu or base/pose + base/twist (base_input.source); efforts = rnea(..., '
+        'base=motion). '
         '"floating": the model with a free-flyer root (legged robots), its base state from '
         'base/pose + base/twist; the joints\' efforts and the contact wrenches of '
         'contacts.links (published on contact_wrenches) split M qdd + h (contact inverse '
