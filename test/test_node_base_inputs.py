@@ -306,3 +306,20 @@ def test_floating_without_base_pose_publishes_nothing(solo_path):
                                                  zero, zero))
     assert out.answer is None and answering.totals.rejected['base_missing'] == 1
     assert any('no good base/pose yet' in text for _, text in answering.log.said)
+
+
+def test_the_observer_is_off_on_a_moving_base_and_says_so(demo_text):
+    from spatial_dynamics.ros.diagnostics import observer_status
+    from spatial_dynamics.ros.observer import EstimateWindow
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    msg = joint_state(robot.joints, 1.0, np.zeros(n), np.zeros(n), np.ones(n))
+    answering.measured(cfg, msg)
+    out = answering.observe(cfg, msg)        # efforts of every joint: fixed, it would estimate
+    assert out.estimate is None and answering.observer is None
+    level, text, _ = observer_status(robot, cfg.params.observer_gain, None, EstimateWindow(),
+                                     cfg.params.base)
+    assert level == 'OK' and text == 'observer off (base moving: it needs a fixed base)'

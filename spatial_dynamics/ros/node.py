@@ -421,7 +421,8 @@ class InverseDynamicsNode(Node):
             ('feedforward', feedforward_status(robot, window, answering.totals, config.params,
                                                answering.wrenches, now_ns)),
             ('external torque', observer_status(robot, config.params.observer_gain,
-                                                answering.observer, estimates))]
+                                                answering.observer, estimates,
+                                                config.params.base))]
         if config.params.base != 'fixed':
             statuses.append(('base', base_status(config.params, robot, answering.base_inputs,
                                                  answering.base_inputs.period(), now_ns)))
