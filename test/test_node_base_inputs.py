@@ -193,8 +193,11 @@ def test_base_parameters_are_checked_against_the_model(demo_text, solo_path):
     with pytest.raises(ConfigError, match="contacts.links: 'LF_FOOT' is not a link"):
         configured(robot_description_file=solo_path, base='floating',
                    **{'contacts.links': ['LF_FOOT']})
-    with pytest.raises(ConfigError, match="armature: not supported with base 'floating'"):
-        configured(robot_description_file=solo_path, base='floating', armature=[0.1] * 12)
+    with pytest.raises(ConfigError, match="wrench_estimate.link: not supported with base"):
+        configured(robot_description_file=solo_path, base='floating',
+                   **{'wrench_estimate.link': 'FL_FOOT'})
+    with pytest.raises(ConfigError, match='armature: expected 12 values for the actuated'):
+        configured(robot_description_file=solo_path, base='floating', armature=[0.1] * 13)
     with pytest.raises(ConfigError, match='base'):
         configured(robot_description=demo_text, base='sideways')
     assert configured(robot_description=demo_text).params.base == 'fixed'
@@ -323,3 +326,47 @@ def test_the_observer_is_off_on_a_moving_base_and_says_so(demo_text):
     level, text, _ = observer_status(robot, cfg.params.observer_gain, None, EstimateWindow(),
                                      cfg.params.base)
     assert level == 'OK' and text == 'observer off (base moving: it needs a fixed base)'
+
+
+def test_armature_on_a_floating_base_and_terms_on_a_moving_one(solo_path, demo_text):
+    armature = np.linspace(0.01, 0.12, 12)
+    cfg = floating(solo_path, armature=list(armature))
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q, qdd = standing(robot.joints), np.linspace(-1.0, 1.0, 12)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, np.zeros(12), qdd))
+    expected = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                           np.r_[np.zeros(6), qdd],
+                                           [sd.Contact(f) for f in FEET])
+    np.testing.assert_allclose(out.answer.tau, expected.tau + armature * qdd, rtol=1e-9,
+                               atol=1e-9)
+    assert out.answer.terms is None           # no term split on a floating base
+
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/imu', imu(1.0, [1.0, 0.0, 9.0], [0.0, 0.4, 0.0]))
+    q, qd, qdd = np.full(n, 0.2), np.full(n, 0.3), np.full(n, -0.4)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, qd, qdd), True)
+    base = sd.base_from_imu(robot.model, 'base_link', [1.0, 0.0, 9.0], [0.0, 0.4, 0.0])
+    terms = out.answer.terms
+    np.testing.assert_allclose(terms['gravity'], sd.gravity_torque(robot.model, q, base=base),
+                               atol=1e-9)
+    np.testing.assert_allclose(sum(terms.values()), sd.rnea(robot.model, q, qd, qdd, base=base),
+                               rtol=1e-9, atol=1e-9)
+
+
+def test_contact_states_for_other_contacts_links_are_not_applied(solo_path):
+    cfg = floating(solo_path)
+    robot = cfg.robot
+    answering = Answering(Log())
+    feed_base(cfg, answering)
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 0, 1, 1]))
+    three = floating(solo_path, **{'contacts.links': list(FEET[:3])})   # changed live
+    zero = np.zeros(12)
+    out = answering.joint_state(three, joint_state(robot.joints, 1.0, standing(robot.joints),
+                                                   zero, zero))
+    assert out.answer is None and answering.totals.rejected['contacts_stale'] == 1

@@ -140,11 +140,9 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
         if links:
             raise ConfigError("parameter contacts.links: contacts need base 'floating' (a "
                               "moving base's motion is given, nothing carries it)")
-    for name, bad in (('armature', params.armature),
-                      ('wrench_estimate.link', params.wrench_estimate_link)):
-        if bad:
-            raise ConfigError(f'parameter {name}: not supported with base '
-                              f'{params.base!r} (only with base fixed)')
+    if params.wrench_estimate_link:
+        raise ConfigError(f'parameter wrench_estimate.link: not supported with base '
+                          f'{params.base!r} (the observer needs a fixed base)')
 
 
 class Held:
@@ -284,8 +282,11 @@ class BaseInputs:
                 raise InputError('contacts_stale', f'contact_states is {age:.3f} s old '
                                  f'(base_input.timeout {params.base_input_timeout} s); '
                                  'not publishing')
-            if len(self.flags.value) == len(links):
-                flags = self.flags.value
+            if len(self.flags.value) != len(links):   # contacts.links changed since
+                raise InputError('contacts_stale', f'contact_states has '
+                                 f'{len(self.flags.value)} flags for the {len(links)} '
+                                 f'contacts.links {list(links)}; not publishing')
+            flags = self.flags.value
         return tuple(sd.Contact(link, kind=params.contacts_kind, mu=params.contacts_mu)
                      for link, touching in zip(links, flags) if touching)
 
@@ -293,12 +294,13 @@ class BaseInputs:
         """The :class:`~.control.Dynamics` of an answer on this base (InputError: none)."""
         robot, params = config.robot, config.params
         if params.base == 'moving':
-            return Dynamics(robot.model, params.gravity, robot.backend, None,
+            return Dynamics(robot.model, params.gravity, robot.backend, robot.armature,
                             robot.friction_threshold, f_ext, self.motion(config, now_ns))
         position, quat = self._fresh(params, self.pose, 'base/pose', now_ns)
         v, _ = self._fresh(params, self.twist, 'base/twist', now_ns)
         return FloatingDynamics(
-            robot.model, params.gravity, robot.backend, None, robot.friction_threshold, f_ext,
+            robot.model, params.gravity, robot.backend, robot.armature,
+            robot.friction_threshold, f_ext,
             None, np.r_[position, quat], v, self._rate(params, 'base/twist'),
             self.contacts(config, now_ns), params.contacts_method, [])
 
@@ -323,7 +325,8 @@ class FloatingDynamics(Dynamics):
     ``base_v`` and ``base_a`` (``[ω; v]``, base frame). Each :meth:`full` solves
     :func:`~spatial_dynamics.contact_inverse_dynamics` with ``contacts`` by ``method`` and
     keeps its result in ``results`` (the contact wrenches to publish); the efforts never
-    include the base's rows. Friction (``friction_threshold``) adds to the joints'.
+    include the base's rows. Armature and friction (``friction_threshold``) add to the
+    joints' (the rotors' torque; the drives' friction).
     """
 
     base_q: np.ndarray = None
@@ -346,6 +349,8 @@ class FloatingDynamics(Dynamics):
         result = self._solve(q, qd, qdd, self.base_v, self.base_a, self.gravity)
         self.results.append(result)
         tau = np.array(result.tau)
+        if self.armature is not None:
+            tau += self.armature * qdd
         if self.friction_threshold is not None:
             tau += sd.friction_torque(self.model, np.r_[self.base_v, qd],
                                       self.friction_threshold)[6:]
@@ -359,7 +364,10 @@ class FloatingDynamics(Dynamics):
     def inertia_times(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
         """The contact-consistent efforts of joint accelerations ``u`` alone (no gravity)."""
         zero, six = np.zeros(len(q)), np.zeros(6)
-        return np.array(self._solve(q, zero, u, six, six, (0.0, 0.0, 0.0)).tau)
+        tau = np.array(self._solve(q, zero, u, six, six, (0.0, 0.0, 0.0)).tau)
+        if self.armature is not None:
+            tau += self.armature * u
+        return tau
 
 
 def contact_wrenches(model: 'sd.Model', base_q: np.ndarray, q: np.ndarray,

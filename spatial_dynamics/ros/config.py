@@ -373,15 +373,30 @@ def locked_positions(params) -> dict:
 
 def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
                    ) -> Optional[np.ndarray]:
-    """``armature`` (kg m² or kg): empty = none, else one value in [0, MAX_ARMATURE] per joint."""
+    """``armature`` (kg m² or kg): empty = none, else one value in [0, MAX_ARMATURE] per joint.
+
+    A floating base's joints are its actuated ones (the free-flyer has no rotor).
+    """
     if not values:
         return None
+    joints = model.joint_names[1:] if model.floating else model.joint_names
     try:
-        armature = sd.per_joint(model, 'parameter armature', list(values), nonnegative=True)
+        if model.floating:
+            armature = np.array(values, dtype=float)
+            if armature.shape != (len(joints),):
+                raise ValueError(f'parameter armature: expected {len(joints)} values for the '
+                                 f'actuated joints {list(joints)}, got {len(armature)}')
+            for name, value in zip(joints, armature):
+                if not value >= 0.0:
+                    raise ValueError(f'parameter armature: joint {name!r} has the value '
+                                     f'{value}, need a finite non-negative number')
+        else:
+            armature = sd.per_joint(model, 'parameter armature', list(values),
+                                    nonnegative=True)
     except ValueError as err:
         raise ConfigError(f'{err} (order of the joints parameter, or the URDF order '
                           'when it is unset)')
-    for name, value in zip(model.joint_names, armature):
+    for name, value in zip(joints, armature):
         if value > MAX_ARMATURE:
             raise ConfigError(f'parameter armature: joint {name!r} has {value:g}, more than '
                               f'{MAX_ARMATURE:g} kg m^2 (or kg) cannot be a rotor inertia')
