@@ -26,8 +26,10 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
   ``r̈ − g`` and ``angular_velocity`` ``ω`` in the IMU's frame, which is
   ``base_input.imu_link`` (its placement from the URDF; ``header.frame_id`` that link or
   empty). ``ω̇`` is taken as zero.
-* ``base/pose`` (``geometry_msgs/PoseStamped``): the root link's pose in the world
-  (``header.frame_id``, any), a unit quaternion (x y z w) within :data:`QUATERNION_TOLERANCE`.
+* ``base/pose`` (``geometry_msgs/PoseStamped``): the pose in the world (``header.frame_id``,
+  any) of the frame of ``base/twist`` (the root link; moving: or a link fixed to it), as
+  ``nav_msgs/Odometry``'s pose of its ``child_frame_id``; a unit quaternion (x y z w) within
+  :data:`QUATERNION_TOLERANCE`.
 * ``base/twist`` (``geometry_msgs/TwistStamped``): the twist of the root link (or, moving, of a
   link fixed to it) in its own axes, ``header.frame_id`` that link or empty: what
   ``nav_msgs/Odometry`` carries in its child frame. Its rate, the base's spatial
