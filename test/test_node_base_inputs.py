@@ -370,3 +370,44 @@ def test_contact_states_for_other_contacts_links_are_not_applied(solo_path):
     out = answering.joint_state(three, joint_state(robot.joints, 1.0, standing(robot.joints),
                                                    zero, zero))
     assert out.answer is None and answering.totals.rejected['contacts_stale'] == 1
+
+
+def wrench_msg(link, wrench):
+    from geometry_msgs.msg import WrenchStamped
+    msg = WrenchStamped(header=header(1.0, link))
+    t, f = msg.wrench.torque, msg.wrench.force
+    t.x, t.y, t.z, f.x, f.y, f.z = map(float, wrench)
+    return msg
+
+
+def test_measured_contact_wrenches_give_the_efforts_and_their_residual(solo_path):
+    cfg = floating(solo_path, **{'contacts.measured': True})
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q, zero = standing(robot.joints), np.zeros(12)
+    msg = joint_state(robot.joints, 1.0, q, zero, zero)
+    solved = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                         np.zeros(18), [sd.Contact(f) for f in FEET])
+    R = sd.contacts.link_orientations(robot.model, np.r_[base_q, q], FEET)
+    for link in FEET[:3]:
+        answering.base_input(cfg, 'measured_contact_wrenches',
+                             wrench_msg(link, np.r_[np.zeros(3), R[link].T @ solved.forces[link]]))
+    assert answering.joint_state(cfg, msg).answer is None       # HR_FOOT not measured yet
+    assert answering.totals.rejected['contacts_missing'] == 1
+    answering.base_input(cfg, 'measured_contact_wrenches', wrench_msg('base_link', np.zeros(6)))
+    assert answering.base_inputs.rejected['measured_contact_wrenches unknown_link'] == 1
+    half = 0.5 * solved.forces['HR_FOOT']     # the sensor reads half: the base rows miss it
+    answering.base_input(cfg, 'measured_contact_wrenches',
+                         wrench_msg('HR_FOOT', np.r_[np.zeros(3), R['HR_FOOT'].T @ half]))
+    out = answering.joint_state(cfg, msg)
+    measured = dict(solved.forces, HR_FOOT=half)
+    expected = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                           np.zeros(18), [sd.Contact(f) for f in FEET],
+                                           measured=measured)
+    np.testing.assert_allclose(out.answer.tau, expected.tau, rtol=1e-9, atol=1e-9)
+    assert np.abs(expected.base_residual).max() > 1.0
+    level, text, _ = base_status(cfg.params, robot, answering.base_inputs,
+                                 answering.base_inputs.period(),
+                                 answering.base_inputs.pose.receipt_ns)
+    assert level == 'WARN' and 'base residual' in text

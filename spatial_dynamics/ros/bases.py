@@ -37,6 +37,10 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
   (``base_input.acceleration: difference``) or zero (``zero``: a base at constant twist).
 * ``contact_states`` (``std_msgs/UInt8MultiArray``): one flag per ``contacts.links``, non-zero
   = in contact; until the first message every link of ``contacts.links`` is in contact.
+* ``measured_contact_wrenches`` (``geometry_msgs/WrenchStamped``, with ``contacts.measured``):
+  a foot sensor's wrench on the robot, ``header.frame_id`` the link of ``contacts.links``,
+  ``[n; f]`` in its frame at its origin; the efforts are then ``(M q̈ + h − J_cᵀ λ)`` of the
+  joints for the measured ``λ``, and the base rows' residual says how consistent they are.
 """
 
 from __future__ import annotations
@@ -48,7 +52,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import (check_bounded, MAX_ACCELERATION, MAX_POSITION,
-                                     MAX_VELOCITY)
+                                     MAX_VELOCITY, MAX_WRENCH)
 from spatial_dynamics.contacts import link_orientations
 from spatial_dynamics.ros.control import Dynamics
 from spatial_dynamics.ros.inputs import InputError
@@ -66,10 +70,12 @@ CONTACT_METHODS = sd.contacts.METHODS
 #: ``|‖quaternion‖ − 1|`` accepted (then normalised): float32 rounding passes, garbage not.
 QUATERNION_TOLERANCE = 1e-2
 #: Why an answer is refused on a moving or floating base (diagnostics counter keys).
-BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved')
+BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved',
+                'contacts_missing')
 #: Why a base input message is refused.
 BASE_INPUT_REASONS = ('non_finite', 'out_of_bounds', 'not_unit', 'wrong_frame', 'unstamped',
-                      'stamp_not_increasing', 'length_mismatch', 'no_model')
+                      'stamp_not_increasing', 'length_mismatch', 'no_model',
+                      'unknown_link')
 #: The base rows' residual (N, N m) above which the status WARNs: the contacts cannot carry it.
 RESIDUAL_WARN = 1e-6
 
@@ -174,6 +180,7 @@ class BaseInputs:
         self.twist: Optional[Held] = None
         self.rate: Optional[np.ndarray] = None    # the differenced twist, (6,)
         self.flags: Optional[Held] = None
+        self.measured: dict = {}                   # link -> Held([n; f] in the link's frame)
         self.received: Counter = Counter()
         self.rejected: Counter = Counter()
         self.window = BaseWindow()
@@ -243,6 +250,31 @@ class BaseInputs:
                              f'{len(links)} contacts.links {list(links)}')
         self.flags = Held(tuple(bool(x) for x in msg.data), 0, now_ns)
 
+    def _take_measured_contact_wrenches(self, config, msg, now_ns: int) -> None:
+        link = msg.header.frame_id
+        links = tuple(config.params.contacts_links or ())
+        if link not in links:
+            raise InputError('unknown_link', f'header.frame_id {link!r} is not one of '
+                             f'contacts.links {list(links)}')
+        t, f = msg.wrench.torque, msg.wrench.force
+        wrench = _vector(f'wrench on {link!r}', (t.x, t.y, t.z, f.x, f.y, f.z), MAX_WRENCH,
+                         'N m or N', [f'torque.{a}' for a in _XYZ] + [f'force.{a}' for a in _XYZ])
+        self.measured[link] = Held(wrench, _stamp_ns(msg.header), now_ns)
+
+    def _measured(self, params, contacts, now_ns: int) -> Optional[dict]:
+        """Link -> measured ``[n; f]`` (link frame) of each contact in force, or None (off)."""
+        if not params.contacts_measured:
+            return None
+        result = {}
+        for contact in contacts:
+            held = self.measured.get(contact.link)
+            if held is None:
+                raise InputError('contacts_missing', f'contacts.measured: no measured wrench '
+                                 f'of {contact.link!r} yet; not publishing')
+            result[contact.link] = self._fresh(params, held, 'measured_contact_wrenches of '
+                                               f'{contact.link!r}', now_ns)
+        return result
+
     # -- what an answer needs -------------------------------------------------------------------
     def _fresh(self, params, held: Optional[Held], topic: str, now_ns: int) -> tuple:
         if held is None:
@@ -300,11 +332,12 @@ class BaseInputs:
                             robot.friction_threshold, f_ext, self.motion(config, now_ns))
         position, quat = self._fresh(params, self.pose, 'base/pose', now_ns)
         v, _ = self._fresh(params, self.twist, 'base/twist', now_ns)
+        contacts = self.contacts(config, now_ns)
         return FloatingDynamics(
             robot.model, params.gravity, robot.backend, robot.armature,
             robot.friction_threshold, f_ext,
             None, np.r_[position, quat], v, self._rate(params, 'base/twist'),
-            self.contacts(config, now_ns), params.contacts_method, [])
+            contacts, params.contacts_method, [], self._measured(params, contacts, now_ns))
 
     def solved(self, result: 'sd.ContactResult') -> None:
         """Count a contact solution's residual and violations for the period."""
@@ -326,7 +359,9 @@ class FloatingDynamics(Dynamics):
     ``q, q̇, q̈`` of the methods are the joints'; the base's are ``base_q`` (position, x y z w),
     ``base_v`` and ``base_a`` (``[ω; v]``, base frame). Each :meth:`full` solves
     :func:`~spatial_dynamics.contact_inverse_dynamics` with ``contacts`` by ``method`` and
-    keeps its result in ``results`` (the contact wrenches to publish); the efforts never
+    keeps its result in ``results`` (the contact wrenches to publish); with ``measured``
+    (link -> ``[n; f]`` in the link's frame) :meth:`full` takes those instead of solving
+    for them (their base residual is the check); the efforts never
     include the base's rows. Armature and friction (``friction_threshold``) add to the
     joints' (the rotors' torque; the drives' friction).
     """
@@ -337,18 +372,24 @@ class FloatingDynamics(Dynamics):
     contacts: Tuple['sd.Contact', ...] = ()
     method: str = 'torques'
     results: List = None
+    measured: Optional[dict] = None
 
-    def _solve(self, q, qd, qdd, base_v, base_a, gravity) -> np.ndarray:
+    def _solve(self, q, qd, qdd, base_v, base_a, gravity, measured=None) -> np.ndarray:
+        q_full = np.r_[self.base_q, q]
+        if measured is not None:   # world axes, as contact_inverse_dynamics takes them
+            rotations = link_orientations(self.model, q_full, list(measured))
+            measured = {c.name: _world(rotations[c.link], measured[c.link], c.rows)
+                        for c in self.contacts}
         result = sd.contact_inverse_dynamics(
-            self.model, np.r_[self.base_q, q], np.r_[base_v, qd], np.r_[base_a, qdd],
-            self.contacts, method=self.method, gravity=gravity)
+            self.model, q_full, np.r_[base_v, qd], np.r_[base_a, qdd],
+            self.contacts, measured=measured, method=self.method, gravity=gravity)
         if result.status != 'solved':
             raise InputError('contacts_unsolved', f'contacts {self.method}: {result.summary()}')
         return result
 
     def full(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
         """The joints' efforts of ``M q̈ + h = Sᵀ τ + J_cᵀ λ``, + friction(q̇)."""
-        result = self._solve(q, qd, qdd, self.base_v, self.base_a, self.gravity)
+        result = self._solve(q, qd, qdd, self.base_v, self.base_a, self.gravity, self.measured)
         self.results.append(result)
         tau = np.array(result.tau)
         if self.armature is not None:
@@ -370,6 +411,13 @@ class FloatingDynamics(Dynamics):
         if self.armature is not None:
             tau += self.armature * u
         return tau
+
+
+def _world(R: np.ndarray, wrench: np.ndarray, rows: int) -> np.ndarray:
+    """A link-frame ``[n; f]`` in world axes: the force (3) of a point contact, else both."""
+    if rows == 3:
+        return R @ wrench[3:]
+    return np.r_[R @ wrench[:3], R @ wrench[3:]]
 
 
 def contact_wrenches(model: 'sd.Model', base_q: np.ndarray, q: np.ndarray,

@@ -338,6 +338,13 @@ PARAMETERS = Table(NODE_NAME, [
         'contacts; "forces", the least contact forces carrying the base; "qp", the least '
         'efforts with every force inside its friction cone (slower; infeasible = no '
         'output). Live.'), choices=CONTACT_METHODS),
+    Param('contacts.measured', 'bool', False, (
+        'Take the contact wrenches from measured_contact_wrenches (geometry_msgs/'
+        "WrenchStamped from foot force sensors: frame_id = a link of contacts.links, [n; f] "
+        "in the link's frame at its origin; a point contact uses the force) instead of "
+        'solving for them: efforts = (M qdd + h - J_c^T lambda) of the joints, the base '
+        'rows\' residual in /diagnostics. Each contact in force needs a measurement younger '
+        'than base_input.timeout. Live.')),
     Param('backend', 'string', 'auto', (
         'How tau is computed. "numpy": plain Python floats (~30-150 µs per call for 6-32 '
         'joints). "compiled" and "auto": the compiled kernels built with the package (~1-3 '

@@ -143,6 +143,9 @@ class InverseDynamicsNode(Node):
                                     (TwistStamped, 'base/twist'),
                                     (UInt8MultiArray, 'contact_states')):
                 subscribe(self, msg_type, topic, self._base_callback(topic), group=group)
+            subscribe(self, WrenchStamped, 'measured_contact_wrenches',
+                      self._base_callback('measured_contact_wrenches'), WRENCH_DEPTH,
+                      group=group)
         self.create_timer(1.0, self._publish_diagnostics, callback_group=group)
 
     def _base_callback(self, topic: str):
