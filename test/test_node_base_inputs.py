@@ -411,3 +411,12 @@ def test_measured_contact_wrenches_give_the_efforts_and_their_residual(solo_path
                                  answering.base_inputs.period(),
                                  answering.base_inputs.pose.receipt_ns)
     assert level == 'WARN' and 'base residual' in text
+
+
+def test_external_wrenches_are_refused_on_a_floating_base(solo_path):
+    cfg = floating(solo_path)
+    answering = Answering(Log())
+    answering.wrench(cfg, wrench_msg('base_link', [0, 0, 0, 10.0, 0, 0]))
+    assert answering.wrenches == {}
+    assert answering.totals.wrenches_rejected['floating_base'] == 1
+    assert any('not applied on a floating base' in text for _, text in answering.log.said)

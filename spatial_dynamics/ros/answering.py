@@ -537,6 +537,11 @@ class Answering:
         if robot is None:
             self._reject_wrench('no_model', f'{link!r}: no robot model loaded yet')
             return
+        if robot.base.floating:
+            self._reject_wrench('floating_base', f'on {link!r}: not applied on a floating '
+                                'base (its contacts carry what acts on it: contacts.links, '
+                                'measured_contact_wrenches)')
+            return
         if link not in robot.model.frames:
             self._reject_wrench('unknown_link', f'header.frame_id {link!r} is not a link of '
                                 f'robot {robot.model.name!r}')
