@@ -215,7 +215,9 @@ def floating(solo_path, **changes):
 def feed_base(cfg, answering, quat=(0.02, -0.03, 0.01, 1.0)):
     quat = np.array(quat) / np.linalg.norm(quat)
     answering.base_input(cfg, 'base/pose', pose(1.0, [0.1, 0.2, 0.25], quat))
-    answering.base_input(cfg, 'base/twist', twist(1.0, np.zeros(6)))
+    answering.base_input(cfg, 'base/twist', twist(1.0, np.zeros(6), 'base_link'))
+    answering.base_input(cfg, 'base/twist', twist(1.0, np.zeros(6), 'FL_FOOT'))   # refused
+    assert answering.base_inputs.rejected['base/twist wrong_frame'] == 1
     return np.r_[0.1, 0.2, 0.25, quat]
 
 
