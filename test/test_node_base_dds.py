@@ -63,7 +63,7 @@ def answered(driver, io, publish, timeout=TIMEOUT):
 
 
 def base_status(io):
-    """The next ``base`` status of the node."""
+    """Return the next ``base`` status of the node."""
     return io.fresh_status('base')
 
 

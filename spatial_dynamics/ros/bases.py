@@ -295,7 +295,7 @@ class BaseInputs:
         return self.rate
 
     def motion(self, config, now_ns: int) -> 'sd.BaseMotion':
-        """A moving base's motion now; InputError (base_missing, base_stale) when unknown."""
+        """Return a moving base's motion now; InputError (base_missing, base_stale): unknown."""
         params, model = config.params, config.robot.model
         if params.base_input_source == 'imu':
             f, w = self._fresh(params, self.imu, 'base/imu', now_ns)
@@ -306,7 +306,7 @@ class BaseInputs:
                                      link=frame or None)
 
     def contacts(self, config, now_ns: int) -> Tuple['sd.Contact', ...]:
-        """The contacts in force now (``contacts.links`` filtered by ``contact_states``)."""
+        """Return the contacts in force now (``contacts.links`` filtered by ``contact_states``)."""
         params = config.params
         links = tuple(params.contacts_links or ())
         flags = (True,) * len(links)
@@ -325,7 +325,7 @@ class BaseInputs:
                      for link, touching in zip(links, flags) if touching)
 
     def dynamics(self, config, f_ext, now_ns: int) -> Dynamics:
-        """The :class:`~.control.Dynamics` of an answer on this base (InputError: none)."""
+        """Return the :class:`~.control.Dynamics` of an answer on this base (InputError: none)."""
         robot, params = config.robot, config.params
         if params.base == 'moving':
             return Dynamics(robot.model, params.gravity, robot.backend, robot.armature,
@@ -388,7 +388,7 @@ class FloatingDynamics(Dynamics):
         return result
 
     def full(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-        """The joints' efforts of ``M q̈ + h = Sᵀ τ + J_cᵀ λ``, + friction(q̇)."""
+        """Return the joints' efforts of ``M q̈ + h = Sᵀ τ + J_cᵀ λ``, + armature, friction."""
         result = self._solve(q, qd, qdd, self.base_v, self.base_a, self.gravity, self.measured)
         self.results.append(result)
         tau = np.array(result.tau)
@@ -400,12 +400,12 @@ class FloatingDynamics(Dynamics):
         return tau
 
     def gravity_torque(self, q: np.ndarray) -> np.ndarray:
-        """The joints' efforts that hold the robot still on its contacts (q̇ = q̈ = 0)."""
+        """Return the joints' efforts that hold the robot still on its contacts (q̇ = q̈ = 0)."""
         zero, six = np.zeros(len(q)), np.zeros(6)
         return np.array(self._solve(q, zero, zero, six, six, self.gravity).tau)
 
     def inertia_times(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """The contact-consistent efforts of joint accelerations ``u`` alone (no gravity)."""
+        """Return the contact-consistent efforts of joint accelerations ``u`` (no gravity)."""
         zero, six = np.zeros(len(q)), np.zeros(6)
         tau = np.array(self._solve(q, zero, u, six, six, (0.0, 0.0, 0.0)).tau)
         if self.armature is not None:
@@ -414,7 +414,7 @@ class FloatingDynamics(Dynamics):
 
 
 def _world(R: np.ndarray, wrench: np.ndarray, rows: int) -> np.ndarray:
-    """A link-frame ``[n; f]`` in world axes: the force (3) of a point contact, else both."""
+    """Return a link-frame ``[n; f]`` in world axes: a point contact's force (3), else both."""
     if rows == 3:
         return R @ wrench[3:]
     return np.r_[R @ wrench[:3], R @ wrench[3:]]
