@@ -116,6 +116,11 @@ def test_moving_base_on_an_imu_is_rnea_with_base_from_imu(demo_text):
     np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
     fixed = sd.rnea(robot.model, q, qd, qdd)
     assert np.abs(out.answer.tau - fixed).max() > 0.1       # the base's motion matters
+    f2 = np.array([-2.0, 0.5, 11.0])                        # the next sample is used
+    answering.base_input(cfg, 'base/imu', imu(1.01, f2, w))
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.01, q, qd, qdd))
+    np.testing.assert_allclose(out.answer.tau, sd.rnea(robot.model, q, qd, qdd, base=(
+        sd.base_from_imu(robot.model, 'base_link', f2, w))), rtol=1e-9, atol=1e-9)
 
 
 def test_moving_base_without_or_with_a_stale_imu_publishes_nothing(demo_text):

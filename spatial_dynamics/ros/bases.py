@@ -153,6 +153,11 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
                           f'{params.base!r} (the observer needs a fixed base)')
 
 
+def _same(a: Optional[tuple], b: tuple) -> bool:
+    """Whether two keys hold the same objects (identity: a model is not compared by value)."""
+    return a is not None and len(a) == len(b) and all(x is y for x, y in zip(a, b))
+
+
 class Held:
     """A checked base input: its arrays, its stamp (ns) and its receipt (monotonic ns)."""
 
@@ -184,6 +189,7 @@ class BaseInputs:
         self.received: Counter = Counter()
         self.rejected: Counter = Counter()
         self.window = BaseWindow()
+        self._motion: tuple = (None, None)         # (what it was made from, BaseMotion)
 
     def period(self) -> BaseWindow:
         """Return the contact figures of the period that ended; start new ones."""
@@ -299,11 +305,17 @@ class BaseInputs:
         params, model = config.params, config.robot.model
         if params.base_input_source == 'imu':
             f, w = self._fresh(params, self.imu, 'base/imu', now_ns)
-            return sd.base_from_imu(model, params.base_input_imu_link, f, w)
+            key = (model, params.base_input_imu_link, self.imu)
+            if not _same(self._motion[0], key):   # once per sample, not per answer
+                self._motion = key, sd.base_from_imu(model, key[1], f, w)
+            return self._motion[1]
         _, quat = self._fresh(params, self.pose, 'base/pose', now_ns)
         v, frame = self._fresh(params, self.twist, 'base/twist', now_ns)
-        return sd.base_from_odometry(model, v, self._rate(params, 'base/twist'), quat,
-                                     link=frame or None)
+        rate = self._rate(params, 'base/twist')
+        key = (model, self.pose, self.twist, params.base_input_acceleration)
+        if not _same(self._motion[0], key):
+            self._motion = key, sd.base_from_odometry(model, v, rate, quat, link=frame or None)
+        return self._motion[1]
 
     def contacts(self, config, now_ns: int) -> Tuple['sd.Contact', ...]:
         """Return the contacts in force now (``contacts.links`` filtered by ``contact_states``)."""
