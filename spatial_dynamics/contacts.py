@@ -164,6 +164,27 @@ def contact_jacobian(model: Model, q, contacts: Sequence[Contact]) -> np.ndarray
     return _jacobian(model, q.tolist(), contacts)
 
 
+def link_orientations(model: Model, q, links: Sequence[str]) -> dict:
+    """Return link -> ``R`` (3, 3), the link's orientation (world <- link), at one state ``q``.
+
+    ``R = R_i E_lᵀ`` for the link on body ``i`` (``R_i`` world <- body, ``E_l`` body -> link,
+    the link's fixed placement): what turns a contact force from world axes into the link's.
+    """
+    check_model(model)
+    (q,) = as_joint_arrays(model, q)
+    if q.ndim != 1:
+        raise ValueError(f'link_orientations takes one state, got q of shape {q.shape}')
+    R, _ = _placements(model, q.tolist())
+    result = {}
+    for link in links:
+        frame = model.frames.get(link)
+        if frame is None:
+            raise ValueError(f'{link!r} is not a link of {model.name!r}')
+        E_lb, _ = _Er(frame.lXb)
+        result[link] = R[frame.body] @ E_lb.T
+    return result
+
+
 def _jacobian(model: Model, q: list, contacts: Sequence[Contact]) -> np.ndarray:
     """:func:`contact_jacobian` of checked arguments, ``q`` a list of floats (one state)."""
     nv = len(model.damping)

@@ -91,7 +91,8 @@ def test_every_parameter_is_in_the_params_file():
         key = spec.name.split('.')[-1]
         assert f'{key}:' in text, f'{spec.name} is not described in inverse_dynamics.yaml'
     read_only = {s.name for s in config.PARAMETERS if s.read_only}
-    assert read_only == {'backend', 'trajectory_max_bytes', 'trajectory_annotation_max_values'}
+    assert read_only == {'backend', 'trajectory_max_bytes', 'trajectory_annotation_max_values',
+                         'base'}
     for name in read_only:   # the header says which cannot change: those marked so
         assert f'# {name} (' in text and 'read-only)' in text.split(f'# {name} (')[1][:20]
     assert set(config.SLOW_PARAMETERS) <= set(config.PARAMETER_NAMES)

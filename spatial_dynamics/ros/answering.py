@@ -41,6 +41,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
 from spatial_dynamics.effort import with_gravity
+from spatial_dynamics.ros.bases import BaseInputs, contact_wrenches
 from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
 from spatial_dynamics.ros.diagnostics import Totals, Window
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
@@ -63,7 +64,11 @@ class Held(NamedTuple):
 
 
 class Answer(NamedTuple):
-    """One answer to publish: the input's header, the model joints, q_d, q̇_d, τ, the terms."""
+    """One answer to publish: the input's header, the model joints, q_d, q̇_d, τ, the terms.
+
+    ``contacts``: on a floating base, ``((link, [n; f] in the link's frame), ...)`` of the
+    contact solution, published on ``contact_wrenches``; None otherwise.
+    """
 
     header: object
     joints: Tuple[str, ...]
@@ -71,6 +76,7 @@ class Answer(NamedTuple):
     qd: np.ndarray
     tau: np.ndarray
     terms: Optional[dict]
+    contacts: Optional[tuple] = None
 
 
 class Out(NamedTuple):
@@ -118,6 +124,7 @@ class Answering:
         self.totals = Totals()
         self.window = Window()
         self.wrenches: dict = {}  # link -> (wrench [n; f] in the link frame, expiry ns)
+        self.base_inputs = BaseInputs()   # base: moving or floating (the base's inputs held)
 
     def period(self) -> Tuple[Window, EstimateWindow]:
         """Return the counters of the period that ended; start new ones."""
@@ -201,6 +208,11 @@ class Answering:
         """Whether plans are annotated; an ``output: none`` is said (no model torque)."""
         if not config.params.trajectory_effort_tolerance > 0.0 or config.robot is None:
             return False
+        if config.params.base != 'fixed':
+            self.totals.rejected['base_not_fixed'] += 1
+            self.log.warn(f'annotated_trajectory: not annotated: base {config.params.base} '
+                          '(annotation needs a fixed base)', throttle_duration_sec=1.0)
+            return False
         if config.params.output == 'none':
             self.totals.rejected['no_model_part'] += 1
             self.log.warn('annotated_trajectory: message rejected: output none has no model '
@@ -257,7 +269,7 @@ class Answering:
             self._reject(topic, 'no_model', 'no robot model loaded yet')
             return None
         try:
-            desired = to_arrays(robot.model.joint_names, *fields)
+            desired = to_arrays(robot.joints, *fields)
         except InputError as err:
             self._reject(topic, err.reason, str(err))
             return None
@@ -322,7 +334,7 @@ class Answering:
         Returns its estimate and, with ``wrench_estimate.link``, the virtual F/T reading.
         """
         observing, self._observing = self._observing, None
-        if config.params.observer_gain <= 0.0:
+        if config.params.observer_gain <= 0.0 or config.params.base != 'fixed':
             self.observer = None
             return NOTHING
         if observing is None or observing[0] is not msg:
@@ -432,10 +444,17 @@ class Answering:
         robot, params = config.robot, config.params
         try:
             f_ext = self._active_wrenches(robot, t0) if self.wrenches else None
-            dynamics = Dynamics(robot.model, params.gravity, robot.backend, robot.armature,
-                                robot.friction_threshold, f_ext)
+            if params.base == 'fixed':
+                dynamics = Dynamics(robot.model, params.gravity, robot.backend, robot.armature,
+                                    robot.friction_threshold, f_ext)
+            else:   # the base's inputs held: InputError when missing or stale
+                dynamics = self.base_inputs.dynamics(config, f_ext, t0)
+                with_terms = with_terms and not robot.base.floating
             tau, terms = answer(dynamics, params.control_mode, params.output, desired, measured,
                                 robot.gains, with_terms)
+        except InputError as err:   # the base's state is not known: nothing is published
+            self._reject(topic, err.reason, str(err))
+            return None
         except Exception as err:  # never die on one message
             self._reject(topic, 'compute_error', f'rnea failed: {err!r}')
             return None
@@ -443,12 +462,36 @@ class Answering:
             self._reject(topic, 'non_finite_output', 'torque is not finite (extreme input?)')
             return None
         if robot.clamp:
-            tau, saturated = sd.clamp_to_effort_limits(robot.model, tau)
+            tau, saturated = self._clamp(robot, tau)
             if saturated.any():
                 self._count_saturated(robot, tau, saturated)
+        contacts = None
+        if robot.base.floating and dynamics.results:   # the solution at the model part's state
+            result = dynamics.results[-1]
+            self.base_inputs.solved(result)
+            q = measured[0] if params.control_mode == 'computed_torque' else desired[0]
+            contacts = contact_wrenches(robot.model, dynamics.base_q, q, result)
         t1 = time.monotonic_ns()
         self._count_answer(self.window, header.stamp, t0, t1)
-        return Answer(header, robot.joints, desired[0], desired[1], tau, terms)
+        return Answer(header, robot.joints, desired[0], desired[1], tau, terms, contacts)
+
+    @staticmethod
+    def _clamp(robot: Robot, tau: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """Clamp ``tau`` to the URDF limits (a floating model's base rows have none)."""
+        if not robot.base.floating:
+            return sd.clamp_to_effort_limits(robot.model, tau)
+        tau, saturated = sd.clamp_to_effort_limits(robot.model, np.r_[np.zeros(6), tau])
+        return tau[6:], saturated[6:]
+
+    def base_input(self, config: Config, topic: str, msg) -> None:
+        """Hold a base input (``base/imu``, ``base/pose``, ``base/twist``, ``contact_states``).
+
+        Nothing to publish: it enters the answers that follow; a refused one is counted and
+        logged, and the one held before stays (it goes stale on its own).
+        """
+        refused = self.base_inputs.take(topic, config, msg, time.monotonic_ns())
+        if refused:
+            self.log.warn(refused, throttle_duration_sec=1.0)
 
     def _count_answer(self, window: Window, stamp, t0: int, t1: int) -> None:
         totals = self.totals
@@ -493,6 +536,11 @@ class Answering:
         robot = config.robot
         if robot is None:
             self._reject_wrench('no_model', f'{link!r}: no robot model loaded yet')
+            return
+        if robot.base.floating:
+            self._reject_wrench('floating_base', f'on {link!r}: not applied on a floating '
+                                'base (its contacts carry what acts on it: contacts.links, '
+                                'measured_contact_wrenches)')
             return
         if link not in robot.model.frames:
             self._reject_wrench('unknown_link', f'header.frame_id {link!r} is not a link of '

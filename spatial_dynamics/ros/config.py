@@ -29,6 +29,8 @@ from spatial_dynamics import backends
 from spatial_dynamics.bounds import MAX_GRAVITY, MAX_PLAN_BYTES
 from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
+from spatial_dynamics.ros.bases import (
+    BASE_ACCELERATIONS, BASE_SOURCES, BASES, check_base, CONTACT_KINDS, CONTACT_METHODS)
 from spatial_dynamics.ros.descriptions import (
     description_change, MAX_DESCRIPTION_BYTES, parse_description)
 from spatial_dynamics.ros.control import (
@@ -50,6 +52,9 @@ DEFAULT_INPUT_TIMEOUT = 0.5         # s
 DEFAULT_FRICTION_THRESHOLD = 0.01   # rad/s or m/s
 DEFAULT_WRENCH_TIMEOUT = 0.5        # s
 DEFAULT_MEASURED_TIMEOUT = 0.5      # s
+DEFAULT_BASE_TIMEOUT = 0.5          # s
+DEFAULT_CONTACT_MU = 0.7            # Coulomb friction of a foot on a floor
+MAX_CONTACT_MU = 10.0               # beyond it a cone is a wall: a mistake, not a floor
 #: ``observer_gain`` K_O, 1/s: a 50 ms time constant (3.2 Hz bandwidth). A collision or a
 #: wrong payload shows within ~0.15 s (3 time constants), while effort noise and the half
 #: sample of timing between a drive's torque and its state pass at K_O times their size
@@ -126,6 +131,11 @@ PARAMETER_FILE_HEADER = (
     '                             per model joint in effort (N m, N), header of the measured\n'
     '                             state it comes from; one per measured message carrying\n'
     '                             velocity and effort of every model joint    reliable\n'
+    '  in   base/imu              sensor_msgs/Imu (base moving, base_input.source imu)\n'
+    '  in   base/pose, base/twist geometry_msgs/PoseStamped, TwistStamped (base moving with\n'
+    '                             base_input.source twist, or floating); best effort, last 1\n'
+    '  in   contact_states        std_msgs/UInt8MultiArray, a flag per contacts.links (floating)\n'
+    '  out  contact_wrenches      geometry_msgs/WrenchStamped, one per contact, in its link\n'
     '  out  /diagnostics          diagnostic_msgs/DiagnosticArray, ~1 Hz\n'
     'QoS of the data topics can be overridden with the standard parameters, e.g.\n'
     '  qos_overrides./desired_joint_states.subscription.reliability: reliable'
@@ -282,6 +292,59 @@ PARAMETERS = Table(NODE_NAME, [
         'Most values (points x joints x (fields + effort)) an annotated_trajectory may hold; '
         'a plan whose tolerance would need more is refused (too_many_points) and counted in '
         'diagnostics. Read-only.'), bounds=(1000, 10**8), read_only=True),
+    Param('base', 'string', 'fixed', (
+        '"fixed": the root link is fixed to the world (an arm on a table). "moving": the '
+        'fixed-base model on a moving base (mobile manipulator, ship), its motion from '
+        'base/imu or base/pose + base/twist (base_input.source); efforts = rnea(..., '
+        'base=motion). '
+        '"floating": the model with a free-flyer root (legged robots), its base state from '
+        'base/pose + base/twist; the joints\' efforts and the contact wrenches of '
+        'contacts.links (published on contact_wrenches) split M qdd + h (contact inverse '
+        'dynamics); the base never gets an effort. A missing or stale base input means no '
+        'output, with the reason in /diagnostics. Read-only.'),
+        choices=BASES, read_only=True),
+    Param('base_input.source', 'string', 'imu', (
+        'A moving base\'s motion: "imu" (base/imu, sensor_msgs/Imu on base_input.imu_link: its '
+        'specific force and angular velocity, angular acceleration zero) or "twist" '
+        '(base/pose for the orientation of gravity, base/twist for the twist; its rate per '
+        'base_input.acceleration). Live.'), choices=BASE_SOURCES),
+    Param('base_input.imu_link', 'string', '', (
+        'The link the IMU of base/imu is mounted on (its frame is the IMU frame, placed by '
+        'the URDF; header.frame_id must be this link or empty): the base link or a link '
+        'fixed to it. Live.')),
+    Param('base_input.acceleration', 'string', 'difference', (
+        'The base\'s acceleration with base/twist (moving, source twist; and floating, '
+        'the desired base acceleration): "difference", the difference of successive '
+        'twists over their header stamps (two samples needed, a gap of base_input.timeout '
+        'restarts it), or "zero", a base moving at constant twist. Live.'),
+        choices=BASE_ACCELERATIONS),
+    Param('base_input.timeout', 'double', DEFAULT_BASE_TIMEOUT, (
+        'Seconds (since receipt) after which a base input (base/imu, base/pose, '
+        'base/twist, contact_states) is stale: answers are then refused (diagnostics say '
+        'which input), never computed as if the base were fixed. Live.'),
+        bounds=(1e-3, 3600.0)),
+    Param('contacts.links', 'string[]', None, (
+        'Floating base: the links that may touch the ground (feet, soles), each a contact '
+        'at its origin; all in contact until contact_states (std_msgs/UInt8MultiArray, one '
+        'flag per link in this order) says otherwise. Live.'), rules=(distinct,)),
+    Param('contacts.kind', 'string', 'point', (
+        '"point" (a force: feet) or "surface" (a wrench: soles). Live.'),
+        choices=CONTACT_KINDS),
+    Param('contacts.mu', 'double', DEFAULT_CONTACT_MU, (
+        'Coulomb friction coefficient of every contact: a force outside its cone is reported '
+        'in /diagnostics ("qp" keeps inside it). Live.'), bounds=(0.0, MAX_CONTACT_MU)),
+    Param('contacts.method', 'string', 'torques', (
+        'How M qdd + h is split: "torques", the least joint efforts consistent with the '
+        'contacts; "forces", the least contact forces carrying the base; "qp", the least '
+        'efforts with every force inside its friction cone (slower; infeasible = no '
+        'output). Live.'), choices=CONTACT_METHODS),
+    Param('contacts.measured', 'bool', False, (
+        'Take the contact wrenches from measured_contact_wrenches (geometry_msgs/'
+        "WrenchStamped from foot force sensors: frame_id = a link of contacts.links, [n; f] "
+        "in the link's frame at its origin; a point contact uses the force) instead of "
+        'solving for them: efforts = (M qdd + h - J_c^T lambda) of the joints, the base '
+        'rows\' residual in /diagnostics. Each contact in force needs a measurement younger '
+        'than base_input.timeout. Live.')),
     Param('backend', 'string', 'auto', (
         'How tau is computed. "numpy": plain Python floats (~30-150 µs per call for 6-32 '
         'joints). "compiled" and "auto": the compiled kernels built with the package (~1-3 '
@@ -317,15 +380,30 @@ def locked_positions(params) -> dict:
 
 def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
                    ) -> Optional[np.ndarray]:
-    """``armature`` (kg m² or kg): empty = none, else one value in [0, MAX_ARMATURE] per joint."""
+    """``armature`` (kg m² or kg): empty = none, else one value in [0, MAX_ARMATURE] per joint.
+
+    A floating base's joints are its actuated ones (the free-flyer has no rotor).
+    """
     if not values:
         return None
+    joints = model.joint_names[1:] if model.floating else model.joint_names
     try:
-        armature = sd.per_joint(model, 'parameter armature', list(values), nonnegative=True)
+        if model.floating:
+            armature = np.array(values, dtype=float)
+            if armature.shape != (len(joints),):
+                raise ValueError(f'parameter armature: expected {len(joints)} values for the '
+                                 f'actuated joints {list(joints)}, got {len(armature)}')
+            for name, value in zip(joints, armature):
+                if not value >= 0.0:
+                    raise ValueError(f'parameter armature: joint {name!r} has the value '
+                                     f'{value}, need a finite non-negative number')
+        else:
+            armature = sd.per_joint(model, 'parameter armature', list(values),
+                                    nonnegative=True)
     except ValueError as err:
         raise ConfigError(f'{err} (order of the joints parameter, or the URDF order '
                           'when it is unset)')
-    for name, value in zip(model.joint_names, armature):
+    for name, value in zip(joints, armature):
         if value > MAX_ARMATURE:
             raise ConfigError(f'parameter armature: joint {name!r} has {value:g}, more than '
                               f'{MAX_ARMATURE:g} kg m^2 (or kg) cannot be a rotor inertia')
@@ -360,7 +438,7 @@ def _base_model(params, current: Optional[Robot], urdf: str, source: str,
     if locked and not joints:
         raise ConfigError(f'parameter locked_joints: {list(locked)} lock joints only '
                           'when the joints parameter lists the joints to keep')
-    return parse_description(urdf, source, joints, locked, params.strict_urdf)
+    return parse_description(urdf, source, joints, locked, params.strict_urdf, params.base)
 
 
 def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
@@ -390,16 +468,18 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
         raise ConfigError(
             f'parameter wrench_estimate.link: {params.wrench_estimate_link!r} is not a link of '
             f'robot {base.name!r} ({source})')
+    check_base(params, base, source)
     setting = params.backend
+    actuated = tuple(base.joint_names[1:] if base.floating else base.joint_names)
     return Robot(
         urdf=urdf, source=source, base=base, model=payload.apply(base),
-        joints=tuple(base.joint_names), joints_param=joints, locked=tuple(locked.items()),
+        joints=actuated, joints_param=joints, locked=tuple(locked.items()),
         payload=payload, armature=check_armature(base, params.armature),
         friction_threshold=(params.friction_velocity_threshold
                             if params.friction_model == 'urdf' else None),
         clamp=params.clamp_to_effort_limits, setting=setting,
-        backend=resolve_backend(setting), gains=model_gains(base, params),
-        external_torque_warn=_observer_check(check_warn, base.joint_names,
+        backend=resolve_backend(setting), gains=model_gains(base, params, actuated),
+        external_torque_warn=_observer_check(check_warn, actuated,
                                              params.external_torque_warn))
 
 
@@ -421,11 +501,12 @@ def _observer_check(check: Callable, *args):
         raise ConfigError(str(err)) from None
 
 
-def model_gains(model: 'sd.Model', params) -> Gains:
-    """``kp``, ``kd`` of ``params`` for ``model`` (:func:`~.control.check_gains`)."""
+def model_gains(model: 'sd.Model', params, joints: Optional[Tuple[str, ...]] = None) -> Gains:
+    """``kp``, ``kd`` of ``params`` for ``joints`` of ``model`` (:func:`~.control.check_gains`)."""
     try:
-        return Gains(check_gains(model, 'kp', params.kp),
-                     check_gains(model, 'kd', params.kd), continuous_joints(model))
+        return Gains(check_gains(model, 'kp', params.kp, joints),
+                     check_gains(model, 'kd', params.kd, joints),
+                     continuous_joints(model, joints))
     except ControlError as err:
         raise ConfigError(f'{err} (order of the joints parameter, or the URDF order when it '
                           'is unset)') from None
@@ -472,4 +553,4 @@ def reparse_needed(requested, params) -> bool:
     """Whether a description parsed with parameters ``requested`` must be parsed again now."""
     return any(getattr(requested, PARAMETERS.by_name[name].field)
                != getattr(params, PARAMETERS.by_name[name].field)
-               for name in MODEL_PARAMETERS + ('strict_urdf',))
+               for name in MODEL_PARAMETERS + ('strict_urdf', 'base'))

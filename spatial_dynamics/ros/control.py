@@ -125,23 +125,26 @@ def check_mode(control_mode: str, output: str, kp: Sequence[float] = (1.0,),
     return control_mode, output
 
 
-def check_gains(model: 'sd.Model', name: str, values: Optional[Sequence[float]]) -> np.ndarray:
+def check_gains(model: 'sd.Model', name: str, values: Optional[Sequence[float]],
+                joints: Optional[Sequence[str]] = None) -> np.ndarray:
     """``kp`` or ``kd``: one value for all joints, or one per model joint; finite, in [0, bound].
 
     Empty or unset: 0 for every joint. Returns a read-only (n,) array in the order of
-    ``model.joint_names`` (the ``joints`` parameter's order).
+    ``joints`` (default ``model.joint_names``, the ``joints`` parameter's order; a floating
+    base's actuated joints).
     """
     values = [] if values is None else list(values)
-    n = len(model.joint_names)
+    joints = model.joint_names if joints is None else tuple(joints)
+    n = len(joints)
     if len(values) not in (0, 1, n):
         raise ControlError(
             f'parameter {name}: {len(values)} values for the {n} joints '
-            f'{list(model.joint_names)} (need one value for all, or one per joint in this '
+            f'{list(joints)} (need one value for all, or one per joint in this '
             'order)')
     gains = np.zeros(n) if not values else np.array(
         values * n if len(values) == 1 else values, dtype=float)
     bound = GAIN_BOUNDS[name]
-    for joint, value in zip(model.joint_names, gains):
+    for joint, value in zip(joints, gains):
         if not (math.isfinite(value) and 0.0 <= value <= bound):
             raise ControlError(
                 f'parameter {name}: joint {joint!r} has {value}, need a finite value from 0 '
@@ -159,9 +162,14 @@ def check_gains_without_model(name: str, values: Optional[Sequence[float]]) -> N
                                f'{bound:g} ({GAIN_UNITS[name]})')
 
 
-def continuous_joints(model: 'sd.Model') -> np.ndarray:
-    """Mask (n,) of the joints of ``q`` whose URDF type is ``continuous`` (their errors wrap)."""
-    mask = np.array([model.joint_types.get(name) == 'continuous' for name in model.joint_names],
+def continuous_joints(model: 'sd.Model', joints: Optional[Sequence[str]] = None
+                      ) -> np.ndarray:
+    """Mask (n,) of ``joints`` (default the model's) whose URDF type is ``continuous``.
+
+    Their position errors wrap.
+    """
+    joints = model.joint_names if joints is None else joints
+    mask = np.array([model.joint_types.get(name) == 'continuous' for name in joints],
                     dtype=bool)
     mask.setflags(write=False)
     return mask
@@ -206,7 +214,9 @@ class Dynamics:
 
     ``gravity`` m/s² in the base frame; ``armature`` None or (n,); ``friction_threshold``
     None (no friction) or the smooth-sign velocity; ``f_ext`` None or link → ``[n; f]``
-    in the link frame (N m, N).
+    in the link frame (N m, N); ``base`` None (a fixed base) or the base's motion
+    (:class:`~spatial_dynamics.BaseMotion`, a moving base: ``base=`` of every RNEA call but
+    :meth:`inertia_times`, since ``M(q)`` does not depend on it).
     """
 
     model: 'sd.Model'
@@ -215,11 +225,12 @@ class Dynamics:
     armature: Optional[np.ndarray] = None
     friction_threshold: Optional[float] = None
     f_ext: Optional[Mapping[str, np.ndarray]] = None
+    base: Optional['sd.BaseMotion'] = None
 
     def full(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
         """``ID(q, q̇, q̈, f_ext) + armature·q̈ + friction(q̇)``: one RNEA call."""
         tau = sd.rnea(self.model, q, qd, qdd, gravity=self.gravity, f_ext=self.f_ext,
-                      backend=self.backend)
+                      backend=self.backend, base=self.base)
         if self.armature is not None:
             tau += self.armature * qdd
         if self.friction_threshold is not None:
@@ -228,7 +239,8 @@ class Dynamics:
 
     def gravity_torque(self, q: np.ndarray) -> np.ndarray:
         """``g(q)``: RNEA at q̇ = q̈ = 0."""
-        return sd.gravity_torque(self.model, q, self.gravity, backend=self.backend)
+        return sd.gravity_torque(self.model, q, self.gravity, backend=self.backend,
+                                 base=self.base)
 
     def inertia_times(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
         """``(M(q) + armature) u``: RNEA at q̇ = 0, q̈ = u, without gravity."""
@@ -259,8 +271,10 @@ class Dynamics:
         g = self.gravity_torque(q)
         result = {'gravity': g}
         if len(wanted) > 1:
-            bias = sd.bias_torque(self.model, q, qd, self.gravity, backend=self.backend)
-            tau = sd.rnea(self.model, q, qd, qdd, gravity=self.gravity, backend=self.backend)
+            bias = sd.bias_torque(self.model, q, qd, self.gravity, backend=self.backend,
+                                  base=self.base)
+            tau = sd.rnea(self.model, q, qd, qdd, gravity=self.gravity, backend=self.backend,
+                          base=self.base)
             result['velocity_product'] = bias - g
             result['inertial'] = tau - bias
             result['armature'] = (np.zeros(n) if self.armature is None
@@ -270,7 +284,7 @@ class Dynamics:
                 else sd.friction_torque(self.model, qd, self.friction_threshold))
             result['external'] = np.zeros(n) if not self.f_ext else sd.rnea(
                 self.model, q, qd, qdd, gravity=self.gravity, f_ext=self.f_ext,
-                backend=self.backend) - tau
+                backend=self.backend, base=self.base) - tau
         return {term: result[term] for term in wanted}
 
 

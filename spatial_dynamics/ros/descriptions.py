@@ -45,7 +45,8 @@ def read_description(path: str) -> str:
 
 
 def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = None,
-                      locked: Optional[dict] = None, strict: bool = False) -> 'sd.Model':
+                      locked: Optional[dict] = None, strict: bool = False,
+                      base: str = 'fixed') -> 'sd.Model':
     """Build the (reduced) model from URDF text; ``source`` names where it came from.
 
     ``urdf`` is XML text, never a path (a path goes in ``robot_description_file``): it is
@@ -54,7 +55,8 @@ def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = 
     other joints are locked at ``locked[name]`` (default 0), lumped, and branches that cannot
     move a kept joint's torque are pruned; ``model.joint_names == joints``. ``strict``: a
     physically inconsistent but computable description (a :class:`~spatial_dynamics.URDFWarning`)
-    is refused; otherwise it loads and its warnings are in ``model.warnings``.
+    is refused; otherwise it loads and its warnings are in ``model.warnings``. ``base``:
+    ``'floating'`` hangs the root link on a free-flyer (the node's ``base: floating``).
 
     One plain-float inverse-dynamics call at q = qd = qdd = 0 follows, before the model is
     used: it proves the model computes (finite torques), and derives the backend's layout at
@@ -74,9 +76,13 @@ def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = 
             where += f' (locked {locked})'
     try:
         model = sd.Model.from_urdf(text.encode('utf-8'), joints=list(joints) if joints else None,
-                                   locked=locked or None, strict=strict)
-        zeros = np.zeros(len(model.joint_names))
-        tau = sd.rnea(model, zeros, zeros, zeros, backend='numpy')
+                                   locked=locked or None, strict=strict,
+                                   base='floating' if base == 'floating' else 'fixed')
+        q = np.zeros(model.nq)
+        if model.floating:
+            q[6] = 1.0     # the free-flyer's identity quaternion
+        zeros = np.zeros(model.nv)
+        tau = sd.rnea(model, q, zeros, zeros, backend='numpy')
     except Exception as err:  # a bad description must never take the node down
         raise ConfigError(f'{where}: {err}')
     if not np.isfinite(tau).all():

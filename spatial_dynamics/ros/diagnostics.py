@@ -219,7 +219,8 @@ def feedforward_status(robot: Optional[Robot], window: Window, totals: Totals,
 
 
 def observer_status(robot: Optional[Robot], gain: float,
-                    observer: Optional[MomentumObserver], window: EstimateWindow) -> Status:
+                    observer: Optional[MomentumObserver], window: EstimateWindow,
+                    base: str = 'fixed') -> Status:
     """Return the ``external torque`` status: RMS of the estimate per joint over the period.
 
     WARN, naming the joints, when a joint's RMS exceeds ``external_torque_warn``; WARN, naming
@@ -232,6 +233,8 @@ def observer_status(robot: Optional[Robot], gain: float,
               ('time constant [ms]', f'{1e3 / gain:.1f}' if gain > 0.0 else '')]
     if gain <= 0.0:
         return 'OK', 'observer off (observer_gain 0)', values
+    if base != 'fixed':
+        return 'OK', f'observer off (base {base}: it needs a fixed base)', values
     if robot is None:
         return 'OK', 'no robot model', values
     values += [('estimates', str(window.count))]

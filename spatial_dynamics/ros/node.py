@@ -39,7 +39,7 @@ from typing import Optional, Sequence, Tuple
 import warnings
 
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -47,10 +47,11 @@ from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.serialization import deserialize_message
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 import spatial_dynamics as sd
 from spatial_dynamics.ros import messages
 from spatial_dynamics.ros.answering import Answering, Out
+from spatial_dynamics.ros.bases import base_status
 from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, plan_qos, spin, subscribe
 from spatial_dynamics.ros.config import (
     build_robot, ConfigError, NODE_NAME, PARAMETER_NAMES, PARAMETERS, PAYLOAD_PARAMETERS,
@@ -61,7 +62,7 @@ from spatial_dynamics.ros.diagnostics import (
     backend_text, feedforward_status, model_status, observer_status)
 from spatial_dynamics.ros.plans import Annotator, prepare_plan
 from spatial_dynamics.ros.records import Config, Robot
-from std_msgs.msg import Float64MultiArray, String
+from std_msgs.msg import Float64MultiArray, String, UInt8MultiArray
 from trajectory_msgs.msg import JointTrajectory
 
 WRENCH_DEPTH = 10                   # several links may publish in one burst
@@ -136,7 +137,21 @@ class InverseDynamicsNode(Node):
         subscribe(self, JointState, 'joint_states', self._on_measured, group=group)
         subscribe(self, WrenchStamped, 'external_wrenches', self._on_wrench, WRENCH_DEPTH,
                   group=group)
+        if self.config.params.base != 'fixed':   # read-only: decided once, at start
+            self.contacts_pub = advertise(self, WrenchStamped, 'contact_wrenches')
+            for msg_type, topic in ((Imu, 'base/imu'), (PoseStamped, 'base/pose'),
+                                    (TwistStamped, 'base/twist'),
+                                    (UInt8MultiArray, 'contact_states')):
+                subscribe(self, msg_type, topic, self._base_callback(topic), group=group)
+            subscribe(self, WrenchStamped, 'measured_contact_wrenches',
+                      self._base_callback('measured_contact_wrenches'), WRENCH_DEPTH,
+                      group=group)
         self.create_timer(1.0, self._publish_diagnostics, callback_group=group)
+
+    def _base_callback(self, topic: str):
+        def take(msg) -> None:
+            self.answering.base_input(self.config, topic, msg)
+        return take
 
     def destroy_node(self) -> None:
         """Stop the description parser and the annotation worker, then destroy the node."""
@@ -344,7 +359,11 @@ class InverseDynamicsNode(Node):
     def _send(self, out: Out) -> None:
         """Publish what one message gave: an answer, an estimate, a wrench, an annotated plan."""
         if out.answer is not None:
-            self._publish(*out.answer)
+            self._publish(*out.answer[:6])
+            if out.answer.contacts is not None:
+                for link, wrench in out.answer.contacts:
+                    self.contacts_pub.publish(messages.wrench_stamped(out.answer.header, link,
+                                                                      wrench))
         if out.estimate is not None:
             self._publish_estimate(*out.estimate)
         if out.wrench is not None:
@@ -405,7 +424,11 @@ class InverseDynamicsNode(Node):
             ('feedforward', feedforward_status(robot, window, answering.totals, config.params,
                                                answering.wrenches, now_ns)),
             ('external torque', observer_status(robot, config.params.observer_gain,
-                                                answering.observer, estimates))]
+                                                answering.observer, estimates,
+                                                config.params.base))]
+        if config.params.base != 'fixed':
+            statuses.append(('base', base_status(config.params, robot, answering.base_inputs,
+                                                 answering.base_inputs.period(), now_ns)))
         name = self.get_fully_qualified_name().lstrip('/')  # 'inverse_dynamics' in the root ns
         diagnostics = messages.diagnostic_array(
             name, '' if robot is None else robot.model.name, statuses,

@@ -1,0 +1,507 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The node on a moving or floating base, without ROS: the base's inputs held, their answers.
+
+Pure Python + numpy + the library (no rclpy import), tested in
+``test/test_node_base_inputs.py``. Parameter ``base`` (read-only):
+
+===========  ===================================================================================
+``fixed``    today's node: the URDF's root link is fixed to the world (default).
+``moving``   the fixed-base model on a moving base (a mobile manipulator, a ship): each answer
+             is ``rnea(..., base=motion)`` with the base's motion from an IMU on the base
+             (``base_input.source: imu``: :func:`~spatial_dynamics.base_from_imu`, its link the
+             ``base_input.imu_link``) or from its pose and twist (``base_input.source: twist``:
+             :func:`~spatial_dynamics.base_from_odometry`).
+``floating`` the model loaded with ``base='floating'`` (a legged robot): the base's pose and
+             twist come from ``base/pose`` and ``base/twist``, the joints' from the desired
+             (or measured) joint state, and :func:`~spatial_dynamics.contact_inverse_dynamics`
+             splits ``M q̈ + h`` between the joints' efforts and the contact wrenches of
+             ``contacts.links``.
+===========  ===================================================================================
+
+Inputs (each sampled, checked and held; an answer whose base input is missing or older than
+``base_input.timeout`` is refused, reason named in /diagnostics, never computed on a fixed base):
+
+* ``base/imu`` (``sensor_msgs/Imu``): ``linear_acceleration`` is the specific force
+  ``r̈ − g`` and ``angular_velocity`` ``ω`` in the IMU's frame, which is
+  ``base_input.imu_link`` (its placement from the URDF; ``header.frame_id`` that link or
+  empty). ``ω̇`` is taken as zero.
+* ``base/pose`` (``geometry_msgs/PoseStamped``): the pose in the world (``header.frame_id``,
+  any) of the frame of ``base/twist`` (the root link; moving: or a link fixed to it), as
+  ``nav_msgs/Odometry``'s pose of its ``child_frame_id``; a unit quaternion (x y z w) within
+  :data:`QUATERNION_TOLERANCE`.
+* ``base/twist`` (``geometry_msgs/TwistStamped``): the twist of the root link (or, moving, of a
+  link fixed to it) in its own axes, ``header.frame_id`` that link or empty: what
+  ``nav_msgs/Odometry`` carries in its child frame. Its rate, the base's spatial
+  acceleration, is the difference of successive samples over their stamps
+  (``base_input.acceleration: difference``) or zero (``zero``: a base at constant twist).
+* ``contact_states`` (``std_msgs/UInt8MultiArray``): one flag per ``contacts.links``, non-zero
+  = in contact; until the first message every link of ``contacts.links`` is in contact.
+* ``measured_contact_wrenches`` (``geometry_msgs/WrenchStamped``, with ``contacts.measured``):
+  a foot sensor's wrench on the robot, ``header.frame_id`` the link of ``contacts.links``,
+  ``[n; f]`` in its frame at its origin; the efforts are then ``(M q̈ + h − J_cᵀ λ)`` of the
+  joints for the measured ``λ``, and the base rows' residual says how consistent they are.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import List, Optional, Tuple
+
+import numpy as np
+import spatial_dynamics as sd
+from spatial_dynamics.bounds import (check_bounded, MAX_ACCELERATION, MAX_POSITION,
+                                     MAX_VELOCITY, MAX_WRENCH)
+from spatial_dynamics.contacts import link_orientations
+from spatial_dynamics.ros.control import Dynamics
+from spatial_dynamics.ros.inputs import InputError
+from spatial_dynamics.ros.parameters import ConfigError
+
+#: Values of the ``base`` parameter.
+BASES = ('fixed', 'moving', 'floating')
+#: Values of ``base_input.source`` (a moving base's motion).
+BASE_SOURCES = ('imu', 'twist')
+#: Values of ``base_input.acceleration``: the twist's rate differenced, or zero.
+BASE_ACCELERATIONS = ('difference', 'zero')
+#: Values of ``contacts.kind`` and ``contacts.method`` (the library's).
+CONTACT_KINDS = sd.contacts.KINDS
+CONTACT_METHODS = sd.contacts.METHODS
+#: ``|‖quaternion‖ − 1|`` accepted (then normalised): float32 rounding passes, garbage not.
+QUATERNION_TOLERANCE = 1e-2
+#: Why an answer is refused on a moving or floating base (diagnostics counter keys).
+BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved',
+                'contacts_missing')
+#: Why a base input message is refused.
+BASE_INPUT_REASONS = ('non_finite', 'out_of_bounds', 'not_unit', 'wrong_frame', 'unstamped',
+                      'stamp_not_increasing', 'length_mismatch', 'no_model',
+                      'unknown_link')
+#: The base rows' residual (N, N m) above which the status WARNs: the contacts cannot carry it.
+RESIDUAL_WARN = 1e-6
+
+_XYZ = ('x', 'y', 'z')
+
+
+def _stamp_ns(header) -> int:
+    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+
+
+def _vector(what: str, values, bound: float, unit: str, names) -> np.ndarray:
+    """``values`` as an array, or InputError (non_finite, out_of_bounds) naming the field."""
+    x = np.array(values, dtype=float)
+    reason = check_bounded(what, x, bound, unit, names)
+    if reason:
+        raise InputError('non_finite' if 'not finite' in reason else 'out_of_bounds', reason)
+    return x
+
+
+def unit_quaternion(what: str, o) -> np.ndarray:
+    """``(x, y, z, w)`` of a ``geometry_msgs/Quaternion``, normalised; InputError if not unit."""
+    quat = _vector(what, (o.x, o.y, o.z, o.w), 2.0, '', ('x', 'y', 'z', 'w'))
+    norm = float(np.linalg.norm(quat))
+    if abs(norm - 1.0) > QUATERNION_TOLERANCE:
+        raise InputError('not_unit', f'{what} has norm {norm:g}, not a unit quaternion '
+                         f'(tolerance {QUATERNION_TOLERANCE:g})')
+    return quat / norm
+
+
+def twist_array(msg) -> np.ndarray:
+    """``[ω; v]`` (6,) of a ``geometry_msgs/TwistStamped`` (rad/s, m/s), bounded."""
+    w, v = msg.twist.angular, msg.twist.linear
+    return _vector('twist', (w.x, w.y, w.z, v.x, v.y, v.z), MAX_VELOCITY, 'rad/s or m/s',
+                   [f'angular.{a}' for a in _XYZ] + [f'linear.{a}' for a in _XYZ])
+
+
+def pose_arrays(msg) -> Tuple[np.ndarray, np.ndarray]:
+    """``(position (3,), quaternion (4,) x y z w)`` of a ``geometry_msgs/PoseStamped``."""
+    p = msg.pose.position
+    position = _vector('pose.position', (p.x, p.y, p.z), MAX_POSITION, 'm', _XYZ)
+    return position, unit_quaternion('pose.orientation', msg.pose.orientation)
+
+
+def imu_arrays(msg) -> Tuple[np.ndarray, np.ndarray]:
+    """``(specific force (3,) m/s², ω (3,) rad/s)`` of a ``sensor_msgs/Imu``, bounded."""
+    a, w = msg.linear_acceleration, msg.angular_velocity
+    return (_vector('linear_acceleration', (a.x, a.y, a.z), MAX_ACCELERATION, 'm/s²', _XYZ),
+            _vector('angular_velocity', (w.x, w.y, w.z), MAX_VELOCITY, 'rad/s', _XYZ))
+
+
+def check_base(params, model: 'sd.Model', source: str) -> None:
+    """Check the base parameters against ``model`` (ConfigError naming the parameter)."""
+    if params.base == 'fixed':
+        return
+    links = tuple(params.contacts_links or ())
+    for link in links:
+        if link not in model.frames:
+            raise ConfigError(f'parameter contacts.links: {link!r} is not a link of robot '
+                              f'{model.name!r} ({source})')
+    if params.base == 'moving':
+        if params.base_input_source == 'imu':
+            link = params.base_input_imu_link
+            if not link:
+                raise ConfigError("parameter base_input.imu_link: base_input.source 'imu' "
+                                  'needs the link the IMU is mounted on')
+            try:
+                sd.base_from_imu(model, link, np.zeros(3), np.zeros(3))
+            except ValueError as err:
+                raise ConfigError(f'parameter base_input.imu_link: {err}') from None
+        if links:
+            raise ConfigError("parameter contacts.links: contacts need base 'floating' (a "
+                              "moving base's motion is given, nothing carries it)")
+    if params.wrench_estimate_link:
+        raise ConfigError(f'parameter wrench_estimate.link: not supported with base '
+                          f'{params.base!r} (the observer needs a fixed base)')
+
+
+def _same(a: Optional[tuple], b: tuple) -> bool:
+    """Whether two keys hold the same objects (identity: a model is not compared by value)."""
+    return a is not None and len(a) == len(b) and all(x is y for x, y in zip(a, b))
+
+
+class Held:
+    """A checked base input: its arrays, its stamp (ns) and its receipt (monotonic ns)."""
+
+    def __init__(self, value: tuple, stamp_ns: int, receipt_ns: int) -> None:
+        self.value, self.stamp_ns, self.receipt_ns = value, stamp_ns, receipt_ns
+
+
+@dataclass
+class BaseWindow:
+    """What the contact solutions of one diagnostics period said."""
+
+    solved: int = 0
+    residual_max: float = 0.0
+    violations: Counter = field(default_factory=Counter)   # 'contact kind' -> count
+    worst: dict = field(default_factory=dict)               # 'contact kind' -> largest N
+    last: str = ''
+
+
+class BaseInputs:
+    """The base's inputs held between messages (see the module docstring); counters."""
+
+    def __init__(self) -> None:
+        self.imu: Optional[Held] = None
+        self.pose: Optional[Held] = None
+        self.twist: Optional[Held] = None
+        self.rate: Optional[np.ndarray] = None    # the differenced twist, (6,)
+        self.flags: Optional[Held] = None
+        self.measured: dict = {}                   # link -> Held([n; f] in the link's frame)
+        self.received: Counter = Counter()
+        self.rejected: Counter = Counter()
+        self.window = BaseWindow()
+        self._motion: tuple = (None, None)         # (what it was made from, BaseMotion)
+
+    def period(self) -> BaseWindow:
+        """Return the contact figures of the period that ended; start new ones."""
+        window, self.window = self.window, BaseWindow()
+        return window
+
+    # -- inputs ---------------------------------------------------------------------------------
+    def take(self, topic: str, config, msg, now_ns: int) -> Optional[str]:
+        """Check and hold one base input; return why it was refused (None: taken)."""
+        self.received[topic] += 1
+        try:
+            if config.robot is None:
+                raise InputError('no_model', 'no robot model loaded yet')
+            getattr(self, '_take_' + topic.replace('/', '_'))(config, msg, now_ns)
+        except InputError as err:
+            self.rejected[f'{topic} {err.reason}'] += 1
+            return f'{topic}: message rejected ({err.reason}): {err}'
+        return None
+
+    def _take_base_imu(self, config, msg, now_ns: int) -> None:
+        link = config.params.base_input_imu_link
+        if msg.header.frame_id not in ('', link):
+            raise InputError('wrong_frame', f'header.frame_id {msg.header.frame_id!r} is not '
+                             f'base_input.imu_link {link!r}, the IMU frame of the model')
+        self.imu = Held(imu_arrays(msg), _stamp_ns(msg.header), now_ns)
+
+    def _take_base_pose(self, config, msg, now_ns: int) -> None:
+        self.pose = Held(pose_arrays(msg), _stamp_ns(msg.header), now_ns)
+
+    def _take_base_twist(self, config, msg, now_ns: int) -> None:
+        robot, params = config.robot, config.params
+        frame = msg.header.frame_id
+        root = robot.base.body_names[1 if robot.base.floating else 0]
+        if frame and frame != root and (robot.base.floating or frame not in robot.base.frames
+                                        or robot.base.frames[frame].body != 0):
+            raise InputError('wrong_frame', f'header.frame_id {frame!r}: the twist must be '
+                             f"the base's, in its frame {root!r}" + (
+                                 '' if robot.base.floating else ' or a link fixed to it'))
+        v = twist_array(msg)
+        stamp = _stamp_ns(msg.header)
+        before = self.twist
+        rate = None
+        if params.base_input_acceleration == 'difference':
+            if stamp == 0:
+                raise InputError('unstamped', 'header.stamp is 0: base_input.acceleration '
+                                 "'difference' differences the twist over its stamps")
+            fresh = (before is not None and before.value[1] == frame
+                     and (now_ns - before.receipt_ns) * 1e-9 <= params.base_input_timeout)
+            if fresh:
+                dt = (stamp - before.stamp_ns) * 1e-9
+                if dt <= 0.0:
+                    raise InputError('stamp_not_increasing', f'header.stamp {stamp * 1e-9:.9f} '
+                                     f's is not after the last twist\'s '
+                                     f'{before.stamp_ns * 1e-9:.9f} s')
+                rate = _vector('twist rate', (v - before.value[0]) / dt, MAX_ACCELERATION,
+                               'rad/s² or m/s²', None)
+        self.twist = Held((v, frame), stamp, now_ns)
+        self.rate = rate
+
+    def _take_contact_states(self, config, msg, now_ns: int) -> None:
+        links = tuple(config.params.contacts_links or ())
+        if len(msg.data) != len(links):
+            raise InputError('length_mismatch', f'{len(msg.data)} flags for the '
+                             f'{len(links)} contacts.links {list(links)}')
+        self.flags = Held(tuple(bool(x) for x in msg.data), 0, now_ns)
+
+    def _take_measured_contact_wrenches(self, config, msg, now_ns: int) -> None:
+        link = msg.header.frame_id
+        links = tuple(config.params.contacts_links or ())
+        if link not in links:
+            raise InputError('unknown_link', f'header.frame_id {link!r} is not one of '
+                             f'contacts.links {list(links)}')
+        t, f = msg.wrench.torque, msg.wrench.force
+        wrench = _vector(f'wrench on {link!r}', (t.x, t.y, t.z, f.x, f.y, f.z), MAX_WRENCH,
+                         'N m or N', [f'torque.{a}' for a in _XYZ] + [f'force.{a}' for a in _XYZ])
+        self.measured[link] = Held(wrench, _stamp_ns(msg.header), now_ns)
+
+    def _measured(self, params, contacts, now_ns: int) -> Optional[dict]:
+        """Link -> measured ``[n; f]`` (link frame) of each contact in force, or None (off)."""
+        if not params.contacts_measured:
+            return None
+        result = {}
+        for contact in contacts:
+            held = self.measured.get(contact.link)
+            if held is None:
+                raise InputError('contacts_missing', f'contacts.measured: no measured wrench '
+                                 f'of {contact.link!r} yet; not publishing')
+            result[contact.link] = self._fresh(params, held, 'measured_contact_wrenches of '
+                                               f'{contact.link!r}', now_ns)
+        return result
+
+    # -- what an answer needs -------------------------------------------------------------------
+    def _fresh(self, params, held: Optional[Held], topic: str, now_ns: int) -> tuple:
+        if held is None:
+            raise InputError('base_missing', f'no good {topic} yet (base {params.base}); '
+                             'not publishing')
+        age = (now_ns - held.receipt_ns) * 1e-9
+        if age > params.base_input_timeout:
+            raise InputError('base_stale', f'{topic} is {age:.3f} s old (base_input.timeout '
+                             f'{params.base_input_timeout} s); not publishing')
+        return held.value
+
+    def _rate(self, params, topic: str) -> np.ndarray:
+        if params.base_input_acceleration == 'zero':
+            return np.zeros(6)
+        if self.rate is None:
+            raise InputError('base_missing', f'{topic}: base_input.acceleration difference needs '
+                             'two successive twists (one so far, or a gap); not publishing')
+        return self.rate
+
+    def motion(self, config, now_ns: int) -> 'sd.BaseMotion':
+        """Return a moving base's motion now; InputError (base_missing, base_stale): unknown."""
+        params, model = config.params, config.robot.model
+        if params.base_input_source == 'imu':
+            f, w = self._fresh(params, self.imu, 'base/imu', now_ns)
+            key = (model, params.base_input_imu_link, self.imu)
+            if not _same(self._motion[0], key):   # once per sample, not per answer
+                self._motion = key, sd.base_from_imu(model, key[1], f, w)
+            return self._motion[1]
+        _, quat = self._fresh(params, self.pose, 'base/pose', now_ns)
+        v, frame = self._fresh(params, self.twist, 'base/twist', now_ns)
+        rate = self._rate(params, 'base/twist')
+        key = (model, self.pose, self.twist, params.base_input_acceleration)
+        if not _same(self._motion[0], key):
+            self._motion = key, sd.base_from_odometry(model, v, rate, quat, link=frame or None)
+        return self._motion[1]
+
+    def contacts(self, config, now_ns: int) -> Tuple['sd.Contact', ...]:
+        """Return the contacts in force now (``contacts.links`` filtered by ``contact_states``)."""
+        params = config.params
+        links = tuple(params.contacts_links or ())
+        flags = (True,) * len(links)
+        if self.flags is not None:
+            age = (now_ns - self.flags.receipt_ns) * 1e-9
+            if age > params.base_input_timeout:
+                raise InputError('contacts_stale', f'contact_states is {age:.3f} s old '
+                                 f'(base_input.timeout {params.base_input_timeout} s); '
+                                 'not publishing')
+            if len(self.flags.value) != len(links):   # contacts.links changed since
+                raise InputError('contacts_stale', f'contact_states has '
+                                 f'{len(self.flags.value)} flags for the {len(links)} '
+                                 f'contacts.links {list(links)}; not publishing')
+            flags = self.flags.value
+        return tuple(sd.Contact(link, kind=params.contacts_kind, mu=params.contacts_mu)
+                     for link, touching in zip(links, flags) if touching)
+
+    def dynamics(self, config, f_ext, now_ns: int) -> Dynamics:
+        """Return the :class:`~.control.Dynamics` of an answer on this base (InputError: none)."""
+        robot, params = config.robot, config.params
+        if params.base == 'moving':
+            return Dynamics(robot.model, params.gravity, robot.backend, robot.armature,
+                            robot.friction_threshold, f_ext, self.motion(config, now_ns))
+        position, quat = self._fresh(params, self.pose, 'base/pose', now_ns)
+        v, _ = self._fresh(params, self.twist, 'base/twist', now_ns)
+        contacts = self.contacts(config, now_ns)
+        return FloatingDynamics(
+            robot.model, params.gravity, robot.backend, robot.armature,
+            robot.friction_threshold, f_ext,
+            None, np.r_[position, quat], v, self._rate(params, 'base/twist'),
+            contacts, params.contacts_method, [], self._measured(params, contacts, now_ns))
+
+    def solved(self, result: 'sd.ContactResult') -> None:
+        """Count a contact solution's residual and violations for the period."""
+        window = self.window
+        window.solved += 1
+        window.residual_max = max(window.residual_max,
+                                  float(np.abs(result.base_residual).max()))
+        for violation in result.violations:
+            key = f'{violation.contact} {violation.kind}'
+            window.violations[key] += 1
+            window.worst[key] = max(window.worst.get(key, 0.0), violation.amount)
+        window.last = result.summary()
+
+
+@dataclass(frozen=True)
+class FloatingDynamics(Dynamics):
+    """A floating base's model part: contact-consistent joint efforts (one answer).
+
+    ``q, q̇, q̈`` of the methods are the joints'; the base's are ``base_q`` (position, x y z w),
+    ``base_v`` and ``base_a`` (``[ω; v]``, base frame). Each :meth:`full` solves
+    :func:`~spatial_dynamics.contact_inverse_dynamics` with ``contacts`` by ``method`` and
+    keeps its result in ``results`` (the contact wrenches to publish); with ``measured``
+    (link -> ``[n; f]`` in the link's frame) :meth:`full` takes those instead of solving
+    for them (their base residual is the check); the efforts never
+    include the base's rows. Armature and friction (``friction_threshold``) add to the
+    joints' (the rotors' torque; the drives' friction).
+    """
+
+    base_q: np.ndarray = None
+    base_v: np.ndarray = None
+    base_a: np.ndarray = None
+    contacts: Tuple['sd.Contact', ...] = ()
+    method: str = 'torques'
+    results: List = None
+    measured: Optional[dict] = None
+
+    def _solve(self, q, qd, qdd, base_v, base_a, gravity, measured=None) -> np.ndarray:
+        q_full = np.r_[self.base_q, q]
+        if measured is not None:   # world axes, as contact_inverse_dynamics takes them
+            rotations = link_orientations(self.model, q_full, list(measured))
+            measured = {c.name: _world(rotations[c.link], measured[c.link], c.rows)
+                        for c in self.contacts}
+        result = sd.contact_inverse_dynamics(
+            self.model, q_full, np.r_[base_v, qd], np.r_[base_a, qdd],
+            self.contacts, measured=measured, method=self.method, gravity=gravity)
+        if result.status != 'solved':
+            raise InputError('contacts_unsolved', f'contacts {self.method}: {result.summary()}')
+        return result
+
+    def full(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """Return the joints' efforts of ``M q̈ + h = Sᵀ τ + J_cᵀ λ``, + armature, friction."""
+        result = self._solve(q, qd, qdd, self.base_v, self.base_a, self.gravity, self.measured)
+        self.results.append(result)
+        tau = np.array(result.tau)
+        if self.armature is not None:
+            tau += self.armature * qdd
+        if self.friction_threshold is not None:
+            tau += sd.friction_torque(self.model, np.r_[self.base_v, qd],
+                                      self.friction_threshold)[6:]
+        return tau
+
+    def gravity_torque(self, q: np.ndarray) -> np.ndarray:
+        """Return the joints' efforts that hold the robot still on its contacts (q̇ = q̈ = 0)."""
+        zero, six = np.zeros(len(q)), np.zeros(6)
+        return np.array(self._solve(q, zero, zero, six, six, self.gravity).tau)
+
+    def inertia_times(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Return the contact-consistent efforts of joint accelerations ``u`` (no gravity)."""
+        zero, six = np.zeros(len(q)), np.zeros(6)
+        tau = np.array(self._solve(q, zero, u, six, six, (0.0, 0.0, 0.0)).tau)
+        if self.armature is not None:
+            tau += self.armature * u
+        return tau
+
+
+def _world(R: np.ndarray, wrench: np.ndarray, rows: int) -> np.ndarray:
+    """Return a link-frame ``[n; f]`` in world axes: a point contact's force (3), else both."""
+    if rows == 3:
+        return R @ wrench[3:]
+    return np.r_[R @ wrench[:3], R @ wrench[3:]]
+
+
+def contact_wrenches(model: 'sd.Model', base_q: np.ndarray, q: np.ndarray,
+                     result: 'sd.ContactResult') -> Tuple[Tuple[str, np.ndarray], ...]:
+    """Each contact's wrench ``[n; f]`` (6,) on the robot, in its link's frame, at its origin.
+
+    ``result.forces`` are in world axes at the contact point (the link's origin: contacts of
+    the node have no offset); a point contact's moment is zero.
+    """
+    links = tuple(result.forces)
+    rotations = link_orientations(model, np.r_[base_q, q], links)
+    out = []
+    for link in links:
+        R = rotations[link]
+        force = np.asarray(result.forces[link], dtype=float)
+        wrench = np.zeros(6)
+        if len(force) == 3:
+            wrench[3:] = R.T @ force
+        else:
+            wrench[:3], wrench[3:] = R.T @ force[:3], R.T @ force[3:]
+        out.append((link, wrench))
+    return tuple(out)
+
+
+def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: int):
+    """Return the ``base`` status: what the base's inputs are, the contacts' figures.
+
+    ERROR while a needed input is missing or stale (nothing is published), WARN when a
+    contact solution of the period violated a friction cone or pulled on the ground, or left
+    a base residual above :data:`RESIDUAL_WARN`.
+    """
+    values = [('base', params.base)]
+    needed = []
+    if params.base == 'moving':
+        values.append(('source', params.base_input_source))
+        needed = ([('base/imu', inputs.imu)] if params.base_input_source == 'imu'
+                  else [('base/pose', inputs.pose), ('base/twist', inputs.twist)])
+    elif params.base == 'floating':
+        needed = [('base/pose', inputs.pose), ('base/twist', inputs.twist)]
+    values += [('base acceleration', params.base_input_acceleration),
+               ('base timeout [s]', str(params.base_input_timeout))]
+    problems = []
+    for topic, held in needed:
+        age = None if held is None else (now_ns - held.receipt_ns) * 1e-9
+        values.append((f'{topic} age [s]', '' if age is None else f'{age:.3f}'))
+        if age is None:
+            problems.append(f'no {topic} yet')
+        elif age > params.base_input_timeout:
+            problems.append(f'{topic} stale ({age:.2f} s, base_input.timeout '
+                            f'{params.base_input_timeout} s)')
+    values += [(f'{topic} received', str(count)) for topic, count in inputs.received.items()]
+    values += [(f'rejected {key}', str(count)) for key, count in inputs.rejected.items()]
+    if params.base == 'floating':
+        values += [('contacts', ', '.join(params.contacts_links or ())),
+                   ('contacts method', params.contacts_method),
+                   ('contact solutions', str(window.solved)),
+                   ('base residual max', f'{window.residual_max:.3g}'),
+                   ('last solution', window.last)]
+        values += [(f'violation {key}', f'{count} (worst {window.worst[key]:.3g} N)')
+                   for key, count in window.violations.items()]
+    if robot is None:
+        return 'ERROR', 'no robot model', values
+    if problems:
+        return 'ERROR', '; '.join(problems) + '; not publishing', values
+    warnings = []
+    if window.violations:
+        warnings.append('contact violations: ' + ', '.join(
+            f'{key} ({count}x, worst {window.worst[key]:.3g} N)'
+            for key, count in window.violations.items()))
+    if window.residual_max > RESIDUAL_WARN:
+        warnings.append(f'base residual {window.residual_max:.3g} (the contacts cannot carry '
+                        'the base rows)')
+    if warnings:
+        return 'WARN', '; '.join(warnings), values
+    return 'OK', f'base {params.base}: inputs fresh', values

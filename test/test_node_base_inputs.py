@@ -1,0 +1,429 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The node on a moving or floating base, without a ROS graph (``base``, ``base_input.*``).
+
+Oracles: the library's ``rnea(..., base=base_from_imu(...))`` and ``base_from_odometry`` for a
+moving base, ``contact_inverse_dynamics`` for a floating one (Solo12 standing on its four
+feet: the contact wrenches carry its weight, ``m g``); a missing, stale or bad base input is
+refused with its reason and no answer, never computed as if the base were fixed.
+"""
+
+import os
+import sys
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PoseStamped, TwistStamped
+import numpy as np
+import pytest
+from sensor_msgs.msg import Imu, JointState
+from std_msgs.msg import Header, UInt8MultiArray
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from conftest import robot_urdf_path  # noqa: E402
+from node_harness import DEMO_URDF  # noqa: E402
+import spatial_dynamics as sd  # noqa: E402
+from spatial_dynamics.ros import config  # noqa: E402
+from spatial_dynamics.ros.answering import Answering  # noqa: E402
+from spatial_dynamics.ros.bases import base_status  # noqa: E402
+from spatial_dynamics.ros.parameters import ConfigError  # noqa: E402
+
+FEET = ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')
+
+
+class Log:
+    def __init__(self) -> None:
+        self.said = []
+
+    def info(self, text, **_):
+        self.said.append(('info', text))
+
+    def warn(self, text, **_):
+        self.said.append(('warn', text))
+
+
+def configured(**changes):
+    params = {spec.name: spec.default for spec in config.PARAMETERS}
+    params.update(changes)
+    return config.prepare({}, params, None)
+
+
+def header(t: float, frame: str = '') -> Header:
+    sec = int(t)
+    return Header(stamp=Time(sec=sec, nanosec=int(round((t - sec) * 1e9))), frame_id=frame)
+
+
+def joint_state(joints, t, q, qd, qdd) -> JointState:
+    return JointState(header=header(t), name=list(joints), position=list(map(float, q)),
+                      velocity=list(map(float, qd)), effort=list(map(float, qdd)))
+
+
+def imu(t, f, w, frame='base_link') -> Imu:
+    msg = Imu(header=header(t, frame))
+    a, g = msg.linear_acceleration, msg.angular_velocity
+    a.x, a.y, a.z = map(float, f)
+    g.x, g.y, g.z = map(float, w)
+    return msg
+
+
+def pose(t, p, quat, frame='odom') -> PoseStamped:
+    msg = PoseStamped(header=header(t, frame))
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, p)
+    o = msg.pose.orientation
+    o.x, o.y, o.z, o.w = map(float, quat)
+    return msg
+
+
+def twist(t, v, frame='') -> TwistStamped:
+    msg = TwistStamped(header=header(t, frame))
+    w, lin = msg.twist.angular, msg.twist.linear
+    w.x, w.y, w.z, lin.x, lin.y, lin.z = map(float, v)
+    return msg
+
+
+@pytest.fixture(scope='module')
+def demo_text():
+    with open(DEMO_URDF) as f:
+        return f.read()
+
+
+@pytest.fixture(scope='module')
+def solo_path():
+    return robot_urdf_path('solo12')
+
+
+def standing(joints):
+    """Solo12's joints standing, knees bent (rad), in ``joints`` order."""
+    return np.array([{'HAA': 0.05, 'HFE': 0.8 if j[0] == 'F' else -0.8,
+                      'KFE': -1.6 if j[0] == 'F' else 1.6}[j[3:]] for j in joints])
+
+
+# -------------------------------------------------------------------------------------------
+# moving base
+
+def test_moving_base_on_an_imu_is_rnea_with_base_from_imu(demo_text):
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    f, w = np.array([0.7, -1.2, 9.6]), np.array([0.1, -0.3, 0.5])
+    answering.base_input(cfg, 'base/imu', imu(1.0, f, w))
+    q, qd, qdd = np.linspace(-1, 1, n), np.linspace(0.4, -0.4, n), np.full(n, 0.2)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, qd, qdd))
+    expected = sd.rnea(robot.model, q, qd, qdd, base=sd.base_from_imu(
+        robot.model, 'base_link', f, w))
+    np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
+    fixed = sd.rnea(robot.model, q, qd, qdd)
+    assert np.abs(out.answer.tau - fixed).max() > 0.1       # the base's motion matters
+    f2 = np.array([-2.0, 0.5, 11.0])                        # the next sample is used
+    answering.base_input(cfg, 'base/imu', imu(1.01, f2, w))
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.01, q, qd, qdd))
+    np.testing.assert_allclose(out.answer.tau, sd.rnea(robot.model, q, qd, qdd, base=(
+        sd.base_from_imu(robot.model, 'base_link', f2, w))), rtol=1e-9, atol=1e-9)
+
+
+def test_moving_base_without_or_with_a_stale_imu_publishes_nothing(demo_text):
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link', 'base_input.timeout': 0.2})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    msg = joint_state(robot.joints, 1.0, np.zeros(n), np.zeros(n), np.zeros(n))
+    assert answering.joint_state(cfg, msg).answer is None
+    assert answering.totals.rejected['base_missing'] == 1
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 9.81], [0, 0, 0]))
+    assert answering.joint_state(cfg, msg).answer is not None
+    answering.base_inputs.imu.receipt_ns -= int(0.3e9)        # 0.3 s later
+    assert answering.joint_state(cfg, msg).answer is None
+    assert answering.totals.rejected['base_stale'] == 1
+    level, text, _ = base_status(cfg.params, robot, answering.base_inputs,
+                                 answering.base_inputs.period(),
+                                 answering.base_inputs.imu.receipt_ns + int(0.3e9))
+    assert level == 'ERROR' and 'base/imu stale' in text and 'not publishing' in text
+
+
+def test_moving_base_on_pose_and_twist_is_rnea_with_base_from_odometry(demo_text):
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.source': 'twist'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    quat = np.array([0.1, -0.2, 0.05, 0.97])
+    quat /= np.linalg.norm(quat)
+    v0, v1 = np.array([0.0, 0.0, 0.5, 1.0, 0.0, 0.0]), np.array([0.0, 0.0, 0.52, 0.98, 0.0, 0.0])
+    answering.base_input(cfg, 'base/pose', pose(1.0, [1, 2, 0], quat))
+    answering.base_input(cfg, 'base/twist', twist(1.0, v0))
+    q, qd, qdd = np.full(n, 0.3), np.full(n, -0.2), np.full(n, 0.1)
+    msg = joint_state(robot.joints, 1.0, q, qd, qdd)
+    assert answering.joint_state(cfg, msg).answer is None   # one twist: no rate yet
+    answering.base_input(cfg, 'base/twist', twist(1.01, v1))
+    out = answering.joint_state(cfg, msg)
+    rate = (v1 - v0) / 0.01
+    expected = sd.rnea(robot.model, q, qd, qdd, base=sd.base_from_odometry(
+        robot.model, v1, rate, quat))
+    np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
+
+
+def test_bad_base_inputs_are_refused_with_their_reason(demo_text):
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link', 'base_input.source': 'twist'})
+    answering = Answering(Log())
+    inputs = answering.base_inputs
+    answering.base_input(cfg, 'base/pose', pose(1.0, [0, 0, 0], [0, 0, 0, 0.5]))
+    answering.base_input(cfg, 'base/pose', pose(1.0, [np.nan, 0, 0], [0, 0, 0, 1]))
+    answering.base_input(cfg, 'base/pose', pose(1.0, [2e5, 0, 0], [0, 0, 0, 1]))
+    answering.base_input(cfg, 'base/twist', twist(1.0, [0, 0, 0, 0, 0, 0], 'link3'))
+    answering.base_input(cfg, 'base/twist', twist(0.0, [0, 0, 0, 0, 0, 0]))
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 9.8], [0, 0, 0], 'link2'))
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, np.inf], [0, 0, 0]))
+    assert inputs.pose is None and inputs.twist is None and inputs.imu is None
+    assert dict(inputs.rejected) == {
+        'base/pose not_unit': 1, 'base/pose non_finite': 1, 'base/pose out_of_bounds': 1,
+        'base/twist wrong_frame': 1, 'base/twist unstamped': 1, 'base/imu wrong_frame': 1,
+        'base/imu non_finite': 1}
+    said = ' '.join(text for _, text in answering.log.said)
+    assert "'x'" in said and 'not a unit quaternion' in said and "'link3'" in said
+    answering.base_input(cfg, 'base/twist', twist(2.0, [0, 0, 0, 0, 0, 0]))
+    answering.base_input(cfg, 'base/twist', twist(1.5, [0, 0, 0, 0, 0, 0]))
+    assert inputs.rejected['base/twist stamp_not_increasing'] == 1
+
+
+def test_base_parameters_are_checked_against_the_model(demo_text, solo_path):
+    with pytest.raises(ConfigError, match='base_input.imu_link.*link2.*moves with joint'):
+        configured(robot_description=demo_text, base='moving',
+                   **{'base_input.imu_link': 'link2'})
+    with pytest.raises(ConfigError, match='base_input.imu_link.*needs the link'):
+        configured(robot_description=demo_text, base='moving')
+    with pytest.raises(ConfigError, match="contacts.links: 'LF_FOOT' is not a link"):
+        configured(robot_description_file=solo_path, base='floating',
+                   **{'contacts.links': ['LF_FOOT']})
+    with pytest.raises(ConfigError, match="wrench_estimate.link: not supported with base"):
+        configured(robot_description_file=solo_path, base='floating',
+                   **{'wrench_estimate.link': 'FL_FOOT'})
+    with pytest.raises(ConfigError, match='armature: expected 12 values for the actuated'):
+        configured(robot_description_file=solo_path, base='floating', armature=[0.1] * 13)
+    with pytest.raises(ConfigError, match='base'):
+        configured(robot_description=demo_text, base='sideways')
+    assert configured(robot_description=demo_text).params.base == 'fixed'
+
+
+# -------------------------------------------------------------------------------------------
+# floating base
+
+def floating(solo_path, **changes):
+    return configured(robot_description_file=solo_path, base='floating',
+                      **{'contacts.links': list(FEET), 'base_input.acceleration': 'zero',
+                         **changes})
+
+
+def feed_base(cfg, answering, quat=(0.02, -0.03, 0.01, 1.0)):
+    quat = np.array(quat) / np.linalg.norm(quat)
+    answering.base_input(cfg, 'base/pose', pose(1.0, [0.1, 0.2, 0.25], quat))
+    answering.base_input(cfg, 'base/twist', twist(1.0, np.zeros(6), 'base_link'))
+    answering.base_input(cfg, 'base/twist', twist(1.0, np.zeros(6), 'FL_FOOT'))   # refused
+    assert answering.base_inputs.rejected['base/twist wrong_frame'] == 1
+    return np.r_[0.1, 0.2, 0.25, quat]
+
+
+def world_forces(model, q_full, contacts):
+    rotations = sd.contacts.link_orientations(model, q_full, [link for link, _ in contacts])
+    return {link: rotations[link] @ w[3:] for link, w in contacts}
+
+
+def test_floating_solo12_standing_is_contact_inverse_dynamics(solo_path):
+    cfg = floating(solo_path)
+    robot = cfg.robot
+    assert robot.joints == robot.model.joint_names[1:] and 'root_joint' not in robot.joints
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q = standing(robot.joints)
+    zero = np.zeros(12)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, zero, zero))
+    expected = sd.contact_inverse_dynamics(
+        robot.model, np.r_[base_q, q], np.zeros(18), np.zeros(18),
+        [sd.Contact(f) for f in FEET])
+    assert len(out.answer.tau) == 12
+    np.testing.assert_allclose(out.answer.tau, expected.tau, rtol=1e-9, atol=1e-9)
+    forces = world_forces(robot.model, np.r_[base_q, q], out.answer.contacts)
+    assert set(forces) == set(FEET)
+    for link in FEET:
+        np.testing.assert_allclose(forces[link], expected.forces[link], atol=1e-9)
+    weight = robot.model.inertia[:, 3, 3].sum() * 9.81
+    np.testing.assert_allclose(sum(forces.values()), [0.0, 0.0, weight], atol=1e-9)
+    level, _, values = base_status(cfg.params, robot, answering.base_inputs,
+                                   answering.base_inputs.period(), answering.base_inputs
+                                   .pose.receipt_ns)
+    assert level == 'OK' and dict(values)['contact solutions'] == '1'
+
+
+def test_floating_contacts_follow_contact_states_and_violations_are_reported(solo_path):
+    cfg = floating(solo_path, **{'contacts.mu': 0.01})
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering, quat=(0.2, 0.0, 0.0, 1.0))    # tilted: it would slip
+    q = standing(robot.joints)
+    zero = np.zeros(12)
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 1, 0, 1]))
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, zero, zero))
+    expected = sd.contact_inverse_dynamics(
+        robot.model, np.r_[base_q, q], np.zeros(18), np.zeros(18),
+        [sd.Contact(f, mu=0.01) for f in ('FL_FOOT', 'FR_FOOT', 'HR_FOOT')])
+    np.testing.assert_allclose(out.answer.tau, expected.tau, rtol=1e-9, atol=1e-9)
+    assert [link for link, _ in out.answer.contacts] == ['FL_FOOT', 'FR_FOOT', 'HR_FOOT']
+    assert expected.violations
+    level, text, _ = base_status(cfg.params, robot, answering.base_inputs,
+                                 answering.base_inputs.period(),
+                                 answering.base_inputs.pose.receipt_ns)
+    assert level == 'WARN' and 'friction' in text
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 1]))
+    assert answering.base_inputs.rejected['contact_states length_mismatch'] == 1
+
+
+def test_floating_feedback_modes(solo_path):
+    kp, kd = 30.0, 2.0
+    cfg = floating(solo_path, control_mode='computed_torque', kp=[kp], kd=[kd])
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q_d = standing(robot.joints)
+    q, qd = q_d + 0.05, np.full(12, 0.1)
+    zero = np.zeros(12)
+    answering.joint_state(cfg, joint_state(robot.joints, 1.0, q_d, zero, zero))
+    out = answering.measured(cfg, joint_state(robot.joints, 1.01, q, qd, ()))
+    u = kp * (q_d - q) + kd * (zero - qd)
+    feet = [sd.Contact(f) for f in FEET]
+    expected = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.r_[np.zeros(6), qd],
+                                           np.r_[np.zeros(6), u], feet)
+    np.testing.assert_allclose(out.answer.tau, expected.tau, rtol=1e-9, atol=1e-9)
+
+    cfg = floating(solo_path, control_mode='pd_feedforward', kp=[kp], kd=[kd])
+    answering = Answering(Log())
+    feed_base(cfg, answering)
+    answering.joint_state(cfg, joint_state(robot.joints, 1.0, q_d, zero, zero))
+    out = answering.measured(cfg, joint_state(robot.joints, 1.01, q, qd, ()))
+    at_desired = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q_d], np.zeros(18),
+                                             np.zeros(18), feet)
+    np.testing.assert_allclose(out.answer.tau, at_desired.tau + u, rtol=1e-9, atol=1e-9)
+
+
+def test_floating_without_base_pose_publishes_nothing(solo_path):
+    cfg = floating(solo_path)
+    robot = cfg.robot
+    answering = Answering(Log())
+    zero = np.zeros(12)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, standing(robot.joints),
+                                                 zero, zero))
+    assert out.answer is None and answering.totals.rejected['base_missing'] == 1
+    assert any('no good base/pose yet' in text for _, text in answering.log.said)
+
+
+def test_the_observer_is_off_on_a_moving_base_and_says_so(demo_text):
+    from spatial_dynamics.ros.diagnostics import observer_status
+    from spatial_dynamics.ros.observer import EstimateWindow
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    msg = joint_state(robot.joints, 1.0, np.zeros(n), np.zeros(n), np.ones(n))
+    answering.measured(cfg, msg)
+    out = answering.observe(cfg, msg)        # efforts of every joint: fixed, it would estimate
+    assert out.estimate is None and answering.observer is None
+    level, text, _ = observer_status(robot, cfg.params.observer_gain, None, EstimateWindow(),
+                                     cfg.params.base)
+    assert level == 'OK' and text == 'observer off (base moving: it needs a fixed base)'
+
+
+def test_armature_on_a_floating_base_and_terms_on_a_moving_one(solo_path, demo_text):
+    armature = np.linspace(0.01, 0.12, 12)
+    cfg = floating(solo_path, armature=list(armature))
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q, qdd = standing(robot.joints), np.linspace(-1.0, 1.0, 12)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, np.zeros(12), qdd))
+    expected = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                           np.r_[np.zeros(6), qdd],
+                                           [sd.Contact(f) for f in FEET])
+    np.testing.assert_allclose(out.answer.tau, expected.tau + armature * qdd, rtol=1e-9,
+                               atol=1e-9)
+    assert out.answer.terms is None           # no term split on a floating base
+
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/imu', imu(1.0, [1.0, 0.0, 9.0], [0.0, 0.4, 0.0]))
+    q, qd, qdd = np.full(n, 0.2), np.full(n, 0.3), np.full(n, -0.4)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, qd, qdd), True)
+    base = sd.base_from_imu(robot.model, 'base_link', [1.0, 0.0, 9.0], [0.0, 0.4, 0.0])
+    terms = out.answer.terms
+    np.testing.assert_allclose(terms['gravity'], sd.gravity_torque(robot.model, q, base=base),
+                               atol=1e-9)
+    np.testing.assert_allclose(sum(terms.values()), sd.rnea(robot.model, q, qd, qdd, base=base),
+                               rtol=1e-9, atol=1e-9)
+
+
+def test_contact_states_for_other_contacts_links_are_not_applied(solo_path):
+    cfg = floating(solo_path)
+    robot = cfg.robot
+    answering = Answering(Log())
+    feed_base(cfg, answering)
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 0, 1, 1]))
+    three = floating(solo_path, **{'contacts.links': list(FEET[:3])})   # changed live
+    zero = np.zeros(12)
+    out = answering.joint_state(three, joint_state(robot.joints, 1.0, standing(robot.joints),
+                                                   zero, zero))
+    assert out.answer is None and answering.totals.rejected['contacts_stale'] == 1
+
+
+def wrench_msg(link, wrench):
+    from geometry_msgs.msg import WrenchStamped
+    msg = WrenchStamped(header=header(1.0, link))
+    t, f = msg.wrench.torque, msg.wrench.force
+    t.x, t.y, t.z, f.x, f.y, f.z = map(float, wrench)
+    return msg
+
+
+def test_measured_contact_wrenches_give_the_efforts_and_their_residual(solo_path):
+    cfg = floating(solo_path, **{'contacts.measured': True})
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q, zero = standing(robot.joints), np.zeros(12)
+    msg = joint_state(robot.joints, 1.0, q, zero, zero)
+    solved = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                         np.zeros(18), [sd.Contact(f) for f in FEET])
+    R = sd.contacts.link_orientations(robot.model, np.r_[base_q, q], FEET)
+    for link in FEET[:3]:
+        answering.base_input(cfg, 'measured_contact_wrenches',
+                             wrench_msg(link, np.r_[np.zeros(3), R[link].T @ solved.forces[link]]))
+    assert answering.joint_state(cfg, msg).answer is None       # HR_FOOT not measured yet
+    assert answering.totals.rejected['contacts_missing'] == 1
+    answering.base_input(cfg, 'measured_contact_wrenches', wrench_msg('base_link', np.zeros(6)))
+    assert answering.base_inputs.rejected['measured_contact_wrenches unknown_link'] == 1
+    half = 0.5 * solved.forces['HR_FOOT']     # the sensor reads half: the base rows miss it
+    answering.base_input(cfg, 'measured_contact_wrenches',
+                         wrench_msg('HR_FOOT', np.r_[np.zeros(3), R['HR_FOOT'].T @ half]))
+    out = answering.joint_state(cfg, msg)
+    measured = dict(solved.forces, HR_FOOT=half)
+    expected = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                           np.zeros(18), [sd.Contact(f) for f in FEET],
+                                           measured=measured)
+    np.testing.assert_allclose(out.answer.tau, expected.tau, rtol=1e-9, atol=1e-9)
+    assert np.abs(expected.base_residual).max() > 1.0
+    level, text, _ = base_status(cfg.params, robot, answering.base_inputs,
+                                 answering.base_inputs.period(),
+                                 answering.base_inputs.pose.receipt_ns)
+    assert level == 'WARN' and 'base residual' in text
+
+
+def test_external_wrenches_are_refused_on_a_floating_base(solo_path):
+    cfg = floating(solo_path)
+    answering = Answering(Log())
+    answering.wrench(cfg, wrench_msg('base_link', [0, 0, 0, 10.0, 0, 0]))
+    assert answering.wrenches == {}
+    assert answering.totals.wrenches_rejected['floating_base'] == 1
+    assert any('not applied on a floating base' in text for _, text in answering.log.said)
