@@ -37,16 +37,15 @@ def imu_msg(k, f, w):
     return msg
 
 
-def base_msgs(k, position, quat):
-    from geometry_msgs.msg import PoseStamped, TwistStamped
-    pose = PoseStamped()
-    pose.header.stamp, pose.header.frame_id = stamp(k), 'odom'
-    p, o = pose.pose.position, pose.pose.orientation
+def odometry_msg(k, position, quat):
+    """Return a state estimator's ``nav_msgs/Odometry`` of a base at rest at ``position``."""
+    from nav_msgs.msg import Odometry
+    msg = Odometry(child_frame_id='base_link')
+    msg.header.stamp, msg.header.frame_id = stamp(k), 'odom'
+    p, o = msg.pose.pose.position, msg.pose.pose.orientation
     p.x, p.y, p.z = map(float, position)
     o.x, o.y, o.z, o.w = map(float, quat)
-    twist = TwistStamped()
-    twist.header.stamp = stamp(k)
-    return pose, twist
+    return msg
 
 
 def answered(driver, io, publish, timeout=TIMEOUT):
@@ -117,9 +116,9 @@ def test_floating_solo12_standing_over_dds(install, driver, tmp_path):
                                  '-p', f'contacts.links:=[{",".join(FEET)}]',
                                  '-p', 'base_input.acceleration:=zero'], str(tmp_path))
     io = Io(driver, )
-    from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
-    pose_pub = driver.node.create_publisher(PoseStamped, 'base/pose', 10)
-    twist_pub = driver.node.create_publisher(TwistStamped, 'base/twist', 10)
+    from geometry_msgs.msg import WrenchStamped
+    from nav_msgs.msg import Odometry
+    odometry_pub = driver.node.create_publisher(Odometry, 'base/odometry', 10)
     wrenches = []
     wrench_sub = driver.node.create_subscription(WrenchStamped, 'contact_wrenches',
                                                  wrenches.append, 100)
@@ -132,14 +131,12 @@ def test_floating_solo12_standing_over_dds(install, driver, tmp_path):
     zero = np.zeros(12)
     try:
         io.wait_connected()
-        driver.spin_until(lambda: (pose_pub.get_subscription_count() >= 1
-                                   and twist_pub.get_subscription_count() >= 1
+        driver.spin_until(lambda: (odometry_pub.get_subscription_count() >= 1
                                    and wrench_sub.get_publisher_count() >= 1),
                           what='the base topics')
 
         def publish(k):
-            for pub, msg in zip((pose_pub, twist_pub), base_msgs(k, position, quat)):
-                pub.publish(msg)
+            odometry_pub.publish(odometry_msg(k, position, quat))
             driver.spin_for(0.005)
             io.joint_states.publish(joint_state(joints, q, zero, zero, k))
         answered(driver, io, publish)
@@ -163,8 +160,7 @@ def test_floating_solo12_standing_over_dds(install, driver, tmp_path):
         status = base_status(io)
         assert 'contact solutions' in values(status)
     finally:
-        for pub in (pose_pub, twist_pub):
-            driver.node.destroy_publisher(pub)
+        driver.node.destroy_publisher(odometry_pub)
         driver.node.destroy_subscription(wrench_sub)
         io.close()
         assert proc.stop() == 0, proc.log()

@@ -13,6 +13,7 @@ import sys
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped, TwistStamped
+from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
 from sensor_msgs.msg import Imu, JointState
@@ -163,6 +164,48 @@ def test_moving_base_on_pose_and_twist_is_rnea_with_base_from_odometry(demo_text
     expected = sd.rnea(robot.model, q, qd, qdd, base=sd.base_from_odometry(
         robot.model, v1, rate, quat))
     np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
+
+
+def odometry(t, p, quat, v, child='') -> Odometry:
+    msg = Odometry(header=header(t, 'odom'), child_frame_id=child)
+    msg.pose.pose = pose(t, p, quat).pose
+    msg.twist.twist = twist(t, v).twist
+    return msg
+
+
+def test_moving_base_on_odometry_is_its_pose_and_twist(demo_text):
+    """``base/odometry`` (nav_msgs/Odometry) gives the answer its pose and twist would."""
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.source': 'twist'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    quat = np.array([0.1, -0.2, 0.05, 0.97]) / np.linalg.norm([0.1, -0.2, 0.05, 0.97])
+    v0, v1 = np.array([0.0, 0.1, 0.5, 1.0, 0.0, 0.2]), np.array([0.0, 0.1, 0.52, 0.98, 0.0, 0.2])
+    q, qd, qdd = np.full(n, 0.3), np.full(n, -0.2), np.full(n, 0.1)
+    msg = joint_state(robot.joints, 1.0, q, qd, qdd)
+    answers = []
+    for feed in ('odometry', 'pose and twist'):
+        answering = Answering(Log())
+        for t, v in ((1.0, v0), (1.01, v1)):
+            if feed == 'odometry':
+                answering.base_input(cfg, 'base/odometry',
+                                     odometry(t, [1, 2, 0], quat, v, 'base_link'))
+            else:
+                answering.base_input(cfg, 'base/pose', pose(t, [1, 2, 0], quat))
+                answering.base_input(cfg, 'base/twist', twist(t, v, 'base_link'))
+        answers.append(answering.joint_state(cfg, msg).answer.tau)
+    expected = sd.rnea(robot.model, q, qd, qdd, base=sd.base_from_odometry(
+        robot.model, v1, (v1 - v0) / 0.01, quat))
+    np.testing.assert_allclose(answers[0], expected, rtol=1e-9, atol=1e-9)
+    np.testing.assert_array_equal(answers[0], answers[1])
+    # a bad orientation refuses the whole message: the twist is not held without its pose
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/odometry', odometry(1.0, [0, 0, 0], [0, 0, 0, 0.5], v0))
+    answering.base_input(cfg, 'base/odometry', odometry(1.0, [0, 0, 0], quat, v0, 'link3'))
+    inputs = answering.base_inputs
+    assert inputs.pose is None and inputs.twist is None
+    assert dict(inputs.rejected) == {'base/odometry not_unit': 1,
+                                     'base/odometry wrong_frame': 1}
 
 
 def test_bad_base_inputs_are_refused_with_their_reason(demo_text):

@@ -30,6 +30,8 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
   any) of the frame of ``base/twist`` (the root link; moving: or a link fixed to it), as
   ``nav_msgs/Odometry``'s pose of its ``child_frame_id``; a unit quaternion (x y z w) within
   :data:`QUATERNION_TOLERANCE`.
+* ``base/odometry`` (``nav_msgs/Odometry``): its pose and the twist of its
+  ``child_frame_id``, held as ``base/pose`` and ``base/twist`` (either input, or both).
 * ``base/twist`` (``geometry_msgs/TwistStamped``): the twist of the root link (or, moving, of a
   link fixed to it) in its own axes, ``header.frame_id`` that link or empty: what
   ``nav_msgs/Odometry`` carries in its child frame. Its rate, the base's spatial
@@ -105,15 +107,18 @@ def unit_quaternion(what: str, o) -> np.ndarray:
     return quat / norm
 
 
-def twist_array(msg) -> np.ndarray:
-    """``[ω; v]`` (6,) of a ``geometry_msgs/TwistStamped`` (rad/s, m/s), bounded."""
-    w, v = msg.twist.angular, msg.twist.linear
+def twist_array(twist) -> np.ndarray:
+    """``[ω; v]`` (6,) of a ``geometry_msgs/Twist`` (rad/s, m/s), bounded."""
+    w, v = twist.angular, twist.linear
     return _vector('twist', (w.x, w.y, w.z, v.x, v.y, v.z), MAX_VELOCITY, 'rad/s or m/s',
                    [f'angular.{a}' for a in _XYZ] + [f'linear.{a}' for a in _XYZ])
 
 
 def pose_arrays(msg) -> Tuple[np.ndarray, np.ndarray]:
-    """``(position (3,), quaternion (4,) x y z w)`` of a ``geometry_msgs/PoseStamped``."""
+    """``(position (3,), quaternion (4,) x y z w)`` of what has a ``pose``.
+
+    A ``geometry_msgs/PoseStamped``, or ``nav_msgs/Odometry``'s ``PoseWithCovariance``.
+    """
     p = msg.pose.position
     position = _vector('pose.position', (p.x, p.y, p.z), MAX_POSITION, 'm', _XYZ)
     return position, unit_quaternion('pose.orientation', msg.pose.orientation)
@@ -219,17 +224,26 @@ class BaseInputs:
     def _take_base_pose(self, config, msg, now_ns: int) -> None:
         self.pose = Held(pose_arrays(msg), _stamp_ns(msg.header), now_ns)
 
+    def _take_base_odometry(self, config, msg, now_ns: int) -> None:
+        """``nav_msgs/Odometry``: its pose and its ``child_frame_id``'s twist, both or neither."""
+        pose = pose_arrays(msg.pose)
+        self._hold_twist(config, msg.twist.twist, msg.child_frame_id, _stamp_ns(msg.header),
+                         now_ns)
+        self.pose = Held(pose, _stamp_ns(msg.header), now_ns)
+
     def _take_base_twist(self, config, msg, now_ns: int) -> None:
+        self._hold_twist(config, msg.twist, msg.header.frame_id, _stamp_ns(msg.header), now_ns)
+
+    def _hold_twist(self, config, twist, frame: str, stamp: int, now_ns: int) -> None:
+        """Check and hold the base's ``twist`` (a ``geometry_msgs/Twist``) in ``frame``."""
         robot, params = config.robot, config.params
-        frame = msg.header.frame_id
         root = robot.base.body_names[1 if robot.base.floating else 0]
         if frame and frame != root and (robot.base.floating or frame not in robot.base.frames
                                         or robot.base.frames[frame].body != 0):
             raise InputError('wrong_frame', f'header.frame_id {frame!r}: the twist must be '
                              f"the base's, in its frame {root!r}" + (
                                  '' if robot.base.floating else ' or a link fixed to it'))
-        v = twist_array(msg)
-        stamp = _stamp_ns(msg.header)
+        v = twist_array(twist)
         before = self.twist
         rate = None
         if params.base_input_acceleration == 'difference':

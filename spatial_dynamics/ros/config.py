@@ -132,8 +132,9 @@ PARAMETER_FILE_HEADER = (
     '                             state it comes from; one per measured message carrying\n'
     '                             velocity and effort of every model joint    reliable\n'
     '  in   base/imu              sensor_msgs/Imu (base moving, base_input.source imu)\n'
-    '  in   base/pose, base/twist geometry_msgs/PoseStamped, TwistStamped (base moving with\n'
+    '  in   base/odometry         nav_msgs/Odometry: pose, child frame twist (base moving with\n'
     '                             base_input.source twist, or floating); best effort, last 1\n'
+    '  in   base/pose, base/twist geometry_msgs/PoseStamped, TwistStamped: the same, apart\n'
     '  in   contact_states        std_msgs/UInt8MultiArray, a flag per contacts.links (floating)\n'
     '  out  contact_wrenches      geometry_msgs/WrenchStamped, one per contact, in its link\n'
     '  out  /diagnostics          diagnostic_msgs/DiagnosticArray, ~1 Hz\n'
@@ -295,19 +296,19 @@ PARAMETERS = Table(NODE_NAME, [
     Param('base', 'string', 'fixed', (
         '"fixed": the root link is fixed to the world (an arm on a table). "moving": the '
         'fixed-base model on a moving base (mobile manipulator, ship), its motion from '
-        'base/imu or base/pose + base/twist (base_input.source); efforts = rnea(..., '
-        'base=motion). '
+        'base/imu or base/odometry (or base/pose + base/twist) (base_input.source); '
+        'efforts = rnea(..., base=motion). '
         '"floating": the model with a free-flyer root (legged robots), its base state from '
-        'base/pose + base/twist; the joints\' efforts and the contact wrenches of '
-        'contacts.links (published on contact_wrenches) split M qdd + h (contact inverse '
-        'dynamics); the base never gets an effort. A missing or stale base input means no '
+        'base/odometry (or base/pose + base/twist); the joints\' efforts and the contact '
+        'wrenches of contacts.links (published on contact_wrenches) split M qdd + h (contact '
+        'inverse dynamics); the base never gets an effort. A missing or stale base input means no '
         'output, with the reason in /diagnostics. Read-only.'),
         choices=BASES, read_only=True),
     Param('base_input.source', 'string', 'imu', (
         'A moving base\'s motion: "imu" (base/imu, sensor_msgs/Imu on base_input.imu_link: its '
         'specific force and angular velocity, angular acceleration zero) or "twist" '
-        '(base/pose for the orientation of gravity, base/twist for the twist; its rate per '
-        'base_input.acceleration). Live.'), choices=BASE_SOURCES),
+        '(base/odometry, or base/pose for the orientation of gravity and base/twist for the '
+        'twist; its rate per base_input.acceleration). Live.'), choices=BASE_SOURCES),
     Param('base_input.imu_link', 'string', '', (
         'The link the IMU of base/imu is mounted on (its frame is the IMU frame, placed by '
         'the URDF; header.frame_id must be this link or empty): the base link or a link '

@@ -40,6 +40,7 @@ import warnings
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
+from nav_msgs.msg import Odometry
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -139,8 +140,8 @@ class InverseDynamicsNode(Node):
                   group=group)
         if self.config.params.base != 'fixed':   # read-only: decided once, at start
             self.contacts_pub = advertise(self, WrenchStamped, 'contact_wrenches')
-            for msg_type, topic in ((Imu, 'base/imu'), (PoseStamped, 'base/pose'),
-                                    (TwistStamped, 'base/twist'),
+            for msg_type, topic in ((Imu, 'base/imu'), (Odometry, 'base/odometry'),
+                                    (PoseStamped, 'base/pose'), (TwistStamped, 'base/twist'),
                                     (UInt8MultiArray, 'contact_states')):
                 subscribe(self, msg_type, topic, self._base_callback(topic), group=group)
             subscribe(self, WrenchStamped, 'measured_contact_wrenches',
