@@ -56,7 +56,7 @@ class Cache:
 
 
 class Progress:
-    """``fleet: 12/36 bags, 0.40 h of data, ETA 0:42`` on a terminal; nothing otherwise."""
+    """``fleet: 12/36 tasks, 0.40 h of data, ETA 0:42`` on a terminal; nothing otherwise."""
 
     def __init__(self, total: int, stream=None) -> None:
         """Count to ``total``."""
@@ -66,14 +66,14 @@ class Progress:
         self.start = time.monotonic()
 
     def __call__(self, result: Dict) -> None:
-        """One more bag done."""
+        """One more task (a bag or a chunk of one) done."""
         self.done += 1
         self.hours += result.get('seconds', 0.0) / 3600.0
         if not self.on:
             return
         spent = time.monotonic() - self.start
         left = int(spent / self.done * (self.total - self.done))
-        self.stream.write(f'\rfleet: {self.done}/{self.total} bags, {self.hours:.2f} h of '
+        self.stream.write(f'\rfleet: {self.done}/{self.total} tasks, {self.hours:.2f} h of '
                           f'data, ETA {left // 60}:{left % 60:02d} ')
         self.stream.flush()
 
@@ -99,7 +99,8 @@ def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
     ``distributed.Client``) or, without one, here one after the other. A task the engine
     gives up on (a worker lost more often than allowed) is a failed bag with the reason.
     """
-    keys = [content_key(t) for t in tasks]
+    digests: Dict[str, bytes] = {}
+    keys = [content_key(t, digests) for t in tasks]
     results: List[Optional[Dict]] = [cache.get(k) for k in keys]
     todo = [i for i, r in enumerate(results) if r is None]
     for i, r in enumerate(results):
@@ -123,6 +124,8 @@ def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
             results[i] = {'robot': tasks[i].robot, 'bag': tasks[i].bag, 'ok': False,
                           'reason': f'the engine gave up on it: {type(err).__name__}: '
                                     + ' '.join(str(err).split())}
+            if tasks[i].chunked:
+                results[i]['chunk'] = [tasks[i].start, tasks[i].stop]
         cache.put(keys[i], results[i])
         if progress:
             progress(results[i])
