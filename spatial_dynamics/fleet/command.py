@@ -36,7 +36,7 @@ from ..files import check_output, write_atomic
 from ..replay.arguments import one_line
 from . import drift as drift_of
 from .chunks import CHUNK, merge, MIN_CHUNK, split
-from .engine import Cache, local_cluster, Progress, run_tasks
+from .engine import Cache, local_cluster, Progress, run_tasks, warm
 from .manifest import ManifestError, read_manifest, scan_folder
 from .sums import Sums, solve, total
 from ..replay.identify import PARAMETERS
@@ -202,8 +202,10 @@ def _on_cluster(args, tasks, cache, progress) -> List[Dict]:
     from distributed import Client
     if args.scheduler:
         with Client(args.scheduler, timeout=30) as client:
+            warm(client)
             return run_tasks(tasks, cache, client, progress)
     with local_cluster(args.workers) as cluster, Client(cluster) as client:
+        warm(client)
         return run_tasks(tasks, cache, client, progress)
 
 

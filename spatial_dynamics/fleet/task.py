@@ -241,7 +241,20 @@ def process(task: Task) -> Dict:
 
 
 def peak_rss_mb() -> float:
-    """Return this process's peak resident memory so far, MB (``getrusage``)."""
+    """Return this process's peak resident memory so far, MB.
+
+    Linux's ``VmHWM`` (``/proc/self/status``): the high-water mark of this process's own
+    memory. ``getrusage``'s ``ru_maxrss`` is not: a process started by fork and exec keeps
+    its parent's RSS at the fork as its floor (a worker of a large command would report the
+    command's). Elsewhere ``ru_maxrss`` (kB on Linux and BSD).
+    """
+    try:
+        with open('/proc/self/status', encoding='ascii') as f:
+            for line in f:
+                if line.startswith('VmHWM:'):
+                    return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
     import resource
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
