@@ -4,6 +4,8 @@
 
 import os
 
+import pytest
+
 from spatial_dynamics.fleet import engine
 from spatial_dynamics.fleet.task import Task
 
@@ -39,3 +41,16 @@ def test_big_bags_and_chunks_go_one_by_one_and_a_chunk_weighs_its_share(tmp_path
 def test_a_small_fleet_still_gives_every_worker_several_batches(tmp_path):
     tasks = bags_of(tmp_path, [1000] * 36)
     assert len(engine.batches(tasks, list(range(36)), workers=2)) == 18
+
+
+def test_the_local_cluster_workers_run_no_profiler_and_keep_mallocs_own_thresholds():
+    # nobody reads the profile (no dashboard) and it samples the running task every 10 ms;
+    # MALLOC_TRIM_THRESHOLD_ (Dask's default) makes every large numpy array an mmap + munmap
+    pytest.importorskip('distributed')
+    if 'MALLOC_TRIM_THRESHOLD_' in os.environ:
+        pytest.skip('MALLOC_TRIM_THRESHOLD_ is set in the environment the workers inherit')
+    from distributed import Client
+    with engine.local_cluster(1) as cluster, Client(cluster) as client:
+        got = client.run(lambda: (__import__('dask').config.get(
+            'distributed.worker.profile.enabled'), 'MALLOC_TRIM_THRESHOLD_' in os.environ))
+    assert list(got.values()) == [(False, False)]
