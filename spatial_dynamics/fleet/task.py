@@ -20,9 +20,12 @@ from dataclasses import dataclass, field
 import hashlib
 import json
 import os
-from typing import Dict, Optional
+from typing import Dict, Optional, TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..replay.bags import JointStates
 
 #: Changes when what a task computes changes (the cache's results are then stale).
 VERSION = 'fleet-1'
@@ -179,7 +182,7 @@ def _prepare_chunk(task: Task, model, margin: Optional[int]) -> Optional[Dict]:
     return dict(d, owned=owned, messages=messages)
 
 
-def _joined(parts) -> 'object':
+def _joined(parts) -> 'JointStates':
     """Return the JointStates of ``parts`` one after the other (bag order)."""
     from ..replay.bags import JointStates
     if len(parts) == 1:
