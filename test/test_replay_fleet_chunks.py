@@ -101,10 +101,16 @@ def test_the_command_cuts_long_bags_and_reports_the_same_numbers(robot, tmp_path
     assert list(outs[1]['samples']) == list(outs[0]['samples'])
 
 
-def test_a_too_short_chunk_is_refused(robot, tmp_path, capsys):
-    with pytest.raises(SystemExit):
-        main([str(tmp_path), '--chunk', '2'])
-    assert '--chunk: 0 (one task per bag) or a number of seconds >= 10' in capsys.readouterr().err
+@pytest.mark.parametrize('prog', ['fleet', 'replay'])
+@pytest.mark.parametrize('value', ['2', 'inf', 'nan', '-1', 'ten'])
+def test_a_chunk_that_is_not_a_length_is_refused(tmp_path, capsys, prog, value):
+    from spatial_dynamics.replay.__main__ import main as replay
+    argv = [str(tmp_path), '--chunk', value]
+    with pytest.raises(SystemExit) as exit:
+        main(argv) if prog == 'fleet' else replay(['fleet'] + argv)
+    assert exit.value.code == 2
+    assert (f"--chunk: '{value}': 0 (one task per bag) or a number of seconds >= 10"
+            in capsys.readouterr().err)
 
 
 def test_the_engine_runs_chunks_like_bags(robot):

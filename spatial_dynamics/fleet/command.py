@@ -61,12 +61,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                        help='no cluster: every bag in this process, one after the other')
     where.add_argument('--scheduler', metavar='ADDRESS',
                        help='an existing Dask scheduler, e.g. tcp://host:8786')
-    p.add_argument('--chunk', type=float, default=CHUNK, metavar='SECONDS',
+    p.add_argument('--chunk', type=chunk_seconds, default=CHUNK, metavar='SECONDS',
                    help='cut a bag longer than this into tasks of this much bag time, their '
                    'sums added (default %(default)g; 0: one task per bag)')
     p.add_argument('--baseline-days', type=float, default=5.0,
                    help="each robot-joint's baseline: its first days (default %(default)g)")
     p.add_argument('--no-plots', action='store_true', help='write no PNG files')
+
+
+def chunk_seconds(text: str) -> float:
+    """``--chunk``: 0 (one task per bag) or a finite number of seconds >= MIN_CHUNK."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float('nan')
+    if not (value == 0 or MIN_CHUNK <= value < float('inf')):
+        raise argparse.ArgumentTypeError(
+            f'{text!r}: 0 (one task per bag) or a number of seconds >= {MIN_CHUNK:g}')
+    return value
 
 
 def parser() -> argparse.ArgumentParser:
@@ -248,8 +260,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = p.parse_args(argv)
     if args.workers is not None and args.workers < 1:
         p.error('--workers: at least 1')
-    if not (args.chunk == 0 or MIN_CHUNK <= args.chunk < float('inf')):
-        p.error(f'--chunk: 0 (one task per bag) or a number of seconds >= {MIN_CHUNK:g}')
     if not args.baseline_days > 0:
         p.error('--baseline-days: a number > 0')
     return run(args)
