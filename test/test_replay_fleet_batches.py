@@ -43,12 +43,13 @@ def test_a_small_fleet_still_gives_every_worker_several_batches(tmp_path):
     assert len(engine.batches(tasks, list(range(36)), workers=2)) == 18
 
 
-def test_the_local_cluster_workers_run_no_profiler_and_keep_mallocs_own_thresholds():
+def test_the_local_cluster_workers_run_no_profiler_and_keep_mallocs_own_thresholds(
+        monkeypatch):
     # nobody reads the profile (no dashboard) and it samples the running task every 10 ms;
-    # MALLOC_TRIM_THRESHOLD_ (Dask's default) makes every large numpy array an mmap + munmap
+    # MALLOC_TRIM_THRESHOLD_ (Dask's default) makes every large numpy array an mmap + munmap.
+    # A default LocalCluster started earlier in this process leaves it in os.environ.
     pytest.importorskip('distributed')
-    if 'MALLOC_TRIM_THRESHOLD_' in os.environ:
-        pytest.skip('MALLOC_TRIM_THRESHOLD_ is set in the environment the workers inherit')
+    monkeypatch.delenv('MALLOC_TRIM_THRESHOLD_', raising=False)
     from distributed import Client
     with engine.local_cluster(1) as cluster, Client(cluster) as client:
         got = client.run(lambda: (__import__('dask').config.get(
