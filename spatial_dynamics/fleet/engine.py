@@ -12,7 +12,7 @@ finish in, so every way of running gives the same numbers.
 
 Tasks go to the cluster in batches of consecutive tasks of :data:`BATCH_BYTES` of bag at
 least (fewer when the fleet is small: at least eight batches per worker): each submission
-costs the scheduler, the client and the worker some 10-25 ms of CPU, as much as a minute of
+costs the scheduler, the client and the worker up to ~30 ms of CPU, as much as a minute of
 a 500 Hz bag takes to process, so one task per short bag would spend more than half the
 cluster on the engine (``python -m benchmarks.fleet``).
 """
