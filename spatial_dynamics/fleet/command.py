@@ -4,11 +4,12 @@
 
     python -m spatial_dynamics.fleet SOURCE [--urdf URDF] [--out DIR] [--cache DIR]
                                      [--workers N | --serial | --scheduler tcp://host:8786]
-                                     [--baseline-days 5] [--no-plots]
+                                     [--chunk 600] [--baseline-days 5] [--no-plots]
 
 SOURCE is a manifest (``.csv``, ``.yaml``) or a folder ``ROBOT/…/BAG``
-(:mod:`spatial_dynamics.fleet.manifest`). Each bag is one task (:func:`.task.process`): read,
-cleaned and differentiated as ``replay`` does, the rigid-body residual, and the normal
+(:mod:`spatial_dynamics.fleet.manifest`). Each bag, or each ``--chunk`` seconds of a longer
+bag (:mod:`.chunks`), is one task (:func:`.task.process`): read, cleaned and differentiated
+as ``replay`` does, the rigid-body residual, and the normal
 equations of each joint's damping, Coulomb friction and armature (:mod:`.sums`), which add:
 a robot's fit over all its bags is their sum. Written to DIR: fleet.csv (robot, bag, start,
 joint, parameter, value, σ, residual RMS, samples: one row per bag, joint and parameter),
@@ -34,7 +35,8 @@ import numpy as np
 from ..files import check_output, write_atomic
 from ..replay.arguments import one_line
 from . import drift as drift_of
-from .engine import Cache, local_cluster, Progress, run_tasks
+from .chunks import CHUNK, merge, MIN_CHUNK, split
+from .engine import Cache, local_cluster, Progress, run_tasks, warm
 from .manifest import ManifestError, read_manifest, scan_folder
 from .sums import Sums, solve, total
 from ..replay.identify import PARAMETERS
@@ -59,9 +61,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                        help='no cluster: every bag in this process, one after the other')
     where.add_argument('--scheduler', metavar='ADDRESS',
                        help='an existing Dask scheduler, e.g. tcp://host:8786')
+    p.add_argument('--chunk', type=chunk_seconds, default=CHUNK, metavar='SECONDS',
+                   help='cut a bag longer than this into tasks of this much bag time, their '
+                   'sums added (default %(default)g; 0: one task per bag)')
     p.add_argument('--baseline-days', type=float, default=5.0,
                    help="each robot-joint's baseline: its first days (default %(default)g)")
     p.add_argument('--no-plots', action='store_true', help='write no PNG files')
+
+
+def chunk_seconds(text: str) -> float:
+    """``--chunk``: 0 (one task per bag) or a finite number of seconds >= MIN_CHUNK."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float('nan')
+    if not (value == 0 or MIN_CHUNK <= value < float('inf')):
+        raise argparse.ArgumentTypeError(
+            f'{text!r}: 0 (one task per bag) or a number of seconds >= {MIN_CHUNK:g}')
+    return value
 
 
 def parser() -> argparse.ArgumentParser:
@@ -177,14 +194,16 @@ def run(args) -> int:
         for name in outputs:
             check_output(os.path.join(args.out, name), name, inputs)
         cache = Cache(args.cache or os.path.join(args.out, 'cache'))
-        progress = Progress(len(tasks))
+        parts, owner = split(tasks, args.chunk)
+        progress = Progress(len(parts))
         try:
             if args.serial:
-                results = run_tasks(tasks, cache, None, progress)
+                results = run_tasks(parts, cache, None, progress)
             else:
-                results = _on_cluster(args, tasks, cache, progress)
+                results = _on_cluster(args, parts, cache, progress)
         finally:
             progress.close()
+        results = merge(tasks, owner, results)
     except (ManifestError, ValueError, OSError) as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
         return 1
@@ -195,8 +214,10 @@ def _on_cluster(args, tasks, cache, progress) -> List[Dict]:
     from distributed import Client
     if args.scheduler:
         with Client(args.scheduler, timeout=30) as client:
+            warm(client)
             return run_tasks(tasks, cache, client, progress)
     with local_cluster(args.workers) as cluster, Client(cluster) as client:
+        warm(client)
         return run_tasks(tasks, cache, client, progress)
 
 

@@ -455,6 +455,200 @@ def read_messages(path: str, topic: str, msgtype: str) -> list:
 
 
 # --------------------------------------------------------------------------------------------
+# A time range of a bag (a chunk of a long recording)
+
+def _between(batches: Iterator[Batch], start: Optional[int], stop: Optional[int]
+             ) -> Iterator[Batch]:
+    """Keep the messages of ``batches`` whose bag time (ns) is in ``[start, stop)``."""
+    for times, messages in batches:
+        rows = np.ones(len(times), dtype=bool)
+        if start is not None:
+            rows &= times >= start
+        if stop is not None:
+            rows &= times < stop
+        if rows.all():
+            yield times, messages
+        elif rows.any():
+            yield times[rows], (messages[rows] if isinstance(messages, np.ndarray)
+                                else [m for m, r in zip(messages, rows.tolist()) if r])
+
+
+def _sqlite_batches_between(paths: Sequence[str], topic: str, start: Optional[int],
+                            stop: Optional[int]) -> Iterator[Batch]:
+    """:func:`_sqlite_batches` of the messages in ``[start, stop)``, found by the time index.
+
+    rosbag2 (and ``rosbags``) index ``messages.timestamp``: SQLite reads the range's rows
+    only. They come in bag order (by id), as the whole bag's do.
+    """
+    import sqlite3
+    lo = -(1 << 63) if start is None else int(start)
+    hi = (1 << 63) - 1 if stop is None else int(stop)
+    for path in paths:
+        con = _sqlite_connect(path)
+        try:
+            ids = [i for i, in con.execute('SELECT id FROM topics WHERE name = ?', (topic,))]
+            cur = con.execute('SELECT timestamp, data FROM messages WHERE timestamp >= ? AND '
+                              'timestamp < ? AND topic_id IN '
+                              f'({", ".join("?" * len(ids))}) ORDER BY id', [lo, hi] + ids)
+            while True:
+                rows = cur.fetchmany(BATCH)
+                if not rows:
+                    break
+                times, data = list(map(_first, rows)), list(map(_second, rows))
+                if set(map(type, data)) != {bytes} or set(map(type, times)) != {int}:
+                    raise _not_sqlite_bag(path, 'a message whose timestamp is not an integer '
+                                          'or data not bytes')
+                yield np.array(times, dtype=np.int64), data
+        except sqlite3.Error as err:
+            raise _not_sqlite_bag(path, str(err)) from None
+        finally:
+            con.close()
+
+
+def _mcap_channels(buf: memoryview, data_end: int) -> Dict[int, str]:
+    """Channel id -> topic from an MCAP file's summary section (empty if it has none)."""
+    channels: Dict[int, str] = {}
+    o = data_end + 9 + int.from_bytes(buf[data_end + 1:data_end + 9], 'little')
+    while o + 9 <= len(buf) and buf[o] != 0x02:          # up to the footer
+        length = int.from_bytes(buf[o + 1:o + 9], 'little')
+        if buf[o] == OP_CHANNEL:
+            b = o + 9
+            n = int.from_bytes(buf[b + 4:b + 8], 'little')
+            channels[int.from_bytes(buf[b:b + 2], 'little')] = bytes(
+                buf[b + 8:b + 8 + n]).decode('utf-8', 'replace')
+        o += 9 + length
+    return channels
+
+
+def _mcap_batches_between(paths: Sequence[str], topic: str, start: Optional[int],
+                          stop: Optional[int]) -> Iterator[Batch]:
+    """:func:`_mcap_batches` of the messages in ``[start, stop)``.
+
+    A chunk whose message time range (in its header) misses ``[start, stop)`` is stepped
+    over without being read or decompressed, when the summary names the channels (a
+    skipped chunk may hold a channel record); the rest are read as the whole file is.
+    """
+    import mmap
+    lo = -(1 << 63) if start is None else int(start)
+    hi = (1 << 63) - 1 if stop is None else int(stop)
+    for path in paths:
+        with open(path, 'rb') as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as mm:
+            buf = memoryview(mm)
+            try:
+                if bytes(buf[:8]) != MCAP_MAGIC:
+                    raise BagError(f'{path}: not an MCAP file')
+                end = _data_end(buf)
+                channel_of = _mcap_channels(buf, end)
+                skip = topic in channel_of.values()
+                o = 8
+                while o + 9 <= end:
+                    length = int.from_bytes(buf[o + 1:o + 9], 'little')
+                    if skip and buf[o] == OP_CHUNK:
+                        first = int.from_bytes(buf[o + 9:o + 17], 'little')
+                        last = int.from_bytes(buf[o + 17:o + 25], 'little')
+                        if last < lo or first >= hi:
+                            o += 9 + length
+                            continue
+                    yield from _between(_mcap_records(buf[o:o + 9 + length], channel_of,
+                                                      topic), start, stop)
+                    o += 9 + length
+            finally:
+                buf.release()
+
+
+def read_joint_states_between(path: str, topic: str, names: Sequence[str],
+                              start: Optional[int] = None, stop: Optional[int] = None,
+                              fast: bool = True) -> JointStates:
+    """:func:`read_joint_states` of the messages whose bag time (ns) is in ``[start, stop)``.
+
+    ``None`` is the bag's beginning (end). The bag time is the time a message was recorded
+    (the storage's timestamp), not its ``header.stamp``: it is what the storages index.
+    Uncompressed sqlite3 is read through its time index, uncompressed MCAP by its chunks'
+    time ranges (``fast``); anything else through ``rosbags``' own time filter.
+    """
+    if fast:
+        staged, stage = _stage(path)
+        try:
+            files, _ = _sqlite_bag(staged, topic)
+            if files is not None:
+                found, _ = _sqlite_topics(files, 0)
+                check_topic(found, topic, JOINT_STATE)
+                return decode_joint_states(_sqlite_batches_between(files, topic, start, stop),
+                                           names, fast)
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
+    reader = open_reader(path)
+    try:
+        conns = connections_of(reader, topic, JOINT_STATE)
+        storage, paths = storage_files(reader) if fast else ('', [])
+        if storage == 'sqlite3':
+            batches = _sqlite_batches_between(paths, topic, start, stop)
+        elif storage == 'mcap':
+            batches = _mcap_batches_between(paths, topic, start, stop)
+        else:
+            batches = _rosbags_batches(reader, conns, start, stop)
+        return decode_joint_states(batches, names, fast)
+    finally:
+        reader.close()
+
+
+def _rosbags_batches(reader, conns, start: Optional[int], stop: Optional[int]
+                     ) -> Iterator[Batch]:
+    """Batches of ``rosbags``' own reading of ``conns`` in ``[start, stop)``."""
+    times: List[int] = []
+    raw: List[bytes] = []
+    for _, t, data in reader.messages(connections=conns, start=start, stop=stop):
+        times.append(t)
+        raw.append(data)
+        if len(raw) == BATCH:
+            yield np.array(times, dtype=np.int64), raw
+            times, raw = [], []
+    if raw:
+        yield np.array(times, dtype=np.int64), raw
+
+
+def time_range(path: str, topic: str) -> Tuple[int, int]:
+    """Return the bag times (ns) of the first and last message of ``topic``.
+
+    An uncompressed sqlite3 bag answers from its time index; any other bag from ``rosbags``'
+    reader (the whole bag's range: every topic's). :class:`BagError` when the topic has no
+    message.
+    """
+    staged, stage = _stage(path)
+    try:
+        files, _ = _sqlite_bag(staged, topic)
+        if files is not None:
+            import sqlite3
+            found, _ = _sqlite_topics(files, 0)
+            check_topic(found, topic, JOINT_STATE)
+            ends = []
+            for f in files:
+                con = _sqlite_connect(f)
+                try:
+                    ends.append(con.execute(
+                        'SELECT min(timestamp), max(timestamp) FROM messages WHERE topic_id '
+                        'IN (SELECT id FROM topics WHERE name = ?)', (topic,)).fetchone())
+                except sqlite3.Error as err:
+                    raise _not_sqlite_bag(f, str(err)) from None
+                finally:
+                    con.close()
+            ends = [e for e in ends if isinstance(e[0], int) and isinstance(e[1], int)]
+            if not ends:
+                raise BagError(f'{path}: topic {topic!r} has no message')
+            return min(e[0] for e in ends), max(e[1] for e in ends)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    reader = open_reader(path)
+    try:
+        connections_of(reader, topic, JOINT_STATE)
+        if not reader.message_count:
+            raise BagError(f'{path}: topic {topic!r} has no message')
+        return int(reader.start_time), int(reader.end_time)
+    finally:
+        reader.close()
+
+
+# --------------------------------------------------------------------------------------------
 # Writing (tests and the benchmark)
 
 Topic = Tuple[str, str, np.ndarray, Sequence[bytes]]
