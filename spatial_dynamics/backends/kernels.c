@@ -143,6 +143,11 @@ int
 result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 {
     *count = kernel == MOMENTUM ? 2 : 1;
+    if (kernel == BODIES) {     /* a row per body: R, p, then J (6 x nv) */
+        dims[0] = h->rows;
+        dims[1] = 12 + 6 * (npy_intp)h->nv;
+        return 2;
+    }
     dims[0] = h->nv;
     dims[1] = kernel == CRBA ? h->nv : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
     return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
@@ -173,6 +178,9 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
         break;
     case MOMENTUM:
         momentum_kernel(K, rows, q, qd, out1, out2, work);
+        break;
+    case BODIES:
+        bodies_kernel(K, rows, work, out1);
         break;
     default:
         regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1,
