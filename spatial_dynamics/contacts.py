@@ -191,23 +191,20 @@ def _compiled_jacobian(kern, q, plan: '_Plan') -> Optional[np.ndarray]:
     rows = _c_bodies(kern, q)
     if rows is None or rows.dtype != np.float64:
         return None
-    nc, nv = len(plan.bodies), kern.nv
     B = rows[plan.bodies]
-    d = B[:, :9].reshape(nc, 3, 3) @ plan.offsets                  # R_b r_c, (nc, 3, 1)
-    T = (d.reshape(nc, 3) @ _SHIFT).reshape(nc, 6, 6)
-    T += _EYE6                                                      # [1 0; -d× 1]
-    Jc = (T @ B[:, PLACEMENT:].reshape(nc, 6, nv)).reshape(6 * nc, nv)
+    nc, m = plan.shift.shape[0], plan.eye.shape[0]
+    T = (B[:, None, :9] @ plan.shift).reshape(nc, m, 6)      # [-d× 1] (points) or [1 0; -d× 1]
+    T += plan.eye
+    Jc = (T @ B[:, PLACEMENT:].reshape(nc, 6, kern.nv)).reshape(nc * m, kern.nv)
     return Jc if plan.rows is None else Jc[plan.rows]
 
 
 _c_bodies = compiled.ext.bodies if compiled.ext is not None else None
-#: ``d @ _SHIFT`` is the 6x6 ``[0 0; -d× 0]`` (flat), d a row 3-vector.
+#: ``_SHIFT[a]`` is the coefficient of ``d_a`` in ``[1 0; -d× 1]`` (6x6)
 _SHIFT = np.zeros((3, 6, 6))
 _SHIFT[0, 4, 2], _SHIFT[0, 5, 1] = 1.0, -1.0        # -d× = [[0, d2, -d1],
 _SHIFT[1, 3, 2], _SHIFT[1, 5, 0] = -1.0, 1.0        #        [-d2, 0, d0],
 _SHIFT[2, 3, 1], _SHIFT[2, 4, 0] = 1.0, -1.0        #        [d1, -d0, 0]]
-_SHIFT = _SHIFT.reshape(3, 36)
-_EYE6 = np.eye(6)
 
 
 def _jacobian(model: Model, q: list, contacts: Sequence[Contact]) -> np.ndarray:
@@ -316,15 +313,18 @@ def _depths(model: Model) -> tuple:
 class _Plan:
     """What a model and its contacts fix for every state: checked once (:func:`_plan`).
 
-    ``bodies`` (nc,) the contact bodies, ``offsets`` (nc, 3, 1) the contact points in their
-    coordinates, ``rows`` the rows of the stacked ``[ω; v]`` a contact keeps (its ``v`` for a
-    point, ``None``: all surfaces), and per contact ``(name, rows, normal, μ)`` for the
-    result (plain floats).
+    ``bodies`` (nc,) the contact bodies; ``shift`` (nc, 9, 6 m) and ``eye`` (m, 6) give the
+    rows ``T`` of ``[1 0; -d× 1]`` with ``d = R_b r_c`` (``r_c`` the contact point in body
+    coordinates) from ``R_b`` flat, ``T = R_b shift + eye``: the three ``v`` rows (m = 3)
+    when every contact is a point, else all six, of which a point keeps its ``v`` (``rows``;
+    ``None``: all); and per contact ``(name, first row, rows, normal, μ)`` for the result
+    (plain floats).
     """
 
     contacts: tuple
     bodies: np.ndarray
-    offsets: np.ndarray
+    shift: np.ndarray
+    eye: np.ndarray
     rows: Optional[np.ndarray]
     k: int
     checks: tuple
@@ -356,12 +356,15 @@ def _plan(model: Model, contacts) -> _Plan:
         rows += range(6 * j + 6 - c.rows, 6 * j + 6)
         checks.append((c.name, row, c.rows, tuple(c.normal.tolist()), float(c.mu)))
         row += c.rows
+    points = all(c.kind == 'point' for c in contacts)
+    kept = slice(3, 6) if points else slice(0, 6)
+    shift = np.einsum('cj,arx->cajrx', np.array(offsets).reshape(-1, 3), _SHIFT[:, kept])
     if len(plans) >= 64:        # contacts made anew for each call: keep the last ones
         plans.clear()
     plan = plans[key] = _Plan(contacts, np.array(bodies, dtype=np.intp),
-                              np.array(offsets).reshape(-1, 3, 1),
-                              None if len(rows) == 6 * len(contacts) else np.array(rows),
-                              row, tuple(checks))
+                              shift.reshape(len(contacts), 9, -1), np.eye(6)[kept],
+                              None if points or len(rows) == 6 * len(contacts)
+                              else np.array(rows), row, tuple(checks))
     return plan
 
 
@@ -432,7 +435,7 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         b = rnea(model, q, qd, qdd, gravity, backend=backend)   # M q̈ + h
         Jc = (_compiled_jacobian(kern, q, plan) if kern is not None and q.dtype == np.float64
               else _jacobian(model, q.tolist(), contacts))
-    n = model.nv - 6
+    n = len(b) - 6
     if measured is not None:
         lam = _measured(contacts, measured)
         return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'measured', 'solved',
@@ -480,12 +483,15 @@ _lapack = []        # scipy.linalg.lapack, imported on first use (or None withou
 def _split_lapack(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
     """The contact-consistent ``(τ, λ)`` of full-rank ``J_c`` by LAPACK, or ``None``.
 
-    The steps of :func:`contact_inverse_dynamics`'s numpy split, each one LAPACK call:
-    ``J_cᵀ = Q [R; 0]`` (``dgeqrf``), ``Qᵀ [b, Sᵀ]`` (``dormqr``: its last ``nv - k`` rows are
-    ``Q2ᵀ b`` and ``A = Q2ᵀ Sᵀ``), ``τ = Aᵀ (A Aᵀ)⁻¹ Q2ᵀ b`` (``dgesv``), ``λ = R⁻¹ Q1ᵀ
-    (b - Sᵀ τ)`` (``dtrtrs``). ``None`` (the numpy split then answers) without SciPy, for
-    redundant contact rows (rank below ``k``, the same test), fewer than six rows or more
-    than ``nv``, or base rows the contacts cannot carry (the same check of ``A τ = Q2ᵀ b``).
+    The numpy split's equations, in three LAPACK calls: one QR (``dgeqrf``) of
+    ``[J_cᵀ, b, Sᵀ]`` (nv × (k + 1 + n)), whose first ``k`` columns are ``J_cᵀ = Q [R; 0]``
+    and whose others are then ``Qᵀ b`` and ``Qᵀ Sᵀ``, their last ``nv - k`` rows turned by
+    the further reflectors (an orthogonal change of the basis ``Q2`` of the equations, which
+    keeps their least-norm solution): ``A = Q2ᵀ Sᵀ``, ``y = Q2ᵀ b``, ``τ = Aᵀ (A Aᵀ)⁻¹ y``
+    (``dgesv``), ``λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)`` (``dtrtrs``). ``None`` (the numpy split then
+    answers) without SciPy, for redundant contact rows (the numpy split's rank test), fewer
+    than six contact rows or ``nv`` or more, or base rows the contacts cannot carry (its check
+    that ``A τ = y``).
     """
     if not _lapack:
         try:
@@ -497,41 +503,48 @@ def _split_lapack(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
     k, nv = Jc.shape
     if lapack is None or not 6 <= k < nv:
         return None
-    qr, h, _, info = lapack.dgeqrf(Jc.T)
-    d = [abs(x) for x in qr.diagonal().tolist()]
+    M, upper = _augmented(nv, k, n)             # [J_cᵀ, b, Sᵀ], Sᵀ = [0; 1]
+    M[:, :k] = Jc.T
+    M[:, k] = b
+    F, _, _, info = lapack.dgeqrf(M, overwrite_a=1)
+    d = [abs(x) for x in F.diagonal()[:k].tolist()]
     if info or not min(d) > 1e-10 * max(1.0, max(d)):
         return None
-    bS = np.zeros((nv, n + 1), order='F')       # [b, Sᵀ], Sᵀ = [0; 1]
-    bS[:, 0] = b
-    bS[6:, 1:] = _eye(n)
-    QbS, _, info = lapack.dormqr('L', 'T', qr, h, bS, 64 * (n + 1), overwrite_c=1)
-    A, y = QbS[k:, 1:], QbS[k:, 0]
+    # rows k: of the factor (below its diagonal dgeqrf keeps the reflectors): y = (β, 0, …)
+    A = F[k:, k + 1:] * upper
+    beta = float(F[k, k])
+    y = np.zeros(nv - k)
+    y[0] = beta
     if w is not None:
         A = A / w
     *_, x, info = lapack.dgesv(A @ A.T, y)
     if info:
         return None
     tw = A.T @ x                                # τ w: the least-norm solution of A (τ w) = y
-    yl = y.tolist()
-    atol = 1e-9 * max(1.0, max(map(abs, yl)))
-    for r, yi in zip((A @ tw).tolist(), yl):
-        if not abs(r - yi) <= atol + 1e-9 * abs(yi):
-            return None
+    r = (A @ tw).tolist()                       # A τ w = y to 1e-9 (each row within atol)
+    r[0] -= beta
+    if not max(map(abs, r)) <= 1e-9 * max(1.0, abs(beta)):
+        return None
     tau = tw if w is None else tw / w
-    lam, info = lapack.dtrtrs(qr, QbS[:k, 0] - QbS[:k, 1:] @ tau)
+    lam, info = lapack.dtrtrs(F[:, :k], F[:k, k] - F[:k, k + 1:] @ tau)
     return (tau, lam) if info == 0 else None
 
 
-_eyes: dict = {}
+_augments: dict = {}
 
 
-def _eye(n: int) -> np.ndarray:
-    """The identity of size ``n``, read-only, made once."""
-    eye = _eyes.get(n)
-    if eye is None:
-        eye = _eyes[n] = np.eye(n)
-        eye.setflags(write=False)
-    return eye
+def _augmented(nv: int, k: int, n: int) -> tuple:
+    """A new (nv, k + 1 + n) Fortran-ordered array whose last ``n`` columns are ``Sᵀ = [0; 1]``,
+    and the (nv - k, n) mask of the upper triangle of the factor's ``Qᵀ Sᵀ`` rows."""
+    made = _augments.get((nv, k, n))
+    if made is None:
+        M = np.zeros((nv, k + 1 + n), order='F')
+        M[nv - n:, k + 1:] = np.eye(n)
+        upper = np.triu(np.ones((nv - k, n)), -1)   # row i of A: columns i - 1 … (y is column -1)
+        for x in (M, upper):
+            x.setflags(write=False)
+        made = _augments[nv, k, n] = (M, upper)
+    return made[0].copy(order='F'), made[1]
 
 
 def _weights(weights, size: int, what: str) -> np.ndarray:
