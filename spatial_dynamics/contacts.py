@@ -184,17 +184,17 @@ def contact_jacobian(model: Model, q, contacts: Sequence[Contact],
 def _compiled_jacobian(kern, q, plan: '_Plan') -> Optional[np.ndarray]:
     """:func:`contact_jacobian` from the compiled bodies' rows, or ``None`` (q declined).
 
-    Each contact body's row holds ``R_b``, ``p_b`` and ``J_b`` (its origin's world-aligned
-    Jacobian, :func:`~.algorithms.jacobian.bodies_kernel`); the point at ``r_c`` (body
-    coordinates) moves with ``[ω; v + ω × d]``, ``d = R_b r_c``: ``J_c = [1 0; -d× 1] J_b``.
+    Each contact body's row holds its placement ``[R_b p_b; 0 1]`` and ``J_b`` (its origin's
+    world-aligned Jacobian, :func:`~.algorithms.jacobian.bodies_kernel`); the point at
+    ``r_c`` (body coordinates) moves with ``[ω; v + ω × d]``, ``d = R_b r_c``:
+    ``J_c = [1 0; -d× 1] J_b``, whose rows are linear in the placement (``plan.shift``).
     """
     rows = _c_bodies(kern, q)
     if rows is None or rows.dtype != np.float64:
         return None
-    B = rows[plan.bodies]
-    nc, m = plan.shift.shape[0], plan.eye.shape[0]
-    T = (B[:, None, :9] @ plan.shift).reshape(nc, m, 6)      # [-d× 1] (points) or [1 0; -d× 1]
-    T += plan.eye
+    B = rows.take(plan.bodies, 0)
+    nc, m = plan.shift.shape[0], plan.shift.shape[2] // 6
+    T = (B[:, None, :PLACEMENT] @ plan.shift).reshape(nc, m, 6)     # [-d× 1] or [1 0; -d× 1]
     Jc = (T @ B[:, PLACEMENT:].reshape(nc, 6, kern.nv)).reshape(nc * m, kern.nv)
     return Jc if plan.rows is None else Jc[plan.rows]
 
@@ -313,18 +313,17 @@ def _depths(model: Model) -> tuple:
 class _Plan:
     """What a model and its contacts fix for every state: checked once (:func:`_plan`).
 
-    ``bodies`` (nc,) the contact bodies; ``shift`` (nc, 9, 6 m) and ``eye`` (m, 6) give the
-    rows ``T`` of ``[1 0; -d× 1]`` with ``d = R_b r_c`` (``r_c`` the contact point in body
-    coordinates) from ``R_b`` flat, ``T = R_b shift + eye``: the three ``v`` rows (m = 3)
-    when every contact is a point, else all six, of which a point keeps its ``v`` (``rows``;
-    ``None``: all); and per contact ``(name, first row, rows, normal, μ)`` for the result
-    (plain floats).
+    ``bodies`` (nc,) the contact bodies; ``shift`` (nc, 16, 6 m) gives the rows ``T`` of
+    ``[1 0; -d× 1]`` with ``d = R_b r_c`` (``r_c`` the contact point in body coordinates)
+    from the body's placement ``H = [R_b p_b; 0 1]`` flat, ``T = H shift``: the three ``v``
+    rows (m = 3) when every contact is a point, else all six, of which a point keeps its
+    ``v`` (``rows``; ``None``: all); and per contact ``(name, first row, rows, normal, μ)``
+    for the result (plain floats).
     """
 
     contacts: tuple
     bodies: np.ndarray
     shift: np.ndarray
-    eye: np.ndarray
     rows: Optional[np.ndarray]
     k: int
     checks: tuple
@@ -358,13 +357,18 @@ def _plan(model: Model, contacts) -> _Plan:
         row += c.rows
     points = all(c.kind == 'point' for c in contacts)
     kept = slice(3, 6) if points else slice(0, 6)
-    shift = np.einsum('cj,arx->cajrx', np.array(offsets).reshape(-1, 3), _SHIFT[:, kept])
+    nc, m = len(contacts), 3 if points else 6
+    # T = [1 0; -d× 1] (its kept rows), d_a = Σ_j R[a, j] r_j: H[4 a + j] r_j _SHIFT[a] + H[15] 1
+    shift = np.zeros((nc, 4, 4, m, 6))
+    shift[:, :3, :3] = np.einsum('cj,arx->cajrx', np.array(offsets).reshape(-1, 3),
+                                 _SHIFT[:, kept])
+    shift[:, 3, 3] = np.eye(6)[kept]
     if len(plans) >= 64:        # contacts made anew for each call: keep the last ones
         plans.clear()
     plan = plans[key] = _Plan(contacts, np.array(bodies, dtype=np.intp),
-                              shift.reshape(len(contacts), 9, -1), np.eye(6)[kept],
-                              None if points or len(rows) == 6 * len(contacts)
-                              else np.array(rows), row, tuple(checks))
+                              shift.reshape(nc, 16, 6 * m),
+                              None if points or len(rows) == 6 * nc else np.array(rows), row,
+                              tuple(checks))
     return plan
 
 

@@ -73,26 +73,25 @@ def test_bodies_rows_are_the_world_jacobians_of_every_body(solo, talos):
         kern = kernels(model)
         q = state(model, rng)[0]
         rows = compiled.ext.bodies(kern, q)
-        assert rows.shape == (model.NB + 1, 12 + 6 * model.nv)
+        assert rows.shape == (model.NB + 1, 16 + 6 * model.nv)
         for link, frame in model.frames.items():
             if frame.body == 0 or not np.array_equal(frame.lXb, np.eye(6)):
                 continue            # the body's own link
             row = rows[frame.body]
             J = sd.jacobian(model, q, link, frame='world')
-            np.testing.assert_allclose(row[12:].reshape(6, model.nv), J, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(row[16:].reshape(6, model.nv), J, rtol=0, atol=1e-12)
             lX0 = sd.algorithms.jacobian.local_jacobian(model, q, link)[1]
-            R = lX0[:3, :3].T
-            np.testing.assert_allclose(row[:9].reshape(3, 3), R, rtol=0, atol=1e-12)
-            p = -lX0[:3, :3].T @ lX0[3:, :3]        # lX0 = [[E, 0], [-E p×, E]]: p× = -Eᵀ B
-            np.testing.assert_allclose(row[9:12], [p[2, 1], p[0, 2], p[1, 0]], rtol=0,
-                                       atol=1e-12)
+            px = -lX0[:3, :3].T @ lX0[3:, :3]       # lX0 = [[E, 0], [-E p×, E]]: p× = -Eᵀ B
+            H = np.eye(4)
+            H[:3, :3], H[:3, 3] = lX0[:3, :3].T, (px[2, 1], px[0, 2], px[1, 0])
+            np.testing.assert_allclose(row[:16].reshape(4, 4), H, rtol=0, atol=1e-12)
 
 
 def test_bodies_batch_is_the_single_state_entry(solo):
     rng = np.random.default_rng(4)
     kern = kernels(solo)
     Q = np.array([state(solo, rng)[0] for _ in range(7)])
-    out = np.empty((7, solo.NB + 1, 12 + 6 * solo.nv))
+    out = np.empty((7, solo.NB + 1, 16 + 6 * solo.nv))
     compiled.ext.bodies_batch(kern, 7, Q, out, 2)
     for q, rows in zip(Q, out):
         np.testing.assert_array_equal(rows, compiled.ext.bodies(kern, q))

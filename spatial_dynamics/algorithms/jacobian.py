@@ -92,19 +92,20 @@ def local_jacobian(model: Model, q, link: str) -> tuple[np.ndarray, np.ndarray]:
     return J, lXi
 
 
-#: Scalars of one body's row in :func:`bodies_kernel`'s output: ``R`` (9), ``p`` (3), then
-#: ``J`` (6 rows of ``nv``).
-PLACEMENT = 12
+#: Scalars of one body's row in :func:`bodies_kernel`'s output before its Jacobian: the
+#: homogeneous placement ``[R p; 0 0 0 1]`` (4 × 4, row-major).
+PLACEMENT = 16
 
 
 def bodies_kernel(rows, Xup, J) -> None:
     """Every body's placement and world-aligned Jacobian into ``J``, from the ``Xup`` of ``q``.
 
-    ``J`` holds ``len(rows) * (12 + 6 nv)`` scalars, a row per body (row 0 the base): its
-    orientation ``R_i`` (world <- body, row-major), its origin ``p_i`` (world), then its
-    Jacobian ``J_i`` (6 × nv, row-major, angular rows first) at its origin in world axes
-    (Pinocchio's ``LOCAL_WORLD_ALIGNED``, :func:`jacobian` with ``frame='world'``). From
-    ``Xup_i = (E_i, r_i)`` (:func:`~.rnea.xup_kernel`), for each body after its parent::
+    ``J`` holds ``len(rows) * (16 + 6 nv)`` scalars, a row per body (row 0 the base): its
+    placement ``[R_i p_i; 0 0 0 1]`` (4 × 4 row-major: orientation world <- body, origin in
+    the world), then its Jacobian ``J_i`` (6 × nv, row-major, angular rows first) at its
+    origin in world axes (Pinocchio's ``LOCAL_WORLD_ALIGNED``, :func:`jacobian` with
+    ``frame='world'``). From ``Xup_i = (E_i, r_i)`` (:func:`~.rnea.xup_kernel`), for each
+    body after its parent::
 
         d_i = R_λ(i) r_i;   R_i = R_λ(i) E_iᵀ;   p_i = p_λ(i) + d_i
         J_i = [1 0; -d_i× 1] J_λ(i)  +  mul_i [R_i 0; 0 R_i] S_i   (at columns kv_i …)
@@ -116,12 +117,13 @@ def bodies_kernel(rows, Xup, J) -> None:
     """
     (_, _, _, nv, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
      _, _, _, _, _, _, _, _, _, _, _, _) = rows[0]
-    width = 12 + 6 * nv
+    width = 16 + 6 * nv
     for a in range(width):
         J[a] = 0.0
     J[0] = 1.0
-    J[4] = 1.0
-    J[8] = 1.0
+    J[5] = 1.0
+    J[10] = 1.0
+    J[15] = 1.0
     for i in range(1, len(rows)):
         (p, code, _, kv, dof, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
          _, _, _, _, _, _, _, _, _, _, mul, _) = rows[i]
@@ -131,19 +133,16 @@ def bodies_kernel(rows, Xup, J) -> None:
         a00 = J[o]
         a01 = J[o + 1]
         a02 = J[o + 2]
-        a10 = J[o + 3]
-        a11 = J[o + 4]
-        a12 = J[o + 5]
-        a20 = J[o + 6]
-        a21 = J[o + 7]
-        a22 = J[o + 8]
-        # d_i = R_λ r_i;  p_i = p_λ + d_i;  R_i = R_λ E_iᵀ
+        a10 = J[o + 4]
+        a11 = J[o + 5]
+        a12 = J[o + 6]
+        a20 = J[o + 8]
+        a21 = J[o + 9]
+        a22 = J[o + 10]
+        # d_i = R_λ r_i;  R_i = R_λ E_iᵀ;  p_i = p_λ + d_i
         d0 = a00 * rx + a01 * ry + a02 * rz
         d1 = a10 * rx + a11 * ry + a12 * rz
         d2 = a20 * rx + a21 * ry + a22 * rz
-        J[w + 9] = J[o + 9] + d0
-        J[w + 10] = J[o + 10] + d1
-        J[w + 11] = J[o + 11] + d2
         b00 = a00 * e00 + a01 * e01 + a02 * e02
         b01 = a00 * e10 + a01 * e11 + a02 * e12
         b02 = a00 * e20 + a01 * e21 + a02 * e22
@@ -156,15 +155,22 @@ def bodies_kernel(rows, Xup, J) -> None:
         J[w] = b00
         J[w + 1] = b01
         J[w + 2] = b02
-        J[w + 3] = b10
-        J[w + 4] = b11
-        J[w + 5] = b12
-        J[w + 6] = b20
-        J[w + 7] = b21
-        J[w + 8] = b22
+        J[w + 3] = J[o + 3] + d0
+        J[w + 4] = b10
+        J[w + 5] = b11
+        J[w + 6] = b12
+        J[w + 7] = J[o + 7] + d1
+        J[w + 8] = b20
+        J[w + 9] = b21
+        J[w + 10] = b22
+        J[w + 11] = J[o + 11] + d2
+        J[w + 12] = 0.0
+        J[w + 13] = 0.0
+        J[w + 14] = 0.0
+        J[w + 15] = 1.0
         # the parent's columns at the body's origin: ω, v + ω × d_i
         for j in range(nv):
-            c = 12 + j
+            c = 16 + j
             w0 = J[o + c]
             w1 = J[o + c + nv]
             w2 = J[o + c + 2 * nv]
@@ -177,7 +183,7 @@ def bodies_kernel(rows, Xup, J) -> None:
         # the joint's own columns, world axes: mul [R_i s_ω; R_i s_v]
         for col in range(dof):
             s0, s1, s2, s3, s4, s5 = joint_axis(code, col, ax, ay, az)
-            c = w + 12 + kv + col
+            c = w + 16 + kv + col
             J[c] = J[c] + mul * (b00 * s0 + b01 * s1 + b02 * s2)
             J[c + nv] = J[c + nv] + mul * (b10 * s0 + b11 * s1 + b12 * s2)
             J[c + 2 * nv] = J[c + 2 * nv] + mul * (b20 * s0 + b21 * s1 + b22 * s2)

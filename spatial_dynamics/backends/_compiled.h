@@ -109,7 +109,7 @@ typedef struct {
     int gravity;            /* 3 numbers after them */
     int fext;               /* then, optionally, the external forces (rnea's f_body) */
     int kernel;             /* results: RNEA tau (n,), CRBA H (n, n), MOMENTUM two (n,), */
-                            /* REGRESSOR Y (n, 10 NB), BODIES (NB + 1, 12 + 6 n) */
+                            /* REGRESSOR Y (n, 10 NB), BODIES (NB + 1, 16 + 6 n) */
     const char *outputs[2]; /* the batch entry's result arguments, as its errors name them */
     const char *doc, *batch_doc;
 } Algorithm;

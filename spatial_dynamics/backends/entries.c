@@ -51,11 +51,12 @@ const Algorithm ALGORITHMS[] = {
      "regressor_batch(kernels, N, q, qd, qdd, gravity, Y, threads) -> None: the regressors of\n"
      "N states (q, qd, qdd N x n each, gravity 3 numbers) into Y (N x n x 10 NB)."},
     {"bodies", "bodies_batch", 1, 0, 0, BODIES, {"J"},
-     "bodies(kernels, q) -> (NB + 1, 12 + 6 n), or None\n\n"
-     "Each body's row: its orientation R (world <- body, row-major, 9), its origin p (3), and\n"
-     "its Jacobian (6 x n row-major, angular rows first) at its origin in world axes.",
+     "bodies(kernels, q) -> (NB + 1, 16 + 6 n), or None\n\n"
+     "Each body's row: its placement [R p; 0 0 0 1] (4 x 4 row-major: orientation world <- body,\n"
+     "origin), then its Jacobian (6 x n row-major, angular rows first) at its origin in world\n"
+     "axes.",
      "bodies_batch(kernels, N, q, J, threads) -> None: the rows of bodies() of N states into\n"
-     "J (N x (NB + 1) x (12 + 6 n))."},
+     "J (N x (NB + 1) x (16 + 6 n))."},
 };
 #define ROWS (sizeof ALGORITHMS / sizeof ALGORITHMS[0])
 const int ALGORITHM_COUNT = (int)ROWS;

@@ -143,9 +143,9 @@ int
 result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 {
     *count = kernel == MOMENTUM ? 2 : 1;
-    if (kernel == BODIES) {     /* a row per body: R, p, then J (6 x nv) */
+    if (kernel == BODIES) {     /* a row per body: [R p; 0 1], then J (6 x nv) */
         dims[0] = h->rows;
-        dims[1] = 12 + 6 * (npy_intp)h->nv;
+        dims[1] = 16 + 6 * (npy_intp)h->nv;
         return 2;
     }
     dims[0] = h->nv;
