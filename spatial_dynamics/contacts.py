@@ -514,23 +514,24 @@ def _split_lapack(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
     d = [abs(x) for x in F.diagonal()[:k].tolist()]
     if info or not min(d) > 1e-10 * max(1.0, max(d)):
         return None
-    # rows k: of the factor (below its diagonal dgeqrf keeps the reflectors): y = (β, 0, …)
-    A = F[k:, k + 1:] * upper
-    beta = float(F[k, k])
+    # Qᵀ Sᵀ: rows :k Q1ᵀ Sᵀ, rows k: A (dgeqrf keeps its reflectors below the diagonal)
+    QS = F[:, k + 1:] * upper
+    beta = float(F[k, k])                       # y = (β, 0, …)
     y = np.zeros(nv - k)
     y[0] = beta
-    if w is not None:
-        A = A / w
+    A = QS[k:] if w is None else QS[k:] / w
     *_, x, info = lapack.dgesv(A @ A.T, y)
     if info:
         return None
-    tw = A.T @ x                                # τ w: the least-norm solution of A (τ w) = y
-    r = (A @ tw).tolist()                       # A τ w = y to 1e-9 (each row within atol)
+    tau = A.T @ x                               # τ w: the least-norm solution of A (τ w) = y
+    if w is not None:
+        tau /= w
+    QSt = (QS @ tau).tolist()                   # [Q1ᵀ Sᵀ τ; A τ w]
+    r = QSt[k:]                                 # A τ w = y to 1e-9 (each row within atol)
     r[0] -= beta
     if not max(map(abs, r)) <= 1e-9 * max(1.0, abs(beta)):
         return None
-    tau = tw if w is None else tw / w
-    lam, info = lapack.dtrtrs(F[:, :k], F[:k, k] - F[:k, k + 1:] @ tau)
+    lam, info = lapack.dtrtrs(F[:, :k], F[:k, k] - QSt[:k])     # R λ = Q1ᵀ (b - Sᵀ τ)
     return (tau, lam) if info == 0 else None
 
 
@@ -539,12 +540,13 @@ _augments: dict = {}
 
 def _augmented(nv: int, k: int, n: int) -> tuple:
     """A new (nv, k + 1 + n) Fortran-ordered array whose last ``n`` columns are ``Sᵀ = [0; 1]``,
-    and the (nv - k, n) mask of the upper triangle of the factor's ``Qᵀ Sᵀ`` rows."""
+    and the (nv, n) mask of what its factor holds of ``Qᵀ Sᵀ`` (not the reflectors)."""
     made = _augments.get((nv, k, n))
     if made is None:
         M = np.zeros((nv, k + 1 + n), order='F')
         M[nv - n:, k + 1:] = np.eye(n)
-        upper = np.triu(np.ones((nv - k, n)), -1)   # row i of A: columns i - 1 … (y is column -1)
+        upper = np.ones((nv, n))                    # the factor's rows k + i: columns i - 1 …
+        upper[k:] = np.triu(upper[k:], -1)
         for x in (M, upper):
             x.setflags(write=False)
         made = _augments[nv, k, n] = (M, upper)
