@@ -409,10 +409,10 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         force_weight: the QP's small weight on the contact forces (makes λ unique).
         backend: as :func:`~spatial_dynamics.rnea`'s. ``'compiled'`` (``'auto'`` when built)
             takes ``M q̈ + h`` and ``J_c`` from the compiled kernels
-            (:func:`contact_jacobian`) and, with SciPy, splits ``'torques'`` by calling LAPACK
-            directly (``dgeqrf``, ``dormqr``, ``dgesv``, ``dtrtrs``: the same QR, without
-            numpy's per-call checks); ``'numpy'`` runs every step in numpy. Both give the same
-            answer to rounding (``test/test_core_contacts_compiled.py``).
+            (:func:`contact_jacobian`) and splits ``'torques'`` with the compiled
+            :func:`~.algorithms.split.split_kernel` (the same equations); ``'numpy'`` runs
+            every step in numpy. Both give the same answer to rounding
+            (``test/test_core_contacts_compiled.py``).
 
     Returns:
         a :class:`ContactResult`; ``ValueError`` for arguments that name no contact, model
@@ -455,7 +455,7 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
                        np.linalg.matrix_rank(Jc) if len(Jc) else 0)
     # contact-consistent: J_cᵀ = Q [R; 0], Q2ᵀ Sᵀ τ = Q2ᵀ b, λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
     w = np.sqrt(_weights(weights, n, 'joint')) if weights is not None else None
-    split = _split_lapack(Jc, b, n, w) if kern is not None else None
+    split = _split_compiled(Jc, b, n, w) if kern is not None else None
     if split is not None:
         return _result(plan, b, Jc, *split, 'torques', 'solved', len(Jc))
     if w is None:
@@ -481,76 +481,50 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
 
 
 _c_rnea = compiled.ext.rnea if compiled.ext is not None else None
-_lapack = []        # scipy.linalg.lapack, imported on first use (or None without SciPy)
+_c_split = compiled.ext.split if compiled.ext is not None else None
 
 
-def _split_lapack(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
-    """The contact-consistent ``(τ, λ)`` of full-rank ``J_c`` by LAPACK, or ``None``.
+def _split_compiled(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
+    """The contact-consistent ``(τ, λ)`` by the compiled split, or ``None``.
 
-    The numpy split's equations, in three LAPACK calls: one QR (``dgeqrf``) of
-    ``[J_cᵀ, b, Sᵀ]`` (nv × (k + 1 + n)), whose first ``k`` columns are ``J_cᵀ = Q [R; 0]``
-    and whose others are then ``Qᵀ b`` and ``Qᵀ Sᵀ``, their last ``nv - k`` rows turned by
-    the further reflectors (an orthogonal change of the basis ``Q2`` of the equations, which
-    keeps their least-norm solution): ``A = Q2ᵀ Sᵀ``, ``y = Q2ᵀ b``, ``τ = Aᵀ (A Aᵀ)⁻¹ y``
-    (``dgesv``), ``λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)`` (``dtrtrs``). ``None`` (the numpy split then
-    answers) without SciPy, for redundant contact rows (the numpy split's rank test), fewer
-    than six contact rows or ``nv`` or more, or base rows the contacts cannot carry (its check
-    that ``A τ = y``).
+    :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars: a
+    Householder QR of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ`` by Cholesky, ``R λ`` by
+    back substitution). ``None`` (the numpy split then answers, as it always did) for fewer
+    contact rows than six or ``nv`` or more, and for the cases the kernel leaves to it:
+    redundant contact rows, base rows the contacts cannot carry.
     """
-    if not _lapack:
-        try:
-            from scipy.linalg import lapack
-        except ImportError:
-            lapack = None
-        _lapack.append(lapack)
-    lapack = _lapack[0]
     k, nv = Jc.shape
-    if lapack is None or not 6 <= k < nv:
+    if not 6 <= k < nv:
         return None
-    M, upper = _augmented(nv, k, n)             # [J_cᵀ, b, Sᵀ], Sᵀ = [0; 1]
-    M[:, :k] = Jc.T
-    M[:, k] = b
-    F, _, _, info = lapack.dgeqrf(M, overwrite_a=1)
-    d = [abs(x) for x in F.diagonal()[:k].tolist()]
-    if info or not min(d) > 1e-10 * max(1.0, max(d)):
-        return None
-    # Qᵀ Sᵀ: rows :k Q1ᵀ Sᵀ, rows k: A (dgeqrf keeps its reflectors below the diagonal)
-    QS = F[:, k + 1:] * upper
-    beta = float(F[k, k])                       # y = (β, 0, …)
-    y = np.zeros(nv - k)
-    y[0] = beta
-    A = QS[k:] if w is None else QS[k:] / w
-    *_, x, info = lapack.dgesv(A @ A.T, y)
-    if info:
-        return None
-    tau = A.T @ x                               # τ w: the least-norm solution of A (τ w) = y
-    if w is not None:
-        tau /= w
-    QSt = (QS @ tau).tolist()                   # [Q1ᵀ Sᵀ τ; A τ w]
-    r = QSt[k:]                                 # A τ w = y to 1e-9 (each row within atol)
-    r[0] -= beta
-    if not max(map(abs, r)) <= 1e-9 * max(1.0, abs(beta)):
-        return None
-    lam, info = lapack.dtrtrs(F[:, :k], F[:k, k] - QSt[:k])     # R λ = Q1ᵀ (b - Sᵀ τ)
-    return (tau, lam) if info == 0 else None
+    QR = _augmented(nv, k, n)                   # [J_cᵀ, b, Sᵀ] by columns: (k + 1 + n, nv)
+    QR[:k] = Jc
+    QR[k] = b
+    res = np.empty(n + k + 1)
+    _c_split(QR, k, _ones(n) if w is None else w, res, np.empty((nv - k) * (nv - k + 1)))
+    return (res[:n], res[n:n + k]) if res[n + k] == 0.0 else None
 
 
-_augments: dict = {}
+_made: dict = {}
 
 
-def _augmented(nv: int, k: int, n: int) -> tuple:
-    """A new (nv, k + 1 + n) Fortran-ordered array whose last ``n`` columns are ``Sᵀ = [0; 1]``,
-    and the (nv, n) mask of what its factor holds of ``Qᵀ Sᵀ`` (not the reflectors)."""
-    made = _augments.get((nv, k, n))
-    if made is None:
-        M = np.zeros((nv, k + 1 + n), order='F')
-        M[nv - n:, k + 1:] = np.eye(n)
-        upper = np.ones((nv, n))                    # the factor's rows k + i: columns i - 1 …
-        upper[k:] = np.triu(upper[k:], -1)
-        for x in (M, upper):
-            x.setflags(write=False)
-        made = _augments[nv, k, n] = (M, upper)
-    return made[0].copy(order='F'), made[1]
+def _augmented(nv: int, k: int, n: int) -> np.ndarray:
+    """A new (k + 1 + n, nv) array whose last ``n`` rows are the columns of ``Sᵀ = [0; 1]``."""
+    M = _made.get((nv, k, n))
+    if M is None:
+        M = np.zeros((k + 1 + n, nv))
+        M[k + 1:, nv - n:] = np.eye(n)
+        M.setflags(write=False)
+        _made[nv, k, n] = M
+    return M.copy()
+
+
+def _ones(n: int) -> np.ndarray:
+    """``n`` ones, read-only, made once."""
+    ones = _made.get(n)
+    if ones is None:
+        ones = _made[n] = np.ones(n)
+        ones.setflags(write=False)
+    return ones
 
 
 def _weights(weights, size: int, what: str) -> np.ndarray:

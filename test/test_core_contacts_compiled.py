@@ -4,7 +4,7 @@
 
 ``contact_jacobian`` and ``contact_inverse_dynamics`` with ``backend='compiled'`` take every
 body's world-aligned Jacobian from one compiled pass (``bodies_kernel``) and split the
-``'torques'`` by LAPACK directly; ``backend='numpy'`` is the reference (numpy columns, numpy
+``'torques'`` with the compiled ``split_kernel``; ``backend='numpy'`` is the reference (numpy columns, numpy
 QR). Oracles: that reference, ``sd.jacobian(..., frame='world')`` for the bodies' rows, and
 Pinocchio's frame Jacobians on a model with mimic joints (Talos' grippers).
 """
@@ -150,13 +150,13 @@ def test_weights_surfaces_measured_and_redundant_rows(solo, talos):
 def test_a_wrong_fast_split_is_seen(solo, monkeypatch):
     """The comparison above catches a fast path that is off: a perturbed λ fails it."""
     from spatial_dynamics import contacts as module
-    split = module._split_lapack
+    split = module._split_compiled
 
     def off(*args):
         tau, lam = split(*args)
         return tau, lam * (1.0 + 1e-10)
 
-    monkeypatch.setattr(module, '_split_lapack', off)
+    monkeypatch.setattr(module, '_split_compiled', off)
     rng = np.random.default_rng(8)
     q, qd, qdd = state(solo, rng)
     feet = [sd.Contact(f) for f in FEET]
