@@ -203,8 +203,8 @@ _c_bodies = compiled.ext.bodies if compiled.ext is not None else None
 #: ``_SHIFT[a]`` is the coefficient of ``d_a`` in ``[1 0; -d× 1]`` (6x6)
 _SHIFT = np.zeros((3, 6, 6))
 _SHIFT[0, 4, 2], _SHIFT[0, 5, 1] = 1.0, -1.0        # -d× = [[0, d2, -d1],
-_SHIFT[1, 3, 2], _SHIFT[1, 5, 0] = -1.0, 1.0        #        [-d2, 0, d0],
-_SHIFT[2, 3, 1], _SHIFT[2, 4, 0] = 1.0, -1.0        #        [d1, -d0, 0]]
+_SHIFT[1, 3, 2], _SHIFT[1, 5, 0] = -1.0, 1.0        # [-d2, 0, d0],
+_SHIFT[2, 3, 1], _SHIFT[2, 4, 0] = 1.0, -1.0        # [d1, -d0, 0]]
 
 
 def _jacobian(model: Model, q: list, contacts: Sequence[Contact]) -> np.ndarray:
@@ -485,7 +485,7 @@ _c_split = compiled.ext.split if compiled.ext is not None else None
 
 
 def _split_compiled(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
-    """The contact-consistent ``(τ, λ)`` by the compiled split, or ``None``.
+    """Return the contact-consistent ``(τ, λ)`` by the compiled split, or ``None``.
 
     :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars: a
     Householder QR of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ`` by Cholesky, ``R λ`` by
@@ -508,7 +508,7 @@ _made: dict = {}
 
 
 def _augmented(nv: int, k: int, n: int) -> np.ndarray:
-    """A new (k + 1 + n, nv) array whose last ``n`` rows are the columns of ``Sᵀ = [0; 1]``."""
+    """Return a new (k + 1 + n, nv) array whose last ``n`` rows are the columns of ``Sᵀ``."""
     M = _made.get((nv, k, n))
     if M is None:
         M = np.zeros((k + 1 + n, nv))
@@ -519,7 +519,7 @@ def _augmented(nv: int, k: int, n: int) -> np.ndarray:
 
 
 def _ones(n: int) -> np.ndarray:
-    """``n`` ones, read-only, made once."""
+    """Return ``n`` ones, read-only, made once."""
     ones = _made.get(n)
     if ones is None:
         ones = _made[n] = np.ones(n)

@@ -29,13 +29,13 @@ needs_ext = pytest.mark.skipif(compiled.ext is None, reason='built without the k
 
 @pytest.fixture(scope='module')
 def tree():
-    """A fixed-base random tree of 9 bodies, branching, with mimic joints."""
+    """Return a fixed-base random tree of 9 bodies, branching, with mimic joints."""
     return sd.Model.from_urdf(random_tree_urdf(np.random.default_rng(5), 9, branching=True,
                                                mimic=True))
 
 
 def source_bodies(model, q):
-    """``bodies_kernel`` of the source on Python floats: (NB + 1, 16 + 6 nv)."""
+    """Return ``bodies_kernel`` of the source on Python floats: (NB + 1, 16 + 6 nv)."""
     rows = layout.of(model).rows
     Xup = [None] * len(rows)
     xup_kernel(rows, q.tolist(), math, Xup)
@@ -76,7 +76,7 @@ def test_bodies_flat_and_compiled_compute_what_the_source_computes(tree):
 
 
 def split_problem(rng, k=12, n=12, nb=6):
-    """A random ``[J_cᵀ, b, Sᵀ]`` by columns ((k + 1 + n, nv)) and weights' square roots."""
+    """Return a random ``[J_cᵀ, b, Sᵀ]`` by columns ((k + 1 + n, nv)), weights' roots."""
     nv = nb + n
     QR = np.zeros((k + 1 + n, nv))
     QR[:k] = rng.normal(size=(k, nv))
@@ -87,7 +87,7 @@ def split_problem(rng, k=12, n=12, nb=6):
 
 
 def numpy_split(QR, k, w):
-    """The numpy split of ``contact_inverse_dynamics`` (its equations, numpy's QR)."""
+    """Return the numpy split of ``contact_inverse_dynamics`` (its equations, numpy's QR)."""
     Jc, b = QR[:k], QR[k]
     Q, R = np.linalg.qr(Jc.T, mode='complete')
     Q1, Q2 = Q[:, :k], Q[:, k:]

@@ -4,9 +4,9 @@
 
 ``contact_jacobian`` and ``contact_inverse_dynamics`` with ``backend='compiled'`` take every
 body's world-aligned Jacobian from one compiled pass (``bodies_kernel``) and split the
-``'torques'`` with the compiled ``split_kernel``; ``backend='numpy'`` is the reference (numpy columns, numpy
-QR). Oracles: that reference, ``sd.jacobian(..., frame='world')`` for the bodies' rows, and
-Pinocchio's frame Jacobians on a model with mimic joints (Talos' grippers).
+``'torques'`` with the compiled ``split_kernel``; ``backend='numpy'`` is the reference
+(numpy columns, numpy QR). Oracles: that reference (Solo12, Talos' soles, the full Talos'
+mimic grippers) and ``sd.jacobian(..., frame='world')`` for the bodies' rows.
 """
 
 import os
@@ -37,7 +37,7 @@ def talos():
 
 
 def state(model, rng, scale=1.0):
-    """A random state: base anywhere, tilted; joints, velocities, accelerations of ``scale``."""
+    """Return a random state: base anywhere, tilted; joints, rates of size ``scale``."""
     q = rng.normal(size=model.nq) * scale
     q[:3] = rng.uniform(-2.0, 2.0, 3)
     q[3:7] /= np.linalg.norm(q[3:7])
@@ -45,14 +45,14 @@ def state(model, rng, scale=1.0):
 
 
 def close(fast, ref):
-    """``fast`` equals ``ref`` to 1e-12 of the reference's scale (max(1, |ref|))."""
+    """Assert ``fast`` equals ``ref`` to 1e-12 of the reference's scale (max(1, |ref|))."""
     fast, ref = np.asarray(fast), np.asarray(ref)
     assert fast.shape == ref.shape
     assert np.abs(fast - ref).max(initial=0.0) <= 1e-12 * max(1.0, np.abs(ref).max(initial=0.0))
 
 
 def same(fast, ref):
-    """Two ContactResults alike: torques, forces, base residual, rank, violations."""
+    """Assert two ContactResults alike: torques, forces, base residual, rank, violations."""
     close(fast.tau, ref.tau)
     assert list(fast.forces) == list(ref.forces)
     for name in ref.forces:

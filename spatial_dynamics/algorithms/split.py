@@ -66,8 +66,9 @@ def split_kernel(QR, k, n, nb, wts, res, scr, m) -> None:
         for j in range(i + 1):
             t = 0.0
             for c in range(n):
-                t = t + (QR[k + i + (k + 1 + c) * nv] / wts[c]) * (QR[k + j + (k + 1 + c) * nv]
-                                                                    / wts[c])
+                ai = QR[k + i + (k + 1 + c) * nv] / wts[c]
+                aj = QR[k + j + (k + 1 + c) * nv] / wts[c]
+                t = t + ai * aj
             for a in range(j):
                 t = t - scr[i * p + a] * scr[j * p + a]
             if i == j:
