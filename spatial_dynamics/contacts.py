@@ -153,7 +153,7 @@ class ContactResult:
 
 def contact_jacobian(model: Model, q, contacts: Sequence[Contact],
                      backend: str = 'auto') -> np.ndarray:
-    """Return ``J_c`` (rows, nv): the contacts' rows stacked, world axes at the contact points.
+    """Return ``J_c`` (..., rows, nv): the contacts' rows stacked, world axes at the points.
 
     A point contact's rows are the velocity of its point ``p_c``; a surface contact's
     ``[ω; v_p]`` (Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame Jacobian at the point, angular
@@ -166,6 +166,8 @@ def contact_jacobian(model: Model, q, contacts: Sequence[Contact],
     with numpy; ``'compiled'`` (``'auto'`` when built) takes every body's world-aligned
     Jacobian from one compiled pass (:func:`~.algorithms.jacobian.bodies_kernel`) and
     carries the contact body's to its point, ``[ω; v + ω × d]`` with ``d = R_b r_c``.
+    ``q`` (nq,) or a batch (..., nq): the compiled batch entry and the same products, or
+    numpy state by state.
     """
     plan = _plan(model, contacts)
     kern = kernels(model, backend)
@@ -174,29 +176,45 @@ def contact_jacobian(model: Model, q, contacts: Sequence[Contact],
         if Jc is not None:
             return Jc
     (q,) = as_joint_arrays(model, q)
-    if q.ndim != 1:
-        raise ValueError(f'contact_jacobian takes one state, got q of shape {q.shape}')
-    if kern is not None and q.dtype == np.float64:
-        return _compiled_jacobian(kern, q, plan)
-    return _jacobian(model, q.tolist(), plan.contacts)
+    if kern is not None and q.dtype == np.float64 and q.size:
+        Q = np.ascontiguousarray(q.reshape(-1, q.shape[-1]))
+        rows = np.empty((len(Q),) + _rows_shape(kern))
+        compiled.ext.bodies_batch(kern, len(Q), Q, rows, compiled.THREADS)
+        Jc = _contact_rows(rows[:, plan.bodies], plan, kern.nv)
+        return Jc.reshape(q.shape[:-1] + Jc.shape[-2:])
+    Jc = [_jacobian(model, x.tolist(), plan.contacts) for x in q.reshape(-1, q.shape[-1])]
+    return np.array(Jc).reshape(q.shape[:-1] + (plan.k, len(model.damping)))
+
+
+def _rows_shape(kern) -> tuple:
+    """Return the shape of the compiled bodies' rows of one state: (NB + 1, 16 + 6 nv)."""
+    return (kern.rows, PLACEMENT + 6 * kern.nv)
 
 
 def _compiled_jacobian(kern, q, plan: '_Plan') -> Optional[np.ndarray]:
-    """:func:`contact_jacobian` from the compiled bodies' rows, or ``None`` (q declined).
+    """:func:`contact_jacobian` of one state from the compiled bodies' rows, or ``None``.
+
+    ``None`` when the single-state entry declines ``q`` (a batch, a wrong length, …).
+    """
+    rows = _c_bodies(kern, q)
+    if rows is None or rows.dtype != np.float64:
+        return None
+    return _contact_rows(rows.take(plan.bodies, 0), plan, kern.nv)
+
+
+def _contact_rows(B: np.ndarray, plan: '_Plan', nv: int) -> np.ndarray:
+    """``J_c`` (..., k, nv) from the contact bodies' rows ``B`` (..., nc, 16 + 6 nv).
 
     Each contact body's row holds its placement ``[R_b p_b; 0 1]`` and ``J_b`` (its origin's
     world-aligned Jacobian, :func:`~.algorithms.jacobian.bodies_kernel`); the point at
     ``r_c`` (body coordinates) moves with ``[ω; v + ω × d]``, ``d = R_b r_c``:
     ``J_c = [1 0; -d× 1] J_b``, whose rows are linear in the placement (``plan.shift``).
     """
-    rows = _c_bodies(kern, q)
-    if rows is None or rows.dtype != np.float64:
-        return None
-    B = rows.take(plan.bodies, 0)
     nc, m = plan.shift.shape[0], plan.shift.shape[2] // 6
-    T = (B[:, None, :PLACEMENT] @ plan.shift).reshape(nc, m, 6)     # [-d× 1] or [1 0; -d× 1]
-    Jc = (T @ B[:, PLACEMENT:].reshape(nc, 6, kern.nv)).reshape(nc * m, kern.nv)
-    return Jc if plan.rows is None else Jc[plan.rows]
+    batch = B.shape[:-2]
+    T = (B[..., None, :PLACEMENT] @ plan.shift).reshape(batch + (nc, m, 6))
+    Jc = (T @ B[..., PLACEMENT:].reshape(batch + (nc, 6, nv))).reshape(batch + (nc * m, nv))
+    return Jc if plan.rows is None else Jc[..., plan.rows, :]
 
 
 _c_bodies = compiled.ext.bodies if compiled.ext is not None else None
@@ -437,8 +455,7 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
             raise ValueError('contact_inverse_dynamics takes one state, got q of shape '
                              f'{q.shape}')
         b = rnea(model, q, qd, qdd, gravity, backend=backend)   # M q̈ + h
-        Jc = (_compiled_jacobian(kern, q, plan) if kern is not None and q.dtype == np.float64
-              else _jacobian(model, q.tolist(), contacts))
+        Jc = contact_jacobian(model, q, contacts, backend)
     n = len(b) - 6
     if measured is not None:
         lam = _measured(contacts, measured)

@@ -186,3 +186,19 @@ def test_inputs_the_entries_decline_take_the_checked_path(solo):
                                       zero.astype(np.float32), feet)
     assert r32.feasible
     np.testing.assert_allclose(r32.tau, ref.tau, atol=1e-3)
+
+
+def test_contact_jacobian_of_a_batch_is_each_state_s(solo, talos):
+    """q of shape (2, 3, nq): the compiled batch entry and numpy, state by state alike."""
+    rng = np.random.default_rng(9)
+    for model, contacts in ((solo, [sd.Contact(f, offset=(0.01, 0.0, -0.02)) for f in FEET]),
+                            (talos, [sd.Contact(SOLES[0], kind='surface'),
+                                     sd.Contact(SOLES[1], offset=(0.1, 0.05, 0.0))])):
+        Q = np.array([state(model, rng)[0] for _ in range(6)]).reshape(2, 3, model.nq)
+        each = np.array([sd.contact_jacobian(model, q, contacts, backend='numpy')
+                         for q in Q.reshape(6, -1)]).reshape(2, 3, -1, model.nv)
+        for backend in ('compiled', 'numpy'):
+            J = sd.contact_jacobian(model, Q, contacts, backend=backend)
+            assert J.shape == each.shape
+            close(J, each)
+        assert sd.contact_jacobian(model, Q[:0], contacts).shape == (0, 3) + each.shape[2:]
