@@ -189,7 +189,7 @@ def test_inputs_the_entries_decline_take_the_checked_path(solo):
 
 
 def test_contact_jacobian_of_a_batch_is_each_state_s(solo, talos):
-    """q of shape (2, 3, nq): the compiled batch entry and numpy, state by state alike."""
+    """Take a batch q (2, 3, nq): the compiled batch entry and numpy, state by state alike."""
     rng = np.random.default_rng(9)
     for model, contacts in ((solo, [sd.Contact(f, offset=(0.01, 0.0, -0.02)) for f in FEET]),
                             (talos, [sd.Contact(SOLES[0], kind='surface'),
