@@ -7,7 +7,10 @@ per robot (Solo12, Talos reduced, G1) the single-call time of ``sd.rnea`` and ``
 the same state (``time.thread_time``, the minimum of 25 repeats of 3000 calls: the CPU time
 of this thread, steady on a busy machine), and a batch of 10,000 states through ``sd.rnea``
 against ``pin.rneaInParallel`` on 2 threads (wall time, minimum of 9 runs), with their
-ratios. Our ``q̇ = [ω; v, joints]`` is Pinocchio's ``[v; ω, joints]``.
+ratios. Our ``q̇ = [ω; v, joints]`` is Pinocchio's ``[v; ω, joints]``. Then Solo12 standing
+on its four feet (point contacts): ``sd.contact_inverse_dynamics`` (``'torques'``, the
+contact-consistent split) per state, on the compiled path and on numpy (thread time as
+above, 25 repeats of 300 calls).
 """
 
 import os
@@ -64,6 +67,28 @@ def main() -> None:
         print(f'{name} (nq {model.nq}, nv {model.nv}): sd.rnea {ours:.3f} µs, pin.rnea '
               f'{theirs:.3f} µs ({ours / theirs:.2f}x); batch of {N}: {batch:.3f} against '
               f'rneaInParallel {batch_pin:.3f} µs a state ({batch / batch_pin:.2f}x)')
+        if name == 'solo12':
+            contacts(model, cpu)
+
+
+def contacts(model, cpu) -> None:
+    """Print the contact inverse dynamics row: Solo12 standing on four point feet."""
+    import spatial_dynamics as sd
+    q = np.zeros(model.nq)
+    q[2], q[6] = 0.25, 1.0
+    q[7:] = [0.0, 0.8, -1.6] * 2 + [0.0, -0.8, 1.6] * 2
+    rng = np.random.default_rng(0)
+    qd, qdd = rng.normal(size=(2, model.nv)) * 0.1
+    feet = [sd.Contact(f) for f in ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')]
+
+    def per_state(backend, calls=300):
+        timer = timeit.Timer(lambda: sd.contact_inverse_dynamics(
+            model, q, qd, qdd, feet, backend=backend), timer=time.thread_time)
+        return min(timer.repeat(number=calls, repeat=25)) / calls * 1e6
+
+    fast, slow = per_state('auto'), per_state('numpy', 30)
+    print(f'solo12 contact_inverse_dynamics (four point feet, \'torques\'): {fast:.1f} µs '
+          f'a state; numpy backend {slow:.1f} µs ({slow / fast:.1f}x)')
 
 
 if __name__ == '__main__':

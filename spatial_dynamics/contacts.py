@@ -41,8 +41,9 @@ from typing import Mapping, Optional, Sequence
 import numpy as np
 
 from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
+from .algorithms.jacobian import PLACEMENT
 from .algorithms.rnea import xup_kernel
-from .backends import GRAVITY, layout, rnea
+from .backends import compiled, GRAVITY, kernels, layout, rnea
 from .joints import FREE_FLYER, REVOLUTE
 from .model import Model
 
@@ -86,8 +87,11 @@ class Contact:
         if not (np.isfinite(self.mu) and self.mu >= 0.0):
             raise ValueError(f'contact {self.link!r}: mu must be a finite number >= 0, '
                              f'got {self.mu}')
+        normal = normal / np.linalg.norm(normal)
+        offset.setflags(write=False)        # immutable, as the model: answers derived from
+        normal.setflags(write=False)        # a contact once stay its answers (_plan)
         object.__setattr__(self, 'offset', offset)
-        object.__setattr__(self, 'normal', normal / np.linalg.norm(normal))
+        object.__setattr__(self, 'normal', normal)
         object.__setattr__(self, 'name', self.name or self.link)
 
     @property
@@ -147,8 +151,9 @@ class ContactResult:
         return ', '.join(parts)
 
 
-def contact_jacobian(model: Model, q, contacts: Sequence[Contact]) -> np.ndarray:
-    """Return ``J_c`` (rows, nv): the contacts' rows stacked, world axes at the contact points.
+def contact_jacobian(model: Model, q, contacts: Sequence[Contact],
+                     backend: str = 'auto') -> np.ndarray:
+    """Return ``J_c`` (..., rows, nv): the contacts' rows stacked, world axes at the points.
 
     A point contact's rows are the velocity of its point ``p_c``; a surface contact's
     ``[ω; v_p]`` (Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame Jacobian at the point, angular
@@ -156,12 +161,68 @@ def contact_jacobian(model: Model, q, contacts: Sequence[Contact]) -> np.ndarray
     the contact's path turns about ``s = R_j axis`` through ``p_j``, so its column is
     ``[s; s × (p_c - p_j)]``; a prismatic one ``[0; s]``; the free-flyer's six are those of its
     ``[ω; v]`` in the base frame, ``[R; -(p_c - p_b)× R]`` and ``[0; R]``.
+
+    ``backend`` as :func:`~spatial_dynamics.rnea`'s: ``'numpy'`` builds the columns above
+    with numpy; ``'compiled'`` (``'auto'`` when built) takes every body's world-aligned
+    Jacobian from one compiled pass (:func:`~.algorithms.jacobian.bodies_kernel`) and
+    carries the contact body's to its point, ``[ω; v + ω × d]`` with ``d = R_b r_c``.
+    ``q`` (nq,) or a batch (..., nq): the compiled batch entry and the same products, or
+    numpy state by state.
     """
-    check_model(model)
+    plan = _plan(model, contacts)
+    kern = kernels(model, backend)
+    if kern is not None:
+        Jc = _compiled_jacobian(kern, q, plan)
+        if Jc is not None:
+            return Jc
     (q,) = as_joint_arrays(model, q)
-    if q.ndim != 1:
-        raise ValueError(f'contact_jacobian takes one state, got q of shape {q.shape}')
-    return _jacobian(model, q.tolist(), contacts)
+    if kern is not None and q.dtype == np.float64 and q.size:
+        Q = np.ascontiguousarray(q.reshape(-1, q.shape[-1]))
+        rows = np.empty((len(Q),) + _rows_shape(kern))
+        compiled.ext.bodies_batch(kern, len(Q), Q, rows, compiled.THREADS)
+        Jc = _contact_rows(rows[:, plan.bodies], plan, kern.nv)
+        return Jc.reshape(q.shape[:-1] + Jc.shape[-2:])
+    Jc = [_jacobian(model, x.tolist(), plan.contacts) for x in q.reshape(-1, q.shape[-1])]
+    return np.array(Jc).reshape(q.shape[:-1] + (plan.k, len(model.damping)))
+
+
+def _rows_shape(kern) -> tuple:
+    """Return the shape of the compiled bodies' rows of one state: (NB + 1, 16 + 6 nv)."""
+    return (kern.rows, PLACEMENT + 6 * kern.nv)
+
+
+def _compiled_jacobian(kern, q, plan: '_Plan') -> Optional[np.ndarray]:
+    """:func:`contact_jacobian` of one state from the compiled bodies' rows, or ``None``.
+
+    ``None`` when the single-state entry declines ``q`` (a batch, a wrong length, …).
+    """
+    rows = _c_bodies(kern, q)
+    if rows is None or rows.dtype != np.float64:
+        return None
+    return _contact_rows(rows.take(plan.bodies, 0), plan, kern.nv)
+
+
+def _contact_rows(B: np.ndarray, plan: '_Plan', nv: int) -> np.ndarray:
+    """``J_c`` (..., k, nv) from the contact bodies' rows ``B`` (..., nc, 16 + 6 nv).
+
+    Each contact body's row holds its placement ``[R_b p_b; 0 1]`` and ``J_b`` (its origin's
+    world-aligned Jacobian, :func:`~.algorithms.jacobian.bodies_kernel`); the point at
+    ``r_c`` (body coordinates) moves with ``[ω; v + ω × d]``, ``d = R_b r_c``:
+    ``J_c = [1 0; -d× 1] J_b``, whose rows are linear in the placement (``plan.shift``).
+    """
+    nc, m = plan.shift.shape[0], plan.shift.shape[2] // 6
+    batch = B.shape[:-2]
+    T = (B[..., None, :PLACEMENT] @ plan.shift).reshape(batch + (nc, m, 6))
+    Jc = (T @ B[..., PLACEMENT:].reshape(batch + (nc, 6, nv))).reshape(batch + (nc * m, nv))
+    return Jc if plan.rows is None else Jc[..., plan.rows, :]
+
+
+_c_bodies = compiled.ext.bodies if compiled.ext is not None else None
+#: ``_SHIFT[a]`` is the coefficient of ``d_a`` in ``[1 0; -d× 1]`` (6x6)
+_SHIFT = np.zeros((3, 6, 6))
+_SHIFT[0, 4, 2], _SHIFT[0, 5, 1] = 1.0, -1.0        # -d× = [[0, d2, -d1],
+_SHIFT[1, 3, 2], _SHIFT[1, 5, 0] = -1.0, 1.0        # [-d2, 0, d0],
+_SHIFT[2, 3, 1], _SHIFT[2, 4, 0] = 1.0, -1.0        # [d1, -d0, 0]]
 
 
 def link_orientations(model: Model, q, links: Sequence[str]) -> dict:
@@ -287,12 +348,71 @@ def _depths(model: Model) -> tuple:
     return levels
 
 
-def _contacts(model: Model, contacts) -> tuple:
-    """Check the model (floating) and the contacts; return the contacts as a tuple."""
+@dataclass(frozen=True, eq=False)
+class _Plan:
+    """What a model and its contacts fix for every state: checked once (:func:`_plan`).
+
+    ``bodies`` (nc,) the contact bodies; ``shift`` (nc, 16, 6 m) gives the rows ``T`` of
+    ``[1 0; -d× 1]`` with ``d = R_b r_c`` (``r_c`` the contact point in body coordinates)
+    from the body's placement ``H = [R_b p_b; 0 1]`` flat, ``T = H shift``: the three ``v``
+    rows (m = 3) when every contact is a point, else all six, of which a point keeps its
+    ``v`` (``rows``; ``None``: all); and per contact ``(name, first row, rows, normal, μ)``
+    for the result (plain floats).
+    """
+
+    contacts: tuple
+    bodies: np.ndarray
+    shift: np.ndarray
+    rows: Optional[np.ndarray]
+    k: int
+    checks: tuple
+
+
+#: model -> {ids of its contacts: their _Plan}; a plan holds its contacts, so their ids stay
+#: theirs while it lives (a cache of a pure function of immutable records).
+_plans: 'weakref.WeakKeyDictionary[Model, dict]' = weakref.WeakKeyDictionary()
+
+
+def _plan(model: Model, contacts) -> _Plan:
+    """Check the contacts on ``model`` (once per model and contacts) and plan their rows."""
     check_model(model)
-    if not model.floating:
-        raise ValueError(f'{model.name!r} has a fixed base: contact inverse dynamics needs a '
-                         "floating base (Model.from_urdf(..., base='floating'))")
+    contacts = tuple(contacts)
+    plans = _plans.get(model)
+    if plans is None:
+        plans = _plans[model] = {}
+    key = tuple(map(id, contacts))
+    plan = plans.get(key)
+    if plan is not None:
+        return plan
+    contacts = _contacts(model, contacts)
+    bodies, offsets, rows, checks, row = [], [], [], [], 0
+    for j, c in enumerate(contacts):
+        frame = model.frames[c.link]
+        E_lb, r_lb = _Er(frame.lXb)
+        bodies.append(frame.body)
+        offsets.append(r_lb + E_lb.T @ c.offset)
+        rows += range(6 * j + 6 - c.rows, 6 * j + 6)
+        checks.append((c.name, row, c.rows, tuple(c.normal.tolist()), float(c.mu)))
+        row += c.rows
+    points = all(c.kind == 'point' for c in contacts)
+    kept = slice(3, 6) if points else slice(0, 6)
+    nc, m = len(contacts), 3 if points else 6
+    # T = [1 0; -d× 1] (its kept rows), d_a = Σ_j R[a, j] r_j: H[4 a + j] r_j _SHIFT[a] + H[15] 1
+    shift = np.zeros((nc, 4, 4, m, 6))
+    shift[:, :3, :3] = np.einsum('cj,arx->cajrx', np.array(offsets).reshape(-1, 3),
+                                 _SHIFT[:, kept])
+    shift[:, 3, 3] = np.eye(6)[kept]
+    if len(plans) >= 64:        # contacts made anew for each call: keep the last ones
+        plans.clear()
+    plan = plans[key] = _Plan(contacts, np.array(bodies, dtype=np.intp),
+                              shift.reshape(nc, 16, 6 * m),
+                              None if points or len(rows) == 6 * nc else np.array(rows), row,
+                              tuple(checks))
+    return plan
+
+
+def _contacts(model: Model, contacts) -> tuple:
+    """Check the contacts (their links, names); return them as a tuple."""
     contacts = tuple(contacts)
     names = set()
     for c in contacts:
@@ -310,7 +430,7 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
                              measured: Optional[Mapping[str, np.ndarray]] = None,
                              method: str = 'torques', weights=None,
                              gravity: Sequence[float] = GRAVITY,
-                             force_weight: float = 1e-6) -> ContactResult:
+                             force_weight: float = 1e-6, backend: str = 'auto') -> ContactResult:
     """Joint torques and contact forces that make a floating-base robot follow ``q̈``.
 
     Args:
@@ -326,35 +446,58 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
             (``'forces'``); default ones.
         gravity: m/s², world coordinates.
         force_weight: the QP's small weight on the contact forces (makes λ unique).
+        backend: as :func:`~spatial_dynamics.rnea`'s. ``'compiled'`` (``'auto'`` when built)
+            takes ``M q̈ + h`` and ``J_c`` from the compiled kernels
+            (:func:`contact_jacobian`) and splits ``'torques'`` with the compiled
+            :func:`~.algorithms.split.split_kernel` (the same equations); ``'numpy'`` runs
+            every step in numpy. Both give the same answer to rounding
+            (``test/test_core_contacts_compiled.py``).
 
     Returns:
         a :class:`ContactResult`; ``ValueError`` for arguments that name no contact, model
         or method, never a base torque in ``tau``.
     """
-    contacts = _contacts(model, contacts)
-    q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
-    if q.ndim != 1:
-        raise ValueError(f'contact_inverse_dynamics takes one state, got q of shape {q.shape}')
+    plan = _plan(model, contacts)
+    contacts = plan.contacts
+    if not model.floating:
+        raise ValueError(f'{model.name!r} has a fixed base: contact inverse dynamics needs a '
+                         "floating base (Model.from_urdf(..., base='floating'))")
     if method not in METHODS:
         raise ValueError(f'method must be one of {METHODS}, got {method!r}')
-    b = rnea(model, q, qd, qdd, gravity)               # M q̈ + h
-    Jc = contact_jacobian(model, q, contacts)
-    n = model.nv - 6
+    kern = kernels(model, backend)
+    b = Jc = None
+    if kern is not None:        # one float64 state the compiled entries read as it is
+        b = _c_rnea(kern, q, qd, qdd, gravity)
+        if b is not None and b.dtype == np.float64:
+            Jc = _compiled_jacobian(kern, q, plan)
+    if Jc is None:
+        q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
+        if q.ndim != 1:
+            raise ValueError('contact_inverse_dynamics takes one state, got q of shape '
+                             f'{q.shape}')
+        b = rnea(model, q, qd, qdd, gravity, backend=backend)   # M q̈ + h
+        Jc = contact_jacobian(model, q, contacts, backend)
+    n = len(b) - 6
     if measured is not None:
         lam = _measured(contacts, measured)
-        return _result(contacts, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'measured', 'solved',
+        return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'measured', 'solved',
                        np.linalg.matrix_rank(Jc) if len(Jc) else 0)
     if method == 'qp':
-        return _qp(contacts, b, Jc, n, _weights(weights, n, 'joint'), force_weight)
+        return _qp(plan, b, Jc, n, _weights(weights, n, 'joint'), force_weight)
     if method == 'forces':
         W = _weights(weights, len(Jc), 'contact row')
         A = Jc[:, :6].T                                 # base rows: A λ = b_base
         AWi = A / W
         lam = AWi.T @ np.linalg.lstsq(AWi @ A.T, b[:6], rcond=None)[0] if len(Jc) else Jc[:, 0]
-        return _result(contacts, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'forces', 'solved',
+        return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'forces', 'solved',
                        np.linalg.matrix_rank(Jc) if len(Jc) else 0)
     # contact-consistent: J_cᵀ = Q [R; 0], Q2ᵀ Sᵀ τ = Q2ᵀ b, λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
-    w = np.sqrt(_weights(weights, n, 'joint'))
+    w = np.sqrt(_weights(weights, n, 'joint')) if weights is not None else None
+    split = _split_compiled(Jc, b, n, w) if kern is not None else None
+    if split is not None:
+        return _result(plan, b, Jc, *split, 'torques', 'solved', len(Jc))
+    if w is None:
+        w = np.ones(n)
     Q, R = np.linalg.qr(Jc.T, mode='complete')
     d = np.abs(np.diagonal(R))
     rank = int(np.sum(d > 1e-10 * max(1.0, d.max()))) if len(Jc) else 0
@@ -372,7 +515,54 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         lam = np.linalg.solve(R[:rank], Q1.T @ rest)
     else:                           # redundant contact rows: the least λ
         lam = np.linalg.lstsq(Jc.T, rest, rcond=None)[0]
-    return _result(contacts, b, Jc, tau, lam, 'torques', 'solved', rank)
+    return _result(plan, b, Jc, tau, lam, 'torques', 'solved', rank)
+
+
+_c_rnea = compiled.ext.rnea if compiled.ext is not None else None
+_c_split = compiled.ext.split if compiled.ext is not None else None
+
+
+def _split_compiled(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
+    """Return the contact-consistent ``(τ, λ)`` by the compiled split, or ``None``.
+
+    :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars: a
+    Householder QR of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ`` by Cholesky, ``R λ`` by
+    back substitution). ``None`` (the numpy split then answers, as it always did) for fewer
+    contact rows than six or ``nv`` or more, and for the cases the kernel leaves to it:
+    redundant contact rows, base rows the contacts cannot carry.
+    """
+    k, nv = Jc.shape
+    if not 6 <= k < nv:
+        return None
+    QR = _augmented(nv, k, n)                   # [J_cᵀ, b, Sᵀ] by columns: (k + 1 + n, nv)
+    QR[:k] = Jc
+    QR[k] = b
+    res = np.empty(n + k + 1)
+    _c_split(QR, k, _ones(n) if w is None else w, res, np.empty((nv - k) * (nv - k + 1)))
+    return (res[:n], res[n:n + k]) if res[n + k] == 0.0 else None
+
+
+_made: dict = {}
+
+
+def _augmented(nv: int, k: int, n: int) -> np.ndarray:
+    """Return a new (k + 1 + n, nv) array whose last ``n`` rows are the columns of ``Sᵀ``."""
+    M = _made.get((nv, k, n))
+    if M is None:
+        M = np.zeros((k + 1 + n, nv))
+        M[k + 1:, nv - n:] = np.eye(n)
+        M.setflags(write=False)
+        _made[nv, k, n] = M
+    return M.copy()
+
+
+def _ones(n: int) -> np.ndarray:
+    """Return ``n`` ones, read-only, made once."""
+    ones = _made.get(n)
+    if ones is None:
+        ones = _made[n] = np.ones(n)
+        ones.setflags(write=False)
+    return ones
 
 
 def _weights(weights, size: int, what: str) -> np.ndarray:
@@ -406,21 +596,24 @@ def _measured(contacts, measured) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros(0)
 
 
-def _result(contacts, b, Jc, tau, lam, method, status, rank) -> ContactResult:
-    """Assemble the result: forces by name, base residual, cone and unilateral checks."""
+def _result(plan: _Plan, b, Jc, tau, lam, method, status, rank) -> ContactResult:
+    """Assemble the result: forces by name, base residual, cone and unilateral checks.
+
+    Per contact, its force ``f`` (the last three of its λ), normal ``n`` and ``μ``: the
+    normal force ``f_n = n · f`` and the tangential ``f_t = |f - f_n n|`` (on floats).
+    """
     residual = b[:6] - Jc[:, :6].T @ lam
-    forces, violations, k = {}, [], 0
-    for c in contacts:
-        lam_c = lam[k:k + c.rows]
-        k += c.rows
-        forces[c.name] = lam_c
-        f = lam_c[-3:]
-        fn = float(c.normal @ f)
-        ft = float(np.linalg.norm(f - fn * c.normal))
+    forces, violations, values = {}, [], lam.tolist()
+    for name, k, rows, (n0, n1, n2), mu in plan.checks:
+        forces[name] = lam[k:k + rows]
+        f0, f1, f2 = values[k + rows - 3:k + rows]
+        fn = n0 * f0 + n1 * f1 + n2 * f2
+        t0, t1, t2 = f0 - fn * n0, f1 - fn * n1, f2 - fn * n2
+        ft = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
         if fn < 0.0:
-            violations.append(Violation(c.name, 'unilateral', -fn))
-        if ft > c.mu * max(fn, 0.0) + 1e-9 * max(1.0, abs(fn)):
-            violations.append(Violation(c.name, 'friction', ft - c.mu * max(fn, 0.0)))
+            violations.append(Violation(name, 'unilateral', -fn))
+        if ft > mu * max(fn, 0.0) + 1e-9 * max(1.0, abs(fn)):
+            violations.append(Violation(name, 'friction', ft - mu * max(fn, 0.0)))
     return ContactResult(np.asarray(tau, dtype=float), forces, residual, violations, method,
                          status, rank)
 
@@ -432,8 +625,9 @@ def _tangents(normal: np.ndarray) -> tuple:
     return t1, np.cross(normal, t1)
 
 
-def _qp(contacts, b, Jc, n, W, force_weight) -> ContactResult:
+def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     """Solve the friction-cone QP with Clarabel; see :func:`contact_inverse_dynamics`."""
+    contacts = plan.contacts
     try:
         import clarabel
         from scipy import sparse
@@ -469,9 +663,9 @@ def _qp(contacts, b, Jc, n, W, force_weight) -> ContactResult:
         kind = ('infeasible: no contact forces inside the friction cones carry the base rows'
                 if 'Infeasible' in status else f'not solved ({status})')
         nan = np.full(nx, np.nan)
-        result = _result(contacts, b, Jc, nan[:n], nan[n:], 'qp', kind, 0)
+        result = _result(plan, b, Jc, nan[:n], nan[n:], 'qp', kind, 0)
         result.base_residual = b[:6].copy()     # nothing carries the base rows
         result.violations = []
         return result
-    return _result(contacts, b, Jc, x[:n], x[n:], 'qp', 'solved',
+    return _result(plan, b, Jc, x[:n], x[n:], 'qp', 'solved',
                    int(np.linalg.matrix_rank(Jc)) if k else 0)

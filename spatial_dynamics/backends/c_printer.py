@@ -25,9 +25,9 @@ _C_RESERVED = {'auto', 'case', 'char', 'const', 'default', 'double', 'enum', 'ex
                'volatile'}
 #: Parameters of the generated kernels that are arrays (the rest are doubles, or int flags).
 _C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'dq', 'f_body', 'tau', 'work', 'H', 'mom', 'ctq', 'Y',
-             'axes'}
+             'axes', 'J', 'QR', 'wts', 'res', 'scr'}
 #: Parameters that are integers: flags, and the joints' code, indices and column.
-_C_FLAGS = {'has_fext', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row'}
+_C_FLAGS = {'has_fext', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row', 'nb'}
 #: ``len(x)`` of an array parameter: the number of velocity coordinates ``nv`` (``q̇``, ``τ``),
 #: ``nv * nv`` for M(q), ``nv * 10 NB`` for the regressor.
 _C_LENGTH = {'H': 'nv * nv', 'Y': 'nv * 10 * (rows - 1)'}
@@ -154,7 +154,7 @@ class _ToC:
                 return _C_LENGTH.get(node.args[0].id, 'nv')
         elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
               and isinstance(node.func.value, ast.Name) and node.func.value.id == 'np'
-              and node.func.attr in ('sin', 'cos')):
+              and node.func.attr in ('sin', 'cos', 'sqrt')):
             return f'{node.func.attr}({self.expr(node.args[0])})'
         raise SyntaxError(f'line {getattr(node, "lineno", "?")}: no C for '
                           f'{ast.unparse(node)!r}')

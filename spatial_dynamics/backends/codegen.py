@@ -4,7 +4,8 @@
 
 The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
 :mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`,
-:mod:`~spatial_dynamics.algorithms.momentum`, :mod:`~spatial_dynamics.algorithms.regressor`)
+:mod:`~spatial_dynamics.algorithms.momentum`, :mod:`~spatial_dynamics.algorithms.regressor`,
+:mod:`~spatial_dynamics.algorithms.jacobian`'s bodies, :mod:`~spatial_dynamics.algorithms.split`)
 are plain Python over tuples and lists. This module rewrites their syntax tree statement for
 statement onto flat float64 arrays (``_kernels_generated.py``, a readable listing the tests
 run, :func:`flat_module`) and prints the result as C (``_kernels_generated.h``, written into
@@ -57,7 +58,7 @@ from . import layout
 from .c_printer import _ToC, lanes_c
 from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_torque,
                       joint_transform, joint_velocity)
-from ..algorithms import components, crba, momentum, regressor, rnea
+from ..algorithms import components, crba, jacobian, momentum, regressor, rnea, split
 
 #: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
 #: (m, h, Ibar) (10) per body, flat.
@@ -72,13 +73,15 @@ SOURCES = (components.cross, components.X_motion, components.XT_force, component
            joint_transform, joint_motion, joint_velocity, joint_torque, joint_ctq, joint_axis,
            joint_crba,
            rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
-           regressor.regressor_kernel)
+           regressor.regressor_kernel, jacobian.bodies_kernel, split.split_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
               'rnea_kernel': 'K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work',
               'crba_kernel': 'K, work, H',
               'momentum_kernel': 'K, q, qd, mom, ctq, work',
-              'regressor_kernel': 'K, qd, qdd, gx, gy, gz, Y, axes, work'}
+              'regressor_kernel': 'K, qd, qdd, gx, gy, gz, Y, axes, work',
+              'bodies_kernel': 'K, work, J',
+              'split_kernel': 'QR, k, n, nb, wts, res, scr'}
 #: The generated files' names. Build products, not sources: ``setup.py`` writes the header
 #: into its build directory when it compiles the extension; ``python -m
 #: spatial_dynamics.backends.codegen DIR`` writes both for reading.

@@ -27,7 +27,7 @@ import warnings
 import numpy as np
 
 #: The interface of ``_compiled.c`` this module speaks (its ``API``).
-API = 5
+API = 7
 
 try:
     ext = importlib.import_module(__package__ + '._compiled')

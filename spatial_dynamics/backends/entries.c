@@ -50,6 +50,13 @@ const Algorithm ALGORITHMS[] = {
      "each body); arguments as for rnea, None when one is not such a state.",
      "regressor_batch(kernels, N, q, qd, qdd, gravity, Y, threads) -> None: the regressors of\n"
      "N states (q, qd, qdd N x n each, gravity 3 numbers) into Y (N x n x 10 NB)."},
+    {"bodies", "bodies_batch", 1, 0, 0, BODIES, {"J"},
+     "bodies(kernels, q) -> (NB + 1, 16 + 6 n), or None\n\n"
+     "Each body's row: its placement [R p; 0 0 0 1] (4 x 4 row-major: orientation world <- body,\n"
+     "origin), then its Jacobian (6 x n row-major, angular rows first) at its origin in world\n"
+     "axes.",
+     "bodies_batch(kernels, N, q, J, threads) -> None: the rows of bodies() of N states into\n"
+     "J (N x (NB + 1) x (16 + 6 n))."},
 };
 #define ROWS (sizeof ALGORITHMS / sizeof ALGORITHMS[0])
 const int ALGORITHM_COUNT = (int)ROWS;

@@ -143,6 +143,11 @@ int
 result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 {
     *count = kernel == MOMENTUM ? 2 : 1;
+    if (kernel == BODIES) {     /* a row per body: [R p; 0 1], then J (6 x nv) */
+        dims[0] = h->rows;
+        dims[1] = 16 + 6 * (npy_intp)h->nv;
+        return 2;
+    }
     dims[0] = h->nv;
     dims[1] = kernel == CRBA ? h->nv : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
     return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
@@ -173,6 +178,9 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
         break;
     case MOMENTUM:
         momentum_kernel(K, rows, q, qd, out1, out2, work);
+        break;
+    case BODIES:
+        bodies_kernel(K, rows, work, out1);
         break;
     default:
         regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1,
@@ -208,6 +216,56 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
     return 0;
 }
 
+/* ------------------------------------------------------------------------------------------
+ * The contact-consistent split (algorithms/split.py), on arrays the caller prepares */
+
+/* split(QR, k, wts, res, scr) -> None; QR, res and scr C-contiguous float64, written. */
+static PyObject *
+c_split(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "split takes 5 arguments");
+        return NULL;
+    }
+    const long k = PyLong_AsLong(args[1]);
+    if (k == -1 && PyErr_Occurred())
+        return NULL;
+    PyObject *const objs[4] = {args[0], args[2], args[3], args[4]};
+    static const char *const names[4] = {"QR", "wts", "res", "scr"};
+    Py_buffer v[4];
+    int held = 0;
+    for (; held < 4; held++)
+        if (get_table(objs[held], &v[held], held != 1, names[held]) < 0)
+            goto fail;
+    const Py_ssize_t d = (Py_ssize_t)sizeof(double), n = v[1].len / d, size = v[0].len / d;
+    const Py_ssize_t cols = k + 1 + n, nv = k >= 0 ? size / cols : 0;
+    if (k < 0 || n < 1 || nv * cols != size || nv <= k || nv < n || v[2].len / d < n + k + 1
+            || v[3].len / d < (nv - k) * (nv - k + 1)) {
+        PyErr_SetString(PyExc_ValueError, "split: QR must hold (k + 1 + n) x nv numbers "
+                        "(n = len(wts), nv > k), res n + k + 1, scr (nv - k) (nv - k + 1)");
+        goto fail;
+    }
+    split_kernel(v[0].buf, k, (long)n, (long)(nv - n), v[1].buf, v[2].buf, v[3].buf);
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&v[i]);
+    Py_RETURN_NONE;
+fail:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&v[i]);
+    return NULL;
+}
+
+static PyMethodDef split_methods[] = {
+    {"split", (PyCFunction)(void (*)(void))c_split, METH_FASTCALL,
+     "split(QR, k, wts, res, scr) -> None\n\n"
+     "The contact-consistent split of algorithms/split.py: QR holds [J_c^T, b, S^T] by columns\n"
+     "((k + 1 + n) x nv, C-contiguous float64, overwritten), wts the n square roots of the\n"
+     "weights; writes tau (n), lambda (k) and the status (0 solved, 1 the numpy split's case)\n"
+     "into res; scr is scratch."},
+    {NULL, NULL, 0, NULL},
+};
+
 /* Add Kernels to the module m, with the generated header's SHA-256 and its WORK (scratch
  * doubles a body). */
 int
@@ -220,7 +278,8 @@ kernels_add(PyObject *m)
         Py_DECREF(&KernelsType);
         return -1;
     }
-    if (PyModule_AddStringConstant(m, "KERNELS_SHA256", KERNELS_SHA256) < 0
+    if (PyModule_AddFunctions(m, split_methods) < 0
+            || PyModule_AddStringConstant(m, "KERNELS_SHA256", KERNELS_SHA256) < 0
             || PyModule_AddIntConstant(m, "WORK", WORK) < 0)
         return -1;
     return 0;
