@@ -232,17 +232,21 @@ def link_orientations(model: Model, q, links: Sequence[str]) -> dict:
     the link's fixed placement): what turns a contact force from world axes into the link's.
     """
     check_model(model)
-    (q,) = as_joint_arrays(model, q)
-    if q.ndim != 1:
-        raise ValueError(f'link_orientations takes one state, got q of shape {q.shape}')
-    R, _ = _placements(model, q.tolist())
+    kern = kernels(model)
+    rows = None if kern is None else _c_bodies(kern, q)     # placements: the compiled pass
+    if rows is not None and rows.dtype == np.float64:
+        R = rows[:, :PLACEMENT].reshape(-1, 4, 4)[:, :3, :3]
+    else:
+        (q,) = as_joint_arrays(model, q)
+        if q.ndim != 1:
+            raise ValueError(f'link_orientations takes one state, got q of shape {q.shape}')
+        R, _ = _placements(model, q.tolist())
     result = {}
     for link in links:
         frame = model.frames.get(link)
         if frame is None:
             raise ValueError(f'{link!r} is not a link of {model.name!r}')
-        E_lb, _ = _Er(frame.lXb)
-        result[link] = R[frame.body] @ E_lb.T
+        result[link] = R[frame.body] @ frame.lXb[:3, :3].T    # E_lb = lXb's top-left block
     return result
 
 

@@ -233,3 +233,21 @@ def test_bad_contact_arguments_are_refused(solo):
     with pytest.raises(ValueError, match='method must be one of'):
         sd.contact_inverse_dynamics(model, q, zero, zero, [sd.Contact('FL_FOOT')],
                                     method='magic')
+
+
+@pytest.mark.parametrize('path', ['compiled', 'numpy'])
+def test_link_orientations_are_pinocchios_frame_rotations(solo, talos, path, monkeypatch):
+    """``link_orientations`` (what turns a contact force into the link's axes) = ``oMf.R``."""
+    if path == 'numpy':      # the compiled pass declines: the numpy placements answer
+        monkeypatch.setattr(sd.contacts, '_c_bodies', lambda kern, q: None)
+    rng = np.random.default_rng(7)
+    for (model, pm), links in ((solo, FEET), (talos, SOLES + ('arm_left_7_link',))):
+        pd = pm.createData()
+        for _ in range(5):
+            q = pin.randomConfiguration(pm, -np.ones(pm.nq), np.ones(pm.nq))
+            q[:3] = rng.uniform(-3.0, 3.0, 3)
+            R = sd.contacts.link_orientations(model, q, links)
+            pin.framesForwardKinematics(pm, pd, q)
+            for link in links:
+                np.testing.assert_allclose(R[link], pd.oMf[pm.getFrameId(link)].rotation,
+                                           rtol=0, atol=1e-12)

@@ -192,6 +192,7 @@ class BaseInputs:
         self.flags: Optional[Held] = None
         self.measured: dict = {}                   # link -> Held([n; f] in the link's frame)
         self.received: Counter = Counter()
+        self._contacts: tuple = (None, ())    # (key, the Contacts of contacts.links in force)
         self.rejected: Counter = Counter()
         self.window = BaseWindow()
         self._motion: tuple = (None, None)         # (what it was made from, BaseMotion)
@@ -347,8 +348,12 @@ class BaseInputs:
                                  f'{len(self.flags.value)} flags for the {len(links)} '
                                  f'contacts.links {list(links)}; not publishing')
             flags = self.flags.value
-        return tuple(sd.Contact(link, kind=params.contacts_kind, mu=params.contacts_mu)
-                     for link, touching in zip(links, flags) if touching)
+        key = (links, params.contacts_kind, params.contacts_mu, flags)
+        if self._contacts[0] != key:     # the same Contacts each answer: the library's plan
+            self._contacts = key, tuple(   # for them is cached, their checks made once
+                sd.Contact(link, kind=params.contacts_kind, mu=params.contacts_mu)
+                for link, touching in zip(links, flags) if touching)
+        return self._contacts[1]
 
     def dynamics(self, config, f_ext, now_ns: int) -> Dynamics:
         """Return the :class:`~.control.Dynamics` of an answer on this base (InputError: none)."""
@@ -362,7 +367,7 @@ class BaseInputs:
         return FloatingDynamics(
             robot.model, params.gravity, robot.backend, robot.armature,
             robot.friction_threshold, f_ext,
-            None, np.r_[position, quat], v, self._rate(params, 'base/twist'),
+            None, np.concatenate((position, quat)), v, self._rate(params, 'base/twist'),
             contacts, params.contacts_method, [], self._measured(params, contacts, now_ns))
 
     def solved(self, result: 'sd.ContactResult') -> None:
@@ -401,13 +406,13 @@ class FloatingDynamics(Dynamics):
     measured: Optional[dict] = None
 
     def _solve(self, q, qd, qdd, base_v, base_a, gravity, measured=None) -> np.ndarray:
-        q_full = np.r_[self.base_q, q]
+        q_full = np.concatenate((self.base_q, q))
         if measured is not None:   # world axes, as contact_inverse_dynamics takes them
             rotations = link_orientations(self.model, q_full, list(measured))
             measured = {c.name: _world(rotations[c.link], measured[c.link], c.rows)
                         for c in self.contacts}
         result = sd.contact_inverse_dynamics(
-            self.model, q_full, np.r_[base_v, qd], np.r_[base_a, qdd],
+            self.model, q_full, np.concatenate((base_v, qd)), np.concatenate((base_a, qdd)),
             self.contacts, measured=measured, method=self.method, gravity=gravity)
         if result.status != 'solved':
             raise InputError('contacts_unsolved', f'contacts {self.method}: {result.summary()}')
@@ -421,7 +426,7 @@ class FloatingDynamics(Dynamics):
         if self.armature is not None:
             tau += self.armature * qdd
         if self.friction_threshold is not None:
-            tau += sd.friction_torque(self.model, np.r_[self.base_v, qd],
+            tau += sd.friction_torque(self.model, np.concatenate((self.base_v, qd)),
                                       self.friction_threshold)[6:]
         return tau
 
@@ -454,7 +459,7 @@ def contact_wrenches(model: 'sd.Model', base_q: np.ndarray, q: np.ndarray,
     the node have no offset); a point contact's moment is zero.
     """
     links = tuple(result.forces)
-    rotations = link_orientations(model, np.r_[base_q, q], links)
+    rotations = link_orientations(model, np.concatenate((base_q, q)), links)
     out = []
     for link in links:
         R = rotations[link]
