@@ -152,7 +152,7 @@ def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixe
 #: critically damped soft contact (``solref`` time constant 4 ms, ``solimp`` impedance
 #: 0.99 to 0.999 over 1 mm), elliptic friction cones (our second-order cones), ``impratio``
 #: 10 (tangential forces as stiff as normal ones: little creep), and the solver run to 1e-12.
-CONTACT = {'solref': (0.004, 1.0), 'solimp': (0.99, 0.999, 0.001, 0.5, 2.0),
+CONTACT = {'solref': (0.004, 1.0), 'solimp': (0.999, 0.9999, 0.0001, 0.5, 2.0),
            'impratio': 10.0, 'tolerance': 1e-12, 'iterations': 200}
 
 
