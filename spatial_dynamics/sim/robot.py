@@ -142,6 +142,7 @@ def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixe
         m.opt.impratio = CONTACT['impratio']
         m.opt.tolerance = CONTACT['tolerance']
         m.opt.iterations = CONTACT['iterations']
+        m.opt.noslip_iterations = CONTACT['noslip_iterations']
     else:
         m.opt.disableflags |= int(bits.mjDSBL_CONSTRAINT)
     m.opt.gravity[:] = np.asarray(gravity, dtype=float)
@@ -153,7 +154,7 @@ def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixe
 #: 0.99 to 0.999 over 1 mm), elliptic friction cones (our second-order cones), ``impratio``
 #: 10 (tangential forces as stiff as normal ones: little creep), and the solver run to 1e-12.
 CONTACT = {'solref': (0.004, 1.0), 'solimp': (0.999, 0.9999, 0.0001, 0.5, 2.0),
-           'impratio': 10.0, 'tolerance': 1e-12, 'iterations': 200}
+           'impratio': 10.0, 'tolerance': 1e-12, 'iterations': 200, 'noslip_iterations': 20}
 
 
 @dataclass(frozen=True)
