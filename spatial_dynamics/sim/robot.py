@@ -194,7 +194,7 @@ def _add_feet(mujoco, spec, feet: Sequence[Foot]) -> None:
             kind, size, pos = mujoco.mjtGeom.mjGEOM_SPHERE, [foot.size[0], 0, 0], c.offset
         else:
             kind, size = mujoco.mjtGeom.mjGEOM_BOX, [foot.size[0], foot.size[1], 0.01]
-            pos = np.asarray(c.offset) - [0.0, 0.0, 0.01]
+            pos = np.asarray(c.offset) + [0.0, 0.0, 0.01]       # above the sole plane
         body.add_geom(name=c.name, type=kind, size=size, pos=[float(x) for x in pos],
                       contype=1, conaffinity=0, condim=3, mass=0.0,
                       friction=[c.mu, 0.005, 0.0001], solref=list(CONTACT['solref']),

@@ -6,26 +6,30 @@
     python -m spatial_dynamics.tools.legged --robot talos
 
 MuJoCo (:class:`~spatial_dynamics.sim.robot.FloatingRobot`: free base, floor, stiff soft
-contacts with elliptic friction cones, μ = 0.8, semi-implicit Euler at 1 ms) simulates Solo12
-on four point feet (2 cm spheres) or Talos on two soles (20 × 10 cm boxes; its gripper
-joints fixed) of example-robot-data. The trunk sways: its height and lateral position follow
-``p_d(t) = p_0 + A (1 - cos ωt)`` (Solo12: 3 cm down over 1.2 s, 3 cm sideways over 1.6 s;
-Talos: 5 cm down over 2 s, 6 cm sideways over 2.6 s), its orientation fixed, the feet where
-they stand (after 0.5 s standing still, not counted). The joints' ``q_d`` come from inverse kinematics (Gauss-Newton steps on the feet's
-positions and soles' orientations with :func:`~spatial_dynamics.contact_jacobian`), ``q̇_d``
+contacts with elliptic friction cones and a no-slip pass, μ = 0.8, semi-implicit Euler at
+1 ms; :data:`~spatial_dynamics.sim.robot.CONTACT`) simulates, from example-robot-data, Solo12
+on four point feet (spheres of 2 mm radius at its foot frames) or Talos (``talos_reduced``,
+its gripper joints fixed) on two soles (20 × 10 cm boxes). After 0.5 s standing still (not
+counted) the trunk sways: its position follows ``p_d(t) = p_0 + A (1 - cos ωt)`` (Solo12:
+down 3 cm and sideways 3 cm, periods 1.2 s and 1.6 s; Talos: down 3 cm and sideways 2 cm,
+periods 2 s and 2.6 s; ``1 - cos`` goes up to 2), its orientation fixed, the feet where they
+stand. The joints' ``q_d`` come from inverse kinematics (Gauss-Newton steps on the feet's
+points and the soles' orientations with :func:`~spatial_dynamics.contact_jacobian`), ``q̇_d``
 from ``J_c v = 0`` and ``q̈_d`` from ``J_c a + J̇_c v = 0``.
 
-Two laws with the same low-gain PD on the joints (Solo12: Kp 4 N m/rad, Kd 0.1 N m s/rad;
-Talos: Kp 400, Kd 8):
+Two laws with the same low-gain PD on the joints, critically damped at 10 Hz (Solo12) or
+20 Hz (Talos: below that its whole body topples about the ankles) and scaled per joint by
+the inertia it moves with the trunk held (:func:`gains`):
 
 * ``PD alone``: ``τ = Kp e + Kd ė``;
 * ``PD + contact feed-forward``: ``τ += contact_inverse_dynamics(q_d, v_d, a_d, feet,
-  method='qp').tau``, the torques of the least-torque split inside the friction cones.
+  method='qp').tau``, the least torques whose contact forces stay inside the friction cones.
 
-Prints, for each, the RMS tracking error of the joints (rad) and of the trunk (m), and for the
+Prints, for each, the RMS tracking error of the joints (rad) and of the trunk (m); and for the
 feed-forward run the contact forces: MuJoCo's (``mj_contactForce`` per contact, world axes,
 summed per foot) against the QP's, per foot (vertical, N), and their total against
-``m (g + a_com)`` with MuJoCo's centre-of-mass acceleration. ``--json`` writes the figures.
+``m (a_com - g)``, the rate of the robot's linear momentum over each step (our
+``generalized_momentum`` of MuJoCo's state). ``--json`` writes the figures.
 """
 
 from __future__ import annotations
@@ -265,7 +269,12 @@ def figures(setup: Setup, seconds: float) -> dict:
         'foot_vertical_force_rms_difference_N': rms(fz_theirs - fz_ours),
         'foot_vertical_force_max_difference_N': float(np.abs(fz_theirs - fz_ours).max()),
         'foot_vertical_force_mean_N': float(np.mean(fz_ours)),
+        'total_force_vs_qp_max_N': float(np.abs(total - ff['ours'][:-1].sum(axis=1)).max()),
     }
+    out['foot_vertical_force_rms_relative'] = (out['foot_vertical_force_rms_difference_N']
+                                               / out['foot_vertical_force_mean_N'])
+    out['foot_vertical_force_max_relative'] = (out['foot_vertical_force_max_difference_N']
+                                               / out['foot_vertical_force_mean_N'])
     out['ratio_pd_to_feedforward'] = (out['rms_joint_error_rad'][LAWS[0]]
                                       / out['rms_joint_error_rad'][LAWS[1]])
     return out
@@ -297,7 +306,10 @@ def main(argv=None) -> dict:
     print(f'vertical force per foot, MuJoCo minus QP: RMS '
           f'{out["foot_vertical_force_rms_difference_N"]:.3f} N, max '
           f'{out["foot_vertical_force_max_difference_N"]:.3f} N '
-          f'(mean per foot {out["foot_vertical_force_mean_N"]:.2f} N)')
+          f'(mean per foot {out["foot_vertical_force_mean_N"]:.2f} N: '
+          f'{out["foot_vertical_force_rms_relative"]:.2%}, '
+          f'{out["foot_vertical_force_max_relative"]:.2%})')
+    print(f'floor force total, MuJoCo minus QP: max {out["total_force_vs_qp_max_N"]:.3f} N')
     if args.json:
         write_atomic(args.json, json.dumps(out, indent=2) + '\n', 'the JSON of the figures')
     return out
