@@ -8,7 +8,8 @@
   linear momentum (our ``generalized_momentum`` of MuJoCo's state) over each 1 ms step. It is
   exact in MuJoCo's discrete dynamics but for the change of ``M`` within a step (O(h²));
   measured 3.6e-4 N of 24.5 N (Solo12) and 2.3e-3 N of 886 N (Talos): required 1e-3 m g,
-  whatever the soft contacts do.
+  whatever the soft contacts do. And against the QP's total, ``m (a_com,d - g)`` of the plan:
+  measured 0.27 % and 0.63 % of m g (the robot is where the plan is to a few mm): required 1 %.
 * The vertical force at each foot, MuJoCo's against our QP's: each leg's Jacobian is square,
   so the joint torques decide the forces; they differ by what the PD adds to the
   feed-forward and by the soft floor. Measured RMS 0.25 % / max 0.7 % of a foot's mean load
@@ -35,6 +36,7 @@ def run(robot):
 
 def check(out, rms, worst, ratio):
     assert out['total_force_vs_newton_max_N'] < 1e-3 * out['weight_N']
+    assert out['total_force_vs_qp_max_N'] < 0.01 * out['weight_N']
     assert out['foot_vertical_force_rms_relative'] < rms
     assert out['foot_vertical_force_max_relative'] < worst
     assert out['ratio_pd_to_feedforward'] > ratio
