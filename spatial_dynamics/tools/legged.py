@@ -233,7 +233,8 @@ def run(setup: Setup, plan: list, law: str) -> dict:
         e_joints.append(q_d[7:] - q[7:])
         e_base.append(q_d[:3] - q[:3])
         # linear momentum, world axes: the base rows of M v (base frame) turned by R
-        momentum.append(quaternion_matrix(q[3:7]) @ sd.generalized_momentum(model, q, robot.v)[0][3:6])
+        p = sd.generalized_momentum(model, q, robot.v)[0]
+        momentum.append(quaternion_matrix(q[3:7]) @ p[3:6])
         robot.step(tau)
         forces = robot.contact_forces()         # those of the step just made, at (q, v)
         theirs.append(np.array([forces[c.name][-3:] for c in contacts]))
