@@ -18,8 +18,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from conftest import robot_urdf_path  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.sim.robot import FloatingRobot, Foot  # noqa: E402
-from spatial_dynamics.tools.legged import gains, without_mimic  # noqa: E402
+from spatial_dynamics.sim.robot import FloatingRobot, Foot, without_mimic  # noqa: E402
+from spatial_dynamics.tools.legged import gains  # noqa: E402
 
 SOLO_FEET = ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')
 
@@ -104,6 +104,23 @@ def test_standing_still_the_floor_carries_the_weight_at_the_feet():
     assert np.abs(total[:2]).max() < 1e-3 * weight
     for c in contacts:          # each foot as the QP split it (the legs are square: unique)
         assert forces[c.name][2] == pytest.approx(hold.forces[c.name][2], rel=0.01)
+
+
+def test_a_sole_box_lies_on_its_sole_plane():
+    robot = talos()
+    q = np.zeros(robot.model.nq)
+    q[6] = 1.0
+    q[2] = -robot.frame_pose(q, 'left_sole_link')[1][2]        # the soles on the floor
+    robot.set_state(q)
+    for _ in range(20):         # falling from rest: it touches the floor, nothing pushes yet
+        robot.step(np.zeros(robot.model.nv - 6))
+    assert sum(robot.contact_forces().values())[5] > 0.0
+    assert robot.q[2] < q[2]                    # and did not pop up out of the floor
+
+
+def test_mimic_joints_are_refused_by_name():
+    with pytest.raises(ValueError, match=r'mimic joints are not simulated \(gripper_left'):
+        FloatingRobot(robot_urdf_path('talos_reduced'))
 
 
 def test_a_foot_of_the_wrong_size_or_link_is_refused_by_name():

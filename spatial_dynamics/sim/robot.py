@@ -87,6 +87,24 @@ def dynamics_only(xml: str) -> str:
     return ET.tostring(root, encoding='unicode')
 
 
+def without_mimic(xml: str) -> str:
+    """Return URDF text with every mimic joint and its source fixed at 0 (Talos's grippers).
+
+    For :class:`FloatingRobot`, which simulates no mimic joints.
+    """
+    root = ET.fromstring(xml.encode('utf-8'))
+    names = set()
+    for joint in root.iter('joint'):
+        mimic = joint.find('mimic')
+        if mimic is not None:
+            names |= {joint.get('name'), mimic.get('joint')}
+            joint.remove(mimic)
+    for joint in root.iter('joint'):
+        if joint.get('name') in names:
+            joint.set('type', 'fixed')
+    return ET.tostring(root, encoding='unicode')
+
+
 def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixed',
                  imus: Optional[Mapping[str, tuple]] = None, feet: Sequence['Foot'] = ()):
     """Load URDF text into MuJoCo as the URDF's rigid-body robot (see the module doc).
@@ -542,8 +560,10 @@ class FloatingRobot:
         self._mj = mujoco
         xml = urdf_text(urdf)
         self.model = model = Model.from_urdf(xml.encode('utf-8'), base='floating')
-        if model.mimics or model.locked:
-            raise ValueError('FloatingRobot: mimic and locked joints are not simulated here')
+        if model.mimics:
+            raise ValueError(f'FloatingRobot: mimic joints are not simulated '
+                             f'({", ".join(sorted(model.mimics))}); fix them with '
+                             f'without_mimic(urdf)')
         if not (np.isfinite(timestep) and timestep > 0.0):
             raise ValueError(f'timestep must be a positive number of seconds, got {timestep}')
         self.feet = tuple(feet)

@@ -39,14 +39,13 @@ from dataclasses import dataclass
 import json
 import os
 import sysconfig
-import xml.etree.ElementTree as ET
 
 import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics.files import check_output, write_atomic
 from spatial_dynamics.joints import quaternion_matrix
-from spatial_dynamics.sim.robot import FloatingRobot, Foot, urdf_text
+from spatial_dynamics.sim.robot import FloatingRobot, Foot, urdf_text, without_mimic
 
 LAWS = ('PD alone', 'PD + contact feed-forward')
 MU = 0.8
@@ -97,21 +96,6 @@ def _talos() -> Setup:
 
 
 ROBOTS = {'solo12': _solo12, 'talos': _talos}
-
-
-def without_mimic(xml: str) -> str:
-    """Fix every mimic joint and its source (Talos's grippers) at 0: URDF text."""
-    root = ET.fromstring(xml.encode('utf-8'))
-    names = set()
-    for joint in root.iter('joint'):
-        mimic = joint.find('mimic')
-        if mimic is not None:
-            names |= {joint.get('name'), mimic.get('joint')}
-            joint.remove(mimic)
-    for joint in root.iter('joint'):
-        if joint.get('name') in names:
-            joint.set('type', 'fixed')
-    return ET.tostring(root, encoding='unicode')
 
 
 class Stance:
