@@ -219,6 +219,15 @@ def _add_feet(mujoco, spec, feet: Sequence[Foot]) -> None:
                       solimp=list(CONTACT['solimp']))
 
 
+def xfrc(d, body: int, wrench: np.ndarray) -> np.ndarray:
+    """Return ``[f; n]`` of a link's ``[n; f]`` (its frame, about its origin): MuJoCo's
+    ``xfrc_applied``, world coordinates, about the body's centre of mass."""
+    R = d.xmat[body].reshape(3, 3)
+    f = R @ wrench[3:]
+    n = R @ wrench[:3] + np.cross(d.xpos[body] - d.xipos[body], f)
+    return np.concatenate([f, n])
+
+
 class SimulatedRobot:
     """The rigid-body robot of a URDF, simulated by MuJoCo, driven by joint torques.
 
@@ -492,17 +501,10 @@ class SimulatedRobot:
                              f'{wrench}')
         self._wrenches[link] = (self.m.body(link).id, wrench.copy())
 
-    def _xfrc(self, d, body: int, wrench: np.ndarray) -> np.ndarray:
-        """``[f; n]`` in world coordinates about the body's centre of mass (xfrc_applied)."""
-        R = d.xmat[body].reshape(3, 3)
-        f = R @ wrench[3:]
-        n = R @ wrench[:3] + np.cross(d.xpos[body] - d.xipos[body], f)
-        return np.concatenate([f, n])
-
     def _apply_wrenches(self, d) -> None:
         d.xfrc_applied[:] = 0.0
         for body, wrench in self._wrenches.values():
-            d.xfrc_applied[body] += self._xfrc(d, body, wrench)
+            d.xfrc_applied[body] += xfrc(d, body, wrench)
 
     # ----------------------------------------------------------------------------------------
     # Inverse dynamics
@@ -530,8 +532,8 @@ class SimulatedRobot:
             qfrc = np.zeros(self.m.nv)
             for link, wrench in f_ext.items():
                 body = self.m.body(link).id
-                xfrc = self._xfrc(d, body, np.asarray(wrench, dtype=float))
-                mj.mj_applyFT(self.m, d, xfrc[:3], xfrc[3:], d.xipos[body], body, qfrc)
+                push = xfrc(d, body, np.asarray(wrench, dtype=float))
+                mj.mj_applyFT(self.m, d, push[:3], push[3:], d.xipos[body], body, qfrc)
             tau = tau - self.G.T @ qfrc
         return tau
 
@@ -578,8 +580,12 @@ class FloatingRobot:
             raise ValueError(f'MuJoCo made {m.nq} coordinates and {m.nv} velocities, our model '
                              f'{model.nq} and {model.nv}')
         self._foot_of = {m.geom(f.contact.name).id: k for k, f in enumerate(self.feet)}
+        self.integrator = 'euler'
         self.d = mujoco.MjData(m)
         self._scratch = mujoco.MjData(m)
+        self._wrenches: dict = {}
+        self.resets = 0          # restarts after MuJoCo found a bad acceleration
+        self.reset_reason = ''
         q = np.zeros(model.nq)
         q[6] = 1.0
         self.set_state(q)
@@ -639,19 +645,76 @@ class FloatingRobot:
         """Return the seconds simulated since the start."""
         return float(self.d.time)
 
+    @property
+    def qd(self) -> np.ndarray:
+        """Return the joints' velocities (nv - 6,), in the order of :attr:`joint_names`."""
+        return self.d.qvel[self._vadr].copy()
+
+    def on_floor(self, joint_positions=None) -> np.ndarray:
+        """Return ``q`` with the joints at ``joint_positions`` (default 0), the base upright
+        above the world's origin and its lowest foot on the floor (touching, not pressing)."""
+        q = np.zeros(self.model.nq)
+        q[6] = 1.0
+        if joint_positions is not None:
+            q[7:] = self._vector('joint positions', joint_positions, self.model.nq - 7)
+        if self.feet:
+            self._scratch.qpos[:] = self.to_mujoco(q)[0]
+            self._mj.mj_kinematics(self.m, self._scratch)
+            q[2] = -min(p[2] - (f.size[0] if f.contact.kind == 'point' else 0.0)
+                        for f, p in zip(self.feet, self._contact_points(self._scratch)))
+        return q
+
     def set_state(self, q, v=None) -> None:
-        """Put the robot at ``q`` with velocity ``v`` (default 0); time is kept."""
+        """Put the robot at ``q`` with velocity ``v`` (default 0); time is kept.
+
+        ``q`` is also where the simulation restarts if it diverges (:meth:`step`).
+        """
         self.d.qpos[:], self.d.qvel[:], _ = self.to_mujoco(q, v)
+        self.home = np.array(q, dtype=float)
         self.d.qacc_warmstart[:] = 0.0
         self._mj.mj_forward(self.m, self.d)
 
     def step(self, tau, n: int = 1) -> None:
-        """Advance ``n`` steps with joint torques ``tau`` (nv - 6,) held constant."""
+        """Advance ``n`` steps with joint torques ``tau`` (nv - 6,) held constant.
+
+        When MuJoCo finds a bad acceleration (``mjWARN_BADQACC``: a torque far beyond the
+        robot), it restarts; the robot then restarts at :attr:`home` at rest instead, and
+        :attr:`resets` and :attr:`reset_reason` say so.
+        """
         tau = self._vector('tau', tau, self.model.nv - 6)
-        self.d.qfrc_applied[:] = 0.0
-        self.d.qfrc_applied[self._vadr] = tau
+        m, d, mj = self.m, self.d, self._mj
+        bad = d.warning[int(mj.mjtWarning.mjWARN_BADQACC)]
         for _ in range(int(n)):
-            self._mj.mj_step(self.m, self.d)
+            if self._wrenches:
+                mj.mj_kinematics(m, d)
+                d.xfrc_applied[:] = 0.0
+                for body, wrench in self._wrenches.values():
+                    d.xfrc_applied[body] += xfrc(d, body, wrench)
+            d.qfrc_applied[:] = 0.0
+            d.qfrc_applied[self._vadr] = tau
+            count = bad.number
+            mj.mj_step(m, d)
+            if bad.number != count:
+                self.resets += 1
+                self.reset_reason = (f'at t = {self.time:.6g} s MuJoCo found a bad '
+                                     f'acceleration (dof {bad.lastinfo})')
+                self.set_state(self.home)
+
+    def apply_wrench(self, link: str, wrench) -> None:
+        """Apply ``[n; f]`` (link frame, about its origin) from the next step on; ``None``
+        removes it (as :meth:`SimulatedRobot.apply_wrench`)."""
+        if link not in self.model.frames:
+            raise ValueError(f'apply_wrench: unknown link {link!r}')
+        if wrench is None:
+            self._wrenches.pop(link, None)
+            if not self._wrenches:
+                self.d.xfrc_applied[:] = 0.0
+            return
+        wrench = np.asarray(wrench, dtype=float)
+        if wrench.shape != (6,) or not np.isfinite(wrench).all():
+            raise ValueError(f'apply_wrench {link!r}: need 6 finite numbers [n; f], got '
+                             f'{wrench}')
+        self._wrenches[link] = (self.m.body(link).id, wrench.copy())
 
     # ----------------------------------------------------------------------------------------
     # Inverse dynamics and contact forces
@@ -685,7 +748,7 @@ class FloatingRobot:
         """
         m, d, mj = self.m, self.d, self._mj
         out = {f.contact.name: np.zeros(f.contact.rows) for f in self.feet}
-        points = self._contact_points()
+        points = self._contact_points(d)
         f6 = np.zeros(6)
         for i in range(d.ncon):
             con = d.contact[i]
@@ -705,9 +768,9 @@ class FloatingRobot:
                 out[c.name] += np.r_[np.cross(con.pos - points[k], f), f]
         return out
 
-    def _contact_points(self) -> list:
-        """World position of each foot's contact point now."""
-        d, out = self.d, []
+    def _contact_points(self, d) -> list:
+        """World position of each foot's contact point in ``d`` (after its kinematics)."""
+        out = []
         for foot in self.feet:
             b = self.m.body(foot.contact.link).id
             out.append(d.xpos[b] + d.xmat[b].reshape(3, 3) @ foot.contact.offset)

@@ -105,14 +105,10 @@ class Stance:
         self.robot, self.model = robot, robot.model
         self.contacts = [f.contact for f in robot.feet]
         self.A, self.w = np.array(setup.amplitude), 2 * np.pi / np.array(setup.period)
-        q = np.zeros(self.model.nq)
-        q[6] = 1.0
+        joints = np.zeros(self.model.nq - 7)
         for name, value in setup.posture.items():
-            q[7 + robot.joint_names.index(name)] = value
-        # the trunk's height that puts the lowest foot point on the floor (z = 0)
-        low = min(p[2] - (f.size[0] if f.contact.kind == 'point' else 0.0)
-                  for f, (_, p) in zip(robot.feet, self._poses(q)))
-        q[2] = -low
+            joints[robot.joint_names.index(name)] = value
+        q = robot.on_floor(joints)
         self.q0 = q
         self.targets = self._poses(q)
 
