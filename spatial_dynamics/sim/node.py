@@ -331,7 +331,6 @@ class SimNode(Node):
         if self.republish_timer is not None:
             self.republish_timer.reset()
 
-
     def _publish_base(self, q: np.ndarray, v: np.ndarray, stamp) -> None:
         """Publish the base's pose (world) and twist (``[ω; v]`` in the base frame)."""
         pose, twist = self.pose_msg, self.twist_msg
@@ -347,8 +346,10 @@ class SimNode(Node):
 
 
 def floating_robot(urdf: str, p: dict) -> FloatingRobot:
-    """Return the :class:`FloatingRobot` of the ``floating`` parameters; ``ConfigError``
-    naming the parameter that cannot be."""
+    """Return the :class:`FloatingRobot` of the ``floating`` parameters.
+
+    ``ConfigError`` naming the parameter that cannot be.
+    """
     if not p['feet']:
         raise ConfigError('floating: set feet, the links that touch the floor')
     if p['joints']:

@@ -220,8 +220,11 @@ def _add_feet(mujoco, spec, feet: Sequence[Foot]) -> None:
 
 
 def xfrc(d, body: int, wrench: np.ndarray) -> np.ndarray:
-    """Return ``[f; n]`` of a link's ``[n; f]`` (its frame, about its origin): MuJoCo's
-    ``xfrc_applied``, world coordinates, about the body's centre of mass."""
+    """Return MuJoCo's ``xfrc_applied`` ``[f; n]`` of a link's wrench ``[n; f]``.
+
+    The wrench in the link's frame about its origin; the result in world coordinates, about
+    the body's centre of mass.
+    """
     R = d.xmat[body].reshape(3, 3)
     f = R @ wrench[3:]
     n = R @ wrench[:3] + np.cross(d.xpos[body] - d.xipos[body], f)
@@ -651,8 +654,10 @@ class FloatingRobot:
         return self.d.qvel[self._vadr].copy()
 
     def on_floor(self, joint_positions=None) -> np.ndarray:
-        """Return ``q`` with the joints at ``joint_positions`` (default 0), the base upright
-        above the world's origin and its lowest foot on the floor (touching, not pressing)."""
+        """Return ``q`` standing: upright above the origin, its lowest foot on the floor.
+
+        The joints at ``joint_positions`` (default 0); the foot touches, it does not press.
+        """
         q = np.zeros(self.model.nq)
         q[6] = 1.0
         if joint_positions is not None:
@@ -701,8 +706,10 @@ class FloatingRobot:
                 self.set_state(self.home)
 
     def apply_wrench(self, link: str, wrench) -> None:
-        """Apply ``[n; f]`` (link frame, about its origin) from the next step on; ``None``
-        removes it (as :meth:`SimulatedRobot.apply_wrench`)."""
+        """Apply ``[n; f]`` (link frame, about its origin) from the next step on.
+
+        ``None`` removes it, as :meth:`SimulatedRobot.apply_wrench`.
+        """
         if link not in self.model.frames:
             raise ValueError(f'apply_wrench: unknown link {link!r}')
         if wrench is None:
