@@ -4,7 +4,9 @@
 
 ``python -m spatial_dynamics.sim`` or ``ros2 run spatial_dynamics sim``. The robot is a
 :class:`~spatial_dynamics.sim.robot.SimulatedRobot`: the URDF's rigid-body robot exactly (no
-joint limits, contacts, damping or friction; mimic joints follow their source).
+joint limits, contacts, damping or friction; mimic joints follow their source). With
+``floating``, a :class:`~spatial_dynamics.sim.robot.FloatingRobot`: the root link on a free
+joint, standing on a floor on its ``feet`` (contacts, friction ``friction``).
 
 Topics (relative, so they follow the namespace and can be remapped):
 
@@ -22,6 +24,11 @@ Topics (relative, so they follow the namespace and can be remapped):
                                                              until replaced, zero removes it
 ``joint_states``       sensor_msgs/JointState, out           reliable; position, velocity and
                                                              effort = the applied command
+``base_pose``          geometry_msgs/PoseStamped, out        with ``floating``, each state: the
+                                                             root link's pose in ``world``
+``base_twist``         geometry_msgs/TwistStamped, out       with ``floating``: its angular
+                                                             and linear velocity in its own
+                                                             frame (``frame_id``)
 ``/clock``             rosgraph_msgs/Clock, out              with ``publish_clock``: sim time
 =====================  ====================================  =================================
 
@@ -54,7 +61,7 @@ import time
 from typing import Optional, Sequence
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, QoSReliabilityPolicy
@@ -64,8 +71,9 @@ from spatial_dynamics.ros.descriptions import read_description
 
 from spatial_dynamics.ros.parameters import ConfigError, Param, ParameterError, Table
 from spatial_dynamics.ros.common import advertise, spin
-from spatial_dynamics.sim.robot import (import_mujoco, INTEGRATORS, MujocoMissing,
-                                        SimulatedRobot)
+from spatial_dynamics import Contact
+from spatial_dynamics.sim.robot import (FloatingRobot, Foot, import_mujoco, INTEGRATORS,
+                                        MujocoMissing, SimulatedRobot)
 from std_msgs.msg import Float64MultiArray
 
 NODE_NAME = 'sim'
@@ -106,6 +114,18 @@ PARAMETERS = Table(NODE_NAME, [
           'time, for use_sim_time.', read_only=True),
     Param('integrator', 'string', 'auto', 'auto (rk4), rk4 or euler (semi-implicit).',
           choices=INTEGRATORS, read_only=True),
+    Param('floating', 'bool', False, 'The root link on a free joint, standing on a floor '
+          '(z = 0) on its feet, upright above the origin with its lowest foot on the floor '
+          '(contacts on, semi-implicit Euler); base_pose and base_twist carry the base.',
+          read_only=True),
+    Param('feet', 'string[]', None, 'floating: the links that touch the floor (a contact '
+          'geom at the origin of each).', read_only=True),
+    Param('foot_size', 'double[]', [0.01], 'floating: one value, a sphere of that radius '
+          "centred at each foot's origin; two, a box sole of those half length (x) and "
+          "half width (y) whose bottom face is at the foot's origin.", unit='m',
+          bounds=(1e-4, 10.0), read_only=True),
+    Param('friction', 'double', 0.8, "floating: Coulomb friction coefficient of the feet "
+          'on the floor.', bounds=(0.0, 10.0), read_only=True),
 ], header=(
     'Copyright 2026 spatial_dynamics contributors\n'
     'SPDX-License-Identifier: Apache-2.0\n'
@@ -176,12 +196,19 @@ class SimNode(Node):
         else:
             raise ConfigError('no robot: set robot_description (URDF XML) or '
                               'robot_description_file (a path)')
+        self.floating = p['floating']
         try:
-            self.robot = SimulatedRobot(urdf, joints=p['joints'] or None,
-                                        timestep=p['timestep'], integrator=p['integrator'])
-            n = self.robot.model.nq
-            q0 = np.zeros(n) if not p['initial_positions'] else p['initial_positions']
-            self.robot.set_state(q0, np.zeros(n))
+            if self.floating:
+                self.robot = floating_robot(urdf, p)
+                n = len(self.robot.joint_names)
+                self.robot.set_state(self.robot.on_floor(p['initial_positions'] or None))
+            else:
+                self.robot = SimulatedRobot(urdf, joints=p['joints'] or None,
+                                            timestep=p['timestep'],
+                                            integrator=p['integrator'])
+                n = self.robot.model.nq
+                q0 = np.zeros(n) if not p['initial_positions'] else p['initial_positions']
+                self.robot.set_state(q0, np.zeros(n))
         except ValueError as err:
             raise ConfigError(f'{source}: {err}') from None
         self.mode = p['mode']
@@ -193,6 +220,14 @@ class SimNode(Node):
         self.refused = 0
         self._warned = {}
         self.state_pub = advertise(self, JointState, p['state_topic'])
+        if self.floating:
+            root = self.robot.model.body_names[1]
+            self.pose_msg = PoseStamped()
+            self.pose_msg.header.frame_id = 'world'
+            self.twist_msg = TwistStamped()
+            self.twist_msg.header.frame_id = root
+            self.pose_pub = advertise(self, PoseStamped, 'base_pose')
+            self.twist_pub = advertise(self, TwistStamped, 'base_twist')
         self.clock_pub = None
         if p['publish_clock']:
             from rosgraph_msgs.msg import Clock
@@ -284,14 +319,52 @@ class SimNode(Node):
             msg.header.stamp = to_time(self.robot.time)
         else:
             msg.header.stamp = self.get_clock().now().to_msg()
-        msg.position = self.robot.q.tolist()
+        q = self.robot.q
+        msg.position = (q[7:] if self.floating else q).tolist()
         msg.velocity = self.robot.qd.tolist()
         msg.effort = self.tau.tolist()
         self.state_pub.publish(msg)
+        if self.floating:
+            self._publish_base(q, self.robot.v, msg.header.stamp)
         if self.clock_pub is not None:
             self.clock_pub.publish(self._clock_msg(clock=to_time(self.robot.time)))
         if self.republish_timer is not None:
             self.republish_timer.reset()
+
+    def _publish_base(self, q: np.ndarray, v: np.ndarray, stamp) -> None:
+        """Publish the base's pose (world) and twist (``[ω; v]`` in the base frame)."""
+        pose, twist = self.pose_msg, self.twist_msg
+        pose.header.stamp = twist.header.stamp = stamp
+        p, o = pose.pose.position, pose.pose.orientation
+        p.x, p.y, p.z = (float(x) for x in q[:3])
+        o.x, o.y, o.z, o.w = (float(x) for x in q[3:7])
+        w, u = twist.twist.angular, twist.twist.linear
+        w.x, w.y, w.z = (float(x) for x in v[:3])
+        u.x, u.y, u.z = (float(x) for x in v[3:6])
+        self.pose_pub.publish(pose)
+        self.twist_pub.publish(twist)
+
+
+def floating_robot(urdf: str, p: dict) -> FloatingRobot:
+    """Return the :class:`FloatingRobot` of the ``floating`` parameters.
+
+    ``ConfigError`` naming the parameter that cannot be.
+    """
+    if not p['feet']:
+        raise ConfigError('floating: set feet, the links that touch the floor')
+    if p['joints']:
+        raise ConfigError('floating: joints (model reduction) is not simulated on a '
+                          'floating base; leave it unset')
+    if p['integrator'] == 'rk4':
+        raise ConfigError('floating: the contacts are stepped by semi-implicit Euler; '
+                          'integrator must be auto or euler')
+    size = tuple(p['foot_size'])
+    if len(size) not in (1, 2):
+        raise ConfigError(f'foot_size: one value (a sphere) or two (a box sole), got '
+                          f'{list(size)}')
+    kind = 'point' if len(size) == 1 else 'surface'
+    feet = [Foot(Contact(link, kind=kind, mu=p['friction']), size) for link in p['feet']]
+    return FloatingRobot(urdf, feet, timestep=p['timestep'])
 
 
 def main(args: Optional[Sequence[str]] = None) -> int:

@@ -26,13 +26,14 @@ the multiplier for a mimic joint, 0 for a locked joint) by Gauss's principle, an
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 import os
 from typing import Mapping, Optional, Sequence, Union
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from spatial_dynamics import GRAVITY, Model
+from spatial_dynamics import Contact, GRAVITY, Model
 from spatial_dynamics.bounds import check_bounded, MAX_POSITION, MAX_VELOCITY
 from spatial_dynamics.terms import per_joint, PerJoint
 from spatial_dynamics.urdf import read_description
@@ -86,8 +87,26 @@ def dynamics_only(xml: str) -> str:
     return ET.tostring(root, encoding='unicode')
 
 
+def without_mimic(xml: str) -> str:
+    """Return URDF text with every mimic joint and its source fixed at 0 (Talos's grippers).
+
+    For :class:`FloatingRobot`, which simulates no mimic joints.
+    """
+    root = ET.fromstring(xml.encode('utf-8'))
+    names = set()
+    for joint in root.iter('joint'):
+        mimic = joint.find('mimic')
+        if mimic is not None:
+            names |= {joint.get('name'), mimic.get('joint')}
+            joint.remove(mimic)
+    for joint in root.iter('joint'):
+        if joint.get('name') in names:
+            joint.set('type', 'fixed')
+    return ET.tostring(root, encoding='unicode')
+
+
 def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixed',
-                 imus: Optional[Mapping[str, tuple]] = None):
+                 imus: Optional[Mapping[str, tuple]] = None, feet: Sequence['Foot'] = ()):
     """Load URDF text into MuJoCo as the URDF's rigid-body robot (see the module doc).
 
     No geometry, every link a body (``fusestatic`` off), ``dof_damping``,
@@ -101,6 +120,10 @@ def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixe
     frame then the angular velocity in the body frame). ``imus`` maps a name to ``(link,
     position, quaternion x y z w)``: a site of that name at that pose in the link's frame,
     with an accelerometer ``name + '_accelerometer'`` and a gyro ``name + '_gyro'``.
+
+    ``feet``: a floor (the plane z = 0, named ``'floor'``) and each :class:`Foot`'s geom; the
+    contacts of the feet with the floor (and only those) stay on, with the feet's friction
+    and :data:`CONTACT` settings; joint limits and equality constraints stay off.
     """
     mujoco = import_mujoco()
     if base not in ('fixed', 'floating'):
@@ -121,6 +144,8 @@ def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixe
                                  (mujoco.mjtSensor.mjSENS_GYRO, '_gyro')):
                 spec.add_sensor(name=name + suffix, type=kind,
                                 objtype=mujoco.mjtObj.mjOBJ_SITE, objname=name)
+        if feet:
+            _add_feet(mujoco, spec, feet)
         m = spec.compile()
     except ValueError as err:
         raise ValueError(f'MuJoCo cannot load the URDF: {str(err).splitlines()[0]}') from None
@@ -128,9 +153,82 @@ def mujoco_model(xml: str, gravity: Sequence[float] = GRAVITY, base: str = 'fixe
     m.dof_frictionloss[:] = 0.0
     m.dof_armature[:] = 0.0
     m.jnt_stiffness[:] = 0.0
-    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+    bits = mujoco.mjtDisableBit
+    if feet:
+        m.opt.disableflags |= int(bits.mjDSBL_EQUALITY | bits.mjDSBL_LIMIT)
+        m.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+        m.opt.impratio = CONTACT['impratio']
+        m.opt.tolerance = CONTACT['tolerance']
+        m.opt.iterations = CONTACT['iterations']
+        m.opt.noslip_iterations = CONTACT['noslip_iterations']
+    else:
+        m.opt.disableflags |= int(bits.mjDSBL_CONSTRAINT)
     m.opt.gravity[:] = np.asarray(gravity, dtype=float)
     return m
+
+
+#: MuJoCo's contact settings for :class:`Foot` geoms (see :class:`FloatingRobot`): a stiff,
+#: critically damped soft contact (``solref`` time constant 4 ms, ``solimp`` impedance
+#: 0.99 to 0.999 over 1 mm), elliptic friction cones (our second-order cones), ``impratio``
+#: 10 (tangential forces as stiff as normal ones: little creep), and the solver run to 1e-12.
+CONTACT = {'solref': (0.004, 1.0), 'solimp': (0.999, 0.9999, 0.0001, 0.5, 2.0),
+           'impratio': 10.0, 'tolerance': 1e-12, 'iterations': 200, 'noslip_iterations': 20}
+
+
+@dataclass(frozen=True)
+class Foot:
+    """A foot of a floating-base robot in MuJoCo: its :class:`~spatial_dynamics.Contact` and geom.
+
+    A point contact is a sphere of radius ``size[0]`` centred on the contact's point (MuJoCo
+    pushes at its lowest point, ``size[0]`` below: keep it small). A surface contact is a box
+    sole ``2 size[0]`` long (link x) and ``2 size[1]`` wide (link y), 2 cm thick, whose
+    bottom face is centred on the contact's point (the sole's z axis is its normal). Its
+    friction is the contact's ``mu``.
+    """
+
+    contact: Contact
+    size: tuple = (0.01,)
+
+    def __post_init__(self) -> None:
+        size = tuple(float(s) for s in np.atleast_1d(self.size))
+        need = 1 if self.contact.kind == 'point' else 2
+        if len(size) != need or not all(np.isfinite(s) and s > 0.0 for s in size):
+            raise ValueError(f'foot {self.contact.name!r}: size must be {need} positive '
+                             f'number(s) (m), got {self.size}')
+        object.__setattr__(self, 'size', size)
+
+
+def _add_feet(mujoco, spec, feet: Sequence[Foot]) -> None:
+    """Add the floor and the feet's geoms; only foot-floor pairs collide."""
+    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    spec.worldbody.add_geom(name='floor', type=mujoco.mjtGeom.mjGEOM_PLANE,
+                            size=[0.0, 0.0, 1.0], contype=0, conaffinity=1)
+    for foot in feet:
+        c = foot.contact
+        body = spec.body(c.link)
+        if body is None:
+            raise ValueError(f'foot {c.name!r}: no link {c.link!r}')
+        if c.kind == 'point':
+            kind, size, pos = mujoco.mjtGeom.mjGEOM_SPHERE, [foot.size[0], 0, 0], c.offset
+        else:
+            kind, size = mujoco.mjtGeom.mjGEOM_BOX, [foot.size[0], foot.size[1], 0.01]
+            pos = np.asarray(c.offset) + [0.0, 0.0, 0.01]       # above the sole plane
+        body.add_geom(name=c.name, type=kind, size=size, pos=[float(x) for x in pos],
+                      contype=1, conaffinity=0, condim=3, mass=0.0,
+                      friction=[c.mu, 0.005, 0.0001], solref=list(CONTACT['solref']),
+                      solimp=list(CONTACT['solimp']))
+
+
+def xfrc(d, body: int, wrench: np.ndarray) -> np.ndarray:
+    """Return MuJoCo's ``xfrc_applied`` ``[f; n]`` of a link's wrench ``[n; f]``.
+
+    The wrench in the link's frame about its origin; the result in world coordinates, about
+    the body's centre of mass.
+    """
+    R = d.xmat[body].reshape(3, 3)
+    f = R @ wrench[3:]
+    n = R @ wrench[:3] + np.cross(d.xpos[body] - d.xipos[body], f)
+    return np.concatenate([f, n])
 
 
 class SimulatedRobot:
@@ -406,17 +504,10 @@ class SimulatedRobot:
                              f'{wrench}')
         self._wrenches[link] = (self.m.body(link).id, wrench.copy())
 
-    def _xfrc(self, d, body: int, wrench: np.ndarray) -> np.ndarray:
-        """``[f; n]`` in world coordinates about the body's centre of mass (xfrc_applied)."""
-        R = d.xmat[body].reshape(3, 3)
-        f = R @ wrench[3:]
-        n = R @ wrench[:3] + np.cross(d.xpos[body] - d.xipos[body], f)
-        return np.concatenate([f, n])
-
     def _apply_wrenches(self, d) -> None:
         d.xfrc_applied[:] = 0.0
         for body, wrench in self._wrenches.values():
-            d.xfrc_applied[body] += self._xfrc(d, body, wrench)
+            d.xfrc_applied[body] += xfrc(d, body, wrench)
 
     # ----------------------------------------------------------------------------------------
     # Inverse dynamics
@@ -444,7 +535,258 @@ class SimulatedRobot:
             qfrc = np.zeros(self.m.nv)
             for link, wrench in f_ext.items():
                 body = self.m.body(link).id
-                xfrc = self._xfrc(d, body, np.asarray(wrench, dtype=float))
-                mj.mj_applyFT(self.m, d, xfrc[:3], xfrc[3:], d.xipos[body], body, qfrc)
+                push = xfrc(d, body, np.asarray(wrench, dtype=float))
+                mj.mj_applyFT(self.m, d, push[:3], push[3:], d.xipos[body], body, qfrc)
             tau = tau - self.G.T @ qfrc
         return tau
+
+
+class FloatingRobot:
+    """A floating-base robot of a URDF standing on a floor in MuJoCo, in our coordinates.
+
+    The URDF's rigid-body robot as :func:`mujoco_model` makes it, its root link on MuJoCo's
+    free joint, with a floor and a geom per :class:`Foot` (the only contacts). The state is
+    that of ``Model.from_urdf(urdf, base='floating')`` (``self.model``): ``q`` (nq) = base
+    position (world), quaternion **x y z w**, joints; ``v`` (nv) = base twist ``[ω; v]`` in the
+    base frame, joints. MuJoCo's free joint has ``qpos`` = position, quaternion **w x y z**
+    and ``qvel`` = ``[ṗ; ω]``, the origin's velocity in **world** axes then ``ω`` in the base
+    frame, so (``R`` the base's orientation, exact both ways)::
+
+        qvel = [R v_b; ω_b]      qacc = [R (v̇_b + ω_b × v_b); ω̇_b]     qfrc = [R f_b; n_b]
+
+    (the last by duality: ``qfrcᵀ qvel = [n; f]ᵀ [ω; v]``). Contacts: :data:`CONTACT`
+    (stiff soft contacts, elliptic cones); integrator semi-implicit Euler, ``timestep``
+    0.5 ms by default. Joint torques act on the joints; the base has no motor.
+    """
+
+    def __init__(self, urdf: Source, feet: Sequence[Foot] = (), timestep: float = 5e-4,
+                 gravity: Sequence[float] = GRAVITY) -> None:
+        mujoco = import_mujoco()
+        self._mj = mujoco
+        xml = urdf_text(urdf)
+        self.model = model = Model.from_urdf(xml.encode('utf-8'), base='floating')
+        if model.mimics:
+            raise ValueError(f'FloatingRobot: mimic joints are not simulated '
+                             f'({", ".join(sorted(model.mimics))}); fix them with '
+                             f'without_mimic(urdf)')
+        if not (np.isfinite(timestep) and timestep > 0.0):
+            raise ValueError(f'timestep must be a positive number of seconds, got {timestep}')
+        self.feet = tuple(feet)
+        self.m = m = mujoco_model(xml, gravity, base='floating', feet=self.feet)
+        m.opt.timestep = float(timestep)
+        m.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP)
+        self.joint_names = model.joint_names[1:]
+        self._qadr = np.array([m.jnt_qposadr[m.joint(n).id] for n in self.joint_names], int)
+        self._vadr = np.array([m.jnt_dofadr[m.joint(n).id] for n in self.joint_names], int)
+        if m.nq != model.nq or m.nv != model.nv:
+            raise ValueError(f'MuJoCo made {m.nq} coordinates and {m.nv} velocities, our model '
+                             f'{model.nq} and {model.nv}')
+        self._foot_of = {m.geom(f.contact.name).id: k for k, f in enumerate(self.feet)}
+        self.integrator = 'euler'
+        self.d = mujoco.MjData(m)
+        self._scratch = mujoco.MjData(m)
+        self._wrenches: dict = {}
+        self.resets = 0          # restarts after MuJoCo found a bad acceleration
+        self.reset_reason = ''
+        q = np.zeros(model.nq)
+        q[6] = 1.0
+        self.set_state(q)
+
+    # ----------------------------------------------------------------------------------------
+    # Our coordinates <-> MuJoCo's
+
+    def _rotation(self, quat_xyzw: np.ndarray) -> np.ndarray:
+        R = np.zeros(9)
+        x, y, z, w = quat_xyzw
+        self._mj.mju_quat2Mat(R, np.array([w, x, y, z]) / np.linalg.norm(quat_xyzw))
+        return R.reshape(3, 3)
+
+    def to_mujoco(self, q, v=None, a=None) -> tuple:
+        """Return MuJoCo's ``(qpos, qvel, qacc)`` of our ``(q, v, a)`` (zeros when omitted)."""
+        q = self._vector('q', q, self.model.nq)
+        v = np.zeros(self.model.nv) if v is None else self._vector('v', v, self.model.nv)
+        a = np.zeros(self.model.nv) if a is None else self._vector('a', a, self.model.nv)
+        R = self._rotation(q[3:7])
+        qpos, qvel, qacc = np.zeros(self.m.nq), np.zeros(self.m.nv), np.zeros(self.m.nv)
+        qpos[:3], qpos[3], qpos[4:7] = q[:3], q[6], q[3:6]
+        qvel[:3], qvel[3:6] = R @ v[3:6], v[:3]
+        qacc[:3], qacc[3:6] = R @ (a[3:6] + np.cross(v[:3], v[3:6])), a[:3]
+        qpos[self._qadr], qvel[self._vadr], qacc[self._vadr] = q[7:], v[6:], a[6:]
+        return qpos, qvel, qacc
+
+    def from_mujoco(self, qpos, qvel) -> tuple:
+        """Return our ``(q, v)`` of MuJoCo's ``(qpos, qvel)``."""
+        q, v = np.zeros(self.model.nq), np.zeros(self.model.nv)
+        q[:3], q[3:6], q[6] = qpos[:3], qpos[4:7], qpos[3]
+        R = self._rotation(q[3:7])
+        v[:3], v[3:6] = qvel[3:6], R.T @ qvel[:3]
+        q[7:], v[6:] = qpos[self._qadr], qvel[self._vadr]
+        return q, v
+
+    def _vector(self, what: str, x, size: int) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        if x.shape != (size,) or not np.isfinite(x).all():
+            raise ValueError(f'{what}: expected {size} finite values, got shape {x.shape}')
+        return x
+
+    # ----------------------------------------------------------------------------------------
+    # State and steps
+
+    @property
+    def q(self) -> np.ndarray:
+        """Return our configuration (nq,): base position, quaternion x y z w, joints."""
+        return self.from_mujoco(self.d.qpos, self.d.qvel)[0]
+
+    @property
+    def v(self) -> np.ndarray:
+        """Return our velocity (nv,): base ``[ω; v]`` in the base frame, joints."""
+        return self.from_mujoco(self.d.qpos, self.d.qvel)[1]
+
+    @property
+    def time(self) -> float:
+        """Return the seconds simulated since the start."""
+        return float(self.d.time)
+
+    @property
+    def qd(self) -> np.ndarray:
+        """Return the joints' velocities (nv - 6,), in the order of :attr:`joint_names`."""
+        return self.d.qvel[self._vadr].copy()
+
+    def on_floor(self, joint_positions=None) -> np.ndarray:
+        """Return ``q`` standing: upright above the origin, its lowest foot on the floor.
+
+        The joints at ``joint_positions`` (default 0); the foot touches, it does not press.
+        """
+        q = np.zeros(self.model.nq)
+        q[6] = 1.0
+        if joint_positions is not None:
+            q[7:] = self._vector('joint positions', joint_positions, self.model.nq - 7)
+        if self.feet:
+            self._scratch.qpos[:] = self.to_mujoco(q)[0]
+            self._mj.mj_kinematics(self.m, self._scratch)
+            q[2] = -min(p[2] - (f.size[0] if f.contact.kind == 'point' else 0.0)
+                        for f, p in zip(self.feet, self._contact_points(self._scratch)))
+        return q
+
+    def set_state(self, q, v=None) -> None:
+        """Put the robot at ``q`` with velocity ``v`` (default 0); time is kept.
+
+        ``q`` is also where the simulation restarts if it diverges (:meth:`step`).
+        """
+        self.d.qpos[:], self.d.qvel[:], _ = self.to_mujoco(q, v)
+        self.home = np.array(q, dtype=float)
+        self.d.qacc_warmstart[:] = 0.0
+        self._mj.mj_forward(self.m, self.d)
+
+    def step(self, tau, n: int = 1) -> None:
+        """Advance ``n`` steps with joint torques ``tau`` (nv - 6,) held constant.
+
+        When MuJoCo finds a bad acceleration (``mjWARN_BADQACC``: a torque far beyond the
+        robot), it restarts; the robot then restarts at :attr:`home` at rest instead, and
+        :attr:`resets` and :attr:`reset_reason` say so.
+        """
+        tau = self._vector('tau', tau, self.model.nv - 6)
+        m, d, mj = self.m, self.d, self._mj
+        bad = d.warning[int(mj.mjtWarning.mjWARN_BADQACC)]
+        for _ in range(int(n)):
+            if self._wrenches:
+                mj.mj_kinematics(m, d)
+                d.xfrc_applied[:] = 0.0
+                for body, wrench in self._wrenches.values():
+                    d.xfrc_applied[body] += xfrc(d, body, wrench)
+            d.qfrc_applied[:] = 0.0
+            d.qfrc_applied[self._vadr] = tau
+            count = bad.number
+            mj.mj_step(m, d)
+            if bad.number != count:
+                self.resets += 1
+                self.reset_reason = (f'at t = {self.time:.6g} s MuJoCo found a bad '
+                                     f'acceleration (dof {bad.lastinfo})')
+                self.set_state(self.home)
+
+    def apply_wrench(self, link: str, wrench) -> None:
+        """Apply ``[n; f]`` (link frame, about its origin) from the next step on.
+
+        ``None`` removes it, as :meth:`SimulatedRobot.apply_wrench`.
+        """
+        if link not in self.model.frames:
+            raise ValueError(f'apply_wrench: unknown link {link!r}')
+        if wrench is None:
+            self._wrenches.pop(link, None)
+            if not self._wrenches:
+                self.d.xfrc_applied[:] = 0.0
+            return
+        wrench = np.asarray(wrench, dtype=float)
+        if wrench.shape != (6,) or not np.isfinite(wrench).all():
+            raise ValueError(f'apply_wrench {link!r}: need 6 finite numbers [n; f], got '
+                             f'{wrench}')
+        self._wrenches[link] = (self.m.body(link).id, wrench.copy())
+
+    # ----------------------------------------------------------------------------------------
+    # Inverse dynamics and contact forces
+
+    def inverse(self, q, v, a) -> np.ndarray:
+        """Return MuJoCo's ``mj_inverse`` in our coordinates (nv,), contacts off.
+
+        The base's six rows are the wrench ``[n; f]`` (base frame, about its origin) that
+        makes the motion, as :func:`spatial_dynamics.rnea` gives it: ``[qfrc[3:6];
+        Rᵀ qfrc[:3]]``.
+        """
+        d, mj = self._scratch, self._mj
+        d.qpos[:], d.qvel[:], d.qacc[:] = self.to_mujoco(q, v, a)
+        flags = self.m.opt.disableflags
+        self.m.opt.disableflags |= int(mj.mjtDisableBit.mjDSBL_CONSTRAINT)
+        try:
+            mj.mj_inverse(self.m, d)
+        finally:
+            self.m.opt.disableflags = flags
+        R = self._rotation(np.asarray(q, dtype=float)[3:7])
+        f = d.qfrc_inverse
+        return np.r_[f[3:6], R.T @ f[:3], f[self._vadr]]
+
+    def contact_forces(self) -> dict:
+        """Return what the floor exerts on each foot now, by contact name (world axes).
+
+        MuJoCo's contact forces (``mj_contactForce``, contact frame) turned into world axes
+        and summed per foot: a force (3,) for a point contact, a wrench ``[n; f]`` (6,) about
+        the contact's point for a surface contact, as
+        :class:`~spatial_dynamics.ContactResult` gives them. Feet off the floor: zeros.
+        """
+        m, d, mj = self.m, self.d, self._mj
+        out = {f.contact.name: np.zeros(f.contact.rows) for f in self.feet}
+        points = self._contact_points(d)
+        f6 = np.zeros(6)
+        for i in range(d.ncon):
+            con = d.contact[i]
+            g1, g2 = int(con.geom[0]), int(con.geom[1])
+            if g2 in self._foot_of:
+                k, sign = self._foot_of[g2], 1.0
+            elif g1 in self._foot_of:
+                k, sign = self._foot_of[g1], -1.0
+            else:
+                continue
+            mj.mj_contactForce(m, d, i, f6)
+            f = sign * con.frame.reshape(3, 3).T @ f6[:3]
+            c = self.feet[k].contact
+            if c.kind == 'point':
+                out[c.name] += f
+            else:
+                out[c.name] += np.r_[np.cross(con.pos - points[k], f), f]
+        return out
+
+    def _contact_points(self, d) -> list:
+        """World position of each foot's contact point in ``d`` (after its kinematics)."""
+        out = []
+        for foot in self.feet:
+            b = self.m.body(foot.contact.link).id
+            out.append(d.xpos[b] + d.xmat[b].reshape(3, 3) @ foot.contact.offset)
+        return out
+
+    def frame_pose(self, q, link: str) -> tuple:
+        """Return ``(R, p)`` of ``link``'s frame at our ``q``: orientation and origin (world)."""
+        d, mj = self._scratch, self._mj
+        d.qpos[:] = self.to_mujoco(q)[0]
+        mj.mj_kinematics(self.m, d)
+        b = self.m.body(link).id
+        return d.xmat[b].reshape(3, 3).copy(), d.xpos[b].copy()
