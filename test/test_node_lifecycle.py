@@ -61,7 +61,11 @@ def test_yaml_documents_every_parameter():
                         'kp', 'kd', 'measured_timeout', 'observer_gain',
                         'external_torque_warn', 'measured_effort', 'wrench_estimate.link',
                         'wrench_estimate.epsilon', 'trajectory_effort_tolerance',
-                        'trajectory_max_bytes', 'trajectory_annotation_max_values'}
+                        'trajectory_max_bytes', 'trajectory_annotation_max_values',
+                        'base', 'base_input.source', 'base_input.imu_link',
+                        'base_input.acceleration', 'base_input.timeout', 'contacts.links',
+                        'contacts.kind', 'contacts.mu', 'contacts.method',
+                        'contacts.measured'}
     for name in declared:
         # payload.link is written nested: 'payload:' then 'link:'
         *group, leaf = name.split('.')
