@@ -25,7 +25,7 @@ import pytest
 
 pytest.importorskip('mujoco')
 pytest.importorskip('clarabel')
-pytestmark = pytest.mark.slow      # ~35 s of simulation: the whole suite runs it, the fast loop not
+pytestmark = pytest.mark.slow      # ~35 s of MuJoCo: the whole suite runs it, the fast loop not
 
 
 def run(robot):
