@@ -198,16 +198,26 @@ def _not_sqlite_bag(path: str, why: str) -> BagError:
     return BagError(f'{os.path.realpath(path)}: not a rosbag2 sqlite3 database ({why})')
 
 
-def _sqlite_batches(paths: Sequence[str], topic: str) -> Iterator[Batch]:
-    """Yield batches of one topic's messages from rosbag2 sqlite3 files (standard library)."""
+def _sqlite_batches(paths: Sequence[str], topic: str, start: Optional[int] = None,
+                    stop: Optional[int] = None) -> Iterator[Batch]:
+    """Yield batches of one topic's messages from rosbag2 sqlite3 files (standard library).
+
+    With ``start``/``stop`` (ns, bag time), those in ``[start, stop)`` only: rosbag2 (and
+    ``rosbags``) index ``messages.timestamp``, so SQLite reads the range's rows alone. Either
+    way the rows come in bag order (by id).
+    """
     import sqlite3
+    ranged = start is not None or stop is not None
+    bounds = ([-(1 << 63) if start is None else int(start),
+               (1 << 63) - 1 if stop is None else int(stop)] if ranged else [])
+    where = 'timestamp >= ? AND timestamp < ? AND ' if ranged else ''
     for path in paths:
         con = _sqlite_connect(path)
         try:
             ids = [i for i, in con.execute('SELECT id FROM topics WHERE name = ?', (topic,))]
             # by topic id, without a join: the rows come straight from the messages table
-            cur = con.execute('SELECT timestamp, data FROM messages WHERE topic_id IN '
-                              f'({", ".join("?" * len(ids))}) ORDER BY id', ids)
+            cur = con.execute(f'SELECT timestamp, data FROM messages WHERE {where}topic_id IN '
+                              f'({", ".join("?" * len(ids))}) ORDER BY id', bounds + ids)
             while True:
                 rows = cur.fetchmany(BATCH)
                 if not rows:
@@ -473,38 +483,6 @@ def _between(batches: Iterator[Batch], start: Optional[int], stop: Optional[int]
                                 else [m for m, r in zip(messages, rows.tolist()) if r])
 
 
-def _sqlite_batches_between(paths: Sequence[str], topic: str, start: Optional[int],
-                            stop: Optional[int]) -> Iterator[Batch]:
-    """:func:`_sqlite_batches` of the messages in ``[start, stop)``, found by the time index.
-
-    rosbag2 (and ``rosbags``) index ``messages.timestamp``: SQLite reads the range's rows
-    only. They come in bag order (by id), as the whole bag's do.
-    """
-    import sqlite3
-    lo = -(1 << 63) if start is None else int(start)
-    hi = (1 << 63) - 1 if stop is None else int(stop)
-    for path in paths:
-        con = _sqlite_connect(path)
-        try:
-            ids = [i for i, in con.execute('SELECT id FROM topics WHERE name = ?', (topic,))]
-            cur = con.execute('SELECT timestamp, data FROM messages WHERE timestamp >= ? AND '
-                              'timestamp < ? AND topic_id IN '
-                              f'({", ".join("?" * len(ids))}) ORDER BY id', [lo, hi] + ids)
-            while True:
-                rows = cur.fetchmany(BATCH)
-                if not rows:
-                    break
-                times, data = list(map(_first, rows)), list(map(_second, rows))
-                if set(map(type, data)) != {bytes} or set(map(type, times)) != {int}:
-                    raise _not_sqlite_bag(path, 'a message whose timestamp is not an integer '
-                                          'or data not bytes')
-                yield np.array(times, dtype=np.int64), data
-        except sqlite3.Error as err:
-            raise _not_sqlite_bag(path, str(err)) from None
-        finally:
-            con.close()
-
-
 def _mcap_channels(buf: memoryview, data_end: int) -> Dict[int, str]:
     """Channel id -> topic from an MCAP file's summary section (empty if it has none)."""
     channels: Dict[int, str] = {}
@@ -573,7 +551,7 @@ def read_joint_states_between(path: str, topic: str, names: Sequence[str],
             if files is not None:
                 found, _ = _sqlite_topics(files, 0)
                 check_topic(found, topic, JOINT_STATE)
-                return decode_joint_states(_sqlite_batches_between(files, topic, start, stop),
+                return decode_joint_states(_sqlite_batches(files, topic, start, stop),
                                            names, fast)
         finally:
             shutil.rmtree(stage, ignore_errors=True)
@@ -582,7 +560,7 @@ def read_joint_states_between(path: str, topic: str, names: Sequence[str],
         conns = connections_of(reader, topic, JOINT_STATE)
         storage, paths = storage_files(reader) if fast else ('', [])
         if storage == 'sqlite3':
-            batches = _sqlite_batches_between(paths, topic, start, stop)
+            batches = _sqlite_batches(paths, topic, start, stop)
         elif storage == 'mcap':
             batches = _mcap_batches_between(paths, topic, start, stop)
         else:

@@ -219,6 +219,22 @@ def _add_feet(mujoco, spec, feet: Sequence[Foot]) -> None:
                       solimp=list(CONTACT['solimp']))
 
 
+def hold_wrench(wrenches: dict, model: Model, m, link: str, wrench) -> None:
+    """Hold ``[n; f]`` on ``link`` in ``wrenches`` (link -> (MuJoCo body id, wrench)).
+
+    ``None`` removes it; an unknown link or anything but 6 finite numbers is a ValueError.
+    """
+    if link not in model.frames:
+        raise ValueError(f'apply_wrench: unknown link {link!r}')
+    if wrench is None:
+        wrenches.pop(link, None)
+        return
+    wrench = np.asarray(wrench, dtype=float)
+    if wrench.shape != (6,) or not np.isfinite(wrench).all():
+        raise ValueError(f'apply_wrench {link!r}: need 6 finite numbers [n; f], got {wrench}')
+    wrenches[link] = (m.body(link).id, wrench.copy())
+
+
 def xfrc(d, body: int, wrench: np.ndarray) -> np.ndarray:
     """Return MuJoCo's ``xfrc_applied`` ``[f; n]`` of a link's wrench ``[n; f]``.
 
@@ -493,16 +509,7 @@ class SimulatedRobot:
         converted at each step into MuJoCo's ``xfrc_applied`` of the link's body (world
         coordinates, force first, torque about the body's centre of mass).
         """
-        if link not in self.model.frames:
-            raise ValueError(f'apply_wrench: unknown link {link!r}')
-        if wrench is None:
-            self._wrenches.pop(link, None)
-            return
-        wrench = np.asarray(wrench, dtype=float)
-        if wrench.shape != (6,) or not np.isfinite(wrench).all():
-            raise ValueError(f'apply_wrench {link!r}: need 6 finite numbers [n; f], got '
-                             f'{wrench}')
-        self._wrenches[link] = (self.m.body(link).id, wrench.copy())
+        hold_wrench(self._wrenches, self.model, self.m, link, wrench)
 
     def _apply_wrenches(self, d) -> None:
         d.xfrc_applied[:] = 0.0
@@ -710,18 +717,9 @@ class FloatingRobot:
 
         ``None`` removes it, as :meth:`SimulatedRobot.apply_wrench`.
         """
-        if link not in self.model.frames:
-            raise ValueError(f'apply_wrench: unknown link {link!r}')
-        if wrench is None:
-            self._wrenches.pop(link, None)
-            if not self._wrenches:
-                self.d.xfrc_applied[:] = 0.0
-            return
-        wrench = np.asarray(wrench, dtype=float)
-        if wrench.shape != (6,) or not np.isfinite(wrench).all():
-            raise ValueError(f'apply_wrench {link!r}: need 6 finite numbers [n; f], got '
-                             f'{wrench}')
-        self._wrenches[link] = (self.m.body(link).id, wrench.copy())
+        hold_wrench(self._wrenches, self.model, self.m, link, wrench)
+        if not self._wrenches:
+            self.d.xfrc_applied[:] = 0.0
 
     # ----------------------------------------------------------------------------------------
     # Inverse dynamics and contact forces
