@@ -380,3 +380,16 @@ def demo_model():
     """Return the library's model of the demo arm the node tests start the node with."""
     import spatial_dynamics as sd
     return sd.Model.from_urdf(DEMO_URDF)
+
+
+class Log:
+    """The node's logger, as ``Answering`` uses it: what it said, by level."""
+
+    def __init__(self) -> None:
+        self.said = []
+
+    def info(self, text, **_):
+        self.said.append(('info', text))
+
+    def warn(self, text, **_):
+        self.said.append(('warn', text))

@@ -20,24 +20,11 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from node_harness import DEMO_URDF  # noqa: E402
+from node_harness import DEMO_URDF, Log  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.ros import config  # noqa: E402
 from spatial_dynamics.ros.answering import Answer, Answering, NOTHING, Out  # noqa: E402
 from spatial_dynamics.ros.plans import Job, prepare_plan  # noqa: E402
-
-
-class Log:
-    """The node's logger, as Answering uses it: what it said, by level."""
-
-    def __init__(self) -> None:
-        self.said = []
-
-    def info(self, text, **_):
-        self.said.append(('info', text))
-
-    def warn(self, text, **_):
-        self.said.append(('warn', text))
 
 
 @pytest.fixture(scope='module')

@@ -22,7 +22,7 @@ from std_msgs.msg import Header, UInt8MultiArray
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from conftest import robot_urdf_path  # noqa: E402
-from node_harness import DEMO_URDF  # noqa: E402
+from node_harness import DEMO_URDF, Log  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.ros import config  # noqa: E402
 from spatial_dynamics.ros.answering import Answering  # noqa: E402
@@ -30,17 +30,6 @@ from spatial_dynamics.ros.bases import base_status  # noqa: E402
 from spatial_dynamics.ros.parameters import ConfigError  # noqa: E402
 
 FEET = ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')
-
-
-class Log:
-    def __init__(self) -> None:
-        self.said = []
-
-    def info(self, text, **_):
-        self.said.append(('info', text))
-
-    def warn(self, text, **_):
-        self.said.append(('warn', text))
 
 
 def configured(**changes):

@@ -390,16 +390,7 @@ def raw_batches(reader, topic: str, msgtype: str, fast: bool = True) -> Iterator
     if storage == 'mcap':
         yield from _mcap_batches(paths, topic)
         return
-    times: List[int] = []
-    raw: List[bytes] = []
-    for _, t, data in reader.messages(connections=conns):
-        times.append(t)
-        raw.append(data)
-        if len(raw) == BATCH:
-            yield np.array(times, dtype=np.int64), raw
-            times, raw = [], []
-    if raw:
-        yield np.array(times, dtype=np.int64), raw
+    yield from _rosbags_batches(reader, conns)
 
 
 def read_raw(reader, topic: str, msgtype: str) -> Tuple[List[bytes], np.ndarray]:
@@ -570,9 +561,9 @@ def read_joint_states_between(path: str, topic: str, names: Sequence[str],
         reader.close()
 
 
-def _rosbags_batches(reader, conns, start: Optional[int], stop: Optional[int]
+def _rosbags_batches(reader, conns, start: Optional[int] = None, stop: Optional[int] = None
                      ) -> Iterator[Batch]:
-    """Batches of ``rosbags``' own reading of ``conns`` in ``[start, stop)``."""
+    """Batches of ``rosbags``' own reading of ``conns`` (in ``[start, stop)`` when given)."""
     times: List[int] = []
     raw: List[bytes] = []
     for _, t, data in reader.messages(connections=conns, start=start, stop=stop):
