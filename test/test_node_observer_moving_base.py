@@ -12,6 +12,7 @@ observer is off (``base_input.source: imu``) or skips the sample (none held yet)
 computed as if the base were fixed.
 """
 
+from dataclasses import replace
 import math
 import os
 import sys
@@ -44,7 +45,7 @@ def demo_text():
 
 
 def base_motion(t):
-    """The base at ``t``: ``(position, quaternion x y z w, twist [ω; v], its rate)``.
+    """Return the base at ``t``: ``(position, quaternion x y z w, twist [ω; v], its rate)``.
 
     Turning by ``θ(t)`` about the fixed ``AXIS`` (so ``ω = θ̇ AXIS`` in the base frame too);
     the body-frame linear velocity in closed form; the rate is the derivative of the twist's
@@ -96,7 +97,7 @@ def run(cfg, samples, tau_ext, with_base=True):
 
 
 def first_order(ext, gain, h):
-    """The discrete observer's response to ``ext`` (samples): trapezoidal means, filtered."""
+    """Return the discrete observer's response to ``ext`` (samples): trapezoids, filtered."""
     r = np.zeros_like(ext)
     decay = math.exp(-gain * h)
     for k in range(1, len(ext)):
@@ -167,11 +168,9 @@ def test_the_wrench_estimate_follows_the_observer(demo_text):
                            **{'base_input.source': 'twist'})
     model = twist_cfg.robot.model
     link = list(model.frames)[-1]
-    check_base(twist_cfg.params.__class__(**{**vars(twist_cfg.params),
-                                            'wrench_estimate_link': link}), model, 'test')
+    check_base(replace(twist_cfg.params, wrench_estimate_link=link), model, 'test')
     imu_cfg = configured(robot_description=demo_text, base='moving',
                          **{'base_input.source': 'imu', 'base_input.imu_link': 'base_link'})
     with pytest.raises(ConfigError, match='wrench_estimate.link: not supported with base '
                        'moving with base_input.source imu'):
-        check_base(imu_cfg.params.__class__(**{**vars(imu_cfg.params),
-                                              'wrench_estimate_link': link}), model, 'test')
+        check_base(replace(imu_cfg.params, wrench_estimate_link=link), model, 'test')
