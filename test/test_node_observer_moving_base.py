@@ -12,7 +12,6 @@ observer is off (``base_input.source: imu``) or skips the sample (none held yet)
 computed as if the base were fixed.
 """
 
-from dataclasses import replace
 import math
 import os
 import sys
@@ -25,7 +24,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_harness import DEMO_URDF  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.ros.answering import Answering  # noqa: E402
-from spatial_dynamics.ros.bases import check_base, observer_off  # noqa: E402
+from spatial_dynamics.ros.bases import observer_off  # noqa: E402
 from spatial_dynamics.ros.diagnostics import observer_status  # noqa: E402
 from spatial_dynamics.ros.observer import MomentumObserver  # noqa: E402
 from spatial_dynamics.ros.parameters import ConfigError  # noqa: E402
@@ -163,14 +162,24 @@ def test_the_observer_is_off_with_an_imu_and_says_why(demo_text):
 
 
 def test_the_wrench_estimate_follows_the_observer(demo_text):
-    # wrench_estimate.link needs the observer: accepted where it runs, refused where it is off
-    twist_cfg = configured(robot_description=demo_text, base='moving',
-                           **{'base_input.source': 'twist'})
-    model = twist_cfg.robot.model
-    link = list(model.frames)[-1]
-    check_base(replace(twist_cfg.params, wrench_estimate_link=link), model, 'test')
-    imu_cfg = configured(robot_description=demo_text, base='moving',
-                         **{'base_input.source': 'imu', 'base_input.imu_link': 'base_link'})
+    # wrench_estimate.link needs the observer: accepted and published where it runs (source
+    # twist), refused where it is off (source imu)
+    link = list(sd.Model.from_urdf(DEMO_URDF).frames)[-1]
+    cfg = configured(robot_description=demo_text, base='moving', observer_gain=K,
+                     **{'base_input.source': 'twist', 'base_input.timeout': 3600.0,
+                        'wrench_estimate.link': link})
+    n = len(cfg.robot.joints)
+    answering = Answering(Log())
+    position, quat, v, _ = base_motion(T0)
+    answering.base_input(cfg, 'base/pose', pose(T0, position, quat))
+    answering.base_input(cfg, 'base/twist', twist(T0, v))
+    for k in range(2):
+        msg = joint_state(cfg.robot.joints, T0 + k * H, np.zeros(n), np.zeros(n), np.ones(n))
+        answering.measured(cfg, msg)
+        out = answering.observe(cfg, msg)
+        assert out.estimate is not None and out.wrench[1] == link and out.wrench[2].shape == (6,)
     with pytest.raises(ConfigError, match='wrench_estimate.link: not supported with base '
                        'moving with base_input.source imu'):
-        check_base(replace(imu_cfg.params, wrench_estimate_link=link), model, 'test')
+        configured(robot_description=demo_text, base='moving',
+                   **{'base_input.source': 'imu', 'base_input.imu_link': 'base_link',
+                      'wrench_estimate.link': link})
