@@ -205,13 +205,26 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     return rnea(model, q, qd, zero, gravity, backend=backend)
 
 
-def mass_matrix(model: Model, q, backend: str = 'auto') -> np.ndarray:
+def mass_matrix(model: Model, q, backend: str = 'auto', *,
+                base: Optional[BaseMotion] = None) -> np.ndarray:
     """Joint-space inertia ``M(q)`` by the composite rigid body algorithm (RBDA table 6.2).
 
     ``M`` is symmetric positive definite (for a model whose every joint moves some mass);
     ``τ = M(q) q̈ + bias_torque(q, q̇)``. ``q`` of shape (n,) or (..., n), arrays, lists or
     tuples; returns an array of shape (..., n, n), float64 or ``q``'s floating dtype.
+    ``base`` (a moving base's :class:`~spatial_dynamics.base.BaseMotion`) is taken as the
+    other functions take it and changes nothing: the joints' block ``M_jj`` of the floating
+    twin is the composite inertia of the bodies beyond each joint, which depends on ``q``
+    only, never on the base's motion (only broadcast against its batch).
     """
+    if base is not None:
+        if not isinstance(base, BaseMotion):
+            raise TypeError("base must be a spatial_dynamics.BaseMotion (the base's v, a and "
+                            f'orientation), got {type(base).__name__}')
+        H = mass_matrix(model, q, backend)
+        shape = np.broadcast_shapes(H.shape[:-2], base.v.shape[:-1], base.a.shape[:-1], (
+            () if base.orientation is None else base.orientation.shape[:-1])) + H.shape[-2:]
+        return H if H.shape == shape else np.broadcast_to(H, shape).copy()
     lay, kern, H = _entered(model, backend, _c_mass_matrix, q)
     if H is not None:
         return H
@@ -221,14 +234,29 @@ def mass_matrix(model: Model, q, backend: str = 'auto') -> np.ndarray:
     return python.mass_matrix(lay.rows, q)
 
 
-def generalized_momentum(model: Model, q, qd, backend: str = 'auto') -> tuple:
+def generalized_momentum(model: Model, q, qd, backend: str = 'auto', *,
+                         base: Optional[BaseMotion] = None) -> tuple:
     """``(p, Cᵀ q̇)``: the generalized momentum ``p = M(q) q̇`` and ``Cᵀ(q, q̇) q̇``, in O(n).
 
     What a momentum observer of external torques integrates (``ṗ = τ + Cᵀ q̇ - g + τ_ext``);
     ``Cᵀ q̇ = ∂T/∂q`` for the kinetic energy ``T = ½ q̇ᵀ M q̇``, and ``Ṁ q̇ = C q̇ + Cᵀ q̇``
     (see :mod:`spatial_dynamics.algorithms.momentum`). ``q``, ``qd`` of shape (n,) or
     (..., n), broadcast; returns two arrays of the broadcast shape.
+
+    On a moving ``base`` (its twist ``v_b``; its acceleration is not used) the joint rows of
+    the floating twin's, with ``ν = [v_b; q̇]``::
+
+        p = M_jb v_b + M_jj q̇,    Cᵀ q̇ → (Cᵀ(q, ν) ν)_j = ∂T(q, ν)/∂q
+
+    and still ``ṗ = τ + (Cᵀ ν)_j − g_j + τ_ext``, ``g_j`` the gravity torque at the base's
+    orientation (``gravity_torque(q, base=BaseMotion.at_rest(orientation))``): the joints
+    are true coordinates, so their Lagrange equations hold as on a fixed base.
     """
+    if base is not None:
+        twin = floating_twin(model)
+        q, qd, _, _ = twin_state(model, base, q, qd)
+        p, ctv = generalized_momentum(twin, q, qd, backend)
+        return p[..., 6:], ctv[..., 6:]
     lay, kern, out = _entered(model, backend, _c_momentum, q, qd)
     if out is not None:
         return out

@@ -41,7 +41,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
 from spatial_dynamics.effort import with_gravity
-from spatial_dynamics.ros.bases import BaseInputs, contact_wrenches
+from spatial_dynamics.ros.bases import BaseInputs, contact_wrenches, observer_off
 from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
 from spatial_dynamics.ros.diagnostics import Totals, Window
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
@@ -334,7 +334,7 @@ class Answering:
         Returns its estimate and, with ``wrench_estimate.link``, the virtual F/T reading.
         """
         observing, self._observing = self._observing, None
-        if config.params.observer_gain <= 0.0 or config.params.base != 'fixed':
+        if config.params.observer_gain <= 0.0 or observer_off(config.params):
             self.observer = None
             return NOTHING
         if observing is None or observing[0] is not msg:
@@ -405,8 +405,15 @@ class Answering:
         if t is None:
             skipped['unstamped'] += 1
             return None
+        base = None
+        if config.params.base == 'moving':     # its twist and orientation (source twist)
+            try:
+                base = self.base_inputs.velocity(config, time.monotonic_ns())
+            except InputError as err:
+                skipped[err.reason] = skipped.get(err.reason, 0) + 1
+                return None
         try:
-            r = observer.update(t, q, qd, tau)
+            r = observer.update(t, q, qd, tau, base)
         except Exception as err:  # never die on one message
             self.log.warn(f'external torque observer failed: {err!r}', throttle_duration_sec=1.0)
             observer.reset('compute error')

@@ -153,9 +153,27 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
         if links:
             raise ConfigError("parameter contacts.links: contacts need base 'floating' (a "
                               "moving base's motion is given, nothing carries it)")
-    if params.wrench_estimate_link:
-        raise ConfigError(f'parameter wrench_estimate.link: not supported with base '
-                          f'{params.base!r} (the observer needs a fixed base)')
+    off = observer_off(params)
+    if params.wrench_estimate_link and off:
+        raise ConfigError(f'parameter wrench_estimate.link: not supported with {off}')
+
+
+def observer_off(params) -> str:
+    """Why the external-torque observer cannot run on this base ('' when it can).
+
+    It needs the base's twist and orientation (see :mod:`~spatial_dynamics.ros.observer`):
+    a fixed base, or a moving one with ``base_input.source: twist``. An IMU gives the twist
+    only integrated (its drift would enter the momentum), and a floating base's twist is the
+    robot's own state, not a given motion.
+    """
+    if params.base == 'fixed' or (params.base == 'moving'
+                                  and params.base_input_source == 'twist'):
+        return ''
+    if params.base == 'moving':
+        return ("base moving with base_input.source imu: the observer needs the base's "
+                'twist, which an IMU gives only integrated (base_input.source twist gives it)')
+    return (f'base {params.base}: the observer needs a base whose motion is given (fixed, or '
+            'moving with base_input.source twist)')
 
 
 def _same(a: Optional[tuple], b: tuple) -> bool:
@@ -196,6 +214,7 @@ class BaseInputs:
         self.rejected: Counter = Counter()
         self.window = BaseWindow()
         self._motion: tuple = (None, None)         # (what it was made from, BaseMotion)
+        self._velocity: tuple = (None, None)       # the same, the observer's (twist only)
 
     def period(self) -> BaseWindow:
         """Return the contact figures of the period that ended; start new ones."""
@@ -331,6 +350,22 @@ class BaseInputs:
         if not _same(self._motion[0], key):
             self._motion = key, sd.base_from_odometry(model, v, rate, quat, link=frame or None)
         return self._motion[1]
+
+    def velocity(self, config, now_ns: int) -> 'sd.BaseMotion':
+        """Return a moving base's twist and orientation now, its acceleration zero.
+
+        What the observer needs (``base_input.source: twist``): the last ``base/twist`` and
+        ``base/pose`` (or ``base/odometry``), whatever ``base_input.acceleration`` says.
+        InputError (base_missing, base_stale) when either is missing or stale.
+        """
+        params, model = config.params, config.robot.model
+        _, quat = self._fresh(params, self.pose, 'base/pose', now_ns)
+        v, frame = self._fresh(params, self.twist, 'base/twist', now_ns)
+        key = (model, self.pose, self.twist)
+        if not _same(self._velocity[0], key):
+            self._velocity = key, sd.base_from_odometry(model, v, np.zeros(6), quat,
+                                                        link=frame or None)
+        return self._velocity[1]
 
     def contacts(self, config, now_ns: int) -> Tuple['sd.Contact', ...]:
         """Return the contacts in force now (``contacts.links`` filtered by ``contact_states``)."""

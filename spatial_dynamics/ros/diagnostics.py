@@ -220,21 +220,22 @@ def feedforward_status(robot: Optional[Robot], window: Window, totals: Totals,
 
 def observer_status(robot: Optional[Robot], gain: float,
                     observer: Optional[MomentumObserver], window: EstimateWindow,
-                    base: str = 'fixed') -> Status:
+                    off: str = '') -> Status:
     """Return the ``external torque`` status: RMS of the estimate per joint over the period.
 
     WARN, naming the joints, when a joint's RMS exceeds ``external_torque_warn``; WARN, naming
     the directions, when the virtual F/T sensor (``wrench_estimate.link``) had a sample in the
     period where some direction of the wrench was unobservable or damped (fewer than six
     joints, a singular pose), whether or not anything pushed: a wrench along it would be
-    missed or underestimated.
+    missed or underestimated. ``off``: why the observer cannot run on this base
+    (:func:`~spatial_dynamics.ros.bases.observer_off`), '' when it can.
     """
     values = [('observer gain [1/s]', f'{gain:g}'),
               ('time constant [ms]', f'{1e3 / gain:.1f}' if gain > 0.0 else '')]
     if gain <= 0.0:
         return 'OK', 'observer off (observer_gain 0)', values
-    if base != 'fixed':
-        return 'OK', f'observer off (base {base}: it needs a fixed base)', values
+    if off:
+        return 'OK', f'observer off ({off})', values
     if robot is None:
         return 'OK', 'no robot model', values
     values += [('estimates', str(window.count))]

@@ -52,7 +52,7 @@ from sensor_msgs.msg import Imu, JointState
 import spatial_dynamics as sd
 from spatial_dynamics.ros import messages
 from spatial_dynamics.ros.answering import Answering, Out
-from spatial_dynamics.ros.bases import base_status
+from spatial_dynamics.ros.bases import base_status, observer_off
 from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, plan_qos, spin, subscribe
 from spatial_dynamics.ros.config import (
     build_robot, ConfigError, NODE_NAME, PARAMETER_NAMES, PARAMETERS, PAYLOAD_PARAMETERS,
@@ -426,7 +426,7 @@ class InverseDynamicsNode(Node):
                                                answering.wrenches, now_ns)),
             ('external torque', observer_status(robot, config.params.observer_gain,
                                                 answering.observer, estimates,
-                                                config.params.base))]
+                                                observer_off(config.params)))]
         if config.params.base != 'fixed':
             statuses.append(('base', base_status(config.params, robot, answering.base_inputs,
                                                  answering.base_inputs.period(), now_ns)))

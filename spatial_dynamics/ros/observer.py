@@ -33,6 +33,16 @@ with ``w = τ_m + β`` (trapezoidal rule), and ``r`` is the exact solution of
 (for ``K_O Δt ≪ 1`` this is the Euler step of the integral form above; unlike it, it is
 stable and exactly first order for any sample interval). A step of ``τ_ext`` at a sample
 gives ``r = (1 − e^{−K_O t}) τ_ext`` at the samples after it.
+
+**On a moving base** (a mobile manipulator, a ship: the node's ``base: moving``) the same
+observer runs on the joint rows of the floating twin (:func:`~spatial_dynamics.floating_twin`)
+with the base's twist ``v_b`` and orientation given, ``ν = [v_b; q̇]``::
+
+    p = M_jb v_b + (M_jj + A) q̇,    β = (Cᵀ(q, ν) ν)_j − g_j(q, orientation) − friction(q̇)
+
+(:func:`spatial_dynamics.generalized_momentum` with ``base=``): the joints are true
+coordinates, so ``ṗ = τ_m + β + τ_ext`` holds as on a fixed base. It needs the base's twist
+and orientation, never its acceleration.
 """
 
 from __future__ import annotations
@@ -62,6 +72,9 @@ MAX_EXTERNAL_TORQUE_WARN = 1e6
 #: :func:`sample_time`), ``repeated`` (the stamp of the previous sample).
 SKIP_REASONS = ('no_effort', 'length_mismatch', 'non_finite', 'out_of_bounds', 'no_velocity',
                 'unstamped', 'repeated')
+#: On a moving base, also (counted only when they happen): ``base_missing`` (no base twist or
+#: pose yet), ``base_stale`` (older than ``base_input.timeout``).
+BASE_SKIP_REASONS = ('base_missing', 'base_stale')
 
 Friction = Callable[[np.ndarray], np.ndarray]
 
@@ -183,19 +196,37 @@ class MomentumObserver:
         self._w: Optional[np.ndarray] = None
         self.r = np.zeros(len(self.model.joint_names))
 
-    def momentum(self, q: np.ndarray, qd: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-        """``(p, β)``: ``p = (M + A) q̇`` and ``β = Cᵀ q̇ − g − friction(q̇)``."""
-        p, ctq = sd.generalized_momentum(self.model, q, qd, backend=self.backend)
-        beta = ctq - sd.gravity_torque(self.model, q, self.gravity, backend=self.backend)
+    def momentum(self, q: np.ndarray, qd: np.ndarray, base: Optional['sd.BaseMotion'] = None
+                 ) -> Tuple[np.ndarray, np.ndarray]:
+        """``(p, β)``: ``p = (M + A) q̇`` and ``β = Cᵀ q̇ − g − friction(q̇)``.
+
+        On a moving ``base`` (its twist and orientation; its acceleration is not used), the
+        joint rows of the floating twin's (see the module doc).
+        """
+        if base is None:
+            p, ctq = sd.generalized_momentum(self.model, q, qd, backend=self.backend)
+            g = sd.gravity_torque(self.model, q, self.gravity, backend=self.backend)
+        elif base.gravity_included:
+            raise ObserverError("the observer needs the base's orientation for gravity, not an "
+                                "IMU's specific force: give its twist and orientation")
+        else:
+            p, ctq = sd.generalized_momentum(self.model, q, qd, backend=self.backend,
+                                             base=base)
+            g = sd.gravity_torque(self.model, q, self.gravity, backend=self.backend,
+                                  base=sd.BaseMotion.at_rest(base.orientation))
+        beta = ctq - g
         if self.armature is not None:
             p = p + self.armature * qd
         if self.friction is not None:
             beta -= self.friction(qd)
         return p, beta
 
-    def update(self, t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray
-               ) -> Optional[np.ndarray]:
+    def update(self, t: float, q: np.ndarray, qd: np.ndarray, tau: np.ndarray,
+               base: Optional['sd.BaseMotion'] = None) -> Optional[np.ndarray]:
         """Take the sample ``(q, q̇, τ_m)`` measured at time ``t`` (s); return ``r`` (n,).
+
+        ``base``: a moving base's motion at ``t`` (its twist and orientation), None for a
+        fixed base.
 
         None when ``t`` equals the previous sample's time (the same measurement again:
         nothing new). A time before the previous one, or more than ``max_gap`` after it,
@@ -209,7 +240,7 @@ class MomentumObserver:
                 self.reset(f'time went backwards by {-dt:.6f} s')
             elif dt > self.max_gap:
                 self.reset(f'gap of {dt:.3f} s between samples (more than {self.max_gap:g} s)')
-        p, beta = self.momentum(q, qd)
+        p, beta = self.momentum(q, qd, base)
         w = tau + beta
         if self._t is not None:
             dt = t - self._t
