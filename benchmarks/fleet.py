@@ -10,7 +10,10 @@ armature) and noise, the bags an hour apart. It runs the fleet's tasks as the co
 cluster's start-up timed apart), and prints per way the wall time, the bag-hours processed
 per minute per core (and per CPU-minute: user + system time of this process and the
 workers, which a busy machine does not inflate as it does the wall time), the overhead per
-core against serial, and whether the sums are the serial ones bit for bit. Then long bags
+core, and whether the sums are the serial ones bit for bit. A cluster of N workers is
+measured against N plain processes that each run an equal share with no engine at all (what
+N cores give this work here: they share caches and memory bandwidth), 1 worker against
+serial. Then long bags
 (``--long`` s) as one task and cut into ``--chunk`` s chunks, each in a fresh process: the
 most messages a task holds and the process's peak RSS, which the chunks bound whatever the
 bag's length.
@@ -111,11 +114,20 @@ def timed_runs(tasks: List, workers: Sequence[int]) -> List[dict]:
     rows = []
     me = [os.getpid()]
     load_modules()      # as warm() does on each worker
+    for task in tasks:  # every way reads the bags from the page cache, the first one too
+        walk = os.walk(task.bag) if os.path.isdir(task.bag) else [('', (), [task.bag])]
+        for root, _, files in walk:
+            for name in files:
+                with open(os.path.join(root, name), 'rb') as f:
+                    while f.read(1 << 24):
+                        pass
     c0, t0 = cpu_of(me), time.perf_counter()
     results = run_tasks(tasks, Cache(None))
     rows.append({'way': 'serial', 'cores': 1, 'wall': time.perf_counter() - t0,
                  'cpu': cpu_of(me) - c0, 'startup': 0.0, 'results': results})
     for n in workers:
+        if n > 1:       # the machine's own limit: n processes, no engine, n equal shares
+            rows.append(plain_processes(tasks, n))
         t0 = time.perf_counter()
         with local_cluster(n) as cluster, Client(cluster) as client:
             warm(client)
@@ -129,6 +141,39 @@ def timed_runs(tasks: List, workers: Sequence[int]) -> List[dict]:
                      'cpu': here + there, 'here': here, 'startup': startup,
                      'results': results})
     return rows
+
+
+def _share(tasks: List) -> tuple:
+    """Run ``tasks`` here, one after the other: (results, CPU s of this process).
+
+    Each bag hashed first, as every way does for its cache key.
+    """
+    from spatial_dynamics.fleet.engine import load_modules, process_batch
+    from spatial_dynamics.fleet.task import content_key
+    load_modules()
+    c0 = time.process_time()
+    digests: dict = {}
+    for task in tasks:
+        content_key(task, digests)
+    results = process_batch(tasks)
+    return results, time.process_time() - c0
+
+
+def plain_processes(tasks: List, n: int) -> dict:
+    """Run ``tasks`` in ``n`` plain processes, each a contiguous share: no engine at all.
+
+    What ``n`` cores give this work on this machine (their shared caches and memory
+    bandwidth included): the cluster's overhead is measured against it.
+    """
+    from concurrent.futures import ProcessPoolExecutor
+    shares = [list(tasks[k * len(tasks) // n:(k + 1) * len(tasks) // n]) for k in range(n)]
+    with ProcessPoolExecutor(n) as pool:
+        list(pool.map(time.sleep, [0.0] * n))          # the processes started apart
+        t0 = time.perf_counter()
+        done = list(pool.map(_share, shares))
+        wall = time.perf_counter() - t0
+    return {'way': f'{n} plain', 'cores': n, 'wall': wall, 'cpu': sum(c for _, c in done),
+            'startup': 0.0, 'results': [r for results, _ in done for r in results]}
 
 
 def memory_of_long_bag(path: str, chunk: float) -> str:
@@ -179,12 +224,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         rate = hours / (row['wall'] / 60.0) / row['cores']
         row['rate'] = rate
         per_cpu = hours / (row['cpu'] / 60.0)
-        over = 1.0 - rate / rows[0]['rate']
-        cpu_over = row['cpu'] / rows[0]['cpu'] - 1.0
+        base = next((r for r in rows if r['way'] == f'{row["cores"]} plain'), rows[0])
+        over = 1.0 - rate / base['rate']
+        cpu_over = row['cpu'] / base['cpu'] - 1.0
         rss = max(r['peak_rss_mb'] for r in results)
         print(f'{row["way"]:>9}: {row["wall"]:6.1f} s wall ({row["startup"]:.1f} s cluster '
               f'start-up apart), {rate:6.2f} bag-h/min/core ({per_cpu:.2f} per CPU-minute), '
-              f'overhead per core {over:+.1%} wall, {cpu_over:+.1%} CPU ({row["cpu"]:.1f} s, '
+              f'overhead per core against {base["way"]} {over:+.1%} wall, {cpu_over:+.1%} '
+              f'CPU ({row["cpu"]:.1f} s, '
               f'{row.get("here", row["cpu"]):.1f} s of it in this process); peak RSS per '
               f'process {rss:.0f} MB; sums {"identical" if same else "DIFFERENT"} to serial',
               flush=True)

@@ -55,3 +55,25 @@ def test_the_local_cluster_workers_run_no_profiler_and_keep_mallocs_own_threshol
         got = client.run(lambda: (__import__('dask').config.get(
             'distributed.worker.profile.enabled'), 'MALLOC_TRIM_THRESHOLD_' in os.environ))
     assert list(got.values()) == [(False, False)]
+
+
+def test_the_workers_hash_the_bags_and_a_bag_they_cannot_read_is_left_out(tmp_path,
+                                                                          monkeypatch):
+    """The content keys' hashes come from the workers (the client hashes nothing itself)."""
+    pytest.importorskip('distributed')
+    from distributed import Client
+    from spatial_dynamics.fleet import task as task_module
+    tasks = bags_of(tmp_path, [1000 + k for k in range(9)])
+    for k, t in enumerate(tasks):
+        with open(t.bag, 'wb') as f:
+            f.write(bytes([k]) * (1000 + k))
+    expected = {t.bag: task_module.bag_digest(t.bag) for t in tasks}
+    missing = Task('r', 'robot.urdf', str(tmp_path / 'gone.db3'))
+
+    def not_here(path):
+        raise AssertionError(f'hashed {path} in the client')
+    monkeypatch.setattr(engine, 'bag_digest', not_here)
+    monkeypatch.setattr(task_module, 'bag_digest', not_here)
+    with engine.local_cluster(2) as cluster, Client(cluster) as client:
+        got = engine.digests_on(client, tasks + [missing])
+    assert got == expected
