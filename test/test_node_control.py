@@ -78,24 +78,42 @@ class Loop:
     def answers(self, k):
         return [m for m in self.io.efforts if stamp_key(m.header.stamp) == k]
 
-    def _ask(self, publisher, msg, k, with_terms=False):
+    def _ask(self, publisher, message, with_terms=False):
+        """Publish ``message(k)`` until answered; the effort (and the terms) of stamp ``k``.
+
+        The node publishes the terms only once it has seen our subscription, which on a
+        loaded machine may come after its answer to the first stamp: an answer without
+        terms is asked again with the next stamp (the node answers a stamp once).
+        """
+        self.k += 1
+        msg = message(self.k)
         deadline = time.monotonic() + TIMEOUT
         while True:
+            k = self.k
             answers = self.answers(k)
             terms = [m for m in self.terms if stamp_key(m.header.stamp) == k]
             if answers and (terms or not with_terms):
                 assert tuple(answers[0].name) == self.names
                 effort = np.array(answers[0].effort)
                 return (effort, terms[0]) if with_terms else effort
-            assert time.monotonic() < deadline, f'no answer to message {k}'
+            assert time.monotonic() < deadline, (
+                f'no answer to message {k} ({len(answers)} answers of it, '
+                f'{len(self.io.efforts)} efforts and {len(self.terms)} terms received, '
+                f'the last of stamps {[stamp_key(m.header.stamp) for m in self.io.efforts[-3:]]}'
+                f', terms wanted: {with_terms})')
+            if answers:             # answered before the node saw our terms subscription
+                self.driver.spin_for(0.05)      # terms of k may still be on their way
+                if not [m for m in self.terms if stamp_key(m.header.stamp) == k]:
+                    self.k += 1
+                    msg = message(self.k)
+                continue
             publisher.publish(msg)
             self.driver.spin_for(0.05)
 
     def desired(self, state, with_terms=False):
         """Publish a desired state (q, qd, qdd) until answered (feedforward mode)."""
-        self.k += 1
-        return self._ask(self.io.joint_states, joint_state(self.names, *state, self.k),
-                         self.k, with_terms)
+        return self._ask(self.io.joint_states, lambda k: joint_state(self.names, *state, k),
+                         with_terms)
 
     def measured_msg(self, q, qd, k):
         msg = joint_state(self.names, q, qd, [], k)
@@ -104,8 +122,7 @@ class Loop:
 
     def measure(self, q, qd, with_terms=False):
         """Publish a measured (q, qd) until answered (feedback modes)."""
-        self.k += 1
-        return self._ask(self.measured, self.measured_msg(q, qd, self.k), self.k, with_terms)
+        return self._ask(self.measured, lambda k: self.measured_msg(q, qd, k), with_terms)
 
 
 @pytest.fixture
