@@ -353,8 +353,8 @@ def _mcap_records(buf: memoryview, channel_of: Dict[int, str], topic: str
         yield np.array(single_t, dtype=np.int64), single
 
 
-def _mcap_batches(paths: Sequence[str], topic: str) -> Iterator[Batch]:
-    """Yield batches of one topic's messages from MCAP files (chunks parsed with numpy)."""
+def _mcap_buffers(paths: Sequence[str]) -> Iterator[memoryview]:
+    """Yield each MCAP file's bytes, mapped read-only, checked to be MCAP; released after."""
     import mmap
     for path in paths:
         with open(path, 'rb') as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as mm:
@@ -362,10 +362,16 @@ def _mcap_batches(paths: Sequence[str], topic: str) -> Iterator[Batch]:
             try:
                 if bytes(buf[:8]) != MCAP_MAGIC:
                     raise BagError(f'{path}: not an MCAP file')
-                # Stop at the data end record (opcode 0x0F): the summary repeats channels.
-                yield from _mcap_records(buf[8:_data_end(buf)], {}, topic)
+                yield buf
             finally:
                 buf.release()
+
+
+def _mcap_batches(paths: Sequence[str], topic: str) -> Iterator[Batch]:
+    """Yield batches of one topic's messages from MCAP files (chunks parsed with numpy)."""
+    for buf in _mcap_buffers(paths):
+        # Stop at the data end record (opcode 0x0F): the summary repeats channels.
+        yield from _mcap_records(buf[8:_data_end(buf)], {}, topic)
 
 
 def _data_end(buf: memoryview) -> int:
@@ -497,32 +503,24 @@ def _mcap_batches_between(paths: Sequence[str], topic: str, start: Optional[int]
     over without being read or decompressed, when the summary names the channels (a
     skipped chunk may hold a channel record); the rest are read as the whole file is.
     """
-    import mmap
     lo = -(1 << 63) if start is None else int(start)
     hi = (1 << 63) - 1 if stop is None else int(stop)
-    for path in paths:
-        with open(path, 'rb') as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as mm:
-            buf = memoryview(mm)
-            try:
-                if bytes(buf[:8]) != MCAP_MAGIC:
-                    raise BagError(f'{path}: not an MCAP file')
-                end = _data_end(buf)
-                channel_of = _mcap_channels(buf, end)
-                skip = topic in channel_of.values()
-                o = 8
-                while o + 9 <= end:
-                    length = int.from_bytes(buf[o + 1:o + 9], 'little')
-                    if skip and buf[o] == OP_CHUNK:
-                        first = int.from_bytes(buf[o + 9:o + 17], 'little')
-                        last = int.from_bytes(buf[o + 17:o + 25], 'little')
-                        if last < lo or first >= hi:
-                            o += 9 + length
-                            continue
-                    yield from _between(_mcap_records(buf[o:o + 9 + length], channel_of,
-                                                      topic), start, stop)
+    for buf in _mcap_buffers(paths):
+        end = _data_end(buf)
+        channel_of = _mcap_channels(buf, end)
+        skip = topic in channel_of.values()
+        o = 8
+        while o + 9 <= end:
+            length = int.from_bytes(buf[o + 1:o + 9], 'little')
+            if skip and buf[o] == OP_CHUNK:
+                first = int.from_bytes(buf[o + 9:o + 17], 'little')
+                last = int.from_bytes(buf[o + 17:o + 25], 'little')
+                if last < lo or first >= hi:
                     o += 9 + length
-            finally:
-                buf.release()
+                    continue
+            yield from _between(_mcap_records(buf[o:o + 9 + length], channel_of, topic),
+                                start, stop)
+            o += 9 + length
 
 
 def read_joint_states_between(path: str, topic: str, names: Sequence[str],
