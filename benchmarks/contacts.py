@@ -11,8 +11,9 @@ import os
 import sysconfig
 import time
 
-import numpy as np
 import spatial_dynamics as sd
+
+from .floating import solo_standing
 
 
 def per_call(f, n=300, repeats=7) -> float:
@@ -31,12 +32,7 @@ def main() -> None:
                           'example-robot-data', 'robots')
     model = sd.Model.from_urdf(os.path.join(robots, 'solo_description', 'robots',
                                             'solo12.urdf'), base='floating')
-    q = np.zeros(model.nq)
-    q[2], q[6] = 0.25, 1.0
-    q[7:] = [0.0, 0.8, -1.6] * 2 + [0.0, -0.8, 1.6] * 2
-    rng = np.random.default_rng(0)
-    qd, qdd = rng.normal(size=(2, model.nv)) * 0.1
-    feet = [sd.Contact(f) for f in ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')]
+    q, qd, qdd, feet = solo_standing(model)
     print(f'rnea (M q̈ + h):       {per_call(lambda: sd.rnea(model, q, qd, qdd)):8.1f} µs')
     t = per_call(lambda: sd.contact_jacobian(model, q, feet))
     print(f'contact_jacobian:       {t:8.1f} µs')

@@ -71,15 +71,21 @@ def main() -> None:
             contacts(model, cpu)
 
 
-def contacts(model, cpu) -> None:
-    """Print the contact inverse dynamics row: Solo12 standing on four point feet."""
+def solo_standing(model) -> tuple:
+    """Return Solo12 standing, knees bent, with small random rates: ``(q, qd, qdd, feet)``."""
     import spatial_dynamics as sd
     q = np.zeros(model.nq)
     q[2], q[6] = 0.25, 1.0
     q[7:] = [0.0, 0.8, -1.6] * 2 + [0.0, -0.8, 1.6] * 2
     rng = np.random.default_rng(0)
     qd, qdd = rng.normal(size=(2, model.nv)) * 0.1
-    feet = [sd.Contact(f) for f in ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')]
+    return q, qd, qdd, [sd.Contact(f) for f in ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')]
+
+
+def contacts(model, cpu) -> None:
+    """Print the contact inverse dynamics row: Solo12 standing on four point feet."""
+    import spatial_dynamics as sd
+    q, qd, qdd, feet = solo_standing(model)
 
     def per_state(backend, calls=300):
         timer = timeit.Timer(lambda: sd.contact_inverse_dynamics(
