@@ -44,7 +44,8 @@ from spatial_dynamics.effort import with_gravity
 from spatial_dynamics.ros.bases import BaseInputs, contact_wrenches, observer_off
 from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
 from spatial_dynamics.ros.diagnostics import Totals, Window
-from spatial_dynamics.ros.inputs import InputError, joint_state_arrays, trajectory_arrays
+from spatial_dynamics.ros.inputs import (InputError, joint_state_arrays, stamp_ns,
+                                         trajectory_arrays)
 from spatial_dynamics.ros.observer import (
     EstimateWindow, make_observer, measured_effort, observer_key, sample_time)
 from spatial_dynamics.ros.plans import Job, prepare_plan, PlanItem
@@ -181,7 +182,7 @@ class Answering:
             self._reject_annotation(item.error[0], item.error[1])
             return None
         msg = item.msg
-        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        stamp = stamp_ns(msg.header)
         try:
             check_start(stamp or clock_ns, clock_ns)
         except TrajectoryError as err:
@@ -226,7 +227,7 @@ class Answering:
         Returns the plan to annotate, when it is followed and plans are annotated.
         """
         robot, msg = config.robot, item.msg
-        start_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        start_ns = stamp_ns(msg.header)
         q = self._measured_q
         if q is not None and len(q) != len(robot.joints):   # measured on another model
             q = None
@@ -304,7 +305,7 @@ class Answering:
             return NOTHING
         totals.last_measured_ns = t0
         self.window.measured += 1
-        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        stamp = stamp_ns(msg.header)
         self._measured_q = measured[0]     # in robot.joints order: held by an empty trajectory
         self._measured_stamp = stamp or self._measured_stamp
         self._measured_seen = True
@@ -351,7 +352,7 @@ class Answering:
                          with_terms: bool) -> Optional[Answer]:
         """Answer a good measured state with the held desired state (a feedback mode)."""
         robot, mode = config.robot, config.params.control_mode
-        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        stamp = stamp_ns(msg.header)
         desired = None
         if self._following == robot.joints:   # a trajectory, sampled at this measurement
             desired = self.follower.sample(stamp or self._measured_stamp)

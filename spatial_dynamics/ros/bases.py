@@ -57,7 +57,7 @@ from spatial_dynamics.bounds import (check_bounded, MAX_ACCELERATION, MAX_POSITI
                                      MAX_VELOCITY, MAX_WRENCH)
 from spatial_dynamics.contacts import link_orientations
 from spatial_dynamics.ros.control import Dynamics
-from spatial_dynamics.ros.inputs import InputError
+from spatial_dynamics.ros.inputs import InputError, stamp_ns
 from spatial_dynamics.ros.parameters import ConfigError
 
 #: Values of the ``base`` parameter.
@@ -82,10 +82,6 @@ BASE_INPUT_REASONS = ('non_finite', 'out_of_bounds', 'not_unit', 'wrong_frame', 
 RESIDUAL_WARN = 1e-6
 
 _XYZ = ('x', 'y', 'z')
-
-
-def _stamp_ns(header) -> int:
-    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
 
 
 def _vector(what: str, values, bound: float, unit: str, names) -> np.ndarray:
@@ -239,20 +235,20 @@ class BaseInputs:
         if msg.header.frame_id not in ('', link):
             raise InputError('wrong_frame', f'header.frame_id {msg.header.frame_id!r} is not '
                              f'base_input.imu_link {link!r}, the IMU frame of the model')
-        self.imu = Held(imu_arrays(msg), _stamp_ns(msg.header), now_ns)
+        self.imu = Held(imu_arrays(msg), stamp_ns(msg.header), now_ns)
 
     def _take_base_pose(self, config, msg, now_ns: int) -> None:
-        self.pose = Held(pose_arrays(msg), _stamp_ns(msg.header), now_ns)
+        self.pose = Held(pose_arrays(msg), stamp_ns(msg.header), now_ns)
 
     def _take_base_odometry(self, config, msg, now_ns: int) -> None:
         """``nav_msgs/Odometry``: its pose and its ``child_frame_id``'s twist, both or neither."""
         pose = pose_arrays(msg.pose)
-        self._hold_twist(config, msg.twist.twist, msg.child_frame_id, _stamp_ns(msg.header),
+        self._hold_twist(config, msg.twist.twist, msg.child_frame_id, stamp_ns(msg.header),
                          now_ns)
-        self.pose = Held(pose, _stamp_ns(msg.header), now_ns)
+        self.pose = Held(pose, stamp_ns(msg.header), now_ns)
 
     def _take_base_twist(self, config, msg, now_ns: int) -> None:
-        self._hold_twist(config, msg.twist, msg.header.frame_id, _stamp_ns(msg.header), now_ns)
+        self._hold_twist(config, msg.twist, msg.header.frame_id, stamp_ns(msg.header), now_ns)
 
     def _hold_twist(self, config, twist, frame: str, stamp: int, now_ns: int) -> None:
         """Check and hold the base's ``twist`` (a ``geometry_msgs/Twist``) in ``frame``."""
@@ -299,7 +295,7 @@ class BaseInputs:
         t, f = msg.wrench.torque, msg.wrench.force
         wrench = _vector(f'wrench on {link!r}', (t.x, t.y, t.z, f.x, f.y, f.z), MAX_WRENCH,
                          'N m or N', [f'torque.{a}' for a in _XYZ] + [f'force.{a}' for a in _XYZ])
-        self.measured[link] = Held(wrench, _stamp_ns(msg.header), now_ns)
+        self.measured[link] = Held(wrench, stamp_ns(msg.header), now_ns)
 
     def _measured(self, params, contacts, now_ns: int) -> Optional[dict]:
         """Link -> measured ``[n; f]`` (link frame) of each contact in force, or None (off)."""

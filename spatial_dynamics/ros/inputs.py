@@ -53,6 +53,11 @@ class InputError(ValueError):
         self.reason = reason
 
 
+def stamp_ns(header) -> int:
+    """Return a ``std_msgs/Header``'s stamp in integer nanoseconds."""
+    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+
+
 def _listed(names: Sequence[str]) -> str:
     shown = ', '.join(repr(name) for name in names[:_MAX_LISTED])
     return shown + (', ...' if len(names) > _MAX_LISTED else '')
