@@ -174,13 +174,18 @@ class Lockstep:
     """
 
     def __init__(self, node, names: Sequence[str], desired, timestep: float,
-                 prefix: str = '') -> None:
-        """Create the endpoints on ``node``, topics under ``prefix`` (or its namespace)."""
+                 prefix: str = '', watched=None, depth: int = 1000) -> None:
+        """Create the endpoints on ``node``, topics under ``prefix`` (or its namespace).
+
+        ``watched``: the subscription of this process to the measured states, if any;
+        :meth:`kick` waits until it is matched too. ``depth``: the answers' queue.
+        """
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
         from std_msgs.msg import Float64MultiArray
-        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+        reliable = QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE)
         self.node, self.desired, self.timestep = node, desired, timestep
+        self.watched = watched
         self.steps = 0                  # torques forwarded: the simulator is at step `steps`
         self.answers = 0                # answers seen
         self.stale = 0                  # of them computed from another step's desired state
@@ -205,9 +210,16 @@ class Lockstep:
         self.desired_pub.publish(msg)
 
     def kick(self) -> None:
-        """Before the first answer: send the desired state of step 0, once both are up."""
+        """Before the first answer: send the desired state of step 0, once all are matched.
+
+        Matched: the node's desired input, the simulator's command input, the node's answers
+        and the watched states (on a busy machine discovery can take seconds; a state
+        published before the watcher matched is never seen).
+        """
         if (self.steps == 0 and self.desired_pub.get_subscription_count() > 0
-                and self.relay.get_subscription_count() > 0):
+                and self.relay.get_subscription_count() > 0
+                and self.answered.get_publisher_count() > 0
+                and (self.watched is None or self.watched.get_publisher_count() > 0)):
             self.publish_desired(0.0)
 
     def _on_answer(self, msg) -> None:
@@ -261,12 +273,18 @@ class Plans:
     measured ``q`` of the same stamp.
     """
 
-    def __init__(self, node, names: Sequence[str], trajectory, seconds: float, run: Run) -> None:
+    def __init__(self, node, names: Sequence[str], trajectory, seconds: float, run: Run,
+                 watched, depth: int = 1000) -> None:
+        """Create the endpoints on ``node``; ``watched``: the measured states' subscription.
+
+        ``depth``: the answers' queue (the run's steps: none is dropped while this process
+        waits for the CPU).
+        """
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
         from trajectory_msgs.msg import JointTrajectory
-        reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-        self.node, self.names, self.run = node, list(names), run
+        reliable = QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE)
+        self.node, self.names, self.run, self.watched = node, list(names), run, watched
         self.q0 = trajectory(0.0)[0]
         times = np.arange(0.0, seconds + PLAN_STEP, PLAN_STEP)
         # stamped 0: starts on receipt, at the node's latest measured stamp (sim time 0)
@@ -283,9 +301,17 @@ class Plans:
         self.seen: set = set()     # stamps of the measured states seen
 
     def kick(self) -> None:
-        """Until the first answer: (re)send the first plan, once the node subscribes."""
+        """Until the first answer: (re)send the first plan, once every endpoint is matched.
+
+        The node's plan input, its answers and the watched states: the simulator steps as
+        soon as the node answers, so a state published before this process's subscription
+        matched (discovery can take seconds on a busy machine) is never seen; a CI run saw
+        629 of 3001.
+        """
         now = time.monotonic()
         if (self.run.answers == 0 and self.pub.get_subscription_count() > 0
+                and self.sub.get_publisher_count() > 0
+                and self.watched.get_publisher_count() > 0
                 and now - self.last_sent > 0.2):
             self.pub.publish(self.first)
             self.last_sent = now
@@ -375,9 +401,13 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
             run.t.append(t)
             run.e.append(trajectory(t)[0] - q)
 
-    plans = Plans(driver, names, trajectory, args.seconds, run) if args.plan else None
-    lockstep = None if args.plan else Lockstep(driver, names, trajectory, TIMESTEP)
-    driver.create_subscription(JointState, 'joint_states', on_state, 1000)
+    # queues as long as the run: a busy machine may keep this process off the CPU for a while
+    depth = int(args.seconds / TIMESTEP) + 100
+    states = driver.create_subscription(JointState, 'joint_states', on_state, depth)
+    plans = (Plans(driver, names, trajectory, args.seconds, run, states, depth) if args.plan
+             else None)
+    lockstep = None if args.plan else Lockstep(driver, names, trajectory, TIMESTEP,
+                                               watched=states, depth=depth)
     wall0 = time.monotonic()
     next_show = wall0
     try:
