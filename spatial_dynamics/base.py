@@ -299,6 +299,9 @@ def floating_twin(model: Model) -> Model:
     return twin
 
 
+_ORIGIN = np.zeros(3)
+
+
 def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=None):
     """Return the twin's ``(q, q̇, q̈, gravity)`` for ``model``'s ``q, q̇, q̈`` on ``base``.
 
@@ -321,7 +324,12 @@ def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=Non
         return np.concatenate([head, np.broadcast_to(x, batch + x.shape[-1:])],
                               -1).astype(q.dtype, copy=False)
 
-    pose = np.concatenate([np.zeros(quat.shape[:-1] + (3,)), quat], -1)
     if base.gravity_included:
         gravity = (0.0, 0.0, 0.0)
+    if not batch:       # one state (a node's answer): nothing to broadcast
+        cat, dtype = np.concatenate, q.dtype
+        return (cat((_ORIGIN, quat, q)).astype(dtype, copy=False),
+                cat((base.v, qd)).astype(dtype, copy=False),
+                cat((base.a, qdd)).astype(dtype, copy=False), gravity)
+    pose = np.concatenate([np.zeros(quat.shape[:-1] + (3,)), quat], -1)
     return joined(pose, q), joined(base.v, qd), joined(base.a, qdd), gravity

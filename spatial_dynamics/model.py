@@ -12,6 +12,7 @@ Models are built from a URDF by :mod:`spatial_dynamics.urdf` (``Model.from_urdf`
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
+from functools import cached_property
 import os
 from types import MappingProxyType
 from typing import Callable, Mapping, Optional, Sequence, Union
@@ -135,12 +136,12 @@ class Model:
         return (type(self), tuple(dict(v) if isinstance(v, MappingProxyType) else v
                                   for v in (getattr(self, f.name) for f in fields(self))))
 
-    @property
+    @cached_property
     def nq(self) -> int:
         """Number of position coordinates ``len(q)``: 1 per joint, 7 for a free-flyer."""
         return len(self.joint_names) + sum(NQ[int(k)] - 1 for k in self.jtype[1:])
 
-    @property
+    @cached_property
     def nv(self) -> int:
         """Number of velocity coordinates ``len(q̇) = len(τ)``: 1 per joint, 6 for a free-flyer."""
         return len(self.joint_names) + sum(NV[int(k)] - 1 for k in self.jtype[1:])

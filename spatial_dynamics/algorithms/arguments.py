@@ -43,6 +43,11 @@ def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) ->
     not ``model.nq`` (``q``) or ``model.nv`` (``qd``, ``qdd``).
     """
     check_model(model)
+    if all(type(a) is np.ndarray and a.ndim == 1 and a.dtype == np.float64 for a in arrays):
+        # one float64 state (the common call): only the lengths to check, nothing to convert
+        sizes = [model.nq if what == 'q' else model.nv for what in names[:len(arrays)]]
+        if all(len(a) == n for a, n in zip(arrays, sizes)):
+            return list(arrays)
     out = []
     for what, x in zip(names, arrays):
         a = as_real_array(what, x)

@@ -180,13 +180,13 @@ def _arrays(
             result.append(np.zeros(n))
             continue
         mapped = np.asarray(values, dtype=np.float64)[idx]
-        if not np.isfinite(mapped).all():
-            bad = [joint_names[i] for i in np.flatnonzero(~np.isfinite(mapped))]
-            raise InputError('non_finite',
-                             f"field '{field}' is not finite for joint(s) {_listed(bad)}")
         bound, unit = JOINT_BOUNDS[kind]
-        huge = np.flatnonzero(np.abs(mapped) > bound)
-        if huge.size:
+        if not np.abs(mapped).max(initial=0.0) <= bound:    # NaN fails too: one pass if good
+            if not np.isfinite(mapped).all():
+                bad = [joint_names[i] for i in np.flatnonzero(~np.isfinite(mapped))]
+                raise InputError('non_finite',
+                                 f"field '{field}' is not finite for joint(s) {_listed(bad)}")
+            huge = np.flatnonzero(np.abs(mapped) > bound)
             raise InputError('out_of_bounds', f"field '{field}' of joint "
                              f'{joint_names[huge[0]]!r} is {mapped[huge[0]]:g}, beyond '
                              f'±{bound:g} {unit}')
