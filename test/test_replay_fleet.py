@@ -20,7 +20,11 @@ from spatial_dynamics.replay.identify import identify
 ONSET = 6           # the first day of wear (1-based): r02's elbow_joint
 
 
-def test_sums_of_chunks_equal_the_fit_of_the_concatenation():
+@pytest.mark.parametrize('noise', [0.05, 1e-5])
+def test_sums_of_chunks_equal_the_fit_of_the_concatenation(noise):
+    # noise 1e-5 N m on torques of ~1.5 N m: the residual sum of squares as rᵀr - θᵀh would
+    # be off by ~eps (|r| / 1e-5)² ≈ 5e-6 (it was: 2.9e-5 here); from the triangular factor
+    # of [A r] by ~eps |r| / 1e-5 ≈ 3e-11 at worst
     rng = np.random.default_rng(3)
     N, n = 6000, 3
     t = np.arange(N) / 500.0
@@ -28,7 +32,7 @@ def test_sums_of_chunks_equal_the_fit_of_the_concatenation():
     qdd = np.gradient(qd, t, axis=0)
     truth = np.array([[0.5, 1.0, 0.05], [0.6, 1.2, 0.06], [0.7, 1.4, 0.07]])
     r = (truth[:, 0] * qd + truth[:, 1] * np.tanh(qd / 0.01) + truth[:, 2] * qdd
-         + rng.normal(0.0, 0.05, (N, n)))
+         + rng.normal(0.0, noise, (N, n)))
     cuts = [0, 700, 2500, 2501, 4100, N]
     parts = [normal_sums(r[a:b], qd[a:b], qdd[a:b], 0.01) for a, b in zip(cuts, cuts[1:])]
     got = solve(total(parts), ['a', 'b', 'c'])

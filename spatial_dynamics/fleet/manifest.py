@@ -3,9 +3,11 @@
 """Which bags belong to which robot: a manifest (CSV or YAML) or a folder ``ROBOT/…/BAG``.
 
 CSV: a header with ``robot,urdf,bag`` and optional option columns (``topic``, ``joints``
-(space-separated), ``threshold``, ``window``, ``order``, ``measured_effort``); ``bag`` may be
-a glob. YAML: a list of ``{robot, urdf, bags: [path or glob, ...], options: {...}}``. Paths
-are relative to the manifest's folder. A folder: each sub-folder is a robot, every bag below
+(space-separated), ``threshold``, ``window``, ``order``, ``measured_effort``, ``gravity``,
+and for a mobile manipulator ``base_odometry`` or ``base_imu`` with ``odometry_link`` or
+``imu_link``: the base's motion from that topic of each bag); ``bag`` may be a glob.
+YAML: a list of ``{robot, urdf, bags: [path or glob, ...], options: {...}}``. Paths are
+relative to the manifest's folder. A folder: each sub-folder is a robot, every bag below
 it (a directory holding ``metadata.yaml``, or a ``.db3``/``.mcap`` file outside one) is one
 of its bags, and the URDF is ``--urdf`` or the robot folder's ``robot.urdf``.
 """
@@ -19,7 +21,7 @@ import os
 from typing import Dict, List, Optional
 
 from ..files import load_yaml, read_regular
-from .task import DEFAULTS, Task
+from .task import BASE_TOPICS, DEFAULTS, Task
 
 #: Largest manifest read (a fleet of thousands of bags is a few MB).
 MANIFEST_LIMIT = 64 << 20
@@ -81,6 +83,13 @@ def _row(robot, urdf, patterns, options: Dict, base: str, where: str) -> List[Ta
         raise ManifestError(f'{where}: robot, urdf and bag are all needed')
     opts = {k: _option(k, v, where) for k, v in options.items()
             if v is not None and v != ''}
+    topics = [k for k in BASE_TOPICS if k in opts]
+    if len(topics) > 1:
+        raise ManifestError(f'{where}: base_odometry and base_imu: give one (each gives the '
+                            'whole motion of the base)')
+    for topic, link in BASE_TOPICS.items():
+        if link in opts and topic not in opts:
+            raise ManifestError(f'{where}: {link} needs {topic}')
     urdf = _urdf(urdf, base, where)
     return [Task(str(robot), urdf, bag, opts)
             for p in patterns for bag in _bags(str(p), base, where)]

@@ -28,16 +28,23 @@ if TYPE_CHECKING:
     from ..replay.bags import JointStates
 
 #: Changes when what a task computes changes (the cache's results are then stale).
-VERSION = 'fleet-1'
+VERSION = 'fleet-2'
 
 #: Bag time read on each side of a chunk, s, at least: four differentiation windows or this.
 MARGIN = 1.0
+#: Bag time (ns) of a base topic read beyond a chunk's joint states, each side.
+BASE_MARGIN = 10 ** 9
 #: How often a chunk's margin is widened (×4) before it reads the whole bag.
 WIDENINGS = 4
 
-#: Per-robot options and their defaults (the replay command's).
+#: Per-robot options and their defaults (the replay command's). ``base_odometry`` or
+#: ``base_imu``: a mobile manipulator's base motion from that topic of each bag (with
+#: ``odometry_link``/``imu_link``), as ``replay --base-odometry/--base-imu``.
 DEFAULTS = {'topic': '/joint_states', 'joints': None, 'threshold': 0.01, 'window': 0.05,
-            'order': 3, 'measured_effort': 'full', 'gravity': (0.0, 0.0, -9.81)}
+            'order': 3, 'measured_effort': 'full', 'gravity': (0.0, 0.0, -9.81),
+            'base_odometry': None, 'base_imu': None, 'odometry_link': None, 'imu_link': None}
+#: The options that name a base topic, and the link option that goes with each.
+BASE_TOPICS = {'base_odometry': 'odometry_link', 'base_imu': 'imu_link'}
 
 
 @dataclass(frozen=True)
@@ -115,7 +122,8 @@ def prepare(task: Task, model) -> Dict:
     from ..replay import bags
     if not task.chunked:
         js = bags.read_joint_states(task.bag, task.option('topic'), model.joint_names)
-        return dict(_derive(task, model, js), owned=None, messages=len(js.stamp))
+        return dict(_derive(task, model, js, (None, None)), owned=None,
+                    messages=len(js.stamp))
     margin = int(max(MARGIN, 4.0 * float(task.option('window'))) * 1e9)
     for _ in range(WIDENINGS):
         d = _prepare_chunk(task, model, margin)
@@ -125,10 +133,15 @@ def prepare(task: Task, model) -> Dict:
     return _prepare_chunk(task, model, None)
 
 
-def _derive(task: Task, model, js) -> Dict:
-    """Clean the messages ``js`` and differentiate them as ``replay`` does."""
+def _derive(task: Task, model, js, between) -> Dict:
+    """Clean the messages ``js`` and differentiate them as ``replay`` does.
+
+    ``base``: the base's motion at each sample (a base topic option), read from the bag
+    in the bag-time range ``between`` (ns; ``(None, None)``: all of it), or None.
+    """
+    from types import SimpleNamespace
     from .. import effort as effort_model
-    from ..replay import differentiate
+    from ..replay import base_topics, differentiate
     from ..replay.recording import clean
     window, order = float(task.option('window')), int(task.option('order'))
     s = clean(js, window)
@@ -137,10 +150,14 @@ def _derive(task: Task, model, js) -> Dict:
         (qd, qdd), _ = differentiate.derivatives(t, s['qd'], window, order, (0, 1), spans)
     else:
         (qd, qdd), _ = differentiate.derivatives(t, q, window, order, (1, 2), spans)
+    options = SimpleNamespace(window=window, order=order, **{
+        name: task.option(name) for name in ('base_odometry', 'base_imu', 'odometry_link',
+                                             'imu_link')})
+    base = base_topics.base_motion(options, task.bag, model, t, spans, between)
     effort = effort_model.with_gravity(model, q, s['effort'], task.option('measured_effort'),
                                        task.option('gravity'))
     return {'t': t, 'q': q, 'qd': qd, 'qdd': qdd, 'effort': effort, 'skipped': s['skipped'],
-            'period': s['period']}
+            'period': s['period'], 'base': base}
 
 
 def _prepare_chunk(task: Task, model, margin: Optional[int]) -> Optional[Dict]:
@@ -167,8 +184,12 @@ def _prepare_chunk(task: Task, model, margin: Optional[int]) -> Optional[Dict]:
     post = read(task.stop, hi) if task.stop is not None else None
     js = _joined([p for p in (pre, own, post) if p is not None])
     messages = len(js.stamp)
+    # the base topic over the joint states read and a margin more: its samples must reach
+    # past the first and last joint stamps (by header stamp, which may lag the bag time)
+    between = ((None if lo is None else lo - BASE_MARGIN),
+               (None if hi is None else hi + BASE_MARGIN))
     try:
-        d = _derive(task, model, js)
+        d = _derive(task, model, js, between)
     except Refused as err:      # nothing usable here: the whole bag drops these samples too
         return {'owned': np.zeros(0, dtype=bool), 'messages': messages, 'empty': str(err)}
     owned = np.isin(d['t'], own.stamp)
@@ -227,7 +248,7 @@ def process(task: Task) -> Dict:
                             messages=d['messages'], peak_rss_mb=peak_rss_mb(),
                             empty=one_line(d.get('empty') or 'no message in the range'))
             residual = d['effort'] - rnea(model, d['q'], d['qd'], d['qdd'],
-                                          task.option('gravity'))
+                                          task.option('gravity'), base=d['base'])
             t, qd, qdd = d['t'], d['qd'], d['qdd']
             if owned is not None:
                 t, residual, qd, qdd = t[owned], residual[owned], qd[owned], qdd[owned]

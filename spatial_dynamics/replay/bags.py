@@ -382,21 +382,26 @@ def _data_end(buf: memoryview) -> int:
     return o
 
 
-def raw_batches(reader, topic: str, msgtype: str, fast: bool = True) -> Iterator[Batch]:
+def raw_batches(reader, topic: str, msgtype: str, fast: bool = True,
+                start: Optional[int] = None, stop: Optional[int] = None) -> Iterator[Batch]:
     """Yield ``(bag times ns, messages)`` batches of a topic, in the order of the files.
 
     Uncompressed sqlite3 files are read with the standard library's sqlite3 and MCAP files
-    with numpy (``fast``); anything else (compressed bags) through ``rosbags``.
+    with numpy (``fast``); anything else (compressed bags) through ``rosbags``. With
+    ``start``/``stop`` (ns, bag time): the messages in ``[start, stop)`` only (sqlite3
+    through its time index, MCAP by its chunks' time ranges, else ``rosbags``' filter).
     """
     conns = connections_of(reader, topic, msgtype)
     storage, paths = storage_files(reader) if fast else ('', [])
+    ranged = start is not None or stop is not None
     if storage == 'sqlite3':
-        yield from _sqlite_batches(paths, topic)
+        yield from _sqlite_batches(paths, topic, start, stop)
         return
     if storage == 'mcap':
-        yield from _mcap_batches(paths, topic)
+        yield from (_mcap_batches_between(paths, topic, start, stop) if ranged
+                    else _mcap_batches(paths, topic))
         return
-    yield from _rosbags_batches(reader, conns)
+    yield from _rosbags_batches(reader, conns, start, stop)
 
 
 def read_raw(reader, topic: str, msgtype: str) -> Tuple[List[bytes], np.ndarray]:
@@ -441,11 +446,17 @@ def read_joint_states(path: str, topic: str, names: Sequence[str], fast: bool = 
         reader.close()
 
 
-def read_stamped(path: str, topic: str, msgtype: str) -> Stamped:
-    """Read an Odometry or Imu topic of a bag into arrays (:func:`.cdr.decode_fixed`)."""
+def read_stamped(path: str, topic: str, msgtype: str, start: Optional[int] = None,
+                 stop: Optional[int] = None) -> Stamped:
+    """Read an Odometry or Imu topic of a bag into arrays (:func:`.cdr.decode_fixed`).
+
+    ``start``/``stop``: the messages whose bag time (ns) is in ``[start, stop)`` only
+    (``None``: the bag's beginning, end).
+    """
     reader = open_reader(path)
     try:
-        return decode_fixed(raw_batches(reader, topic, msgtype), msgtype)
+        return decode_fixed(raw_batches(reader, topic, msgtype, start=start, stop=stop),
+                            msgtype)
     finally:
         reader.close()
 
@@ -546,15 +557,8 @@ def read_joint_states_between(path: str, topic: str, names: Sequence[str],
             shutil.rmtree(stage, ignore_errors=True)
     reader = open_reader(path)
     try:
-        conns = connections_of(reader, topic, JOINT_STATE)
-        storage, paths = storage_files(reader) if fast else ('', [])
-        if storage == 'sqlite3':
-            batches = _sqlite_batches(paths, topic, start, stop)
-        elif storage == 'mcap':
-            batches = _mcap_batches_between(paths, topic, start, stop)
-        else:
-            batches = _rosbags_batches(reader, conns, start, stop)
-        return decode_joint_states(batches, names, fast)
+        return decode_joint_states(raw_batches(reader, topic, JOINT_STATE, fast, start, stop),
+                                   names, fast)
     finally:
         reader.close()
 

@@ -71,12 +71,17 @@ def check_base_arguments(p, args) -> None:
 
 
 def base_motion(args, bag: str, model: Model, t: np.ndarray,
-                spans: Sequence[Tuple[int, int]]) -> Optional[BaseMotion]:
+                spans: Sequence[Tuple[int, int]],
+                between: Tuple[Optional[int], Optional[int]] = (None, None)
+                ) -> Optional[BaseMotion]:
     """Return the base's motion at the joint stamps ``t`` (s), or None without a base topic.
 
     ``spans``: the stretches of ``t`` between gaps (:func:`.recording.clean`), each
-    differentiated on its own as the joints are. :class:`Refused` naming the option and
-    the topic when the topic cannot give the motion over ``t``.
+    differentiated on its own as the joints are. ``between``: the bag-time range (ns) of
+    the topic read (a chunk of a long bag: its joint states' range and a margin). Reads
+    ``args.base_odometry`` or ``args.base_imu``, ``args.odometry_link``/``imu_link``,
+    ``window`` and ``order``. :class:`Refused` naming the option and the topic when the
+    topic cannot give the motion over ``t``.
     """
     odometry, imu = getattr(args, 'base_odometry', None), getattr(args, 'base_imu', None)
     if not odometry and not imu:
@@ -85,7 +90,7 @@ def base_motion(args, bag: str, model: Model, t: np.ndarray,
                               ('--base-imu', imu, IMU))
     where = f'{option} {topic}'
     try:
-        found = bags.read_stamped(bag, topic, msgtype)
+        found = bags.read_stamped(bag, topic, msgtype, *between)
     except bags.BagError as err:
         raise Refused(f'{where}: {err}') from None
     fields = (('orientation', 'angular', 'linear') if odometry else
