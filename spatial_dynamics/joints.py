@@ -186,6 +186,20 @@ def integrate_free_flyer(q: np.ndarray, v: np.ndarray, dt) -> np.ndarray:
 # The operations on scalar components (the rules of algorithms/rnea.py): each branches on the
 # kernel code, so that the algorithms do not.
 
+def rotation_product(a00, a01, a02, a10, a11, a12, a20, a21, a22,
+                     b00, b01, b02, b10, b11, b12, b20, b21, b22):
+    """The 3×3 product ``A B`` of two rotations given by rows, as 9 scalars by rows."""
+    return (a00 * b00 + a01 * b10 + a02 * b20,
+            a00 * b01 + a01 * b11 + a02 * b21,
+            a00 * b02 + a01 * b12 + a02 * b22,
+            a10 * b00 + a11 * b10 + a12 * b20,
+            a10 * b01 + a11 * b11 + a12 * b21,
+            a10 * b02 + a11 * b12 + a12 * b22,
+            a20 * b00 + a21 * b10 + a22 * b20,
+            a20 * b01 + a21 * b11 + a22 * b21,
+            a20 * b02 + a21 * b12 + a22 * b22)
+
+
 def joint_transform(code, q, k, mul, off, ax, ay, az, t00, t01, t02, t10, t11, t12, t20, t21,
                     t22, rx, ry, rz, m):
     """Body transform ``Xup = XJ(q) Xtree`` as ``(E (9 scalars), r (3))``.
@@ -222,16 +236,10 @@ def joint_transform(code, q, k, mul, off, ax, ay, az, t00, t01, t02, t10, t11, t
         sx, sy, sz = s * ax, s * ay, s * az
         j01, j02, j10 = cxy + sz, cxz - sy, cxy - sz
         j12, j20, j21 = cyz + sx, cxz + sy, cyz - sx
-        return (j00 * t00 + j01 * t10 + j02 * t20,
-                j00 * t01 + j01 * t11 + j02 * t21,
-                j00 * t02 + j01 * t12 + j02 * t22,
-                j10 * t00 + j11 * t10 + j12 * t20,
-                j10 * t01 + j11 * t11 + j12 * t21,
-                j10 * t02 + j11 * t12 + j12 * t22,
-                j20 * t00 + j21 * t10 + j22 * t20,
-                j20 * t01 + j21 * t11 + j22 * t21,
-                j20 * t02 + j21 * t12 + j22 * t22,
-                rx, ry, rz)
+        e00, e01, e02, e10, e11, e12, e20, e21, e22 = rotation_product(
+            j00, j01, j02, j10, j11, j12, j20, j21, j22,
+            t00, t01, t02, t10, t11, t12, t20, t21, t22)
+        return (e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz)
     if code == PR:
         qi = q[k] if mul == 1.0 and off == 0.0 else mul * q[k] + off
         return (t00, t01, t02, t10, t11, t12, t20, t21, t22,
@@ -249,15 +257,10 @@ def joint_transform(code, q, k, mul, off, ax, ay, az, t00, t01, t02, t10, t11, t
     r10, r11, r12 = xy + wz, 1.0 - (xx + zz), yz - wx
     r20, r21, r22 = xz - wy, yz + wx, 1.0 - (xx + yy)
     px, py, pz = q[k], q[k + 1], q[k + 2]
-    return (r00 * t00 + r10 * t10 + r20 * t20,           # E = Rᵀ E_t
-            r00 * t01 + r10 * t11 + r20 * t21,
-            r00 * t02 + r10 * t12 + r20 * t22,
-            r01 * t00 + r11 * t10 + r21 * t20,
-            r01 * t01 + r11 * t11 + r21 * t21,
-            r01 * t02 + r11 * t12 + r21 * t22,
-            r02 * t00 + r12 * t10 + r22 * t20,
-            r02 * t01 + r12 * t11 + r22 * t21,
-            r02 * t02 + r12 * t12 + r22 * t22,
+    e00, e01, e02, e10, e11, e12, e20, e21, e22 = rotation_product(     # E = Rᵀ E_t
+        r00, r10, r20, r01, r11, r21, r02, r12, r22,
+        t00, t01, t02, t10, t11, t12, t20, t21, t22)
+    return (e00, e01, e02, e10, e11, e12, e20, e21, e22,
             rx + (t00 * px + t10 * py + t20 * pz),        # r = r_t + E_tᵀ p
             ry + (t01 * px + t11 * py + t21 * pz),
             rz + (t02 * px + t12 * py + t22 * pz))

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import ast
 
-from ..joints import joint_motion, joint_torque, joint_transform, joint_velocity
+from ..joints import joint_motion, joint_torque, joint_transform, joint_velocity, rotation_product
 from ..algorithms import components, rnea
 
 # --------------------------------------------------------------------------------------------
@@ -341,8 +341,8 @@ class _ToC:
 
 #: The kernels printed a second time on lanes, and the arrays holding one value per state.
 LANE_SOURCES = (components.cross, components.X_motion, components.XT_force,
-                components.XT_force_plus, components.I_motion, joint_transform, joint_motion,
-                joint_velocity, joint_torque, rnea.xup_kernel, rnea.rnea_kernel)
+                components.XT_force_plus, components.I_motion, rotation_product, joint_transform,
+                joint_motion, joint_velocity, joint_torque, rnea.xup_kernel, rnea.rnea_kernel)
 _LANE_ARRAYS = {'q', 'qd', 'qdd', 'f_body', 'tau', 'work'}
 
 

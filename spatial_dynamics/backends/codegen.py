@@ -57,7 +57,7 @@ from typing import Optional, Sequence
 from . import layout
 from .c_printer import _ToC, lanes_c
 from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_torque,
-                      joint_transform, joint_velocity)
+                      joint_transform, joint_velocity, rotation_product)
 from ..algorithms import components, crba, jacobian, momentum, regressor, rnea, split
 
 #: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
@@ -69,7 +69,7 @@ WORK = 40
 #: The joints' operations (:mod:`spatial_dynamics.joints`) come first: the kernels call them,
 #: and the C compiler inlines them (``static inline``), as it does the components.
 SOURCES = (components.cross, components.X_motion, components.XT_force, components.XT_force_plus,
-           components.I_motion, components.XT_I_X, components.XT_I_X_plus,
+           components.I_motion, components.XT_I_X, components.XT_I_X_plus, rotation_product,
            joint_transform, joint_motion, joint_velocity, joint_torque, joint_ctq, joint_axis,
            joint_crba,
            rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
