@@ -467,13 +467,13 @@ def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarra
     eigendecomposition after equilibrating its columns; it loses the accuracy of directions
     the data barely sees, far below the regularisation that decides those directions anyway
     (``test_ident_inertias``: the same fit as a QR of the stacked rows). The chunks are
-    shared by ``THREADS`` threads, each summing its own (every ``THREADS``-th chunk) in a
+    shared by ``compiled.THREADS`` threads, each summing its own (every such chunk) in a
     fixed order: the result does not depend on the timing. Call it with the BLAS on one
     thread (:func:`identify_inertias` does): these threads are the parallelism.
     """
     from concurrent.futures import ThreadPoolExecutor
     from scipy.linalg.blas import dsyrk
-    from .backends.compiled import THREADS
+    from .backends import compiled
     q, qd, qdd = states
     n = q.shape[-1]
     fixed = np.setdiff1d(np.arange(10 * model.NB), cols)
@@ -516,7 +516,7 @@ def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarra
         return G
 
     starts = range(0, len(q), CHUNK)
-    workers = max(1, min(THREADS, len(starts)))
+    workers = max(1, min(compiled.THREADS, len(starts)))
     if workers == 1:
         G = gram(starts)
     else:

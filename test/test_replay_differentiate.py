@@ -56,7 +56,7 @@ def derivatives_one_by_one(t, y, window_s, order, deriv, spans):
 @pytest.mark.parametrize('shape', [(2001, 7), (400, 1), (37, 3), (1000,)])
 def test_savgol_many_equals_one_by_one_and_scipy(monkeypatch, threads, shape):
     signal = pytest.importorskip('scipy.signal')
-    monkeypatch.setattr(differentiate, 'THREADS', threads)
+    monkeypatch.setattr(differentiate.compiled, 'THREADS', threads)
     dt, window, order = 1e-3, 51, 3
     y = np.cumsum(RNG.standard_normal(shape), axis=0) * 1e-2
     many = savgol_many(y, dt, window, order, (0, 1, 2))

@@ -118,3 +118,28 @@ def test_the_engine_runs_chunks_like_bags(robot):
     parts, owner = split([task], 10.0)
     serial = merge([task], owner, run_tasks(parts, Cache(None)))
     assert serial[0]['chunks'] == 5 and serial[0]['ok']
+
+
+def test_a_task_runs_the_kernels_and_filters_on_one_thread_of_its_own(robot, monkeypatch):
+    # each worker has one core: the kernels' batch threads and the derivatives' filter threads
+    # would oversubscribe it (BLAS is held to one thread apart); the limit ends with the task
+    import spatial_dynamics
+    from spatial_dynamics.backends import compiled
+    from spatial_dynamics.replay import differentiate
+    monkeypatch.setattr(compiled, 'THREADS', 4)
+    seen = {}
+    rnea, savgol_many = spatial_dynamics.rnea, differentiate.savgol_many
+
+    def rnea_seen(*args, **kw):
+        seen['rnea'] = compiled.THREADS
+        return rnea(*args, **kw)
+
+    def savgol_seen(*args, **kw):
+        seen['savgol'] = compiled.THREADS
+        return savgol_many(*args, **kw)
+
+    monkeypatch.setattr(spatial_dynamics, 'rnea', rnea_seen)
+    monkeypatch.setattr(differentiate, 'savgol_many', savgol_seen)
+    result = process(bag(robot, 'long_sqlite3', 47.3))
+    assert result['ok'] and seen == {'rnea': 1, 'savgol': 1}
+    assert compiled.THREADS == 4

@@ -88,7 +88,7 @@ def test_write_csv_same_file_on_any_threads(tmp_path, monkeypatch):
     r[5, 1], r[N - 1, 2] = np.nan, 1e30
     files = []
     for threads in (1, 2, 3):
-        monkeypatch.setattr(report, 'THREADS', threads)
+        monkeypatch.setattr(report.compiled, 'THREADS', threads)
         path = tmp_path / f'{threads}.csv'
         report.write_csv(str(path), ['t', 'a', 'b', 'c'], [t] + [r[:, j] for j in range(3)],
                          [6, 4, 4, 4])

@@ -18,10 +18,11 @@ computed in float64 and their results rounded back to float32 once.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 import importlib
 import math
 import os
-from typing import Optional
+from typing import Iterator, Optional
 import warnings
 
 import numpy as np
@@ -49,9 +50,28 @@ if ext is None:
                   '(Debian/Ubuntu: build-essential python3-dev) and build it again. '
                   f'({FAILURE})', RuntimeWarning, stacklevel=2)
 
-#: Threads a batch may use: the CPUs this process may run on.
+#: Threads a batch may use: the CPUs this process may run on (:func:`threads_at_most` lowers
+#: it for a block). The package's other thread pools (the derivatives' filter, the inertia
+#: fit's sums, the CSV writer) read it too, when they run.
 THREADS = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else (
     os.cpu_count() or 1)
+
+
+@contextmanager
+def threads_at_most(n: int) -> Iterator[None]:
+    """Run the block with at most ``n`` of this package's threads at a time, process-wide.
+
+    For a process that is one of several sharing the cores (a fleet worker: one core each):
+    threads of its own on top would oversubscribe them. BLAS's threads are limited apart
+    (``threadpoolctl``). Not for a process whose other threads run batches meanwhile.
+    """
+    global THREADS
+    before = THREADS
+    THREADS = max(1, min(before, int(n)))
+    try:
+        yield
+    finally:
+        THREADS = before
 
 
 def kernels(table: np.ndarray):

@@ -224,11 +224,13 @@ def process(task: Task) -> Dict:
     Returns ``{ok, robot, bag, start, end (s since the epoch: the first and last sample),
     seconds, samples, joints, sums, rms_residual (rigid body), skipped, messages (read at
     once), peak_rss_mb (of the process so far)}`` or ``{ok: False, robot, bag, reason}``.
-    A chunk with no usable sample has ``samples`` 0 and ``empty``: why. BLAS runs on one
-    thread (the engine gives each worker one core).
+    A chunk with no usable sample has ``samples`` 0 and ``empty``: why. BLAS and the
+    package's own threads (the kernels' batches, the derivatives' filter) run on one thread:
+    the engine gives each worker one core.
     """
     from threadpoolctl import threadpool_limits
     from .. import rnea
+    from ..backends.compiled import threads_at_most
     from ..replay import bags
     from ..replay.arguments import load_model, one_line, Refused
     from .sums import normal_sums
@@ -236,7 +238,7 @@ def process(task: Task) -> Dict:
     if task.chunked:
         head['chunk'] = [task.start, task.stop]
     try:
-        with threadpool_limits(limits=1, user_api='blas'):
+        with threadpool_limits(limits=1, user_api='blas'), threads_at_most(1):
             model = load_model(_ModelArgs(task.urdf), task.option('joints'))
             d = prepare(task, model)
             owned = d['owned']

@@ -26,7 +26,7 @@ from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..backends.compiled import THREADS   # the CPUs this process may run on
+from ..backends import compiled     # compiled.THREADS: the threads this process may use
 
 JITTER = 0.01   # relative spread of periods up to which a segment counts as uniform
 
@@ -60,7 +60,7 @@ def savgol_many(y: np.ndarray, dt: float, window: int, order: int, derivs: Seque
     """:func:`savgol` for several derivatives of ``y`` at once, into ``outs`` if given.
 
     Each column is made contiguous once and convolved with the weights of every derivative;
-    the columns go to :data:`THREADS` threads (numpy's convolution releases the GIL), so the
+    the columns go to ``compiled.THREADS`` threads (numpy's convolution releases the GIL), so the
     two derivatives of 7 joints over an hour at 1 kHz take ~0.3 s on two cores instead of
     ~1.1 s. Each value is the same sum of the same products as one ``np.convolve`` of the
     column: the result does not depend on the threads.
@@ -81,8 +81,9 @@ def savgol_many(y: np.ndarray, dt: float, window: int, order: int, derivs: Seque
         for r, w in zip(res, weights):
             r[h:N - h, j] = np.convolve(col, w, mode='valid')
 
-    if flat.shape[1] > 1 and THREADS > 1:
-        with ThreadPoolExecutor(min(THREADS, flat.shape[1])) as pool:
+    threads = compiled.THREADS
+    if flat.shape[1] > 1 and threads > 1:
+        with ThreadPoolExecutor(min(threads, flat.shape[1])) as pool:
             list(pool.map(column, range(flat.shape[1])))
     else:
         for j in range(flat.shape[1]):

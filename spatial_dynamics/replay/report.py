@@ -24,7 +24,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from ..backends.compiled import THREADS   # the CPUs this process may run on
+from ..backends import compiled     # compiled.THREADS: the threads this process may use
 from ..files import write_atomic
 
 CHUNK = 1 << 18          # rows formatted at once
@@ -99,7 +99,7 @@ def write_csv(path: str, header: Sequence[str], columns: Sequence[np.ndarray],
               decimals: Sequence[int]) -> None:
     """Write columns of floats as CSV with a header line, fixed-point per column.
 
-    Chunks of :data:`CHUNK` rows are formatted on :data:`THREADS` threads (numpy releases
+    Chunks of :data:`CHUNK` rows are formatted on ``compiled.THREADS`` threads (numpy releases
     the GIL in its loops) and written in order: the file does not depend on the threads.
     Written whole or not at all (:func:`~spatial_dynamics.files.write_atomic`).
     """
@@ -117,15 +117,16 @@ def write_csv(path: str, header: Sequence[str], columns: Sequence[np.ndarray],
     def write(f) -> None:
         f.write((','.join(header) + '\n').encode())
         starts = range(0, N, CHUNK)
-        if THREADS < 2 or len(starts) < 2:
+        threads = compiled.THREADS
+        if threads < 2 or len(starts) < 2:
             for a in starts:
                 f.write(chunk(a))
             return
-        with ThreadPoolExecutor(THREADS) as pool:
+        with ThreadPoolExecutor(threads) as pool:
             pending = deque()
             for a in starts:
                 pending.append(pool.submit(chunk, a))
-                if len(pending) > THREADS:          # bounds the memory held
+                if len(pending) > threads:          # bounds the memory held
                     f.write(pending.popleft().result())
             while pending:
                 f.write(pending.popleft().result())
