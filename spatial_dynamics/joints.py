@@ -188,7 +188,7 @@ def integrate_free_flyer(q: np.ndarray, v: np.ndarray, dt) -> np.ndarray:
 
 def rotation_product(a00, a01, a02, a10, a11, a12, a20, a21, a22,
                      b00, b01, b02, b10, b11, b12, b20, b21, b22):
-    """The 3×3 product ``A B`` of two rotations given by rows, as 9 scalars by rows."""
+    """Return the 3×3 product ``A B`` of two rotations given by rows, as 9 scalars by rows."""
     return (a00 * b00 + a01 * b10 + a02 * b20,
             a00 * b01 + a01 * b11 + a02 * b21,
             a00 * b02 + a01 * b12 + a02 * b22,
