@@ -105,6 +105,18 @@ class NodeProcess:
             time.sleep(0.05)
         raise AssertionError(f'{text!r} not in the node log:\n{self.log()}')
 
+    def refused_at_start(self, words: Sequence[str]) -> None:
+        """Assert the process exits 1, saying it cannot start and naming each of ``words``.
+
+        No traceback: a refusal is a message for the user, not a crash.
+        """
+        assert self.proc.wait(TIMEOUT) == 1
+        log = self.log()
+        assert 'cannot start' in log and 'Traceback' not in log, log
+        for word in words:
+            assert word in log, (word, log)
+        self.stop()
+
     def stop(self, sig: int = signal.SIGINT, timeout: float = TIMEOUT) -> int:
         """Send ``sig`` and wait for the exit status (killed after ``timeout``)."""
         if self.proc.poll() is None:
