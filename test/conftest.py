@@ -207,6 +207,17 @@ def random_state(rng, shape, n, scale=(1.5, 2.0, 3.0)):
     return tuple(rng.uniform(-s, s, size=size) for s in scale)
 
 
+def to_pin(x):
+    """Our velocity ([ω; v] first) to Pinocchio's free-flyer order ([v; ω] first)."""
+    return np.concatenate([x[..., 3:6], x[..., 0:3], x[..., 6:]], axis=-1)
+
+
+def unit_quaternions(rng, n):
+    """Return ``n`` random unit quaternions (n, 4)."""
+    quat = rng.normal(size=(n, 4))
+    return quat / np.linalg.norm(quat, axis=-1, keepdims=True)
+
+
 @pytest.fixture
 def rng():
     """Return a seeded random generator."""

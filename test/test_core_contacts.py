@@ -16,17 +16,12 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from conftest import robot_urdf_path  # noqa: E402
+from conftest import robot_urdf_path, to_pin  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 
 pin = pytest.importorskip('pinocchio')
 FEET = ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')
 SOLES = ('left_sole_link', 'right_sole_link')
-
-
-def to_pin(x):
-    """Our velocity ([ω; v] first) to Pinocchio's free-flyer order ([v; ω] first)."""
-    return np.concatenate([x[..., 3:6], x[..., 0:3], x[..., 6:]], axis=-1)
 
 
 @pytest.fixture(scope='module')

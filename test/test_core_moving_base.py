@@ -18,22 +18,12 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from conftest import robot_urdf_path  # noqa: E402
+from conftest import robot_urdf_path, to_pin, unit_quaternions  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.algorithms.regressor import parameters  # noqa: E402
 from spatial_dynamics.joints import quaternion_matrix  # noqa: E402
 
 G = np.array([0.0, 0.0, -9.81])
-
-
-def to_pin(x):
-    """Our velocity ([ω; v] first) to Pinocchio's free-flyer order ([v; ω] first)."""
-    return np.concatenate([x[..., 3:6], x[..., 0:3], x[..., 6:]], axis=-1)
-
-
-def unit_quaternions(rng, n):
-    quat = rng.normal(size=(n, 4))
-    return quat / np.linalg.norm(quat, axis=-1, keepdims=True)
 
 
 @pytest.fixture(scope='module')
