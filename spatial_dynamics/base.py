@@ -302,15 +302,20 @@ def floating_twin(model: Model) -> Model:
 _ORIGIN = np.zeros(3)
 
 
+def check_base_motion(base) -> None:
+    """Raise ``TypeError`` naming what ``base`` is, unless it is a :class:`BaseMotion`."""
+    if not isinstance(base, BaseMotion):
+        raise TypeError("base must be a spatial_dynamics.BaseMotion (the base's v, a and "
+                        f'orientation), got {type(base).__name__}')
+
+
 def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=None):
     """Return the twin's ``(q, q̇, q̈, gravity)`` for ``model``'s ``q, q̇, q̈`` on ``base``.
 
     ``q̇``/``q̈`` ``None`` are zero; arrays broadcast against the base's batch. ``gravity``
     becomes zero when the base's ``a`` includes it.
     """
-    if not isinstance(base, BaseMotion):
-        raise TypeError("base must be a spatial_dynamics.BaseMotion (the base's v, a and "
-                        f'orientation), got {type(base).__name__}')
+    check_base_motion(base)
     from .algorithms.arguments import as_joint_arrays
     zero = np.zeros(model.nv)
     q, qd, qdd = as_joint_arrays(model, q, zero if qd is None else qd,

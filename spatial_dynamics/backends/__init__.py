@@ -32,7 +32,7 @@ import numpy as np
 from . import compiled, layout, python
 from .layout import LAYOUTS
 from ..algorithms.arguments import as_joint_arrays, as_real_array, as_vector, f_ext_in_bodies
-from ..base import BaseMotion, floating_twin, twin_state
+from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
 
 BACKENDS = ('auto', 'numpy', 'compiled')
@@ -218,9 +218,7 @@ def mass_matrix(model: Model, q, backend: str = 'auto', *,
     only, never on the base's motion (only broadcast against its batch).
     """
     if base is not None:
-        if not isinstance(base, BaseMotion):
-            raise TypeError("base must be a spatial_dynamics.BaseMotion (the base's v, a and "
-                            f'orientation), got {type(base).__name__}')
+        check_base_motion(base)
         H = mass_matrix(model, q, backend)
         shape = np.broadcast_shapes(H.shape[:-2], base.v.shape[:-1], base.a.shape[:-1], (
             () if base.orientation is None else base.orientation.shape[:-1])) + H.shape[-2:]
