@@ -141,15 +141,12 @@ def _derive(task: Task, model, js, between) -> Dict:
     """
     from types import SimpleNamespace
     from .. import effort as effort_model
-    from ..replay import base_topics, differentiate
-    from ..replay.recording import clean
+    from ..replay import base_topics
+    from ..replay.recording import clean, rates
     window, order = float(task.option('window')), int(task.option('order'))
     s = clean(js, window)
     t, q, spans = s['t'], s['q'], s['spans']
-    if s['qd'] is not None:
-        (qd, qdd), _ = differentiate.derivatives(t, s['qd'], window, order, (0, 1), spans)
-    else:
-        (qd, qdd), _ = differentiate.derivatives(t, q, window, order, (1, 2), spans)
+    qd, qdd, _ = rates(s, window, order)
     options = SimpleNamespace(window=window, order=order, **{
         name: task.option(name) for name in ('base_odometry', 'base_imu', 'odometry_link',
                                              'imu_link')})

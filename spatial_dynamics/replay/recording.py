@@ -161,6 +161,22 @@ def clean(js: bags.JointStates, window: float) -> Dict:
             'period': seg.period, 'out_of_order': backwards}
 
 
+def rates(s: Dict, window: float, order: int):
+    """Return ``(q̇, q̈, resampled)`` of cleaned samples ``s`` (:func:`clean`), per stretch.
+
+    From the measured velocity when the bag has it, smoothed by the same zero-phase filter
+    (without it the velocity noise stays in the residual: test_replay, 0.08 instead of
+    0.05 N m), else from the positions.
+    """
+    if s['qd'] is not None:
+        (qd, qdd), resampled = differentiate.derivatives(s['t'], s['qd'], window, order,
+                                                         (0, 1), s['spans'])
+    else:
+        (qd, qdd), resampled = differentiate.derivatives(s['t'], s['q'], window, order,
+                                                         (1, 2), s['spans'])
+    return qd, qdd, resampled
+
+
 def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
     """Read, clean and differentiate ``bag``: ``{t, q, qd, qdd, effort, ...}`` for the model.
 
@@ -182,16 +198,8 @@ def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
         bar.close()
     t, q, spans = s['t'], s['q'], s['spans']
     stages.done('clean+sort')
-    if s['qd'] is not None:
-        # the same zero-phase smoother on the measured velocity: without it the velocity
-        # noise stays in the residual (test_replay: 0.08 instead of 0.05 N m)
-        (qd, qdd), resampled = differentiate.derivatives(t, s['qd'], args.window, args.order,
-                                                         (0, 1), spans)
-        source = 'velocity'
-    else:
-        (qd, qdd), resampled = differentiate.derivatives(t, q, args.window, args.order,
-                                                         (1, 2), spans)
-        source = 'position (the bag has no velocities)'
+    qd, qdd, resampled = rates(s, args.window, args.order)
+    source = 'velocity' if s['qd'] is not None else 'position (the bag has no velocities)'
     stages.done('differentiate')
     try:
         base = base_topics.base_motion(args, bag, model, t, spans)
