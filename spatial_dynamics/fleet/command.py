@@ -17,8 +17,15 @@ robots.csv (each robot's fit over all its bags), drift.txt, trend_ROBOT.png. Res
 cached by the content of the bag, the URDF and the options: a re-run does only new or
 changed bags.
 
-Exit status: 0 done, nothing drifted; 3 done, something drifted (drift.txt names it); 1
-refused (no usable manifest, no bag usable); 2 bad usage.
+Every (robot, joint, parameter) series is judged or listed as not judged with the reason
+(too few bags in the baseline or after it, no estimate: the joint did not move enough).
+A bag listed twice (overlapping globs, the same file by two paths) is counted once, said in
+a ``note:`` line; a bag that cannot be used is one ``failed:`` line naming its manifest row.
+
+Exit status: 0 done, every series judged, nothing drifted; 3 done, something drifted
+(drift.txt names it); 4 done, nothing drifted among the series judged but some (or all)
+could not be judged (drift.txt says which and why); 1 refused (no usable manifest, no bag
+usable); 2 bad usage. A failed bag does not change the status of the others' verdict.
 """
 
 from __future__ import annotations
@@ -28,7 +35,7 @@ import csv
 import io
 import os
 import sys
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -36,13 +43,22 @@ from ..files import check_output, write_atomic
 from ..replay.arguments import one_line
 from . import drift as drift_of
 from .chunks import CHUNK, merge, MIN_CHUNK, split
-from .engine import Cache, local_cluster, Progress, run_tasks, warm
+from .engine import Cache, local_cluster, Progress, run_tasks, SERIAL_BYTES, warm
 from .manifest import ManifestError, read_manifest, scan_folder
 from .sums import Sums, solve, total
+from .task import Task
 from ..replay.identify import PARAMETERS
 
 #: Exit status when something drifted.
 DRIFTED = 3
+#: Exit status when nothing drifted among the series judged, but not every one was judged.
+NOT_JUDGED = 4
+#: The longest --chunk, s (a year of bag time; 0 already means never cut).
+MAX_CHUNK = 366 * 86400.0
+#: What each exit status says, in every --help.
+EXIT_STATUS = ('Exit status: 0 every series judged, nothing drifted; 3 something drifted; '
+               '4 nothing drifted but some series not judged (drift.txt says why); 1 refused; '
+               '2 bad usage.')
 COLUMNS = ['robot', 'bag', 'start', 'joint', 'parameter', 'value', 'sigma', 'rms_residual',
            'samples']
 
@@ -55,46 +71,108 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--out', default='fleet_out', help='output directory (created)')
     p.add_argument('--cache', help='results by content hash (default: OUT/cache)')
     where = p.add_mutually_exclusive_group()
-    where.add_argument('--workers', type=int, metavar='N',
-                       help='local cluster of N worker processes (default: the cores)')
+    where.add_argument('--workers', type=workers_count, metavar='N',
+                       help='local cluster of N worker processes (default: the cores, when '
+                       'the work is large enough; see --serial)')
     where.add_argument('--serial', action='store_true',
-                       help='no cluster: every bag in this process, one after the other')
-    where.add_argument('--scheduler', metavar='ADDRESS',
-                       help='an existing Dask scheduler, e.g. tcp://host:8786')
+                       help='no cluster: every bag in this process, one after the other '
+                       '(the default when the bags to process are less than '
+                       f'{SERIAL_BYTES >> 20} MB)')
+    where.add_argument('--scheduler', metavar='ADDRESS', type=scheduler_address,
+                       help='an existing Dask scheduler, tcp://host:port or tls://host:port')
     p.add_argument('--chunk', type=chunk_seconds, default=CHUNK, metavar='SECONDS',
                    help='cut a bag longer than this into tasks of this much bag time, their '
                    'sums added (default %(default)g; 0: one task per bag)')
-    p.add_argument('--baseline-days', type=float, default=5.0,
-                   help="each robot-joint's baseline: its first days (default %(default)g)")
+    p.add_argument('--baseline-days', type=baseline_days, default=5.0,
+                   help="each robot-joint's baseline: its first days, at least "
+                   f'{drift_of.MIN_BASELINE} bags (default %(default)g)')
     p.add_argument('--no-plots', action='store_true', help='write no PNG files')
 
 
-def chunk_seconds(text: str) -> float:
-    """``--chunk``: 0 (one task per bag) or a finite number of seconds >= MIN_CHUNK."""
+def _number(text: str) -> float:
     try:
-        value = float(text)
+        return float(text)
     except ValueError:
-        value = float('nan')
-    if not (value == 0 or MIN_CHUNK <= value < float('inf')):
+        return float('nan')
+
+
+def chunk_seconds(text: str) -> float:
+    """``--chunk``: 0 (one task per bag) or seconds from MIN_CHUNK to MAX_CHUNK."""
+    value = _number(text)
+    if not (value == 0 or MIN_CHUNK <= value <= MAX_CHUNK):
         raise argparse.ArgumentTypeError(
-            f'{text!r}: 0 (one task per bag) or a number of seconds >= {MIN_CHUNK:g}')
+            f'{text!r}: 0 (one task per bag) or a number of seconds >= {MIN_CHUNK:g} and <= '
+            f'{MAX_CHUNK:.0f} (a year)')
     return value
+
+
+def baseline_days(text: str) -> float:
+    """``--baseline-days``: a number of days > 0, at most ten years."""
+    value = _number(text)
+    if not 0.0 < value <= 3660.0:
+        raise argparse.ArgumentTypeError(f'{text!r}: a number of days > 0 and <= 3660')
+    return value
+
+
+def workers_count(text: str) -> int:
+    """``--workers``: a whole number from 1 to 4096."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= 4096:
+        raise argparse.ArgumentTypeError(f'{text!r}: a whole number of processes, 1 to 4096')
+    return value
+
+
+#: The protocols a scheduler address may use here (Dask's ``inproc`` is in-process only;
+#: ``ucx`` needs UCX-Py, which the fleet does not depend on).
+PROTOCOLS = ('tcp', 'tls')
+
+
+def scheduler_address(text: str) -> str:
+    """``--scheduler``: ``[tcp://|tls://]host:port`` with a port from 1 to 65535."""
+    protocol, sep, rest = text.partition('://')
+    if not sep:
+        protocol, rest = 'tcp', text
+    host, _, port = rest.rpartition(':')
+    if protocol not in PROTOCOLS:
+        raise argparse.ArgumentTypeError(
+            f'{text!r}: the protocol {protocol!r} is not supported here; give '
+            'tcp://host:port or tls://host:port')
+    if not host or not port.isdigit() or not 1 <= int(port) <= 65535 or '/' in rest:
+        raise argparse.ArgumentTypeError(
+            f'{text!r}: a scheduler address is tcp://host:port (or tls://), the port 1 to '
+            '65535, e.g. tcp://10.0.0.5:8786')
+    return f'{protocol}://{rest}'
 
 
 def parser() -> argparse.ArgumentParser:
     """Return the command's own parser."""
     p = argparse.ArgumentParser(prog='fleet', description=__doc__.split('\n\n')[0],
-                                epilog='Exit status: 0 nothing drifted, 3 something drifted, '
-                                '1 refused, 2 bad usage.')
+                                epilog=EXIT_STATUS)
     add_arguments(p)
     return p
 
 
-def tasks_of(args) -> list:
-    """Return the tasks of ``args.source``."""
-    if os.path.isdir(args.source):
-        return scan_folder(args.source, args.urdf)
-    return read_manifest(args.source)
+def tasks_of(source: str, urdf: Optional[str]) -> Tuple[List[Task], List[str]]:
+    """Return the tasks of ``source``, each bag once, and a note for each bag left out.
+
+    A bag is the same bag when its path resolves to the same file (overlapping globs, a
+    link): it is counted once, under its first row.
+    """
+    tasks = scan_folder(source, urdf) if os.path.isdir(source) else read_manifest(source)
+    first: Dict[str, Task] = {}
+    once, notes = [], []
+    for t in tasks:
+        real = os.path.realpath(t.bag)
+        if real in first:
+            notes.append(f'note: {t.bag} ({t.where}) is listed twice, counted once '
+                         f'(as {first[real].bag} of {first[real].robot}, {first[real].where})')
+            continue
+        first[real] = t
+        once.append(t)
+    return once, notes
 
 
 def per_bag_rows(results: List[Dict]) -> List[Dict]:
@@ -177,22 +255,33 @@ def plot_trends(out: str, rows: List[Dict], drifts) -> List[str]:
         fig.suptitle(f'{robot}: drive parameters per bag (band: ±σ; red: drifted)')
         fig.autofmt_xdate()
         name = f'trend_{robot}.png'
-        write_atomic(os.path.join(out, name), lambda f: fig.savefig(f, format='png', dpi=80),
+        write_atomic(inside(out, name), lambda f: fig.savefig(f, format='png', dpi=80),
                      'trend plot')
         plt.close(fig)
         written.append(name)
     return written
 
 
+def inside(out: str, name: str) -> str:
+    """Return the path of output ``name`` in ``out``; refuse one that would land elsewhere."""
+    path = os.path.join(out, name)
+    folder = os.path.realpath(os.path.dirname(os.path.abspath(path)))
+    if os.path.basename(path) != name or folder != os.path.realpath(out):
+        raise ValueError(f'output {name!r} would be written outside --out {out!r}')
+    return path
+
+
 def run(args) -> int:
-    """Run the command on parsed ``args``; return the exit status (0, 1 or 3)."""
+    """Run the command on parsed ``args``; return the exit status (0, 1, 3 or 4)."""
     try:
-        tasks = tasks_of(args)
+        tasks, notes = tasks_of(args.source, args.urdf)
         os.makedirs(args.out, exist_ok=True)
         outputs = ['fleet.csv', 'robots.csv', 'drift.txt']
+        if not args.no_plots:
+            outputs += [f'trend_{robot}.png' for robot in sorted({t.robot for t in tasks})]
         inputs = [t.bag for t in tasks] + sorted({t.urdf for t in tasks}) + [args.source]
         for name in outputs:
-            check_output(os.path.join(args.out, name), name, inputs)
+            check_output(inside(args.out, name), name, inputs)
         cache = Cache(args.cache or os.path.join(args.out, 'cache'))
         parts, owner = split(tasks, args.chunk)
         progress = Progress(len(parts))
@@ -207,7 +296,9 @@ def run(args) -> int:
     except (ManifestError, ValueError, OSError) as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
         return 1
-    return report(args, results)
+    for task, result in zip(tasks, results):      # this run's names, whatever the cache's
+        result.update(robot=task.robot, bag=task.bag, where=task.where)
+    return report(args, results, notes)
 
 
 def _on_cluster(args, tasks, cache, progress) -> List[Dict]:
@@ -221,16 +312,43 @@ def _on_cluster(args, tasks, cache, progress) -> List[Dict]:
         return run_tasks(tasks, cache, client, progress)
 
 
-def report(args, results: List[Dict]) -> int:
-    """Write the files, print the drift report and the bags that failed; return the status."""
+def verdict(judgement: drift_of.Judgement) -> List[str]:
+    """Return drift.txt's verdict lines: the drifts or no drift, and what was not judged.
+
+    "no drift" only when every series was judged; each series not judged is listed with the
+    reason (a joint's parameters with the same reason on one line).
+    """
+    lines = [f'drift: {d.text()}' for d in judgement.drifts]
+    missing = len(judgement.not_judged)
+    total_series = judgement.judged + missing
+    if not judgement.judged:
+        lines.append(f'nothing judged: none of the {total_series} series (robot, joint, '
+                     'parameter) could be judged')
+    elif not lines:
+        lines.append('no drift' if not missing else
+                     f'no drift among the {judgement.judged} series judged; {missing} of '
+                     f'{total_series} not judged')
+    elif missing:
+        lines.append(f'{missing} of {total_series} series not judged')
+    grouped: Dict[Tuple[str, str, str], List[str]] = {}
+    for (robot, joint, parameter), reason in judgement.not_judged.items():
+        grouped.setdefault((robot, joint, reason), []).append(drift_of.LABELS[parameter])
+    lines += [f'not judged: {robot} {joint} ({", ".join(labels)}): {reason}'
+              for (robot, joint, reason), labels in sorted(grouped.items())]
+    return lines
+
+
+def report(args, results: List[Dict], notes: Sequence[str] = ()) -> int:
+    """Write the files, print the verdict and the bags that failed; return the status."""
     rows = per_bag_rows(results)
     failed = [r for r in results if not r.get('ok')]
-    drifts = drift_of.detect(rows, args.baseline_days)
-    write_atomic(os.path.join(args.out, 'fleet.csv'), csv_text(COLUMNS, [
+    judgement = drift_of.detect(rows, args.baseline_days)
+    drifts = judgement.drifts
+    write_atomic(inside(args.out, 'fleet.csv'), csv_text(COLUMNS, [
         [r['robot'], r['bag'], iso(r['start_s']), r['joint'], r['parameter'], r['value'],
          r['sigma'], r['rms_residual'], r['samples']] for r in rows]), 'fleet.csv')
     robots = per_robot(results)
-    write_atomic(os.path.join(args.out, 'robots.csv'), csv_text(
+    write_atomic(inside(args.out, 'robots.csv'), csv_text(
         ['robot', 'joint', 'parameter', 'value', 'sigma', 'rms_residual', 'samples'],
         [[robot, joint, p, float(getattr(fit, p)[j]), float(fit.sigma[j, k]),
           float(fit.rms_after[j]), n]
@@ -240,26 +358,35 @@ def report(args, results: List[Dict]) -> int:
     cached = sum(1 for r in results if r.get('cached'))
     lines = [f'{len(results)} bags of {len({r["robot"] for r in results})} robots, '
              f'{hours:.3g} h of data ({cached} from the cache, {len(failed)} failed)']
-    lines += [f'drift: {d.text()}' for d in drifts] or ['no drift']
-    lines += [f'failed: {r["robot"]} {r["bag"]}: {r["reason"]}' for r in failed]
+    lines += list(notes)
+    lines += verdict(judgement)
+    lines += [f'failed: {r["robot"]} {r["bag"]}'
+              + (f' ({r["where"]})' if r.get('where') else '') + f': {r["reason"]}'
+              for r in failed]
     text = '\n'.join(lines) + '\n'
-    write_atomic(os.path.join(args.out, 'drift.txt'), text, 'drift.txt')
+    write_atomic(inside(args.out, 'drift.txt'), text, 'drift.txt')
     written = ['fleet.csv', 'robots.csv', 'drift.txt']
     if not args.no_plots and rows:
         written += plot_trends(args.out, rows, drifts)
-    print(text + f'written to {args.out}: {", ".join(written)}')
+    status = DRIFTED if drifts else NOT_JUDGED if judgement.not_judged else 0
+    if not rows:
+        status = 1
+    say(text + f'written to {args.out}: {", ".join(written)}')
     if not rows:
         print('error: no bag could be used (see failed above)', file=sys.stderr)
-        return 1
-    return DRIFTED if drifts else 0
+    return status
+
+
+def say(text: str) -> None:
+    """Print ``text``; a reader that has gone (``| head -1``) ends the output quietly."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())     # nothing more to flush at exit either
+        os.close(devnull)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Parse ``argv`` and run; return the exit status."""
-    p = parser()
-    args = p.parse_args(argv)
-    if args.workers is not None and args.workers < 1:
-        p.error('--workers: at least 1')
-    if not args.baseline_days > 0:
-        p.error('--baseline-days: a number > 0')
-    return run(args)
+    return run(parser().parse_args(argv))

@@ -2,29 +2,39 @@
 # SPDX-License-Identifier: Apache-2.0
 """Which drive parameter of which joint drifted, since when and by how much: a CUSUM.
 
-Each (robot, joint, parameter) is judged against its own baseline, the estimates of its
-first days: robots differ (payload, build, wear at installation), so a fleet-wide value
+Each (robot, joint, parameter) series is judged against its own baseline, the estimates of
+its first days: robots differ (payload, build, wear at installation), so a fleet-wide value
 would flag the odd robot, not the change. Each later estimate becomes a standardized
 deviation::
 
     z_i = (x_i - μ₀) / sqrt(φ (σ_i² + var μ₀))
 
 with σ_i the estimate's own σ (from its fit), μ₀ the baseline's σ-weighted mean and φ ≥ 1
-how much more the baseline estimates scatter than their σ say (what the σ of one
-recording does not see: a different motion each day, model error), pooled per parameter
-over the whole fleet's baselines: a handful of days per joint is too few to measure a
-scatter, a fleet's are many. A two-sided CUSUM (Page 1954)
-``S⁺ = max(0, S⁺ + z - k)``, ``S⁻ = max(0, S⁻ - z - k)`` sums the deviations that persist:
-a friction rising a few per cent a day crosses ``h`` within days, while one odd bag (a
-different program, a cold morning) does not; with σ in the denominator a poorly determined
-estimate counts for less. The onset is where the sum last left zero.
+how much more the series scatters than its σ say (what the σ of one recording does not see:
+a different motion each day, model error). φ is the series' own, from the robust scale
+(1.4826 × the median absolute deviation) of its standardized successive differences
+``(x_i - x_{i-1}) / sqrt(σ_i² + σ_{i-1}²)`` around their median: a step changes one
+difference and a steady trend shifts them all alike, so neither inflates it, and one series'
+wear never blinds another's (nor does the number of robots in the fleet change a verdict).
+A two-sided CUSUM (Page 1954) ``S⁺ = max(0, S⁺ + z - k)``, ``S⁻ = max(0, S⁻ - z - k)`` sums
+the deviations that persist: a friction rising a few per cent a day crosses ``h`` within
+days, while one odd bag (a different program, a cold morning) does not; with σ in the
+denominator a poorly determined estimate counts for less. The onset is where the sum last
+left zero.
+
+A baseline that itself drifts (wear that starts within the first days) is found by its own
+scatter: ``Σ w (x - μ₀)² / φ`` over the baseline against the χ² with ``nb - 1`` degrees of
+freedom, at :data:`P_BASELINE`; it is reported as a drift, its onset from a CUSUM against
+the first estimate. A series is judged only with :data:`MIN_BASELINE` estimates in its
+baseline, at least one after it and :data:`MIN_SCATTER` successive differences for its
+scatter; any other is reported as not judged, with the reason.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import datetime, timezone
-from typing import List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -32,6 +42,12 @@ import numpy as np
 #: of 5σ after ~2-3, while a series without change (Gaussian z) alarms about once in 10⁷
 #: bags (Siegmund's approximation): thousands of robot-joint-parameter series stay quiet.
 K, H = 1.0, 8.0
+#: Fewest estimates in a baseline (its mean and its own test for a drift need them).
+MIN_BASELINE = 3
+#: Fewest successive differences a series' own scatter φ is measured from.
+MIN_SCATTER = 4
+#: How unlikely a steady baseline's scatter must be to call the baseline drifting.
+P_BASELINE = 1e-9
 LABELS = {'damping': 'viscous damping', 'friction': 'Coulomb friction',
           'armature': 'armature'}
 
@@ -47,13 +63,24 @@ class Drift:
     baseline: float
     latest: float
     z: float                # the latest estimate's deviation, in σ
+    within_baseline: bool = False
 
     def text(self) -> str:
         """``r07 joint 3: Coulomb friction +38 % since 2026-10-02, 6σ``."""
         change = (f'{100 * (self.latest / self.baseline - 1):+.0f} %' if self.baseline
                   else f'{self.latest - self.baseline:+.3g}')
+        where = ' (within its baseline days)' if self.within_baseline else ''
         return (f'{self.robot} {self.joint}: {LABELS[self.parameter]} {change} since '
-                f'{day(self.since)}, {abs(self.z):.0f}σ')
+                f'{day(self.since)}, {abs(self.z):.0f}σ{where}')
+
+
+@dataclass
+class Judgement:
+    """The drifts found, and the series that could not be judged with the reason of each."""
+
+    drifts: List[Drift] = field(default_factory=list)
+    judged: int = 0
+    not_judged: Dict[Tuple[str, str, str], str] = field(default_factory=dict)
 
 
 def day(t: float) -> str:
@@ -72,42 +99,25 @@ def _baseline(t: np.ndarray, baseline_days: float) -> int:
     return int(np.searchsorted(t, t[0] + baseline_days * 86400.0, side='left')) if len(t) else 0
 
 
-def dispersion(series, baseline_days: float) -> float:
-    """Return φ ≥ 1: how much more the baseline estimates scatter than their σ say (squared).
+def scatter(x: np.ndarray, s: np.ndarray) -> float:
+    """Return φ ≥ 1 of one series: its robust scatter beyond its σ, squared.
 
-    Pooled over ``series`` (each ``(start, x, sigma)``): the mean of ``((x - x̄)/σ)²`` over
-    every baseline estimate, each series' mean removed (``nb - 1`` degrees of freedom each).
+    1.4826 × the median absolute deviation of the standardized successive differences
+    around their median (the module's docstring), squared; NaN with fewer than
+    :data:`MIN_SCATTER` differences.
     """
-    chi2, dof = 0.0, 0
-    for start, x, sigma in series:
-        t, x, s = _clean(start, x, sigma)
-        nb = _baseline(t, baseline_days)
-        if nb >= 2:
-            w = 1.0 / s[:nb] ** 2
-            mean = np.sum(w * x[:nb]) / np.sum(w)
-            chi2 += float(np.sum(w * (x[:nb] - mean) ** 2))
-            dof += nb - 1
-    return max(chi2 / dof, 1.0) if dof else 1.0
+    if len(x) - 1 < MIN_SCATTER:
+        return float('nan')
+    d = np.diff(x) / np.sqrt(s[1:] ** 2 + s[:-1] ** 2)
+    mad = float(np.median(np.abs(d - np.median(d))))
+    return max((1.4826 * mad) ** 2, 1.0)
 
 
-def cusum(start: Sequence[float], x: Sequence[float], sigma: Sequence[float],
-          baseline_days: float, phi: float = 1.0) -> Optional[Tuple[int, float, float]]:
-    """Return ``(onset index, baseline μ₀, latest z)`` of a detected change, or None.
-
-    ``start`` sorted; the baseline is every estimate within ``baseline_days`` of the first
-    (at least two are needed, else nothing is judged); each σ is scaled by ``sqrt(φ)``
-    (:func:`dispersion`). The onset index counts the estimates with a finite value and σ.
-    """
-    t, x, s = _clean(start, x, sigma)
-    nb = _baseline(t, baseline_days)
-    if nb < 2 or nb >= len(t):
-        return None
-    w = 1.0 / s[:nb] ** 2
-    mu0 = float(np.sum(w * x[:nb]) / np.sum(w))
-    z = (x - mu0) / np.sqrt(phi * (s ** 2 + 1.0 / np.sum(w)))
+def _crossing(z: np.ndarray, first: int) -> Optional[int]:
+    """Return the onset index of the first crossing of the two-sided CUSUM, or None."""
     up = down = 0.0
-    up_from = down_from = nb
-    for i in range(nb, len(t)):
+    up_from = down_from = first
+    for i in range(first, len(z)):
         if up == 0.0:
             up_from = i
         if down == 0.0:
@@ -115,28 +125,67 @@ def cusum(start: Sequence[float], x: Sequence[float], sigma: Sequence[float],
         up = max(0.0, up + z[i] - K)
         down = max(0.0, down - z[i] - K)
         if up > H or down > H:
-            onset = up_from if up > H else down_from
-            return onset, mu0, float(z[-1])
+            return up_from if up > H else down_from
     return None
 
 
-def detect(rows: List[dict], baseline_days: float) -> List[Drift]:
-    """Return the drifts among the per-bag estimates ``rows`` (fleet.csv's rows)."""
-    series = {}
+def cusum(start: Sequence[float], x: Sequence[float], sigma: Sequence[float],
+          baseline_days: float) -> Tuple[Optional[Tuple[int, float, float, bool]],
+                                         Optional[str]]:
+    """Judge one series: ``((onset index, reference, latest z, within baseline), None)``.
+
+    ``start`` sorted. Returns ``(None, None)`` when judged without a change, ``(None,
+    reason)`` when it cannot be judged. The onset index counts the estimates with a finite
+    value and σ; the reference is the baseline's mean (the first estimate's value when the
+    baseline itself drifts).
+    """
+    from scipy.stats import chi2
+    n_all = len(start)
+    t, x, s = _clean(start, x, sigma)
+    if not len(t):
+        return None, (f'no estimate in any of its {n_all} bags (the joint did not move enough '
+                      'to determine it)')
+    nb = _baseline(t, baseline_days)
+    if nb < MIN_BASELINE:
+        return None, (f'{nb} estimate(s) in its first {baseline_days:g} days; a baseline needs '
+                      f'{MIN_BASELINE}')
+    if nb >= len(t):
+        return None, f'no estimate after its first {baseline_days:g} days ({len(t)} in all)'
+    phi = scatter(x, s)
+    if not np.isfinite(phi):
+        return None, (f'{len(t)} estimates; its scatter needs {MIN_SCATTER + 1} at least')
+    w = 1.0 / s[:nb] ** 2
+    mu0 = float(np.sum(w * x[:nb]) / np.sum(w))
+    if np.sum(w * (x[:nb] - mu0) ** 2) / phi > chi2.isf(P_BASELINE, nb - 1):
+        z = (x - x[0]) / np.sqrt(phi * (s ** 2 + s[0] ** 2))
+        onset = _crossing(z, 1)
+        return (1 if onset is None else onset, float(x[0]), float(z[-1]), True), None
+    z = (x - mu0) / np.sqrt(phi * (s ** 2 + 1.0 / np.sum(w)))
+    onset = _crossing(z, nb)
+    if onset is None:
+        return None, None
+    return (onset, mu0, float(z[-1]), False), None
+
+
+def detect(rows: List[dict], baseline_days: float) -> Judgement:
+    """Judge every (robot, joint, parameter) series of the per-bag estimates ``rows``."""
+    series: Dict[Tuple[str, str, str], List[dict]] = {}
     for r in rows:
         series.setdefault((r['robot'], r['joint'], r['parameter']), []).append(r)
-    arrays = {}
+    out = Judgement()
     for key, rs in series.items():
         rs.sort(key=lambda r: r['start_s'])
-        arrays[key] = tuple([r[c] for r in rs] for c in ('start_s', 'value', 'sigma'))
-    phi = {p: dispersion([a for k, a in arrays.items() if k[2] == p], baseline_days)
-           for p in {k[2] for k in arrays}}
-    found = []
-    for (robot, joint, parameter), rs in series.items():
-        hit = cusum(*arrays[robot, joint, parameter], baseline_days, phi[parameter])
+        hit, reason = cusum(*([r[c] for r in rs] for c in ('start_s', 'value', 'sigma')),
+                            baseline_days)
+        if reason is not None:
+            out.not_judged[key] = reason
+            continue
+        out.judged += 1
         if hit is not None:
-            onset, mu0, z = hit
-            good = [r for r in rs if np.isfinite(r['value']) and np.isfinite(r['sigma'])]
-            found.append(Drift(robot, joint, parameter, good[onset]['start_s'], mu0,
-                               good[-1]['value'], z))
-    return sorted(found, key=lambda d: (d.robot, d.joint, d.parameter))
+            onset, mu0, z, within = hit
+            good = [r for r in rs if np.isfinite(r['value']) and np.isfinite(r['sigma'])
+                    and r['sigma'] > 0.0]
+            out.drifts.append(Drift(*key, good[onset]['start_s'], mu0, good[-1]['value'], z,
+                                    within))
+    out.drifts.sort(key=lambda d: (d.robot, d.joint, d.parameter))
+    return out

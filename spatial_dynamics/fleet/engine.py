@@ -19,14 +19,17 @@ cluster on the engine (``python -m benchmarks.fleet``).
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import sys
 import time
 from typing import Callable, Dict, List, Optional, Sequence
 
-from ..files import write_atomic
-from .task import bag_digest, content_key, process, Task
+import numpy as np
+
+from ..files import read_regular, write_atomic
+from .task import bag_digest, content_key, process, Task, VERSION
 
 #: How often a task is started again when its worker is lost or it fails unexpectedly.
 RETRIES = 3
@@ -34,10 +37,20 @@ RETRIES = 3
 BATCH_BYTES = 64 << 20
 #: Fewest batches per worker when the fleet is small (the last ones balance the workers).
 BATCHES_PER_WORKER = 8
+#: Bytes of bag to process below which the command runs them here, without a cluster (about
+#: 20 s of one core: less than a local cluster's start-up and engine cost on a busy machine).
+SERIAL_BYTES = 1 << 30
 
 
 class Cache:
-    """Results by content key, one JSON file each in a folder."""
+    """Results by content key, one JSON file each in a folder.
+
+    An entry holds only what the content decides (never the robot's name or the bag's
+    path: those are the current run's), with the cache's own :data:`~.task.VERSION`, its
+    key and a SHA-256 of its result. An entry that is not a regular file (a FIFO, a folder),
+    is malformed, of another version or key, or whose numbers were edited, is not used: the
+    task runs again and its entry is written anew.
+    """
 
     def __init__(self, folder: Optional[str]) -> None:
         """Use ``folder`` (created); ``None``: no cache."""
@@ -50,19 +63,68 @@ class Cache:
         return os.path.join(self.folder, key + '.json')
 
     def get(self, key: str) -> Optional[Dict]:
-        """Return the result stored for ``key``, or None (also for an unreadable file)."""
+        """Return the result stored for ``key``, or None (for anything but a valid entry)."""
         if not self.folder:
             return None
         try:
-            with open(self.path(key), encoding='utf-8') as f:
-                return json.load(f)
-        except (OSError, ValueError):
+            entry = json.loads(read_regular(self.path(key), 'cache entry', ENTRY_LIMIT))
+            result = entry['result']
+            if (entry['version'] != VERSION or entry['key'] != key
+                    or entry['check'] != checksum(result) or not valid(result)):
+                return None
+        except (ValueError, TypeError, KeyError):
             return None
+        return result
 
     def put(self, key: str, result: Dict) -> None:
-        """Store ``result`` (a refused bag is not stored: it is tried again next time)."""
-        if self.folder and result.get('ok'):
-            write_atomic(self.path(key), json.dumps(result), 'cache entry')
+        """Store ``result`` (a refused bag is not stored: it is tried again next time).
+
+        What cannot be stored (a folder where the entry goes, a full disk) is left out: the
+        task runs again next time.
+        """
+        if not (self.folder and result.get('ok')):
+            return
+        kept = {k: v for k, v in result.items() if k not in PER_RUN}
+        entry = {'version': VERSION, 'key': key, 'check': checksum(kept), 'result': kept}
+        try:
+            write_atomic(self.path(key), json.dumps(entry), 'cache entry')
+        except ValueError:
+            pass
+
+
+#: Largest cache entry read (a 50-joint robot's sums are ~100 kB).
+ENTRY_LIMIT = 16 << 20
+#: What a result holds of the current run, not of the content: never stored in the cache.
+PER_RUN = ('robot', 'bag', 'where', 'cached')
+
+
+def checksum(result: Dict) -> str:
+    """Return the SHA-256 of a result as JSON with sorted keys (what a cache entry keeps)."""
+    return hashlib.sha256(json.dumps(result, sort_keys=True).encode()).hexdigest()
+
+
+def valid(result: Dict) -> bool:
+    """Whether a result has the shape :func:`~.task.process` gives and finite numbers."""
+    try:
+        joints = result['joints']
+        n = len(joints)
+        sums = result['sums']
+        shapes = {'G': (n, 3, 3), 'rr': (n,), 'R': (n, 4, 4)}
+        ok = (result['ok'] is True and n > 0 and all(isinstance(j, str) for j in joints)
+              and isinstance(sums['N'], int) and sums['N'] >= 0
+              and isinstance(result['samples'], int) and result['samples'] >= 0
+              and isinstance(result['messages'], int)
+              and np.isfinite(float(result['peak_rss_mb'])))
+        for name, shape in shapes.items():
+            a = np.asarray(sums[name], dtype=float)
+            ok = ok and a.shape == shape and bool(np.isfinite(a).all())
+        if result['samples']:
+            numbers = np.asarray([result['start'], result['end'], result['seconds']]
+                                 + list(result['rms_residual']), dtype=float)
+            ok = ok and numbers.shape == (3 + n,) and bool(np.isfinite(numbers).all())
+        return bool(ok)
+    except (KeyError, TypeError, ValueError):
+        return False
 
 
 class Progress:
@@ -115,17 +177,24 @@ def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
               progress: Optional[Callable[[Dict], None]] = None) -> List[Dict]:
     """Return the result of every task, in the order of ``tasks``.
 
-    Cached results are taken as they are; the others run on ``client`` (a
-    ``distributed.Client``) or, without one, here one after the other. A task the engine
+    Cached results are taken as they are, with the current task's robot and bag; the others
+    run on ``client`` (a ``distributed.Client``) or, without one, here one after the other.
+    A bag that cannot be hashed (missing, a symlink loop, unreadable) or a task the engine
     gives up on (a worker lost more often than allowed) is a failed bag with the reason.
     """
     digests = {} if client is None else digests_on(client, tasks)
-    keys = [content_key(t, digests) for t in tasks]
-    results: List[Optional[Dict]] = [cache.get(k) for k in keys]
+    keys: List[Optional[str]] = []
+    results: List[Optional[Dict]] = []
+    for t in tasks:
+        try:
+            keys.append(content_key(t, digests))
+        except (OSError, ValueError) as err:
+            keys.append(None)
+            results.append(unreadable(t, err))
+            continue
+        r = cache.get(keys[-1])
+        results.append(None if r is None else dict(r, **_head(t), cached=True))
     todo = [i for i, r in enumerate(results) if r is None]
-    for i, r in enumerate(results):
-        if r is not None:
-            r['cached'] = True
     if client is None:
         for i in todo:
             results[i] = process(tasks[i])
@@ -192,14 +261,28 @@ def process_batch(tasks: Sequence[Task]) -> List[Dict]:
     return [process(t) for t in tasks]
 
 
+def _head(task: Task) -> Dict:
+    """Return what a result holds of the current run: the robot, the bag (and the chunk)."""
+    head = {'robot': task.robot, 'bag': task.bag}
+    if task.chunked:
+        head['chunk'] = [task.start, task.stop]
+    return head
+
+
+def unreadable(task: Task, err: Exception) -> Dict:
+    """Return the failed result of a bag that cannot be read to be hashed."""
+    if isinstance(err, OSError):
+        reason = f'{err.strerror or type(err).__name__} ({err.filename or task.bag})'
+    else:
+        reason = ' '.join(str(err).split())
+    return dict(_head(task), ok=False, reason=f'cannot read the bag: {reason}')
+
+
 def gave_up(task: Task, err: Exception) -> Dict:
     """Return the failed result of a task the engine gave up on (a worker lost too often)."""
-    result = {'robot': task.robot, 'bag': task.bag, 'ok': False,
-              'reason': f'the engine gave up on it: {type(err).__name__}: '
-                        + ' '.join(str(err).split())}
-    if task.chunked:
-        result['chunk'] = [task.start, task.stop]
-    return result
+    return dict(_head(task), ok=False,
+                reason=f'the engine gave up on it: {type(err).__name__}: '
+                       + ' '.join(str(err).split()))
 
 
 def batches(tasks: Sequence[Task], todo: Sequence[int], workers: int) -> List[List[int]]:

@@ -19,6 +19,7 @@ import glob
 import io
 import os
 from typing import Dict, List, Optional
+import unicodedata
 
 from ..files import load_yaml, read_regular
 from .task import BASE_TOPICS, DEFAULTS, Task
@@ -26,10 +27,36 @@ from .task import BASE_TOPICS, DEFAULTS, Task
 #: Largest manifest read (a fleet of thousands of bags is a few MB).
 MANIFEST_LIMIT = 64 << 20
 BAG_SUFFIXES = ('.db3', '.mcap')
+#: Longest robot name (it names files: ``trend_ROBOT.png``).
+NAME_LIMIT = 64
+#: Largest gravity component accepted, m/s² (10 g: a vehicle's or a test rig's).
+GRAVITY_LIMIT = 100.0
+#: Longest differentiation window, s (a longer one smooths away the motion a drive fit needs).
+WINDOW_LIMIT = 10.0
 
 
 class ManifestError(ValueError):
     """The manifest or folder cannot be used; the message names the file and the row."""
+
+
+def robot_name(name, where: str) -> str:
+    """Return ``name`` as a robot's name, or refuse it naming ``where``.
+
+    A name becomes a file name (``trend_ROBOT.png``) and a line of drift.txt: path
+    separators, ``.`` and ``..``, control and format characters (a newline would forge a
+    line) and names longer than :data:`NAME_LIMIT` characters are refused.
+    """
+    text = '' if name is None else str(name)
+    bad = [c for c in text if unicodedata.category(c) in ('Cc', 'Cf', 'Zl', 'Zp')]
+    why = ('is empty' if not text.strip() else
+           f'is longer than {NAME_LIMIT} characters' if len(text) > NAME_LIMIT else
+           'has a path separator' if any(c in text for c in ('/', '\\', os.sep)) else
+           'is . or ..' if text in ('.', '..') else
+           f'has the control character {bad[0]!r}' if bad else None)
+    if why:
+        raise ManifestError(f'{where}: robot name {text[:NAME_LIMIT + 8]!r} {why}; use '
+                            'letters, digits, - and _')
+    return text
 
 
 def _option(name: str, value, where: str):
@@ -39,7 +66,7 @@ def _option(name: str, value, where: str):
     try:
         if name in ('threshold', 'window'):
             x = float(value)
-            if not x > 0.0 or x == float('inf'):
+            if not 0.0 < x < float('inf') or (name == 'window' and x > WINDOW_LIMIT):
                 raise ValueError
             return x
         if name == 'order':
@@ -51,16 +78,20 @@ def _option(name: str, value, where: str):
             return tuple(value.split() if isinstance(value, str) else value)
         if name == 'gravity':
             g = tuple(float(v) for v in (value.split() if isinstance(value, str) else value))
-            if len(g) != 3:
-                raise ValueError
+            if len(g) != 3 or not all(abs(v) <= GRAVITY_LIMIT for v in g):
+                raise ManifestError(f'{where}: option gravity = {value!r}: three numbers, '
+                                    f'm/s², each within ±{GRAVITY_LIMIT:g}')
             return g
         if name == 'measured_effort':
             from ..effort import MEASURED_EFFORT
             if value not in MEASURED_EFFORT:
                 raise ValueError
         return str(value)
+    except ManifestError:
+        raise
     except (TypeError, ValueError):
-        raise ManifestError(f'{where}: option {name} = {value!r} is not valid') from None
+        bound = f' (0 < window <= {WINDOW_LIMIT:g} s)' if name == 'window' else ''
+        raise ManifestError(f'{where}: option {name} = {value!r} is not valid{bound}') from None
 
 
 def _bags(pattern: str, base: str, where: str) -> List[str]:
@@ -81,6 +112,7 @@ def _urdf(path: str, base: str, where: str) -> str:
 def _row(robot, urdf, patterns, options: Dict, base: str, where: str) -> List[Task]:
     if not robot or not urdf or not patterns:
         raise ManifestError(f'{where}: robot, urdf and bag are all needed')
+    robot = robot_name(robot, where)
     opts = {k: _option(k, v, where) for k, v in options.items()
             if v is not None and v != ''}
     topics = [k for k in BASE_TOPICS if k in opts]
@@ -91,7 +123,7 @@ def _row(robot, urdf, patterns, options: Dict, base: str, where: str) -> List[Ta
         if link in opts and topic not in opts:
             raise ManifestError(f'{where}: {link} needs {topic}')
     urdf = _urdf(urdf, base, where)
-    return [Task(str(robot), urdf, bag, opts)
+    return [Task(robot, urdf, bag, opts, where=where)
             for p in patterns for bag in _bags(str(p), base, where)]
 
 
@@ -144,6 +176,7 @@ def scan_folder(folder: str, urdf: Optional[str]) -> List[Task]:
         top = os.path.join(folder, robot)
         if not os.path.isdir(top):
             continue
+        where = f'{folder}: robot folder {robot!r}'
         own = os.path.join(top, 'robot.urdf')
         robot_urdf = urdf or (own if os.path.isfile(own) else None)
         found = []
@@ -157,9 +190,10 @@ def scan_folder(folder: str, urdf: Optional[str]) -> List[Task]:
                       if f.endswith(BAG_SUFFIXES)]
         if not found:
             continue
+        robot_name(robot, where)
         if robot_urdf is None:
             raise ManifestError(f'robot {robot}: no --urdf and no {own}')
-        tasks += [Task(robot, robot_urdf, bag, {}) for bag in found]
+        tasks += [Task(robot, robot_urdf, bag, {}, where=where) for bag in found]
     if not tasks:
         raise ManifestError(f'{folder}: no bags found in ROBOT/…/BAG')
     return tasks

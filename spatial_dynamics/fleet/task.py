@@ -52,7 +52,8 @@ class Task:
     """A bag of a robot, with the URDF and the options it is read with.
 
     ``start``, ``stop``: the chunk's bag-time range (ns; ``None`` is the bag's beginning,
-    end); both ``None``: the whole bag.
+    end); both ``None``: the whole bag. ``where``: the manifest row or folder it comes from
+    (what a ``failed:`` line names).
     """
 
     robot: str
@@ -61,6 +62,7 @@ class Task:
     options: Dict = field(default_factory=dict, hash=False)
     start: Optional[int] = None
     stop: Optional[int] = None
+    where: str = field(default='', compare=False)
 
     @property
     def chunked(self) -> bool:

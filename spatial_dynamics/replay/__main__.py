@@ -685,8 +685,7 @@ def fleet_command(sub) -> None:
     from ..fleet import command as fleet
     p = sub.add_parser('fleet', help='a fleet\'s bags on a Dask cluster: drive trends, wear',
                        description=fleet.__doc__.split('\n\n')[0],
-                       epilog='Exit status: 0 nothing drifted, 3 something drifted, 1 refused, '
-                       '2 bad usage.')
+                       epilog=fleet.EXIT_STATUS)
     fleet.add_arguments(p)
     p.set_defaults(run=fleet.run)
 

@@ -3,15 +3,16 @@
 """A simulated fleet: robots with different payloads, one daily bag each, one joint wearing.
 
     python -m spatial_dynamics.tools.fleet_demo OUT [--robots 4] [--days 30] [--seconds 4]
-        [--wear-robot 2] [--wear-joint 3] [--onset 12] [--rate 0.05]
+        [--wear-robot 2] [--wear-joint 3] [--onset 12] [--rate 0.05] [--jump 0]
 
 Each robot is the UR5 of example-robot-data carrying its own payload on ``tool0`` (0.5 to
 2.5 kg), simulated by MuJoCo with the drives of :mod:`.identify_demo` and tracking, every
 day, its own program (two sines per joint) with PD + feed-forward of its URDF (which has the
 payload); the effort and velocity carry the identification demonstration's noise. From day
 ``onset`` on, the Coulomb friction of one joint of one robot rises by ``rate`` (a fraction
-of its value) a day. Written: ``OUT/rNN/robot.urdf`` (the URDF with the robot's payload)
-and ``OUT/rNN/dayDD`` (rosbag2, sqlite3), the layout ``fleet`` reads.
+of its value) a day, after a jump of ``jump`` at the onset. Written: ``OUT/rNN/robot.urdf``
+(the URDF with the robot's payload) and ``OUT/rNN/dayDD`` (rosbag2, sqlite3), the layout
+``fleet`` reads.
 """
 
 from __future__ import annotations
@@ -44,12 +45,13 @@ def simulate(true_text: str, model: sd.Model, motion: Motion, seconds: float,
 def friction_of(n: int, robot: int, day: int, wear) -> np.ndarray:
     """Return the true Coulomb friction of ``robot`` on ``day``.
 
-    ``wear``: the robot, the joint, the onset day (0-based) and the rise a day (a fraction).
+    ``wear``: the robot, the joint, the onset day (0-based), the rise a day (a fraction) and
+    optionally a jump at the onset (a fraction: 1.0 doubles the friction from that day on).
     """
     friction = drives(n)[1].copy()
-    w_robot, w_joint, onset, rate = wear
+    w_robot, w_joint, onset, rate, *jump = wear
     if robot == w_robot and day >= onset:
-        friction[w_joint] *= 1.0 + rate * (day - onset + 1)
+        friction[w_joint] *= 1.0 + sum(jump) + rate * (day - onset + 1)
     return friction
 
 
@@ -103,9 +105,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument('--wear-joint', type=int, default=3, help='1-based')
     p.add_argument('--onset', type=int, default=12, help='first day of wear, 1-based')
     p.add_argument('--rate', type=float, default=0.05, help='friction rise a day, fraction')
+    p.add_argument('--jump', type=float, default=0.0,
+                   help='friction jump at the onset, fraction (1: doubled; default 0)')
     args = p.parse_args(argv)
     make_fleet(args.out, args.robots, args.days, args.seconds,
-               (args.wear_robot - 1, args.wear_joint - 1, args.onset - 1, args.rate))
+               (args.wear_robot - 1, args.wear_joint - 1, args.onset - 1, args.rate,
+                args.jump))
     print(f'written to {args.out}: {args.robots} robots x {args.days} days')
     return 0
 

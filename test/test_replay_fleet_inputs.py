@@ -1,0 +1,212 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The fleet's inputs: whose a cached result is, cache entries checked, names, bags, options."""
+
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from spatial_dynamics.fleet import main
+
+
+@pytest.fixture(scope='module')
+def small(tmp_path_factory):
+    """Two robots, two days of two seconds each, no wear."""
+    pytest.importorskip('mujoco')
+    from spatial_dynamics.tools.fleet_demo import make_fleet
+    out = str(tmp_path_factory.mktemp('small'))
+    try:
+        make_fleet(out, robots=2, days=2, seconds=2.0, wear=(0, 0, 99, 0.0))
+    except RuntimeError as err:
+        pytest.skip(str(err))
+    return out
+
+
+def run(argv, capsys):
+    status = main([str(a) for a in argv] + ['--serial', '--no-plots'])
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+def table(out):
+    with open(os.path.join(out, 'fleet.csv'), newline='') as f:
+        return list(csv.DictReader(f))
+
+
+def manifest(path, rows, header='robot,urdf,bag'):
+    path.write_text('\n'.join([header] + [','.join(r) for r in rows]) + '\n')
+    return path
+
+
+# -- the cache keeps what the content decides; the run says whose it is -----------------------
+
+def test_a_robot_renamed_in_the_manifest_is_reported_by_its_new_name(small, tmp_path, capsys):
+    urdf, bags = os.path.join(small, 'r01', 'robot.urdf'), os.path.join(small, 'r01', 'day*')
+    out, cache = tmp_path / 'o', tmp_path / 'cache'
+    run([manifest(tmp_path / 'a.csv', [('old', urdf, bags)]), '--out', out, '--cache', cache],
+        capsys)
+    status, text, _ = run([manifest(tmp_path / 'b.csv', [('new', urdf, bags)]), '--out', out,
+                           '--cache', cache], capsys)
+    assert '(2 from the cache, 0 failed)' in text
+    assert {r['robot'] for r in table(out)} == {'new'}
+
+
+def test_two_robots_with_the_same_bytes_are_both_reported(small, tmp_path, capsys):
+    folder = tmp_path / 'fleet'
+    for robot in ('alpha', 'beta'):
+        shutil.copytree(os.path.join(small, 'r01', 'day01'), folder / robot / 'day01')
+    urdf = os.path.join(small, 'r01', 'robot.urdf')
+    for attempt in range(2):
+        status, text, _ = run([folder, '--urdf', urdf, '--out', tmp_path / 'o'], capsys)
+        rows = table(tmp_path / 'o')
+        assert {r['robot'] for r in rows} == {'alpha', 'beta'}, attempt
+        assert {r['bag'] for r in rows} == {str(folder / 'alpha' / 'day01'),
+                                            str(folder / 'beta' / 'day01')}
+    assert '(2 from the cache, 0 failed)' in text
+
+
+def test_a_moved_archive_reports_the_new_paths(small, tmp_path, capsys):
+    shutil.copytree(small, tmp_path / 'before')
+    run([tmp_path / 'before', '--out', tmp_path / 'o'], capsys)
+    os.rename(tmp_path / 'before', tmp_path / 'after')
+    status, text, _ = run([tmp_path / 'after', '--out', tmp_path / 'o'], capsys)
+    assert '(4 from the cache, 0 failed)' in text
+    assert all(r['bag'].startswith(str(tmp_path / 'after')) for r in table(tmp_path / 'o'))
+
+
+# -- cache entries are checked before they are used -------------------------------------------
+
+def entries(cache):
+    return sorted(os.path.join(cache, f) for f in os.listdir(cache) if f.endswith('.json'))
+
+
+def edit_a_number(path):
+    with open(path) as f:
+        doc = json.load(f)
+    result = doc.get('result', doc)
+    result['sums']['R'][0][0][0] *= 2.0
+    result['sums']['G'][0][0][0] *= 4.0
+    with open(path, 'w') as f:
+        json.dump(doc, f)
+
+
+@pytest.mark.parametrize('damage', ['malformed', 'edited', 'directory', 'fifo', 'shape'])
+def test_a_damaged_cache_entry_is_computed_again(small, tmp_path, capsys, damage):
+    out = tmp_path / 'o'
+    run([small, '--out', out], capsys)
+    want = table(out)
+    path = entries(out / 'cache')[0]
+    if damage == 'edited':
+        edit_a_number(path)
+    else:
+        os.remove(path)
+        if damage == 'malformed':
+            open(path, 'w').write('{"ok": true, "sums": ')
+        elif damage == 'directory':
+            os.mkdir(path)
+        elif damage == 'fifo':
+            os.mkfifo(path)
+        else:
+            open(path, 'w').write(json.dumps({'ok': True, 'joints': ['a'], 'sums': {}}))
+    # in a child process: a FIFO must not hang the run (the old reader waited for a writer)
+    proc = subprocess.run([sys.executable, '-m', 'spatial_dynamics.fleet', small, '--out',
+                           str(out), '--serial', '--no-plots'], capture_output=True, text=True,
+                          timeout=300)
+    assert 'Traceback' not in proc.stderr, proc.stderr
+    assert '(3 from the cache, 0 failed)' in proc.stdout, proc.stdout
+    assert table(out) == want
+
+
+# -- robot names, missing and repeated bags --------------------------------------------------
+
+@pytest.mark.parametrize('name', ['x/../../../ESCAPED', 'a/b', '../escape', '..', 'r' * 300,
+                                  'r02\ndrift: r01 forged', 'tab\there'])
+def test_an_unusable_robot_name_is_refused_before_any_work(small, tmp_path, capsys, name):
+    (tmp_path / 'o' / 'trend_x').mkdir(parents=True)
+    path = tmp_path / 'm.yaml'
+    path.write_text(json.dumps([
+        {'robot': 'r01', 'urdf': os.path.join(small, 'r01', 'robot.urdf'),
+         'bags': [os.path.join(small, 'r01', 'day01')]},
+        {'robot': name, 'urdf': os.path.join(small, 'r02', 'robot.urdf'),
+         'bags': [os.path.join(small, 'r02', 'day01')]}]))
+    status = main([str(path), '--out', str(tmp_path / 'o'), '--serial'])
+    err = capsys.readouterr().err
+    assert status == 1
+    assert 'robot 2: robot name' in err
+    assert os.listdir(tmp_path / 'o') == ['trend_x']
+    assert sorted(os.listdir(tmp_path)) == ['m.yaml', 'o']
+
+
+def test_missing_and_looping_bags_are_one_failed_line_each_and_the_rest_finish(
+        small, tmp_path, capsys):
+    os.symlink('loop.db3', tmp_path / 'loop.db3')
+    os.symlink('nowhere.db3', tmp_path / 'dangling.db3')
+    urdf = os.path.join(small, 'r01', 'robot.urdf')
+    path = manifest(tmp_path / 'm.csv', [
+        ('r01', urdf, os.path.join(small, 'r01', 'day*')),
+        ('r01', urdf, str(tmp_path / 'gone.db3')),
+        ('r01', urdf, str(tmp_path / 'loop.db3')),
+        ('r01', urdf, str(tmp_path / 'dangling.db3'))])
+    status, text, err = run([path, '--out', tmp_path / 'o'], capsys)
+    assert status != 1, err
+    failed = [line for line in text.splitlines() if line.startswith('failed:')]
+    assert len(failed) == 3, text
+    for k, name in enumerate(['gone.db3', 'loop.db3', 'dangling.db3']):
+        assert name in failed[k] and f'line {k + 3}' in failed[k]
+    assert {r['bag'] for r in table(tmp_path / 'o')} == {
+        os.path.join(small, 'r01', 'day01'), os.path.join(small, 'r01', 'day02')}
+
+
+def test_a_bag_listed_twice_is_counted_once_and_said(small, tmp_path, capsys):
+    urdf = os.path.join(small, 'r01', 'robot.urdf')
+    path = tmp_path / 'm.yaml'
+    path.write_text(json.dumps([{'robot': 'r01', 'urdf': urdf, 'bags': [
+        os.path.join(small, 'r01', 'day*'), os.path.join(small, 'r01', 'day01'),
+        os.path.join(small, 'r01', '..', 'r01', 'day02')]}]))
+    status, text, _ = run([path, '--out', tmp_path / 'o'], capsys)
+    rows = table(tmp_path / 'o')
+    assert len(rows) == 2 * 6 * 3            # two bags, six joints, three parameters
+    assert text.startswith('2 bags of 1 robots')
+    assert len([line for line in text.splitlines() if 'listed twice' in line]) == 2
+
+
+# -- options ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize('gravity', ['nan 0 -9.81', '0 0 1e300', '0 0 inf'])
+def test_an_impossible_gravity_is_refused_naming_the_row(small, tmp_path, capsys, gravity):
+    urdf = os.path.join(small, 'r01', 'robot.urdf')
+    path = manifest(tmp_path / 'm.csv', [('r01', urdf, os.path.join(small, 'r01', 'day*'),
+                                          gravity)], header='robot,urdf,bag,gravity')
+    status, _, err = run([path, '--out', tmp_path / 'o'], capsys)
+    assert status == 1 and 'line 2: option gravity' in err
+
+
+@pytest.mark.parametrize('option, value, says', [
+    ('--chunk', '1e300', 'a year'), ('--chunk', 'nan', 'a year'),
+    ('--scheduler', '', 'tcp://host:port'), ('--scheduler', 'ucx://127.0.0.1:1', "'ucx'"),
+    ('--scheduler', 'tcp://127.0.0.1:99999', '65535'), ('--workers', '0', '1 to 4096'),
+    ('--baseline-days', '1e308', 'days')])
+def test_an_impossible_option_is_refused_at_once_saying_what_is_allowed(
+        tmp_path, capsys, option, value, says):
+    from spatial_dynamics.replay.__main__ import main as replay
+    for command in (main, lambda argv: replay(['fleet'] + argv)):
+        with pytest.raises(SystemExit) as stop:
+            command([str(tmp_path), option, value, '--out', str(tmp_path / 'o')])
+        assert stop.value.code == 2
+        err = capsys.readouterr().err
+        assert option in err and says in err
+
+
+def test_a_reader_that_goes_away_ends_the_output_quietly(small, tmp_path):
+    proc = subprocess.Popen([sys.executable, '-m', 'spatial_dynamics.fleet', small, '--out',
+                             str(tmp_path / 'o'), '--serial', '--no-plots'],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()                      # as `| head -1` does once it has its line
+    err = proc.stderr.read().decode()
+    proc.wait(timeout=300)
+    assert 'Traceback' not in err and 'BrokenPipe' not in err, err
