@@ -210,3 +210,35 @@ def test_a_reader_that_goes_away_ends_the_output_quietly(small, tmp_path):
     err = proc.stderr.read().decode()
     proc.wait(timeout=300)
     assert 'Traceback' not in err and 'BrokenPipe' not in err, err
+
+
+# -- a cached re-run reads no bag and starts no cluster --------------------------------------
+
+def test_a_cached_rerun_reads_no_bag_starts_no_cluster_and_draws_no_plot(small, tmp_path,
+                                                                         capsys, monkeypatch):
+    from spatial_dynamics.fleet import command, task
+    from spatial_dynamics.replay import bags
+    out = tmp_path / 'o'
+    assert main([small, '--out', str(out), '--serial']) == command.NOT_JUDGED
+    first = capsys.readouterr().out
+    reads = []
+
+    def counted(name, real):
+        def read(*args, **kwargs):
+            reads.append((name, args[1] if name == 'hash' else args[0]))
+            return real(*args, **kwargs)
+        return read
+    monkeypatch.setattr(task, '_hash_file', counted('hash', task._hash_file))
+    for name in ('read_joint_states', 'read_joint_states_between'):
+        monkeypatch.setattr(bags, name, counted(name, getattr(bags, name)))
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError('a cluster was started')
+    monkeypatch.setattr(command, 'local_cluster', no_cluster)
+    monkeypatch.setattr(command, '_draw', no_cluster)
+    assert main([small, '--out', str(out)]) == command.NOT_JUDGED     # no --serial
+    again = capsys.readouterr().out
+    assert '(4 from the cache, 0 failed)' in again
+    assert again.split('\n', 1)[1] == first.split('\n', 1)[1]
+    # the URDFs' bytes are hashed (for the content keys), no bag's
+    assert {os.path.basename(path) for _, path in reads} == {'robot.urdf'}, reads

@@ -39,11 +39,12 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..files import check_output, write_atomic
+from ..files import check_output, read_regular, write_atomic
 from ..replay.arguments import one_line
 from . import drift as drift_of
 from .chunks import CHUNK, merge, MIN_CHUNK, split
-from .engine import Cache, local_cluster, Progress, run_tasks, SERIAL_BYTES, warm
+from .engine import (Cache, local_cluster, pending_bytes, Progress, run_tasks, SERIAL_BYTES,
+                     warm)
 from .manifest import ManifestError, read_manifest, scan_folder
 from .sums import Sums, solve, total
 from .task import Task
@@ -224,42 +225,70 @@ def iso(t: float) -> str:
     return datetime.fromtimestamp(t, timezone.utc).isoformat(timespec='seconds')
 
 
-def plot_trends(out: str, rows: List[Dict], drifts) -> List[str]:
-    """Draw trend_ROBOT.png: per joint and parameter, the values with ±σ bands."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    from datetime import datetime, timezone
+def plot_trends(out: str, rows: List[Dict], drifts, keys: Optional[str] = None) -> List[str]:
+    """Draw trend_ROBOT.png: per joint and parameter, the values with ±σ bands.
+
+    ``keys``: a folder keeping a hash of what each plot was drawn from; a plot whose
+    inputs are the same is not drawn again.
+    """
+    import hashlib
+    import json
     written = []
     flagged = {(d.robot, d.joint, d.parameter) for d in drifts}
     for robot in sorted({r['robot'] for r in rows}):
         mine = [r for r in rows if r['robot'] == robot]
-        joints = list(dict.fromkeys(r['joint'] for r in mine))
-        fig, axes = plt.subplots(len(joints), 3, figsize=(12, 1.8 * len(joints) + 1),
-                                 sharex=True, squeeze=False)
-        for a, joint in enumerate(joints):
-            for b, parameter in enumerate(PARAMETERS):
-                rs = sorted((r for r in mine if r['joint'] == joint
-                             and r['parameter'] == parameter), key=lambda r: r['start_s'])
-                t = [datetime.fromtimestamp(r['start_s'], timezone.utc) for r in rs]
-                x = np.array([r['value'] for r in rs])
-                s = np.array([r['sigma'] for r in rs])
-                ax = axes[a, b]
-                color = 'tab:red' if (robot, joint, parameter) in flagged else 'tab:blue'
-                ax.fill_between(t, x - s, x + s, color=color, alpha=0.3, lw=0)
-                ax.plot(t, x, '.-', color=color, lw=0.8)
-                if a == 0:
-                    ax.set_title(drift_of.LABELS[parameter])
-                if b == 0:
-                    ax.set_ylabel(joint, fontsize=8)
-        fig.suptitle(f'{robot}: drive parameters per bag (band: ±σ; red: drifted)')
-        fig.autofmt_xdate()
         name = f'trend_{robot}.png'
-        write_atomic(inside(out, name), lambda f: fig.savefig(f, format='png', dpi=80),
-                     'trend plot')
-        plt.close(fig)
+        key = hashlib.sha256(json.dumps(
+            [mine, sorted(f for f in flagged if f[0] == robot)], sort_keys=True,
+            default=str).encode()).hexdigest()
+        key_path = os.path.join(keys, name + '.key') if keys else None
+        try:
+            if (key_path and os.path.isfile(inside(out, name))
+                    and read_regular(key_path, 'plot key', 64) == key.encode()):
+                written.append(name)
+                continue
+        except ValueError:
+            pass
+        _draw(out, name, robot, mine, flagged)
+        if key_path:
+            try:
+                os.makedirs(keys, exist_ok=True)
+                write_atomic(key_path, key, 'plot key')
+            except (ValueError, OSError):
+                pass
         written.append(name)
     return written
+
+
+def _draw(out: str, name: str, robot: str, mine: List[Dict], flagged) -> None:
+    """Draw one robot's trend plot into ``out``/``name``."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    from datetime import datetime, timezone
+    joints = list(dict.fromkeys(r['joint'] for r in mine))
+    fig, axes = plt.subplots(len(joints), 3, figsize=(12, 1.8 * len(joints) + 1),
+                             sharex=True, squeeze=False)
+    for a, joint in enumerate(joints):
+        for b, parameter in enumerate(PARAMETERS):
+            rs = sorted((r for r in mine if r['joint'] == joint
+                         and r['parameter'] == parameter), key=lambda r: r['start_s'])
+            t = [datetime.fromtimestamp(r['start_s'], timezone.utc) for r in rs]
+            x = np.array([r['value'] for r in rs])
+            s = np.array([r['sigma'] for r in rs])
+            ax = axes[a, b]
+            color = 'tab:red' if (robot, joint, parameter) in flagged else 'tab:blue'
+            ax.fill_between(t, x - s, x + s, color=color, alpha=0.3, lw=0)
+            ax.plot(t, x, '.-', color=color, lw=0.8)
+            if a == 0:
+                ax.set_title(drift_of.LABELS[parameter])
+            if b == 0:
+                ax.set_ylabel(joint, fontsize=8)
+    fig.suptitle(f'{robot}: drive parameters per bag (band: ±σ; red: drifted)')
+    fig.autofmt_xdate()
+    write_atomic(inside(out, name), lambda f: fig.savefig(f, format='png', dpi=80),
+                 'trend plot')
+    plt.close(fig)
 
 
 def inside(out: str, name: str) -> str:
@@ -284,12 +313,16 @@ def run(args) -> int:
             check_output(inside(args.out, name), name, inputs)
         cache = Cache(args.cache or os.path.join(args.out, 'cache'))
         parts, owner = split(tasks, args.chunk)
+        digests = cache.known_digests(parts)
+        # a cluster only for work worth its start-up, unless asked for (--workers, --scheduler)
+        serial = args.serial or (args.workers is None and args.scheduler is None
+                                 and pending_bytes(parts, cache, digests) < SERIAL_BYTES)
         progress = Progress(len(parts))
         try:
-            if args.serial:
-                results = run_tasks(parts, cache, None, progress)
+            if serial:
+                results = run_tasks(parts, cache, None, progress, digests)
             else:
-                results = _on_cluster(args, parts, cache, progress)
+                results = _on_cluster(args, parts, cache, progress, digests)
         finally:
             progress.close()
         results = merge(tasks, owner, results)
@@ -301,15 +334,15 @@ def run(args) -> int:
     return report(args, results, notes)
 
 
-def _on_cluster(args, tasks, cache, progress) -> List[Dict]:
+def _on_cluster(args, tasks, cache, progress, digests) -> List[Dict]:
     from distributed import Client
     if args.scheduler:
         with Client(args.scheduler, timeout=30) as client:
             warm(client)
-            return run_tasks(tasks, cache, client, progress)
+            return run_tasks(tasks, cache, client, progress, digests)
     with local_cluster(args.workers) as cluster, Client(cluster) as client:
         warm(client)
-        return run_tasks(tasks, cache, client, progress)
+        return run_tasks(tasks, cache, client, progress, digests)
 
 
 def verdict(judgement: drift_of.Judgement) -> List[str]:
@@ -367,7 +400,9 @@ def report(args, results: List[Dict], notes: Sequence[str] = ()) -> int:
     write_atomic(inside(args.out, 'drift.txt'), text, 'drift.txt')
     written = ['fleet.csv', 'robots.csv', 'drift.txt']
     if not args.no_plots and rows:
-        written += plot_trends(args.out, rows, drifts)
+        written += plot_trends(args.out, rows, drifts,
+                               os.path.join(args.cache or os.path.join(args.out, 'cache'),
+                                            'plots'))
     status = DRIFTED if drifts else NOT_JUDGED if judgement.not_judged else 0
     if not rows:
         status = 1

@@ -76,6 +76,46 @@ class Cache:
             return None
         return result
 
+    def known_digests(self, tasks: Sequence[Task]) -> Dict[str, bytes]:
+        """Return bag path -> :func:`~.task.bag_digest` of the bags unchanged since hashed.
+
+        A bag is unchanged when its resolved path and each of its files' name, size,
+        ``mtime_ns`` and inode are what they were when its bytes were hashed
+        (:meth:`remember`): its bytes are not read again. Any change hashes them again.
+        """
+        known: Dict[str, bytes] = {}
+        for bag in dict.fromkeys(t.bag for t in tasks):
+            try:
+                text = read_regular(self._stat_path(bag), 'bag digest', 64).decode('ascii')
+                if len(text) == 64:
+                    known[bag] = bytes.fromhex(text)
+            except (ValueError, OSError, TypeError):
+                continue
+        return known
+
+    def remember(self, digests: Dict[str, bytes]) -> None:
+        """Keep each bag's digest under its files' signature (see :meth:`known_digests`)."""
+        for bag, digest in digests.items():
+            try:
+                write_atomic(self._stat_path(bag), digest.hex(), 'bag digest')
+            except (ValueError, OSError):
+                pass
+
+    def _stat_path(self, bag: str) -> str:
+        if not self.folder:
+            raise ValueError('no cache')
+        files = ([os.path.join(bag, f) for f in sorted(os.listdir(bag))]
+                 if os.path.isdir(bag) else [bag])
+        h = hashlib.sha256(os.path.realpath(bag).encode())
+        for name in files:
+            info = os.stat(name)
+            if os.path.isfile(name):
+                h.update(f'\0{os.path.basename(name)}\0{info.st_size}\0{info.st_mtime_ns}'
+                         f'\0{info.st_ino}'.encode())
+        folder = os.path.join(self.folder, 'bags')
+        os.makedirs(folder, exist_ok=True)
+        return os.path.join(folder, h.hexdigest())
+
     def put(self, key: str, result: Dict) -> None:
         """Store ``result`` (a refused bag is not stored: it is tried again next time).
 
@@ -174,15 +214,19 @@ def local_cluster(workers: Optional[int] = None):
 
 
 def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
-              progress: Optional[Callable[[Dict], None]] = None) -> List[Dict]:
+              progress: Optional[Callable[[Dict], None]] = None,
+              digests: Optional[Dict[str, bytes]] = None) -> List[Dict]:
     """Return the result of every task, in the order of ``tasks``.
 
     Cached results are taken as they are, with the current task's robot and bag; the others
     run on ``client`` (a ``distributed.Client``) or, without one, here one after the other.
     A bag that cannot be hashed (missing, a symlink loop, unreadable) or a task the engine
     gives up on (a worker lost more often than allowed) is a failed bag with the reason.
+    ``digests``: the bags' digests known already (:meth:`Cache.known_digests`).
     """
-    digests = {} if client is None else digests_on(client, tasks)
+    digests = dict(digests or {})
+    if client is not None:
+        digests.update(digests_on(client, [t for t in tasks if t.bag not in digests]))
     keys: List[Optional[str]] = []
     results: List[Optional[Dict]] = []
     for t in tasks:
@@ -194,6 +238,7 @@ def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
             continue
         r = cache.get(keys[-1])
         results.append(None if r is None else dict(r, **_head(t), cached=True))
+    cache.remember(digests)
     todo = [i for i, r in enumerate(results) if r is None]
     if client is None:
         for i in todo:
@@ -220,6 +265,19 @@ def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
             if progress:
                 progress(result)
     return results
+
+
+def pending_bytes(tasks: Sequence[Task], cache: Cache, digests: Dict[str, bytes]) -> int:
+    """Return the bytes of bag the tasks not in ``cache`` would read (a bag not hashed: all)."""
+    pending = set()
+    for t in tasks:
+        try:
+            if t.bag in digests and cache.get(content_key(t, dict(digests))) is not None:
+                continue
+        except (OSError, ValueError):
+            continue
+        pending.add(t.bag)
+    return sum(_bytes(bag) for bag in pending)
 
 
 def digests_on(client, tasks: Sequence[Task]) -> Dict[str, bytes]:
