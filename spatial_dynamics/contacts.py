@@ -43,6 +43,7 @@ import numpy as np
 from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
 from .algorithms.jacobian import PLACEMENT
 from .algorithms.rnea import xup_kernel
+from .algorithms.split import DEPENDENT, RANK_TOLERANCE
 from .backends import compiled, GRAVITY, kernels, layout, rnea
 from .joints import FREE_FLYER, REVOLUTE
 from .model import Model
@@ -485,7 +486,7 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
     if measured is not None:
         lam = _measured(contacts, measured)
         return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'measured', 'solved',
-                       np.linalg.matrix_rank(Jc) if len(Jc) else 0)
+                       _rank(Jc))
     if method == 'qp':
         return _qp(plan, b, Jc, n, _weights(weights, n, 'joint'), force_weight)
     if method == 'forces':
@@ -494,56 +495,109 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         AWi = A / W
         lam = AWi.T @ np.linalg.lstsq(AWi @ A.T, b[:6], rcond=None)[0] if len(Jc) else Jc[:, 0]
         return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'forces', 'solved',
-                       np.linalg.matrix_rank(Jc) if len(Jc) else 0)
-    # contact-consistent: J_cᵀ = Q [R; 0], Q2ᵀ Sᵀ τ = Q2ᵀ b, λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
+                       _rank(Jc))
+    # contact-consistent (algorithms/split.py): J_cᵀ P = Q [R; 0] pivoted, Q2ᵀ Sᵀ τ = Q2ᵀ b
     w = np.sqrt(_weights(weights, n, 'joint')) if weights is not None else None
     split = _split_compiled(Jc, b, n, w) if kern is not None else None
-    if split is not None:
-        return _result(plan, b, Jc, *split, 'torques', 'solved', len(Jc))
-    if w is None:
-        w = np.ones(n)
-    Q, R = np.linalg.qr(Jc.T, mode='complete')
-    d = np.abs(np.diagonal(R))
-    rank = int(np.sum(d > 1e-10 * max(1.0, d.max()))) if len(Jc) else 0
-    Q1, Q2 = Q[:, :rank], Q[:, rank:]
-    A, y = Q2[6:].T / w, Q2.T @ b                   # Q2ᵀ Sᵀ (τ / w) ... = Q2ᵀ b, Sᵀ = [0; 1]
-    try:        # the least-norm solution Aᵀ (A Aᵀ)⁻¹ y, A of full row rank (feasible base rows)
-        tau = A.T @ np.linalg.solve(A @ A.T, y) / w
-        if not np.allclose(A @ (tau * w), y, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(y).max())):
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:   # too few contacts to carry the base rows: least squares
-        tau = np.linalg.lstsq(A, y, rcond=None)[0] / w
-    rest = b.copy()
-    rest[6:] -= tau
-    if rank == len(Jc):             # λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
-        lam = np.linalg.solve(R[:rank], Q1.T @ rest)
-    else:                           # redundant contact rows: the least λ
-        lam = np.linalg.lstsq(Jc.T, rest, rcond=None)[0]
-    return _result(plan, b, Jc, tau, lam, 'torques', 'solved', rank)
+    if split is None:
+        split = _split_numpy(Jc, b, n, np.ones(n) if w is None else w)
+    return _result(plan, b, Jc, *split[:2], 'torques', 'solved', split[2])
 
 
 _c_rnea = compiled.ext.rnea if compiled.ext is not None else None
 _c_split = compiled.ext.split if compiled.ext is not None else None
 
 
-def _split_compiled(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
-    """Return the contact-consistent ``(τ, λ)`` by the compiled split, or ``None``.
+def _split_numpy(Jc: np.ndarray, b: np.ndarray, n: int, w: np.ndarray) -> tuple:
+    """Return the contact-consistent ``(τ, λ, r)``: :mod:`~.algorithms.split`'s equations.
 
-    :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars: a
-    Householder QR of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ`` by Cholesky, ``R λ`` by
-    back substitution). ``None`` (the numpy split then answers, as it always did) for fewer
-    contact rows than six or ``nv`` or more, and for the cases the kernel leaves to it:
-    redundant contact rows, base rows the contacts cannot carry.
+    The pivoted QR is :func:`_pivoted_qr` (the kernel's steps, the same rank); ``τ`` the least
+    solution by ``A Aᵀ`` when the contacts carry the base rows, else numpy's least squares
+    (``A τ ≈ y``: the base residual says what is left); ``λ`` the least solution of
+    ``[R11 R12] Pᵀ λ = Q1ᵀ (b - Sᵀ τ)`` when the rows left out are dependent to rounding
+    (:data:`~.algorithms.split.DEPENDENT`), else ``R11 z1 = …`` with those rows' ``λ`` zero.
     """
     k, nv = Jc.shape
-    if not 6 <= k < nv:
+    M = np.zeros((nv, k + 1 + n))                   # [J_cᵀ, b, Sᵀ], Sᵀ = [0; 1]
+    M[:, :k], M[:, k] = Jc.T, b
+    M[nv - n:, k + 1:] = np.eye(n)
+    r, perm, scale = _pivoted_qr(M, k)
+    A, y = M[r:, k + 1:] / w, M[r:, k]               # Q2ᵀ Sᵀ (τ / w) ... = Q2ᵀ b
+    try:        # the least-norm solution Aᵀ (A Aᵀ)⁻¹ y, A of full row rank (feasible base rows)
+        tau = A.T @ np.linalg.solve(A @ A.T, y) / w
+        if not np.allclose(A @ (tau * w), y, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(y).max(
+                initial=0.0))):
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:   # too few contacts to carry the base rows: least squares
+        tau = np.linalg.lstsq(A, y, rcond=None)[0] / w
+    c = M[:r, k] - M[:r, k + 1:] @ tau              # Q1ᵀ (b - Sᵀ τ)
+    z = np.zeros(k)
+    if r < k and np.abs(M[r:, r:k]).max(initial=0.0) <= DEPENDENT * scale:
+        z = np.linalg.lstsq(M[:r, :k], c, rcond=None)[0]    # the least z of [R11 R12] z = c
+    elif r:                                                 # R11 z1 = c, z2 = 0
+        z[:r] = np.linalg.solve(M[:r, :r], c)
+    lam = np.empty(k)
+    lam[perm] = z
+    return tau, lam, r
+
+
+def _pivoted_qr(M: np.ndarray, k: int) -> tuple:
+    """Reduce ``M = [J_cᵀ, …]`` (nv, ≥ k) to ``Qᵀ M P`` in place; return ``(r, P, scale)``.
+
+    ``P`` is the columns' order, ``scale`` the largest norm of the first ``k`` columns.
+
+    The steps of :func:`~.algorithms.split.split_kernel`: step ``j`` swaps in the column of
+    the first ``k`` whose norm below row ``j`` is largest and stops when that norm is not
+    above :data:`~.algorithms.split.RANK_TOLERANCE` times ``J_c``'s largest row norm (``r``
+    steps made); a Householder reflector then zeroes it below row ``j`` in every column.
+    """
+    nv = len(M)
+    perm = np.arange(k)
+    scale = np.sqrt(np.einsum('ij,ij->j', M[:, :k], M[:, :k]).max(initial=0.0))
+    floor = RANK_TOLERANCE * scale
+    r = 0
+    for j in range(min(k, nv)):
+        below = np.einsum('ij,ij->j', M[j:, j:k], M[j:, j:k])
+        p = j + int(np.argmax(below))
+        if not np.sqrt(below[p - j]) > floor:
+            break
+        M[:, [j, p]], perm[[j, p]] = M[:, [p, j]], perm[[p, j]]
+        x = M[j:, j]
+        alpha = -np.sqrt(below[p - j]) if x[0] >= 0.0 else np.sqrt(below[p - j])
+        v = x.copy()
+        v[0] -= alpha
+        vv = v @ v
+        if vv > 0.0:
+            M[j:, j + 1:] -= np.outer(v, (2.0 / vv) * (v @ M[j:, j + 1:]))
+        M[j, j], M[j + 1:, j] = alpha, 0.0
+        r = j + 1
+    return r, perm, scale
+
+
+def _rank(Jc: np.ndarray) -> int:
+    """Return the rank of ``J_c`` (k, nv) that the split finds (:func:`_pivoted_qr`)."""
+    return _pivoted_qr(Jc.T.copy(), len(Jc))[0]
+
+
+def _split_compiled(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
+    """Return the contact-consistent ``(τ, λ, r)`` by the compiled split, or ``None``.
+
+    :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars: a
+    Householder QR with column pivoting of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ`` by
+    Cholesky, ``λ`` by back substitution or, for redundant contact rows, a second QR).
+    ``None`` (the numpy split then answers) for fewer contact rows than six and for the
+    cases the kernel leaves to it: base rows the contacts cannot carry.
+    """
+    k, nv = Jc.shape
+    if k < 6:
         return None
     QR = _augmented(nv, k, n)                   # [J_cᵀ, b, Sᵀ] by columns: (k + 1 + n, nv)
     QR[:k] = Jc
     QR[k] = b
-    res = np.empty(n + k + 1)
-    _c_split(QR, k, _ones(n) if w is None else w, res, np.empty((nv - k) * (nv - k + 1)))
-    return (res[:n], res[n:n + k]) if res[n + k] == 0.0 else None
+    res = np.empty(n + k + 2)
+    _c_split(QR, k, _ones(n) if w is None else w, res, np.empty(k + (nv + k + 2) * nv),
+             RANK_TOLERANCE)
+    return (res[:n], res[n:n + k], int(res[n + k + 1])) if res[n + k] == 0.0 else None
 
 
 _made: dict = {}
@@ -671,5 +725,4 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
         result.base_residual = b[:6].copy()     # nothing carries the base rows
         result.violations = []
         return result
-    return _result(plan, b, Jc, x[:n], x[n:], 'qp', 'solved',
-                   int(np.linalg.matrix_rank(Jc)) if k else 0)
+    return _result(plan, b, Jc, x[:n], x[n:], 'qp', 'solved', _rank(Jc))
