@@ -20,7 +20,8 @@ is formed. Three ways to split it (:func:`contact_inverse_dynamics`):
   that carry the base rows, ``J_c,baseᵀ λ = (M q̈ + h)_base``, and the torques they leave;
 * **friction cones as a QP** (Clarabel, second-order cones: exact cones, no pyramid):
   minimise ``½ τᵀ W τ + ½ ε |λ|²`` subject to all the rows of the equation and, per contact,
-  ``|f_t| ≤ μ f_n``; infeasible problems are reported, never answered with a base torque.
+  ``n·f ≥ 0`` (unilateral, whatever ``μ``) and ``|f_t| ≤ μ f_n``; infeasible problems are
+  reported, never answered with a base torque. :func:`warm_qp` imports the solver ahead.
 
 Every answer says the base rows' residual (never a silent base torque) and which contacts
 violate their friction cone or pull on the ground, by how much (:class:`ContactResult`).
@@ -40,7 +41,8 @@ from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
-from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
+from .algorithms.arguments import (as_joint_arrays, as_real_array, check_model,
+                                   check_quaternions)
 from .algorithms.jacobian import PLACEMENT
 from .algorithms.rnea import xup_kernel
 from .algorithms.split import DEPENDENT, RANK_TOLERANCE
@@ -82,13 +84,15 @@ class Contact:
         if offset.shape != (3,) or not np.isfinite(offset).all():
             raise ValueError(f'contact {self.link!r}: offset must be 3 finite numbers (m), '
                              f'got {self.offset}')
-        if normal.shape != (3,) or not np.linalg.norm(normal) > 0.0:
-            raise ValueError(f'contact {self.link!r}: normal must be a non-zero 3-vector, '
-                             f'got {self.normal}')
+        if normal.shape != (3,) or not (np.isfinite(normal).all()
+                                        and np.abs(normal).max() > 0.0):
+            raise ValueError(f'contact {self.name or self.link!r}: normal must be a finite '
+                             f'non-zero 3-vector, got {self.normal}')
         if not (np.isfinite(self.mu) and self.mu >= 0.0):
             raise ValueError(f'contact {self.link!r}: mu must be a finite number >= 0, '
                              f'got {self.mu}')
-        normal = normal / np.linalg.norm(normal)
+        normal = normal / np.abs(normal).max()          # scaled first: 1e200 and 1e-320
+        normal = normal / np.linalg.norm(normal)        # have a length
         offset.setflags(write=False)        # immutable, as the model: answers derived from
         normal.setflags(write=False)        # a contact once stay its answers (_plan)
         object.__setattr__(self, 'offset', offset)
@@ -480,8 +484,13 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         if q.ndim != 1:
             raise ValueError('contact_inverse_dynamics takes one state, got q of shape '
                              f'{q.shape}')
+        if not (np.isfinite(q).all() and np.isfinite(qd).all() and np.isfinite(qdd).all()):
+            raise _not_finite(model, q, qd, qdd, gravity)
+        check_quaternions(model, q)
         b = rnea(model, q, qd, qdd, gravity, backend=backend)   # M q̈ + h
         Jc = contact_jacobian(model, q, contacts, backend)
+    if not (np.isfinite(b).all() and np.isfinite(Jc).all()):     # before any LAPACK call
+        raise _not_finite(model, q, qd, qdd, gravity)
     n = len(b) - 6
     if measured is not None:
         lam = _measured(contacts, measured)
@@ -506,6 +515,25 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
 
 _c_rnea = compiled.ext.rnea if compiled.ext is not None else None
 _c_split = compiled.ext.split if compiled.ext is not None else None
+
+
+def _not_finite(model: Model, q, qd, qdd, gravity) -> ValueError:
+    """Return the error of a state whose ``M q̈ + h`` or ``J_c`` is not finite, naming why.
+
+    The first argument holding a NaN or an infinity, else a zero quaternion
+    (:func:`~.algorithms.arguments.check_quaternions`), else values too large to compute with.
+    """
+    for what, x in (('q', q), ('qd', qd), ('qdd', qdd), ('gravity', gravity)):
+        x = np.asarray(x, dtype=float)
+        bad = np.flatnonzero(~np.isfinite(x))
+        if bad.size:
+            return ValueError(f'{what} must be finite: {what}[{bad[0]}] is {x.flat[bad[0]]}')
+    try:
+        check_quaternions(model, q)
+    except ValueError as err:
+        return err
+    return ValueError('M q̈ + h or J_c of this state is not finite: q, qd, qdd or gravity '
+                      'too large to compute with')
 
 
 def _split_numpy(Jc: np.ndarray, b: np.ndarray, n: int, w: np.ndarray) -> tuple:
@@ -683,15 +711,49 @@ def _tangents(normal: np.ndarray) -> tuple:
     return t1, np.cross(normal, t1)
 
 
+#: The QP solver's modules once imported and warmed (:func:`warm_qp`): clarabel, scipy.sparse.
+_solver: dict = {}
+
+
+def _qp_solver() -> tuple:
+    """Return ``(clarabel, scipy.sparse)``; imported here (only ``'qp'`` needs them)."""
+    if not _solver:
+        try:
+            import clarabel
+            from scipy import sparse
+        except ImportError as err:
+            raise ImportError(f"method='qp' needs clarabel and scipy ({err}): pip install "
+                              'clarabel scipy') from None
+        _solver.update(clarabel=clarabel, sparse=sparse)
+    return _solver['clarabel'], _solver['sparse']
+
+
+def warm_qp() -> None:
+    """Import the QP solver and solve one small cone problem, so that no answer waits for it.
+
+    The import alone takes 0.3 to 0.7 s; a node calls this where it prepares a configuration
+    with ``contacts.method: qp``, never on the path that answers. ``ImportError`` (naming what
+    to install) when clarabel or scipy is missing.
+    """
+    clarabel, sparse = _qp_solver()
+    if _solver.get('warm'):
+        return
+    # min ½ x₀² subject to x₀ + x₁ = 1, x₁ ≥ 0, (x₀, x₁, 0) in the second-order cone
+    A = sparse.csc_matrix(np.array([[1.0, 1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, -1.0],
+                                    [0.0, 0.0]]))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    clarabel.DefaultSolver(sparse.csc_matrix(np.diag([1.0, 0.0])), np.zeros(2), A,
+                           np.array([1.0, 0.0, 0.0, 0.0, 0.0]),
+                           [clarabel.ZeroConeT(1), clarabel.NonnegativeConeT(1),
+                            clarabel.SecondOrderConeT(3)], settings).solve()
+    _solver['warm'] = True
+
+
 def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     """Solve the friction-cone QP with Clarabel; see :func:`contact_inverse_dynamics`."""
     contacts = plan.contacts
-    try:
-        import clarabel
-        from scipy import sparse
-    except ImportError as err:
-        raise ImportError(f"method='qp' needs clarabel and scipy ({err}): pip install "
-                          'clarabel scipy') from None
+    clarabel, sparse = _qp_solver()
     k = len(Jc)
     nx = n + k
     if not (np.isfinite(force_weight) and force_weight > 0.0):
@@ -701,7 +763,12 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     A_eq = np.zeros((len(b), nx))
     A_eq[6:, :n] = np.eye(n)
     A_eq[:, n:] = Jc.T
-    blocks, cones, row = [A_eq], [clarabel.ZeroConeT(len(b))], 0
+    # unilateral (nonnegative cone): n·f ≥ 0 of each contact, whatever its μ
+    N = np.zeros((len(contacts), nx))
+    for j, (c, (_, row, rows, _, _)) in enumerate(zip(contacts, plan.checks)):
+        N[j, n + row + rows - 3:n + row + rows] = c.normal
+    blocks = [A_eq, -N]
+    cones, row = [clarabel.ZeroConeT(len(b)), clarabel.NonnegativeConeT(len(contacts))], 0
     for c in contacts:
         t1, t2 = _tangents(c.normal)
         G = np.zeros((3, nx))       # s = (μ n·f, t1·f, t2·f) in the second-order cone

@@ -346,3 +346,72 @@ def test_redundant_contacts_split_is_the_least_torque(solo, talos, layout, backe
         qp = sd.contact_inverse_dynamics(model, q, qd, qdd, contacts, method='qp')
         if qp.status == 'solved':
             assert np.linalg.norm(r.tau) <= np.linalg.norm(qp.tau) * (1 + 1e-6) + 1e-9
+
+
+# -------------------------------------------------------------------------------------------
+# unilateral contact in the QP; what the split refuses
+
+@pytest.mark.parametrize('mu', [0.0, 0.7])
+def test_qp_feet_never_pull_whatever_mu(solo, mu):
+    """The trunk accelerating down at 30 m/s² (> g): only pulling feet could; the QP says so.
+
+    Standing still on frictionless feet (μ = 0) is feasible: vertical pushes only.
+    """
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f, mu=mu) for f in FEET]
+    R = sd.joints.quaternion_matrix(q[3:7])
+    qdd = zero.copy()
+    qdd[3:6] = R.T @ [0.0, 0.0, -30.0]                  # base frame, world down
+    r = sd.contact_inverse_dynamics(model, q, zero, qdd, feet, method='qp')
+    assert 'infeasible' in r.status and not r.feasible, r.summary()
+    assert np.isnan(r.tau).all()
+    r = sd.contact_inverse_dynamics(model, q, zero, zero, feet, method='qp')
+    assert r.feasible, r.summary()
+    for name, f in r.forces.items():
+        assert f[2] > 0.0 and np.hypot(f[0], f[1]) <= mu * f[2] + 1e-6, (name, f)
+
+
+def test_non_finite_or_zero_normals_are_refused_or_scaled():
+    """(0, 0, 1e200) is up; (0, 0, ∞), NaN and zero normals are refused, naming the contact."""
+    np.testing.assert_array_equal(sd.Contact('FL_FOOT', normal=(0.0, 0.0, 1e200)).normal,
+                                  [0.0, 0.0, 1.0])
+    np.testing.assert_allclose(sd.Contact('FL_FOOT', normal=(1e-320, 0.0, 1e-320)).normal,
+                               [np.sqrt(0.5), 0.0, np.sqrt(0.5)], rtol=1e-15)
+    for normal in ((0.0, 0.0, np.inf), (0.0, np.nan, 1.0), (0.0, 0.0, 0.0)):
+        with pytest.raises(ValueError, match="contact 'toe': normal must be a finite non-zero"):
+            sd.Contact('FL_FOOT', normal=normal, name='toe')
+
+
+@pytest.mark.parametrize('backend', ['numpy', 'compiled'])
+@pytest.mark.parametrize('method', ['torques', 'forces', 'qp', 'measured'])
+def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method, capfd):
+    """NaN or ∞ in q, qd, qdd, gravity, or a zero quaternion: a ValueError naming it.
+
+    Never numpy's LinAlgError, nothing on stderr (LAPACK's "DLASCL parameter 4"), never a QP
+    that calls a NaN state "infeasible".
+    """
+    model, _ = solo
+    q0 = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f) for f in FEET]
+    kw = {'measured': {f: [0.0, 0.0, 6.0] for f in FEET}} if method == 'measured' else {
+        'method': method}
+    cases = []
+    for what, index in (('q', 2), ('q', 9), ('qd', 4), ('qdd', 10)):
+        for bad in (np.nan, np.inf):
+            args = {'q': q0.copy(), 'qd': zero.copy(), 'qdd': zero.copy()}
+            args[what][index] = bad
+            cases.append((args, {}, rf'{what} must be finite: {what}\[{index}\] is {bad}'))
+    zero_quat = q0.copy()
+    zero_quat[3:7] = 0.0
+    cases.append(({'q': zero_quat, 'qd': zero, 'qdd': zero}, {},
+                  r"q\[3:7\], the quaternion \(x, y, z, w\) of 'base_link'.* non-zero"))
+    cases.append(({'q': q0, 'qd': zero, 'qdd': zero}, {'gravity': (0.0, 0.0, np.nan)},
+                  r'gravity must be finite: gravity\[2\] is nan'))
+    for args, more, match in cases:
+        with pytest.raises(ValueError, match=match):
+            sd.contact_inverse_dynamics(model, args['q'], args['qd'], args['qdd'], feet,
+                                        backend=backend, **kw, **more)
+    assert capfd.readouterr().err == ''
