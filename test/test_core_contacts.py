@@ -387,7 +387,7 @@ def test_non_finite_or_zero_normals_are_refused_or_scaled():
 @pytest.mark.parametrize('backend', ['numpy', 'compiled'])
 @pytest.mark.parametrize('method', ['torques', 'forces', 'qp', 'measured'])
 def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method, capfd):
-    """NaN or ∞ in q, qd, qdd, gravity, or a zero quaternion: a ValueError naming it.
+    """Refuse NaN or ∞ in q, qd, qdd, gravity, or a zero quaternion: a ValueError naming it.
 
     Never numpy's LinAlgError, nothing on stderr (LAPACK's "DLASCL parameter 4"), never a QP
     that calls a NaN state "infeasible".
