@@ -489,7 +489,7 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         check_quaternions(model, q)
         b = rnea(model, q, qd, qdd, gravity, backend=backend)   # M q̈ + h
         Jc = contact_jacobian(model, q, contacts, backend)
-    if not (np.isfinite(b).all() and np.isfinite(Jc).all()):     # before any LAPACK call
+    if not math.isfinite(b @ b + np.vdot(Jc, Jc)):     # NaN, ∞ or overflow: before LAPACK
         raise _not_finite(model, q, qd, qdd, gravity)
     n = len(b) - 6
     if measured is not None:
@@ -532,8 +532,8 @@ def _not_finite(model: Model, q, qd, qdd, gravity) -> ValueError:
         check_quaternions(model, q)
     except ValueError as err:
         return err
-    return ValueError('M q̈ + h or J_c of this state is not finite: q, qd, qdd or gravity '
-                      'too large to compute with')
+    return ValueError('M q̈ + h or J_c of this state is not finite (or its square overflows): '
+                      'q, qd, qdd or gravity too large to compute with')
 
 
 def _split_numpy(Jc: np.ndarray, b: np.ndarray, n: int, w: np.ndarray) -> tuple:
