@@ -20,7 +20,8 @@ is formed. Three ways to split it (:func:`contact_inverse_dynamics`):
   that carry the base rows, ``J_c,baseᵀ λ = (M q̈ + h)_base``, and the torques they leave;
 * **friction cones as a QP** (Clarabel, second-order cones: exact cones, no pyramid):
   minimise ``½ τᵀ W τ + ½ ε |λ|²`` subject to all the rows of the equation and, per contact,
-  ``|f_t| ≤ μ f_n``; infeasible problems are reported, never answered with a base torque.
+  ``n·f ≥ 0`` (unilateral, whatever ``μ``) and ``|f_t| ≤ μ f_n``; infeasible problems are
+  reported, never answered with a base torque. :func:`warm_qp` imports the solver ahead.
 
 Every answer says the base rows' residual (never a silent base torque) and which contacts
 violate their friction cone or pull on the ground, by how much (:class:`ContactResult`).
@@ -40,9 +41,11 @@ from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
-from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
+from .algorithms.arguments import (as_joint_arrays, as_real_array, check_model,
+                                   check_quaternions)
 from .algorithms.jacobian import PLACEMENT
 from .algorithms.rnea import xup_kernel
+from .algorithms.split import DEPENDENT, RANK_TOLERANCE
 from .backends import compiled, GRAVITY, kernels, layout, rnea
 from .joints import FREE_FLYER, REVOLUTE
 from .model import Model
@@ -81,13 +84,15 @@ class Contact:
         if offset.shape != (3,) or not np.isfinite(offset).all():
             raise ValueError(f'contact {self.link!r}: offset must be 3 finite numbers (m), '
                              f'got {self.offset}')
-        if normal.shape != (3,) or not np.linalg.norm(normal) > 0.0:
-            raise ValueError(f'contact {self.link!r}: normal must be a non-zero 3-vector, '
-                             f'got {self.normal}')
+        if normal.shape != (3,) or not (np.isfinite(normal).all()
+                                        and np.abs(normal).max() > 0.0):
+            raise ValueError(f'contact {self.name or self.link!r}: normal must be a finite '
+                             f'non-zero 3-vector, got {self.normal}')
         if not (np.isfinite(self.mu) and self.mu >= 0.0):
             raise ValueError(f'contact {self.link!r}: mu must be a finite number >= 0, '
                              f'got {self.mu}')
-        normal = normal / np.linalg.norm(normal)
+        normal = normal / np.abs(normal).max()          # scaled first: 1e200 and 1e-320
+        normal = normal / np.linalg.norm(normal)        # have a length
         offset.setflags(write=False)        # immutable, as the model: answers derived from
         normal.setflags(write=False)        # a contact once stay its answers (_plan)
         object.__setattr__(self, 'offset', offset)
@@ -479,13 +484,18 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         if q.ndim != 1:
             raise ValueError('contact_inverse_dynamics takes one state, got q of shape '
                              f'{q.shape}')
+        if not (np.isfinite(q).all() and np.isfinite(qd).all() and np.isfinite(qdd).all()):
+            raise _not_finite(model, q, qd, qdd, gravity)
+        check_quaternions(model, q)
         b = rnea(model, q, qd, qdd, gravity, backend=backend)   # M q̈ + h
         Jc = contact_jacobian(model, q, contacts, backend)
+    if not math.isfinite(b @ b + np.vdot(Jc, Jc)):     # NaN, ∞ or overflow: before LAPACK
+        raise _not_finite(model, q, qd, qdd, gravity)
     n = len(b) - 6
     if measured is not None:
         lam = _measured(contacts, measured)
         return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'measured', 'solved',
-                       np.linalg.matrix_rank(Jc) if len(Jc) else 0)
+                       _rank(Jc))
     if method == 'qp':
         return _qp(plan, b, Jc, n, _weights(weights, n, 'joint'), force_weight)
     if method == 'forces':
@@ -494,56 +504,128 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         AWi = A / W
         lam = AWi.T @ np.linalg.lstsq(AWi @ A.T, b[:6], rcond=None)[0] if len(Jc) else Jc[:, 0]
         return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'forces', 'solved',
-                       np.linalg.matrix_rank(Jc) if len(Jc) else 0)
-    # contact-consistent: J_cᵀ = Q [R; 0], Q2ᵀ Sᵀ τ = Q2ᵀ b, λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
+                       _rank(Jc))
+    # contact-consistent (algorithms/split.py): J_cᵀ P = Q [R; 0] pivoted, Q2ᵀ Sᵀ τ = Q2ᵀ b
     w = np.sqrt(_weights(weights, n, 'joint')) if weights is not None else None
     split = _split_compiled(Jc, b, n, w) if kern is not None else None
-    if split is not None:
-        return _result(plan, b, Jc, *split, 'torques', 'solved', len(Jc))
-    if w is None:
-        w = np.ones(n)
-    Q, R = np.linalg.qr(Jc.T, mode='complete')
-    d = np.abs(np.diagonal(R))
-    rank = int(np.sum(d > 1e-10 * max(1.0, d.max()))) if len(Jc) else 0
-    Q1, Q2 = Q[:, :rank], Q[:, rank:]
-    A, y = Q2[6:].T / w, Q2.T @ b                   # Q2ᵀ Sᵀ (τ / w) ... = Q2ᵀ b, Sᵀ = [0; 1]
-    try:        # the least-norm solution Aᵀ (A Aᵀ)⁻¹ y, A of full row rank (feasible base rows)
-        tau = A.T @ np.linalg.solve(A @ A.T, y) / w
-        if not np.allclose(A @ (tau * w), y, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(y).max())):
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:   # too few contacts to carry the base rows: least squares
-        tau = np.linalg.lstsq(A, y, rcond=None)[0] / w
-    rest = b.copy()
-    rest[6:] -= tau
-    if rank == len(Jc):             # λ = R⁻¹ Q1ᵀ (b - Sᵀ τ)
-        lam = np.linalg.solve(R[:rank], Q1.T @ rest)
-    else:                           # redundant contact rows: the least λ
-        lam = np.linalg.lstsq(Jc.T, rest, rcond=None)[0]
-    return _result(plan, b, Jc, tau, lam, 'torques', 'solved', rank)
+    if split is None:
+        split = _split_numpy(Jc, b, n, np.ones(n) if w is None else w)
+    return _result(plan, b, Jc, *split[:2], 'torques', 'solved', split[2])
 
 
 _c_rnea = compiled.ext.rnea if compiled.ext is not None else None
 _c_split = compiled.ext.split if compiled.ext is not None else None
 
 
-def _split_compiled(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
-    """Return the contact-consistent ``(τ, λ)`` by the compiled split, or ``None``.
+def _not_finite(model: Model, q, qd, qdd, gravity) -> ValueError:
+    """Return the error of a state whose ``M q̈ + h`` or ``J_c`` is not finite, naming why.
 
-    :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars: a
-    Householder QR of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ`` by Cholesky, ``R λ`` by
-    back substitution). ``None`` (the numpy split then answers, as it always did) for fewer
-    contact rows than six or ``nv`` or more, and for the cases the kernel leaves to it:
-    redundant contact rows, base rows the contacts cannot carry.
+    The first argument holding a NaN or an infinity, else a zero quaternion
+    (:func:`~.algorithms.arguments.check_quaternions`), else values too large to compute with.
+    """
+    for what, x in (('q', q), ('qd', qd), ('qdd', qdd), ('gravity', gravity)):
+        x = np.asarray(x, dtype=float)
+        bad = np.flatnonzero(~np.isfinite(x))
+        if bad.size:
+            return ValueError(f'{what} must be finite: {what}[{bad[0]}] is {x.flat[bad[0]]}')
+    try:
+        check_quaternions(model, q)
+    except ValueError as err:
+        return err
+    return ValueError('M q̈ + h or J_c of this state is not finite (or its square overflows): '
+                      'q, qd, qdd or gravity too large to compute with')
+
+
+def _split_numpy(Jc: np.ndarray, b: np.ndarray, n: int, w: np.ndarray) -> tuple:
+    """Return the contact-consistent ``(τ, λ, r)``: :mod:`~.algorithms.split`'s equations.
+
+    The pivoted QR is :func:`_pivoted_qr` (the kernel's steps, the same rank); ``τ`` the least
+    solution by ``A Aᵀ`` when the contacts carry the base rows, else numpy's least squares
+    (``A τ ≈ y``: the base residual says what is left); ``λ`` the least solution of
+    ``[R11 R12] Pᵀ λ = Q1ᵀ (b - Sᵀ τ)`` when the rows left out are dependent to rounding
+    (:data:`~.algorithms.split.DEPENDENT`), else ``R11 z1 = …`` with those rows' ``λ`` zero.
     """
     k, nv = Jc.shape
-    if not 6 <= k < nv:
+    M = np.zeros((nv, k + 1 + n))                   # [J_cᵀ, b, Sᵀ], Sᵀ = [0; 1]
+    M[:, :k], M[:, k] = Jc.T, b
+    M[nv - n:, k + 1:] = np.eye(n)
+    r, perm, scale = _pivoted_qr(M, k)
+    A, y = M[r:, k + 1:] / w, M[r:, k]               # Q2ᵀ Sᵀ (τ / w) ... = Q2ᵀ b
+    try:        # the least-norm solution Aᵀ (A Aᵀ)⁻¹ y, A of full row rank (feasible base rows)
+        tau = A.T @ np.linalg.solve(A @ A.T, y) / w
+        if not np.allclose(A @ (tau * w), y, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(y).max(
+                initial=0.0))):
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:   # too few contacts to carry the base rows: least squares
+        tau = np.linalg.lstsq(A, y, rcond=None)[0] / w
+    c = M[:r, k] - M[:r, k + 1:] @ tau              # Q1ᵀ (b - Sᵀ τ)
+    z = np.zeros(k)
+    if r < k and np.abs(M[r:, r:k]).max(initial=0.0) <= DEPENDENT * scale:
+        z = np.linalg.lstsq(M[:r, :k], c, rcond=None)[0]    # the least z of [R11 R12] z = c
+    elif r:                                                 # R11 z1 = c, z2 = 0
+        z[:r] = np.linalg.solve(M[:r, :r], c)
+    lam = np.empty(k)
+    lam[perm] = z
+    return tau, lam, r
+
+
+def _pivoted_qr(M: np.ndarray, k: int) -> tuple:
+    """Reduce ``M = [J_cᵀ, …]`` (nv, ≥ k) to ``Qᵀ M P`` in place; return ``(r, P, scale)``.
+
+    ``P`` is the columns' order, ``scale`` the largest norm of the first ``k`` columns.
+
+    The steps of :func:`~.algorithms.split.split_kernel`: step ``j`` swaps in the column of
+    the first ``k`` whose norm below row ``j`` is largest and stops when that norm is not
+    above :data:`~.algorithms.split.RANK_TOLERANCE` times ``J_c``'s largest row norm (``r``
+    steps made); a Householder reflector then zeroes it below row ``j`` in every column.
+    """
+    nv = len(M)
+    perm = np.arange(k)
+    scale = np.sqrt(np.einsum('ij,ij->j', M[:, :k], M[:, :k]).max(initial=0.0))
+    floor = RANK_TOLERANCE * scale
+    r = 0
+    for j in range(min(k, nv)):
+        below = np.einsum('ij,ij->j', M[j:, j:k], M[j:, j:k])
+        p = j + int(np.argmax(below))
+        if not np.sqrt(below[p - j]) > floor:
+            break
+        M[:, [j, p]], perm[[j, p]] = M[:, [p, j]], perm[[p, j]]
+        x = M[j:, j]
+        alpha = -np.sqrt(below[p - j]) if x[0] >= 0.0 else np.sqrt(below[p - j])
+        v = x.copy()
+        v[0] -= alpha
+        vv = v @ v
+        if vv > 0.0:
+            M[j:, j + 1:] -= np.outer(v, (2.0 / vv) * (v @ M[j:, j + 1:]))
+        M[j, j], M[j + 1:, j] = alpha, 0.0
+        r = j + 1
+    return r, perm, scale
+
+
+def _rank(Jc: np.ndarray) -> int:
+    """Return the rank of ``J_c`` (k, nv) that the split finds (:func:`_pivoted_qr`)."""
+    return _pivoted_qr(Jc.T.copy(), len(Jc))[0]
+
+
+def _split_compiled(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
+    """Return the contact-consistent ``(τ, λ, r)`` by the compiled split, or ``None``.
+
+    :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars: a
+    Householder QR with column pivoting of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ`` by
+    Cholesky, ``λ`` by back substitution or, for redundant contact rows, a second QR).
+    ``None`` (the numpy split then answers) for fewer contact rows than six and for the
+    cases the kernel leaves to it: base rows the contacts cannot carry.
+    """
+    k, nv = Jc.shape
+    if k < 6:
         return None
     QR = _augmented(nv, k, n)                   # [J_cᵀ, b, Sᵀ] by columns: (k + 1 + n, nv)
     QR[:k] = Jc
     QR[k] = b
-    res = np.empty(n + k + 1)
-    _c_split(QR, k, _ones(n) if w is None else w, res, np.empty((nv - k) * (nv - k + 1)))
-    return (res[:n], res[n:n + k]) if res[n + k] == 0.0 else None
+    res = np.empty(n + k + 2)
+    _c_split(QR, k, _ones(n) if w is None else w, res, np.empty(k + (nv + k + 2) * nv),
+             RANK_TOLERANCE)
+    return (res[:n], res[n:n + k], int(res[n + k + 1])) if res[n + k] == 0.0 else None
 
 
 _made: dict = {}
@@ -629,15 +711,49 @@ def _tangents(normal: np.ndarray) -> tuple:
     return t1, np.cross(normal, t1)
 
 
+#: The QP solver's modules once imported and warmed (:func:`warm_qp`): clarabel, scipy.sparse.
+_solver: dict = {}
+
+
+def _qp_solver() -> tuple:
+    """Return ``(clarabel, scipy.sparse)``; imported here (only ``'qp'`` needs them)."""
+    if not _solver:
+        try:
+            import clarabel
+            from scipy import sparse
+        except ImportError as err:
+            raise ImportError(f"method='qp' needs clarabel and scipy ({err}): pip install "
+                              'clarabel scipy') from None
+        _solver.update(clarabel=clarabel, sparse=sparse)
+    return _solver['clarabel'], _solver['sparse']
+
+
+def warm_qp() -> None:
+    """Import the QP solver and solve one small cone problem, so that no answer waits for it.
+
+    The import alone takes 0.3 to 0.7 s; a node calls this where it prepares a configuration
+    with ``contacts.method: qp``, never on the path that answers. ``ImportError`` (naming what
+    to install) when clarabel or scipy is missing.
+    """
+    clarabel, sparse = _qp_solver()
+    if _solver.get('warm'):
+        return
+    # min ½ x₀² subject to x₀ + x₁ = 1, x₁ ≥ 0, (x₀, x₁, 0) in the second-order cone
+    A = sparse.csc_matrix(np.array([[1.0, 1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, -1.0],
+                                    [0.0, 0.0]]))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    clarabel.DefaultSolver(sparse.csc_matrix(np.diag([1.0, 0.0])), np.zeros(2), A,
+                           np.array([1.0, 0.0, 0.0, 0.0, 0.0]),
+                           [clarabel.ZeroConeT(1), clarabel.NonnegativeConeT(1),
+                            clarabel.SecondOrderConeT(3)], settings).solve()
+    _solver['warm'] = True
+
+
 def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     """Solve the friction-cone QP with Clarabel; see :func:`contact_inverse_dynamics`."""
     contacts = plan.contacts
-    try:
-        import clarabel
-        from scipy import sparse
-    except ImportError as err:
-        raise ImportError(f"method='qp' needs clarabel and scipy ({err}): pip install "
-                          'clarabel scipy') from None
+    clarabel, sparse = _qp_solver()
     k = len(Jc)
     nx = n + k
     if not (np.isfinite(force_weight) and force_weight > 0.0):
@@ -647,7 +763,12 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     A_eq = np.zeros((len(b), nx))
     A_eq[6:, :n] = np.eye(n)
     A_eq[:, n:] = Jc.T
-    blocks, cones, row = [A_eq], [clarabel.ZeroConeT(len(b))], 0
+    # unilateral (nonnegative cone): n·f ≥ 0 of each contact, whatever its μ
+    N = np.zeros((len(contacts), nx))
+    for j, (c, (_, row, rows, _, _)) in enumerate(zip(contacts, plan.checks)):
+        N[j, n + row + rows - 3:n + row + rows] = c.normal
+    blocks = [A_eq, -N]
+    cones, row = [clarabel.ZeroConeT(len(b)), clarabel.NonnegativeConeT(len(contacts))], 0
     for c in contacts:
         t1, t2 = _tangents(c.normal)
         G = np.zeros((3, nx))       # s = (μ n·f, t1·f, t2·f) in the second-order cone
@@ -671,5 +792,4 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
         result.base_residual = b[:6].copy()     # nothing carries the base rows
         result.violations = []
         return result
-    return _result(plan, b, Jc, x[:n], x[n:], 'qp', 'solved',
-                   int(np.linalg.matrix_rank(Jc)) if k else 0)
+    return _result(plan, b, Jc, x[:n], x[n:], 'qp', 'solved', _rank(Jc))

@@ -218,6 +218,24 @@ def unit_quaternions(rng, n):
     return quat / np.linalg.norm(quat, axis=-1, keepdims=True)
 
 
+def least_torque_split(Jc, b, tol):
+    """Return the contact-consistent least-torque split by an SVD: ``(τ, λ, rank)``.
+
+    ``J_cᵀ = U Σ Vᵀ``; the rank counts the singular values above ``tol`` times ``J_c``'s
+    largest row norm (asserted clear of it by a factor 100 either way); ``U2 = U[:, r:]``
+    spans what the contacts cannot push, so ``τ`` is the least solution of
+    ``U2ᵀ Sᵀ τ = U2ᵀ b`` and ``λ = V1 Σ1⁻¹ U1ᵀ (b - Sᵀ τ)`` the least contact forces.
+    """
+    floor = tol * np.linalg.norm(Jc, axis=1).max()
+    U, s, Vt = np.linalg.svd(Jc.T)
+    assert not np.any((s > floor / 100) & (s < floor * 100)), (s, floor)
+    r = int(np.sum(s > floor))
+    U1, U2 = U[:, :r], U[:, r:]
+    tau = np.linalg.lstsq(U2[6:].T, U2.T @ b, rcond=None)[0]
+    lam = Vt[:r].T @ ((U1.T @ (b - np.r_[np.zeros(6), tau])) / s[:r])
+    return tau, lam, r
+
+
 @pytest.fixture
 def rng():
     """Return a seeded random generator."""

@@ -16,7 +16,7 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from conftest import robot_urdf_path, to_pin  # noqa: E402
+from conftest import least_torque_split, robot_urdf_path, to_pin  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 
 pin = pytest.importorskip('pinocchio')
@@ -246,3 +246,172 @@ def test_link_orientations_are_pinocchios_frame_rotations(solo, talos, path, mon
             for link in links:
                 np.testing.assert_allclose(R[link], pd.oMf[pm.getFrameId(link)].rotation,
                                            rtol=0, atol=1e-12)
+
+
+# -------------------------------------------------------------------------------------------
+# redundant contact rows: two contacts on one rigid body
+
+#: The rank tolerance of J_c, relative to its largest row norm (doc/floating_base.md).
+RANK_TOLERANCE = 1e-6
+
+
+def corners(sole):
+    """Return the four corners of a 20 x 10 cm sole: points on one body (rank 6 of 12)."""
+    return [sd.Contact(sole, offset=(x, y, 0.0), name=f'{sole} {x:+} {y:+}')
+            for x in (0.1, -0.1) for y in (0.05, -0.05)]
+
+
+def beside_fl_foot(*extra):
+    """Return Solo12's feet, ``extra`` (on FL's lower leg) right after FL_FOOT."""
+    return [sd.Contact('FL_FOOT'), *extra] + [sd.Contact(f) for f in FEET[1:]]
+
+
+def toe_heel(foot):
+    return [sd.Contact(foot, offset=(0.02, 0.0, 0.0), name=f'{foot} toe'),
+            sd.Contact(foot, offset=(-0.02, 0.0, 0.0), name=f'{foot} heel')]
+
+
+#: Each layout the issue lists: (robot, contacts), the redundant rows before the others.
+REDUNDANT = {
+    'talos, four corners of each sole': ('talos', lambda: corners(SOLES[0]) + corners(SOLES[1])),
+    'solo12, a point 1 cm ahead of FL_FOOT': ('solo', lambda: beside_fl_foot(
+        sd.Contact('FL_FOOT', offset=(0.01, 0.0, 0.0), name='FL toe'))),
+    'solo12, a point 1e-9 m ahead of FL_FOOT': ('solo', lambda: beside_fl_foot(
+        sd.Contact('FL_FOOT', offset=(1e-9, 0.0, 0.0), name='FL toe'))),
+    'solo12, the 1 cm point first': ('solo', lambda: [
+        sd.Contact('FL_FOOT', offset=(0.01, 0.0, 0.0), name='FL toe')] + [
+        sd.Contact(f) for f in FEET]),
+    'solo12, foot and shin': ('solo', lambda: beside_fl_foot(
+        sd.Contact('FL_LOWER_LEG', offset=(0.0, 0.0, -0.08), name='FL shin'))),
+    'solo12, toe and heel of both front feet (k = nv)': ('solo', lambda: toe_heel('FL_FOOT')
+                                                         + toe_heel('FR_FOOT')
+                                                         + [sd.Contact(f) for f in FEET[2:]]),
+}
+
+
+def standing_talos(model):
+    q = np.zeros(model.nq)
+    q[2], q[6] = 1.02, 1.0
+    return q
+
+
+@pytest.mark.parametrize('backend', ['numpy', 'compiled'])
+@pytest.mark.parametrize('layout', list(REDUNDANT))
+def test_redundant_contacts_split_is_the_least_torque(solo, talos, layout, backend,
+                                                      monkeypatch):
+    """Contacts sharing a body: the split carries the base and its τ is the least.
+
+    Oracle: Pinocchio's ``J_c`` and ``rnea``, split by an SVD (conftest's
+    ``least_torque_split``); the QP (the cones added) never needs less torque, nor do the
+    least contact forces (``'forces'``).
+    """
+    from spatial_dynamics.backends import compiled
+    if backend == 'compiled':
+        if compiled.ext is None:
+            pytest.skip('built without the kernels')
+
+        def no_numpy(*args):
+            raise AssertionError('the compiled split left this case to numpy')
+        monkeypatch.setattr(sd.contacts, '_split_numpy', no_numpy)
+    robot, make = REDUNDANT[layout]
+    model, pm = solo if robot == 'solo' else talos
+    contacts = make()
+    rng = np.random.default_rng(11)
+    q0 = standing_solo(model) if robot == 'solo' else standing_talos(model)
+    for k in range(4):
+        q, qd, qdd = q0.copy(), np.zeros(model.nv), np.zeros(model.nv)
+        if k:                               # moving: joints off the stance, rates, accelerations
+            q[7:] += rng.normal(size=model.nq - 7) * 0.05
+            qd, qdd = rng.normal(size=(2, model.nv)) * 0.5
+        r = sd.contact_inverse_dynamics(model, q, qd, qdd, contacts, backend=backend)
+        b = to_pin(pin.rnea(pm, pm.createData(), q, to_pin(qd), to_pin(qdd)))
+        Jc = pin_contact_jacobian(pm, q, contacts)
+        tau, lam, rank = least_torque_split(Jc, b, RANK_TOLERANCE)
+        assert r.status == 'solved' and r.rank == rank < len(Jc), (layout, r.rank, rank)
+        assert np.abs(r.base_residual).max() < 1e-11, (layout, r.summary())
+        got = np.concatenate([r.forces[c.name] for c in contacts])
+        np.testing.assert_allclose(np.r_[np.zeros(6), r.tau] + Jc.T @ got, b, atol=1e-9)
+        np.testing.assert_allclose(r.tau, tau, rtol=0, atol=1e-9 * max(1.0, np.abs(tau).max()))
+        scale = 1e-9 * max(1.0, np.abs(lam).max())
+        if 'e-9 m' in layout:       # nearly one point: the rows left out carry nothing
+            assert ((got[:3] == 0) | (got[3:6] == 0)).all(), got[:6]
+            np.testing.assert_allclose(got[:6].reshape(2, 3).sum(0), lam[:6].reshape(2, 3).sum(0),
+                                       rtol=0, atol=scale)
+            np.testing.assert_allclose(got[6:], lam[6:], rtol=0, atol=scale)
+        else:                       # dependent rows share the load: the least λ
+            np.testing.assert_allclose(got, lam, rtol=0, atol=scale)
+        forces = sd.contact_inverse_dynamics(model, q, qd, qdd, contacts, method='forces')
+        assert np.abs(forces.base_residual).max() < 1e-9
+        assert np.linalg.norm(r.tau) <= np.linalg.norm(forces.tau) + 1e-9
+        qp = sd.contact_inverse_dynamics(model, q, qd, qdd, contacts, method='qp')
+        if qp.status == 'solved':
+            assert np.linalg.norm(r.tau) <= np.linalg.norm(qp.tau) * (1 + 1e-6) + 1e-9
+
+
+# -------------------------------------------------------------------------------------------
+# unilateral contact in the QP; what the split refuses
+
+@pytest.mark.parametrize('mu', [0.0, 0.7])
+def test_qp_feet_never_pull_whatever_mu(solo, mu):
+    """The trunk accelerating down at 30 m/s² (> g): only pulling feet could; the QP says so.
+
+    Standing still on frictionless feet (μ = 0) is feasible: vertical pushes only.
+    """
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f, mu=mu) for f in FEET]
+    R = sd.joints.quaternion_matrix(q[3:7])
+    qdd = zero.copy()
+    qdd[3:6] = R.T @ [0.0, 0.0, -30.0]                  # base frame, world down
+    r = sd.contact_inverse_dynamics(model, q, zero, qdd, feet, method='qp')
+    assert 'infeasible' in r.status and not r.feasible, r.summary()
+    assert np.isnan(r.tau).all()
+    r = sd.contact_inverse_dynamics(model, q, zero, zero, feet, method='qp')
+    assert r.feasible, r.summary()
+    for name, f in r.forces.items():
+        assert f[2] > 0.0 and np.hypot(f[0], f[1]) <= mu * f[2] + 1e-6, (name, f)
+
+
+def test_non_finite_or_zero_normals_are_refused_or_scaled():
+    """(0, 0, 1e200) is up; (0, 0, ∞), NaN and zero normals are refused, naming the contact."""
+    np.testing.assert_array_equal(sd.Contact('FL_FOOT', normal=(0.0, 0.0, 1e200)).normal,
+                                  [0.0, 0.0, 1.0])
+    np.testing.assert_allclose(sd.Contact('FL_FOOT', normal=(1e-320, 0.0, 1e-320)).normal,
+                               [np.sqrt(0.5), 0.0, np.sqrt(0.5)], rtol=1e-15)
+    for normal in ((0.0, 0.0, np.inf), (0.0, np.nan, 1.0), (0.0, 0.0, 0.0)):
+        with pytest.raises(ValueError, match="contact 'toe': normal must be a finite non-zero"):
+            sd.Contact('FL_FOOT', normal=normal, name='toe')
+
+
+@pytest.mark.parametrize('backend', ['numpy', 'compiled'])
+@pytest.mark.parametrize('method', ['torques', 'forces', 'qp', 'measured'])
+def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method, capfd):
+    """Refuse NaN or ∞ in q, qd, qdd, gravity, or a zero quaternion: a ValueError naming it.
+
+    Never numpy's LinAlgError, nothing on stderr (LAPACK's "DLASCL parameter 4"), never a QP
+    that calls a NaN state "infeasible".
+    """
+    model, _ = solo
+    q0 = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f) for f in FEET]
+    kw = {'measured': {f: [0.0, 0.0, 6.0] for f in FEET}} if method == 'measured' else {
+        'method': method}
+    cases = []
+    for what, index in (('q', 2), ('q', 9), ('qd', 4), ('qdd', 10)):
+        for bad in (np.nan, np.inf):
+            args = {'q': q0.copy(), 'qd': zero.copy(), 'qdd': zero.copy()}
+            args[what][index] = bad
+            cases.append((args, {}, rf'{what} must be finite: {what}\[{index}\] is {bad}'))
+    zero_quat = q0.copy()
+    zero_quat[3:7] = 0.0
+    cases.append(({'q': zero_quat, 'qd': zero, 'qdd': zero}, {},
+                  r"q\[3:7\], the quaternion \(x, y, z, w\) of 'base_link'.* non-zero"))
+    cases.append(({'q': q0, 'qd': zero, 'qdd': zero}, {'gravity': (0.0, 0.0, np.nan)},
+                  r'gravity must be finite: gravity\[2\] is nan'))
+    for args, more, match in cases:
+        with pytest.raises(ValueError, match=match):
+            sd.contact_inverse_dynamics(model, args['q'], args['qd'], args['qdd'], feet,
+                                        backend=backend, **kw, **more)
+    assert capfd.readouterr().err == ''

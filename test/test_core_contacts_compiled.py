@@ -153,8 +153,8 @@ def test_a_wrong_fast_split_is_seen(solo, monkeypatch):
     split = module._split_compiled
 
     def off(*args):
-        tau, lam = split(*args)
-        return tau, lam * (1.0 + 1e-10)
+        tau, lam, rank = split(*args)
+        return tau, lam * (1.0 + 1e-10), rank
 
     monkeypatch.setattr(module, '_split_compiled', off)
     rng = np.random.default_rng(8)

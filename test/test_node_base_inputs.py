@@ -21,7 +21,7 @@ from std_msgs.msg import Header, UInt8MultiArray
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from conftest import robot_urdf_path  # noqa: E402
+from conftest import least_torque_split, robot_urdf_path, to_pin  # noqa: E402
 from node_harness import DEMO_URDF, Log  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.ros import config  # noqa: E402
@@ -461,3 +461,114 @@ def test_external_wrenches_are_refused_on_a_floating_base(solo_path):
     assert answering.wrenches == {}
     assert answering.totals.wrenches_rejected['floating_base'] == 1
     assert any('not applied on a floating base' in text for _, text in answering.log.said)
+
+
+# -------------------------------------------------------------------------------------------
+# contacts that share a body; unilateral contact in the QP; the QP solver made ready
+
+def solo_with_toe(solo_path, ahead):
+    """Return Solo12's URDF with a link FL_TOE fixed ``ahead`` m in front of FL_FOOT."""
+    with open(solo_path) as f:
+        text = f.read()
+    toe = ('<joint name="FL_TOE_JOINT" type="fixed"><parent link="FL_FOOT"/>'
+           f'<child link="FL_TOE"/><origin xyz="{ahead} 0 0" rpy="0 0 0"/></joint>'
+           '<link name="FL_TOE"/>')
+    return text.replace('</robot>', toe + '</robot>')
+
+
+def test_floating_a_toe_beside_a_foot_is_the_least_torque_split(solo_path):
+    """FL_TOE 1 cm ahead of FL_FOOT, both contacts: the split carries the base, least τ.
+
+    Oracle: Pinocchio's frame Jacobians and rnea of the same URDF, split by an SVD
+    (conftest's ``least_torque_split``): the published efforts and contact wrenches are
+    its τ and λ, the wrenches sum to the weight, and /diagnostics never says the contacts
+    cannot carry the base.
+    """
+    pin = pytest.importorskip('pinocchio')
+    text = solo_with_toe(solo_path, 0.01)
+    links = ['FL_FOOT', 'FL_TOE', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT']
+    cfg = configured(robot_description=text, base='floating',
+                     **{'contacts.links': links, 'base_input.acceleration': 'zero'})
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q = standing(robot.joints)
+    zero = np.zeros(12)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, zero, zero))
+    pm = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    pd = pm.createData()
+    q_full = np.r_[base_q, q]
+    b = to_pin(pin.rnea(pm, pd, q_full, np.zeros(18), np.zeros(18)))
+    pin.computeJointJacobians(pm, pd, q_full)
+    pin.framesForwardKinematics(pm, pd, q_full)
+    Jc = np.vstack([to_pin(pin.getFrameJacobian(pm, pd, pm.getFrameId(link),
+                                                pin.LOCAL_WORLD_ALIGNED))[:3]
+                    for link in links])               # the point's velocity, world axes
+    tau, lam, rank = least_torque_split(Jc, b, 1e-6)
+    assert rank == 14
+    np.testing.assert_allclose(out.answer.tau, tau, rtol=0, atol=1e-9)
+    forces = world_forces(robot.model, q_full, out.answer.contacts)
+    np.testing.assert_allclose(np.concatenate([forces[link] for link in links]), lam, rtol=0,
+                               atol=1e-9)
+    weight = robot.model.inertia[:, 3, 3].sum() * 9.81
+    np.testing.assert_allclose(sum(forces.values()), [0.0, 0.0, weight], atol=1e-9)
+    level, status, values = base_status(cfg.params, robot, answering.base_inputs,
+                                        answering.base_inputs.period(),
+                                        answering.base_inputs.pose.receipt_ns)
+    assert float(dict(values)['base residual max']) < 1e-9
+    assert 'cannot carry' not in status
+
+
+def test_floating_qp_without_friction_never_publishes_pulling_feet(solo_path):
+    """contacts.mu 0, method qp, the base accelerating down at 30 m/s²: no answer, the reason.
+
+    Feet cannot pull; on ice they cannot push sideways either. Standing still on the same
+    ice is answered, every foot pushing straight up.
+    """
+    cfg = floating(solo_path, **{'contacts.method': 'qp', 'contacts.mu': 0.0,
+                                 'base_input.acceleration': 'difference'})
+    robot = cfg.robot
+    answering = Answering(Log())
+    quat = np.array([0.02, -0.03, 0.01, 1.0]) / np.linalg.norm([0.02, -0.03, 0.01, 1.0])
+    R = sd.joints.quaternion_matrix(quat)
+    answering.base_input(cfg, 'base/pose', pose(1.0, [0.1, 0.2, 0.25], quat))
+    answering.base_input(cfg, 'base/twist', twist(0.98, np.zeros(6), 'base_link'))
+    down = np.r_[np.zeros(3), R.T @ [0.0, 0.0, -0.6]]          # 0.02 s later: -30 m/s²
+    answering.base_input(cfg, 'base/twist', twist(1.0, down, 'base_link'))
+    q, zero = standing(robot.joints), np.zeros(12)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, zero, zero))
+    if out.answer is not None:
+        forces = world_forces(robot.model, np.r_[0.1, 0.2, 0.25, quat, q], out.answer.contacts)
+        assert all(f[2] >= 0.0 for f in forces.values()), forces
+    else:
+        assert answering.totals.rejected['contacts_unsolved'] == 1
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/pose', pose(1.0, [0.1, 0.2, 0.25], quat))
+    answering.base_input(cfg, 'base/twist', twist(0.98, np.zeros(6), 'base_link'))
+    answering.base_input(cfg, 'base/twist', twist(1.0, np.zeros(6), 'base_link'))
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, zero, zero))
+    forces = world_forces(robot.model, np.r_[0.1, 0.2, 0.25, quat, q], out.answer.contacts)
+    for f in forces.values():
+        assert f[2] > 0.0 and np.hypot(f[0], f[1]) < 1e-6 * f[2], forces
+
+
+def test_the_qp_solver_is_ready_before_the_first_answer(solo_path):
+    """Preparing a configuration with contacts.method qp imports and warms the QP solver.
+
+    In a fresh interpreter: nothing imported clarabel before; after ``prepare`` it is
+    imported and has solved once, so the first answer never waits 0.3 to 0.7 s for it.
+    """
+    code = (
+        'import sys\n'
+        'from spatial_dynamics.ros import config\n'
+        "assert 'clarabel' not in sys.modules\n"
+        'params = {spec.name: spec.default for spec in config.PARAMETERS}\n'
+        f'params.update(robot_description_file={solo_path!r}, base="floating")\n'
+        "params.update({'contacts.links': ['FL_FOOT'], 'contacts.method': 'qp'})\n"
+        'config.prepare({}, params, None)\n'
+        'from spatial_dynamics import contacts\n'
+        "assert 'clarabel' in sys.modules and contacts._solver.get('warm'), contacts._solver\n")
+    import subprocess
+    proc = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr

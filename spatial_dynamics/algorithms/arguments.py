@@ -8,6 +8,7 @@ from typing import Mapping
 
 import numpy as np
 
+from ..joints import FREE_FLYER
 from ..model import Model
 
 
@@ -60,6 +61,24 @@ def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) ->
         np.issubdtype(a.dtype, np.floating) for a in out) else np.result_type(*out)
     batch = np.broadcast_shapes(*(a.shape[:-1] for a in out))
     return [np.broadcast_to(a.astype(dtype, copy=False), batch + a.shape[-1:]) for a in out]
+
+
+def check_quaternions(model: Model, q, what: str = 'q') -> None:
+    """``ValueError`` naming ``what`` when a free-flyer's quaternion is zero or not finite.
+
+    ``q`` (..., nq) holds each free-flyer's ``(p, quaternion x y z w)`` at its ``qidx``; the
+    algorithms normalise a quaternion where they read it, which a zero or non-finite one
+    turns into NaN. Its length is taken scaled (no overflow or underflow of the squares).
+    """
+    q = np.asarray(q)
+    for i in np.flatnonzero(np.asarray(model.jtype) == FREE_FLYER):
+        a = int(model.qidx[i]) + 3
+        quat = q[..., a:a + 4].astype(float).reshape(-1, 4)
+        bad = ~(np.isfinite(quat).all(-1) & (np.abs(quat).max(-1, initial=0.0) > 0.0))
+        if bad.any():
+            raise ValueError(f'{what}[{a}:{a + 4}], the quaternion (x, y, z, w) of '
+                             f'{model.body_names[i]!r} on its free-flyer, must be finite and '
+                             f'non-zero, got {quat[bad][0]}')
 
 
 def as_vector(what: str, x, size: int) -> np.ndarray:

@@ -81,7 +81,7 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'momentum_kernel': 'K, q, qd, mom, ctq, work',
               'regressor_kernel': 'K, qd, qdd, gx, gy, gz, Y, axes, work',
               'bodies_kernel': 'K, work, J',
-              'split_kernel': 'QR, k, n, nb, wts, res, scr'}
+              'split_kernel': 'QR, k, n, nb, wts, res, scr, tol'}
 #: The generated files' names. Build products, not sources: ``setup.py`` writes the header
 #: into its build directory when it compiles the extension; ``python -m
 #: spatial_dynamics.backends.codegen DIR`` writes both for reading.

@@ -219,17 +219,20 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
 /* ------------------------------------------------------------------------------------------
  * The contact-consistent split (algorithms/split.py), on arrays the caller prepares */
 
-/* split(QR, k, wts, res, scr) -> None; QR, res and scr C-contiguous float64, written. */
+/* split(QR, k, wts, res, scr, tol) -> None; QR, res and scr C-contiguous float64, written. */
 static PyObject *
 c_split(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     (void)self;
-    if (nargs != 5) {
-        PyErr_SetString(PyExc_TypeError, "split takes 5 arguments");
+    if (nargs != 6) {
+        PyErr_SetString(PyExc_TypeError, "split takes 6 arguments");
         return NULL;
     }
     const long k = PyLong_AsLong(args[1]);
     if (k == -1 && PyErr_Occurred())
+        return NULL;
+    const double tol = PyFloat_AsDouble(args[5]);
+    if (tol == -1.0 && PyErr_Occurred())
         return NULL;
     PyObject *const objs[4] = {args[0], args[2], args[3], args[4]};
     static const char *const names[4] = {"QR", "wts", "res", "scr"};
@@ -240,13 +243,13 @@ c_split(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
             goto fail;
     const Py_ssize_t d = (Py_ssize_t)sizeof(double), n = v[1].len / d, size = v[0].len / d;
     const Py_ssize_t cols = k + 1 + n, nv = k >= 0 ? size / cols : 0;
-    if (k < 0 || n < 1 || nv * cols != size || nv <= k || nv < n || v[2].len / d < n + k + 1
-            || v[3].len / d < (nv - k) * (nv - k + 1)) {
+    if (k < 0 || n < 1 || nv * cols != size || nv < n || v[2].len / d < n + k + 2
+            || v[3].len / d < k + (nv + k + 2) * nv || !(tol >= 0.0)) {
         PyErr_SetString(PyExc_ValueError, "split: QR must hold (k + 1 + n) x nv numbers "
-                        "(n = len(wts), nv > k), res n + k + 1, scr (nv - k) (nv - k + 1)");
+                        "(n = len(wts)), res n + k + 2, scr k + (nv + k + 2) nv, tol >= 0");
         goto fail;
     }
-    split_kernel(v[0].buf, k, (long)n, (long)(nv - n), v[1].buf, v[2].buf, v[3].buf);
+    split_kernel(v[0].buf, k, (long)n, (long)(nv - n), v[1].buf, v[2].buf, v[3].buf, tol);
     for (int i = 0; i < held; i++)
         PyBuffer_Release(&v[i]);
     Py_RETURN_NONE;
@@ -258,11 +261,12 @@ fail:
 
 static PyMethodDef split_methods[] = {
     {"split", (PyCFunction)(void (*)(void))c_split, METH_FASTCALL,
-     "split(QR, k, wts, res, scr) -> None\n\n"
+     "split(QR, k, wts, res, scr, tol) -> None\n\n"
      "The contact-consistent split of algorithms/split.py: QR holds [J_c^T, b, S^T] by columns\n"
      "((k + 1 + n) x nv, C-contiguous float64, overwritten), wts the n square roots of the\n"
-     "weights; writes tau (n), lambda (k) and the status (0 solved, 1 the numpy split's case)\n"
-     "into res; scr is scratch."},
+     "weights, tol the rank tolerance relative to J_c's largest row norm; writes tau (n),\n"
+     "lambda (k), the status (0 solved, 1 the numpy split's case) and the rank into res;\n"
+     "scr is scratch."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -27,6 +27,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
 from spatial_dynamics.bounds import MAX_GRAVITY, MAX_PLAN_BYTES
+from spatial_dynamics.contacts import warm_qp
 from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
 from spatial_dynamics.ros.bases import (
@@ -470,6 +471,8 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
             f'parameter wrench_estimate.link: {params.wrench_estimate_link!r} is not a link of '
             f'robot {base.name!r} ({source})')
     check_base(params, base, source)
+    if params.base == 'floating' and params.contacts_method == 'qp':
+        _warm_qp()
     setting = params.backend
     actuated = tuple(base.joint_names[1:] if base.floating else base.joint_names)
     return Robot(
@@ -482,6 +485,14 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
         backend=resolve_backend(setting), gains=model_gains(base, params, actuated),
         external_torque_warn=_observer_check(check_warn, actuated,
                                              params.external_torque_warn))
+
+
+def _warm_qp() -> None:
+    """Import and warm the contacts' QP solver here, never on the answering path."""
+    try:
+        warm_qp()
+    except ImportError as err:
+        raise ConfigError(f'parameter contacts.method: {err}') from None
 
 
 def _check_without_model(params) -> None:
