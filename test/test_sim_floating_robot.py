@@ -133,7 +133,7 @@ def test_a_foot_of_the_wrong_size_or_link_is_refused_by_name():
 
 
 def test_a_foot_on_the_world_is_refused_by_name():
-    """MuJoCo's ``spec.body('world')`` is its world body: ``feet:=[world]`` was accepted."""
+    """Refuse ``world``: MuJoCo's ``spec.body('world')`` is its world (was accepted)."""
     with pytest.raises(ValueError, match=r"foot 'world': no link 'world' in robot 'solo'"):
         FloatingRobot(robot_urdf_path('solo12'), [Foot(sd.Contact('world'))])
 

@@ -219,6 +219,7 @@ def mass_matrix(model: Model, q, backend: str = 'auto', *,
     """
     if base is not None:
         check_base_motion(base)
+        floating_twin(model)        # refuses a floating model as rnea(base=) does
         H = mass_matrix(model, q, backend)
         shape = np.broadcast_shapes(H.shape[:-2], base.v.shape[:-1], base.a.shape[:-1], (
             () if base.orientation is None else base.orientation.shape[:-1])) + H.shape[-2:]
