@@ -31,6 +31,7 @@ import numpy as np
 from ..base import base_from_imu, base_from_odometry, BaseMotion
 from ..bounds import (MAX_BASE_ANGULAR_ACCELERATION, MAX_BASE_LINEAR_ACCELERATION,
                       MIN_STAMP_INTERVAL)
+from ..joints import unit_norms
 from ..model import Model
 from . import bags, differentiate
 from .arguments import Refused
@@ -159,13 +160,14 @@ def covering(found: Stamped, values: Sequence[np.ndarray], t: np.ndarray, where:
              ) -> np.ndarray:
     """Return the usable stamps of a base topic, made to cover ``t``; Refused if they cannot.
 
-    Messages with a non-finite value (or a zero quaternion) and repeated stamps are dropped
+    Messages with a non-finite value (or a quaternion off unit by more than the library's
+    tolerance, :func:`~spatial_dynamics.joints.is_unit`) and repeated stamps are dropped
     (``values`` keep the same rows); the rest must begin and end within one median period of
     ``t``'s ends and have no gap of more than :data:`GAP` periods inside them.
     """
     keep = np.all([np.isfinite(x).all(axis=1) for x in values], axis=0)
     if found.msgtype == ODOMETRY:
-        keep &= np.linalg.norm(values[0], axis=1) > 1e-9
+        keep &= unit_norms(values[0])
     keep &= np.concatenate(([True], np.diff(found.stamp) > 0))
     tb = found.stamp[keep]
     for k, x in enumerate(values):

@@ -75,8 +75,8 @@ BASE_ACCELERATIONS = ('difference', 'zero')
 #: Values of ``contacts.kind`` and ``contacts.method`` (the library's).
 CONTACT_KINDS = sd.contacts.KINDS
 CONTACT_METHODS = sd.contacts.METHODS
-#: ``|‖quaternion‖ − 1|`` accepted (then normalised): float32 rounding passes, garbage not.
-QUATERNION_TOLERANCE = 1e-2
+#: ``|‖quaternion‖ − 1|`` accepted (then normalised): the library's, for every quaternion read.
+QUATERNION_TOLERANCE = sd.joints.QUATERNION_TOLERANCE
 #: Why an answer is refused on a moving or floating base (diagnostics counter keys).
 BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved',
                 'contacts_missing')
