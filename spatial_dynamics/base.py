@@ -49,7 +49,8 @@ import weakref
 import numpy as np
 
 from .algorithms.arguments import as_real_array
-from .joints import FIXED, FREE_FLYER
+from .joints import (check_quaternion, check_rotation, FIXED, FREE_FLYER,
+                     quaternion_matrix)
 from .model import Frame, Model
 from .spatial import plux_Er
 
@@ -67,9 +68,12 @@ class BaseMotion:
             with ``gravity_included``, the acceleration relative to free fall
             ``[ω̇; r̈ - ω × v - Rᵀ g]`` (what an IMU's specific force gives).
         orientation: the base's orientation in the world, a unit quaternion ``(x, y, z, w)``
-            (..., 4) or a rotation matrix (..., 3, 3) mapping base to world coordinates;
-            ``None``: the world's axes. Used to turn gravity into the base frame, and by
-            ``jacobian(..., frame='world')``.
+            (..., 4; its norm within 1e-2 of 1, then normalised) or a rotation matrix
+            (..., 3, 3; ``RᵀR = 1`` within 1e-6, ``det R = +1``) mapping base to world
+            coordinates; ``None``: the world's axes. Used to turn gravity into the base
+            frame, and by ``jacobian(..., frame='world')``. Anything else (zero, a scaled or
+            reflected matrix) is refused (:func:`~spatial_dynamics.joints.check_quaternion`,
+            :func:`~spatial_dynamics.joints.check_rotation`).
         gravity_included: ``a`` already holds gravity (an IMU's specific force): the
             algorithms add none.
     """
@@ -90,14 +94,13 @@ class BaseMotion:
         if self.orientation is not None:
             o = as_real_array('base.orientation', self.orientation).astype(float)
             if o.shape[-2:] == (3, 3):
+                check_rotation('base.orientation', o)
                 o = quaternion_of(o)
             elif o.ndim == 0 or o.shape[-1] != 4:
                 raise ValueError('base.orientation must be a quaternion (x, y, z, w) of '
                                  'shape (..., 4) or a rotation matrix of shape (..., 3, 3), '
                                  f'got shape {o.shape}')
-            _finite('base.orientation', o)
-            if not (np.linalg.norm(o, axis=-1) > 1e-9).all():
-                raise ValueError('base.orientation: a quaternion of zero length')
+            check_quaternion('base.orientation', o)
             object.__setattr__(self, 'orientation', o)
 
     @classmethod
@@ -168,12 +171,20 @@ def _base_link(model: Model, link: str, what: str) -> Frame:
     return frame
 
 
-def _rotation(quaternion, what: str) -> np.ndarray:
-    """Rotation matrix of a quaternion ``(x, y, z, w)``, checked."""
-    from .joints import quaternion_matrix
-    o = as_real_array(what, quaternion).astype(float)
-    if o.shape[-1:] != (4,) or not (np.linalg.norm(o, axis=-1) > 1e-9).all():
-        raise ValueError(f'{what} must be a non-zero quaternion (x, y, z, w), got {o}')
+def _rotation(orientation, what: str) -> np.ndarray:
+    """Rotation matrix of a quaternion ``(x, y, z, w)`` or of a rotation matrix, checked.
+
+    The quaternion's norm within 1e-2 of 1, the matrix orthonormal within 1e-6 and proper
+    (:func:`~spatial_dynamics.joints.check_quaternion`, ``check_rotation``).
+    """
+    o = as_real_array(what, orientation).astype(float)
+    if o.shape[-2:] == (3, 3):
+        check_rotation(what, o)
+        return o
+    if o.shape[-1:] != (4,):
+        raise ValueError(f'{what} must be a quaternion (x, y, z, w) or a rotation matrix, '
+                         f'got shape {o.shape}')
+    check_quaternion(what, o)
     return quaternion_matrix(o)
 
 
@@ -191,7 +202,8 @@ def base_from_imu(model: Model, link: str, specific_force, angular_velocity,
         angular_acceleration: ``ω̇`` (rad/s², IMU frame), e.g. the gyro's rate differentiated
             and filtered; an IMU does not give it, zero by default.
         position, orientation: the IMU's pose in ``link``'s frame (m; quaternion x y z w
-            mapping IMU to link coordinates), as in the URDF joint or TF of the sensor.
+            or rotation matrix mapping IMU to link coordinates, held to
+            :class:`BaseMotion`'s tolerances), as in the URDF joint or TF of the sensor.
 
     Returns:
         ``BaseMotion(v=[ω; 0], a=[ω̇; r̈_0 - g], gravity_included=True)`` in base
@@ -233,8 +245,9 @@ def base_from_odometry(model: Model, twist, twist_rate, orientation=None,
         twist_rate: the time derivative of those six numbers (the twist differentiated
             component by component, rad/s², m/s²). This is the spatial acceleration (see the
             module doc); from a classical ``ω̇, r̈`` use :func:`spatial_acceleration`.
-        orientation: ``Odometry.pose.pose.orientation`` (x, y, z, w), the child frame's in the
-            world, for gravity; ``None``: the child frame's axes are the world's.
+        orientation: ``Odometry.pose.pose.orientation`` (x, y, z, w; or a rotation matrix),
+            the child frame's in the world, for gravity, held to :class:`BaseMotion`'s
+            tolerances; ``None``: the child frame's axes are the world's.
         link: the child frame: the base (default) or a link fixed to it.
     """
     frame = _base_link(model, model.body_names[0] if link is None else link,

@@ -27,6 +27,23 @@ MAX_EFFORT = 1e6
 MAX_WRENCH = 1e6
 #: |g|, m/s² (100 g): gravity of a mounting.
 MAX_GRAVITY = 1e3
+#: Largest bound a user may set on a base's linear acceleration, m/s² (100 g: beyond a crash).
+MAX_BASE_LINEAR_ACCELERATION = 1e3
+#: Largest bound a user may set on a base's angular acceleration, rad/s².
+MAX_BASE_ANGULAR_ACCELERATION = 1e4
+#: Default bounds of a base's acceleration (``base_input.max_*_acceleration``): 50 m/s² (5 g)
+#: and 100 rad/s² are above a mobile base, a ship or a trotting or jumping quadruped.
+BASE_LINEAR_ACCELERATION = 50.0
+BASE_ANGULAR_ACCELERATION = 100.0
+#: Shortest stamp interval anything divides by, s: no sensor publishes faster than 100 kHz;
+#: a smaller difference of stamps is a clock's artefact, not a measurement.
+MIN_STAMP_INTERVAL = 1e-5
+#: |ω| an IMU reports, rad/s: 100 rad/s (5,700 deg/s) is above the full scale of every common
+#: MEMS gyro (±2000 deg/s = 35 rad/s typical, ±4000 deg/s the largest).
+MAX_IMU_RATE = 100.0
+#: |specific force| an IMU reports, m/s²: 4,000 m/s² (400 g) is above high-g accelerometers;
+#: common ones saturate at ±16 g.
+MAX_IMU_SPECIFIC_FORCE = 4e3
 #: time_from_start of a trajectory point, s (a day).
 MAX_TRAJECTORY_TIME = 86400.0
 #: Points of one trajectory.

@@ -23,7 +23,7 @@ import warnings
 
 import numpy as np
 
-from . import Model, urdf, URDFWarning
+from . import mass_matrix, Model, urdf, URDFWarning
 from .joints import KIND_NAMES
 
 WIDTH = 99
@@ -104,6 +104,31 @@ def body_lines(model: Model) -> List[str]:
     return table(('body', 'link', 'joint', 'parent', 'mass (kg)'), rows, left=(1, 2))
 
 
+def singular_base(model: Model) -> List[str]:
+    """Return a warning when a floating ``model``'s mass matrix is singular, else nothing.
+
+    The base rows of ``M`` at the neutral configuration are the whole robot's spatial inertia
+    about its base (RBDA §6.2's composite ``I^c_1``): without mass, or with its mass on a line
+    and no rotational inertia, no wrench on the base gives it an acceleration, and ``M``, the
+    contact split and the forward dynamics have no answer.
+    """
+    if not model.floating:
+        return []
+    q = np.zeros(model.nq)
+    q[6] = 1.0
+    Ic = mass_matrix(model, q, backend='numpy')[:6, :6]
+    eig = np.linalg.eigvalsh(Ic)
+    if eig[-1] <= 0.0:
+        return ['the tree has no mass: on the free-flyer its mass matrix M is singular (no '
+                "wrench moves the base); give the links <inertial>, or load it with "
+                "base='fixed'"]
+    if eig[0] <= 1e-12 * eig[-1]:
+        return [f'the whole robot\'s spatial inertia about its base has rank '
+                f'{int(np.sum(eig > 1e-12 * eig[-1]))} of 6: on the free-flyer its mass '
+                'matrix M is singular; give the links <inertial> with rotational inertia']
+    return []
+
+
 def report(model: Model, types: Dict[str, str]) -> str:
     """Return the whole check as text: robot, joints, bodies, mass and warnings."""
     base = (f'floating base (link {model.body_names[1]!r} on the free-flyer joint '
@@ -127,9 +152,10 @@ def report(model: Model, types: Dict[str, str]) -> str:
     lines += ['', f'total mass: {num(float(np.sum(mass)))} kg '
               f'({num(float(mass[0]))} kg on the fixed base, {num(float(np.sum(mass[1:])))} kg '
               'moving)', '']
-    if model.warnings:
-        lines.append(f'warnings ({len(model.warnings)}):')
-        for w in model.warnings:
+    said = list(model.warnings) + singular_base(model)
+    if said:
+        lines.append(f'warnings ({len(said)}):')
+        for w in said:
             lines += textwrap.wrap(w, WIDTH, initial_indent='  - ', subsequent_indent='    ')
     else:
         lines.append('no warnings')
@@ -175,8 +201,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f'error: {err}', file=sys.stderr)
         return 1
     print(report(model, model.joint_types))
-    if args.strict and model.warnings:
-        print(f'error: {len(model.warnings)} warning(s) with --strict', file=sys.stderr)
+    said = len(model.warnings) + len(singular_base(model))
+    if args.strict and said:
+        print(f'error: {said} warning(s) with --strict', file=sys.stderr)
         return 1
     return 0
 

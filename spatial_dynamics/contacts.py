@@ -41,8 +41,8 @@ from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
-from .algorithms.arguments import (as_joint_arrays, as_real_array, check_model,
-                                   check_quaternions)
+from .algorithms.arguments import (as_joint_arrays, as_real_array, check_configuration,
+                                   check_model)
 from .algorithms.jacobian import PLACEMENT
 from .algorithms.rnea import xup_kernel
 from .algorithms.split import DEPENDENT, RANK_TOLERANCE
@@ -486,7 +486,6 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
                              f'{q.shape}')
         if not (np.isfinite(q).all() and np.isfinite(qd).all() and np.isfinite(qdd).all()):
             raise _not_finite(model, q, qd, qdd, gravity)
-        check_quaternions(model, q)
         b = rnea(model, q, qd, qdd, gravity, backend=backend)   # M q̈ + h
         Jc = contact_jacobian(model, q, contacts, backend)
     if not math.isfinite(b @ b + np.vdot(Jc, Jc)):     # NaN, ∞ or overflow: before LAPACK
@@ -521,7 +520,7 @@ def _not_finite(model: Model, q, qd, qdd, gravity) -> ValueError:
     """Return the error of a state whose ``M q̈ + h`` or ``J_c`` is not finite, naming why.
 
     The first argument holding a NaN or an infinity, else a zero quaternion
-    (:func:`~.algorithms.arguments.check_quaternions`), else values too large to compute with.
+    (:func:`~.algorithms.arguments.check_configuration`), else values too large to compute with.
     """
     for what, x in (('q', q), ('qd', qd), ('qdd', qdd), ('gravity', gravity)):
         x = np.asarray(x, dtype=float)
@@ -529,7 +528,7 @@ def _not_finite(model: Model, q, qd, qdd, gravity) -> ValueError:
         if bad.size:
             return ValueError(f'{what} must be finite: {what}[{bad[0]}] is {x.flat[bad[0]]}')
     try:
-        check_quaternions(model, q)
+        check_configuration(model, np.asarray(q, dtype=float))
     except ValueError as err:
         return err
     return ValueError('M q̈ + h or J_c of this state is not finite (or its square overflows): '

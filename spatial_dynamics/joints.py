@@ -22,8 +22,11 @@ know about a kind is here, so an algorithm asks the joint instead of branching o
 
 The free-flyer's conventions: ``q = [x, y, z, qx, qy, qz, qw]``, the position of the body's
 origin in the parent (world) frame and the unit quaternion of its orientation, in the order of
-``geometry_msgs/Pose`` (and of Pinocchio's ``q``); the quaternion is normalised where it is
-used (only its direction matters; it must not be zero). ``q̇`` (we say ``v``) is the body's
+``geometry_msgs/Pose`` (and of Pinocchio's ``q``). A quaternion whose norm is within
+:data:`QUATERNION_TOLERANCE` of 1 (rounding noise, float32, integration drift) is normalised
+where it is used; any other (zero, not finite, 0.5, 2) is refused where it enters, by
+:func:`check_quaternion`, as a rotation matrix that is not one by :func:`check_rotation`.
+``q̇`` (we say ``v``) is the body's
 spatial velocity in its own frame, angular first ``[ω; v]`` like every spatial vector here;
 ``S = 1`` (6×6), so ``τ`` of the joint is the body wrench ``[n; f]`` in the body frame.
 Pinocchio's free-flyer velocity is the same twist linear first, ``[v; ω]`` (``LOCAL``).
@@ -53,6 +56,14 @@ RX, RY, RZ, RA, PR, FF = 0, 1, 2, 3, 4, 5
 CODES = {'RX': RX, 'RY': RY, 'RZ': RZ, 'RA': RA, 'PR': PR, 'FF': FF}
 
 _AXIS_E = (Erotx, Eroty, Erotz)
+
+#: ``|‖quaternion‖ − 1|`` accepted, then normalised where it is used: rounding noise, float32
+#: messages and integration drift pass; a zero, 0.5 or 2 is no orientation but a bug.
+QUATERNION_TOLERANCE = 1e-2
+#: Largest entry of ``RᵀR − 1`` accepted of a rotation matrix (float32 sources give ~1e-7).
+ROTATION_TOLERANCE = 1e-6
+#: The squared norms within QUATERNION_TOLERANCE of 1 (what the compiled entry compares).
+_UNIT_SQUARED = ((1.0 - QUATERNION_TOLERANCE) ** 2, (1.0 + QUATERNION_TOLERANCE) ** 2)
 
 
 def frame_axis(axis) -> tuple[int, float]:
@@ -136,6 +147,68 @@ def quaternion_matrix(quat) -> np.ndarray:
     return np.stack([np.stack([1.0 - (yy + zz), xy - wz, xz + wy], -1),
                      np.stack([xy + wz, 1.0 - (xx + zz), yz - wx], -1),
                      np.stack([xz - wy, yz + wx, 1.0 - (xx + yy)], -1)], -2)
+
+
+def is_unit(x, y, z, w):
+    """Return whether the quaternion ``(x, y, z, w)`` has a finite norm within the tolerance.
+
+    ``(1 − tol)² ≤ x² + y² + z² + w² ≤ (1 + tol)²`` (:data:`QUATERNION_TOLERANCE`), on
+    Python floats or arrays (then elementwise): a NaN, an infinity or a norm ≥ 1e155 (whose
+    square overflows) is not. The compiled entry compares the same.
+    """
+    n2 = x * x + y * y + z * z + w * w
+    return (n2 >= _UNIT_SQUARED[0]) & (n2 <= _UNIT_SQUARED[1])
+
+
+def unit_norms(quat) -> np.ndarray:
+    """Return :func:`is_unit` of each quaternion (..., 4): a boolean array (...)."""
+    quat = np.asarray(quat, dtype=float)
+    with np.errstate(over='ignore', invalid='ignore'):
+        return is_unit(*(quat[..., j] for j in range(4)))
+
+
+def check_quaternion(what: str, quat) -> None:
+    """Refuse quaternions (..., 4) that are no orientation: ``ValueError`` naming ``what``.
+
+    Each must have a finite norm within :data:`QUATERNION_TOLERANCE` of 1 (it is normalised
+    where it is used); in a batch the error names the first bad state's index.
+    """
+    quat = np.asarray(quat, dtype=float)
+    ok = unit_norms(quat)
+    if ok.all():
+        return
+    k = tuple(int(i) for i in np.argwhere(~ok)[0])
+    x = quat[k]
+    big = float(np.max(np.abs(x))) if np.isfinite(x).all() else 0.0
+    norm = big * float(np.linalg.norm(x / big)) if big > 0.0 else float(np.linalg.norm(x))
+    state = '' if not k else f' (state {k[0] if len(k) == 1 else k})'
+    raise ValueError(f'{what}{state} has norm {norm:.6g} ({", ".join(f"{v:g}" for v in x)}); '
+                     f'a unit quaternion (x, y, z, w) within {QUATERNION_TOLERANCE:g} is '
+                     'expected')
+
+
+def check_rotation(what: str, R) -> None:
+    """Refuse matrices (..., 3, 3) that are no rotation: ``ValueError`` naming ``what``.
+
+    Each must be finite, orthonormal (every entry of ``RᵀR − 1`` within
+    :data:`ROTATION_TOLERANCE`) and proper (``det R > 0``: no reflection); in a batch the
+    error names the first bad state's index.
+    """
+    R = np.asarray(R, dtype=float)
+    finite = np.isfinite(R).all(axis=(-2, -1))
+    Rs = np.where(finite[..., None, None], R, 0.0)
+    off = np.abs(np.swapaxes(Rs, -1, -2) @ Rs - np.eye(3)).max(axis=(-2, -1))
+    det = np.linalg.det(Rs)
+    ok = finite & (off <= ROTATION_TOLERANCE) & (det > 0.0)
+    if ok.all():
+        return
+    k = tuple(int(i) for i in np.argwhere(~ok)[0])
+    state = '' if not k else f' (state {k[0] if len(k) == 1 else k})'
+    why = ('is not finite' if not finite[k] else
+           f'is not orthonormal (RᵀR − 1 has an entry of {off[k]:.3g})'
+           if off[k] > ROTATION_TOLERANCE else f'is a reflection (det {det[k]:.6g})')
+    raise ValueError(f'{what}{state} {why}; a rotation matrix (RᵀR = 1 within '
+                     f'{ROTATION_TOLERANCE:g}, det +1) is expected')
 
 
 def joint_integrate(jtype: int, q: np.ndarray, v: np.ndarray, dt) -> np.ndarray:

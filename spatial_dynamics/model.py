@@ -146,6 +146,12 @@ class Model:
         """Number of velocity coordinates ``len(q̇) = len(τ)``: 1 per joint, 6 for a free-flyer."""
         return len(self.joint_names) + sum(NV[int(k)] - 1 for k in self.jtype[1:])
 
+    @cached_property
+    def free_flyers(self) -> tuple:
+        """``(joint name, k)`` of each free-flyer: its quaternion is ``q[k + 3:k + 7]``."""
+        return tuple((self.body_joints[i], int(self.qidx[i])) for i in range(1, self.NB + 1)
+                     if int(self.jtype[i]) == FREE_FLYER)
+
     @property
     def floating(self) -> bool:
         """Whether the base moves: the root link hangs on a free-flyer joint."""

@@ -79,6 +79,8 @@ BASES = ('fixed', 'floating')
 ROOT_JOINT = 'root_joint'
 #: The name of body 0 of a floating-base model, the world (Pinocchio's).
 WORLD = 'universe'
+#: The root link a URDF fixes a robot to the world with (ROS and Gazebo's convention).
+URDF_WORLD = 'world'
 
 
 def model_from_urdf(source: Source, joints: Optional[Sequence[str]] = None,
@@ -387,6 +389,12 @@ def _from_robot(robot_name: str, links: list, joints: list,
     if floating and ROOT_JOINT in joint_by_name:
         raise ValueError(f'joint {ROOT_JOINT!r}: the URDF has a joint of the name a floating '
                          "base gives its free-flyer joint (base='floating')")
+    if floating and roots[0] == URDF_WORLD:
+        fixed = [j.name for j in children[roots[0]] if j.type == 'fixed']
+        through = (f' through fixed joint{"s" if len(fixed) > 1 else ""} '
+                   + ', '.join(repr(j) for j in fixed) if fixed else '')
+        report(f'the free-flyer is attached to {URDF_WORLD!r}{through}; did you mean a fixed '
+               "base? (the URDF's root link is the world it is fixed to: base='fixed')")
     if floating and keep is not None and not isinstance(keep, str):
         keep = [j for j in keep if j != ROOT_JOINT]     # the free-flyer is always kept
     mimics: dict = {}     # joint name -> its resolved source, mult, offset (_resolve_mimic)

@@ -230,3 +230,16 @@ def test_bad_base_motions_are_refused_by_name(ur5):
     with pytest.raises(ValueError, match='floating base'):
         sd.rnea(floating, np.r_[np.zeros(6), 1, np.zeros(6)], np.zeros(12), np.zeros(12),
                 base=sd.BaseMotion.at_rest())
+
+
+def test_mass_matrix_refuses_a_base_motion_on_a_floating_model_as_rnea_does():
+    """``mass_matrix(floating, q, base=...)`` was accepted where rnea refused it."""
+    floating = sd.Model.from_urdf(robot_urdf_path('ur5'), base='floating')
+    q = np.r_[np.zeros(6), 1, np.zeros(6)]
+    for call in (lambda: sd.rnea(floating, q, np.zeros(12), np.zeros(12),
+                                 base=sd.BaseMotion.at_rest()),
+                 lambda: sd.generalized_momentum(floating, q, np.zeros(12),
+                                                 base=sd.BaseMotion.at_rest()),
+                 lambda: sd.mass_matrix(floating, q, base=sd.BaseMotion.at_rest())):
+        with pytest.raises(ValueError, match="'ur5' has a floating base already"):
+            call()

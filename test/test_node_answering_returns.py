@@ -121,3 +121,29 @@ def test_a_plan_gives_its_first_answer_and_its_job(demo_text):
                                 backend='numpy'), rtol=1e-12, atol=1e-12)
     assert isinstance(out.annotate, Job) and out.annotate.config is cfg
     assert out.annotate.header is msg.header
+
+
+def test_a_measured_state_stamped_closer_than_any_sensor_is_not_integrated(demo_text):
+    # two joint_states 1 µs apart: Δp/Δt would be 1e6 times the change; the sample is skipped
+    # with its reason in /diagnostics and the estimate is that of the states around it
+    from spatial_dynamics.ros.diagnostics import observer_status
+    cfg = configured(demo_text, observer_gain=20.0)
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    q, rest = np.linspace(-0.5, 0.5, n), np.zeros(n)
+    g = sd.gravity_torque(robot.model, q, backend='numpy')
+    estimates = []
+    for t, qd, tau_m in ((1.0, rest, g), (1.001, rest, g), (1.001 + 1e-6, rest + 0.5, g + 50.0),
+                         (1.002, rest, g)):
+        msg = joint_state(robot.joints, t, q, qd, tau_m)
+        answering.measured(cfg, msg)
+        estimates.append(answering.observe(cfg, msg).estimate)
+    assert estimates[2] is None and None not in (estimates[0], estimates[1], estimates[3])
+    # held at rest by gravity's torque: nothing external, before and after the refused sample
+    np.testing.assert_allclose(estimates[3][2], np.zeros(n), atol=1e-9)
+    assert answering.estimates.skipped['interval_too_short'] == 1
+    _, _, values = observer_status(robot, 20.0, answering.observer, answering.estimates)
+    said = dict(values)
+    assert said['skipped interval_too_short'] == '1'
+    assert 'less than 1e-05 s' in said['last refused sample']

@@ -572,3 +572,179 @@ def test_the_qp_solver_is_ready_before_the_first_answer(solo_path):
     proc = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                           timeout=120)
     assert proc.returncode == 0, proc.stderr
+
+
+# -------------------------------------------------------------------------------------------
+# a differenced twist is bounded by what a base can do (issue 34)
+
+@pytest.fixture(scope='module')
+def ur5_text():
+    with open(robot_urdf_path('ur5')) as f:
+        return f.read()
+
+
+def moving_on_twist(text, **changes):
+    return configured(robot_description=text, base='moving',
+                      **{'base_input.source': 'twist', **changes})
+
+
+@pytest.mark.parametrize('dt, dv', [(1e-6, 0.1), (1e-6, 1.0), (1e-9, 1e-3)])
+def test_twists_stamped_closer_than_a_source_period_are_refused(ur5_text, dt, dv):
+    """The issue's UR5: two twists within bounds 1 µs (1 ns) apart gave 2.6e6-3.2e6 N m."""
+    cfg = moving_on_twist(ur5_text)
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    v0 = np.zeros(6)
+    v1 = np.array([0.0, 0.0, 0.0, dv, 0.0, 0.0])
+    answering.base_input(cfg, 'base/pose', pose(1.0, [0, 0, 0], quat))
+    answering.base_input(cfg, 'base/twist', twist(1.0, v0))
+    msg = joint_state(robot.joints, 1.0, np.full(n, 0.3), np.zeros(n), np.zeros(n))
+    answering.base_input(cfg, 'base/twist', twist(1.0 + dt, v1))
+    assert answering.base_inputs.rejected['base/twist interval_too_short'] == 1
+    assert answering.joint_state(cfg, msg).answer is None       # no acceleration: no output
+    said = ' '.join(text for _, text in answering.log.said)
+    assert 'base_input.min_interval' in said
+    level, text, values = base_status(cfg.params, robot, answering.base_inputs,
+                                      answering.base_inputs.period(),
+                                      answering.base_inputs.twist.receipt_ns)
+    assert dict(values)['rejected base/twist interval_too_short'] == '1'
+    # a twist a source period later is differenced; the last good one kept after a refusal
+    v2 = np.array([0.0, 0.0, 0.0, 0.2, 0.0, 0.0])                # 20 m/s² over 10 ms
+    answering.base_input(cfg, 'base/twist', twist(1.01, v2))
+    rate = (v2 - v0) / 0.01
+    out = answering.joint_state(cfg, msg)
+    q = np.full(n, 0.3)
+    expected = sd.rnea(robot.model, q, np.zeros(n), np.zeros(n),
+                       base=sd.base_from_odometry(robot.model, v2, rate, quat))
+    np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
+    answering.base_input(cfg, 'base/twist', twist(1.01 + dt, v0))        # refused again
+    np.testing.assert_allclose(answering.joint_state(cfg, msg).answer.tau, expected,
+                               rtol=1e-9, atol=1e-9)
+
+
+def test_a_differenced_twist_is_filtered_and_bounded(ur5_text):
+    """``a += (1 − e^{−dt/T}) (Δv/dt − a)``; beyond the base's bound refused, last kept."""
+    T = 0.01
+    cfg = moving_on_twist(ur5_text, **{'base_input.acceleration_time_constant': T,
+                                       'base_input.max_linear_acceleration': 20.0,
+                                       'base_input.max_angular_acceleration': 30.0})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    answering.base_input(cfg, 'base/pose', pose(1.0, [0, 0, 0], quat))
+    q = np.linspace(-0.5, 0.5, n)
+    msg = joint_state(robot.joints, 1.0, q, np.zeros(n), np.zeros(n))
+
+    def answer():
+        return answering.joint_state(cfg, msg).answer
+
+    def oracle(v, a):
+        return sd.rnea(robot.model, q, np.zeros(n), np.zeros(n),
+                       base=sd.base_from_odometry(robot.model, v, a, quat))
+
+    v0, v1 = np.zeros(6), np.array([0.1, 0.0, 0.0, 0.1, 0.0, 0.0])
+    answering.base_input(cfg, 'base/twist', twist(1.0, v0))
+    answering.base_input(cfg, 'base/twist', twist(1.01, v1))     # first difference: as is
+    a = (v1 - v0) / 0.01
+    np.testing.assert_allclose(answer().tau, oracle(v1, a), rtol=1e-9, atol=1e-9)
+    v2, dt = v1 + np.array([0.0, 0.0, 0.0, 0.05, 0.0, 0.0]), 1e-4    # a jump 0.1 ms later
+    answering.base_input(cfg, 'base/twist', twist(1.01 + dt, v2))
+    a2 = a + (1 - np.exp(-dt / T)) * ((v2 - v1) / dt - a)
+    assert np.linalg.norm(a2 - a) <= 0.05 / T                    # moved by at most Δv / T
+    np.testing.assert_allclose(answer().tau, oracle(v2, a2), rtol=1e-9, atol=1e-9)
+    for jump, reason in ((np.array([0, 0, 0, 0.5, 0, 0]), 'linear'),
+                         (np.array([0.5, 0, 0, 0, 0, 0]), 'angular')):
+        answering.base_input(cfg, 'base/twist', twist(1.0102, v2 + jump))   # beyond: refused
+        said = answering.log.said[-1][1]
+        assert f'base_input.max_{reason}_acceleration' in said, said
+        np.testing.assert_allclose(answer().tau, oracle(v2, a2), rtol=1e-9, atol=1e-9)
+    assert answering.base_inputs.rejected['base/twist out_of_bounds'] == 2
+
+
+# -------------------------------------------------------------------------------------------
+# a typical /odom and IMU driver (issue 35)
+
+def test_odometry_of_base_footprint_is_taken_as_base_input_odometry_link(demo_text):
+    """``child_frame_id: base_footprint`` (no such link): named by the right field, then mapped."""
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    v0, v1 = np.array([0, 0, 0.1, 0.5, 0, 0.0]), np.array([0, 0, 0.12, 0.52, 0, 0.0])
+    cfg = moving_on_twist(demo_text)
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/odometry', odometry(1.0, [0, 0, 0], quat, v0,
+                                                        'base_footprint'))
+    assert answering.base_inputs.rejected['base/odometry wrong_frame'] == 1
+    said = answering.log.said[-1][1]
+    assert "child_frame_id 'base_footprint'" in said and 'header.frame_id' not in said
+    assert 'base_input.odometry_link' in said
+    cfg = moving_on_twist(demo_text, **{'base_input.odometry_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    for t, v in ((1.0, v0), (1.01, v1)):
+        answering.base_input(cfg, 'base/odometry', odometry(t, [0, 0, 0], quat, v,
+                                                            'base_footprint'))
+    q = np.full(n, 0.2)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, q, q))
+    expected = sd.rnea(robot.model, q, q, q, base=sd.base_from_odometry(
+        robot.model, v1, (v1 - v0) / 0.01, quat, link='base_link'))
+    np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
+    # a link of the URDF that moves is still refused; the parameter is checked
+    answering.base_input(cfg, 'base/odometry', odometry(1.02, [0, 0, 0], quat, v1, 'link3'))
+    assert answering.base_inputs.rejected['base/odometry wrong_frame'] == 1
+    with pytest.raises(ConfigError, match="base_input.odometry_link: 'base_footprint' is not"):
+        moving_on_twist(demo_text, **{'base_input.odometry_link': 'base_footprint'})
+    with pytest.raises(ConfigError, match='base_input.odometry_link.*moves with a joint'):
+        moving_on_twist(demo_text, **{'base_input.odometry_link': 'link3'})
+
+
+def test_imu_frame_of_the_driver_is_taken_as_the_imu_link(demo_text):
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 9.81], [0, 0, 0], 'imu'))
+    assert answering.base_inputs.rejected['base/imu wrong_frame'] == 1
+    assert 'base_input.imu_frame' in answering.log.said[-1][1]
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link', 'base_input.imu_frame': 'imu'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    f, w = np.array([0.3, 0.1, 9.7]), np.array([0.2, 0.0, -0.1])
+    answering.base_input(cfg, 'base/imu', imu(1.0, f, w, 'imu'))
+    q = np.full(n, 0.2)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, q, q))
+    np.testing.assert_allclose(out.answer.tau, sd.rnea(robot.model, q, q, q, base=(
+        sd.base_from_imu(robot.model, 'base_link', f, w))), rtol=1e-9, atol=1e-9)
+
+
+def test_an_imu_rate_no_imu_reports_is_refused(demo_text):
+    """An IMU rate of 1e4 rad/s gave 1.1e8 N m: beyond any gyro's full scale, refused."""
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 9.81], [1e4, 0, 0]))
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 1e5], [0, 0, 0]))
+    assert answering.base_inputs.rejected['base/imu out_of_bounds'] == 2
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 9.81], [34.9, 0, 0]))   # 2000 deg/s
+    assert answering.base_inputs.imu is not None
+
+
+def test_odometry_on_source_imu_suggests_source_twist(demo_text):
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    answering.base_input(cfg, 'base/odometry', odometry(1.0, [0, 0, 0], quat, np.zeros(6)))
+    msg = joint_state(robot.joints, 1.0, np.zeros(n), np.zeros(n), np.zeros(n))
+    assert answering.joint_state(cfg, msg).answer is None
+    said = answering.log.said[-1][1]
+    assert "base_input.source 'twist'" in said, said
+    level, text, _ = base_status(cfg.params, robot, answering.base_inputs,
+                                 answering.base_inputs.period(), 0)
+    assert level == 'ERROR' and "base_input.source 'twist'" in text
+    with pytest.raises(ConfigError, match="base_input.source 'twist'"):
+        configured(robot_description=demo_text, base='moving')

@@ -63,7 +63,12 @@ def test_yaml_documents_every_parameter():
                         'wrench_estimate.epsilon', 'trajectory_effort_tolerance',
                         'trajectory_max_bytes', 'trajectory_annotation_max_values',
                         'base', 'base_input.source', 'base_input.imu_link',
-                        'base_input.acceleration', 'base_input.timeout', 'contacts.links',
+                        'base_input.imu_frame', 'base_input.odometry_link',
+                        'base_input.acceleration', 'base_input.min_interval',
+                        'base_input.acceleration_time_constant',
+                        'base_input.max_linear_acceleration',
+                        'base_input.max_angular_acceleration', 'base_input.timeout',
+                        'contacts.links',
                         'contacts.kind', 'contacts.mu', 'contacts.method',
                         'contacts.measured'}
     for name in declared:

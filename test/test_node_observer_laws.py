@@ -243,3 +243,30 @@ def test_window_rms_per_joint():
     for r in ([3.0, 0.0], [-4.0, 1.0]):
         window.add(np.array(r))
     assert window.rms().tolist() == pytest.approx([math.sqrt(12.5), math.sqrt(0.5)])
+
+
+def test_a_sample_stamped_closer_than_any_sensor_is_refused_and_the_estimate_kept():
+    # Δp/Δt over 1 µs would be a clock's artefact, not a measurement: refused with the
+    # reason, the observer's state kept, and the next real sample integrated as if the
+    # refused one had never come (the estimate of an observer that never saw it)
+    model = sd.Model.from_urdf(DEMO_URDF)
+    n = model.nq
+    q, z = np.linspace(-0.5, 0.5, n), np.zeros(n)
+    g = sd.gravity_torque(model, q)
+    extra = np.linspace(1.0, 2.0, n)
+    observer, reference = MomentumObserver(model, K), MomentumObserver(model, K)
+    for t in (1.0, 1.001):
+        observer.update(t, q, z, g - extra)
+        reference.update(t, q, z, g - extra)
+    r = observer.r.copy()
+    with pytest.raises(InputError) as refused:
+        observer.update(1.001 + 1e-6, q, np.full(n, 0.5), g + 100.0)
+    assert refused.value.reason == 'interval_too_short' and '1e-06 s' in str(refused.value)
+    assert observer.refused_reason == str(refused.value)
+    np.testing.assert_array_equal(observer.r, r)
+    assert observer.samples == 2 and observer.resets == 0
+    np.testing.assert_array_equal(observer.update(1.002, q, z, g - extra),
+                                  reference.update(1.002, q, z, g - extra))
+    assert observer.r == pytest.approx(extra * (1.0 - math.exp(-K * 0.002)), rel=1e-9)
+    # a real sensor's fastest interval is taken
+    assert observer.update(1.002 + 2e-5, q, z, g - extra) is not None

@@ -105,3 +105,60 @@ def test_derivatives_equal_one_derivative_per_call():
             assert np.isnan(g[5000:]).all()
             np.testing.assert_allclose(g[:5000], ref[:5000], rtol=1e-12,
                                        atol=1e-12 * np.max(np.abs(ref[:5000])))
+
+
+# --------------------------------------------------------------------------------------------
+# What divides by a difference of stamps is bounded by what the thing can do (issue 34)
+
+def joint_states(t, q):
+    from spatial_dynamics.replay.cdr import JointStates
+    n = q.shape[1]
+    return JointStates(tuple(f'j{k}' for k in range(n)), t, q, np.full(q.shape, np.nan),
+                       np.ones(q.shape))
+
+
+@pytest.mark.parametrize('period', [1e-6, 1e-9])
+def test_joint_states_stamped_closer_than_any_sensor_are_refused(period):
+    from spatial_dynamics.replay.arguments import Refused
+    from spatial_dynamics.replay.recording import clean
+    t = 100.0 + period * np.arange(200)
+    q = 1e-3 * np.sin(np.arange(200))[:, None] * np.ones((1, 2))   # within every bound
+    with pytest.raises(Refused, match='stamped .* apart .*less than 1e-05 s'):
+        clean(joint_states(t, q), 0.05)
+
+
+def test_differentiated_accelerations_no_joint_reaches_are_refused():
+    """A 1 kHz recording whose positions jump by 1 rad: q̈ ~1e6 rad/s², refused, named."""
+    from spatial_dynamics.replay.arguments import Refused
+    from spatial_dynamics.replay.recording import clean, rates
+    t = 1e-3 * np.arange(400)
+    q = np.zeros((400, 1))
+    q[200:] = 10.0
+    s = clean(joint_states(t, q), 0.005)
+    with pytest.raises(Refused, match='differentiated (velocity|acceleration) of joint 0'):
+        rates(s, 0.005, 3)
+    q[200:] = 0.0
+    q[:, 0] = np.sin(t)                                             # a real motion passes
+    s = clean(joint_states(t, q), 0.005)
+    qd, qdd, _ = rates(s, 0.005, 3)
+    np.testing.assert_allclose(qdd[10:-10, 0], -np.sin(t[10:-10]), atol=1e-3)
+
+
+def test_a_base_topic_stamped_closer_than_any_sensor_or_accelerating_beyond_a_base_is_refused():
+    from spatial_dynamics.replay import base_topics
+    from spatial_dynamics.replay.arguments import Refused
+    from spatial_dynamics.replay.cdr import IMU, Stamped
+    t = 1e-6 * np.arange(20)
+    found = Stamped(IMU, t, np.zeros((20, 10)), ('imu',))
+    with pytest.raises(Refused, match='--base-imu /imu: .*stamped 1e-06 s apart'):
+        base_topics.covering(found, [np.zeros((20, 3))], t, '--base-imu /imu')
+    tj = 1e-3 * np.arange(10)
+    a = np.zeros((10, 6))
+    a[4, 3] = 2e3                                                   # 200 g
+    with pytest.raises(Refused, match='linear acceleration at 0.004000 s is 2e\\+03 m/s'):
+        base_topics.check_base_acceleration('--base-odometry /odom', tj, a)
+    a[4, 3], a[5, 0] = 30.0, 2e4
+    with pytest.raises(Refused, match='angular acceleration at 0.005000 s is 2e\\+04'):
+        base_topics.check_base_acceleration('--base-odometry /odom', tj, a)
+    a[5, 0] = 200.0
+    base_topics.check_base_acceleration('--base-odometry /odom', tj, a)      # a real base

@@ -295,3 +295,20 @@ def test_odometry_and_imu_decoding_equals_rosbags_deserialiser(tmp_path, storage
         assert np.array_equal(found.values, expected)
         assert np.array_equal(found.stamp, t_ns // 10 ** 9 + (t_ns % 10 ** 9) * 1e-9)
         assert found.frames == (frames[0] if msgtype == cdr.ODOMETRY else frames[0][:1])
+
+
+def test_odometry_whose_quaternion_is_no_orientation_is_dropped_as_unusable():
+    # a zero, half or doubled quaternion is a broken message, as a NaN is: not a tilt of
+    # gravity; drift within 1e-2 of unit is kept (and normalised)
+    from spatial_dynamics.replay.base_topics import covering
+    t = np.arange(100) / ODOMETRY_RATE
+    quat = np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1))
+    quat[10], quat[20], quat[30], quat[40] = 0.0, (0, 0, 0, 0.5), (0, 0, 0, 2), (0, 0, 0, 1.005)
+    values = np.zeros((len(t), cdr.FIXED_MESSAGES[cdr.ODOMETRY][1]))
+    layout = cdr.FIXED_MESSAGES[cdr.ODOMETRY][3]
+    values[:, layout['orientation']] = quat
+    found = cdr.Stamped(cdr.ODOMETRY, t, values, ('odom', 'base_link'))
+    fields = [found.field(f) for f in ('orientation', 'angular', 'linear')]
+    kept = covering(found, fields, t, 'base/odometry')
+    assert len(kept) == len(t) - 3 and not {0.1, 0.2, 0.3} & set(np.round(kept, 6))
+    assert 0.4 in np.round(kept, 6)

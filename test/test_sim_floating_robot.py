@@ -130,3 +130,38 @@ def test_a_foot_of_the_wrong_size_or_link_is_refused_by_name():
         Foot(sd.Contact('FL_FOOT'), (-0.01,))
     with pytest.raises(ValueError, match=r"foot 'hand': no link 'hand'"):
         FloatingRobot(robot_urdf_path('solo12'), [Foot(sd.Contact('hand'))])
+
+
+def test_a_foot_on_the_world_is_refused_by_name():
+    """Refuse ``world``: MuJoCo's ``spec.body('world')`` is its world (was accepted)."""
+    with pytest.raises(ValueError, match=r"foot 'world': no link 'world' in robot 'solo'"):
+        FloatingRobot(robot_urdf_path('solo12'), [Foot(sd.Contact('world'))])
+
+
+def test_a_diverging_floating_robot_restarts_at_home_within_the_bounds():
+    """Solo12 under 1e6 N m: joint velocities reached 3.4e6 rad/s; the fixed-base rule holds.
+
+    A velocity beyond ±1e4 rad/s (a position beyond ±1e5) restarts at :attr:`home` at rest,
+    counted with the reason, as :class:`SimulatedRobot` does; then it runs as a fresh robot.
+    """
+    robot = solo()
+    home = robot.on_floor()
+    robot.set_state(home)
+    n = robot.model.nv - 6
+    top = 0.0
+    for _ in range(200):
+        robot.step(np.full(n, 1e6))
+        assert np.isfinite(robot.q).all() and np.isfinite(robot.v).all()
+        top = max(top, float(np.abs(robot.v).max()))
+    assert top <= 1e4
+    assert robot.resets >= 1 and 'beyond ±10000 rad/s' in robot.reset_reason, (
+        robot.resets, robot.reset_reason)
+    robot.set_state(home)
+    fresh = solo()
+    fresh.set_state(home)
+    resets = robot.resets
+    robot.step(np.zeros(n), 50)
+    fresh.step(np.zeros(n), 50)
+    assert robot.resets == resets
+    np.testing.assert_array_equal(robot.q, fresh.q)
+    np.testing.assert_array_equal(robot.v, fresh.v)

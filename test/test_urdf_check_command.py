@@ -12,6 +12,7 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
+import numpy as np
 import pytest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -271,3 +272,29 @@ def test_model_carries_the_joint_types_and_mimic_tags_as_written(robot):
                         float(j.find('mimic').get('multiplier', 1.0)),
                         float(j.find('mimic').get('offset', 0.0)))
         for j in joints if j.find('mimic') is not None}
+
+
+MASSLESS = """<robot name="massless"><link name="trunk"/><link name="leg"/>
+  <joint name="hip" type="revolute"><parent link="trunk"/><child link="leg"/>
+    <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="2"/></joint>
+</robot>"""
+BOX = """<robot name="box"><link name="box"><inertial><mass value="2"/>
+  <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.3"/></inertial></link>
+</robot>"""
+
+
+@pytest.mark.parametrize('xml, singular', ((MASSLESS, True), (BOX, False)))
+def test_a_floating_tree_without_mass_is_said_to_have_a_singular_mass_matrix(
+        capsys, tmp_path, xml, singular):
+    path = tmp_path / 'robot.urdf'
+    path.write_text(xml)
+    model = sd.Model.from_urdf(str(path), base='floating')
+    q = np.r_[np.zeros(6), 1.0, np.zeros(model.nq - 7)]
+    M = sd.mass_matrix(model, q)
+    assert (np.linalg.matrix_rank(M) < model.nv) == singular    # the physics said
+    status, out, _ = run(capsys, path, '--base', 'floating', '--strict')
+    if singular:
+        assert status == 1 and 'warnings (1)' in out
+        assert 'the tree has no mass' in out and 'mass matrix M is singular' in out
+    else:
+        assert status == 0 and out.rstrip().endswith('no warnings')

@@ -215,3 +215,18 @@ def test_joint_order_is_the_documented_one_on_more_trees(name):
         warnings.simplefilter('ignore', sd.URDFWarning)
         model = sd.Model.from_urdf(path)
     assert list(model.joint_names) == documented_order(path)
+
+
+def test_a_free_flyer_on_the_world_link_is_said_naming_the_fixed_joint():
+    # ur5_robot.urdf fixes base_link to 'world': floating, the world link would fly
+    path = robot_urdf_path('ur5')
+    with pytest.warns(sd.URDFWarning, match=r"the free-flyer is attached to 'world' through "
+                      r"fixed joint 'world_joint'; did you mean a fixed base\?"):
+        model = sd.Model.from_urdf(path, base='floating')
+    assert model.body_names[1] == 'world'
+    with pytest.raises(ValueError, match="fixed joint 'world_joint'"):
+        sd.Model.from_urdf(path, base='floating', strict=True)
+    fixed = load_silently(path)      # the base it meant: no word
+    assert fixed.body_names[0] == 'world' and not fixed.floating
+    solo = load_silently(robot_urdf_path('solo12'), base='floating')    # one that does fly
+    assert solo.floating

@@ -8,7 +8,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ..joints import FREE_FLYER
+from ..joints import check_quaternion, is_unit
 from ..model import Model
 
 
@@ -48,6 +48,8 @@ def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) ->
         # one float64 state (the common call): only the lengths to check, nothing to convert
         sizes = [model.nq if what == 'q' else model.nv for what in names[:len(arrays)]]
         if all(len(a) == n for a, n in zip(arrays, sizes)):
+            if model.free_flyers and names[0] == 'q':
+                check_configuration(model, arrays[0])
             return list(arrays)
     out = []
     for what, x in zip(names, arrays):
@@ -60,25 +62,22 @@ def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) ->
     dtype = np.result_type(*out, np.float64) if not all(
         np.issubdtype(a.dtype, np.floating) for a in out) else np.result_type(*out)
     batch = np.broadcast_shapes(*(a.shape[:-1] for a in out))
+    if model.free_flyers and names[0] == 'q':
+        check_configuration(model, out[0])
     return [np.broadcast_to(a.astype(dtype, copy=False), batch + a.shape[-1:]) for a in out]
 
 
-def check_quaternions(model: Model, q, what: str = 'q') -> None:
-    """``ValueError`` naming ``what`` when a free-flyer's quaternion is zero or not finite.
+def check_configuration(model: Model, q: np.ndarray) -> None:
+    """Refuse a ``q`` (..., nq) whose free-flyer quaternion is no orientation.
 
-    ``q`` (..., nq) holds each free-flyer's ``(p, quaternion x y z w)`` at its ``qidx``; the
-    algorithms normalise a quaternion where they read it, which a zero or non-finite one
-    turns into NaN. Its length is taken scaled (no overflow or underflow of the squares).
+    :func:`~spatial_dynamics.joints.check_quaternion` on each free-flyer's ``q[k + 3:k + 7]``:
+    ``ValueError`` naming the joint, its rows and, in a batch, the first bad state.
     """
-    q = np.asarray(q)
-    for i in np.flatnonzero(np.asarray(model.jtype) == FREE_FLYER):
-        a = int(model.qidx[i]) + 3
-        quat = q[..., a:a + 4].astype(float).reshape(-1, 4)
-        bad = ~(np.isfinite(quat).all(-1) & (np.abs(quat).max(-1, initial=0.0) > 0.0))
-        if bad.any():
-            raise ValueError(f'{what}[{a}:{a + 4}], the quaternion (x, y, z, w) of '
-                             f'{model.body_names[i]!r} on its free-flyer, must be finite and '
-                             f'non-zero, got {quat[bad][0]}')
+    for name, k in model.free_flyers:
+        if q.ndim == 1 and is_unit(*q[k + 3:k + 7].tolist()):
+            continue        # one state: four Python floats
+        check_quaternion(f'q: the free-flyer quaternion of joint {name!r} at q[{k + 3}:{k + 7}]',
+                         q[..., k + 3:k + 7])
 
 
 def as_vector(what: str, x, size: int) -> np.ndarray:

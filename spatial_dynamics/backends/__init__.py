@@ -31,7 +31,8 @@ import numpy as np
 
 from . import compiled, layout, python
 from .layout import LAYOUTS
-from ..algorithms.arguments import as_joint_arrays, as_real_array, as_vector, f_ext_in_bodies
+from ..algorithms.arguments import (as_joint_arrays, as_real_array, as_vector,
+                                    check_configuration, f_ext_in_bodies)
 from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
 
@@ -108,8 +109,9 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         q, qd, qdd: joint positions (rad, m), velocities and accelerations in the order of
             ``model.joint_names``; shape (n,) or (..., n), broadcast against each other;
             arrays, lists or tuples of any real type. A floating-base model's ``q`` has
-            ``model.nq`` numbers (the base's position and quaternion x y z w first), ``qd``
-            and ``qdd`` ``model.nv`` (the base's twist ``[ω; v]`` and its rate first, base
+            ``model.nq`` numbers (the base's position and quaternion x y z w first: its norm
+            within 1e-2 of 1, then normalised, any other a ``ValueError``), ``qd`` and
+            ``qdd`` ``model.nv`` (the base's twist ``[ω; v]`` and its rate first, base
             frame); see doc/floating_base.md.
         gravity: gravitational acceleration (m/s²) in root-link coordinates (fixed base) or
             world coordinates (floating base), 3 numbers.
@@ -144,6 +146,8 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
                 # a batch of states of one shape and dtype: no broadcasting to work out
                 g = GRAVITY if gravity is GRAVITY else _gravity(gravity)
                 if g[0] is not None:
+                    if model.free_flyers:
+                        check_configuration(model, q)
                     if q.size == lay.n:     # one state with batch dimensions of 1
                         return _c_rnea(kern, q.reshape(-1), qd.reshape(-1), qdd.reshape(-1),
                                        g).reshape(qd.shape)
@@ -157,6 +161,8 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
                     and len(q) == lay.n and len(qd) == len(qdd) == lay.nv):
                 gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
                 if gx is not None:
+                    if model.free_flyers:
+                        check_configuration(model, q)
                     return np.array(python.rnea_rows(lay.rows, q.tolist(), qd.tolist(),
                                                      qdd.tolist(), (gx, gy, gz)))
     return _rnea(model, lay, q, qd, qdd, gravity, f_ext, kern)
@@ -219,6 +225,7 @@ def mass_matrix(model: Model, q, backend: str = 'auto', *,
     """
     if base is not None:
         check_base_motion(base)
+        floating_twin(model)        # refuses a floating model as rnea(base=) does
         H = mass_matrix(model, q, backend)
         shape = np.broadcast_shapes(H.shape[:-2], base.v.shape[:-1], base.a.shape[:-1], (
             () if base.orientation is None else base.orientation.shape[:-1])) + H.shape[-2:]

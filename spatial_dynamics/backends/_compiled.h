@@ -62,7 +62,13 @@ typedef struct {
     long n;             /* joints (len(q)) */
     double *zeros;      /* nv zeros: qd, qdd of the terms at rest */
     long nv;            /* velocity coordinates (len(qd), len(tau)); n for a fixed base */
+    long quaternion;    /* q[quaternion..+4] the free-flyer's quaternion x y z w, or -1 */
 } KernelsObject;
+
+/* The squared norm a free-flyer's quaternion may have, (1 -+ 1e-2)^2: joints.py's
+ * QUATERNION_TOLERANCE (the module's UNIT_SQUARED, which a test holds to joints.py's). */
+#define UNIT_SQUARED_LOW 0.9801
+#define UNIT_SQUARED_HIGH 1.0201
 
 extern PyTypeObject KernelsType;
 

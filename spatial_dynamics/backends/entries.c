@@ -141,6 +141,13 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
             goto declined;
         floats += read == AS_FLOAT;
     }
+    if (h->quaternion >= 0) {
+        /* a quaternion off unit (or not finite) is the general path's named ValueError */
+        const double *u = x[0] + h->quaternion;
+        const double n2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + u[3] * u[3];
+        if (!(n2 >= UNIT_SQUARED_LOW && n2 <= UNIT_SQUARED_HIGH))
+            goto declined;
+    }
     for (int i = a->vectors; i < 3; i++)
         x[i] = h->zeros;
     if (a->gravity && !as_doubles(args[1 + a->vectors], 3, g))

@@ -104,6 +104,8 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     self->rows = rows;
     self->n = (long)n;
     self->nv = (long)K[VIDX];
+    /* a free-flyer is the root link's joint only (layout.py), body 1 */
+    self->quaternion = rows > 1 && K[WIDTH + 1] == FF ? (long)K[WIDTH + QIDX] + 3 : -1;
     self->K = PyMem_Malloc(sizeof(double) * rows * WIDTH);
     self->zeros = PyMem_Calloc(self->nv + 1, sizeof(double));
     if (self->K != NULL)
@@ -286,5 +288,11 @@ kernels_add(PyObject *m)
             || PyModule_AddStringConstant(m, "KERNELS_SHA256", KERNELS_SHA256) < 0
             || PyModule_AddIntConstant(m, "WORK", WORK) < 0)
         return -1;
+    /* the squared norms of a quaternion the single-state entries take (joints.py's) */
+    PyObject *unit = Py_BuildValue("(dd)", UNIT_SQUARED_LOW, UNIT_SQUARED_HIGH);
+    if (unit == NULL || PyModule_AddObject(m, "UNIT_SQUARED", unit) < 0) {
+        Py_XDECREF(unit);
+        return -1;
+    }
     return 0;
 }

@@ -29,6 +29,9 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 
 from ..base import base_from_imu, base_from_odometry, BaseMotion
+from ..bounds import (MAX_BASE_ANGULAR_ACCELERATION, MAX_BASE_LINEAR_ACCELERATION,
+                      MIN_STAMP_INTERVAL)
+from ..joints import unit_norms
 from ..model import Model
 from . import bags, differentiate
 from .arguments import Refused
@@ -106,17 +109,40 @@ def base_motion(args, bag: str, model: Model, t: np.ndarray,
         quat = quat / np.linalg.norm(quat, axis=1, keepdims=True)
         link = link_of(model, args.odometry_link, found.frames[1:], where, 'child_frame_id',
                        '--odometry-link')
+        check_base_acceleration(where, t, a)
         try:
             return base_from_odometry(model, v, a, quat, link)
         except ValueError as err:
             raise Refused(f'{where}: {err}') from None
     (w, wd), _ = differentiate.derivatives(t, at[0], window, order, (0, 1), spans)
     (f,), _ = differentiate.derivatives(t, at[1], window, order, (0,), spans)
+    check_base_acceleration(where, t, np.concatenate((wd, np.zeros_like(wd)), axis=1))
     link = link_of(model, args.imu_link, found.frames[:1], where, 'frame_id', '--imu-link')
     try:
         return base_from_imu(model, link, f, w, wd)
     except ValueError as err:
         raise Refused(f'{where}: {err}') from None
+
+
+def check_base_acceleration(where: str, t: np.ndarray, a: np.ndarray) -> None:
+    """Refuse a differentiated base acceleration ``a`` (N, 6) ``[ω̇; v̇]`` no base reaches.
+
+    Bounded by :data:`~spatial_dynamics.bounds.MAX_BASE_ANGULAR_ACCELERATION` and
+    :data:`~spatial_dynamics.bounds.MAX_BASE_LINEAR_ACCELERATION` (norms); nan (outside the
+    stretches) is not compared.
+    """
+    for part, bound, what, unit in ((a[:, :3], MAX_BASE_ANGULAR_ACCELERATION, 'angular',
+                                     'rad/s²'),
+                                    (a[:, 3:], MAX_BASE_LINEAR_ACCELERATION, 'linear', 'm/s²')):
+        norm = np.linalg.norm(part, axis=1)
+        with np.errstate(invalid='ignore'):
+            huge = np.flatnonzero(norm > bound)
+        if len(huge):
+            k = huge[0]
+            raise Refused(f'{where}: the base\'s differentiated {what} acceleration at '
+                          f'{t[k] - t[0]:.6f} s is {norm[k]:.3g} {unit}, more than the '
+                          f'{bound:g} {unit} no base reaches (stamps closer than the motion, '
+                          'or a jump in the topic)')
 
 
 def joined(bases: Sequence[Optional[BaseMotion]]) -> Optional[BaseMotion]:
@@ -134,13 +160,14 @@ def covering(found: Stamped, values: Sequence[np.ndarray], t: np.ndarray, where:
              ) -> np.ndarray:
     """Return the usable stamps of a base topic, made to cover ``t``; Refused if they cannot.
 
-    Messages with a non-finite value (or a zero quaternion) and repeated stamps are dropped
+    Messages with a non-finite value (or a quaternion off unit by more than the library's
+    tolerance, :func:`~spatial_dynamics.joints.is_unit`) and repeated stamps are dropped
     (``values`` keep the same rows); the rest must begin and end within one median period of
     ``t``'s ends and have no gap of more than :data:`GAP` periods inside them.
     """
     keep = np.all([np.isfinite(x).all(axis=1) for x in values], axis=0)
     if found.msgtype == ODOMETRY:
-        keep &= np.linalg.norm(values[0], axis=1) > 1e-9
+        keep &= unit_norms(values[0])
     keep &= np.concatenate(([True], np.diff(found.stamp) > 0))
     tb = found.stamp[keep]
     for k, x in enumerate(values):
@@ -154,6 +181,10 @@ def covering(found: Stamped, values: Sequence[np.ndarray], t: np.ndarray, where:
         flip = np.cumsum(np.r_[0, np.einsum('ij,ij->i', q[1:], q[:-1]) < 0]) % 2 == 1
         q[flip] = -q[flip]
     period = float(np.median(np.diff(tb)))
+    if period < MIN_STAMP_INTERVAL:
+        raise Refused(f'{where}: its messages are stamped {period:.3g} s apart (median), less '
+                      f'than {MIN_STAMP_INTERVAL:g} s: no sensor publishes that fast (a clock '
+                      'artefact: check its header.stamp)')
     if tb[0] > t[0] + period or tb[-1] < t[-1] - period:
         raise Refused(f'{where}: the topic covers {tb[0] - t[0]:.3f} .. {tb[-1] - t[0]:.3f} s '
                       f'of the joint states\' 0 .. {t[-1] - t[0]:.3f} s: the base\'s motion is '

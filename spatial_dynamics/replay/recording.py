@@ -18,7 +18,7 @@ from typing import Dict, Tuple
 import numpy as np
 
 from .. import effort as effort_model
-from ..bounds import JOINT_BOUNDS
+from ..bounds import JOINT_BOUNDS, MIN_STAMP_INTERVAL
 from ..model import Model
 from . import bags, base_topics, differentiate
 from .arguments import Refused
@@ -140,6 +140,11 @@ def clean(js: bags.JointStates, window: float) -> Dict:
                       f'{MIN_SAMPLES} are needed to differentiate)' + (': ' + '; '.join(
                           f'{v} skipped, {k}' for k, v in skipped.items()) if skipped else ''))
     seg = differentiate.segments(t, window)
+    if seg.period < MIN_STAMP_INTERVAL:
+        raise Refused(f'the joint states are stamped {seg.period:.3g} s apart (median), less '
+                      f'than {MIN_STAMP_INTERVAL:g} s: no sensor publishes that fast, and '
+                      'differentiating over such stamps gives rates no joint reaches (a clock '
+                      'artefact: check header.stamp of the driver)')
     if seg.dropped:
         skipped['in a stretch between gaps shorter than the window'] = seg.dropped
     if not seg.spans:
@@ -174,6 +179,15 @@ def rates(s: Dict, window: float, order: int):
     else:
         (qd, qdd), resampled = differentiate.derivatives(s['t'], s['q'], window, order,
                                                          (1, 2), s['spans'])
+    for what, x in (('velocity', qd), ('acceleration', qdd)):
+        bound, unit = JOINT_BOUNDS[what]
+        with np.errstate(invalid='ignore'):
+            huge = np.abs(x) > bound           # nan (outside the spans) is not compared
+        if huge.any():
+            k, j = np.argwhere(huge)[0]
+            raise Refused(f'the differentiated {what} of joint {j} at {s["t"][k] - s["t"][0]:.6f} '
+                          f's is {x[k, j]:.3g}, beyond ±{bound:g} {unit}: the stamps are closer '
+                          'than the motion (a clock artefact), or the positions jump')
     return qd, qdd, resampled
 
 

@@ -27,8 +27,9 @@ External torques (any ``control_mode``): each measured state whose ``effort`` ho
 measured torque of every model joint updates a generalized-momentum observer
 (:mod:`spatial_dynamics.ros.observer`, gain ``observer_gain``, the node's model with payload,
 armature, friction and gravity), integrated over the header stamps (a message stamped 0 or with
-the stamp of the previous one is skipped; a stamp going back, a gap above ``measured_timeout``
-or a change of the model or of a parameter it uses restarts it at zero); its estimate of
+the stamp of the previous one, or closer to it than any sensor publishes, is skipped; a stamp
+going back, a gap above ``measured_timeout`` or a change of the model or of a parameter it
+uses restarts it at zero); its estimate of
 τ_ext = Jᵀw is published on ``external_torque_estimate``.
 """
 
@@ -415,6 +416,9 @@ class Answering:
                 return None
         try:
             r = observer.update(t, q, qd, tau, base)
+        except InputError as err:   # a sample refused (interval_too_short): the state kept
+            skipped[err.reason] += 1
+            return None
         except Exception as err:  # never die on one message
             self.log.warn(f'external torque observer failed: {err!r}', throttle_duration_sec=1.0)
             observer.reset('compute error')

@@ -24,8 +24,10 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
 
 * ``base/imu`` (``sensor_msgs/Imu``): ``linear_acceleration`` is the specific force
   ``r̈ − g`` and ``angular_velocity`` ``ω`` in the IMU's frame, which is
-  ``base_input.imu_link`` (its placement from the URDF; ``header.frame_id`` that link or
-  empty). ``ω̇`` is taken as zero.
+  ``base_input.imu_link`` (its placement from the URDF; ``header.frame_id`` that link,
+  ``base_input.imu_frame`` or empty). ``ω̇`` is taken as zero. Each axis within what an IMU
+  reports (:data:`~spatial_dynamics.bounds.MAX_IMU_RATE`,
+  :data:`~spatial_dynamics.bounds.MAX_IMU_SPECIFIC_FORCE`).
 * ``base/pose`` (``geometry_msgs/PoseStamped``): the pose in the world (``header.frame_id``,
   any) of the frame of ``base/twist`` (the root link; moving: or a link fixed to it), as
   ``nav_msgs/Odometry``'s pose of its ``child_frame_id``; a unit quaternion (x y z w) within
@@ -34,9 +36,13 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
   ``child_frame_id``, held as ``base/pose`` and ``base/twist`` (either input, or both).
 * ``base/twist`` (``geometry_msgs/TwistStamped``): the twist of the root link (or, moving, of a
   link fixed to it) in its own axes, ``header.frame_id`` that link or empty: what
-  ``nav_msgs/Odometry`` carries in its child frame. Its rate, the base's spatial
-  acceleration, is the difference of successive samples over their stamps
-  (``base_input.acceleration: difference``) or zero (``zero``: a base at constant twist).
+  ``nav_msgs/Odometry`` carries in its child frame. A frame that is not a link of the URDF
+  (``base_footprint``) is ``base_input.odometry_link`` when that is set (:func:`twist_link`).
+  Its rate, the base's spatial acceleration, is the difference of successive samples over
+  their stamps (``base_input.acceleration: difference``: no closer than
+  ``base_input.min_interval``, low-pass filtered and bounded by what a base reaches,
+  :func:`twist_rate`; a refused twist keeps the last good one) or zero (``zero``: a base at
+  constant twist).
 * ``contact_states`` (``std_msgs/UInt8MultiArray``): one flag per ``contacts.links``, non-zero
   = in contact; until the first message every link of ``contacts.links`` is in contact.
 * ``measured_contact_wrenches`` (``geometry_msgs/WrenchStamped``, with ``contacts.measured``):
@@ -53,8 +59,8 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
-from spatial_dynamics.bounds import (check_bounded, MAX_ACCELERATION, MAX_POSITION,
-                                     MAX_VELOCITY, MAX_WRENCH)
+from spatial_dynamics.bounds import (check_bounded, MAX_IMU_RATE, MAX_IMU_SPECIFIC_FORCE,
+                                     MAX_POSITION, MAX_VELOCITY, MAX_WRENCH)
 from spatial_dynamics.contacts import link_orientations
 from spatial_dynamics.ros.control import Dynamics
 from spatial_dynamics.ros.inputs import InputError, stamp_ns
@@ -69,15 +75,15 @@ BASE_ACCELERATIONS = ('difference', 'zero')
 #: Values of ``contacts.kind`` and ``contacts.method`` (the library's).
 CONTACT_KINDS = sd.contacts.KINDS
 CONTACT_METHODS = sd.contacts.METHODS
-#: ``|‖quaternion‖ − 1|`` accepted (then normalised): float32 rounding passes, garbage not.
-QUATERNION_TOLERANCE = 1e-2
+#: ``|‖quaternion‖ − 1|`` accepted (then normalised): the library's, for every quaternion read.
+QUATERNION_TOLERANCE = sd.joints.QUATERNION_TOLERANCE
 #: Why an answer is refused on a moving or floating base (diagnostics counter keys).
 BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved',
                 'contacts_missing')
 #: Why a base input message is refused.
 BASE_INPUT_REASONS = ('non_finite', 'out_of_bounds', 'not_unit', 'wrong_frame', 'unstamped',
-                      'stamp_not_increasing', 'length_mismatch', 'no_model',
-                      'unknown_link')
+                      'stamp_not_increasing', 'interval_too_short', 'length_mismatch',
+                      'no_model', 'unknown_link')
 #: The base rows' residual (N, N m) above which the status WARNs: the contacts cannot carry it.
 RESIDUAL_WARN = 1e-6
 
@@ -121,10 +127,64 @@ def pose_arrays(msg) -> Tuple[np.ndarray, np.ndarray]:
 
 
 def imu_arrays(msg) -> Tuple[np.ndarray, np.ndarray]:
-    """``(specific force (3,) m/s², ω (3,) rad/s)`` of a ``sensor_msgs/Imu``, bounded."""
+    """``(specific force (3,) m/s², ω (3,) rad/s)`` of a ``sensor_msgs/Imu``.
+
+    Each axis bounded by what an IMU reports (:data:`~spatial_dynamics.bounds.MAX_IMU_RATE`,
+    :data:`~spatial_dynamics.bounds.MAX_IMU_SPECIFIC_FORCE`).
+    """
     a, w = msg.linear_acceleration, msg.angular_velocity
-    return (_vector('linear_acceleration', (a.x, a.y, a.z), MAX_ACCELERATION, 'm/s²', _XYZ),
-            _vector('angular_velocity', (w.x, w.y, w.z), MAX_VELOCITY, 'rad/s', _XYZ))
+    return (_vector('linear_acceleration', (a.x, a.y, a.z), MAX_IMU_SPECIFIC_FORCE, 'm/s²',
+                    _XYZ),
+            _vector('angular_velocity', (w.x, w.y, w.z), MAX_IMU_RATE, 'rad/s', _XYZ))
+
+
+def twist_rate(before: Optional[np.ndarray], v_before: np.ndarray, v: np.ndarray, dt: float,
+               time_constant: float, max_linear: float, max_angular: float) -> np.ndarray:
+    """Return the base's acceleration ``[ω̇; v̇]`` (6,) from two twists ``dt`` s apart.
+
+    The difference ``(v − v_before) / dt`` low-pass filtered over the stamps,
+    ``a = before + (1 − exp(−dt / T)) (Δv / dt − before)`` (``before`` None: a first
+    difference, taken as it is; ``T`` 0: unfiltered), so a jump ``Δv`` moves ``a`` by at
+    most ``Δv / T``. InputError (out_of_bounds) when ``|ω̇|`` or ``|v̇|`` exceeds what a
+    real base reaches (``max_angular`` rad/s², ``max_linear`` m/s²): naming the norm.
+    """
+    raw = (v - v_before) / dt
+    if before is None or time_constant <= 0.0:
+        a = raw
+    else:
+        a = before + (-np.expm1(-dt / time_constant)) * (raw - before)
+    for part, bound, unit, param in ((a[:3], max_angular, 'rad/s²', 'angular'),
+                                     (a[3:], max_linear, 'm/s²', 'linear')):
+        norm = float(np.linalg.norm(part))
+        if not norm <= bound:
+            raise InputError('out_of_bounds', f'the twist differenced over {dt:.3g} s gives a '
+                             f'base {param} acceleration of {norm:.3g} {unit}, beyond '
+                             f'base_input.max_{param}_acceleration {bound:g} {unit}; the last '
+                             'good acceleration kept')
+    return a
+
+
+def twist_link(model: 'sd.Model', frame: str, field: str, odometry_link: str = '') -> str:
+    """Return the link of ``model`` a base twist in ``frame`` is of ('' = the root link).
+
+    ``frame`` is the message's ``field`` (``child_frame_id`` of ``nav_msgs/Odometry``,
+    ``header.frame_id`` of ``geometry_msgs/TwistStamped``); a frame that is not a link of
+    the model (``base_footprint`` of a typical /odom), or empty, is ``odometry_link`` when that
+    is set. InputError (wrong_frame) naming ``field`` unless the link is the root link or
+    (fixed base) a link fixed to it.
+    """
+    link = odometry_link if odometry_link and (not frame or frame not in model.frames) else frame
+    root = model.body_names[1 if model.floating else 0]
+    if link and link != root and (model.floating or link not in model.frames
+                                  or model.frames[link].body != 0):
+        where = 'not a link of the model' if link not in model.frames else (
+            'a link that moves with a joint' if not model.floating else 'not the root link')
+        hint = ('' if odometry_link or link in model.frames else
+                '; set base_input.odometry_link to the link of the URDF this frame is')
+        raise InputError('wrong_frame', f'{field} {frame!r} is {where}: the twist must be the '
+                         f"base's, in its frame {root!r}" + (
+                             '' if model.floating else ' or a link fixed to it') + hint)
+    return link
 
 
 def check_base(params, model: 'sd.Model', source: str) -> None:
@@ -141,7 +201,9 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
             link = params.base_input_imu_link
             if not link:
                 raise ConfigError("parameter base_input.imu_link: base_input.source 'imu' "
-                                  'needs the link the IMU is mounted on')
+                                  'needs the link the IMU is mounted on (or set '
+                                  "base_input.source 'twist' to take the base's motion from "
+                                  'base/odometry, or base/pose and base/twist)')
             try:
                 sd.base_from_imu(model, link, np.zeros(3), np.zeros(3))
             except ValueError as err:
@@ -149,6 +211,15 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
         if links:
             raise ConfigError("parameter contacts.links: contacts need base 'floating' (a "
                               "moving base's motion is given, nothing carries it)")
+    link = params.base_input_odometry_link
+    if link:
+        if link not in model.frames:
+            raise ConfigError(f'parameter base_input.odometry_link: {link!r} is not a link of '
+                              f'robot {model.name!r} ({source})')
+        try:
+            twist_link(model, link, 'base_input.odometry_link')
+        except InputError as err:
+            raise ConfigError(f'parameter base_input.odometry_link: {err}') from None
     off = observer_off(params)
     if params.wrench_estimate_link and off:
         raise ConfigError(f'parameter wrench_estimate.link: not supported with {off}')
@@ -170,6 +241,25 @@ def observer_off(params) -> str:
                 'twist, which an IMU gives only integrated (base_input.source twist gives it)')
     return (f'base {params.base}: the observer needs a base whose motion is given (fixed, or '
             'moving with base_input.source twist)')
+
+
+def source_hint(params, inputs: 'BaseInputs') -> str:
+    """Return what to set when the inputs that arrive are not those ``base_input.source`` reads.
+
+    '' when they are (or nothing arrived): a moving base on ``imu`` receiving only
+    odometry, pose or twist messages, or on ``twist`` receiving only IMU messages.
+    """
+    if params.base != 'moving':
+        return ''
+    received = inputs.received
+    odometry = [t for t in ('base/odometry', 'base/pose', 'base/twist') if received[t]]
+    if params.base_input_source == 'imu' and odometry and not received['base/imu']:
+        return (f"{' and '.join(odometry)} arrive but base_input.source is 'imu': set "
+                "base_input.source 'twist' to use them")
+    if params.base_input_source == 'twist' and received['base/imu'] and not odometry:
+        return ("base/imu arrives but base_input.source is 'twist': set base_input.source "
+                "'imu' (and base_input.imu_link) to use it")
+    return ''
 
 
 def _same(a: Optional[tuple], b: tuple) -> bool:
@@ -231,10 +321,14 @@ class BaseInputs:
         return None
 
     def _take_base_imu(self, config, msg, now_ns: int) -> None:
-        link = config.params.base_input_imu_link
-        if msg.header.frame_id not in ('', link):
+        params = config.params
+        link, alias = params.base_input_imu_link, params.base_input_imu_frame
+        if msg.header.frame_id not in ('', link, alias or link):
             raise InputError('wrong_frame', f'header.frame_id {msg.header.frame_id!r} is not '
-                             f'base_input.imu_link {link!r}, the IMU frame of the model')
+                             f'base_input.imu_link {link!r}, the IMU frame of the model' + (
+                                 f', nor base_input.imu_frame {alias!r}' if alias else
+                                 ' (set base_input.imu_frame to the frame the IMU driver '
+                                 'writes)'))
         self.imu = Held(imu_arrays(msg), stamp_ns(msg.header), now_ns)
 
     def _take_base_pose(self, config, msg, now_ns: int) -> None:
@@ -243,22 +337,23 @@ class BaseInputs:
     def _take_base_odometry(self, config, msg, now_ns: int) -> None:
         """``nav_msgs/Odometry``: its pose and its ``child_frame_id``'s twist, both or neither."""
         pose = pose_arrays(msg.pose)
-        self._hold_twist(config, msg.twist.twist, msg.child_frame_id, stamp_ns(msg.header),
-                         now_ns)
+        self._hold_twist(config, msg.twist.twist, msg.child_frame_id, 'child_frame_id',
+                         stamp_ns(msg.header), now_ns)
         self.pose = Held(pose, stamp_ns(msg.header), now_ns)
 
     def _take_base_twist(self, config, msg, now_ns: int) -> None:
-        self._hold_twist(config, msg.twist, msg.header.frame_id, stamp_ns(msg.header), now_ns)
+        self._hold_twist(config, msg.twist, msg.header.frame_id, 'header.frame_id',
+                         stamp_ns(msg.header), now_ns)
 
-    def _hold_twist(self, config, twist, frame: str, stamp: int, now_ns: int) -> None:
-        """Check and hold the base's ``twist`` (a ``geometry_msgs/Twist``) in ``frame``."""
+    def _hold_twist(self, config, twist, frame: str, field: str, stamp: int,
+                    now_ns: int) -> None:
+        """Check and hold the base's ``twist`` (a ``geometry_msgs/Twist``) in ``frame``.
+
+        ``field`` names where the message carries ``frame``. A frame that is not a link of
+        the model is ``base_input.odometry_link``'s when that is set.
+        """
         robot, params = config.robot, config.params
-        root = robot.base.body_names[1 if robot.base.floating else 0]
-        if frame and frame != root and (robot.base.floating or frame not in robot.base.frames
-                                        or robot.base.frames[frame].body != 0):
-            raise InputError('wrong_frame', f'header.frame_id {frame!r}: the twist must be '
-                             f"the base's, in its frame {root!r}" + (
-                                 '' if robot.base.floating else ' or a link fixed to it'))
+        frame = twist_link(robot.base, frame, field, params.base_input_odometry_link)
         v = twist_array(twist)
         before = self.twist
         rate = None
@@ -274,8 +369,16 @@ class BaseInputs:
                     raise InputError('stamp_not_increasing', f'header.stamp {stamp * 1e-9:.9f} '
                                      f's is not after the last twist\'s '
                                      f'{before.stamp_ns * 1e-9:.9f} s')
-                rate = _vector('twist rate', (v - before.value[0]) / dt, MAX_ACCELERATION,
-                               'rad/s² or m/s²', None)
+                if dt < params.base_input_min_interval:
+                    raise InputError('interval_too_short', f'header.stamp {dt:.3g} s after the '
+                                     'last twist\'s, less than base_input.min_interval '
+                                     f'{params.base_input_min_interval:g} s (the source\'s '
+                                     'period): not differenced; the last good acceleration '
+                                     'kept')
+                rate = twist_rate(self.rate, before.value[0], v, dt,
+                                  params.base_input_acceleration_time_constant,
+                                  params.base_input_max_linear_acceleration,
+                                  params.base_input_max_angular_acceleration)
         self.twist = Held((v, frame), stamp, now_ns)
         self.rate = rate
 
@@ -334,11 +437,19 @@ class BaseInputs:
         """Return a moving base's motion now; InputError (base_missing, base_stale): unknown."""
         params, model = config.params, config.robot.model
         if params.base_input_source == 'imu':
+            hint = source_hint(params, self)
+            if hint and self.imu is None:
+                raise InputError('base_missing', f'no good base/imu yet (base moving); {hint}; '
+                                 'not publishing')
             f, w = self._fresh(params, self.imu, 'base/imu', now_ns)
             key = (model, params.base_input_imu_link, self.imu)
             if not _same(self._motion[0], key):   # once per sample, not per answer
                 self._motion = key, sd.base_from_imu(model, key[1], f, w)
             return self._motion[1]
+        hint = source_hint(params, self)
+        if hint and (self.pose is None or self.twist is None):
+            raise InputError('base_missing', f'no good base/odometry (or base/pose and '
+                             f'base/twist) yet (base moving); {hint}; not publishing')
         _, quat = self._fresh(params, self.pose, 'base/pose', now_ns)
         v, frame = self._fresh(params, self.twist, 'base/twist', now_ns)
         rate = self._rate(params, 'base/twist')
@@ -542,6 +653,9 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
                    for key, count in window.violations.items()]
     if robot is None:
         return 'ERROR', 'no robot model', values
+    hint = source_hint(params, inputs)
+    if problems and hint:
+        problems.append(hint)
     if problems:
         return 'ERROR', '; '.join(problems) + '; not publishing', values
     warnings = []

@@ -26,7 +26,10 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
-from spatial_dynamics.bounds import MAX_GRAVITY, MAX_PLAN_BYTES
+from spatial_dynamics.bounds import (
+    BASE_ANGULAR_ACCELERATION, BASE_LINEAR_ACCELERATION, MAX_BASE_ANGULAR_ACCELERATION,
+    MAX_BASE_LINEAR_ACCELERATION, MAX_GRAVITY, MAX_IMU_RATE, MAX_IMU_SPECIFIC_FORCE,
+    MAX_PLAN_BYTES, MIN_STAMP_INTERVAL)
 from spatial_dynamics.contacts import warm_qp
 from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
@@ -54,6 +57,8 @@ DEFAULT_FRICTION_THRESHOLD = 0.01   # rad/s or m/s
 DEFAULT_WRENCH_TIMEOUT = 0.5        # s
 DEFAULT_MEASURED_TIMEOUT = 0.5      # s
 DEFAULT_BASE_TIMEOUT = 0.5          # s
+DEFAULT_BASE_MIN_INTERVAL = 1e-4    # s: twist sources up to 10 kHz
+DEFAULT_BASE_FILTER = 0.01          # s: the differenced twist's low-pass, ~16 Hz
 DEFAULT_CONTACT_MU = 0.7            # Coulomb friction of a foot on a floor
 MAX_CONTACT_MU = 10.0               # beyond it a cone is a wall: a mistake, not a floor
 #: ``observer_gain`` K_O, 1/s: a 50 ms time constant (3.2 Hz bandwidth). A collision or a
@@ -312,14 +317,50 @@ PARAMETERS = Table(NODE_NAME, [
         'twist; its rate per base_input.acceleration). Live.'), choices=BASE_SOURCES),
     Param('base_input.imu_link', 'string', '', (
         'The link the IMU of base/imu is mounted on (its frame is the IMU frame, placed by '
-        'the URDF; header.frame_id must be this link or empty): the base link or a link '
-        'fixed to it. Live.')),
+        'the URDF; header.frame_id must be this link, empty, or base_input.imu_frame): the '
+        'base link or a link fixed to it. Values beyond what an IMU reports (angular_velocity '
+        f'±{MAX_IMU_RATE:g} rad/s, linear_acceleration ±{MAX_IMU_SPECIFIC_FORCE:g} m/s², per '
+        'axis) are refused. Live.')),
+    Param('base_input.imu_frame', 'string', '', (
+        'The header.frame_id the IMU driver writes when it is not the name of '
+        'base_input.imu_link in the URDF (e.g. "imu" or "imu_link_optical" for a link named '
+        "otherwise): that frame is taken as base_input.imu_link's. '' = the link's own name. "
+        'Live.')),
+    Param('base_input.odometry_link', 'string', '', (
+        "The link of the URDF whose twist base/odometry's child_frame_id (base/twist's "
+        "header.frame_id) names, when that frame is not a link of the URDF (a typical /odom "
+        'has child_frame_id base_footprint): that frame is taken as this link (moving: the '
+        "root link or a link fixed to it; floating: the root link). '' = the frame must be a "
+        "link (or empty, the root link). As replay's --odometry-link. Live.")),
     Param('base_input.acceleration', 'string', 'difference', (
         'The base\'s acceleration with base/twist (moving, source twist; and floating, '
         'the desired base acceleration): "difference", the difference of successive '
         'twists over their header stamps (two samples needed, a gap of base_input.timeout '
-        'restarts it), or "zero", a base moving at constant twist. Live.'),
+        'restarts it), low-pass filtered (base_input.acceleration_time_constant) and '
+        'bounded (base_input.max_linear_acceleration, base_input.max_angular_acceleration), '
+        'or "zero", a base moving at constant twist. Live.'),
         choices=BASE_ACCELERATIONS),
+    Param('base_input.min_interval', 'double', DEFAULT_BASE_MIN_INTERVAL, (
+        'Shortest stamp interval between two base twists that is differenced (the period of '
+        'the fastest twist source expected; the default admits sources up to 10 kHz): a twist '
+        'stamped closer to the last one is refused (interval_too_short) and the last good '
+        f'acceleration is kept. At least {MIN_STAMP_INTERVAL:g} s. Live.'), unit='s',
+        bounds=(MIN_STAMP_INTERVAL, 1.0)),
+    Param('base_input.acceleration_time_constant', 'double', DEFAULT_BASE_FILTER, (
+        'Time constant of the first-order low-pass filter of the differenced twist (over the '
+        'stamps: a = a + (1 - exp(-dt / T)) (dv / dt - a)); a twist jump dv then moves the '
+        'acceleration by at most dv / T however close the stamps. 0 = unfiltered. The first '
+        'difference after a start or a gap is taken as it is. Live.'), unit='s',
+        bounds=(0.0, 1.0)),
+    Param('base_input.max_linear_acceleration', 'double', BASE_LINEAR_ACCELERATION, (
+        "Largest norm of the rate of the base twist's linear part a real base reaches "
+        '(default 5 g: above a mobile base, a ship, a jumping quadruped; set your base\'s): a '
+        'differenced twist beyond it is refused (out_of_bounds) and the last good '
+        'acceleration kept. Live.'), unit='m/s^2', bounds=(1e-3, MAX_BASE_LINEAR_ACCELERATION)),
+    Param('base_input.max_angular_acceleration', 'double', BASE_ANGULAR_ACCELERATION, (
+        "Largest norm of the rate of the base twist's angular part a real base reaches: a "
+        'differenced twist beyond it is refused (out_of_bounds) and the last good acceleration '
+        'kept. Live.'), unit='rad/s^2', bounds=(1e-3, MAX_BASE_ANGULAR_ACCELERATION)),
     Param('base_input.timeout', 'double', DEFAULT_BASE_TIMEOUT, (
         'Seconds (since receipt) after which a base input (base/imu, base/pose, '
         'base/twist, contact_states) is stale: answers are then refused (diagnostics say '

@@ -243,7 +243,8 @@ def observer_status(robot: Optional[Robot], gain: float,
     if observer is not None:
         values += [('samples since restart', str(observer.samples)),
                    ('restarts', str(observer.resets)),
-                   ('last restart', observer.reset_reason)]
+                   ('last restart', observer.reset_reason),
+                   ('last refused sample', observer.refused_reason)]
     rms = window.rms()
     if rms is None or len(rms) != len(robot.joints):
         return 'OK', 'no measured effort in this period (observer waiting)', values

@@ -52,7 +52,7 @@ from typing import Callable, Optional, Sequence, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
-from spatial_dynamics.bounds import MAX_EFFORT
+from spatial_dynamics.bounds import MAX_EFFORT, MIN_STAMP_INTERVAL
 from spatial_dynamics.ros.inputs import InputError, name_index
 from spatial_dynamics.ros.records import Robot
 
@@ -69,9 +69,11 @@ MAX_EXTERNAL_TORQUE_WARN = 1e6
 #: ``out_of_bounds`` (|effort| beyond :data:`~spatial_dynamics.bounds.MAX_EFFORT`: one such
 #: sample integrated would poison every later estimate),
 #: ``no_velocity`` (the observer needs q̇), ``unstamped`` (header stamp 0, see
-#: :func:`sample_time`), ``repeated`` (the stamp of the previous sample).
+#: :func:`sample_time`), ``repeated`` (the stamp of the previous sample),
+#: ``interval_too_short`` (stamped less than :data:`~spatial_dynamics.bounds.
+#: MIN_STAMP_INTERVAL` after the previous sample: :meth:`MomentumObserver.update`).
 SKIP_REASONS = ('no_effort', 'length_mismatch', 'non_finite', 'out_of_bounds', 'no_velocity',
-                'unstamped', 'repeated')
+                'unstamped', 'repeated', 'interval_too_short')
 #: On a moving base, also (counted only when they happen): ``base_missing`` (no base twist or
 #: pose yet), ``base_stale`` (older than ``base_input.timeout``).
 BASE_SKIP_REASONS = ('base_missing', 'base_stale')
@@ -165,7 +167,8 @@ class MomentumObserver:
 
     :meth:`update` takes one sample and returns ``r`` (n,), N m or N; zeros on the first
     sample after a (re)start. ``resets`` counts the restarts, ``reset_reason`` says why the
-    last one happened, ``samples`` counts the samples since it.
+    last one happened, ``samples`` counts the samples since it; ``refused_reason`` says why
+    the last sample refused was (stamped closer than any sensor publishes).
     """
 
     def __init__(self, model: 'sd.Model', gain: float, armature: Optional[np.ndarray] = None,
@@ -183,6 +186,7 @@ class MomentumObserver:
         self.backend = backend
         self.resets = 0
         self.reset_reason = ''
+        self.refused_reason = ''
         self.reset()
 
     def reset(self, reason: str = '') -> None:
@@ -230,12 +234,23 @@ class MomentumObserver:
 
         None when ``t`` equals the previous sample's time (the same measurement again:
         nothing new). A time before the previous one, or more than ``max_gap`` after it,
-        restarts the observer at this sample.
+        restarts the observer at this sample. A time less than
+        :data:`~spatial_dynamics.bounds.MIN_STAMP_INTERVAL` (10 µs: no joint sensor publishes
+        faster than 100 kHz) after it is a clock's artefact, not a measurement: the sample is
+        refused (``InputError`` ``interval_too_short``) and the observer keeps its state;
+        ``Δp/Δt`` is only taken over intervals a sensor can give, and ``r`` moves by at most
+        ``(1 − e^{−K Δt}) ȳ`` over them.
         """
         if self._t is not None:
             dt = t - self._t
             if dt == 0.0:
                 return None
+            if 0.0 < dt < MIN_STAMP_INTERVAL:
+                self.refused_reason = (
+                    f'a sample stamped {dt:.3g} s after the previous one, less than '
+                    f'{MIN_STAMP_INTERVAL:g} s: no sensor publishes that fast (check the '
+                    'header.stamp of joint_states); not integrated, the estimate kept')
+                raise InputError('interval_too_short', self.refused_reason)
             if dt < 0.0:
                 self.reset(f'time went backwards by {-dt:.6f} s')
             elif dt > self.max_gap:

@@ -579,6 +579,10 @@ class FloatingRobot:
         if not (np.isfinite(timestep) and timestep > 0.0):
             raise ValueError(f'timestep must be a positive number of seconds, got {timestep}')
         self.feet = tuple(feet)
+        for foot in self.feet:     # MuJoCo's spec.body('world') is the world: never a foot
+            if foot.contact.link not in model.frames:
+                raise ValueError(f'foot {foot.contact.name!r}: no link {foot.contact.link!r} '
+                                 f'in robot {model.name!r}')
         self.m = m = mujoco_model(xml, gravity, base='floating', feet=self.feet)
         m.opt.timestep = float(timestep)
         m.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
@@ -594,8 +598,13 @@ class FloatingRobot:
         self.d = mujoco.MjData(m)
         self._scratch = mujoco.MjData(m)
         self._wrenches: dict = {}
-        self.resets = 0          # restarts after MuJoCo found a bad acceleration
+        self.resets = 0          # restarts after a bad acceleration or a diverged state
         self.reset_reason = ''
+        self._q_names = ('base x', 'base y', 'base z', 'base qx', 'base qy', 'base qz',
+                         'base qw') + tuple(self.joint_names)
+        self._v_names = ('base angular x', 'base angular y', 'base angular z',
+                         'base linear x', 'base linear y', 'base linear z'
+                         ) + tuple(self.joint_names)
         q = np.zeros(model.nq)
         q[6] = 1.0
         self.set_state(q)
@@ -691,7 +700,9 @@ class FloatingRobot:
 
         When MuJoCo finds a bad acceleration (``mjWARN_BADQACC``: a torque far beyond the
         robot), it restarts; the robot then restarts at :attr:`home` at rest instead, and
-        :attr:`resets` and :attr:`reset_reason` say so.
+        :attr:`resets` and :attr:`reset_reason` say so. So it does when the state leaves what
+        a robot reaches (a position beyond ±``MAX_POSITION``, a velocity beyond
+        ±``MAX_VELOCITY``), as :meth:`SimulatedRobot.step`.
         """
         tau = self._vector('tau', tau, self.model.nv - 6)
         m, d, mj = self.m, self.d, self._mj
@@ -710,6 +721,15 @@ class FloatingRobot:
                 self.resets += 1
                 self.reset_reason = (f'at t = {self.time:.6g} s MuJoCo found a bad '
                                      f'acceleration (dof {bad.lastinfo})')
+                self.set_state(self.home)
+                continue
+            q, v = self.from_mujoco(d.qpos, d.qvel)
+            reason = (check_bounded('position', q, MAX_POSITION, 'rad or m', self._q_names)
+                      or check_bounded('velocity', v, MAX_VELOCITY, 'rad/s or m/s',
+                                       self._v_names))
+            if reason:
+                self.resets += 1
+                self.reset_reason = f'at t = {self.time:.6g} s the {reason}'
                 self.set_state(self.home)
 
     def apply_wrench(self, link: str, wrench) -> None:
