@@ -653,7 +653,7 @@ def test_floating_a_base_falling_faster_than_gravity_is_refused(solo_path, metho
 
 
 def test_floating_without_the_qp_a_pulling_split_is_refused(solo_path, monkeypatch):
-    """clarabel not installed: a floating base still loads, with a WARN naming the qp extra.
+    """Without clarabel a floating base still loads, with a WARN naming the qp extra.
 
     ``contacts.method: qp`` is refused at configuration; with ``torques`` the toe's pulling
     split is refused (``contacts_pull``, the contact and its pull named), and a state whose
@@ -735,11 +735,13 @@ def test_floating_qp_without_friction_never_publishes_pulling_feet(solo_path):
         assert f[2] > 0.0 and np.hypot(f[0], f[1]) < 1e-6 * f[2], forces
 
 
-def test_the_qp_solver_is_ready_before_the_first_answer(solo_path):
-    """Preparing a configuration with contacts.method qp imports and warms the QP solver.
+@pytest.mark.parametrize('method', ['qp', 'torques'])
+def test_the_qp_solver_is_ready_before_the_first_answer(solo_path, method):
+    """Preparing a floating base imports and warms the QP solver, whatever contacts.method.
 
     In a fresh interpreter: nothing imported clarabel before; after ``prepare`` it is
-    imported and has solved once, so the first answer never waits 0.3 to 0.7 s for it.
+    imported and has solved once, so the first answer never waits 0.3 to 0.7 s for it
+    (``torques``: the QP re-solves a split that makes a contact pull).
     """
     code = (
         'import sys\n'
@@ -747,7 +749,7 @@ def test_the_qp_solver_is_ready_before_the_first_answer(solo_path):
         "assert 'clarabel' not in sys.modules\n"
         'params = {spec.name: spec.default for spec in config.PARAMETERS}\n'
         f'params.update(robot_description_file={solo_path!r}, base="floating")\n'
-        "params.update({'contacts.links': ['FL_FOOT'], 'contacts.method': 'qp'})\n"
+        f"params.update({{'contacts.links': ['FL_FOOT'], 'contacts.method': {method!r}}})\n"
         'config.prepare({}, params, None)\n'
         'from spatial_dynamics import contacts\n'
         "assert 'clarabel' in sys.modules and contacts._solver.get('warm'), contacts._solver\n")

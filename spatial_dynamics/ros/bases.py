@@ -16,7 +16,9 @@ Pure Python + numpy + the library (no rclpy import), tested in
              twist come from ``base/pose`` and ``base/twist``, the joints' from the desired
              (or measured) joint state, and :func:`~spatial_dynamics.contact_inverse_dynamics`
              splits ``M q̈ + h`` between the joints' efforts and the contact wrenches of
-             ``contacts.links``.
+             ``contacts.links``; a split that makes a contact pull (beyond
+             :func:`pull_tolerance`) is re-solved by the QP, or refused
+             (:class:`FloatingDynamics`).
 ===========  ===================================================================================
 
 Inputs (each sampled, checked and held; an answer whose base input is missing or older than
