@@ -132,6 +132,7 @@ setup(
         'replay': ['rosbags', 'matplotlib', 'pyyaml', 'threadpoolctl'],
         'identify': ['scipy', 'threadpoolctl'],
         'sim': ['mujoco'],
+        'qp': ['clarabel', 'scipy'],
     },
     zip_safe=False,
     maintainer='spatial_dynamics maintainers',

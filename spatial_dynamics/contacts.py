@@ -721,8 +721,8 @@ def _qp_solver() -> tuple:
             import clarabel
             from scipy import sparse
         except ImportError as err:
-            raise ImportError(f"method='qp' needs clarabel and scipy ({err}): pip install "
-                              'clarabel scipy') from None
+            raise ImportError(f"method='qp' needs clarabel and scipy ({err}): the package's "
+                              "'qp' extra, pip install clarabel scipy") from None
         _solver.update(clarabel=clarabel, sparse=sparse)
     return _solver['clarabel'], _solver['sparse']
 

@@ -26,7 +26,7 @@ from node_harness import DEMO_URDF, Log  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.ros import config  # noqa: E402
 from spatial_dynamics.ros.answering import Answering  # noqa: E402
-from spatial_dynamics.ros.bases import base_status  # noqa: E402
+from spatial_dynamics.ros.bases import base_status, qp_missing_warning  # noqa: E402
 from spatial_dynamics.ros.parameters import ConfigError  # noqa: E402
 
 FEET = ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')
@@ -476,13 +476,16 @@ def solo_with_toe(solo_path, ahead):
     return text.replace('</robot>', toe + '</robot>')
 
 
-def test_floating_a_toe_beside_a_foot_is_the_least_torque_split(solo_path):
-    """FL_TOE 1 cm ahead of FL_FOOT, both contacts: the split carries the base, least τ.
+def test_floating_a_toe_beside_a_foot_publishes_the_qp_not_a_pull(solo_path):
+    """FL_TOE 1 cm ahead of FL_FOOT, both contacts: the least-torque split pulls; not published.
 
     Oracle: Pinocchio's frame Jacobians and rnea of the same URDF, split by an SVD
-    (conftest's ``least_torque_split``): the published efforts and contact wrenches are
-    its τ and λ, the wrenches sum to the weight, and /diagnostics never says the contacts
-    cannot carry the base.
+    (conftest's ``least_torque_split``): the library's ``'torques'`` split is its τ and λ,
+    and there the toe pulls some 49 N (a couple with the foot that cancels the knee torque) on
+    a 24.5 N robot. The node re-solves such a state by the QP (``contacts.mu``'s cones,
+    ``n·f ≥ 0``): it publishes the QP's efforts and wrenches, no wrench pulls, they sum to
+    the weight, the efforts are no smaller than the least-torque ones, and /diagnostics
+    counts the re-solve with the worst pull seen, never that the contacts cannot carry the base.
     """
     pin = pytest.importorskip('pinocchio')
     text = solo_with_toe(solo_path, 0.01)
@@ -506,17 +509,197 @@ def test_floating_a_toe_beside_a_foot_is_the_least_torque_split(solo_path):
                     for link in links])               # the point's velocity, world axes
     tau, lam, rank = least_torque_split(Jc, b, 1e-6)
     assert rank == 14
-    np.testing.assert_allclose(out.answer.tau, tau, rtol=0, atol=1e-9)
+    contacts = [sd.Contact(link) for link in links]
+    split = sd.contact_inverse_dynamics(robot.model, q_full, np.zeros(18), np.zeros(18),
+                                        contacts)
+    np.testing.assert_allclose(split.tau, tau, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.concatenate([split.forces[link] for link in links]), lam,
+                               rtol=0, atol=1e-9)
+    pull = -lam[5]                                     # FL_TOE's n·f, the floor's normal z
+    assert pull > 40.0
+    qp = sd.contact_inverse_dynamics(robot.model, q_full, np.zeros(18), np.zeros(18),
+                                     contacts, method='qp')
+    np.testing.assert_allclose(out.answer.tau, qp.tau, rtol=0, atol=1e-9)
     forces = world_forces(robot.model, q_full, out.answer.contacts)
-    np.testing.assert_allclose(np.concatenate([forces[link] for link in links]), lam, rtol=0,
+    np.testing.assert_allclose(np.concatenate([forces[link] for link in links]),
+                               np.concatenate([qp.forces[link] for link in links]), rtol=0,
                                atol=1e-9)
     weight = robot.model.inertia[:, 3, 3].sum() * 9.81
-    np.testing.assert_allclose(sum(forces.values()), [0.0, 0.0, weight], atol=1e-9)
+    tolerance = 1e-6 * weight
+    mu = cfg.params.contacts_mu
+    for link, f in forces.items():
+        assert f[2] >= -tolerance, (link, f)                      # never pulls
+        assert np.hypot(f[0], f[1]) <= mu * f[2] + 1e-6, (link, f)   # inside its cone
+    np.testing.assert_allclose(sum(forces.values()), [0.0, 0.0, weight], atol=1e-6)
+    assert np.linalg.norm(out.answer.tau) >= np.linalg.norm(tau) - 1e-9
     level, status, values = base_status(cfg.params, robot, answering.base_inputs,
                                         answering.base_inputs.period(),
                                         answering.base_inputs.pose.receipt_ns)
-    assert float(dict(values)['base residual max']) < 1e-9
-    assert 'cannot carry' not in status
+    values = dict(values)
+    assert float(values['base residual max']) < 1e-6
+    assert 'cannot carry' not in status and level == 'OK', status
+    assert values['re-solved by qp (a contact would pull)'] == '1'
+    worst, contact = values['worst pull [N]'].split()
+    assert contact == '(FL_TOE)' and float(worst) == pytest.approx(pull, rel=1e-3)
+    assert values['qp fallback'] == 'ready'
+    assert answering.totals.rejected['contacts_pull'] == 0
+    # output gravity_only holds the robot still on the same contacts: the QP's efforts too
+    cfg = configured(robot_description=text, base='floating', output='gravity_only',
+                     **{'contacts.links': links, 'base_input.acceleration': 'zero'})
+    answering = Answering(Log())
+    feed_base(cfg, answering)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, zero, zero))
+    np.testing.assert_allclose(out.answer.tau, qp.tau, rtol=0, atol=1e-9)
+
+
+def accelerate_base(cfg, answering, a_world, t=1.0, quat=(0.02, -0.03, 0.01, 1.0)):
+    """Feed a base at rest at ``t`` − 0.02 s, at ``a_world`` m/s² × 0.02 s at ``t``: (q, rate)."""
+    quat = np.array(quat) / np.linalg.norm(quat)
+    R = sd.joints.quaternion_matrix(quat)
+    answering.base_input(cfg, 'base/pose', pose(t, [0.1, 0.2, 0.25], quat))
+    answering.base_input(cfg, 'base/twist', twist(t - 0.02, np.zeros(6), 'base_link'))
+    answering.base_input(cfg, 'base/twist',
+                         twist(t, np.r_[np.zeros(3), R.T @ (0.02 * np.asarray(a_world))],
+                               'base_link'))
+    rate = answering.base_inputs.rate           # the twist differenced over its stamps
+    np.testing.assert_allclose(rate, np.r_[np.zeros(3), R.T @ a_world], atol=1e-9)
+    return np.r_[0.1, 0.2, 0.25, quat], rate    # the same floats as the node's answer
+
+
+@pytest.mark.parametrize('method, control_mode', [
+    ('torques', 'feedforward'), ('forces', 'feedforward'), ('torques', 'computed_torque'),
+    ('forces', 'pd_feedforward')])
+def test_floating_a_split_that_pulls_is_re_solved_by_the_qp(solo_path, method, control_mode):
+    """The base swerving at (3, 5, 0) m/s² on four feet: both splits make FL_FOOT pull.
+
+    The feet can carry it (5.8 m/s² sideways is inside μ g = 6.9 m/s²): the node publishes
+    the QP's answer (the library's ``method='qp'``), every foot pushing; the contact forces
+    sum to ``m (a − g)`` (the joints still, the base not turning: Newton on the whole robot).
+    The same in the feedback modes (computed_torque's model part goes through the same
+    contact answer).
+    """
+    cfg = floating(solo_path, **{'contacts.method': method, 'control_mode': control_mode,
+                                 'base_input.acceleration': 'difference'})
+    robot = cfg.robot
+    answering = Answering(Log())
+    a_world = np.array([3.0, 5.0, 0.0])
+    base_q, base_a = accelerate_base(cfg, answering, a_world)
+    q, zero = standing(robot.joints), np.zeros(12)
+    state = (robot.model, np.r_[base_q, q], np.zeros(18), np.r_[base_a, zero],
+             [sd.Contact(f) for f in FEET])
+    split = sd.contact_inverse_dynamics(*state, method=method)
+    assert any(v.contact == 'FL_FOOT' and v.kind == 'unilateral' and v.amount > 0.5
+               for v in split.violations), split.summary()
+    qp = sd.contact_inverse_dynamics(*state, method='qp')
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, zero, zero))
+    if control_mode != 'feedforward':     # the measured state at the desired one: u = 0
+        out = answering.measured(cfg, joint_state(robot.joints, 1.0, q, zero, ()))
+    np.testing.assert_allclose(out.answer.tau, qp.tau, rtol=0, atol=1e-9)
+    forces = world_forces(robot.model, state[1], out.answer.contacts)
+    mass = robot.model.inertia[:, 3, 3].sum()
+    for link in FEET:
+        np.testing.assert_allclose(forces[link], qp.forces[link], rtol=0, atol=1e-9)
+        assert forces[link][2] >= -1e-6 * mass * 9.81, forces
+    np.testing.assert_allclose(sum(forces.values()), mass * (a_world + [0.0, 0.0, 9.81]),
+                               atol=1e-6)
+    level, _, values = base_status(cfg.params, robot, answering.base_inputs,
+                                   answering.base_inputs.period(),
+                                   answering.base_inputs.pose.receipt_ns)
+    assert dict(values)['re-solved by qp (a contact would pull)'] == '1'
+    assert answering.totals.rejected['contacts_pull'] == 0
+
+
+@pytest.mark.parametrize('method', ['torques', 'forces'])
+def test_floating_a_base_falling_faster_than_gravity_is_refused(solo_path, method):
+    """The base accelerating down at 30 m/s² on four feet: every split pulls, the QP has none.
+
+    Nothing is published for it (the controller keeps the last good command): the reason
+    ``contacts_unsolved`` is counted, the WARN names the contact that would pull most and by
+    how much, and /diagnostics explains it; standing again, the node answers again.
+    """
+    cfg = floating(solo_path, **{'contacts.method': method,
+                                 'base_input.acceleration': 'difference'})
+    robot = cfg.robot
+    answering = Answering(Log())
+    q, zero = standing(robot.joints), np.zeros(12)
+    msg = joint_state(robot.joints, 1.0, q, zero, zero)
+    accelerate_base(cfg, answering, np.zeros(3))
+    good = answering.joint_state(cfg, msg).answer
+    assert good is not None
+    base_q, base_a = accelerate_base(cfg, answering, np.array([0.0, 0.0, -30.0]), 2.0)
+    state = (robot.model, np.r_[base_q, q], np.zeros(18), np.r_[base_a, zero],
+             [sd.Contact(f) for f in FEET])
+    worst = max((v for v in sd.contact_inverse_dynamics(*state, method=method).violations
+                 if v.kind == 'unilateral'), key=lambda v: v.amount)
+    assert worst.amount > 10.0
+    assert sd.contact_inverse_dynamics(*state, method='qp').status.startswith('infeasible')
+    out = answering.joint_state(cfg, msg)
+    assert out.answer is None and out.estimate is None
+    assert answering.totals.rejected['contacts_unsolved'] == 1
+    said = answering.log.said[-1]
+    assert said[0] == 'warn' and f'{worst.contact!r} would pull' in said[1], said
+    assert f'{worst.amount:.3g} N' in said[1] and 'infeasible' in said[1], said
+    level, text, values = base_status(cfg.params, robot, answering.base_inputs,
+                                      answering.base_inputs.period(),
+                                      answering.base_inputs.pose.receipt_ns)
+    values = dict(values)
+    assert level == 'WARN' and 'refused, a contact would pull' in text, text
+    assert values['refused contacts_unsolved (a contact would pull)'] == '1'
+    assert values['re-solved by qp (a contact would pull)'] == '0'
+    assert values['worst pull [N]'] == f'{worst.amount:.3g} ({worst.contact})'
+    accelerate_base(cfg, answering, np.zeros(3), 3.0)
+    again = answering.joint_state(cfg, msg).answer
+    np.testing.assert_array_equal(again.tau, good.tau)
+
+
+def test_floating_without_the_qp_a_pulling_split_is_refused(solo_path, monkeypatch):
+    """Without clarabel a floating base still loads, with a WARN naming the qp extra.
+
+    ``contacts.method: qp`` is refused at configuration; with ``torques`` the toe's pulling
+    split is refused (``contacts_pull``, the contact and its pull named), and a state whose
+    split pulls nowhere is answered as before.
+    """
+    monkeypatch.setitem(sys.modules, 'clarabel', None)      # import clarabel fails
+    monkeypatch.setattr(sd.contacts, '_solver', {})          # as in a fresh process
+    text = solo_with_toe(solo_path, 0.01)
+    links = ['FL_FOOT', 'FL_TOE', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT']
+    with pytest.raises(ConfigError, match="contacts.method: .*'qp' extra"):
+        configured(robot_description=text, base='floating',
+                   **{'contacts.links': links, 'contacts.method': 'qp'})
+    cfg = configured(robot_description=text, base='floating',
+                     **{'contacts.links': links, 'base_input.acceleration': 'zero'})
+    robot = cfg.robot
+    assert "'qp' extra" in robot.qp_missing
+    warning = qp_missing_warning(robot)
+    assert "'qp' extra" in warning and 'refusing' in warning
+    assert qp_missing_warning(floating(solo_path, **{'contacts.links': []}).robot) != ''
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q, zero = standing(robot.joints), np.zeros(12)
+    msg = joint_state(robot.joints, 1.0, q, zero, zero)
+    split = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                        np.zeros(18), [sd.Contact(link) for link in links])
+    pull = next(v for v in split.violations if v.kind == 'unilateral')
+    assert pull.contact == 'FL_TOE' and pull.amount > 40.0
+    assert answering.joint_state(cfg, msg).answer is None
+    assert answering.totals.rejected['contacts_pull'] == 1
+    said = answering.log.said[-1][1]
+    assert f"'FL_TOE' would pull {pull.amount:.3g} N" in said and "'qp' extra" in said, said
+    level, _, values = base_status(cfg.params, robot, answering.base_inputs,
+                                   answering.base_inputs.period(),
+                                   answering.base_inputs.pose.receipt_ns)
+    assert level == 'WARN' and dict(values)['refused contacts_pull (a contact would pull)'] == '1'
+    assert "'qp' extra" in dict(values)['qp fallback']
+
+    cfg = floating(solo_path)                  # four feet: the split pulls nowhere
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    out = answering.joint_state(cfg, msg)
+    expected = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                           np.zeros(18), [sd.Contact(f) for f in FEET])
+    assert not expected.violations
+    np.testing.assert_allclose(out.answer.tau, expected.tau, rtol=1e-9, atol=1e-9)
+    assert 'clarabel' not in sd.contacts._solver
 
 
 def test_floating_qp_without_friction_never_publishes_pulling_feet(solo_path):
@@ -552,11 +735,13 @@ def test_floating_qp_without_friction_never_publishes_pulling_feet(solo_path):
         assert f[2] > 0.0 and np.hypot(f[0], f[1]) < 1e-6 * f[2], forces
 
 
-def test_the_qp_solver_is_ready_before_the_first_answer(solo_path):
-    """Preparing a configuration with contacts.method qp imports and warms the QP solver.
+@pytest.mark.parametrize('method', ['qp', 'torques'])
+def test_the_qp_solver_is_ready_before_the_first_answer(solo_path, method):
+    """Preparing a floating base imports and warms the QP solver, whatever contacts.method.
 
     In a fresh interpreter: nothing imported clarabel before; after ``prepare`` it is
-    imported and has solved once, so the first answer never waits 0.3 to 0.7 s for it.
+    imported and has solved once, so the first answer never waits 0.3 to 0.7 s for it
+    (``torques``: the QP re-solves a split that makes a contact pull).
     """
     code = (
         'import sys\n'
@@ -564,7 +749,7 @@ def test_the_qp_solver_is_ready_before_the_first_answer(solo_path):
         "assert 'clarabel' not in sys.modules\n"
         'params = {spec.name: spec.default for spec in config.PARAMETERS}\n'
         f'params.update(robot_description_file={solo_path!r}, base="floating")\n'
-        "params.update({'contacts.links': ['FL_FOOT'], 'contacts.method': 'qp'})\n"
+        f"params.update({{'contacts.links': ['FL_FOOT'], 'contacts.method': {method!r}}})\n"
         'config.prepare({}, params, None)\n'
         'from spatial_dynamics import contacts\n'
         "assert 'clarabel' in sys.modules and contacts._solver.get('warm'), contacts._solver\n")

@@ -454,6 +454,7 @@ class Answering:
                  measured: Optional[tuple], t0: int, with_terms: bool) -> Optional[Answer]:
         """Compute one answer (and its terms while subscribed); None when it is rejected."""
         robot, params = config.robot, config.params
+        dynamics = None
         try:
             f_ext = self._active_wrenches(robot, t0) if self.wrenches else None
             if params.base == 'fixed':
@@ -465,6 +466,8 @@ class Answering:
             tau, terms = answer(dynamics, params.control_mode, params.output, desired, measured,
                                 robot.gains, with_terms)
         except InputError as err:   # the base's state is not known: nothing is published
+            if getattr(dynamics, 'pulls', None):   # a contact would pull, no QP answer
+                self.base_inputs.pulled(dynamics.pulls, err)
             self._reject(topic, err.reason, str(err))
             return None
         except Exception as err:  # never die on one message
@@ -478,9 +481,11 @@ class Answering:
             if saturated.any():
                 self._count_saturated(robot, tau, saturated)
         contacts = None
+        if robot.base.floating and dynamics.pulls:   # re-solved by qp: a contact would pull
+            self.base_inputs.pulled(dynamics.pulls)
         if robot.base.floating and dynamics.results:   # the solution at the model part's state
             result = dynamics.results[-1]
-            self.base_inputs.solved(result)
+            self.base_inputs.solved(result, robot.pull_tolerance)
             q = measured[0] if params.control_mode == 'computed_torque' else desired[0]
             contacts = contact_wrenches(robot.model, dynamics.base_q, q, result)
         t1 = time.monotonic_ns()

@@ -5,7 +5,8 @@
 Pure Python + numpy + the library (no rclpy import), tested in
 ``test/test_node_base_inputs.py``. Parameter ``base`` (read-only):
 
-===========  ===================================================================================
+===========  ============================================================================
+
 ``fixed``    today's node: the URDF's root link is fixed to the world (default).
 ``moving``   the fixed-base model on a moving base (a mobile manipulator, a ship): each answer
              is ``rnea(..., base=motion)`` with the base's motion from an IMU on the base
@@ -16,7 +17,9 @@ Pure Python + numpy + the library (no rclpy import), tested in
              twist come from ``base/pose`` and ``base/twist``, the joints' from the desired
              (or measured) joint state, and :func:`~spatial_dynamics.contact_inverse_dynamics`
              splits ``M q̈ + h`` between the joints' efforts and the contact wrenches of
-             ``contacts.links``.
+             ``contacts.links``; a split that makes a contact pull (beyond
+             :func:`pull_tolerance`) is re-solved by the QP, or refused
+             (:class:`FloatingDynamics`).
 ===========  ===================================================================================
 
 Inputs (each sampled, checked and held; an answer whose base input is missing or older than
@@ -79,13 +82,19 @@ CONTACT_METHODS = sd.contacts.METHODS
 QUATERNION_TOLERANCE = sd.joints.QUATERNION_TOLERANCE
 #: Why an answer is refused on a moving or floating base (diagnostics counter keys).
 BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved',
-                'contacts_missing')
+                'contacts_missing', 'contacts_pull')
 #: Why a base input message is refused.
 BASE_INPUT_REASONS = ('non_finite', 'out_of_bounds', 'not_unit', 'wrong_frame', 'unstamped',
                       'stamp_not_increasing', 'interval_too_short', 'length_mismatch',
                       'no_model', 'unknown_link')
 #: The base rows' residual (N, N m) above which the status WARNs: the contacts cannot carry it.
 RESIDUAL_WARN = 1e-6
+#: A contact pulls when its normal force ``n·f`` is below ``−PULL_TOLERANCE · m · 9.81`` N, ``m``
+#: the model's mass (:func:`pull_tolerance`): relative to the weight, because the split's
+#: rounding and the QP's convergence tolerance (relative, ~1e-8) scale with the forces, which
+#: scale with the weight; an absolute 1e-6 N would refuse a 100 kg robot's QP answers for
+#: their solver noise, and let a 0.1 kg one pull a tenth of a mN unseen.
+PULL_TOLERANCE = 1e-6
 
 _XYZ = ('x', 'y', 'z')
 
@@ -260,6 +269,19 @@ def source_hint(params, inputs: 'BaseInputs') -> str:
         return ("base/imu arrives but base_input.source is 'twist': set base_input.source "
                 "'imu' (and base_input.imu_link) to use it")
     return ''
+=======
+def pull_tolerance(model: 'sd.Model') -> float:
+    """Return the N by which a contact may pull: :data:`PULL_TOLERANCE` of ``m · 9.81``."""
+    return PULL_TOLERANCE * float(model.inertia[:, 3, 3].sum()) * 9.81
+
+
+def qp_missing_warning(robot) -> str:
+    """Return the WARN, once at configuration, of a floating base without its QP ('': none)."""
+    if robot is None or not robot.qp_missing:
+        return ''
+    return ('contacts: the QP that re-solves a split making a contact pull cannot run '
+            f'({robot.qp_missing}); answering with contacts.method alone, and refusing '
+            'each answer whose split makes a contact pull (contacts_pull in /diagnostics)')
 
 
 def _same(a: Optional[tuple], b: tuple) -> bool:
@@ -283,6 +305,11 @@ class BaseWindow:
     violations: Counter = field(default_factory=Counter)   # 'contact kind' -> count
     worst: dict = field(default_factory=dict)               # 'contact kind' -> largest N
     last: str = ''
+    resolved: int = 0           # answers re-solved by qp: the split made a contact pull
+    refused: Counter = field(default_factory=Counter)      # pulling answers refused, by reason
+    pull_max: float = 0.0       # the worst pull seen (N) of those, and its contact
+    pull_contact: str = ''
+    refused_last: str = ''      # why the last of them was refused
 
 
 class BaseInputs:
@@ -510,19 +537,42 @@ class BaseInputs:
             robot.model, params.gravity, robot.backend, robot.armature,
             robot.friction_threshold, f_ext,
             None, np.concatenate((position, quat)), v, self._rate(params, 'base/twist'),
-            contacts, params.contacts_method, [], self._measured(params, contacts, now_ns))
+            contacts, params.contacts_method, [], self._measured(params, contacts, now_ns),
+            robot.qp_missing, robot.pull_tolerance, [])
 
-    def solved(self, result: 'sd.ContactResult') -> None:
-        """Count a contact solution's residual and violations for the period."""
+    def solved(self, result: 'sd.ContactResult', tolerance: float) -> None:
+        """Count a contact solution's residual and violations for the period.
+
+        A normal force below zero by no more than ``tolerance`` (:func:`pull_tolerance`) is
+        rounding, not a pull.
+        """
         window = self.window
         window.solved += 1
         window.residual_max = max(window.residual_max,
                                   float(np.abs(result.base_residual).max()))
         for violation in result.violations:
+            if violation.kind == 'unilateral' and violation.amount <= tolerance:
+                continue
             key = f'{violation.contact} {violation.kind}'
             window.violations[key] += 1
             window.worst[key] = max(window.worst.get(key, 0.0), violation.amount)
         window.last = result.summary()
+
+    def pulled(self, pulls: list, refused: Optional[InputError] = None) -> None:
+        """Count an answer whose split made a contact pull: re-solved by qp, or ``refused``.
+
+        ``pulls``: the :class:`~spatial_dynamics.contacts.Violation` s (``unilateral``) of the
+        answer's splits (:attr:`FloatingDynamics.pulls`).
+        """
+        window = self.window
+        if refused is None:
+            window.resolved += 1
+        else:
+            window.refused[refused.reason] += 1
+            window.refused_last = str(refused)
+        for pull in pulls:
+            if pull.amount > window.pull_max:
+                window.pull_max, window.pull_contact = pull.amount, pull.contact
 
 
 @dataclass(frozen=True)
@@ -537,6 +587,14 @@ class FloatingDynamics(Dynamics):
     for them (their base residual is the check); the efforts never
     include the base's rows. Armature and friction (``friction_threshold``) add to the
     joints' (the rotors' torque; the drives' friction).
+
+    A split (``torques``, ``forces``) that makes a contact pull by more than
+    ``pull_tolerance`` N (:func:`pull_tolerance`) in :meth:`full` or :meth:`gravity_torque`
+    is re-solved by ``'qp'`` (friction cones of the contacts' ``μ``, ``n·f ≥ 0``), whose
+    answer is used; each such pull is kept in ``pulls``. InputError ``contacts_unsolved``
+    when the QP finds none, ``contacts_pull`` when ``qp_missing`` says why the QP cannot run
+    (or it pulls itself). :meth:`inertia_times` is not checked: its forces are the
+    increments of a linear split (no gravity), which have no sign of their own.
     """
 
     base_q: np.ndarray = None
@@ -546,18 +604,44 @@ class FloatingDynamics(Dynamics):
     method: str = 'torques'
     results: List = None
     measured: Optional[dict] = None
+    qp_missing: str = ''
+    pull_tolerance: float = 0.0
+    pulls: List = None
 
-    def _solve(self, q, qd, qdd, base_v, base_a, gravity, measured=None) -> np.ndarray:
+    def _solve(self, q, qd, qdd, base_v, base_a, gravity, measured=None,
+               unilateral: bool = True) -> np.ndarray:
         q_full = np.concatenate((self.base_q, q))
         if measured is not None:   # world axes, as contact_inverse_dynamics takes them
             rotations = link_orientations(self.model, q_full, list(measured))
             measured = {c.name: _world(rotations[c.link], measured[c.link], c.rows)
                         for c in self.contacts}
-        result = sd.contact_inverse_dynamics(
-            self.model, q_full, np.concatenate((base_v, qd)), np.concatenate((base_a, qdd)),
-            self.contacts, measured=measured, method=self.method, gravity=gravity)
+        state = (self.model, q_full, np.concatenate((base_v, qd)),
+                 np.concatenate((base_a, qdd)), self.contacts)
+        result = sd.contact_inverse_dynamics(*state, measured=measured, method=self.method,
+                                             gravity=gravity)
         if result.status != 'solved':
             raise InputError('contacts_unsolved', f'contacts {self.method}: {result.summary()}')
+        if measured is not None or not unilateral:
+            return result
+        pull = _worst_pull(result, self.pull_tolerance)
+        if pull is None:      # the fast path: the violations _result found, usually none
+            return result
+        self.pulls.append(pull)
+        what = (f'contacts {self.method}: contact {pull.contact!r} would pull {pull.amount:.3g} '
+                f'N (n·f < 0; tolerance {self.pull_tolerance:.3g} N)')
+        if self.method == 'qp' or self.qp_missing:
+            raise InputError('contacts_pull', what + (
+                '; not publishing' if self.method == 'qp' else
+                f'; the QP that re-solves it cannot run ({self.qp_missing}); not publishing'))
+        result = sd.contact_inverse_dynamics(*state, method='qp', gravity=gravity)
+        if result.status != 'solved':
+            raise InputError('contacts_unsolved', f'{what}; re-solved by qp: '
+                             f'{result.summary()}; not publishing')
+        again = _worst_pull(result, self.pull_tolerance)
+        if again is not None:
+            raise InputError('contacts_pull', f'{what}; re-solved by qp, contact '
+                             f'{again.contact!r} still pulls {again.amount:.3g} N; '
+                             'not publishing')
         return result
 
     def full(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
@@ -580,10 +664,22 @@ class FloatingDynamics(Dynamics):
     def inertia_times(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Return the contact-consistent efforts of joint accelerations ``u`` (no gravity)."""
         zero, six = np.zeros(len(q)), np.zeros(6)
-        tau = np.array(self._solve(q, zero, u, six, six, (0.0, 0.0, 0.0)).tau)
+        tau = np.array(self._solve(q, zero, u, six, six, (0.0, 0.0, 0.0),
+                                   unilateral=False).tau)
         if self.armature is not None:
             tau += self.armature * u
         return tau
+
+
+def _worst_pull(result: 'sd.ContactResult', tolerance: float
+                ) -> Optional['sd.contacts.Violation']:
+    """Return the contact of ``result`` that pulls most beyond ``tolerance`` N (None: none)."""
+    worst = None
+    for violation in result.violations:
+        if (violation.kind == 'unilateral' and violation.amount > tolerance
+                and (worst is None or violation.amount > worst.amount)):
+            worst = violation
+    return worst
 
 
 def _world(R: np.ndarray, wrench: np.ndarray, rows: int) -> np.ndarray:
@@ -619,8 +715,11 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
     """Return the ``base`` status: what the base's inputs are, the contacts' figures.
 
     ERROR while a needed input is missing or stale (nothing is published), WARN when a
-    contact solution of the period violated a friction cone or pulled on the ground, or left
-    a base residual above :data:`RESIDUAL_WARN`.
+    contact solution of the period violated a friction cone or pulled on the ground, left
+    a base residual above :data:`RESIDUAL_WARN`, or when an answer was refused because its
+    split made a contact pull and the QP could not re-solve it. Answers re-solved by the QP
+    (a contact would have pulled) are counted, with the worst pull seen: that is the node
+    working as documented, not a warning.
     """
     values = [('base', params.base)]
     needed = []
@@ -651,6 +750,14 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
                    ('last solution', window.last)]
         values += [(f'violation {key}', f'{count} (worst {window.worst[key]:.3g} N)')
                    for key, count in window.violations.items()]
+        values += [('contact pull tolerance [N]', f'{robot.pull_tolerance:.3g}' if robot
+                    else ''),
+                   ('qp fallback', (robot.qp_missing or 'ready') if robot else ''),
+                   ('re-solved by qp (a contact would pull)', str(window.resolved)),
+                   ('worst pull [N]', f'{window.pull_max:.3g}' + (
+                       f' ({window.pull_contact})' if window.pull_contact else ''))]
+        values += [(f'refused {reason} (a contact would pull)', str(count))
+                   for reason, count in window.refused.items()]
     if robot is None:
         return 'ERROR', 'no robot model', values
     hint = source_hint(params, inputs)
@@ -659,6 +766,9 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
     if problems:
         return 'ERROR', '; '.join(problems) + '; not publishing', values
     warnings = []
+    if window.refused:
+        warnings.append(f'{sum(window.refused.values())} answer(s) refused, a contact would '
+                        f'pull: {window.refused_last}')
     if window.violations:
         warnings.append('contact violations: ' + ', '.join(
             f'{key} ({count}x, worst {window.worst[key]:.3g} N)'

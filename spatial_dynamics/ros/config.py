@@ -34,7 +34,8 @@ from spatial_dynamics.contacts import warm_qp
 from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
 from spatial_dynamics.ros.bases import (
-    BASE_ACCELERATIONS, BASE_SOURCES, BASES, check_base, CONTACT_KINDS, CONTACT_METHODS)
+    BASE_ACCELERATIONS, BASE_SOURCES, BASES, check_base, CONTACT_KINDS, CONTACT_METHODS,
+    pull_tolerance)
 from spatial_dynamics.ros.descriptions import (
     description_change, MAX_DESCRIPTION_BYTES, parse_description)
 from spatial_dynamics.ros.control import (
@@ -375,12 +376,15 @@ PARAMETERS = Table(NODE_NAME, [
         choices=CONTACT_KINDS),
     Param('contacts.mu', 'double', DEFAULT_CONTACT_MU, (
         'Coulomb friction coefficient of every contact: a force outside its cone is reported '
-        'in /diagnostics ("qp" keeps inside it). Live.'), bounds=(0.0, MAX_CONTACT_MU)),
+        'in /diagnostics ("qp", and the QP that re-solves a pulling split, keep inside it). '
+        'Live.'), bounds=(0.0, MAX_CONTACT_MU)),
     Param('contacts.method', 'string', 'torques', (
         'How M qdd + h is split: "torques", the least joint efforts consistent with the '
         'contacts; "forces", the least contact forces carrying the base; "qp", the least '
         'efforts with every force inside its friction cone (slower; infeasible = no '
-        'output). Live.'), choices=CONTACT_METHODS),
+        'output). A "torques" or "forces" split that makes a contact pull (n.f below '
+        '-1e-6 m g) is re-solved by "qp" and its answer published; without the QP (clarabel, '
+        'the qp extra) or when it is infeasible, no output. Live.'), choices=CONTACT_METHODS),
     Param('contacts.measured', 'bool', False, (
         'Take the contact wrenches from measured_contact_wrenches (geometry_msgs/'
         "WrenchStamped from foot force sensors: frame_id = a link of contacts.links, [n; f] "
@@ -512,12 +516,12 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
             f'parameter wrench_estimate.link: {params.wrench_estimate_link!r} is not a link of '
             f'robot {base.name!r} ({source})')
     check_base(params, base, source)
-    if params.base == 'floating' and params.contacts_method == 'qp':
-        _warm_qp()
+    qp_missing = _warm_qp(params.contacts_method) if params.base == 'floating' else ''
     setting = params.backend
     actuated = tuple(base.joint_names[1:] if base.floating else base.joint_names)
+    model = payload.apply(base)
     return Robot(
-        urdf=urdf, source=source, base=base, model=payload.apply(base),
+        urdf=urdf, source=source, base=base, model=model,
         joints=actuated, joints_param=joints, locked=tuple(locked.items()),
         payload=payload, armature=check_armature(base, params.armature),
         friction_threshold=(params.friction_velocity_threshold
@@ -525,15 +529,25 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
         clamp=params.clamp_to_effort_limits, setting=setting,
         backend=resolve_backend(setting), gains=model_gains(base, params, actuated),
         external_torque_warn=_observer_check(check_warn, actuated,
-                                             params.external_torque_warn))
+                                             params.external_torque_warn),
+        qp_missing=qp_missing,
+        pull_tolerance=pull_tolerance(model) if base.floating else 0.0)
 
 
-def _warm_qp() -> None:
-    """Import and warm the contacts' QP solver here, never on the answering path."""
+def _warm_qp(method: str) -> str:
+    """Import and warm the contacts' QP solver here, never on the answering path.
+
+    A floating base needs it whatever ``contacts.method``: a ``torques`` or ``forces``
+    split that makes a contact pull is re-solved by it. Return why it cannot run (``''``:
+    ready); with ``contacts.method: qp`` that is a ConfigError.
+    """
     try:
         warm_qp()
     except ImportError as err:
-        raise ConfigError(f'parameter contacts.method: {err}') from None
+        if method == 'qp':
+            raise ConfigError(f'parameter contacts.method: {err}') from None
+        return str(err)
+    return ''
 
 
 def _check_without_model(params) -> None:

@@ -52,7 +52,7 @@ from sensor_msgs.msg import Imu, JointState
 import spatial_dynamics as sd
 from spatial_dynamics.ros import messages
 from spatial_dynamics.ros.answering import Answering, Out
-from spatial_dynamics.ros.bases import base_status, observer_off
+from spatial_dynamics.ros.bases import base_status, observer_off, qp_missing_warning
 from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, plan_qos, spin, subscribe
 from spatial_dynamics.ros.config import (
     build_robot, ConfigError, NODE_NAME, PARAMETER_NAMES, PARAMETERS, PAYLOAD_PARAMETERS,
@@ -306,6 +306,8 @@ class InverseDynamicsNode(Node):
         if robot.backend != 'compiled' and robot.setting != 'numpy' and previous is None:
             self.get_logger().warn(f'backend {robot.setting}: compiled kernels unavailable, '
                                    f'answering on numpy: {sd.backends.compiled.FAILURE}')
+        if previous is None and qp_missing_warning(robot):   # base is read-only: once
+            self.get_logger().warn(qp_missing_warning(robot))
         if previous is None or robot.urdf != previous.urdf:
             for warning in robot.base.warnings:
                 self.get_logger().warn(f'URDF warning ({robot.source}): {warning}')

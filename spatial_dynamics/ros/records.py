@@ -57,7 +57,10 @@ class Robot:
     is in the order of ``joints`` (= ``model.joint_names``). ``armature`` is ``None`` or (n,),
     ``friction_threshold`` is ``None`` (friction_model none) or the smooth-sign velocity.
     ``backend`` is what the answers run on (``'numpy'`` or ``'compiled'``, see
-    :func:`~.config.resolve_backend`), ``setting`` the ``backend`` parameter.
+    :func:`~.config.resolve_backend`), ``setting`` the ``backend`` parameter. On a floating
+    base, ``qp_missing`` says why the contacts' QP cannot run (``''``: imported and warmed)
+    and ``pull_tolerance`` is the N by which a contact may pull
+    (:func:`~.bases.pull_tolerance`).
     """
 
     urdf: str
@@ -75,6 +78,8 @@ class Robot:
     setting: str = 'auto'
     gains: Optional[Gains] = None
     external_torque_warn: Optional[np.ndarray] = None
+    qp_missing: str = ''
+    pull_tolerance: float = 0.0
 
 
 @dataclass(frozen=True)
