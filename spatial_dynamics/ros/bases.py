@@ -5,8 +5,7 @@
 Pure Python + numpy + the library (no rclpy import), tested in
 ``test/test_node_base_inputs.py``. Parameter ``base`` (read-only):
 
-===========  ============================================================================
-
+===========  ===================================================================================
 ``fixed``    today's node: the URDF's root link is fixed to the world (default).
 ``moving``   the fixed-base model on a moving base (a mobile manipulator, a ship): each answer
              is ``rnea(..., base=motion)`` with the base's motion from an IMU on the base
@@ -269,7 +268,8 @@ def source_hint(params, inputs: 'BaseInputs') -> str:
         return ("base/imu arrives but base_input.source is 'twist': set base_input.source "
                 "'imu' (and base_input.imu_link) to use it")
     return ''
-=======
+
+
 def pull_tolerance(model: 'sd.Model') -> float:
     """Return the N by which a contact may pull: :data:`PULL_TOLERANCE` of ``m · 9.81``."""
     return PULL_TOLERANCE * float(model.inertia[:, 3, 3].sum()) * 9.81
