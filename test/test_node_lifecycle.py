@@ -70,7 +70,7 @@ def test_yaml_documents_every_parameter():
                         'base_input.max_angular_acceleration', 'base_input.timeout',
                         'contacts.links',
                         'contacts.kind', 'contacts.mu', 'contacts.method',
-                        'contacts.measured'}
+                        'contacts.measured', 'thread_priority', 'cpu_affinity', 'lock_memory'}
     for name in declared:
         # payload.link is written nested: 'payload:' then 'link:'
         *group, leaf = name.split('.')

@@ -27,6 +27,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, QoSReliabilit
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from spatial_dynamics.ros.parameters import ConfigError, ParameterError
+from spatial_dynamics.ros.realtime import GroupExecutor, OthersExecutor
 
 
 def input_qos(depth: int = 1) -> QoSProfile:
@@ -105,9 +106,12 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
     """Make a node and spin it until SIGINT/SIGTERM; 0 on a clean exit, 1 on a bad start-up.
 
     The node's and the latency baseline's (``relay.py``) process around them, one routine.
-    With ``threads`` > 1 the executor is rclpy's MultiThreadedExecutor: callbacks of different
-    callback groups run side by side (the node answers in one group while a parameter change
-    parses a description in rclpy's default group); 1 gives the SingleThreadedExecutor.
+    A node with an ``answering_group`` has it spun in a thread of its own by an executor that
+    waits on that group only (:class:`~.realtime.GroupExecutor`), and everything else by a
+    MultiThreadedExecutor of ``threads`` - 1 threads that never waits on it (the node answers
+    while a parameter change parses a description in rclpy's default group). Otherwise, with
+    ``threads`` > 1 the executor is rclpy's MultiThreadedExecutor; 1 gives the
+    SingleThreadedExecutor.
 
     SIGINT is handled as SIGTERM is: rclpy's handler shuts the context down and wakes the
     executor, which returns between two callbacks. Python's own SIGINT handler is not chained
@@ -119,12 +123,17 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
     rclpy.init(args=args)
     node = None
     status = 0
+    failed: list = []
     try:
         node = make_node()
-        executor = (MultiThreadedExecutor(num_threads=threads) if threads > 1
-                    else SingleThreadedExecutor())
-        executor.add_node(node)
-        executor.spin()
+        group = getattr(node, 'answering_group', None)
+        if group is not None:
+            _spin_answering(node, group, threads - 1, failed)
+        else:
+            executor = (MultiThreadedExecutor(num_threads=threads) if threads > 1
+                        else SingleThreadedExecutor())
+            executor.add_node(node)
+            executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ConfigError, ParameterError, InvalidParameterTypeException,
@@ -145,4 +154,36 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
+    if failed:   # the answering thread stopped on an error: the node must not run on mute
+        raise failed[0]
     return status
+
+
+def _spin_answering(node: Node, group, threads: int, failed: list) -> None:
+    """Spin ``group`` of ``node`` in a thread of its own, the rest here, until shutdown.
+
+    The answering thread first calls ``node.on_answering_thread()`` (its real-time knobs).
+    An exception there (a bug: the callbacks catch what a message can cause) is put in
+    ``failed`` and shuts the context down, so the process ends instead of running without
+    answers; one raised by the requested shutdown is not.
+    """
+    answering = GroupExecutor(node, group)
+    others = OthersExecutor(group, max(threads, 1), node.context)
+    others.add_node(node)
+
+    def run() -> None:
+        try:
+            node.on_answering_thread()
+            answering.spin()
+        except Exception as err:  # raised again by spin, in the main thread
+            if not _context_shut_down():
+                failed.append(err)
+                rclpy.try_shutdown()
+
+    thread = threading.Thread(target=run, name='answering', daemon=True)
+    thread.start()
+    try:
+        others.spin()
+    finally:
+        rclpy.try_shutdown()
+        thread.join(5.0)

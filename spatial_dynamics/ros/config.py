@@ -60,6 +60,7 @@ DEFAULT_MEASURED_TIMEOUT = 0.5      # s
 DEFAULT_BASE_TIMEOUT = 0.5          # s
 DEFAULT_BASE_MIN_INTERVAL = 1e-4    # s: twist sources up to 10 kHz
 DEFAULT_BASE_FILTER = 0.01          # s: the differenced twist's low-pass, ~16 Hz
+DEFAULT_THREAD_PRIORITY = 50        # SCHED_FIFO, as ros2_control's controller_manager
 DEFAULT_CONTACT_MU = 0.7            # Coulomb friction of a foot on a floor
 MAX_CONTACT_MU = 10.0               # beyond it a cone is a wall: a mistake, not a floor
 #: ``observer_gain`` K_O, 1/s: a 50 ms time constant (3.2 Hz bandwidth). A collision or a
@@ -99,6 +100,12 @@ def _gravity_norm(name: str, g) -> None:
 
 
 _gravity_norm.__doc__ = f'norm at most {MAX_GRAVITY:g} m/s² (100 g).'
+
+
+def _distinct_cores(name: str, cores) -> None:
+    """No core repeated."""
+    if len(set(cores)) != len(cores):
+        raise ConfigError(f'parameter {name}: cores repeated in {list(cores)}')
 
 
 #: The top of config/inverse_dynamics.yaml, above the parameters the table writes.
@@ -397,6 +404,31 @@ PARAMETERS = Table(NODE_NAME, [
         'joints). "compiled" and "auto": the compiled kernels built with the package (~1-3 '
         'µs), from the first answer; numpy, with a warning, in a package built without them. '
         'Read-only.'), choices=BACKEND_SETTINGS, read_only=True),
+    Param('thread_priority', 'int', DEFAULT_THREAD_PRIORITY, (
+        'SCHED_FIFO priority of the thread that answers the inputs and of the middleware '
+        "threads that receive them (controller_manager's parameter and default); 0 = normal "
+        'scheduling. A real-time thread runs before every normal one on its core: the '
+        'answers keep their period on a busy machine, and a busy loop in the node would '
+        'starve the core (the node only waits or answers). Needs the rtprio limit or '
+        'CAP_SYS_NICE (a realtime group in /etc/security/limits.conf, ulimit -r, '
+        'docker run --cap-add=sys_nice --ulimit rtprio=99); without it one WARN says so '
+        'and the node answers under normal scheduling. /diagnostics (real-time) says what '
+        'is in effect. Read-only.'), bounds=(0, 99), read_only=True),
+    Param('cpu_affinity', 'int[]', None, (
+        'CPU cores the answering thread may run on (controller_manager\'s parameter); '
+        'unset or empty = all. A core of its own (with isolcpus, or other processes kept '
+        'off it) spares the answers the wait for other work on the core; pinning to a busy '
+        'core costs latency. A core outside the process\'s allowed set is refused with a '
+        'WARN and the thread runs on all of them. Read-only.'), bounds=(0, 1023),
+        rules=(_distinct_cores,), read_only=True),
+    Param('lock_memory', 'bool', False, (
+        'Lock the process\'s memory in RAM (mlockall of current and future pages), so no '
+        'answer waits for a page fault or swap-in. Costs resident memory: every page the '
+        'process maps stays in RAM (the Python process and the middleware, a few hundred '
+        'MB). Needs the memlock limit (unlimited; limits.conf, ulimit -l, docker --ulimit '
+        'memlock=-1) or CAP_IPC_LOCK; without it one WARN and the node runs unlocked. '
+        "controller_manager's default is false on a standard kernel, true on a real-time "
+        'one. Read-only.'), read_only=True),
 ], header=PARAMETER_FILE_HEADER)
 #: Every parameter, by name.
 PARAMETER_NAMES = tuple(spec.name for spec in PARAMETERS)

@@ -26,6 +26,12 @@ the plans (``desired_trajectory``, sized, converted and checked: :mod:`.plans`) 
 rclpy's default group, which alone writes ``config``. A description set by parameter is
 parsed in its callback (the answer says whether it was accepted) while the answers go on in
 theirs.
+
+The ``inputs`` group is the answering group: :func:`~spatial_dynamics.ros.common.spin` runs it
+in a thread of its own with an executor that waits on it alone, and the rest (plans,
+parameters, descriptions, the diagnostics timer) in a MultiThreadedExecutor that never waits
+on it. That thread applies the real-time knobs (``thread_priority``, ``cpu_affinity``,
+``lock_memory``: :mod:`spatial_dynamics.ros.realtime`) when it starts.
 """
 
 from __future__ import annotations
@@ -62,6 +68,7 @@ from spatial_dynamics.ros.descriptions import description_source, DescriptionPar
 from spatial_dynamics.ros.diagnostics import (
     backend_text, feedforward_status, model_status, observer_status)
 from spatial_dynamics.ros.plans import Annotator, prepare_plan
+from spatial_dynamics.ros import realtime
 from spatial_dynamics.ros.records import Config, Robot
 from std_msgs.msg import Float64MultiArray, String, UInt8MultiArray
 from trajectory_msgs.msg import JointTrajectory
@@ -69,7 +76,8 @@ from trajectory_msgs.msg import JointTrajectory
 WRENCH_DEPTH = 10                   # several links may publish in one burst
 #: Parameters that can change while the node runs (all but the read-only ones).
 LIVE_PARAMETERS = frozenset(spec.name for spec in PARAMETERS if not spec.read_only)
-_UNSET = {'string[]': Parameter.Type.STRING_ARRAY, 'double[]': Parameter.Type.DOUBLE_ARRAY}
+_UNSET = {'string[]': Parameter.Type.STRING_ARRAY, 'double[]': Parameter.Type.DOUBLE_ARRAY,
+          'int[]': Parameter.Type.INTEGER_ARRAY}
 
 
 class InverseDynamicsNode(Node):
@@ -80,12 +88,13 @@ class InverseDynamicsNode(Node):
         for param in PARAMETERS:   # the values are checked by _prepare, below
             self.declare_parameter(param.name, _UNSET[param.type] if param.default is None
                                    else param.default, PARAMETERS.descriptor(param))
-        # Callback groups, each its thread (spin's MultiThreadedExecutor): the answering one
-        # (inputs, diagnostics), the plans' one (below) and rclpy's default one (parameter
-        # services, the description topic, the parser's notifications), which alone writes
-        # ``config``. A parameter change that parses a description waits in its callback for
-        # the parse while the answers go on in theirs; the new ``Config`` is swapped in as one
-        # reference, and each answer reads ``self.config`` once.
+        # Callback groups, each its thread: the answering one (inputs; spin gives it a thread
+        # and an executor of its own), the plans' one (below) and rclpy's default one
+        # (parameter services, the description topic, the parser's notifications, the
+        # diagnostics timer), which alone writes ``config``. A parameter change that parses a
+        # description waits in its callback for the parse while the answers go on in theirs;
+        # the new ``Config`` is swapped in as one reference, and each answer reads
+        # ``self.config`` once.
         self.inputs = MutuallyExclusiveCallbackGroup()
         # Plans (desired_trajectory) are taken serialized, sized, converted and checked in a
         # third group (a third thread), handed to the answering group through a queue and a
@@ -95,6 +104,9 @@ class InverseDynamicsNode(Node):
         self._plan_queue: deque = deque()
         self.config: Optional[Config] = None
         self.answering = Answering(self.get_logger())
+        self.realtime: Optional[realtime.InEffect] = None   # set by the answering thread
+        self._collections = 0      # diagnostics periods, each with a young-generation collection
+        self._collection_ns = 0    # the pause of the last one
         # Topic descriptions: parsed by a worker; the result is applied only if its
         # generation is still the newest (a parameter or a newer message supersedes).
         self._description_generation = 0
@@ -108,6 +120,29 @@ class InverseDynamicsNode(Node):
         self._make_endpoints()
         if self.robot is None:
             self._warn_waiting()
+
+    @property
+    def answering_group(self) -> MutuallyExclusiveCallbackGroup:
+        """The callback group spun in the answering thread (see the module docstring)."""
+        return self.inputs
+
+    def on_answering_thread(self) -> None:
+        """Answering thread, before its first wait: apply the real-time knobs; GC off.
+
+        What the system refuses is one WARN (how to grant it) and normal scheduling; what is
+        in effect is in /diagnostics (``real-time``).
+        """
+        params = self.config.params
+        in_effect = realtime.apply(params.thread_priority, params.cpu_affinity,
+                                   params.lock_memory)
+        warning = realtime.warning(in_effect)
+        if warning:
+            self.get_logger().warn(warning)
+        else:
+            self.get_logger().info(f'real-time: {in_effect.priority}; {in_effect.affinity}; '
+                                   f'memory {in_effect.memory}')
+        self.realtime = in_effect
+        realtime.keep_collector_off_answers()
 
     @property
     def robot(self) -> Optional[Robot]:
@@ -130,6 +165,7 @@ class InverseDynamicsNode(Node):
         self._estimate = JointState()
         self._commands = Float64MultiArray()
         self._efforts = JointState()
+        self._efforts_joints = None
         self._terms = JointState()
         group = self.inputs
         subscribe(self, JointState, 'desired_joint_states', self._on_joint_state, group=group)
@@ -147,7 +183,7 @@ class InverseDynamicsNode(Node):
             subscribe(self, WrenchStamped, 'measured_contact_wrenches',
                       self._base_callback('measured_contact_wrenches'), WRENCH_DEPTH,
                       group=group)
-        self.create_timer(1.0, self._publish_diagnostics, callback_group=group)
+        self.create_timer(1.0, self._publish_diagnostics)   # default group: off the answers
 
     def _base_callback(self, topic: str):
         def take(msg) -> None:
@@ -387,7 +423,9 @@ class InverseDynamicsNode(Node):
         self.commands_pub.publish(commands)
         efforts = self._efforts
         efforts.header = header
-        efforts.name = joints
+        if self._efforts_joints is not joints:   # once per model, not per answer
+            efforts.name = joints
+            self._efforts_joints = joints
         efforts.position = array('d', q.tobytes())
         efforts.velocity = array('d', qd.tobytes())
         efforts.effort = commands.data
@@ -412,6 +450,8 @@ class InverseDynamicsNode(Node):
 
     def _publish_diagnostics(self) -> None:
         """Publish the ``robot model`` and ``feedforward`` statuses of the period that ended."""
+        self._collection_ns = realtime.collect(self._collections)   # off the answering thread
+        self._collections += 1
         now_ns = time.monotonic_ns()
         answering = self.answering
         answering.drain(self.annotator)
@@ -429,6 +469,10 @@ class InverseDynamicsNode(Node):
             ('external torque', observer_status(robot, config.params.observer_gain,
                                                 answering.observer, estimates,
                                                 observer_off(config.params)))]
+        level, message, values = realtime.status(self.realtime)
+        values.append(('gc collection', f'{self._collection_ns / 1000:.0f} µs (diagnostics '
+                       'timer; automatic collections off)'))
+        statuses.append(('real-time', (level, message, values)))
         if config.params.base != 'fixed':
             statuses.append(('base', base_status(config.params, robot, answering.base_inputs,
                                                  answering.base_inputs.period(), now_ns)))

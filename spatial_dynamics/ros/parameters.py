@@ -28,7 +28,7 @@ import textwrap
 from typing import Any, Callable, Dict, Iterable, Mapping, Optional, Sequence, Tuple
 
 #: The parameter types a table may use (ROS 2 names).
-TYPES = ('bool', 'int', 'double', 'string', 'double[]', 'string[]')
+TYPES = ('bool', 'int', 'double', 'string', 'double[]', 'int[]', 'string[]')
 
 
 class ConfigError(ValueError):
@@ -44,7 +44,7 @@ class Param:
     """One parameter of a node, as written once in its table.
 
     ``default`` None means unset (arrays only: rclpy cannot infer the type of an empty list).
-    ``bounds`` is a closed interval for a number, or for each element of a ``double[]``;
+    ``bounds`` is a closed interval for a number, or for each element of an array of numbers;
     ``length`` an exact number of elements; ``per_joint`` says a ``double[]`` holds one value
     for every joint or one per model joint (checked against the model by
     :func:`per_joint_values`, the rest of the shape here). ``rules`` are further checks,
@@ -154,10 +154,11 @@ def check(param: Param, value: Any) -> Any:
         if isinstance(value, str) or not all(isinstance(x, str) for x in value):
             raise ParameterError(f'parameter {name}: need a list of strings, got {value!r}')
         value = tuple(value)
-    else:   # double[]
+    else:   # double[], int[]
         if isinstance(value, str):
             raise ParameterError(f'parameter {name}: need a list of numbers, got {value!r}')
-        value = tuple(_number(name, x, float) for x in value)
+        value = tuple(_number(name, x, int if param.type == 'int[]' else float)
+                      for x in value)
         if param.length is not None:
             of_length(name, value, param.length, param.unit)
         if param.per_joint and not value:
@@ -260,6 +261,7 @@ class Table:
         """
         from rclpy.parameter import Parameter
         unset = {'double[]': Parameter.Type.DOUBLE_ARRAY,
+                 'int[]': Parameter.Type.INTEGER_ARRAY,
                  'string[]': Parameter.Type.STRING_ARRAY}
         raw = {}
         for p in self.params:

@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Latency benchmark: ``inverse_dynamics`` against a trivial relay, in the same run.
 
-    python -m spatial_dynamics.tools.latency [--rate 1000] [--seconds 10] [--json out/lat.json]
+    python -m spatial_dynamics.tools.latency [--rate 1000] [--seconds 10] [--robot ur5]
+        [--busy 3] [--priority 50] [--plot out/latency.png] [--json out/lat.json]
 
 Starts the node (on the demo robot) and :mod:`spatial_dynamics.tools.relay` as two processes,
 each in its own namespace, and publishes the same smooth trajectory (sensor_msgs/JointState, model
@@ -13,6 +14,15 @@ target: messages sent, fraction answered, p50 / p99 / max, and the CPU time (use
 process used per message while measured. The relay does everything the node does except the
 inverse dynamics and the second publication (``effort_commands``, published first), so node
 p50 - relay p50 is the node's own cost.
+
+Each round trip is split at the answer's publication (its DDS source timestamp, the same
+clock on one machine): ``to answer`` is input publish -> answer published by the target (the
+way in, the executor, the answer), the rest is the way back to this process. The node's
+compute time per answer (mean and max of each diagnostics period) comes from its
+``/diagnostics``. ``--busy N`` runs N busy loops (one process each) beside the run, the load
+of a busy machine; ``--priority P`` gives node, relay and this process's publishing thread and
+receive threads SCHED_FIFO P (0: normal scheduling for all; needs the rtprio limit, see the
+node's ``thread_priority``). ``--plot`` draws the histograms of the round trips (matplotlib).
 """
 
 from __future__ import annotations
@@ -21,13 +31,22 @@ import argparse
 import json
 import os
 import signal
+import subprocess
 import sys
+import sysconfig
+import textwrap
 import time
 from typing import Callable, Dict, List, Optional, Sequence, Set
 
 import numpy as np
 
-from .driving import cpu_seconds, node_command, robot_model, Sinusoids, start, stop
+from .driving import (
+    cpu_seconds, die_with_parent, node_command, pyplot, robot_model, save_figure, Sinusoids,
+    start, stop)
+
+#: Robots ``--robot`` names: the embedded demo arm, or example-robot-data's (a test dependency).
+ROBOTS = {'demo_arm': None, 'ur5': 'ur_description/urdf/ur5_robot.urdf'}
+QUANTILES = (('p50', 50.0), ('p99', 99.0), ('p99.9', 99.9))
 
 
 class Target:
@@ -40,6 +59,7 @@ class Target:
         self.namespace = namespace
         self.sent: Set[int] = set()
         self.latency_ns: Dict[int, int] = {}
+        self.to_answer_ns: Dict[int, int] = {}   # input publish -> answer published
         self.measuring = False
         self.publisher = bench.create_publisher(
             JointState, f'{namespace}/desired_joint_states', 10)
@@ -50,12 +70,13 @@ class Target:
         self.published = 0   # all messages, measured or not
         self.cpu_s = 0.0   # CPU time of the target's process while it was measured
 
-    def _on_answer(self, msg) -> None:
+    def _on_answer(self, msg, info) -> None:
         now = time.time_ns()
         self.answers += 1
         key = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         if key in self.sent and key not in self.latency_ns:
             self.latency_ns[key] = now - key
+            self.to_answer_ns[key] = info['source_timestamp'] - key
 
     def publish(self, msg) -> None:
         """Stamp ``msg`` with the wall time now and publish it (counted when measuring)."""
@@ -67,14 +88,17 @@ class Target:
         self.publisher.publish(msg)
 
     def summary(self) -> Dict[str, float]:
-        """Sent, answered fraction and latency percentiles in ms."""
+        """Sent, answered fraction and latency percentiles in ms (round trip, to answer)."""
         ms = np.array(sorted(self.latency_ns.values()), dtype=float) * 1e-6
         sent = len(self.sent)
         out = {'target': self.name, 'sent': sent, 'answered': len(ms),
                'answered_fraction': len(ms) / sent if sent else float('nan')}
-        for key, q in (('p50_ms', 50), ('p99_ms', 99)):
-            out[key] = float(np.percentile(ms, q)) if len(ms) else float('nan')
-        out['max_ms'] = float(ms.max()) if len(ms) else float('nan')
+        to_answer = np.array(list(self.to_answer_ns.values()), dtype=float) * 1e-6
+        for prefix, values in (('', ms), ('to_answer_', to_answer)):
+            for key, q in QUANTILES:
+                out[f'{prefix}{key}_ms'] = (float(np.percentile(values, q)) if len(values)
+                                            else float('nan'))
+            out[f'{prefix}max_ms'] = float(values.max()) if len(values) else float('nan')
         out['cpu_us_per_msg'] = 1e6 * self.cpu_s / sent if sent else float('nan')
         out['mean_ms'] = float(ms.mean()) if len(ms) else float('nan')
         return out
@@ -145,15 +169,99 @@ def input_depth(namespace: str, depth: Optional[int]) -> Dict[str, str]:
     return {f'qos_overrides.{namespace}/desired_joint_states.subscription.depth': str(depth)}
 
 
+def robot_path(robot: str) -> Optional[str]:
+    """Return the URDF of ``--robot``: None for the demo arm, else example-robot-data's."""
+    if ROBOTS[robot] is None:
+        return None
+    path = os.path.join(sysconfig.get_paths()['purelib'], 'cmeel.prefix', 'share',
+                        'example-robot-data', 'robots', ROBOTS[robot])
+    if not os.path.isfile(path):
+        raise SystemExit(f'--robot {robot}: needs example-robot-data (pip install '
+                         'example-robot-data), or give its URDF with --urdf')
+    return path
+
+
 def format_table(rows: List[Dict[str, float]]) -> str:
-    """Format the results as a fixed-width text table."""
-    lines = [f'{"target":<18}{"sent":>7}{"answered":>11}{"p50 ms":>9}{"p99 ms":>9}'
-             f'{"max ms":>9}{"CPU us/msg":>12}']
+    """Format the results as a fixed-width text table: round trip, then to the answer."""
+    keys = [key for key, _ in QUANTILES] + ['max']
+    lines = [f'{"":<18}{"":>7}{"":>11}{"round trip ms":^36}{"to answer ms":^36}',
+             f'{"target":<18}{"sent":>7}{"answered":>11}'
+             + ''.join(f'{k:>9}' for k in keys) * 2 + f'{"CPU us/msg":>12}']
     for r in rows:
         lines.append(f'{r["target"]:<18}{r["sent"]:>7}{100 * r["answered_fraction"]:>10.2f}%'
-                     f'{r["p50_ms"]:>9.3f}{r["p99_ms"]:>9.3f}{r["max_ms"]:>9.3f}'
-                     f'{r["cpu_us_per_msg"]:>12.1f}')
+                     + ''.join(f'{r[k + "_ms"]:>9.3f}' for k in keys)
+                     + ''.join(f'{r["to_answer_" + k + "_ms"]:>9.3f}' for k in keys)
+                     + f'{r["cpu_us_per_msg"]:>12.1f}')
     return '\n'.join(lines)
+
+
+class Compute:
+    """The node's compute time per answer from its /diagnostics: period means and maxima."""
+
+    def __init__(self, bench, namespace: str) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+        self.name = f'{namespace.strip("/")}/inverse_dynamics: feedforward'
+        self.means_us: List[float] = []
+        self.maxima_us: List[float] = []
+        self.measuring = False
+        bench.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
+
+    def _on_diagnostics(self, msg) -> None:
+        for status in msg.status:
+            if status.name == self.name and self.measuring:
+                values = {kv.key: kv.value for kv in status.values}
+                if values.get('compute time mean [us]'):
+                    self.means_us.append(float(values['compute time mean [us]']))
+                    self.maxima_us.append(float(values['compute time max [us]']))
+
+    def text(self) -> str:
+        """One line: the mean of the period means and the largest period maximum."""
+        if not self.means_us:
+            return 'inverse_dynamics compute per answer: no diagnostics period while measured'
+        return (f'inverse_dynamics compute per answer (its /diagnostics, {len(self.means_us)} '
+                f'periods): mean {np.mean(self.means_us):.1f} us, max {max(self.maxima_us):.1f} '
+                'us')
+
+
+def busy_loops(count: int) -> List[subprocess.Popen]:
+    """Start ``count`` processes that spin a core each (the load of a busy machine)."""
+    return [subprocess.Popen([sys.executable, '-c', 'while True: pass'],
+                             preexec_fn=die_with_parent) for _ in range(count)]
+
+
+def prioritize(priority: int) -> str:
+    """SCHED_FIFO ``priority`` for this thread and this process's receive threads (0: none)."""
+    from spatial_dynamics.ros import realtime
+    if priority <= 0:
+        return 'normal scheduling'
+    try:
+        for tid in [0] + realtime.receive_threads():
+            realtime.set_priority(tid, priority)
+    except OSError as err:
+        return f'normal scheduling (SCHED_FIFO {priority} not permitted: {err})'
+    return f'SCHED_FIFO {priority}'
+
+
+def plot(path: str, targets: List[Target], title: str) -> Optional[str]:
+    """Draw the histograms of the round trips (log counts) to ``path``; None if no matplotlib."""
+    plt = pyplot()
+    if plt is None:
+        return None
+    fig, ax = plt.subplots(figsize=(7.0, 3.6))
+    values = [np.array(list(t.latency_ns.values()), dtype=float) * 1e-6 for t in targets]
+    top = max((np.percentile(v, 99.9) for v in values if len(v)), default=1.0)
+    bins = np.linspace(0.0, max(top * 1.2, 0.5), 120)
+    for target, v in zip(targets, values):
+        answered = len(v) / max(len(target.sent), 1)
+        ax.hist(np.minimum(v, bins[-1]), bins=bins, histtype='step', log=True,
+                label=f'{target.name}: {100 * answered:.1f} % answered, p99.9 '
+                      f'{np.percentile(v, 99.9) if len(v) else float("nan"):.2f} ms')
+    ax.set_xlabel('round trip, ms (the last bin holds everything beyond)')
+    ax.set_ylabel('answers')
+    ax.set_title('\n'.join(textwrap.wrap(title, 100)), fontsize=8)
+    ax.legend(fontsize=8)
+    save_figure(plt, fig, path)
+    return path
 
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
@@ -166,7 +274,15 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         help='seconds per block; targets alternate (default 2)')
     parser.add_argument('--warmup', type=float, default=1.0,
                         help='unmeasured seconds at full rate per target first (default 1)')
-    parser.add_argument('--urdf', default=None, help='robot (default: the demo arm)')
+    parser.add_argument('--robot', choices=sorted(ROBOTS), default='demo_arm',
+                        help='robot (default demo_arm; ur5 from example-robot-data)')
+    parser.add_argument('--urdf', default=None, help='any other robot (overrides --robot)')
+    parser.add_argument('--busy', type=int, default=0,
+                        help='busy loops beside the run, one process each (default 0)')
+    parser.add_argument('--priority', type=int, default=0,
+                        help='SCHED_FIFO priority of node, relay and publisher (default 0: '
+                             'normal scheduling)')
+    parser.add_argument('--plot', default=None, help='draw the histograms here (PNG)')
     parser.add_argument('--json', default=None, help='also write the results here')
     parser.add_argument('--input-depth', type=int, default=None,
                         help='override the input subscription depth of node and relay (QoS '
@@ -182,22 +298,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    urdf, model = robot_model(args.urdf)
+    urdf, model = robot_model(args.urdf or robot_path(args.robot))
     trajectory = Sinusoids.for_model(model)
     namespace = f'/sd_latency_{os.getpid()}'
     logs = args.log_dir
     if logs:
         os.makedirs(logs, exist_ok=True)
+    priority = {'thread_priority': str(args.priority)}
     procs = {
         'relay': start(node_command('relay', 'spatial_dynamics.tools.relay'), f'{namespace}/relay',
-                       input_depth(f'{namespace}/relay', args.input_depth),
+                       {**priority, **input_depth(f'{namespace}/relay', args.input_depth)},
                        logs and os.path.join(logs, 'relay.log')),
         'inverse_dynamics': start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'),
                                   f'{namespace}/node',
-                                  {'robot_description_file': urdf,
+                                  {'robot_description_file': urdf, **priority,
                                    **input_depth(f'{namespace}/node', args.input_depth)},
                                   logs and os.path.join(logs, 'inverse_dynamics.log')),
     }
+    loops = busy_loops(args.busy)
     signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C even if ignored at start
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     bench = rclpy.create_node('latency_bench')
@@ -205,6 +323,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     executor.add_node(bench)
     targets = [Target(bench, 'relay', f'{namespace}/relay'),
                Target(bench, 'inverse_dynamics', f'{namespace}/node')]
+    compute = Compute(bench, f'{namespace}/node')
+    scheduling = prioritize(args.priority)
     msg = joint_state_for(model.joint_names)
     status = 0
     try:
@@ -229,8 +349,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 pid = procs[target.name].pid
                 cpu = cpu_seconds(pid)
                 target.measuring = True
+                compute.measuring = target.name == 'inverse_dynamics'
                 pace(executor, args.rate, block, send(target))
-                target.measuring = False
+                target.measuring = compute.measuring = False
                 executor.spin_once(timeout_sec=0.05)  # let the last answers of a block land
                 target.cpu_s += cpu_seconds(pid) - cpu
                 measured[target.name] += block
@@ -238,18 +359,25 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                    1.0)
         rows = [t.summary() for t in targets]
         depth = 'keep last 1' if args.input_depth is None else f'depth {args.input_depth}'
-        print(f'latency: {model.name} ({len(model.joint_names)} joints), {args.rate:g} Hz, '
-              f'{args.seconds:g} s per target in {args.block:g} s blocks, same run, input '
-              f'{depth}')
+        title = (f'latency: {model.name} ({len(model.joint_names)} joints), {args.rate:g} Hz, '
+                 f'{args.seconds:g} s per target in {args.block:g} s blocks, same run, input '
+                 f'{depth}; {args.busy} busy loops; {scheduling}; load '
+                 f'{os.getloadavg()[0]:.2f}')
+        print(title)
         print(format_table(rows))
-        diff = rows[1]['p50_ms'] - rows[0]['p50_ms']
-        print(f'inverse_dynamics - relay: p50 {diff:+.3f} ms, '
-              f'p99 {rows[1]["p99_ms"] - rows[0]["p99_ms"]:+.3f} ms')
+        print(compute.text())
+        print('inverse_dynamics - relay: ' + ', '.join(
+            f'{key} {rows[1][key + "_ms"] - rows[0][key + "_ms"]:+.3f} ms'
+            for key, _ in QUANTILES))
+        if args.plot and plot(args.plot, targets, title) is None:
+            print('--plot: matplotlib is not installed, no histogram drawn')
         if args.json:
             os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
             with open(args.json, 'w') as f:
-                json.dump({'robot': model.name, 'rate_hz': args.rate,
-                           'seconds_per_target': args.seconds, 'targets': rows}, f, indent=2)
+                json.dump({'robot': model.name, 'rate_hz': args.rate, 'busy': args.busy,
+                           'scheduling': scheduling, 'seconds_per_target': args.seconds,
+                           'load': os.getloadavg()[0], 'compute_us_means': compute.means_us,
+                           'targets': rows}, f, indent=2)
         status = 0 if all(r['answered'] for r in rows) else 1
     except KeyboardInterrupt:
         status = 130
@@ -258,6 +386,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         rclpy.try_shutdown()
         for proc in procs.values():
             stop(proc)
+        for loop in loops:
+            loop.kill()
+            loop.wait()
     return status
 
 

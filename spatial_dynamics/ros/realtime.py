@@ -1,0 +1,223 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The answering thread and its real-time knobs, named as ros2_control's controller_manager.
+
+The node's inputs are answered in a thread of their own, by an executor that waits on the
+inputs' callback group only (:class:`GroupExecutor`); parameters, descriptions, plans and
+diagnostics run in the other executor (:class:`OthersExecutor`), which never waits on the
+inputs; :func:`~spatial_dynamics.ros.common.spin` runs the two. Measured on a 2-core machine
+at 1 kHz (the demo arm, ``python -m spatial_dynamics.tools.latency``, load 2-8): one
+executor for everything took 370-680 µs from a sample's arrival in the middleware to its
+callback (p50), the answering thread 180-240 µs; rclpy's events executor cannot hold the
+node (it refuses guard conditions, and alone it would run a parameter change's parse where
+the answers wait).
+
+The knobs (the node's parameters ``thread_priority``, ``cpu_affinity``, ``lock_memory``) are
+applied by :func:`apply` from the answering thread: SCHED_FIFO for it and for the
+middleware's receive threads (:data:`RECEIVE_THREADS`), its CPU cores, ``mlockall``. What the
+system does not permit is refused with the reason (:class:`InEffect`), never fatal: the node
+answers under normal scheduling and says how to grant it (:data:`HOW_TO_GRANT`).
+
+Python's garbage collector: :func:`keep_collector_off_answers` freezes what configuration
+allocated (``gc.freeze``) and turns the automatic collections off; :func:`collect` runs the
+young generations from the diagnostics timer, once a second, where a pause is one known
+stall instead of a generation-1 collection (1-10 ms measured under load) landing on any
+answer.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import errno
+import gc
+import os
+import time
+from typing import List, NamedTuple, Optional, Sequence, Tuple
+
+from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+
+MCL_CURRENT = 1
+MCL_FUTURE = 2
+#: Name prefixes of the middleware threads that receive samples: Fast DDS (``dds.shm.7411``,
+#: ``dds.udp.7411``; its shared-memory watchdog excepted) and Cyclone DDS (``recvUC``...).
+RECEIVE_THREADS = ('dds.shm.', 'dds.udp.', 'dds.tcp.', 'recv')
+_NOT_RECEIVING = ('dds.shm.wdog',)
+HOW_TO_GRANT = (
+    'grant it with a realtime group in /etc/security/limits.conf (@realtime - rtprio 99, '
+    '@realtime - memlock unlimited), `ulimit -r 99 -l unlimited` in the shell that starts '
+    'the node, or `docker run --cap-add=sys_nice --ulimit rtprio=99 --ulimit memlock=-1`')
+#: The OS name of the answering thread (``ps -L -p <pid>``).
+ANSWERING_THREAD = 'answering'
+#: Full collections from the diagnostics timer: one in this many calls of :func:`collect`.
+FULL_COLLECTION_EVERY = 60
+
+
+class InEffect(NamedTuple):
+    """What :func:`apply` achieved: each knob in words, and what was refused (with why)."""
+
+    priority: str
+    affinity: str
+    memory: str
+    refused: Tuple[str, ...] = ()
+
+    def values(self) -> List[Tuple[str, str]]:
+        """Return the key-values of the ``real-time`` diagnostics status."""
+        return [('scheduling', self.priority), ('cpu affinity', self.affinity),
+                ('memory', self.memory)]
+
+
+def _reason(err: OSError) -> str:
+    return f'{errno.errorcode.get(err.errno, err.errno)}: {os.strerror(err.errno)}'
+
+
+def set_priority(tid: int, priority: int) -> None:
+    """SCHED_FIFO at ``priority`` for thread ``tid`` (0 = this one); 0: normal scheduling."""
+    if priority > 0:
+        os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(priority))
+    else:
+        os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+
+
+def lock_memory() -> None:
+    """Lock the process's current and future pages in RAM (``mlockall``); OSError if not."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    if libc.mlockall(MCL_CURRENT | MCL_FUTURE) != 0:
+        code = ctypes.get_errno()
+        raise OSError(code, os.strerror(code))
+
+
+def name_thread(name: str) -> None:
+    """Give the calling thread its name in the OS (``ps -L``, ``chrt -p``, ``top -H``)."""
+    PR_SET_NAME = 15
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_NAME, name.encode()[:15])
+
+
+def receive_threads() -> List[int]:
+    """Thread ids of this process's middleware receive threads (by name, see above)."""
+    tids = []
+    for tid in os.listdir('/proc/self/task'):
+        try:
+            with open(f'/proc/self/task/{tid}/comm') as f:
+                name = f.read().strip()
+        except OSError:   # the thread ended meanwhile
+            continue
+        if name.startswith(RECEIVE_THREADS) and name not in _NOT_RECEIVING:
+            tids.append(int(tid))
+    return tids
+
+
+def apply(priority: int, cores: Optional[Sequence[int]], memory: bool) -> InEffect:
+    """Apply the knobs to the calling thread (the answering one) and the receive threads.
+
+    Never raises for what the system refuses: each refusal is in ``refused``, the thread goes
+    on under what it had.
+    """
+    name_thread(ANSWERING_THREAD)
+    refused = []
+    in_effect = 'normal (SCHED_OTHER)'
+    if priority > 0:
+        done = []
+        try:
+            for tid in [0] + receive_threads():
+                try:
+                    set_priority(tid, priority)
+                except ProcessLookupError:   # the thread ended meanwhile
+                    continue
+                done.append(tid)
+            in_effect = (f'SCHED_FIFO {priority}: the answering thread and '
+                         f'{len(done) - 1} middleware receive threads')
+        except OSError as err:
+            for tid in done:   # none of them, rather than some
+                set_priority(tid, 0)
+            refused.append(f'thread_priority {priority} (SCHED_FIFO): {_reason(err)}')
+    affinity = 'all cores'
+    if cores:
+        try:
+            os.sched_setaffinity(0, cores)
+            affinity = 'cores ' + ', '.join(map(str, sorted(os.sched_getaffinity(0))))
+        except OSError as err:
+            refused.append(f'cpu_affinity {list(cores)}: {_reason(err)} (allowed: '
+                           f'{sorted(os.sched_getaffinity(0))})')
+    locked = 'not locked'
+    if memory:
+        try:
+            lock_memory()
+            locked = 'locked (mlockall)'
+        except OSError as err:
+            refused.append(f'lock_memory: {_reason(err)}')
+    return InEffect(in_effect, affinity, locked, tuple(refused))
+
+
+def warning(in_effect: InEffect) -> Optional[str]:
+    """Return the one WARN: what was refused, how to grant it (None: all applied)."""
+    if not in_effect.refused:
+        return None
+    return ('real-time settings not permitted, answering without them: '
+            + '; '.join(in_effect.refused) + '. To use them, ' + HOW_TO_GRANT)
+
+
+def status(in_effect: Optional[InEffect]) -> Tuple[str, str, list]:
+    """Return the ``real-time`` diagnostics status: OK, what is in effect, what not."""
+    if in_effect is None:
+        return 'OK', 'answering thread not started yet', []
+    message = in_effect.priority
+    values = in_effect.values()
+    if in_effect.refused:
+        message += ' (not permitted: ' + '; '.join(in_effect.refused) + ')'
+        values.append(('refused', '; '.join(in_effect.refused)))
+    return 'OK', message, values
+
+
+# -- garbage collection ------------------------------------------------------------------------
+
+def keep_collector_off_answers() -> None:
+    """Freeze what configuration allocated and turn the automatic collections off."""
+    gc.freeze()
+    gc.disable()
+
+
+def collect(calls: int) -> int:
+    """Collect the young generations (every call) or all (every ``FULL_COLLECTION_EVERY``).
+
+    Returns the pause in ns. Run where a pause stalls no answer for long: the diagnostics
+    timer, once a second.
+    """
+    t0 = time.perf_counter_ns()
+    gc.collect(2 if calls % FULL_COLLECTION_EVERY == 0 else 1)
+    return time.perf_counter_ns() - t0
+
+
+# -- executors ---------------------------------------------------------------------------------
+
+class GroupExecutor(SingleThreadedExecutor):
+    """Run the callbacks of ``group`` of ``node`` only, in the thread that spins it.
+
+    The node belongs to another executor (its ``executor`` property, woken when entities
+    change); this one waits on the group's entities alone, so its wait set is a few entities
+    and never holds a parameter service, a plan or a timer.
+    """
+
+    def __init__(self, node, group) -> None:
+        super().__init__(context=node.context)
+        self._node = node
+        self._group = group
+
+    def get_nodes(self) -> list:
+        """Return the one node served (never added: its executor stays the other one)."""
+        return [self._node]
+
+    def can_execute(self, entity) -> bool:
+        """Whether ``entity`` is of the group, and free to run."""
+        return entity.callback_group is self._group and super().can_execute(entity)
+
+
+class OthersExecutor(MultiThreadedExecutor):
+    """A MultiThreadedExecutor for everything but the callbacks of ``excluded``."""
+
+    def __init__(self, excluded, threads: int, context=None) -> None:
+        super().__init__(num_threads=threads, context=context)
+        self._excluded = excluded
+
+    def can_execute(self, entity) -> bool:
+        """Whether ``entity`` is outside the excluded group, and free to run."""
+        return entity.callback_group is not self._excluded and super().can_execute(entity)

@@ -1,0 +1,207 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The answering thread and its real-time knobs: applied where permitted, one WARN where not.
+
+No root needed: a core of the process's own set is always permitted, priority 0 is normal
+scheduling, and a refusal (EPERM) is made by replacing the system call. No latency is
+asserted anywhere (the benchmark measures; these check behaviour).
+"""
+
+import errno
+import os
+import threading
+
+from diagnostic_msgs.msg import DiagnosticStatus
+import numpy as np
+from node_harness import (
+    DEMO_URDF, Io, joint_state, NodeProcess, pin_oracle, random_states, TIMEOUT)
+import pytest
+import spatial_dynamics as sd
+from spatial_dynamics.ros import realtime
+from spatial_dynamics.ros.config import PARAMETERS
+from spatial_dynamics.ros.parameters import check, ConfigError, ParameterError
+
+
+def in_thread(function):
+    """Return ``function()`` run in a new thread (the knobs apply to the calling thread)."""
+    result = []
+    thread = threading.Thread(target=lambda: result.append(function()))
+    thread.start()
+    thread.join(TIMEOUT)
+    return result[0]
+
+
+def permission_denied(*args):
+    raise PermissionError(errno.EPERM, os.strerror(errno.EPERM))
+
+
+def test_knobs_are_controller_managers_in_the_one_table():
+    """Named and defaulted as ros2_control's controller_manager (Jazzy), read-only."""
+    table = PARAMETERS.by_name
+    assert table['thread_priority'].default == 50 and table['thread_priority'].type == 'int'
+    assert table['cpu_affinity'].default is None and table['cpu_affinity'].type == 'int[]'
+    assert table['lock_memory'].default is False   # Jazzy's default on a standard kernel
+    assert all(table[name].read_only for name in ('thread_priority', 'cpu_affinity',
+                                                  'lock_memory'))
+    assert check(table['cpu_affinity'], [0, 1]) == (0, 1)
+    for bad in ([0.5], [-1], [1, 1], 'abc'):
+        with pytest.raises(ConfigError, match='cpu_affinity'):
+            check(table['cpu_affinity'], bad)
+    for bad in (-1, 100):
+        with pytest.raises(ParameterError, match='thread_priority'):
+            check(table['thread_priority'], bad)
+
+
+def test_affinity_applies_to_the_answering_thread_only():
+    allowed = sorted(os.sched_getaffinity(0))
+    core = allowed[-1]
+
+    def answering():
+        effect = realtime.apply(0, [core], False)
+        return effect, os.sched_getaffinity(0), os.sched_getscheduler(0)
+
+    effect, affinity, policy = in_thread(answering)
+    assert affinity == {core} and effect.refused == ()
+    assert policy == os.SCHED_OTHER and 'normal' in effect.priority
+    assert sorted(os.sched_getaffinity(0)) == allowed   # the other threads keep every core
+
+
+def test_priority_zero_is_normal_scheduling():
+    effect, policy = in_thread(lambda: (realtime.apply(0, None, False),
+                                        os.sched_getscheduler(0)))
+    assert policy == os.SCHED_OTHER and effect.refused == () and realtime.warning(effect) is None
+
+
+def test_refused_knobs_warn_once_with_how_to_grant_and_run_on(monkeypatch):
+    monkeypatch.setattr(realtime.os, 'sched_setscheduler', permission_denied)
+    monkeypatch.setattr(realtime, 'lock_memory', permission_denied)
+    core = max(os.sched_getaffinity(0)) + 1   # not a core of this process
+    effect, policy, affinity = in_thread(lambda: (
+        realtime.apply(50, [core], True), os.sched_getscheduler(0), os.sched_getaffinity(0)))
+    assert policy == os.SCHED_OTHER and affinity == os.sched_getaffinity(0)
+    assert effect.priority.startswith('normal') and effect.memory == 'not locked'
+    assert len(effect.refused) == 3
+    text = realtime.warning(effect)
+    for words in ('thread_priority 50', 'EPERM', 'lock_memory', f'cpu_affinity [{core}]',
+                  'limits.conf', 'rtprio', 'memlock', 'ulimit -r', '--cap-add=sys_nice'):
+        assert words in text, (words, text)
+    level, message, values = realtime.status(effect)
+    assert level == 'OK' and 'normal' in message and 'not permitted' in message
+
+
+def test_garbage_collector_is_frozen_and_collected_off_the_answers():
+    import gc
+    try:
+        realtime.keep_collector_off_answers()
+        assert not gc.isenabled() and gc.get_freeze_count() > 0
+        cycle = []
+        cycle.append(cycle)
+        del cycle
+        assert realtime.collect(1) >= 0 and gc.garbage == []
+    finally:
+        gc.unfreeze()
+        gc.enable()
+
+
+@pytest.mark.ros
+def test_group_executor_runs_only_its_group_in_its_thread():
+    """The answering executor runs its group; the others' never does, whoever spins first."""
+    import rclpy
+    from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+    from std_msgs.msg import String
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = rclpy.create_node('group_executor_test', context=context)
+        group = MutuallyExclusiveCallbackGroup()
+        threads = {'inputs': set(), 'other': set()}
+        node.create_subscription(String, 'inputs', lambda _: threads['inputs'].add(
+            threading.get_ident()), 10, callback_group=group)
+        node.create_subscription(String, 'other', lambda _: threads['other'].add(
+            threading.get_ident()), 10)
+        publishers = [node.create_publisher(String, topic, 10) for topic in ('inputs', 'other')]
+        answering = realtime.GroupExecutor(node, group)
+        others = realtime.OthersExecutor(group, 2, context)
+        others.add_node(node)
+        done = threading.Event()
+        thread = threading.Thread(target=lambda: [answering.spin_once(0.05)
+                                                  for _ in iter(done.is_set, True)])
+        thread.start()
+        for _ in range(200):
+            if threads['inputs'] and threads['other']:
+                break
+            for publisher in publishers:
+                publisher.publish(String(data='x'))
+            others.spin_once(0.05)
+        done.set()
+        thread.join(TIMEOUT)
+        assert threads['inputs'] == {thread.ident}
+        assert threads['other'] and thread.ident not in threads['other']
+        others.shutdown()
+        answering.shutdown()
+        node.destroy_node()
+    finally:
+        rclpy.shutdown(context=context)
+
+
+def answering_thread(pid: int) -> int:
+    """Return the id of the node's answering thread (:data:`realtime.ANSWERING_THREAD`)."""
+    for tid in os.listdir(f'/proc/{pid}/task'):
+        with open(f'/proc/{pid}/task/{tid}/comm') as f:
+            if f.read().strip() == realtime.ANSWERING_THREAD:
+                return int(tid)
+    raise AssertionError('no answering thread')
+
+
+@pytest.mark.ros
+def test_node_pins_its_answering_thread_and_answers(install, driver, tmp_path):
+    core = max(os.sched_getaffinity(0))
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
+                                 '-p', 'thread_priority:=0', '-p', f'cpu_affinity:=[{core}]'],
+                       str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        node.wait_for_log('real-time: normal')
+        tid = answering_thread(node.proc.pid)
+        assert os.sched_getaffinity(tid) == {core}
+        assert os.sched_getscheduler(tid) == os.SCHED_OTHER
+        assert_answers_equal_the_library(io)
+        status = io.fresh_status('real-time')
+        assert status.level == DiagnosticStatus.OK and 'normal' in status.message
+        assert f'cores {core}' in dict((v.key, v.value) for v in status.values)['cpu affinity']
+    finally:
+        io.close()
+        node.stop()
+
+
+@pytest.mark.ros
+def test_node_refused_a_knob_warns_once_and_answers(install, driver, tmp_path):
+    core = max(os.sched_getaffinity(0)) + 1   # not permitted: not a core of the process
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}',
+                                 '-p', f'cpu_affinity:=[{core}]'], str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        assert_answers_equal_the_library(io)
+        status = io.fresh_status('real-time')
+        assert status.level == DiagnosticStatus.OK and 'not permitted' in status.message
+        log = node.log()
+        assert log.count('real-time settings not permitted') == 1, log
+        assert f'cpu_affinity [{core}]' in log and 'limits.conf' in log
+        assert 'Traceback' not in log
+    finally:
+        io.close()
+        node.stop()
+
+
+def assert_answers_equal_the_library(io: Io) -> None:
+    """Answers from the answering thread: Pinocchio's RNEA of the states sent."""
+    oracle = pin_oracle(DEMO_URDF)
+    names = sd.Model.from_urdf(DEMO_URDF).joint_names
+    states = random_states(36, 5, len(names))
+    for k, (q, qd, qdd) in enumerate(states):
+        io.efforts.clear()
+        io.publish_until_answered(lambda _: joint_state(names, q, qd, qdd, k))
+        np.testing.assert_allclose(io.efforts[-1].effort, oracle.rnea(names, q, qd, qdd),
+                                   rtol=1e-9, atol=1e-9)
