@@ -13,7 +13,7 @@ from setuptools.command.build_ext import build_ext
 #: points, whose wrapper (setuptools' ``setup.py install``, which colcon runs) looks the entry
 #: point up through importlib.metadata at every start: ~20 ms with bytecode cached, ~0.13 s
 #: without, before the command does anything.
-EXECUTABLES = ('inverse_dynamics', 'demo', 'check_urdf', 'replay', 'sim')
+EXECUTABLES = ('inverse_dynamics', 'demo', 'spatial_dynamics_check', 'replay', 'sim')
 
 package_name = 'spatial_dynamics'
 HERE = os.path.dirname(os.path.abspath(__file__))

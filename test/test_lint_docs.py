@@ -7,7 +7,7 @@
   directory is the checkout (the snippets name ``config/demo_arm.urdf``).
 * ``bash`` blocks: every command of this package (``python -m spatial_dynamics.…``,
   ``ros2 run spatial_dynamics …``, the installed ``lib/spatial_dynamics/…`` launchers,
-  ``check_urdf``, ``scripts/dev …``, ``python -m benchmarks.…``) has its arguments parsed by
+  ``spatial_dynamics_check``, ``scripts/dev …``, ``python -m benchmarks.…``) has its arguments parsed by
   the command's own parser — an option that does not exist or a value it refuses fails the
   test — and every ``-p name:=value`` of the nodes is a parameter of the node's table. Commands
   of other tools (git, colcon, ros2 bag, …) are the reader's to run.
@@ -98,7 +98,7 @@ def check_ros_args(node: str, argv):
             assert flag == '-r', f'{node}: unknown ROS argument {flag}'
 
 
-MODULES = {'replay': 'spatial_dynamics.replay.__main__', 'check_urdf': 'spatial_dynamics.check',
+MODULES = {'replay': 'spatial_dynamics.replay.__main__', 'spatial_dynamics_check': 'spatial_dynamics.check',
            'demo': 'spatial_dynamics.tools.demo'}
 
 
@@ -114,7 +114,7 @@ def check_command(argv) -> bool:
         return True
     if argv[:3] in (['ros2', 'run', 'spatial_dynamics'],):
         argv = ['install/lib/spatial_dynamics/' + argv[3]] + argv[4:]
-    if argv[0].startswith('install/lib/spatial_dynamics/') or argv[0] == 'check_urdf':
+    if argv[0].startswith('install/lib/spatial_dynamics/') or argv[0] == 'spatial_dynamics_check':
         name = os.path.basename(argv[0])
         assert os.path.exists(os.path.join(ROOT, 'bin', name)), f'no command {name}'
         if name in ('inverse_dynamics', 'sim'):
