@@ -3,6 +3,7 @@
 
 from glob import glob
 import os
+import runpy
 import sys
 
 from setuptools import Extension, find_packages, setup
@@ -125,14 +126,8 @@ setup(
     ext_modules=[KERNELS],
     cmdclass={'build_ext': BuildKernels},
     install_requires=['numpy', 'lxml'],
-    extras_require={
-        'test': ['pytest', 'pin', 'example-robot-data', 'hypothesis', 'mpmath', 'flake8',
-                 'pydocstyle'],
-        'plot': ['matplotlib'],
-        'replay': ['rosbags', 'matplotlib', 'pyyaml', 'threadpoolctl'],
-        'identify': ['scipy', 'threadpoolctl'],
-        'sim': ['mujoco'],
-    },
+    # plot, replay, identify, fleet, qp, sim, test: written once, in spatial_dynamics/extras.py
+    extras_require=runpy.run_path(os.path.join(HERE, package_name, 'extras.py'))['EXTRAS'],
     zip_safe=False,
     maintainer='spatial_dynamics maintainers',
     maintainer_email='maintainer@spatial-dynamics.dev',

@@ -61,11 +61,11 @@ import sys
 from typing import Dict, List, NamedTuple, Optional, Sequence, Tuple
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from .. import friction_torque, Model, rnea
 from ..check import read_description
 from .. import effort as effort_model
+from ..extras import install_hint
 from ..files import check_output
 from . import (annotate, bags, base_topics, differentiate, excite, identify, report, splines,
                urdf_writer)
@@ -292,6 +292,7 @@ def fits(args, model: Model, train: Dict, res: Residual, stages: Stages) -> Fitt
     correction, excitation_warning = None, ''
     # the fits work on matrices of a hundred columns, or share their chunks among the
     # command's own threads: BLAS threads beside those only oversubscribe the cores
+    from threadpoolctl import threadpool_limits
     with threadpool_limits(limits=1, user_api='blas'):
         if args.payload is None and args.inertias is None:
             fresidual = res.residual if not args.also else feffort - rnea(
@@ -730,7 +731,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         from . import legacy
         argv = legacy.new_spelling(argv, commands)
     args = p.parse_args(argv)
-    return args.run(args)
+    try:
+        return args.run(args)
+    except ImportError as err:        # an optional dependency: say which extra brings it
+        hint = install_hint(err, 'fleet' if args.command == 'fleet' else 'replay')
+        if not hint:
+            raise
+        print(f'error: replay {args.command}: {hint}', file=sys.stderr)
+        return 1
 
 
 def run(work, p: argparse.ArgumentParser, args) -> int:
