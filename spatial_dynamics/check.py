@@ -162,7 +162,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='value (rad or m) of a joint locked by --joints')
     parser.add_argument('--base', choices=('fixed', 'floating'), default='fixed',
                         help="'floating': the root link moves on a free-flyer joint "
-                        "(Model.from_urdf(..., base='floating'))")
+                        "(Model.from_urdf(..., base='floating')); default %(default)s")
     args = parser.parse_args(argv)
     locked = dict(args.locked)
     if locked and not args.joints:

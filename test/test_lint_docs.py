@@ -5,11 +5,11 @@
 * ``python`` blocks run, in the order of their page, in one namespace per page (a later block
   may use what an earlier one made, as a reader would), in a fresh interpreter whose working
   directory is the checkout (the snippets name ``config/demo_arm.urdf``).
-* ``bash`` blocks: every command of this package (``python -m spatial_dynamics.…``,
-  ``ros2 run spatial_dynamics …``, the installed ``lib/spatial_dynamics/…`` launchers,
-  ``spatial_dynamics_check``, ``scripts/dev …``, ``python -m benchmarks.…``) has its arguments parsed by
-  the command's own parser — an option that does not exist or a value it refuses fails the
-  test — and every ``-p name:=value`` of the nodes is a parameter of the node's table. Commands
+* ``bash`` blocks: every command of this package (``python -m spatial_dynamics.…``, ``ros2 run
+  spatial_dynamics …``, the installed ``lib/spatial_dynamics/…`` launchers,
+  ``spatial_dynamics_check``, ``scripts/dev …``, ``python -m benchmarks.…``) has its arguments
+  parsed by the command's own parser — an option that does not exist or a value it refuses fails
+  the test — and every ``-p name:=value`` of the nodes is a parameter of the node's table. Commands
   of other tools (git, colcon, ros2 bag, …) are the reader's to run.
 * ``text`` blocks are what a command printed; each page names the command beside it.
 
@@ -98,7 +98,8 @@ def check_ros_args(node: str, argv):
             assert flag == '-r', f'{node}: unknown ROS argument {flag}'
 
 
-MODULES = {'replay': 'spatial_dynamics.replay.__main__', 'spatial_dynamics_check': 'spatial_dynamics.check',
+MODULES = {'replay': 'spatial_dynamics.replay.__main__',
+           'spatial_dynamics_check': 'spatial_dynamics.check',
            'demo': 'spatial_dynamics.tools.demo'}
 
 

@@ -566,8 +566,10 @@ def recording_parser() -> argparse.ArgumentParser:
     """Return a parent parser of what reads a recording and writes its residual (no help)."""
     p = argparse.ArgumentParser(add_help=False)
     p.add_argument('bag', metavar='BAG', help='rosbag2 directory, or a .db3 / .mcap file')
-    p.add_argument('--topic', default='/joint_states', help='sensor_msgs/JointState topic')
-    p.add_argument('--out', default='replay_out', help='output directory (created)')
+    p.add_argument('--topic', default='/joint_states',
+                   help='sensor_msgs/JointState topic (default %(default)s)')
+    p.add_argument('--out', default='replay_out',
+                   help='output directory, created (default %(default)s)')
     p.add_argument('--window', type=positive, default=0.05,
                    help='Savitzky-Golay window, s (default %(default)g)')
     p.add_argument('--order', type=int, choices=range(2, 7), default=3,
@@ -655,11 +657,13 @@ def trajectory_command(sub) -> None:
                    help='a trajectory_msgs/JointTrajectory (YAML), or a bag with --topic')
     p.add_argument('--topic', metavar='TOPIC',
                    help='check every JointTrajectory of this topic of the bag')
-    p.add_argument('--out', default='replay_out', help='output directory (created)')
+    p.add_argument('--out', default='replay_out',
+                   help='output directory, created (default %(default)s)')
     p.add_argument('--rate', type=positive, default=1000.0,
                    help='sampling rate, Hz (default %(default)g)')
     p.add_argument('--friction-model', choices=('none', 'urdf'), default='none',
-                   help='add the URDF <dynamics> friction (as the node)')
+                   help='urdf: add the URDF <dynamics> friction, as the node does '
+                   '(default %(default)s)')
     add_threshold(p)
     p.add_argument('--no-plots', action='store_true', help='write no PNG files')
 

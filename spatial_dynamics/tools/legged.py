@@ -263,8 +263,12 @@ def figures(setup: Setup, seconds: float) -> dict:
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--robot', choices=sorted(ROBOTS), default='solo12')
-    parser.add_argument('--seconds', type=float, default=3.0)
+    parser.add_argument('--robot', choices=sorted(ROBOTS), default='solo12',
+                        help='robot of example-robot-data (default %(default)s)')
+    parser.add_argument('--seconds', type=float, default=3.0,
+                        help='simulated seconds of swaying after 0.5 s standing, at most 600 '
+                        '(default %(default)s; ~20 s of wall time a simulated second on a '
+                        'busy core)')
     parser.add_argument('--json', help='write the figures here')
     args = parser.parse_args(argv)
     if not (np.isfinite(args.seconds) and 0.0 < args.seconds <= 600.0):

@@ -128,7 +128,8 @@ def run(law: str, seconds: float = 4.0, dt: float = 1e-3) -> tuple:
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--seconds', type=float, default=4.0)
+    parser.add_argument('--seconds', type=float, default=4.0,
+                        help='simulated seconds of each run (default %(default)s)')
     parser.add_argument('--json', help='write the RMS errors and ratios here')
     args = parser.parse_args(argv)
     if args.json:
