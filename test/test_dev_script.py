@@ -40,7 +40,7 @@ def executable(path, text):
 
 @pytest.fixture
 def checkout(tmp_path):
-    """A checkout with scripts/dev and the requirement list; python3.11 and colcon stubbed."""
+    """Make a checkout with scripts/dev and a requirement list; python3.11 and colcon stubbed."""
     root = tmp_path / 'checkout'
     (root / 'scripts').mkdir(parents=True)
     (root / '.ci').mkdir()

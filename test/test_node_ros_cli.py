@@ -1,7 +1,9 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""``python -m spatial_dynamics.tools.ros_cli``: ``ros2 param set`` and ``ros2 topic pub``
-where ros2cli is not installed (the quick start's venv), against a node in this process."""
+"""``python -m spatial_dynamics.tools.ros_cli``: ros2's param set and topic pub without ros2cli.
+
+Where ros2cli is not installed (the quick start's venv), against a node in this process.
+"""
 
 import os
 import subprocess
@@ -31,7 +33,7 @@ def ros_cli(driver, *args):
 
 @pytest.fixture(scope='module')
 def target(driver):
-    """A node with two parameters and a WrenchStamped subscription, spun by ``driver``."""
+    """Yield a node with two parameters and a WrenchStamped subscription, spun by ``driver``."""
     from geometry_msgs.msg import WrenchStamped
     node = driver.rclpy.create_node(f'ros_cli_target_{os.getpid()}', context=driver.context)
     node.declare_parameter('gravity', [0.0, 0.0, -9.81])

@@ -20,8 +20,9 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 #: The commands with an argparse parser (the nodes take ROS arguments: test_node_usage.py).
 TOOLS = ['spatial_dynamics.tools.' + name for name in (
     'closed_loop', 'demo', 'fleet_demo', 'identify_demo', 'latency', 'legged', 'moving_base',
-    'soak', 'startup', 'ros_cli')] + ['spatial_dynamics.check', 'spatial_dynamics.replay.__main__',
-                           'benchmarks.bench', 'benchmarks.fleet', 'benchmarks.replay']
+    'soak', 'startup', 'ros_cli')] + [
+    'spatial_dynamics.check', 'spatial_dynamics.replay.__main__', 'benchmarks.bench',
+    'benchmarks.fleet', 'benchmarks.replay']
 
 
 class Built(Exception):

@@ -1,9 +1,9 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""``ros2 param set`` and ``ros2 topic pub`` for the route without a ROS installation.
+r"""``ros2 param set`` and ``ros2 topic pub`` for the route without a ROS installation.
 
     python -m spatial_dynamics.tools.ros_cli param set /inverse_dynamics payload.mass 1.5
-    python -m spatial_dynamics.tools.ros_cli topic pub /external_wrenches \\
+    python -m spatial_dynamics.tools.ros_cli topic pub /external_wrenches \
         geometry_msgs/msg/WrenchStamped "{header: {frame_id: hand}, wrench: {force: {z: -9.81}}}"
 
 The quick start's venv has rclpy and the message packages as wheels, but not ros2cli (it is
