@@ -3,6 +3,7 @@
 
 from glob import glob
 import os
+import runpy
 import sys
 
 from setuptools import Extension, find_packages, setup
@@ -13,7 +14,7 @@ from setuptools.command.build_ext import build_ext
 #: points, whose wrapper (setuptools' ``setup.py install``, which colcon runs) looks the entry
 #: point up through importlib.metadata at every start: ~20 ms with bytecode cached, ~0.13 s
 #: without, before the command does anything.
-EXECUTABLES = ('inverse_dynamics', 'demo', 'check_urdf', 'replay', 'sim')
+EXECUTABLES = ('inverse_dynamics', 'demo', 'spatial_dynamics_check', 'replay', 'sim')
 
 package_name = 'spatial_dynamics'
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -125,15 +126,8 @@ setup(
     ext_modules=[KERNELS],
     cmdclass={'build_ext': BuildKernels},
     install_requires=['numpy', 'lxml'],
-    extras_require={
-        'test': ['pytest', 'pin', 'example-robot-data', 'hypothesis', 'mpmath', 'flake8',
-                 'pydocstyle'],
-        'plot': ['matplotlib'],
-        'replay': ['rosbags', 'matplotlib', 'pyyaml', 'threadpoolctl'],
-        'identify': ['scipy', 'threadpoolctl'],
-        'sim': ['mujoco'],
-        'qp': ['clarabel', 'scipy'],
-    },
+    # plot, replay, identify, fleet, qp, sim, test: written once, in spatial_dynamics/extras.py
+    extras_require=runpy.run_path(os.path.join(HERE, package_name, 'extras.py'))['EXTRAS'],
     zip_safe=False,
     maintainer='spatial_dynamics maintainers',
     maintainer_email='maintainer@spatial-dynamics.dev',

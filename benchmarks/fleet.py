@@ -197,12 +197,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument('--dir',
                    default=os.path.join(tempfile.gettempdir(), 'spatial_dynamics_fleet_bench'),
                    help='where the bags are written and reused (default %(default)s)')
-    p.add_argument('--robots', type=int, default=4)
+    p.add_argument('--robots', type=int, default=4, help='robots (default %(default)s)')
     p.add_argument('--bags', type=int, default=30, help='bags per robot (default 30)')
     p.add_argument('--seconds', type=float, default=60.0, help='of each bag (default 60)')
     p.add_argument('--rate', type=float, default=500.0, help='Hz (default 500)')
     p.add_argument('--joints', type=int, default=3, help='of the arm (default 3)')
-    p.add_argument('--workers', type=int, nargs='*', default=[1, 2])
+    p.add_argument('--workers', type=int, nargs='*', default=[1, 2],
+                   help='Dask worker counts to time, one run each (default 1 2)')
     p.add_argument('--long', type=float, nargs='*', default=[1200.0, 2400.0],
                    help='lengths of the long bags, s (default 1200 2400)')
     p.add_argument('--chunk', type=float, default=300.0, help='their chunks, s (default 300)')

@@ -60,17 +60,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """Generate the bag(s), time the command on each; return 0 (1 if the command fails)."""
     p = argparse.ArgumentParser(prog='python -m benchmarks.replay',
                                 description=__doc__.split('\n\n')[0])
-    p.add_argument('--seconds', type=float, default=3600.0)
-    p.add_argument('--rate', type=float, default=1000.0)
-    p.add_argument('--storage', choices=('mcap', 'sqlite3', 'both'), default='both')
+    p.add_argument('--seconds', type=float, default=3600.0,
+                   help='length of the generated bag, s (default %(default)s)')
+    p.add_argument('--rate', type=float, default=1000.0,
+                   help='its joint-state rate, Hz (default %(default)s)')
+    p.add_argument('--storage', choices=('mcap', 'sqlite3', 'both'), default='both',
+                   help='bag storage to time (default %(default)s)')
     p.add_argument('--dir', help='where to write the bags (kept); default a temporary one')
-    p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv')
-    p.add_argument('--identify', action='store_true')
+    p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv',
+                   help="the command's --residual (default %(default)s)")
+    p.add_argument('--identify', action='store_true',
+                   help='time replay identify (the drives\' fit) instead of residual')
     p.add_argument('--inertias', action='store_true',
                    help='time the fit of every link\'s inertial parameters too')
     p.add_argument('--repeat', type=int, default=1,
                    help='run the command this many times (on a shared machine: take the '
-                   'fastest)')
+                   'fastest; default %(default)s)')
     args = p.parse_args(argv)
     work = args.dir or tempfile.mkdtemp(prefix='replay_bench_')
     storages = ('mcap', 'sqlite3') if args.storage == 'both' else (args.storage,)

@@ -2,13 +2,14 @@
 # SPDX-License-Identifier: Apache-2.0
 """Check a robot description for dynamics: what the model computes with, and every warning.
 
-urdfdom's ``check_urdf`` checks the syntax; this prints what inverse dynamics will use: the
-joints in ``q`` order (type, axis, limits, the mimic joints that follow each one), the bodies
+urdfdom's ``check_urdf`` checks the syntax; this command (``spatial_dynamics_check``: a name of
+its own, as urdfdom's is installed beside it) prints what inverse dynamics will use: the joints
+in ``q`` order (type, axis, limits, the mimic joints that follow each one), the bodies
 after fixed joints are lumped and base links pruned, the total mass, and every
 :class:`URDFWarning` of the model (inconsistent inertias and the like, loaded as written).
 
     python -m spatial_dynamics.check ROBOT.urdf [--strict] [--joints J ...] [--locked J=V ...]
-    ros2 run spatial_dynamics check_urdf ROBOT.urdf
+    spatial_dynamics_check ROBOT.urdf        (installed: lib/spatial_dynamics/, or ros2 run)
 
 Exit status: 0 when the model loads, 1 when it is refused (or, with ``--strict``, when it has
 warnings), 2 for bad usage.
@@ -175,7 +176,8 @@ def locked_item(item: str) -> Tuple[str, float]:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Print the check of a robot description; return the exit status (0, 1 or 2)."""
-    parser = argparse.ArgumentParser(prog='check_urdf', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='spatial_dynamics_check',
+                                     description=__doc__.split('\n\n')[0])
     parser.add_argument('urdf', help='URDF file (or .xacro, expanded when xacro is installed)')
     parser.add_argument('--strict', action='store_true',
                         help='exit 1 when the model has warnings (all are still printed)')
@@ -186,7 +188,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help='value (rad or m) of a joint locked by --joints')
     parser.add_argument('--base', choices=('fixed', 'floating'), default='fixed',
                         help="'floating': the root link moves on a free-flyer joint "
-                        "(Model.from_urdf(..., base='floating'))")
+                        "(Model.from_urdf(..., base='floating')); default %(default)s")
     args = parser.parse_args(argv)
     locked = dict(args.locked)
     if locked and not args.joints:

@@ -2,13 +2,13 @@
 # SPDX-License-Identifier: Apache-2.0
 """The one reader of the files users name: regular files only, bounded, YAML safe-loaded.
 
-Every file the library, ``check_urdf`` and ``replay`` read goes through :func:`read_regular`
-(or is checked by :func:`regular_file` before a library such as SQLite opens it), so a path
-never blocks on a FIFO, never reads a device or a directory, and never reads more than its
-caller's limit. YAML goes through :func:`load_yaml`: PyYAML's safe loader (no ``!!python``
-tags), a size limit, and a budget on the nodes the document stands for once its aliases are
-expanded, so a few hundred bytes of nested aliases ("billion laughs") are refused before
-anything walks them.
+Every file the library, ``spatial_dynamics_check`` and ``replay`` read goes through
+:func:`read_regular` (or is checked by :func:`regular_file` before a library such as SQLite
+opens it), so a path never blocks on a FIFO, never reads a device or a directory, and never
+reads more than its caller's limit. YAML goes through :func:`load_yaml`: PyYAML's safe loader
+(no ``!!python`` tags), a size limit, and a budget on the nodes the document stands for once
+its aliases are expanded, so a few hundred bytes of nested aliases ("billion laughs") are
+refused before anything walks them.
 """
 
 from __future__ import annotations

@@ -112,11 +112,11 @@ def read_urdf_file(path: str, limit: int = MAX_FILE_BYTES) -> bytes:
 def read_description(path: str, limit: int = MAX_FILE_BYTES, what: str = '') -> str:
     """Return the URDF text of a file; a ``.xacro`` file is expanded when xacro is importable.
 
-    The one reader of description files (library, node, ``check_urdf``, sim, replay): the file
-    is read by :func:`read_urdf_file` (a regular file of at most ``limit`` bytes, never a
-    FIFO or a device; a ``.xacro`` file passes the same check before xacro opens it), decoded
-    as UTF-8 (a byte order mark is dropped); the expansion of a ``.xacro`` file is held to the
-    same limit. ``ValueError`` names the file as ``what`` (default ``URDF file 'path'``).
+    The one reader of description files (library, node, ``spatial_dynamics_check``, sim, replay):
+    the file is read by :func:`read_urdf_file` (a regular file of at most ``limit`` bytes, never a
+    FIFO or a device; a ``.xacro`` file passes the same check before xacro opens it), decoded as
+    UTF-8 (a byte order mark is dropped); the expansion of a ``.xacro`` file is held to the same
+    limit. ``ValueError`` names the file as ``what`` (default ``URDF file 'path'``).
     """
     what = what or f'URDF file {path!r}'
     data = read_regular(path, what, limit)

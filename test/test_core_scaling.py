@@ -2,12 +2,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """Loading and checking a description stays linear in the number of links.
 
-Linearity is asserted by counting, not timing: the Python lines executed by
-``Model.from_urdf`` and by the ``check_urdf`` report (a deterministic count, whatever the
-machine's load) grow at most a little faster than the number of links, from n to 4n links, on
-plain chains, chains of mimic joints (each mimicking the one before) and chains of fixed links
-lumped into one body. A 20,000-link chain is also checked end to end by the command, with a
-timeout as a hang guard only.
+Linearity is asserted by counting, not timing: the Python lines executed by ``Model.from_urdf`` and
+by the ``spatial_dynamics_check`` report (a deterministic count, whatever the machine's load) grow
+at most a little faster than the number of links, from n to 4n links, on plain chains, chains of
+mimic joints (each mimicking the one before) and chains of fixed links lumped into one body. A
+20,000-link chain is also checked end to end by the command, with a timeout as a hang guard only.
 """
 
 import os

@@ -1,20 +1,32 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""Every code block of the README and of doc/ runs here, so a snippet cannot rot.
+"""Every code block of the README and of doc/ runs here, or says why not, so a snippet cannot rot.
+
+A block is a fence anywhere in a line's indentation (a block inside a list item is a block);
+its info string is the language, then optionally a marker::
+
+    ```bash not-run: needs a ROS installation (ros2 launch)
+
+``not-run: REASON`` says the block is not run here and why (the reason is required and shown
+to the reader as the fence's info). What each language gets:
 
 * ``python`` blocks run, in the order of their page, in one namespace per page (a later block
   may use what an earlier one made, as a reader would), in a fresh interpreter whose working
   directory is the checkout (the snippets name ``config/demo_arm.urdf``).
-* ``bash`` blocks: every command of this package (``python -m spatial_dynamics.…``,
-  ``ros2 run spatial_dynamics …``, the installed ``lib/spatial_dynamics/…`` launchers,
-  ``check_urdf``, ``scripts/dev …``, ``python -m benchmarks.…``) has its arguments parsed by
-  the command's own parser — an option that does not exist or a value it refuses fails the
-  test — and every ``-p name:=value`` of the nodes is a parameter of the node's table. Commands
-  of other tools (git, colcon, ros2 bag, …) are the reader's to run.
+* ``bash`` blocks: every command of this package (``python -m spatial_dynamics.…``, ``ros2 run
+  spatial_dynamics …``, the installed ``lib/spatial_dynamics/…`` launchers,
+  ``spatial_dynamics_check``, ``scripts/dev …``, ``python -m benchmarks.…``) has its arguments
+  parsed by the command's own parser — an option that does not exist or a value it refuses fails
+  the test — and every ``-p name:=value`` of the nodes is a parameter of the node's table, in
+  marked blocks too. An unmarked block runs after the quick start, without a ROS installation:
+  a command that needs one (``ros2``, ``rosdep``) makes it fail unless the block is marked.
+  Commands of other tools (git, colcon, …) are the reader's to run.
 * ``text`` blocks are what a command printed; each page names the command beside it.
+* ``{toctree}`` is Sphinx's table of contents.
 
-Also: every local link of a page points at a file that exists, and the doc tree builds with
-Sphinx, warnings as errors (rosdoc2's build of the same pages: test_lint_rosdoc2.py).
+Also: every local link of a page points at a file that exists, no link is a placeholder, and
+the doc tree builds with Sphinx, warnings as errors (rosdoc2's build of the same pages:
+test_lint_rosdoc2.py).
 """
 
 import argparse
@@ -24,19 +36,47 @@ import re
 import shlex
 import subprocess
 import sys
+import textwrap
+from typing import List, NamedTuple
 
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PAGES = ['README.md'] + sorted(os.path.join('doc', f)
                                for f in os.listdir(os.path.join(ROOT, 'doc')) if f.endswith('.md'))
-FENCE = re.compile(r'^```(\w*)[^\n]*\n(.*?)^```\s*$', re.S | re.M)
+#: A fenced block at any indentation: its indentation, info string and body.
+FENCE = re.compile(r'^(?P<indent>[ \t]*)```(?P<info>[^\n`]*)\n(?P<body>.*?)^(?P=indent)```[ \t]*$',
+                   re.S | re.M)
+LANGUAGES = ('python', 'bash', 'text', '{toctree}')
+NOT_RUN = re.compile(r'not-run: (?P<reason>\S.*)')
+#: Commands that need a ROS installation (ros2cli, rosdep): not in the quick start's venv.
+NEEDS_ROS = ('ros2', 'rosdep')
+CODE_HOSTS = ('github.com', 'gitlab.com', 'bitbucket.org')
 
 
-def blocks(page: str, language: str):
+class Block(NamedTuple):
+    language: str
+    marker: str        # '' or the whole marker, 'not-run: REASON'
+    body: str          # dedented
+    line: int          # of the opening fence, 1-based
+
+
+def all_blocks(page: str) -> List[Block]:
+    """Return every fenced block of ``page``, in order."""
     with open(os.path.join(ROOT, page), encoding='utf-8') as f:
         text = f.read()
-    return [m.group(2) for m in FENCE.finditer(text) if m.group(1) == language]
+    found = []
+    for m in FENCE.finditer(text):
+        language, _, marker = m.group('info').strip().partition(' ')
+        body = textwrap.dedent(m.group('body')) if m.group('indent') else m.group('body')
+        found.append(Block(language, marker.strip(), body, text.count('\n', 0, m.start()) + 1))
+    return found
+
+
+def blocks(page: str, language: str, run_only: bool = False) -> List[str]:
+    """Return the bodies of ``page``'s blocks in ``language`` (unmarked ones: ``run_only``)."""
+    return [b.body for b in all_blocks(page)
+            if b.language == language and not (run_only and b.marker)]
 
 
 def commands(block: str):
@@ -94,11 +134,15 @@ def check_ros_args(node: str, argv):
         if flag == '-p':
             name = value.split(':=')[0]
             assert name in names, f'{node}: no parameter {name!r}'
+        elif flag == '--params-file':   # the installed copy of config/: check the source's
+            path = re.sub(r'^install/share/spatial_dynamics/', '', value)
+            assert os.path.isfile(os.path.join(ROOT, path)), f'{node}: no file {value}'
         else:
             assert flag == '-r', f'{node}: unknown ROS argument {flag}'
 
 
-MODULES = {'replay': 'spatial_dynamics.replay.__main__', 'check_urdf': 'spatial_dynamics.check',
+MODULES = {'replay': 'spatial_dynamics.replay.__main__',
+           'spatial_dynamics_check': 'spatial_dynamics.check',
            'demo': 'spatial_dynamics.tools.demo'}
 
 
@@ -114,7 +158,7 @@ def check_command(argv) -> bool:
         return True
     if argv[:3] in (['ros2', 'run', 'spatial_dynamics'],):
         argv = ['install/lib/spatial_dynamics/' + argv[3]] + argv[4:]
-    if argv[0].startswith('install/lib/spatial_dynamics/') or argv[0] == 'check_urdf':
+    if argv[0].startswith('install/lib/spatial_dynamics/') or argv[0] == 'spatial_dynamics_check':
         name = os.path.basename(argv[0])
         assert os.path.exists(os.path.join(ROOT, 'bin', name)), f'no command {name}'
         if name in ('inverse_dynamics', 'sim'):
@@ -140,8 +184,48 @@ def check_command(argv) -> bool:
 
 
 @pytest.mark.parametrize('page', PAGES)
+def test_every_fence_is_a_block_that_runs_or_says_why_not(page):
+    """Each fence of the page is found (indented ones too) and known; a marker has a reason."""
+    with open(os.path.join(ROOT, page), encoding='utf-8') as f:
+        fences = [line for line in f if line.lstrip().startswith('```')]
+    found = all_blocks(page)
+    assert 2 * len(found) == len(fences), f'{page}: a fence that is not a block'
+    for block in found:
+        where = f'{page}:{block.line}'
+        assert block.language in LANGUAGES, f'{where}: language {block.language!r}'
+        assert not block.marker or NOT_RUN.fullmatch(block.marker), \
+            f'{where}: the marker is `not-run: REASON`, got {block.marker!r}'
+
+
+@pytest.mark.parametrize('page', PAGES)
+def test_unmarked_shell_blocks_need_no_ros_installation(page):
+    """What the quick start installs runs them: no ros2cli, no rosdep (or a marker saying so)."""
+    for block in all_blocks(page):
+        if block.language != 'bash' or block.marker:
+            continue
+        for argv in commands(block.body):
+            assert argv[0] not in NEEDS_ROS, (
+                f'{page}:{block.line}: {shlex.join(argv)} needs a ROS installation: give the '
+                'command that works after the quick start (install/lib/spatial_dynamics/…, '
+                'python -m spatial_dynamics.tools.ros_cli …) or mark the block '
+                '`not-run: needs a ROS installation`')
+
+
+@pytest.mark.parametrize('page', PAGES)
+def test_no_link_is_a_placeholder(page):
+    """A link goes somewhere (not ``https://github.com/``); no ``<this repository>``."""
+    with open(os.path.join(ROOT, page), encoding='utf-8') as f:
+        text = f.read()
+    for target in re.findall(r'\]\((\w+://[^)\s]*)\)', text):
+        host, _, path = target.split('://', 1)[1].partition('/')
+        if host in CODE_HOSTS:      # a project there is owner/name
+            assert len([p for p in path.split('/') if p]) >= 2, f'{page}: placeholder {target}'
+    assert '<this repository>' not in text, f'{page}: a placeholder for the repository'
+
+
+@pytest.mark.parametrize('page', PAGES)
 def test_python_blocks_run(page):
-    code = blocks(page, 'python')
+    code = blocks(page, 'python', run_only=True)
     if not code:
         return
     program = '\n'.join(f'# --- block {i}\n{c}' for i, c in enumerate(code))

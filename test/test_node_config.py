@@ -455,6 +455,24 @@ def test_model_status_levels_and_the_backend(demo_text):
     assert kv['model joints'] == ', '.join(robot.model.joint_names)
 
 
+def test_model_status_of_a_floating_robot_counts_its_joints_and_the_free_flyer():
+    """Solo12 floating: 12 joints and the free-flyer, nv 18 (Pinocchio's), never "13 DOF"."""
+    pin = pytest.importorskip('pinocchio')
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from conftest import robot_urdf_path
+    path = robot_urdf_path('solo12')
+    oracle = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())
+    joints = oracle.njoints - 2               # the universe and the free-flyer aside
+    with open(path, encoding='utf-8') as f:
+        text = f.read()
+    robot = config.prepare({}, defaults(robot_description=text, base='floating'), None).robot
+    level, message, values = diagnostics.model_status(robot, diagnostics.Totals(), False,
+                                                      'numpy')
+    expected = f'{joints} joints + free-flyer (nv {oracle.nv})'
+    assert message == f'robot {oracle.name!r} loaded, {expected}', message
+    assert dict(values)['dof'] == expected
+
+
 def test_feedforward_status_rates_staleness_and_rejections(demo_text):
     robot = config.prepare({}, defaults(robot_description=demo_text), None).robot
     totals, window = diagnostics.Totals(), diagnostics.Window()

@@ -1,6 +1,6 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""The replay and check_urdf against what a careless or malicious user hands them.
+"""The replay and spatial_dynamics_check against what a careless or malicious user hands them.
 
 Each case runs the command as a user does (a subprocess, with a timeout as a hang guard) and
 asserts the exit status and one line on stderr naming the problem, never a traceback; the
@@ -313,7 +313,7 @@ def test_csv_writer_round_trips_every_magnitude(tmp_path):
 
 
 # --------------------------------------------------------------------------------------------
-# The one reader: check_urdf refuses what the library refuses
+# The one reader: spatial_dynamics_check refuses what the library refuses
 
 def test_check_urdf_reads_through_the_safe_reader(tmp_path):
     fifo = tmp_path / 'robot.urdf'

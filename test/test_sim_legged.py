@@ -28,11 +28,18 @@ pytest.importorskip('clarabel')
 pytestmark = pytest.mark.slow      # ~35 s of MuJoCo: the whole suite runs it, the fast loop not
 
 
-def run(robot):
-    from spatial_dynamics.tools.legged import main, robots_dir, ROBOTS
+def run(robot, capsys):
+    """Run the tool; check that it said what it was doing as it went (stderr)."""
+    from spatial_dynamics.tools.legged import LAWS, main, robots_dir, ROBOTS
     if not os.path.isfile(os.path.join(robots_dir(), ROBOTS[robot]().path)):
         pytest.skip('example-robot-data is not installed')
-    return main(['--robot', robot, '--seconds', '2'])
+    out = main(['--robot', robot, '--seconds', '2'])
+    progress = capsys.readouterr().err
+    assert progress.startswith('planning 2 s of sway'), progress
+    for k, law in enumerate(LAWS, 1):
+        assert f'[{k}/{len(LAWS)}] {law}: simulating 2.5 s' in progress, progress
+        assert f'[{k}/{len(LAWS)}] {law}: done in ' in progress, progress
+    return out
 
 
 def check(out, rms, worst, ratio):
@@ -43,9 +50,9 @@ def check(out, rms, worst, ratio):
     assert out['ratio_pd_to_feedforward'] > ratio
 
 
-def test_solo12_sways_on_four_feet_with_the_contact_forces_of_the_qp():
-    check(run('solo12'), 0.01, 0.03, 30.0)
+def test_solo12_sways_on_four_feet_with_the_contact_forces_of_the_qp(capsys):
+    check(run('solo12', capsys), 0.01, 0.03, 30.0)
 
 
-def test_talos_sways_on_two_soles_with_the_contact_forces_of_the_qp():
-    check(run('talos'), 0.03, 0.06, 10.0)
+def test_talos_sways_on_two_soles_with_the_contact_forces_of_the_qp(capsys):
+    check(run('talos', capsys), 0.03, 0.06, 10.0)

@@ -15,11 +15,16 @@ import pytest
 pytest.importorskip('mujoco')
 
 
-def test_imu_feedforward_tracks_on_a_moving_base():
+def test_imu_feedforward_tracks_on_a_moving_base(capsys):
     from spatial_dynamics.tools.moving_base import main, ur5_urdf
     if not os.path.isfile(ur5_urdf()):
         pytest.skip('example-robot-data is not installed')
     out = main(['--seconds', '2'])
+    progress = capsys.readouterr().err.splitlines()     # seconds of work each: said as it goes
+    assert [line.split(':')[0] for line in progress if 'simulating' in line] == [
+        '[1/3] PD alone', '[2/3] PD + feed-forward, fixed base',
+        '[3/3] PD + feed-forward, IMU base']
+    assert sum('done in' in line for line in progress) == 3
     assert out['base_acceleration_error'] < 1e-8       # the base moved as prescribed
     assert out['ratio_imu_to_pd'] < 0.02                # measured 0.005 over 4 s
     assert out['ratio_imu_to_fixed_base_feedforward'] < 0.05     # measured 0.011

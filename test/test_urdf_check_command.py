@@ -6,6 +6,7 @@ What it prints is compared with the model and with the URDF read independently h
 (xml.etree): joint order, mimic multipliers, lumped links, total mass, warnings.
 """
 
+import importlib.metadata
 import os
 import re
 import subprocess
@@ -18,9 +19,12 @@ import pytest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from conftest import robot_urdf_path  # noqa: E402
-from node_harness import DEMO_URDF, PACKAGE  # noqa: E402
+from node_harness import DEMO_URDF, PACKAGE, ROOT  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.check import main  # noqa: E402
+
+#: bin/: the installed name of ``python -m spatial_dynamics.check``
+COMMAND = 'spatial_dynamics_check'
 
 BAD_INERTIA = """<robot name="bad">
   <link name="base"/>
@@ -232,8 +236,34 @@ def test_joints_keep_the_listed_order_and_lock_the_others(capsys):
     assert status == 1 and "'panda_finger_joint2'" in err
 
 
+def test_no_command_of_ours_shares_a_name_with_another_package():
+    """Each command in bin/ has a name no installed distribution's executable has.
+
+    urdfdom (cmeel-urdfdom, a dependency of Pinocchio) installs ``check_urdf``: a command of
+    that name in the same venv's bin/ was urdfdom's for whoever came first on PATH.
+    """
+    ours = set(os.listdir(os.path.join(ROOT, 'bin')))
+    theirs = {}
+    for dist in importlib.metadata.distributions():
+        name = dist.metadata['Name']
+        if name.lower().replace('-', '_') == PACKAGE:
+            continue
+        scripts = {e.name for e in dist.entry_points
+                   if e.group in ('console_scripts', 'gui_scripts')}
+        scripts |= {f.name for f in dist.files or () if 'bin' in f.parts[:-1]}
+        for script in scripts & ours:
+            theirs[script] = name
+    assert not theirs, f'commands of ours that other packages install too: {theirs}'
+    venv_bin = os.path.dirname(sys.executable)
+    for name in ours:
+        path = os.path.join(venv_bin, name)
+        if os.path.exists(path):    # ours, from a pip install into this venv
+            with open(path, encoding='utf-8', errors='replace') as f:
+                assert 'spatial_dynamics' in f.read(), f'{path} is another package\'s'
+
+
 def test_installed_executable_runs(install):
-    executable = os.path.join(install.prefix, 'lib', PACKAGE, 'check_urdf')
+    executable = os.path.join(install.prefix, 'lib', PACKAGE, COMMAND)
     assert os.access(executable, os.X_OK)
     proc = subprocess.run([executable, DEMO_URDF], env=install.env(), capture_output=True,
                           text=True, timeout=60)

@@ -69,7 +69,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('source', help='manifest (.csv, .yaml) or a folder ROBOT/.../BAG')
     p.add_argument('--urdf', help='the URDF of every robot of a folder (default: each robot '
                    "folder's robot.urdf)")
-    p.add_argument('--out', default='fleet_out', help='output directory (created)')
+    p.add_argument('--out', default='fleet_out',
+                   help='output directory, created (default %(default)s)')
     p.add_argument('--cache', help='results by content hash (default: OUT/cache)')
     where = p.add_mutually_exclusive_group()
     where.add_argument('--workers', type=workers_count, metavar='N',

@@ -61,11 +61,11 @@ import sys
 from typing import Dict, List, NamedTuple, Optional, Sequence, Tuple
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from .. import friction_torque, Model, rnea
 from ..check import read_description
 from .. import effort as effort_model
+from ..extras import install_hint
 from ..files import check_output
 from . import (annotate, bags, base_topics, differentiate, excite, identify, report, splines,
                urdf_writer)
@@ -292,6 +292,7 @@ def fits(args, model: Model, train: Dict, res: Residual, stages: Stages) -> Fitt
     correction, excitation_warning = None, ''
     # the fits work on matrices of a hundred columns, or share their chunks among the
     # command's own threads: BLAS threads beside those only oversubscribe the cores
+    from threadpoolctl import threadpool_limits
     with threadpool_limits(limits=1, user_api='blas'):
         if args.payload is None and args.inertias is None:
             fresidual = res.residual if not args.also else feffort - rnea(
@@ -565,8 +566,10 @@ def recording_parser() -> argparse.ArgumentParser:
     """Return a parent parser of what reads a recording and writes its residual (no help)."""
     p = argparse.ArgumentParser(add_help=False)
     p.add_argument('bag', metavar='BAG', help='rosbag2 directory, or a .db3 / .mcap file')
-    p.add_argument('--topic', default='/joint_states', help='sensor_msgs/JointState topic')
-    p.add_argument('--out', default='replay_out', help='output directory (created)')
+    p.add_argument('--topic', default='/joint_states',
+                   help='sensor_msgs/JointState topic (default %(default)s)')
+    p.add_argument('--out', default='replay_out',
+                   help='output directory, created (default %(default)s)')
     p.add_argument('--window', type=positive, default=0.05,
                    help='Savitzky-Golay window, s (default %(default)g)')
     p.add_argument('--order', type=int, choices=range(2, 7), default=3,
@@ -654,11 +657,13 @@ def trajectory_command(sub) -> None:
                    help='a trajectory_msgs/JointTrajectory (YAML), or a bag with --topic')
     p.add_argument('--topic', metavar='TOPIC',
                    help='check every JointTrajectory of this topic of the bag')
-    p.add_argument('--out', default='replay_out', help='output directory (created)')
+    p.add_argument('--out', default='replay_out',
+                   help='output directory, created (default %(default)s)')
     p.add_argument('--rate', type=positive, default=1000.0,
                    help='sampling rate, Hz (default %(default)g)')
     p.add_argument('--friction-model', choices=('none', 'urdf'), default='none',
-                   help='add the URDF <dynamics> friction (as the node)')
+                   help='urdf: add the URDF <dynamics> friction, as the node does '
+                   '(default %(default)s)')
     add_threshold(p)
     p.add_argument('--no-plots', action='store_true', help='write no PNG files')
 
@@ -729,7 +734,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         from . import legacy
         argv = legacy.new_spelling(argv, commands)
     args = p.parse_args(argv)
-    return args.run(args)
+    try:
+        return args.run(args)
+    except ImportError as err:        # an optional dependency: say which extra brings it
+        hint = install_hint(err, 'fleet' if args.command == 'fleet' else 'replay')
+        if not hint:
+            raise
+        print(f'error: replay {args.command}: {hint}', file=sys.stderr)
+        return 1
 
 
 def run(work, p: argparse.ArgumentParser, args) -> int:

@@ -9,14 +9,13 @@ the model torque (``--output`` part), and written in the message's YAML form, re
 against the URDF effort limits as ``replay trajectory`` checks its torques (``EXCEEDED``, exit 1);
 a tolerance the 1 ms steps cannot meet is said, exit 1. The output path is checked before
 any work (not an input, a writable regular file) and written atomically
-(:mod:`spatial_dynamics.files`); nothing else is written.
+(:mod:`spatial_dynamics.files`); nothing else is written. PyYAML (the ``replay`` extra) is
+imported where the plan is written, so the replay command starts without it.
 """
 
 from __future__ import annotations
 
 import sys
-
-import yaml
 
 from . import report, splines
 from .. import effort, files
@@ -46,6 +45,7 @@ def run(args, load_model) -> int:
     except effort.AnnotationError as err:
         raise ValueError(f'{args.plan}: not annotated: {err}') from None
     doc = effort.message_dict(result.trajectory, result.effort)
+    import yaml
     files.write_atomic(args.out, lambda f: f.write(yaml.safe_dump(
         doc, default_flow_style=None, sort_keys=False, width=1 << 16).encode('utf-8')),
         '--out')

@@ -74,7 +74,8 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
                    help='value (rad or m) of a joint locked by --joints')
     p.add_argument('--gravity', type=finite, nargs=3, default=(0.0, 0.0, -9.81),
-                   metavar=('GX', 'GY', 'GZ'), help='m/s^2 in the base frame')
+                   metavar=('GX', 'GY', 'GZ'),
+                   help='m/s^2 in the base frame (default 0 0 -9.81)')
 
 
 def model_parser() -> argparse.ArgumentParser:

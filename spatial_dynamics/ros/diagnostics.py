@@ -14,7 +14,7 @@ import time
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np
-from spatial_dynamics import backends
+from spatial_dynamics import backends, Model
 from spatial_dynamics.ros.config import NODE_REASONS, URDF_WARNINGS_LISTED, WRENCH_REASONS
 from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
 from spatial_dynamics.ros.inputs import REASONS
@@ -77,6 +77,17 @@ def backend_text(robot: Robot) -> str:
     return 'numpy'
 
 
+def dof_text(model: Model) -> str:
+    """Return the model's degrees of freedom as a user counts them.
+
+    A floating model's ``joint_names`` start with the free-flyer: Solo12's are 13 names for
+    12 joints and a base of six degrees of freedom (nv 18).
+    """
+    if model.floating:
+        return f'{model.nv - 6} joints + free-flyer (nv {model.nv})'
+    return f'{model.nv} DOF'
+
+
 def model_status(robot: Optional[Robot], totals: Totals, strict: bool,
                  backend: str) -> Status:
     """Return the ``robot model`` status: what is loaded, from where, backend, warnings."""
@@ -87,10 +98,10 @@ def model_status(robot: Optional[Robot], totals: Totals, strict: bool,
     # WARN while the loaded description has URDF warnings: the torques are those of the
     # file as written, but the file is physically inconsistent somewhere.
     model, urdf_warnings = robot.model, robot.base.warnings
-    message = f'robot {model.name!r} loaded, {len(model.joint_names)} DOF'
+    message = f'robot {model.name!r} loaded, {dof_text(model)}'
     if urdf_warnings:
         message += f', {len(urdf_warnings)} URDF warning(s)'
-    values = [('robot name', model.name), ('dof', str(len(model.joint_names))),
+    values = [('robot name', model.name), ('dof', dof_text(model)),
               ('model joints', ', '.join(model.joint_names)),
               ('output joints', ', '.join(robot.joints)), ('source', robot.source),
               ('summary', robot.base.summary()), ('backend', backend),

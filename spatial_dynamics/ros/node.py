@@ -66,7 +66,7 @@ from spatial_dynamics.ros.config import (
 from spatial_dynamics.ros.control import terms_names
 from spatial_dynamics.ros.descriptions import description_source, DescriptionParser, ParseRequest
 from spatial_dynamics.ros.diagnostics import (
-    backend_text, feedforward_status, model_status, observer_status)
+    backend_text, dof_text, feedforward_status, model_status, observer_status)
 from spatial_dynamics.ros.plans import Annotator, prepare_plan
 from spatial_dynamics.ros import realtime
 from spatial_dynamics.ros.records import Config, Robot
@@ -335,7 +335,7 @@ class InverseDynamicsNode(Node):
         """Log what was loaded; each URDF warning once per new description text."""
         model = robot.model
         self.get_logger().info(
-            f'robot {model.name!r} from {robot.source}: {len(model.joint_names)} DOF; '
+            f'robot {model.name!r} from {robot.source}: {dof_text(model)}; '
             f'output joints {list(robot.joints)}')
         self.get_logger().info(f'model: {robot.base.summary()}; backend: '
                                f'{backend_text(robot)}; payload: {robot.payload}')

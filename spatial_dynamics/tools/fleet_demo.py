@@ -98,15 +98,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """Write the simulated fleet."""
     p = argparse.ArgumentParser(prog='fleet_demo', description=__doc__.split('\n\n')[0])
     p.add_argument('out', help='folder to write (ROBOT/dayDD)')
-    p.add_argument('--robots', type=int, default=4)
-    p.add_argument('--days', type=int, default=30)
-    p.add_argument('--seconds', type=float, default=4.0, help='each bag, s')
-    p.add_argument('--wear-robot', type=int, default=2, help='1-based')
-    p.add_argument('--wear-joint', type=int, default=3, help='1-based')
-    p.add_argument('--onset', type=int, default=12, help='first day of wear, 1-based')
-    p.add_argument('--rate', type=float, default=0.05, help='friction rise a day, fraction')
+    p.add_argument('--robots', type=int, default=4,
+                   help='robots in the fleet, each with its own payload (default %(default)s)')
+    p.add_argument('--days', type=int, default=30,
+                   help='days recorded, one bag per robot a day (default %(default)s)')
+    p.add_argument('--seconds', type=float, default=4.0,
+                   help='length of each bag, s of robot time (default %(default)s)')
+    p.add_argument('--wear-robot', type=int, default=2,
+                   help='the robot that wears, 1-based (default %(default)s)')
+    p.add_argument('--wear-joint', type=int, default=3,
+                   help='its joint that wears, 1-based (default %(default)s)')
+    p.add_argument('--onset', type=int, default=12,
+                   help='first day of wear, 1-based (default %(default)s)')
+    p.add_argument('--rate', type=float, default=0.05,
+                   help='rise of the Coulomb friction a day, a fraction of its value '
+                   '(default %(default)s)')
     p.add_argument('--jump', type=float, default=0.0,
-                   help='friction jump at the onset, fraction (1: doubled; default 0)')
+                   help='friction jump at the onset, a fraction of its value (1: doubled; '
+                   'default %(default)s)')
     args = p.parse_args(argv)
     make_fleet(args.out, args.robots, args.days, args.seconds,
                (args.wear_robot - 1, args.wear_joint - 1, args.onset - 1, args.rate,

@@ -365,10 +365,13 @@ def report(f: Dict) -> str:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the demonstration; print the figures (and write them with ``--json``)."""
     p = argparse.ArgumentParser(prog='identify_demo', description=__doc__.split('\n\n')[0])
-    p.add_argument('--robot', choices=sorted(ROBOTS), default='ur5')
+    p.add_argument('--robot', choices=sorted(ROBOTS), default='ur5',
+                   help='robot of example-robot-data (default %(default)s)')
     p.add_argument('--urdf', help='the robot\'s URDF (default: example-robot-data\'s)')
-    p.add_argument('--seconds', type=float, default=20.0, help='training motion, s')
-    p.add_argument('--seed', type=int, default=1)
+    p.add_argument('--seconds', type=float, default=20.0,
+                   help='length of the training motion, s (default %(default)s)')
+    p.add_argument('--seed', type=int, default=1,
+                   help='seed of the wrong URDF and the noise (default %(default)s)')
     p.add_argument('--out', help='directory for the bags, URDFs and reports (default: a '
                    'temporary one)')
     p.add_argument('--json', help='write the figures to this file')

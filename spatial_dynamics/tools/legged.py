@@ -38,7 +38,9 @@ import argparse
 from dataclasses import dataclass
 import json
 import os
+import sys
 import sysconfig
+import time
 
 import numpy as np
 
@@ -228,12 +230,24 @@ def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x))))
 
 
+def say(text: str) -> None:
+    """Print a progress line on stderr (the figures go to stdout)."""
+    print(text, file=sys.stderr, flush=True)
+
+
 def figures(setup: Setup, seconds: float) -> dict:
     """Run both laws; return the RMS errors and the contact-force comparison."""
     robot = FloatingRobot(without_mimic(urdf_text(os.path.join(robots_dir(), setup.path))),
                           setup.feet, timestep=TIMESTEP)
+    say(f'planning {seconds:g} s of sway: inverse kinematics on the feet at every 1 ms step ...')
     plan = Stance(robot, setup).plan(seconds, TIMESTEP)
-    runs = {law: run(setup, plan, law) for law in LAWS}
+    runs = {}
+    for k, law in enumerate(LAWS, 1):
+        say(f'[{k}/{len(LAWS)}] {law}: simulating {seconds + 0.5:g} s at 1 ms'
+            + (' (a contact QP every step)' if k == len(LAWS) else '') + ' ...')
+        start = time.monotonic()
+        runs[law] = run(setup, plan, law)
+        say(f'[{k}/{len(LAWS)}] {law}: done in {time.monotonic() - start:.1f} s')
     ff = runs[LAWS[1]]
     mg = ff['mass'] * float(np.linalg.norm(ff['gravity']))
     # the total force of the floor against m (a_com - g): the momentum's rate over each step
@@ -263,8 +277,12 @@ def figures(setup: Setup, seconds: float) -> dict:
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--robot', choices=sorted(ROBOTS), default='solo12')
-    parser.add_argument('--seconds', type=float, default=3.0)
+    parser.add_argument('--robot', choices=sorted(ROBOTS), default='solo12',
+                        help='robot of example-robot-data (default %(default)s)')
+    parser.add_argument('--seconds', type=float, default=3.0,
+                        help='simulated seconds of swaying after 0.5 s standing, at most 600 '
+                        '(default %(default)s; ~20 s of wall time a simulated second on a '
+                        'busy core)')
     parser.add_argument('--json', help='write the figures here')
     args = parser.parse_args(argv)
     if not (np.isfinite(args.seconds) and 0.0 < args.seconds <= 600.0):

@@ -27,6 +27,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
+import time
 
 import numpy as np
 
@@ -128,7 +130,8 @@ def run(law: str, seconds: float = 4.0, dt: float = 1e-3) -> tuple:
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--seconds', type=float, default=4.0)
+    parser.add_argument('--seconds', type=float, default=4.0,
+                        help='simulated seconds of each run (default %(default)s)')
     parser.add_argument('--json', help='write the RMS errors and ratios here')
     args = parser.parse_args(argv)
     if args.json:
@@ -137,7 +140,14 @@ def main(argv=None) -> dict:
     if not os.path.isfile(ur5_urdf()):
         parser.error(f'the UR5 of example-robot-data is not at {ur5_urdf()}: '
                      'pip install example-robot-data')
-    runs = {law: run(law, args.seconds) for law in LAWS}
+    runs = {}
+    for k, law in enumerate(LAWS, 1):       # progress on stderr: each run takes seconds
+        print(f'[{k}/{len(LAWS)}] {law}: simulating {args.seconds:g} s of the UR5 at 1 ms ...',
+              file=sys.stderr, flush=True)
+        start = time.monotonic()
+        runs[law] = run(law, args.seconds)
+        print(f'[{k}/{len(LAWS)}] {law}: done in {time.monotonic() - start:.1f} s',
+              file=sys.stderr, flush=True)
     rms = {law: r[0] for law, r in runs.items()}
     out = {'rms_error_rad': rms,
            'base_acceleration_error': max(r[1] for r in runs.values()),

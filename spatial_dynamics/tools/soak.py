@@ -93,8 +93,11 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser.add_argument('--warmup', type=float, default=None,
                         help='seconds before the baseline (default: 20 %% of the run, '
                              '10..60 s)')
-    parser.add_argument('--sample', type=float, default=5.0, help='RSS sample period, s')
-    parser.add_argument('--max-growth-mb', type=float, default=5.0)
+    parser.add_argument('--sample', type=float, default=5.0,
+                        help='RSS sample period, s (default %(default)s)')
+    parser.add_argument('--max-growth-mb', type=float, default=5.0,
+                        help='fail when the resident memory grows more than this after the '
+                        'warm-up, MB (default %(default)s)')
     parser.add_argument('--fixed-order', action='store_true',
                         help='publish the names in model order (default: shuffled)')
     parser.add_argument('--input-depth', type=int, default=None,
