@@ -229,8 +229,17 @@ def test_a_cached_rerun_reads_no_bag_starts_no_cluster_and_draws_no_plot(small, 
             return real(*args, **kwargs)
         return read
     monkeypatch.setattr(task, '_hash_file', counted('hash', task._hash_file))
-    for name in ('read_joint_states', 'read_joint_states_between'):
+    for name in ('read_joint_states', 'read_joint_states_between', 'time_range'):
         monkeypatch.setattr(bags, name, counted(name, getattr(bags, name)))
+
+    from spatial_dynamics.fleet import engine
+    kept = []
+
+    def write_atomic(path, text, what):
+        kept.append(what)
+        return real_write(path, text, what)
+    real_write = engine.write_atomic
+    monkeypatch.setattr(engine, 'write_atomic', write_atomic)
 
     def no_cluster(*args, **kwargs):
         raise AssertionError('a cluster was started')
@@ -242,3 +251,24 @@ def test_a_cached_rerun_reads_no_bag_starts_no_cluster_and_draws_no_plot(small, 
     assert again.split('\n', 1)[1] == first.split('\n', 1)[1]
     # the URDFs' bytes are hashed (for the content keys), no bag's
     assert {os.path.basename(path) for _, path in reads} == {'robot.urdf'}, reads
+    assert kept == [], kept         # nor is what the cache knows of them written again
+
+
+#: What a cached re-run needs none of: the plots', the cluster's, the bags' readers, and
+#: scipy.stats (seconds to import on a busy machine, for one χ² quantile).
+NOT_ON_A_RERUN = ('matplotlib', 'dask', 'distributed', 'rosbags', 'yaml', 'scipy.stats')
+
+
+def test_a_cached_rerun_imports_nothing_it_does_not_use(small, tmp_path):
+    out = str(tmp_path / 'o')
+    script = ('import sys\n'
+              'from spatial_dynamics.fleet import main\n'
+              f'status = main([{small!r}, "--out", {out!r}, "--baseline-days", "0.5"])\n'
+              f'print(status, [m for m in {NOT_ON_A_RERUN!r} if m in sys.modules])\n')
+    for attempt in ('first', 'again'):
+        done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                              timeout=600)
+        assert done.returncode == 0, done.stderr
+    status, imported = done.stdout.splitlines()[-1].split(' ', 1)
+    assert '(4 from the cache, 0 failed)' in done.stdout
+    assert int(status) in (0, 3, 4) and imported == '[]', done.stdout

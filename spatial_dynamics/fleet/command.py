@@ -312,8 +312,10 @@ def run(args) -> int:
         for name in outputs:
             check_output(inside(args.out, name), name, inputs)
         cache = Cache(args.cache or os.path.join(args.out, 'cache'))
-        parts, owner = split(tasks, args.chunk)
-        digests = cache.known_digests(parts)
+        digests = cache.known_digests(tasks)
+        ranges = cache.time_ranges(tasks, digests)     # an unchanged bag is not opened
+        known = len(ranges)
+        parts, owner = split(tasks, args.chunk, ranges)
         # a cluster only for work worth its start-up, unless asked for (--workers, --scheduler)
         serial = args.serial or (args.workers is None and args.scheduler is None
                                  and pending_bytes(parts, cache, digests) < SERIAL_BYTES)
@@ -325,6 +327,8 @@ def run(args) -> int:
                 results = _on_cluster(args, parts, cache, progress, digests)
         finally:
             progress.close()
+        if len(ranges) > known:     # the bags just hashed: their ranges kept by digest
+            cache.remember_ranges(ranges, cache.known_digests(tasks))
         results = merge(tasks, owner, results)
     except (ManifestError, ValueError, OSError) as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
