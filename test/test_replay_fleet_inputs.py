@@ -13,6 +13,9 @@ import pytest
 
 from spatial_dynamics.fleet import main
 
+sys.path.insert(0, os.path.dirname(__file__))
+from conftest import robot_urdf_path  # noqa: E402
+
 
 @pytest.fixture(scope='module')
 def small(tmp_path_factory):
@@ -160,6 +163,39 @@ def test_missing_and_looping_bags_are_one_failed_line_each_and_the_rest_finish(
         assert name in failed[k] and f'line {k + 3}' in failed[k]
     assert {r['bag'] for r in table(tmp_path / 'o')} == {
         os.path.join(small, 'r01', 'day01'), os.path.join(small, 'r01', 'day02')}
+
+
+@pytest.mark.parametrize('kind', ['csv', 'yaml'])
+def test_a_glob_that_matches_nothing_is_one_failed_line_naming_its_row(small, tmp_path,
+                                                                       capsys, kind):
+    urdf = os.path.join(small, 'r01', 'robot.urdf')
+    urdf2 = os.path.join(small, 'r02', 'robot.urdf')
+    rows = [('r01', urdf, os.path.join(small, 'r01', 'day*')),
+            ('r02', urdf2, str(tmp_path / 'nothing' / '*.mcap')),
+            ('r02', urdf2, os.path.join(small, 'r02', 'day*'))]
+    if kind == 'csv':
+        path, where = manifest(tmp_path / 'm.csv', rows), 'line 3'
+    else:
+        path, where = tmp_path / 'm.yaml', 'robot 2'
+        path.write_text(json.dumps([{'robot': r, 'urdf': u, 'bags': [b]} for r, u, b in rows]))
+    status, text, err = run([path, '--out', tmp_path / 'o'], capsys)
+    assert status != 1, err
+    failed = [line for line in text.splitlines() if line.startswith('failed:')]
+    assert len(failed) == 1, text
+    assert f'{path}, {where}' in failed[0] and '*.mcap' in failed[0], failed
+    assert 'no bag matches' in failed[0], failed
+    assert {r['bag'] for r in table(tmp_path / 'o')} == {
+        os.path.join(small, r, d) for r in ('r01', 'r02') for d in ('day01', 'day02')}
+
+
+def test_a_manifest_whose_globs_all_match_nothing_is_refused_with_each_row(tmp_path, capsys):
+    urdf = robot_urdf_path('ur5')
+    path = manifest(tmp_path / 'm.csv', [('a', urdf, str(tmp_path / 'x*')),
+                                         ('b', urdf, str(tmp_path / 'y*'))])
+    status, text, err = run([path, '--out', tmp_path / 'o'], capsys)
+    assert status == 1 and 'no bag could be used' in err
+    failed = [line for line in text.splitlines() if line.startswith('failed:')]
+    assert [('line 2' in f, 'line 3' in f) for f in failed] == [(True, False), (False, True)]
 
 
 def test_a_bag_listed_twice_is_counted_once_and_said(small, tmp_path, capsys):

@@ -18,7 +18,7 @@ import csv
 import glob
 import io
 import os
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 import unicodedata
 
 from ..files import load_yaml, read_regular
@@ -94,12 +94,10 @@ def _option(name: str, value, where: str):
         raise ManifestError(f'{where}: option {name} = {value!r} is not valid{bound}') from None
 
 
-def _bags(pattern: str, base: str, where: str) -> List[str]:
+def _bags(pattern: str, base: str) -> Tuple[str, List[str]]:
+    """Return the pattern's path and the bags it names (none: a glob that matches nothing)."""
     path = os.path.join(base, os.path.expanduser(pattern))
-    found = sorted(glob.glob(path)) if glob.has_magic(path) else [path]
-    if not found:
-        raise ManifestError(f'{where}: no bag matches {pattern!r}')
-    return found
+    return path, sorted(glob.glob(path)) if glob.has_magic(path) else [path]
 
 
 def _urdf(path: str, base: str, where: str) -> str:
@@ -109,7 +107,8 @@ def _urdf(path: str, base: str, where: str) -> str:
     return path
 
 
-def _row(robot, urdf, patterns, options: Dict, base: str, where: str) -> List[Task]:
+def _row(robot, urdf, patterns, options: Dict, base: str, where: str
+         ) -> Tuple[List[Task], List[Dict]]:
     if not robot or not urdf or not patterns:
         raise ManifestError(f'{where}: robot, urdf and bag are all needed')
     robot = robot_name(robot, where)
@@ -123,15 +122,29 @@ def _row(robot, urdf, patterns, options: Dict, base: str, where: str) -> List[Ta
         if link in opts and topic not in opts:
             raise ManifestError(f'{where}: {link} needs {topic}')
     urdf = _urdf(urdf, base, where)
-    return [Task(robot, urdf, bag, opts, where=where)
-            for p in patterns for bag in _bags(str(p), base, where)]
+    tasks: List[Task] = []
+    unmatched: List[Dict] = []
+    for pattern in patterns:
+        path, found = _bags(str(pattern), base)
+        tasks += [Task(robot, urdf, bag, opts, where=where) for bag in found]
+        if not found:
+            unmatched.append({'robot': robot, 'bag': path, 'where': where, 'ok': False,
+                              'reason': f'no bag matches {str(pattern)!r}'})
+    return tasks, unmatched
 
 
-def read_manifest(path: str) -> List[Task]:
-    """Return the tasks of a CSV or YAML manifest; :class:`ManifestError` names the row."""
+def read_manifest(path: str) -> Tuple[List[Task], List[Dict]]:
+    """Return the tasks of a CSV or YAML manifest and a failed result per glob matching none.
+
+    A row that cannot be used (no robot, a bad name or option, no URDF) refuses the manifest
+    (:class:`ManifestError` names the row); a glob that matches no bag is one failed bag
+    (``{robot, bag: the glob's path, where: the row, ok: False, reason}``), the other rows
+    are used.
+    """
     text = read_regular(path, f'manifest {path}', MANIFEST_LIMIT)
     base = os.path.dirname(os.path.abspath(path))
     tasks: List[Task] = []
+    unmatched: List[Dict] = []
     if path.endswith(('.yaml', '.yml')):
         doc = load_yaml(text, f'manifest {path}')
         if isinstance(doc, dict) and 'robots' in doc:
@@ -148,8 +161,10 @@ def read_manifest(path: str) -> List[Task]:
             options = entry.get('options') or {}
             if not isinstance(options, dict):
                 raise ManifestError(f'{where}: options must be a mapping')
-            tasks += _row(entry.get('robot'), entry.get('urdf'), patterns, options, base,
-                          where)
+            found, none = _row(entry.get('robot'), entry.get('urdf'), patterns, options, base,
+                               where)
+            tasks += found
+            unmatched += none
     else:
         try:
             rows = list(csv.DictReader(io.StringIO(text.decode('utf-8'))))
@@ -158,11 +173,13 @@ def read_manifest(path: str) -> List[Task]:
         for k, row in enumerate(rows):
             where = f'manifest {path}, line {k + 2}'
             options = {c: v for c, v in row.items() if c not in ('robot', 'urdf', 'bag')}
-            tasks += _row(row.get('robot'), row.get('urdf'), [row.get('bag')], options, base,
-                          where)
-    if not tasks:
+            found, none = _row(row.get('robot'), row.get('urdf'), [row.get('bag')], options,
+                               base, where)
+            tasks += found
+            unmatched += none
+    if not tasks and not unmatched:
         raise ManifestError(f'manifest {path}: no bags')
-    return tasks
+    return tasks, unmatched
 
 
 def _is_bag_dir(path: str) -> bool:
