@@ -27,6 +27,8 @@ MAX_EFFORT = 1e6
 MAX_WRENCH = 1e6
 #: |g|, m/s² (100 g): gravity of a mounting.
 MAX_GRAVITY = 1e3
+#: The friction velocity threshold ε of tanh(q̇ / ε), rad/s or m/s: its smallest and largest.
+FRICTION_THRESHOLD_RANGE = (1e-9, 1e3)
 #: time_from_start of a trajectory point, s (a day).
 MAX_TRAJECTORY_TIME = 86400.0
 #: Points of one trajectory.

@@ -14,6 +14,7 @@ of its bags, and the URDF is ``--urdf`` or the robot folder's ``robot.urdf``.
 
 from __future__ import annotations
 
+import argparse
 import csv
 import glob
 import io
@@ -21,7 +22,11 @@ import os
 from typing import Dict, List, Optional, Tuple
 import unicodedata
 
+import numpy as np
+
+from ..bounds import MAX_GRAVITY
 from ..files import load_yaml, read_regular
+from ..replay.arguments import gravity_component, velocity_threshold, window_s
 from .task import BASE_TOPICS, DEFAULTS, Task
 
 #: Largest manifest read (a fleet of thousands of bags is a few MB).
@@ -29,10 +34,8 @@ MANIFEST_LIMIT = 64 << 20
 BAG_SUFFIXES = ('.db3', '.mcap')
 #: Longest robot name (it names files: ``trend_ROBOT.png``).
 NAME_LIMIT = 64
-#: Largest gravity component accepted, m/s² (10 g: a vehicle's or a test rig's).
-GRAVITY_LIMIT = 100.0
-#: Longest differentiation window, s (a longer one smooths away the motion a drive fit needs).
-WINDOW_LIMIT = 10.0
+#: The per-robot options checked as ``replay``'s options of the same name are.
+CHECKED = {'window': window_s, 'threshold': velocity_threshold}
 
 
 class ManifestError(ValueError):
@@ -64,11 +67,8 @@ def _option(name: str, value, where: str):
         raise ManifestError(f'{where}: unknown option {name!r} (known: '
                             f'{", ".join(sorted(DEFAULTS))})')
     try:
-        if name in ('threshold', 'window'):
-            x = float(value)
-            if not 0.0 < x < float('inf') or (name == 'window' and x > WINDOW_LIMIT):
-                raise ValueError
-            return x
+        if name in CHECKED:
+            return CHECKED[name](str(value))
         if name == 'order':
             x = int(value)
             if not 2 <= x <= 6:
@@ -77,10 +77,14 @@ def _option(name: str, value, where: str):
         if name == 'joints':
             return tuple(value.split() if isinstance(value, str) else value)
         if name == 'gravity':
-            g = tuple(float(v) for v in (value.split() if isinstance(value, str) else value))
-            if len(g) != 3 or not all(abs(v) <= GRAVITY_LIMIT for v in g):
+            try:        # each component as replay's --gravity takes it, then |g|
+                g = tuple(gravity_component(str(v))
+                          for v in (value.split() if isinstance(value, str) else value))
+            except argparse.ArgumentTypeError:
+                g = ()
+            if len(g) != 3 or not float(np.linalg.norm(g)) <= MAX_GRAVITY:
                 raise ManifestError(f'{where}: option gravity = {value!r}: three numbers, '
-                                    f'm/s², each within ±{GRAVITY_LIMIT:g}')
+                                    f'm/s², |g| at most {MAX_GRAVITY:g} (100 g)')
             return g
         if name == 'measured_effort':
             from ..effort import MEASURED_EFFORT
@@ -89,9 +93,10 @@ def _option(name: str, value, where: str):
         return str(value)
     except ManifestError:
         raise
+    except argparse.ArgumentTypeError as err:
+        raise ManifestError(f'{where}: option {name}: {err}') from None
     except (TypeError, ValueError):
-        bound = f' (0 < window <= {WINDOW_LIMIT:g} s)' if name == 'window' else ''
-        raise ManifestError(f'{where}: option {name} = {value!r} is not valid{bound}') from None
+        raise ManifestError(f'{where}: option {name} = {value!r} is not valid') from None
 
 
 def _bags(pattern: str, base: str) -> Tuple[str, List[str]]:

@@ -26,7 +26,7 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
-from spatial_dynamics.bounds import MAX_GRAVITY, MAX_PLAN_BYTES
+from spatial_dynamics.bounds import FRICTION_THRESHOLD_RANGE, MAX_GRAVITY, MAX_PLAN_BYTES
 from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
 from spatial_dynamics.ros.bases import (
@@ -239,7 +239,7 @@ PARAMETERS = Table(NODE_NAME, [
         choices=FRICTION_MODELS),
     Param('friction_velocity_threshold', 'double', DEFAULT_FRICTION_THRESHOLD, (
         'Velocity (rad/s or m/s) at which the smooth Coulomb sign reaches tanh(1) = 76 %.'),
-        bounds=(1e-9, 1e3)),
+        bounds=FRICTION_THRESHOLD_RANGE),
     Param('clamp_to_effort_limits', 'bool', False, (
         'Clamp tau to the URDF <limit effort> (joints without a positive limit are left '
         'alone); a throttled warning names the saturated joints.')),
