@@ -17,6 +17,12 @@ serial. Then long bags
 (``--long`` s) as one task and cut into ``--chunk`` s chunks, each in a fresh process: the
 most messages a task holds and the process's peak RSS, which the chunks bound whatever the
 bag's length.
+
+The command's own rows run ``python -m spatial_dynamics.fleet`` on a manifest of the fleet,
+each in a fresh process as a user would (its imports included): ``--serial``, then the
+default (below 1 GB of bags to process it runs without a cluster), then the same command
+again with the cache in its ``--out``: the re-run's wall time as a fraction of the first
+run's, the default's against ``--serial``. ``--parts`` chooses what runs (default: all).
 """
 
 from __future__ import annotations
@@ -30,6 +36,8 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
+#: What ``--parts`` may choose.
+PARTS = ('command', 'engine', 'memory')
 #: The drive every synthetic bag carries: damping N m s, Coulomb friction N m, armature.
 DRIVE = (0.4, 0.8, 0.03)
 #: Noise of the measured velocity (rad/s) and torque (N m).
@@ -107,6 +115,17 @@ def cpu_of(pids: Sequence[int]) -> float:
     return sum(sum(psutil.Process(p).cpu_times()[:2]) for p in pids)
 
 
+def read_once(tasks: List) -> None:
+    """Read every bag once: every way then reads them from the page cache, the first too."""
+    for task in tasks:
+        walk = os.walk(task.bag) if os.path.isdir(task.bag) else [('', (), [task.bag])]
+        for root, _, files in walk:
+            for name in files:
+                with open(os.path.join(root, name), 'rb') as f:
+                    while f.read(1 << 24):
+                        pass
+
+
 def timed_runs(tasks: List, workers: Sequence[int]) -> List[dict]:
     """Run ``tasks`` serially and on local clusters of ``workers`` processes; the figures."""
     from distributed import Client
@@ -114,13 +133,7 @@ def timed_runs(tasks: List, workers: Sequence[int]) -> List[dict]:
     rows = []
     me = [os.getpid()]
     load_modules()      # as warm() does on each worker
-    for task in tasks:  # every way reads the bags from the page cache, the first one too
-        walk = os.walk(task.bag) if os.path.isdir(task.bag) else [('', (), [task.bag])]
-        for root, _, files in walk:
-            for name in files:
-                with open(os.path.join(root, name), 'rb') as f:
-                    while f.read(1 << 24):
-                        pass
+    read_once(tasks)
     c0, t0 = cpu_of(me), time.perf_counter()
     results = run_tasks(tasks, Cache(None))
     rows.append({'way': 'serial', 'cores': 1, 'wall': time.perf_counter() - t0,
@@ -176,6 +189,60 @@ def plain_processes(tasks: List, n: int) -> dict:
             'startup': 0.0, 'results': [r for results, _ in done for r in results]}
 
 
+def command_rows(tasks: List, folder: str, baseline_days: float) -> List[dict]:
+    """Run the fleet command on ``tasks`` as a user would: --serial, default, cached re-run.
+
+    Each run is a fresh ``python -m spatial_dynamics.fleet`` on a manifest of the tasks
+    (written to ``folder``), its wall time and CPU time (user + system of the child)
+    measured; ``--serial`` and the default write to their own new ``--out``, the re-run to
+    the default's (its cache). Returns one dict a run: way, wall, cpu, the summary line and
+    fleet.csv's text.
+    """
+    import resource
+    import shutil
+    manifest = os.path.join(folder, 'manifest.csv')
+    with open(manifest, 'w', encoding='utf-8') as f:
+        f.write('robot,urdf,bag\n' + ''.join(f'{t.robot},{t.urdf},{t.bag}\n' for t in tasks))
+    rows = []
+    ways = [('--serial', 'serial', ['--serial']), ('default', 'default', []),
+            ('re-run', 'default', [])]
+    for name in ('serial', 'default'):
+        shutil.rmtree(os.path.join(folder, name), ignore_errors=True)
+    read_once(tasks)
+    for way, out, extra in ways:
+        out = os.path.join(folder, out)
+        argv = [sys.executable, '-m', 'spatial_dynamics.fleet', manifest, '--out', out,
+                '--baseline-days', f'{baseline_days:g}'] + extra
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        done = subprocess.run(argv, capture_output=True, text=True)
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        if done.returncode not in (0, 3, 4):
+            raise RuntimeError(f'{" ".join(argv)}: exit {done.returncode}\n{done.stderr}')
+        with open(os.path.join(out, 'fleet.csv'), encoding='utf-8') as f:
+            csv_text = f.read()
+        cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+        rows.append({'way': way, 'wall': wall, 'cpu': cpu,
+                     'summary': done.stdout.splitlines()[0], 'csv': csv_text})
+    return rows
+
+
+def print_command_rows(rows: List[dict]) -> None:
+    """Print the command's runs and the ratios: re-run / first run, default / --serial."""
+    by = {r['way']: r for r in rows}
+    for r in rows:
+        print(f'{"command " + r["way"]:>16}: {r["wall"]:6.2f} s wall, {r["cpu"]:6.2f} s CPU; '
+              f'{r["summary"]}', flush=True)
+    first, again, serial = by['default'], by['re-run'], by['--serial']
+    print(f'cached re-run / first run: {again["wall"] / first["wall"]:.1%} wall '
+          f'({again["cpu"] / first["cpu"]:.1%} CPU); fleet.csv '
+          f'{"identical" if again["csv"] == first["csv"] else "DIFFERENT"}', flush=True)
+    print(f'default / --serial: {first["wall"] / serial["wall"]:.2f} wall '
+          f'({first["cpu"] / serial["cpu"]:.2f} CPU); fleet.csv '
+          f'{"identical" if first["csv"] == serial["csv"] else "DIFFERENT"}', flush=True)
+
+
 def memory_of_long_bag(path: str, chunk: float) -> str:
     """Run a bag's tasks (``chunk`` 0: one) in this process: messages held, peak RSS."""
     from spatial_dynamics.fleet.chunks import merge, split
@@ -207,6 +274,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument('--long', type=float, nargs='*', default=[1200.0, 2400.0],
                    help='lengths of the long bags, s (default 1200 2400)')
     p.add_argument('--chunk', type=float, default=300.0, help='their chunks, s (default 300)')
+    p.add_argument('--parts', nargs='+', choices=PARTS, default=list(PARTS),
+                   help='what runs: the engine\'s ways, the command\'s runs (first, '
+                   'cached re-run, default against --serial), the long bags\' memory '
+                   '(default: all)')
+    p.add_argument('--baseline-days', type=float, default=0.5,
+                   help='of the command\'s runs (the bags are an hour apart; default '
+                   '%(default)g)')
     p.add_argument('--memory-of', nargs=2, metavar=('BAG', 'CHUNK'), help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.memory_of:
@@ -215,7 +289,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     tasks = make_fleet(args.dir, args.robots, args.bags, args.seconds, args.rate, args.joints)
     print(f'{len(tasks)} bags of {args.seconds:g} s at {args.rate:g} Hz ({args.joints} joints) '
           f'in {args.dir}; {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.1f}', flush=True)
-    rows = timed_runs(tasks, args.workers)
+    if 'command' in args.parts:
+        print_command_rows(command_rows(tasks, os.path.join(args.dir, f'{args.joints}joints'),
+                                        args.baseline_days))
+    if 'engine' in args.parts:
+        engine_rows(tasks, args.workers)
+    if 'memory' in args.parts:
+        long_bags(args)
+    print(f'load {os.getloadavg()[0]:.1f} at the end', flush=True)
+    return 0
+
+
+def engine_rows(tasks: List, workers: Sequence[int]) -> None:
+    """Time the engine's ways of running ``tasks`` and print their figures."""
+    rows = timed_runs(tasks, workers)
     want = [r['sums'] for r in rows[0]['results']]
     for row in rows:
         results = row['results']
@@ -236,6 +323,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               f'{row.get("here", row["cpu"]):.1f} s of it in this process); peak RSS per '
               f'process {rss:.0f} MB; sums {"identical" if same else "DIFFERENT"} to serial',
               flush=True)
+
+
+def long_bags(args) -> None:
+    """Print the messages held and the peak RSS of the long bags, whole and in chunks."""
     for seconds in args.long:
         path = os.path.join(args.dir, f'{args.joints}joints', f'long_{seconds:g}s_{args.rate:g}hz')
         if not os.path.exists(os.path.join(path, 'metadata.yaml')):
@@ -246,7 +337,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                                   str(chunk)], capture_output=True, text=True, check=True)
             how = 'whole' if chunk == 0 else f'chunks of {chunk:g} s'
             print(f'long bag {seconds:g} s, {how}: {out.stdout.strip()}', flush=True)
-    return 0
 
 
 if __name__ == '__main__':

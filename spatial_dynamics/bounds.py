@@ -44,6 +44,8 @@ MAX_IMU_RATE = 100.0
 #: |specific force| an IMU reports, m/s²: 4,000 m/s² (400 g) is above high-g accelerometers;
 #: common ones saturate at ±16 g.
 MAX_IMU_SPECIFIC_FORCE = 4e3
+#: The friction velocity threshold ε of tanh(q̇ / ε), rad/s or m/s: its smallest and largest.
+FRICTION_THRESHOLD_RANGE = (1e-9, 1e3)
 #: time_from_start of a trajectory point, s (a day).
 MAX_TRAJECTORY_TIME = 86400.0
 #: Points of one trajectory.

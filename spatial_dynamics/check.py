@@ -25,6 +25,7 @@ import warnings
 import numpy as np
 
 from . import mass_matrix, Model, urdf, URDFWarning
+from .bounds import MAX_POSITION
 from .joints import KIND_NAMES
 
 WIDTH = 99
@@ -164,14 +165,18 @@ def report(model: Model, types: Dict[str, str]) -> str:
 
 
 def locked_item(item: str) -> Tuple[str, float]:
-    """Parse ``'name=value'`` to ``(name, value)``; ``ArgumentTypeError`` (usage) if not."""
+    """Parse ``'name=value'`` to ``(name, value)``; ``ArgumentTypeError`` (usage) if not.
+
+    The value is a joint position: finite, within ±MAX_POSITION (rad or m).
+    """
     name, sep, value = item.partition('=')
     try:
-        if sep and name:
+        if sep and name and abs(float(value)) <= MAX_POSITION:
             return name, float(value)
     except ValueError:
         pass
-    raise argparse.ArgumentTypeError(f'{item!r}: expected NAME=VALUE (rad or m)')
+    raise argparse.ArgumentTypeError(f'{item!r}: expected NAME=VALUE, the value in rad or m '
+                                     f'within ±{MAX_POSITION:g}')
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -13,6 +13,9 @@ import pytest
 
 from spatial_dynamics.fleet import main
 
+sys.path.insert(0, os.path.dirname(__file__))
+from conftest import robot_urdf_path  # noqa: E402
+
 
 @pytest.fixture(scope='module')
 def small(tmp_path_factory):
@@ -162,6 +165,39 @@ def test_missing_and_looping_bags_are_one_failed_line_each_and_the_rest_finish(
         os.path.join(small, 'r01', 'day01'), os.path.join(small, 'r01', 'day02')}
 
 
+@pytest.mark.parametrize('kind', ['csv', 'yaml'])
+def test_a_glob_that_matches_nothing_is_one_failed_line_naming_its_row(small, tmp_path,
+                                                                       capsys, kind):
+    urdf = os.path.join(small, 'r01', 'robot.urdf')
+    urdf2 = os.path.join(small, 'r02', 'robot.urdf')
+    rows = [('r01', urdf, os.path.join(small, 'r01', 'day*')),
+            ('r02', urdf2, str(tmp_path / 'nothing' / '*.mcap')),
+            ('r02', urdf2, os.path.join(small, 'r02', 'day*'))]
+    if kind == 'csv':
+        path, where = manifest(tmp_path / 'm.csv', rows), 'line 3'
+    else:
+        path, where = tmp_path / 'm.yaml', 'robot 2'
+        path.write_text(json.dumps([{'robot': r, 'urdf': u, 'bags': [b]} for r, u, b in rows]))
+    status, text, err = run([path, '--out', tmp_path / 'o'], capsys)
+    assert status != 1, err
+    failed = [line for line in text.splitlines() if line.startswith('failed:')]
+    assert len(failed) == 1, text
+    assert f'{path}, {where}' in failed[0] and '*.mcap' in failed[0], failed
+    assert 'no bag matches' in failed[0], failed
+    assert {r['bag'] for r in table(tmp_path / 'o')} == {
+        os.path.join(small, r, d) for r in ('r01', 'r02') for d in ('day01', 'day02')}
+
+
+def test_a_manifest_whose_globs_all_match_nothing_is_refused_with_each_row(tmp_path, capsys):
+    urdf = robot_urdf_path('ur5')
+    path = manifest(tmp_path / 'm.csv', [('a', urdf, str(tmp_path / 'x*')),
+                                         ('b', urdf, str(tmp_path / 'y*'))])
+    status, text, err = run([path, '--out', tmp_path / 'o'], capsys)
+    assert status == 1 and 'no bag could be used' in err
+    failed = [line for line in text.splitlines() if line.startswith('failed:')]
+    assert [('line 2' in f, 'line 3' in f) for f in failed] == [(True, False), (False, True)]
+
+
 def test_a_bag_listed_twice_is_counted_once_and_said(small, tmp_path, capsys):
     urdf = os.path.join(small, 'r01', 'robot.urdf')
     path = tmp_path / 'm.yaml'
@@ -229,8 +265,17 @@ def test_a_cached_rerun_reads_no_bag_starts_no_cluster_and_draws_no_plot(small, 
             return real(*args, **kwargs)
         return read
     monkeypatch.setattr(task, '_hash_file', counted('hash', task._hash_file))
-    for name in ('read_joint_states', 'read_joint_states_between'):
+    for name in ('read_joint_states', 'read_joint_states_between', 'time_range'):
         monkeypatch.setattr(bags, name, counted(name, getattr(bags, name)))
+
+    from spatial_dynamics.fleet import engine
+    kept = []
+
+    def write_atomic(path, text, what):
+        kept.append(what)
+        return real_write(path, text, what)
+    real_write = engine.write_atomic
+    monkeypatch.setattr(engine, 'write_atomic', write_atomic)
 
     def no_cluster(*args, **kwargs):
         raise AssertionError('a cluster was started')
@@ -242,3 +287,24 @@ def test_a_cached_rerun_reads_no_bag_starts_no_cluster_and_draws_no_plot(small, 
     assert again.split('\n', 1)[1] == first.split('\n', 1)[1]
     # the URDFs' bytes are hashed (for the content keys), no bag's
     assert {os.path.basename(path) for _, path in reads} == {'robot.urdf'}, reads
+    assert kept == [], kept         # nor is what the cache knows of them written again
+
+
+#: What a cached re-run needs none of: the plots', the cluster's, the bags' readers, and
+#: scipy.stats (seconds to import on a busy machine, for one χ² quantile).
+NOT_ON_A_RERUN = ('matplotlib', 'dask', 'distributed', 'rosbags', 'yaml', 'scipy.stats')
+
+
+def test_a_cached_rerun_imports_nothing_it_does_not_use(small, tmp_path):
+    out = str(tmp_path / 'o')
+    script = ('import sys\n'
+              'from spatial_dynamics.fleet import main\n'
+              f'status = main([{small!r}, "--out", {out!r}, "--baseline-days", "0.5"])\n'
+              f'print(status, [m for m in {NOT_ON_A_RERUN!r} if m in sys.modules])\n')
+    for attempt in ('first', 'again'):
+        done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                              timeout=600)
+        assert done.returncode == 0, done.stderr
+    status, imported = done.stdout.splitlines()[-1].split(' ', 1)
+    assert '(4 from the cache, 0 failed)' in done.stdout
+    assert int(status) in (0, 3, 4) and imported == '[]', done.stdout

@@ -101,6 +101,7 @@ def test_the_yaml_manifest_takes_the_base_options(bag, tmp_path):
     manifest = tmp_path / 'fleet.yaml'
     manifest.write_text(f'- robot: m01\n  urdf: {robot_urdf_path("ur5")}\n  bags: [{bag}]\n'
                         '  options: {base_imu: /imu, imu_link: base_link}\n')
-    task, = read_manifest(str(manifest))
+    (task,), unmatched = read_manifest(str(manifest))
+    assert unmatched == []
     assert task.option('base_imu') == '/imu' and task.option('imu_link') == 'base_link'
     assert task.option('base_odometry') is None

@@ -14,7 +14,7 @@ of the chunked bag is the fit of the whole bag to rounding.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Dict, List, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -27,13 +27,18 @@ CHUNK = 600.0
 MIN_CHUNK = 10.0
 
 
-def split(tasks: Sequence[Task], chunk: float) -> Tuple[List[Task], List[int]]:
+def split(tasks: Sequence[Task], chunk: float,
+          ranges: Optional[Dict[Tuple[str, str], Tuple[int, int]]] = None
+          ) -> Tuple[List[Task], List[int]]:
     """Return the tasks to run and, for each, the index of the bag task it belongs to.
 
     ``chunk`` s: a bag spanning more is cut; ``0`` never cuts. A bag whose time range cannot
-    be read stays whole (its task then says what is wrong with it).
+    be read stays whole (its task then says what is wrong with it). ``ranges``: (bag, topic)
+    -> its first and last bag time (ns), known already (a bag in it is not opened); the
+    ranges read are added to it.
     """
     from ..replay import bags
+    ranges = {} if ranges is None else ranges
     parts: List[Task] = []
     owner: List[int] = []
     step = int(round(chunk * 1e9))
@@ -41,7 +46,7 @@ def split(tasks: Sequence[Task], chunk: float) -> Tuple[List[Task], List[int]]:
         cuts: List[int] = []
         if step > 0:
             try:
-                first, last = bags.time_range(task.bag, task.option('topic'))
+                first, last = _time_range(task, ranges)
                 cuts = list(range(first + step, last + 1, step))
             except (bags.BagError, bags.MissingDependency, ValueError, OSError):
                 cuts = []
@@ -53,6 +58,16 @@ def split(tasks: Sequence[Task], chunk: float) -> Tuple[List[Task], List[int]]:
             parts.append(replace(task, start=start, stop=stop))
             owner.append(i)
     return parts, owner
+
+
+def _time_range(task: Task, ranges: Dict[Tuple[str, str], Tuple[int, int]]
+                ) -> Tuple[int, int]:
+    """Return the task's bag time range from ``ranges``, or read it and add it there."""
+    from ..replay import bags
+    key = (task.bag, task.option('topic'))
+    if key not in ranges:
+        ranges[key] = bags.time_range(*key)
+    return ranges[key]
 
 
 def merge(tasks: Sequence[Task], owner: Sequence[int], results: Sequence[Dict]

@@ -157,13 +157,19 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def tasks_of(source: str, urdf: Optional[str]) -> Tuple[List[Task], List[str]]:
-    """Return the tasks of ``source``, each bag once, and a note for each bag left out.
+def tasks_of(source: str, urdf: Optional[str]
+             ) -> Tuple[List[Task], List[str], List[Dict]]:
+    """Return the tasks of ``source`` (each bag once), the notes and the globs matching none.
 
-    A bag is the same bag when its path resolves to the same file (overlapping globs, a
-    link): it is counted once, under its first row.
+    A note says which bag was left out; a glob of the manifest that matches no bag is a
+    failed result naming its row (:func:`~.manifest.read_manifest`). A bag is the same bag
+    when its path resolves to the same file (overlapping globs, a link): it is counted once,
+    under its first row.
     """
-    tasks = scan_folder(source, urdf) if os.path.isdir(source) else read_manifest(source)
+    if os.path.isdir(source):
+        tasks, unmatched = scan_folder(source, urdf), []
+    else:
+        tasks, unmatched = read_manifest(source)
     first: Dict[str, Task] = {}
     once, notes = [], []
     for t in tasks:
@@ -174,7 +180,7 @@ def tasks_of(source: str, urdf: Optional[str]) -> Tuple[List[Task], List[str]]:
             continue
         first[real] = t
         once.append(t)
-    return once, notes
+    return once, notes, unmatched
 
 
 def per_bag_rows(results: List[Dict]) -> List[Dict]:
@@ -304,7 +310,7 @@ def inside(out: str, name: str) -> str:
 def run(args) -> int:
     """Run the command on parsed ``args``; return the exit status (0, 1, 3 or 4)."""
     try:
-        tasks, notes = tasks_of(args.source, args.urdf)
+        tasks, notes, unmatched = tasks_of(args.source, args.urdf)
         os.makedirs(args.out, exist_ok=True)
         outputs = ['fleet.csv', 'robots.csv', 'drift.txt']
         if not args.no_plots:
@@ -313,8 +319,10 @@ def run(args) -> int:
         for name in outputs:
             check_output(inside(args.out, name), name, inputs)
         cache = Cache(args.cache or os.path.join(args.out, 'cache'))
-        parts, owner = split(tasks, args.chunk)
-        digests = cache.known_digests(parts)
+        digests = cache.known_digests(tasks)
+        ranges = cache.time_ranges(tasks, digests)     # an unchanged bag is not opened
+        known = len(ranges)
+        parts, owner = split(tasks, args.chunk, ranges)
         # a cluster only for work worth its start-up, unless asked for (--workers, --scheduler)
         serial = args.serial or (args.workers is None and args.scheduler is None
                                  and pending_bytes(parts, cache, digests) < SERIAL_BYTES)
@@ -326,13 +334,15 @@ def run(args) -> int:
                 results = _on_cluster(args, parts, cache, progress, digests)
         finally:
             progress.close()
+        if len(ranges) > known:     # the bags just hashed: their ranges kept by digest
+            cache.remember_ranges(ranges, cache.known_digests(tasks))
         results = merge(tasks, owner, results)
     except (ManifestError, ValueError, OSError) as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
         return 1
     for task, result in zip(tasks, results):      # this run's names, whatever the cache's
         result.update(robot=task.robot, bag=task.bag, where=task.where)
-    return report(args, results, notes)
+    return report(args, results + unmatched, notes)
 
 
 def _on_cluster(args, tasks, cache, progress, digests) -> List[Dict]:

@@ -139,7 +139,6 @@ def cusum(start: Sequence[float], x: Sequence[float], sigma: Sequence[float],
     value and σ; the reference is the baseline's mean (the first estimate's value when the
     baseline itself drifts).
     """
-    from scipy.stats import chi2
     n_all = len(start)
     t, x, s = _clean(start, x, sigma)
     if not len(t):
@@ -156,7 +155,8 @@ def cusum(start: Sequence[float], x: Sequence[float], sigma: Sequence[float],
         return None, (f'{len(t)} estimates; its scatter needs {MIN_SCATTER + 1} at least')
     w = 1.0 / s[:nb] ** 2
     mu0 = float(np.sum(w * x[:nb]) / np.sum(w))
-    if np.sum(w * (x[:nb] - mu0) ** 2) / phi > chi2.isf(P_BASELINE, nb - 1):
+    from scipy.special import chdtri        # chi2.isf: scipy.stats takes seconds to import
+    if np.sum(w * (x[:nb] - mu0) ** 2) / phi > chdtri(nb - 1, P_BASELINE):
         z = (x - x[0]) / np.sqrt(phi * (s ** 2 + s[0] ** 2))
         onset = _crossing(z, 1)
         return (1 if onset is None else onset, float(x[0]), float(z[-1]), True), None

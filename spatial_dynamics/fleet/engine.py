@@ -24,7 +24,7 @@ import json
 import os
 import sys
 import time
-from typing import Callable, Dict, List, Optional, Sequence
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -100,6 +100,46 @@ class Cache:
                 write_atomic(self._stat_path(bag), digest.hex(), 'bag digest')
             except (ValueError, OSError):
                 pass
+
+    def time_ranges(self, tasks: Sequence[Task], digests: Dict[str, bytes]
+                    ) -> Dict[Tuple[str, str], Tuple[int, int]]:
+        """Return (bag, topic) -> the topic's first and last bag time (ns), as kept.
+
+        A range is kept by the bag's digest and the topic (:meth:`remember_ranges`): a bag
+        unchanged since (``digests``, :meth:`known_digests`) is not opened to cut it into
+        chunks again.
+        """
+        ranges: Dict[Tuple[str, str], Tuple[int, int]] = {}
+        for bag, topic in dict.fromkeys((t.bag, t.option('topic')) for t in tasks):
+            if bag not in digests:
+                continue
+            try:
+                text = read_regular(self._range_path(digests[bag], topic), 'time range', 64)
+                first, last = (int(x) for x in text.decode('ascii').split())
+            except (ValueError, OSError, TypeError):
+                continue
+            if first <= last:
+                ranges[bag, topic] = (first, last)
+        return ranges
+
+    def remember_ranges(self, ranges: Dict[Tuple[str, str], Tuple[int, int]],
+                        digests: Dict[str, bytes]) -> None:
+        """Keep each bag's time range under its digest and topic (see :meth:`time_ranges`)."""
+        for (bag, topic), (first, last) in ranges.items():
+            if bag not in digests:
+                continue
+            try:
+                write_atomic(self._range_path(digests[bag], topic), f'{first} {last}',
+                             'time range')
+            except (ValueError, OSError):
+                pass
+
+    def _range_path(self, digest: bytes, topic: str) -> str:
+        if not self.folder:
+            raise ValueError('no cache')
+        folder = os.path.join(self.folder, 'ranges')
+        os.makedirs(folder, exist_ok=True)
+        return os.path.join(folder, hashlib.sha256(digest + b'\0' + topic.encode()).hexdigest())
 
     def _stat_path(self, bag: str) -> str:
         if not self.folder:
@@ -224,7 +264,8 @@ def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
     gives up on (a worker lost more often than allowed) is a failed bag with the reason.
     ``digests``: the bags' digests known already (:meth:`Cache.known_digests`).
     """
-    digests = dict(digests or {})
+    known = dict(digests or {})
+    digests = dict(known)
     if client is not None:
         digests.update(digests_on(client, [t for t in tasks if t.bag not in digests]))
     keys: List[Optional[str]] = []
@@ -238,7 +279,7 @@ def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
             continue
         r = cache.get(keys[-1])
         results.append(None if r is None else dict(r, **_head(t), cached=True))
-    cache.remember(digests)
+    cache.remember({bag: d for bag, d in digests.items() if bag not in known})
     todo = [i for i, r in enumerate(results) if r is None]
     if client is None:
         for i in todo:

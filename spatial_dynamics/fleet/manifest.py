@@ -14,14 +14,19 @@ of its bags, and the URDF is ``--urdf`` or the robot folder's ``robot.urdf``.
 
 from __future__ import annotations
 
+import argparse
 import csv
 import glob
 import io
 import os
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 import unicodedata
 
+import numpy as np
+
+from ..bounds import MAX_GRAVITY
 from ..files import load_yaml, read_regular
+from ..replay.arguments import gravity_component, velocity_threshold, window_s
 from .task import BASE_TOPICS, DEFAULTS, Task
 
 #: Largest manifest read (a fleet of thousands of bags is a few MB).
@@ -29,10 +34,8 @@ MANIFEST_LIMIT = 64 << 20
 BAG_SUFFIXES = ('.db3', '.mcap')
 #: Longest robot name (it names files: ``trend_ROBOT.png``).
 NAME_LIMIT = 64
-#: Largest gravity component accepted, m/s² (10 g: a vehicle's or a test rig's).
-GRAVITY_LIMIT = 100.0
-#: Longest differentiation window, s (a longer one smooths away the motion a drive fit needs).
-WINDOW_LIMIT = 10.0
+#: The per-robot options checked as ``replay``'s options of the same name are.
+CHECKED = {'window': window_s, 'threshold': velocity_threshold}
 
 
 class ManifestError(ValueError):
@@ -64,11 +67,8 @@ def _option(name: str, value, where: str):
         raise ManifestError(f'{where}: unknown option {name!r} (known: '
                             f'{", ".join(sorted(DEFAULTS))})')
     try:
-        if name in ('threshold', 'window'):
-            x = float(value)
-            if not 0.0 < x < float('inf') or (name == 'window' and x > WINDOW_LIMIT):
-                raise ValueError
-            return x
+        if name in CHECKED:
+            return CHECKED[name](str(value))
         if name == 'order':
             x = int(value)
             if not 2 <= x <= 6:
@@ -77,10 +77,14 @@ def _option(name: str, value, where: str):
         if name == 'joints':
             return tuple(value.split() if isinstance(value, str) else value)
         if name == 'gravity':
-            g = tuple(float(v) for v in (value.split() if isinstance(value, str) else value))
-            if len(g) != 3 or not all(abs(v) <= GRAVITY_LIMIT for v in g):
+            try:        # each component as replay's --gravity takes it, then |g|
+                g = tuple(gravity_component(str(v))
+                          for v in (value.split() if isinstance(value, str) else value))
+            except argparse.ArgumentTypeError:
+                g = ()
+            if len(g) != 3 or not float(np.linalg.norm(g)) <= MAX_GRAVITY:
                 raise ManifestError(f'{where}: option gravity = {value!r}: three numbers, '
-                                    f'm/s², each within ±{GRAVITY_LIMIT:g}')
+                                    f'm/s², |g| at most {MAX_GRAVITY:g} (100 g)')
             return g
         if name == 'measured_effort':
             from ..effort import MEASURED_EFFORT
@@ -89,17 +93,16 @@ def _option(name: str, value, where: str):
         return str(value)
     except ManifestError:
         raise
+    except argparse.ArgumentTypeError as err:
+        raise ManifestError(f'{where}: option {name}: {err}') from None
     except (TypeError, ValueError):
-        bound = f' (0 < window <= {WINDOW_LIMIT:g} s)' if name == 'window' else ''
-        raise ManifestError(f'{where}: option {name} = {value!r} is not valid{bound}') from None
+        raise ManifestError(f'{where}: option {name} = {value!r} is not valid') from None
 
 
-def _bags(pattern: str, base: str, where: str) -> List[str]:
+def _bags(pattern: str, base: str) -> Tuple[str, List[str]]:
+    """Return the pattern's path and the bags it names (none: a glob that matches nothing)."""
     path = os.path.join(base, os.path.expanduser(pattern))
-    found = sorted(glob.glob(path)) if glob.has_magic(path) else [path]
-    if not found:
-        raise ManifestError(f'{where}: no bag matches {pattern!r}')
-    return found
+    return path, sorted(glob.glob(path)) if glob.has_magic(path) else [path]
 
 
 def _urdf(path: str, base: str, where: str) -> str:
@@ -109,7 +112,8 @@ def _urdf(path: str, base: str, where: str) -> str:
     return path
 
 
-def _row(robot, urdf, patterns, options: Dict, base: str, where: str) -> List[Task]:
+def _row(robot, urdf, patterns, options: Dict, base: str, where: str
+         ) -> Tuple[List[Task], List[Dict]]:
     if not robot or not urdf or not patterns:
         raise ManifestError(f'{where}: robot, urdf and bag are all needed')
     robot = robot_name(robot, where)
@@ -123,15 +127,29 @@ def _row(robot, urdf, patterns, options: Dict, base: str, where: str) -> List[Ta
         if link in opts and topic not in opts:
             raise ManifestError(f'{where}: {link} needs {topic}')
     urdf = _urdf(urdf, base, where)
-    return [Task(robot, urdf, bag, opts, where=where)
-            for p in patterns for bag in _bags(str(p), base, where)]
+    tasks: List[Task] = []
+    unmatched: List[Dict] = []
+    for pattern in patterns:
+        path, found = _bags(str(pattern), base)
+        tasks += [Task(robot, urdf, bag, opts, where=where) for bag in found]
+        if not found:
+            unmatched.append({'robot': robot, 'bag': path, 'where': where, 'ok': False,
+                              'reason': f'no bag matches {str(pattern)!r}'})
+    return tasks, unmatched
 
 
-def read_manifest(path: str) -> List[Task]:
-    """Return the tasks of a CSV or YAML manifest; :class:`ManifestError` names the row."""
+def read_manifest(path: str) -> Tuple[List[Task], List[Dict]]:
+    """Return the tasks of a CSV or YAML manifest and a failed result per glob matching none.
+
+    A row that cannot be used (no robot, a bad name or option, no URDF) refuses the manifest
+    (:class:`ManifestError` names the row); a glob that matches no bag is one failed bag
+    (``{robot, bag: the glob's path, where: the row, ok: False, reason}``), the other rows
+    are used.
+    """
     text = read_regular(path, f'manifest {path}', MANIFEST_LIMIT)
     base = os.path.dirname(os.path.abspath(path))
     tasks: List[Task] = []
+    unmatched: List[Dict] = []
     if path.endswith(('.yaml', '.yml')):
         doc = load_yaml(text, f'manifest {path}')
         if isinstance(doc, dict) and 'robots' in doc:
@@ -148,8 +166,10 @@ def read_manifest(path: str) -> List[Task]:
             options = entry.get('options') or {}
             if not isinstance(options, dict):
                 raise ManifestError(f'{where}: options must be a mapping')
-            tasks += _row(entry.get('robot'), entry.get('urdf'), patterns, options, base,
-                          where)
+            found, none = _row(entry.get('robot'), entry.get('urdf'), patterns, options, base,
+                               where)
+            tasks += found
+            unmatched += none
     else:
         try:
             rows = list(csv.DictReader(io.StringIO(text.decode('utf-8'))))
@@ -158,11 +178,13 @@ def read_manifest(path: str) -> List[Task]:
         for k, row in enumerate(rows):
             where = f'manifest {path}, line {k + 2}'
             options = {c: v for c, v in row.items() if c not in ('robot', 'urdf', 'bag')}
-            tasks += _row(row.get('robot'), row.get('urdf'), [row.get('bag')], options, base,
-                          where)
-    if not tasks:
+            found, none = _row(row.get('robot'), row.get('urdf'), [row.get('bag')], options,
+                               base, where)
+            tasks += found
+            unmatched += none
+    if not tasks and not unmatched:
         raise ManifestError(f'manifest {path}: no bags')
-    return tasks
+    return tasks, unmatched
 
 
 def _is_bag_dir(path: str) -> bool:

@@ -71,8 +71,8 @@ from . import (annotate, bags, base_topics, differentiate, excite, identify, rep
                urdf_writer)
 from .recording import recording, Stages
 from .. import identification
-from .arguments import (check_model, load_model, model_parser, one_line, Parser, positive,
-                        Refused)
+from .arguments import (check_model, effort_tolerance, load_model, model_parser, one_line,
+                        Parser, Refused, sampling_rate, velocity_threshold, window_s)
 from ..urdf import read_urdf_file
 from . import correction as correction_of
 
@@ -570,7 +570,7 @@ def recording_parser() -> argparse.ArgumentParser:
                    help='sensor_msgs/JointState topic (default %(default)s)')
     p.add_argument('--out', default='replay_out',
                    help='output directory, created (default %(default)s)')
-    p.add_argument('--window', type=positive, default=0.05,
+    p.add_argument('--window', type=window_s, default=0.05,
                    help='Savitzky-Golay window, s (default %(default)g)')
     p.add_argument('--order', type=int, choices=range(2, 7), default=3,
                    help='Savitzky-Golay polynomial order (default %(default)d)')
@@ -589,7 +589,7 @@ def recording_parser() -> argparse.ArgumentParser:
 
 def add_threshold(p: argparse.ArgumentParser) -> None:
     """Declare ``--threshold``, the friction velocity threshold (the node's by default)."""
-    p.add_argument('--threshold', type=positive, default=NODE_THRESHOLD,
+    p.add_argument('--threshold', type=velocity_threshold, default=NODE_THRESHOLD,
                    help='friction velocity threshold, rad/s or m/s (default: the node\'s, '
                    '%(default)g)')
 
@@ -659,7 +659,7 @@ def trajectory_command(sub) -> None:
                    help='check every JointTrajectory of this topic of the bag')
     p.add_argument('--out', default='replay_out',
                    help='output directory, created (default %(default)s)')
-    p.add_argument('--rate', type=positive, default=1000.0,
+    p.add_argument('--rate', type=sampling_rate, default=1000.0,
                    help='sampling rate, Hz (default %(default)g)')
     p.add_argument('--friction-model', choices=('none', 'urdf'), default='none',
                    help='urdf: add the URDF <dynamics> friction, as the node does '
@@ -678,7 +678,7 @@ def annotate_command(sub) -> None:
                     'limits (exit 1). Only --out is written.')
     p.add_argument('plan', metavar='PLAN.yaml', help='a trajectory_msgs/JointTrajectory (YAML)')
     p.add_argument('--out', required=True, metavar='OUT.yaml', help='the annotated plan')
-    p.add_argument('--tolerance', type=positive, default=0.1,
+    p.add_argument('--tolerance', type=effort_tolerance, default=0.1,
                    help='|JTC\'s linear interpolation of effort - model torque|, N m (default '
                    '%(default)g)')
     p.add_argument('--output', choices=effort_model.OUTPUTS, default='full',

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from .. import Model, URDFWarning
-from ..bounds import MAX_GRAVITY
+from ..bounds import FRICTION_THRESHOLD_RANGE, MAX_EFFORT, MAX_GRAVITY
 from ..check import locked_item, read_description
 
 
@@ -61,6 +61,32 @@ finite = checked(float, math.isfinite, 'a finite number')
 #: A finite number > 0 (argparse type).
 positive = checked(float, lambda x: x > 0.0 and math.isfinite(x), 'a finite number > 0')
 
+#: The longest differentiation window, s: a longer one smooths away the motion a fit needs
+#: (and in samples it overflowed: ``--window 1e308``).
+MAX_WINDOW = 10.0
+#: The highest rate a plan is sampled at, Hz (a sample a microsecond).
+MAX_RATE = 1e6
+_LOW, _HIGH = FRICTION_THRESHOLD_RANGE
+
+# Each number option of the replay commands and the fleet's manifest, with its range: a
+# value outside it (huge, NaN, inf, negative, zero where zero means nothing) is a usage error
+# naming the option, before any file is read.
+#: ``--window``, s (argparse type).
+window_s = checked(float, lambda x: 0.0 < x <= MAX_WINDOW,
+                   f'a number of seconds > 0, at most {MAX_WINDOW:g}')
+#: ``--threshold``, the friction velocity threshold (argparse type; the node's range).
+velocity_threshold = checked(float, lambda x: _LOW <= x <= _HIGH,
+                             f'a velocity from {_LOW:g} to {_HIGH:g} rad/s or m/s')
+#: ``--rate`` of a plan's sampling, Hz (argparse type).
+sampling_rate = checked(float, lambda x: 0.0 < x <= MAX_RATE,
+                        f'a rate > 0, at most {MAX_RATE:g} Hz')
+#: ``--tolerance`` of an annotated effort, N m or N (argparse type).
+effort_tolerance = checked(float, lambda x: 0.0 < x <= MAX_EFFORT,
+                           f'a torque > 0, at most {MAX_EFFORT:g} N m')
+#: A component of ``--gravity``, m/s² (argparse type; |g| is checked by check_gravity).
+gravity_component = checked(float, lambda x: abs(x) <= MAX_GRAVITY,
+                            f'a number of m/s^2 within ±{MAX_GRAVITY:g}')
+
 
 def add_model_arguments(p: argparse.ArgumentParser) -> None:
     """Declare the options of the model, the same in every replay command.
@@ -73,7 +99,7 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
                    help='model reduction: only these joints move (the others are locked)')
     p.add_argument('--locked', nargs='+', metavar='J=V', default=[], type=locked_item,
                    help='value (rad or m) of a joint locked by --joints')
-    p.add_argument('--gravity', type=finite, nargs=3, default=(0.0, 0.0, -9.81),
+    p.add_argument('--gravity', type=gravity_component, nargs=3, default=(0.0, 0.0, -9.81),
                    metavar=('GX', 'GY', 'GZ'),
                    help='m/s^2 in the base frame (default 0 0 -9.81)')
 

@@ -46,7 +46,7 @@ from typing import List, Optional, Sequence, Tuple
 import numpy as np
 
 from .. import Model, rnea
-from ..bounds import MAX_TRAJECTORY_TIME
+from ..bounds import MAX_POSITION, MAX_TRAJECTORY_TIME
 from ..excitation import (determined, Excitation, excitation, MAX_ITERATIONS,
                           MAX_SEED, min_rate, period_points, POINTS_PER_CYCLE)
 from ..files import check_output, load_yaml, write_atomic
@@ -77,10 +77,11 @@ CONTROLLER_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)
 
 
 def non_negative(text: str) -> float:
-    """Parse a finite number ≥ 0 (argparse type)."""
+    """Parse a margin, rad or m: ≥ 0, at most MAX_POSITION (argparse type)."""
     x = finite(text)
-    if not x >= 0.0:
-        raise argparse.ArgumentTypeError(f'{text!r}: need a finite number >= 0')
+    if not 0.0 <= x <= MAX_POSITION:
+        raise argparse.ArgumentTypeError(f'{text!r}: need a number >= 0, at most '
+                                         f'{MAX_POSITION:g} (rad or m)')
     return x
 
 

@@ -28,7 +28,8 @@ import sys
 from typing import Dict, List, Sequence
 
 from .. import effort as effort_model
-from .arguments import add_model_arguments, check_gravity, positive
+from .arguments import (add_model_arguments, check_gravity, effort_tolerance, sampling_rate,
+                        velocity_threshold, window_s)
 
 #: The node's default ``friction_velocity_threshold`` (config/inverse_dynamics.yaml).
 NODE_THRESHOLD = 0.01
@@ -63,10 +64,10 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument('--write-urdf', metavar='OUT.urdf',
                    help='write the URDF with only the identified <inertial> and <dynamics> '
                    'elements replaced')
-    p.add_argument('--threshold', type=positive, default=NODE_THRESHOLD,
+    p.add_argument('--threshold', type=velocity_threshold, default=NODE_THRESHOLD,
                    help='friction velocity threshold, rad/s or m/s (default: the node\'s, '
                    '%(default)g)')
-    p.add_argument('--window', type=positive, default=0.05,
+    p.add_argument('--window', type=window_s, default=0.05,
                    help='Savitzky-Golay window, s (default %(default)g)')
     p.add_argument('--order', type=int, choices=range(2, 7), default=3,
                    help='Savitzky-Golay polynomial order (default %(default)d)')
@@ -77,7 +78,7 @@ def parser() -> argparse.ArgumentParser:
                    help='check a trajectory_msgs/JointTrajectory (YAML) against effort limits')
     p.add_argument('--trajectory-topic', metavar='TOPIC',
                    help='check every JointTrajectory of this topic of BAG')
-    p.add_argument('--rate', type=positive, default=1000.0,
+    p.add_argument('--rate', type=sampling_rate, default=1000.0,
                    help='trajectory sampling rate, Hz (default %(default)g)')
     p.add_argument('--friction-model', choices=('none', 'urdf'), default='none',
                    help='trajectory check: add the URDF <dynamics> friction (as the node)')
@@ -87,7 +88,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument('--annotate', metavar='OUT.yaml',
                    help='with --trajectory: write it with effort filled for '
                    'joint_trajectory_controller (resampled to --tolerance)')
-    p.add_argument('--tolerance', type=positive, default=0.1,
+    p.add_argument('--tolerance', type=effort_tolerance, default=0.1,
                    help='--annotate: |JTC\'s linear interpolation of effort - model torque|, '
                    'N m (default %(default)g)')
     p.add_argument('--output', choices=effort_model.OUTPUTS, default='full',

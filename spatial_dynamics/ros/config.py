@@ -27,9 +27,9 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import backends
 from spatial_dynamics.bounds import (
-    BASE_ANGULAR_ACCELERATION, BASE_LINEAR_ACCELERATION, MAX_BASE_ANGULAR_ACCELERATION,
-    MAX_BASE_LINEAR_ACCELERATION, MAX_GRAVITY, MAX_IMU_RATE, MAX_IMU_SPECIFIC_FORCE,
-    MAX_PLAN_BYTES, MIN_STAMP_INTERVAL)
+    BASE_ANGULAR_ACCELERATION, BASE_LINEAR_ACCELERATION, FRICTION_THRESHOLD_RANGE,
+    MAX_BASE_ANGULAR_ACCELERATION, MAX_BASE_LINEAR_ACCELERATION, MAX_GRAVITY, MAX_IMU_RATE,
+    MAX_IMU_SPECIFIC_FORCE, MAX_PLAN_BYTES, MIN_STAMP_INTERVAL)
 from spatial_dynamics.contacts import warm_qp
 from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
@@ -253,7 +253,7 @@ PARAMETERS = Table(NODE_NAME, [
         choices=FRICTION_MODELS),
     Param('friction_velocity_threshold', 'double', DEFAULT_FRICTION_THRESHOLD, (
         'Velocity (rad/s or m/s) at which the smooth Coulomb sign reaches tanh(1) = 76 %.'),
-        bounds=(1e-9, 1e3)),
+        bounds=FRICTION_THRESHOLD_RANGE),
     Param('clamp_to_effort_limits', 'bool', False, (
         'Clamp tau to the URDF <limit effort> (joints without a positive limit are left '
         'alone); a throttled warning names the saturated joints.')),
