@@ -3,19 +3,20 @@
 """The one reader of the files users name: regular files only, bounded, YAML safe-loaded.
 
 Every file the library, ``spatial_dynamics_check`` and ``replay`` read goes through
-:func:`read_regular` (or is checked by :func:`regular_file` before a library such as SQLite
-opens it), so a path never blocks on a FIFO, never reads a device or a directory, and never
-reads more than its caller's limit. YAML goes through :func:`load_yaml`: PyYAML's safe loader
-(no ``!!python`` tags), a size limit, and a budget on the nodes the document stands for once
-its aliases are expanded, so a few hundred bytes of nested aliases ("billion laughs") are
-refused before anything walks them.
+:func:`read_regular` or, in blocks, :func:`read_blocks` (or is checked by
+:func:`regular_file` before a library such as SQLite opens it), so a path never blocks on a
+FIFO, never reads a device or a directory, and never reads more than its caller's limit.
+YAML goes through :func:`load_yaml`: PyYAML's safe loader (no ``!!python`` tags), a size
+limit, and a budget on the nodes the document stands for once its aliases are expanded, so
+a few hundred bytes of nested aliases ("billion laughs") are refused before anything walks
+them.
 """
 
 from __future__ import annotations
 
 import os
 import stat
-from typing import Any, Callable, Sequence, Union
+from typing import Any, Callable, Iterator, Sequence, Union
 
 #: What a path is when it is not a regular file, by the test of its mode.
 _KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
@@ -64,6 +65,18 @@ def read_regular(path: Union[str, os.PathLike], what: str, limit: int) -> bytes:
     is read stops at ``limit + 1`` bytes and is refused. ``ValueError`` names the file as
     ``what``, and the reason.
     """
+    return b''.join(read_blocks(path, what, limit, limit + 1))
+
+
+def read_blocks(path: Union[str, os.PathLike], what: str, limit: int,
+                block: int = 1 << 20) -> Iterator[bytes]:
+    """Yield the bytes of ``path`` in blocks of at most ``block``: :func:`read_regular` in parts.
+
+    For files too large to hold at once (a bag's bytes to hash): the same checks, made on
+    the open descriptor before the first block (a regular file, at most ``limit`` bytes),
+    and a file that grows past ``limit`` while it is read is refused. ``ValueError`` names
+    the file as ``what``.
+    """
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, 'O_NONBLOCK', 0)
                      | getattr(os, 'O_CLOEXEC', 0))
@@ -72,27 +85,29 @@ def read_regular(path: Union[str, os.PathLike], what: str, limit: int) -> bytes:
     except OSError as err:
         raise ValueError(f'cannot read {what}: {err.strerror}') from None
     try:
-        info = os.fstat(fd)
+        try:
+            info = os.fstat(fd)
+        except OSError as err:
+            raise ValueError(f'cannot read {what}: {err.strerror}') from None
         if not stat.S_ISREG(info.st_mode):
             raise ValueError(f'{what} is not a regular file ({_kind(info.st_mode)})')
         if info.st_size > limit:
             raise ValueError(f'{what} is too large ({info.st_size} bytes, limit '
                              f'{size_text(limit)})')
-        chunks, size = [], 0
+        size = 0
         while size <= limit:
-            chunk = os.read(fd, limit + 1 - size)
+            try:
+                chunk = os.read(fd, min(block, limit + 1 - size))
+            except OSError as err:
+                raise ValueError(f'cannot read {what}: {err.strerror}') from None
             if not chunk:
-                break
-            chunks.append(chunk)
+                return
             size += len(chunk)
-    except OSError as err:
-        raise ValueError(f'cannot read {what}: {err.strerror}') from None
+            if size > limit:
+                raise ValueError(f'{what} is too large (more than {size_text(limit)})')
+            yield chunk
     finally:
         os.close(fd)
-    data = b''.join(chunks)
-    if len(data) > limit:
-        raise ValueError(f'{what} is too large (more than {size_text(limit)})')
-    return data
 
 
 def _expanded_nodes(root) -> int:

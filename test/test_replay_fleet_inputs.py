@@ -165,6 +165,43 @@ def test_missing_and_looping_bags_are_one_failed_line_each_and_the_rest_finish(
         os.path.join(small, 'r01', 'day01'), os.path.join(small, 'r01', 'day02')}
 
 
+def fleet(argv, timeout=300):
+    """Run the command in a child process: a hang is a timeout, not a stuck test run."""
+    command = [sys.executable, '-m', 'spatial_dynamics.fleet'] + [str(a) for a in argv]
+    return subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+
+
+def test_a_fifo_or_a_device_as_a_bag_is_one_failed_line_and_the_rest_finish(small, tmp_path):
+    folder = tmp_path / 'fleet'
+    shutil.copytree(small, folder)
+    os.mkfifo(folder / 'r01' / 'fifo.db3')
+    os.symlink('/dev/zero', folder / 'r02' / 'zero.mcap')
+    os.mkfifo(tmp_path / 'listed.db3')
+    urdf = folder / 'r01' / 'robot.urdf'
+    path = manifest(tmp_path / 'm.csv', [('r01', str(urdf), str(folder / 'r01' / 'day*')),
+                                         ('r01', str(urdf), str(tmp_path / 'listed.db3'))])
+    for source, bad in ((folder, ['fifo.db3', 'zero.mcap']), (path, ['listed.db3'])):
+        done = fleet([source, '--out', tmp_path / 'o', '--serial', '--no-plots'])
+        assert 'Traceback' not in done.stderr and done.returncode != 1, done.stderr
+        failed = [line for line in done.stdout.splitlines() if line.startswith('failed:')]
+        assert [any(name in line for line in failed) for name in bad] == [True] * len(bad)
+        assert len(failed) == len(bad), done.stdout
+        assert all('not a regular file' in line for line in failed), failed
+
+
+@pytest.mark.parametrize('urdf, says', [('/dev/zero', 'a character device'),
+                                        ('fifo', 'a named pipe'), ('', 'an empty value'),
+                                        ('/nonexistent', 'no such file')])
+def test_an_unusable_urdf_option_is_refused_before_any_work(small, tmp_path, urdf, says):
+    if urdf == 'fifo':
+        urdf = tmp_path / 'robot.urdf'
+        os.mkfifo(urdf)
+    done = fleet([small, '--urdf', urdf, '--out', tmp_path / 'o', '--serial'], timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert '--urdf' in done.stderr and says in done.stderr, done.stderr
+    assert not os.path.exists(tmp_path / 'o')
+
+
 @pytest.mark.parametrize('kind', ['csv', 'yaml'])
 def test_a_glob_that_matches_nothing_is_one_failed_line_naming_its_row(small, tmp_path,
                                                                        capsys, kind):

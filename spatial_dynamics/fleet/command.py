@@ -39,7 +39,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..files import check_output, read_regular, write_atomic
+from ..files import check_output, read_regular, regular_file, write_atomic
 from ..replay.arguments import one_line
 from . import drift as drift_of
 from .chunks import CHUNK, merge, MIN_CHUNK, split
@@ -49,6 +49,7 @@ from .manifest import ManifestError, read_manifest, scan_folder
 from .sums import Sums, solve, total
 from .task import Task
 from ..replay.identify import PARAMETERS
+from ..urdf import MAX_FILE_BYTES
 
 #: Exit status when something drifted.
 DRIFTED = 3
@@ -67,7 +68,8 @@ COLUMNS = ['robot', 'bag', 'start', 'joint', 'parameter', 'value', 'sigma', 'rms
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Declare the command's options on ``p`` (its own parser, or a ``replay`` subparser)."""
     p.add_argument('source', help='manifest (.csv, .yaml) or a folder ROBOT/.../BAG')
-    p.add_argument('--urdf', help='the URDF of every robot of a folder (default: each robot '
+    p.add_argument('--urdf', type=urdf_file,
+                   help='the URDF of every robot of a folder (default: each robot '
                    "folder's robot.urdf)")
     p.add_argument('--out', default='fleet_out',
                    help='output directory, created (default %(default)s)')
@@ -96,6 +98,17 @@ def _number(text: str) -> float:
         return float(text)
     except ValueError:
         return float('nan')
+
+
+def urdf_file(text: str) -> str:
+    """``--urdf``: a regular file (never a FIFO or a device: hashing it would never end)."""
+    if not text:
+        raise argparse.ArgumentTypeError('an empty value (a URDF file is needed)')
+    try:
+        regular_file(text, repr(text), MAX_FILE_BYTES)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+    return text
 
 
 def chunk_seconds(text: str) -> float:

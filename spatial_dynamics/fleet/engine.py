@@ -350,7 +350,7 @@ def digest_batch(paths: Sequence[str]) -> List[Optional[bytes]]:
     for path in paths:
         try:
             out.append(bag_digest(path))
-        except OSError:
+        except (OSError, ValueError):       # missing, a loop, a FIFO or a device
             out.append(None)
     return out
 

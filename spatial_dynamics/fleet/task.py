@@ -24,6 +24,10 @@ from typing import Dict, Optional, TYPE_CHECKING
 
 import numpy as np
 
+from ..files import read_blocks
+from ..replay.bags import MAX_STORAGE_BYTES
+from ..urdf import MAX_FILE_BYTES
+
 if TYPE_CHECKING:
     from ..replay.bags import JointStates
 
@@ -74,24 +78,28 @@ class Task:
         return self.options.get(name, DEFAULTS[name])
 
 
-def _hash_file(h, path: str) -> None:
-    with open(path, 'rb') as f:
-        while True:
-            block = f.read(1 << 20)
-            if not block:
-                return
-            h.update(block)
+def _hash_file(h, path: str, what: str, limit: int) -> None:
+    """Add the bytes of ``path`` to ``h``, through the one reader of user files.
+
+    A FIFO, a device or a directory is refused before a byte is read (``ValueError`` naming
+    the file as ``what``): it would block or never end.
+    """
+    for block in read_blocks(path, what, limit):
+        h.update(block)
 
 
 def bag_digest(path: str) -> bytes:
-    """Return the SHA-256 of a bag's files (a directory's regular files by name, or the file)."""
+    """Return the SHA-256 of a bag's files (a directory's regular files by name, or the file).
+
+    ``ValueError`` for a bag file that is not a regular file (a FIFO, a device).
+    """
     h = hashlib.sha256()
     files = ([os.path.join(path, f) for f in sorted(os.listdir(path))
               if os.path.isfile(os.path.join(path, f))]
              if os.path.isdir(path) else [path])
     for name in files:
         h.update(os.path.basename(name).encode() + b'\0')
-        _hash_file(h, name)
+        _hash_file(h, name, f'bag file {name!r}', MAX_STORAGE_BYTES)
     return h.digest()
 
 
@@ -107,7 +115,7 @@ def content_key(task: Task, digests: Optional[Dict[str, bytes]] = None) -> str:
     h = hashlib.sha256(VERSION.encode())
     h.update(digests[task.bag])
     h.update(b'\0urdf\0')
-    _hash_file(h, task.urdf)
+    _hash_file(h, task.urdf, f'URDF file {task.urdf!r}', MAX_FILE_BYTES)
     options = {k: task.option(k) for k in sorted(DEFAULTS)}
     h.update(json.dumps(options, sort_keys=True, default=list).encode())
     if task.chunked:
