@@ -263,6 +263,13 @@ def test_an_impossible_gravity_is_refused_naming_the_row(small, tmp_path, capsys
     ('--chunk', '1e300', 'a year'), ('--chunk', 'nan', 'a year'),
     ('--scheduler', '', 'tcp://host:port'), ('--scheduler', 'ucx://127.0.0.1:1', "'ucx'"),
     ('--scheduler', 'tcp://127.0.0.1:99999', '65535'), ('--workers', '0', '1 to 4096'),
+    ('--scheduler', 'tls://localhost:1', 'certificates'),
+    ('--scheduler', 'localhost:8786', 'tcp://localhost:8786'),
+    ('--scheduler', 'tcp://a b:1', 'host name'),
+    ('--scheduler', 'tcp://user@localhost:1', 'no user@'),
+    ('--scheduler', 'tcp://999.999.999.999:1', 'IP address'),
+    ('--scheduler', 'tcp://::1:8786', 'IPv6 in brackets'),
+    ('--scheduler', 'tcp://no-such-host.invalid:8786', 'resolve'),
     ('--baseline-days', '1e308', 'days')])
 def test_an_impossible_option_is_refused_at_once_saying_what_is_allowed(
         tmp_path, capsys, option, value, says):

@@ -33,7 +33,10 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import ipaddress
 import os
+import re
+import socket
 import sys
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -83,7 +86,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                        '(the default when the bags to process are less than '
                        f'{SERIAL_BYTES >> 20} MB)')
     where.add_argument('--scheduler', metavar='ADDRESS', type=scheduler_address,
-                       help='an existing Dask scheduler, tcp://host:port or tls://host:port')
+                       help='an existing Dask scheduler, tcp://host:port (tls:// is not '
+                       'supported)')
     p.add_argument('--chunk', type=chunk_seconds, default=CHUNK, metavar='SECONDS',
                    help='cut a bag longer than this into tasks of this much bag time, their '
                    'sums added (default %(default)g; 0: one task per bag)')
@@ -140,26 +144,82 @@ def workers_count(text: str) -> int:
     return value
 
 
-#: The protocols a scheduler address may use here (Dask's ``inproc`` is in-process only;
-#: ``ucx`` needs UCX-Py, which the fleet does not depend on).
-PROTOCOLS = ('tcp', 'tls')
+#: How long the name of a scheduler may take to resolve, s.
+RESOLVE_S = 10.0
+#: A host name's label (RFC 1123): letters, digits and inner hyphens, at most 63.
+_LABEL = re.compile(r'(?!-)[A-Za-z0-9-]{1,63}(?<!-)$')
 
 
 def scheduler_address(text: str) -> str:
-    """``--scheduler``: ``[tcp://|tls://]host:port`` with a port from 1 to 65535."""
+    """``--scheduler``: ``tcp://host:port``, the port 1 to 65535, the host one that resolves.
+
+    The host is a name (RFC 1123 labels) or an IP literal (IPv6 in brackets); no user, path
+    or space. A name that does not resolve within :data:`RESOLVE_S` is refused here, not
+    after Dask's 30 s of connection attempts. ``tls://`` is refused: it needs certificates
+    (a security context) this command does not take; ``ucx``, ``inproc`` and the rest are
+    not for a cluster of plain processes.
+    """
+    example = 'e.g. tcp://10.0.0.5:8786'
     protocol, sep, rest = text.partition('://')
+    if not text:
+        raise argparse.ArgumentTypeError(
+            f'an empty value; a scheduler address is tcp://host:port ({example})')
     if not sep:
-        protocol, rest = 'tcp', text
-    host, _, port = rest.rpartition(':')
-    if protocol not in PROTOCOLS:
+        raise argparse.ArgumentTypeError(
+            f'{text!r}: give the protocol, tcp://{text} ({example})')
+    if protocol == 'tls':
+        raise argparse.ArgumentTypeError(
+            f'{text!r}: tls:// needs certificates (a Dask security context), which this '
+            'command does not take; give tcp://host:port (a scheduler reached through an SSH '
+            'tunnel or a private network)')
+    if protocol != 'tcp':
         raise argparse.ArgumentTypeError(
             f'{text!r}: the protocol {protocol!r} is not supported here; give '
-            'tcp://host:port or tls://host:port')
-    if not host or not port.isdigit() or not 1 <= int(port) <= 65535 or '/' in rest:
+            f'tcp://host:port ({example})')
+    host, _, port = rest.rpartition(':')
+    if not port.isdigit() or not 1 <= int(port) <= 65535:
         raise argparse.ArgumentTypeError(
-            f'{text!r}: a scheduler address is tcp://host:port (or tls://), the port 1 to '
-            '65535, e.g. tcp://10.0.0.5:8786')
-    return f'{protocol}://{rest}'
+            f'{text!r}: a scheduler address is tcp://host:port, the port 1 to 65535 '
+            f'({example})')
+    literal = host[1:-1] if host.startswith('[') and host.endswith(']') else host
+    try:
+        is_ip = (ipaddress.ip_address(literal).version == 6) == (literal != host)
+    except ValueError:
+        is_ip = False
+    name = host[:-1] if host.endswith('.') else host
+    if not is_ip and (literal != host or not name or len(name) > 253
+                      or not all(_LABEL.match(label) for label in name.split('.'))
+                      or name.replace('.', '').isdigit()):
+        raise argparse.ArgumentTypeError(
+            f'{text!r}: the host {host!r} is neither a host name (letters, digits, - and .) '
+            f'nor an IP address (IPv6 in brackets); no user@, path or space ({example})')
+    if not is_ip:
+        why = _resolve(name, int(port))
+        if why:
+            raise argparse.ArgumentTypeError(f'{text!r}: the host {host!r} {why}')
+    return f'tcp://{host}:{int(port)}'
+
+
+def _resolve(name: str, port: int) -> Optional[str]:
+    """Return why ``name`` does not resolve within :data:`RESOLVE_S` (None when it does).
+
+    The lookup runs in a daemon thread: a resolver that never answers keeps neither the
+    refusal nor the command's exit waiting.
+    """
+    import threading
+    answer: List[Optional[str]] = []
+
+    def look_up() -> None:
+        try:
+            socket.getaddrinfo(name, port, type=socket.SOCK_STREAM)
+            answer.append(None)
+        except (OSError, UnicodeError) as err:
+            answer.append(f'does not resolve ({getattr(err, "strerror", None) or err})')
+
+    thread = threading.Thread(target=look_up, daemon=True)
+    thread.start()
+    thread.join(RESOLVE_S)
+    return answer[0] if answer else f'did not resolve within {RESOLVE_S:g} s'
 
 
 def parser() -> argparse.ArgumentParser:
