@@ -98,7 +98,8 @@ def edit_a_number(path):
         json.dump(doc, f)
 
 
-@pytest.mark.parametrize('damage', ['malformed', 'edited', 'directory', 'fifo', 'shape'])
+@pytest.mark.parametrize('damage', ['malformed', 'edited', 'directory', 'fifo', 'shape',
+                                    'nested'])
 def test_a_damaged_cache_entry_is_computed_again(small, tmp_path, capsys, damage):
     out = tmp_path / 'o'
     run([small, '--out', out], capsys)
@@ -114,6 +115,8 @@ def test_a_damaged_cache_entry_is_computed_again(small, tmp_path, capsys, damage
             os.mkdir(path)
         elif damage == 'fifo':
             os.mkfifo(path)
+        elif damage == 'nested':
+            open(path, 'w').write('[' * 100000)
         else:
             open(path, 'w').write(json.dumps({'ok': True, 'joints': ['a'], 'sums': {}}))
     # in a child process: a FIFO must not hang the run (the old reader waited for a writer)

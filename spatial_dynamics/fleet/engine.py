@@ -48,8 +48,9 @@ class Cache:
     An entry holds only what the content decides (never the robot's name or the bag's
     path: those are the current run's), with the cache's own :data:`~.task.VERSION`, its
     key and a SHA-256 of its result. An entry that is not a regular file (a FIFO, a folder),
-    is malformed, of another version or key, or whose numbers were edited, is not used: the
-    task runs again and its entry is written anew.
+    is malformed (also nested too deeply for the parser), of another version or key, or
+    whose numbers were edited, is not used: the task runs again and its entry is written
+    anew.
     """
 
     def __init__(self, folder: Optional[str]) -> None:
@@ -72,7 +73,7 @@ class Cache:
             if (entry['version'] != VERSION or entry['key'] != key
                     or entry['check'] != checksum(result) or not valid(result)):
                 return None
-        except (ValueError, TypeError, KeyError):
+        except (ValueError, TypeError, KeyError, RecursionError):    # nested too deep to parse
             return None
         return result
 
