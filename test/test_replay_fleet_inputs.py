@@ -295,6 +295,68 @@ def test_a_reader_that_goes_away_ends_the_output_quietly(small, tmp_path):
     assert 'Traceback' not in err and 'BrokenPipe' not in err, err
 
 
+# -- Ctrl-C and SIGTERM ------------------------------------------------------------------------
+
+#: Where the child is stopped: in staging a bag (its metadata read), in writing a plot, in a
+#: task (SIGTERM sent to itself).
+STOPS = {
+    'staging': ('from spatial_dynamics.replay import bags\n'
+                'def stop(*args, **kwargs):\n'
+                '    raise KeyboardInterrupt\n'
+                'bags.load_yaml = stop\n'),
+    'plot': ('from matplotlib.figure import Figure\n'
+             'def stop(self, f, **kwargs):\n'
+             '    f.write(b"half a plot")\n'
+             '    raise KeyboardInterrupt\n'
+             'Figure.savefig = stop\n'),
+    'sigterm': ('import os, signal\n'
+                'from spatial_dynamics.fleet import engine\n'
+                'real = engine.process\n'
+                'def stop(task):\n'
+                '    os.kill(os.getpid(), signal.SIGTERM)\n'
+                '    return real(task)\n'
+                'engine.process = stop\n')}
+
+
+@pytest.mark.parametrize('where', sorted(STOPS))
+def test_an_interrupted_run_says_so_in_one_line_and_leaves_no_temporary(small, tmp_path, where):
+    temp, out = tmp_path / 'tmp', tmp_path / 'o'
+    temp.mkdir()
+    script = (f'import sys, tempfile\ntempfile.tempdir = {str(temp)!r}\n{STOPS[where]}'
+              'from spatial_dynamics.replay.__main__ import main\n'
+              f'sys.exit(main(["fleet", {small!r}, "--out", {str(out)!r}, "--serial"]))\n')
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          timeout=300)
+    if where == 'plot':         # the plots come after the tables
+        assert sorted(os.listdir(out)) == ['cache', 'drift.txt', 'fleet.csv', 'robots.csv']
+    assert (done.returncode, done.stderr) == ((143, 'terminated\n') if where == 'sigterm'
+                                              else (130, 'interrupted\n'))
+    assert os.listdir(temp) == []
+    assert [f for _, _, files in os.walk(out) for f in files if f.endswith('.tmp')] == []
+
+
+def test_ctrl_c_on_a_local_cluster_is_one_line_not_a_traceback_per_worker(small, tmp_path):
+    pytest.importorskip('distributed')
+    # Ctrl-C goes to every process of the terminal's group; the command's own is held back
+    # a moment, so that a worker which would print a traceback has the time to
+    script = ('import os, signal, sys, time\n'
+              'from spatial_dynamics.fleet import command\n'
+              'class Progress(command.Progress):\n'
+              '    def __call__(self, result):\n'
+              '        before = signal.signal(signal.SIGINT, lambda *args: None)\n'
+              '        os.killpg(0, signal.SIGINT)\n'
+              '        time.sleep(3)\n'
+              '        signal.signal(signal.SIGINT, before)\n'
+              '        raise KeyboardInterrupt\n'
+              'command.Progress = Progress\n'
+              'from spatial_dynamics.replay.__main__ import main\n'
+              f'sys.exit(main(["fleet", {small!r}, "--out", {str(tmp_path / "o")!r}, '
+              '"--workers", "2"]))\n')
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          timeout=300, start_new_session=True)
+    assert (done.returncode, done.stderr) == (130, 'interrupted\n')
+
+
 # -- a cached re-run reads no bag and starts no cluster --------------------------------------
 
 def test_a_cached_rerun_reads_no_bag_starts_no_cluster_and_draws_no_plot(small, tmp_path,

@@ -25,7 +25,8 @@ a ``note:`` line; a bag that cannot be used is one ``failed:`` line naming its m
 Exit status: 0 done, every series judged, nothing drifted; 3 done, something drifted
 (drift.txt names it); 4 done, nothing drifted among the series judged but some (or all)
 could not be judged (drift.txt says which and why); 1 refused (no usable manifest, no bag
-usable); 2 bad usage. A failed bag does not change the status of the others' verdict.
+usable); 2 bad usage; 130 interrupted (Ctrl-C), 143 terminated (SIGTERM): each file is whole
+or as it was, no temporary left. A failed bag does not change the status of the others' verdict.
 """
 
 from __future__ import annotations
@@ -63,7 +64,7 @@ MAX_CHUNK = 366 * 86400.0
 #: What each exit status says, in every --help.
 EXIT_STATUS = ('Exit status: 0 every series judged, nothing drifted; 3 something drifted; '
                '4 nothing drifted but some series not judged (drift.txt says why); 1 refused; '
-               '2 bad usage.')
+               '2 bad usage; 130 interrupted; 143 terminated.')
 COLUMNS = ['robot', 'bag', 'start', 'joint', 'parameter', 'value', 'sigma', 'rms_residual',
            'samples']
 
@@ -380,8 +381,40 @@ def inside(out: str, name: str) -> str:
     return path
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is, to unwind as Ctrl-C does."""
+
+
 def run(args) -> int:
-    """Run the command on parsed ``args``; return the exit status (0, 1, 3 or 4)."""
+    """Run the command on parsed ``args``; return the exit status (0, 1, 3, 4, 130 or 143).
+
+    Ctrl-C is one line ``interrupted``, exit 130, and SIGTERM ``terminated``, 143: either
+    unwinds the work (the cluster is closed, the bags' staging folders and the temporaries
+    of the files being written are removed; each output is whole or as it was).
+    """
+    import signal
+    import threading
+    main_thread = threading.current_thread() is threading.main_thread()
+    if main_thread:
+        before = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        return _run(args)
+    except Terminated:
+        print('terminated', file=sys.stderr)
+        return 143
+    except KeyboardInterrupt:
+        print('interrupted', file=sys.stderr)
+        return 130
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, before)
+
+
+def _terminate(signum, frame) -> None:
+    raise Terminated()
+
+
+def _run(args) -> int:
     try:
         tasks, notes, unmatched = tasks_of(args.source, args.urdf)
         os.makedirs(args.out, exist_ok=True)

@@ -19,10 +19,13 @@ cluster on the engine (``python -m benchmarks.fleet``).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
+import signal
 import sys
+import threading
 import time
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
@@ -249,9 +252,27 @@ def local_cluster(workers: Optional[int] = None):
     from distributed import LocalCluster
     n = workers or len(os.sched_getaffinity(0))
     with dask.config.set({'distributed.worker.profile.enabled': False,
-                          'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}):
+                          'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}
+                         ), _workers_ignore_ctrl_c():
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                             dashboard_address=None, silence_logs=40)
+
+
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c():
+    """Start the worker processes with SIGINT ignored (an ignored signal stays so in a child).
+
+    Ctrl-C reaches every process of the terminal's group: the command unwinds and closes the
+    cluster; a worker would print its own KeyboardInterrupt traceback, one per worker.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,

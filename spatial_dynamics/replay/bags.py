@@ -129,6 +129,9 @@ def open_reader(path: str):
         shutil.rmtree(stage, ignore_errors=True)
         text = str(err).replace(stage, path)
         raise BagError(f'{path}: cannot open as a rosbag2 bag: {text}') from None
+    except BaseException:       # Ctrl-C: the staging folder goes too
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
     weakref.finalize(reader, shutil.rmtree, stage, True)
     return reader
 
