@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 import stat
-from typing import Any, Callable, Iterator, Sequence, Union
+from typing import Any, Callable, Iterator, Sequence, Tuple, Union
 
 #: What a path is when it is not a regular file, by the test of its mode.
 _KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
@@ -208,6 +208,26 @@ def check_output(path: Union[str, os.PathLike], what: str,
         raise ValueError(f'{what} {os.fspath(path)!r}: the folder {folder!r} does not exist')
     if not os.access(folder, os.W_OK | os.X_OK):
         raise ValueError(f'{what} {os.fspath(path)!r}: the folder {folder!r} is not writable')
+
+
+def within(path: Union[str, os.PathLike], folder: Union[str, os.PathLike]) -> bool:
+    """Tell whether ``path`` is ``folder`` or inside it (links resolved)."""
+    path, folder = os.path.realpath(path), os.path.realpath(folder)
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
+def check_outside_recordings(path: Union[str, os.PathLike], what: str,
+                             recordings: Sequence[Tuple[str, str]]) -> None:
+    """Refuse an output ``path`` in a recording directory, before any work.
+
+    ``recordings``: ``(where it was given, path)`` of each bag read; a bag directory (a
+    rosbag2 recording) is left as it was made, nothing is written into it. ``ValueError``
+    names the output as ``what`` and the bag with where it was given.
+    """
+    for where, bag in recordings:
+        if os.path.isdir(bag) and within(path, bag):
+            raise ValueError(f'{what} {os.fspath(path)}: in the bag {bag!r} ({where}); choose '
+                             'another place (a recording is left as it was made)')
 
 
 def write_atomic(path: Union[str, os.PathLike], data: Union[str, bytes, Callable[[Any], None]],

@@ -295,6 +295,51 @@ def test_a_reader_that_goes_away_ends_the_output_quietly(small, tmp_path):
     assert 'Traceback' not in err and 'BrokenPipe' not in err, err
 
 
+# -- where the command writes ---------------------------------------------------------------
+
+@pytest.mark.parametrize('option, where, says', [
+    ('--out', 'r01/day01', 'in the bag'), ('--out', 'r01/day01/sub', 'in the bag'),
+    ('--cache', 'r02/day02', 'in the bag'), ('--out', '.', 'SOURCE'),
+    ('--cache', '.', 'SOURCE')])
+def test_an_output_in_a_bag_or_the_source_is_refused_before_any_work(
+        small, tmp_path, capsys, option, where, says):
+    folder = tmp_path / 'fleet'
+    shutil.copytree(small, folder)
+    before = sorted(str(p) for p in folder.rglob('*'))
+    argv = [folder, option, folder / where]
+    if option == '--cache':
+        argv += ['--out', tmp_path / 'o']
+    status, _, err = run(argv, capsys)
+    assert status == 1 and err.startswith(f'error: {option} ') and says in err, err
+    assert sorted(str(p) for p in folder.rglob('*')) == before
+    assert not os.path.exists(tmp_path / 'o')
+
+
+@pytest.mark.parametrize('option, value', [('--out', ''), ('--cache', ''), ('--out', 'file'),
+                                           ('--cache', 'file'), ('--out', 'file/below')])
+def test_an_output_folder_that_cannot_be_one_is_a_usage_error(
+        small, tmp_path, capsys, option, value):
+    (tmp_path / 'file').write_text('kept\n')
+    value = str(tmp_path / value) if value else value
+    with pytest.raises(SystemExit) as stop:
+        main([small, option, value, '--serial'])
+    assert stop.value.code == 2
+    assert f'argument {option}:' in capsys.readouterr().err
+    assert (tmp_path / 'file').read_text() == 'kept\n'
+
+
+def test_a_local_cluster_leaves_no_scratch_folder(small, tmp_path):
+    pytest.importorskip('distributed')
+    temp, out = tmp_path / 'tmp', tmp_path / 'o'
+    temp.mkdir()
+    done = subprocess.run([sys.executable, '-m', 'spatial_dynamics.fleet', small, '--out',
+                           str(out), '--workers', '2', '--no-plots'], capture_output=True,
+                          text=True, timeout=300, env=dict(os.environ, TMPDIR=str(temp)))
+    assert done.returncode in (0, 3, 4), done.stderr
+    assert os.listdir(temp) == []
+    assert sorted(os.listdir(out)) == ['cache', 'drift.txt', 'fleet.csv', 'robots.csv']
+
+
 # -- Ctrl-C and SIGTERM ------------------------------------------------------------------------
 
 #: Where the child is stopped: in staging a bag (its metadata read), in writing a plot, in a

@@ -37,13 +37,16 @@ import io
 import ipaddress
 import os
 import re
+import shutil
 import socket
 import sys
+import tempfile
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..files import check_output, read_regular, regular_file, write_atomic
+from ..files import (check_output, check_outside_recordings, read_regular, regular_file,
+                     write_atomic)
 from ..replay.arguments import one_line
 from . import drift as drift_of
 from .chunks import CHUNK, merge, MIN_CHUNK, split
@@ -75,9 +78,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument('--urdf', type=urdf_file,
                    help='the URDF of every robot of a folder (default: each robot '
                    "folder's robot.urdf)")
-    p.add_argument('--out', default='fleet_out',
+    p.add_argument('--out', default='fleet_out', type=output_folder,
                    help='output directory, created (default %(default)s)')
-    p.add_argument('--cache', help='results by content hash (default: OUT/cache)')
+    p.add_argument('--cache', type=output_folder,
+                   help='results by content hash (default: OUT/cache)')
     where = p.add_mutually_exclusive_group()
     where.add_argument('--workers', type=workers_count, metavar='N',
                        help='local cluster of N worker processes (default: the cores, when '
@@ -103,6 +107,23 @@ def _number(text: str) -> float:
         return float(text)
     except ValueError:
         return float('nan')
+
+
+def output_folder(text: str) -> str:
+    """``--out``, ``--cache``: a folder, or a path where one can be created and written."""
+    if not text:
+        raise argparse.ArgumentTypeError('an empty value (a folder to write into)')
+    path = os.path.abspath(text)
+    there = path
+    while not os.path.lexists(there):
+        there = os.path.dirname(there)
+    if not os.path.isdir(there):
+        raise argparse.ArgumentTypeError(
+            f'{text!r} is not a folder' if there == path else
+            f'{text!r}: {there!r} is not a folder')
+    if not os.access(there, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f'{text!r}: cannot write in {there!r}')
+    return text
 
 
 def urdf_file(text: str) -> str:
@@ -417,14 +438,16 @@ def _terminate(signum, frame) -> None:
 def _run(args) -> int:
     try:
         tasks, notes, unmatched = tasks_of(args.source, args.urdf)
-        os.makedirs(args.out, exist_ok=True)
+        check_folders(args, tasks)
+        make_folder(args.out, '--out')
         outputs = ['fleet.csv', 'robots.csv', 'drift.txt']
         if not args.no_plots:
             outputs += [f'trend_{robot}.png' for robot in sorted({t.robot for t in tasks})]
         inputs = [t.bag for t in tasks] + sorted({t.urdf for t in tasks}) + [args.source]
         for name in outputs:
             check_output(inside(args.out, name), name, inputs)
-        cache = Cache(args.cache or os.path.join(args.out, 'cache'))
+        cache = Cache(make_folder(args.cache, '--cache') if args.cache
+                      else os.path.join(args.out, 'cache'))
         digests = cache.known_digests(tasks)
         ranges = cache.time_ranges(tasks, digests)     # an unchanged bag is not opened
         known = len(ranges)
@@ -451,15 +474,44 @@ def _run(args) -> int:
     return report(args, results + unmatched, notes)
 
 
+def check_folders(args, tasks: Sequence[Task]) -> None:
+    """Refuse ``--out`` or ``--cache`` in a bag directory or equal to SOURCE, before any work.
+
+    As ``replay`` refuses an output in a recording (a recording is left as it was made);
+    ``ValueError`` names the option.
+    """
+    recordings = [(t.where or t.robot, t.bag) for t in tasks]
+    for option, folder in (('--out', args.out), ('--cache', args.cache)):
+        if folder is None:
+            continue
+        check_outside_recordings(folder, option, recordings)
+        if os.path.realpath(folder) == os.path.realpath(args.source):
+            raise ValueError(f'{option} {folder}: the fleet\'s own SOURCE; choose another '
+                             'place (an input is left as it is)')
+
+
+def make_folder(path: str, option: str) -> str:
+    """Create the folder ``path`` of ``option`` (with its parents); return it."""
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as err:
+        raise ValueError(f'{option} {path}: cannot be created ({err.strerror})') from None
+    return path
+
+
 def _on_cluster(args, tasks, cache, progress, digests) -> List[Dict]:
     from distributed import Client
     if args.scheduler:
         with Client(args.scheduler, timeout=30) as client:
             warm(client)
             return run_tasks(tasks, cache, client, progress, digests)
-    with local_cluster(args.workers) as cluster, Client(cluster) as client:
-        warm(client)
-        return run_tasks(tasks, cache, client, progress, digests)
+    scratch = tempfile.mkdtemp(prefix='.dask-scratch-', dir=args.out)    # Dask's files
+    try:
+        with local_cluster(args.workers, scratch) as cluster, Client(cluster) as client:
+            warm(client)
+            return run_tasks(tasks, cache, client, progress, digests)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 def verdict(judgement: drift_of.Judgement) -> List[str]:

@@ -239,8 +239,11 @@ class Progress:
             self.stream.write('\n')
 
 
-def local_cluster(workers: Optional[int] = None):
+def local_cluster(workers: Optional[int] = None, directory: Optional[str] = None):
     """Start a LocalCluster of ``workers`` processes (default: the cores), one thread each.
+
+    ``directory``: Dask's local directory (its scratch space: the workers' files, spilled
+    data), which the caller removes; by default Dask's own ``/tmp/dask-scratch-space``.
 
     Without a dashboard, and so without the workers' statistical profiler (it samples the
     running task's stack every 10 ms for the dashboard: 3-4 % of a worker's CPU here). And
@@ -251,11 +254,14 @@ def local_cluster(workers: Optional[int] = None):
     import dask
     from distributed import LocalCluster
     n = workers or len(os.sched_getaffinity(0))
-    with dask.config.set({'distributed.worker.profile.enabled': False,
-                          'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}
-                         ), _workers_ignore_ctrl_c():
+    settings = {'distributed.worker.profile.enabled': False,
+                'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}
+    if directory:
+        settings['temporary-directory'] = directory
+    with dask.config.set(settings), _workers_ignore_ctrl_c():
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                            dashboard_address=None, silence_logs=40)
+                            dashboard_address=None, silence_logs=40,
+                            local_directory=directory)
 
 
 @contextlib.contextmanager

@@ -66,7 +66,7 @@ from .. import friction_torque, Model, rnea
 from ..check import read_description
 from .. import effort as effort_model
 from ..extras import install_hint
-from ..files import check_output
+from ..files import check_output, check_outside_recordings
 from . import (annotate, bags, base_topics, differentiate, excite, identify, report, splines,
                urdf_writer)
 from .recording import recording, Stages
@@ -803,12 +803,6 @@ def input_files(args) -> List[str]:
     return [path for path in [args.urdf] + plan + [b for _, b in bag_options(args)] if path]
 
 
-def _within(path: str, folder: str) -> bool:
-    """Tell whether ``path`` is ``folder`` or inside it (links resolved)."""
-    path, folder = os.path.realpath(path), os.path.realpath(folder)
-    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
-
-
 def check_paths(args) -> None:
     """Refuse, before any work, a bag that cannot be opened and an output that cannot be one.
 
@@ -841,10 +835,10 @@ def check_paths(args) -> None:
                 raise Refused(f'--write-urdf {write_urdf}: the command writes '
                               f'{os.path.basename(path)} there (--out {args.out})')
     for what, path in outputs:
-        for option, bag in given:
-            if os.path.isdir(bag) and _within(path, bag):
-                raise Refused(f'{what} {path}: in the bag {bag!r} ({option}); choose another '
-                              'place (a recording is left as it was made)')
+        try:
+            check_outside_recordings(path, what, given)
+        except ValueError as err:
+            raise Refused(str(err)) from None
     if write_urdf:
         check_output(write_urdf, '--write-urdf', inputs)
     output_dir(args.out)
