@@ -444,6 +444,58 @@ def test_a_cached_rerun_reads_no_bag_starts_no_cluster_and_draws_no_plot(small, 
     assert kept == [], kept         # nor is what the cache knows of them written again
 
 
+@pytest.mark.parametrize('where', [['--workers', '2'], ['--scheduler', 'tcp://127.0.0.1:1']])
+def test_a_cached_rerun_starts_or_contacts_no_cluster_whatever_the_options(
+        small, tmp_path, capsys, monkeypatch, where):
+    pytest.importorskip('distributed')
+    import distributed
+    from spatial_dynamics.fleet import command
+    out = str(tmp_path / 'o')
+    first = main([small, '--out', out, '--serial', '--no-plots'])
+    capsys.readouterr()
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError('a cluster was started or contacted')
+    monkeypatch.setattr(command, 'local_cluster', no_cluster)
+    monkeypatch.setattr(distributed, 'Client', no_cluster)
+    assert main([small, '--out', out, '--no-plots'] + where) == first
+    text = capsys.readouterr().out
+    assert '(4 from the cache, 0 failed)' in text
+    assert [line for line in text.splitlines() if 'no cluster' in line] == [
+        'note: every bag is in the cache: no cluster '
+        + ('contacted' if '--scheduler' in where else 'started')]
+
+
+def test_more_workers_than_four_a_core_are_cut_to_that_and_said(small, tmp_path, capsys,
+                                                                monkeypatch):
+    from spatial_dynamics.fleet import command
+    asked = []
+
+    def local_cluster(workers, *rest):
+        asked.append(workers)
+        raise ValueError('no cluster in this test')
+    monkeypatch.setattr(command, 'local_cluster', local_cluster)
+    assert main([small, '--out', str(tmp_path / 'o'), '--workers', '4096']) == 1
+    cores = len(os.sched_getaffinity(0))
+    assert asked == [4 * cores]
+    assert f'--workers 4096 is more than 4 a core ({cores} here)' in capsys.readouterr().err
+
+
+def test_the_local_cluster_serves_no_dashboard_nor_any_page(tmp_path):
+    pytest.importorskip('distributed')
+    import urllib.error
+    import urllib.request
+    from spatial_dynamics.fleet.engine import local_cluster
+    with local_cluster(1, str(tmp_path)) as cluster:
+        server = cluster.scheduler.http_server
+        assert server.address == '127.0.0.1'
+        for page in ('/', '/status', '/health', '/info/main/workers.html', '/metrics',
+                     '/json/counts.json'):
+            with pytest.raises(urllib.error.HTTPError) as answer:
+                urllib.request.urlopen(f'http://127.0.0.1:{server.port}{page}', timeout=60)
+            assert answer.value.code == 404, page
+
+
 #: What a cached re-run needs none of: the plots', the cluster's, the bags' readers, and
 #: scipy.stats (seconds to import on a busy machine, for one χ² quantile).
 NOT_ON_A_RERUN = ('matplotlib', 'dask', 'distributed', 'rosbags', 'yaml', 'scipy.stats')

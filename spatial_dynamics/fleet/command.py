@@ -50,8 +50,8 @@ from ..files import (check_output, check_outside_recordings, read_regular, regul
 from ..replay.arguments import one_line
 from . import drift as drift_of
 from .chunks import CHUNK, merge, MIN_CHUNK, split
-from .engine import (Cache, local_cluster, pending_bytes, Progress, run_tasks, SERIAL_BYTES,
-                     warm)
+from .engine import (bag_bytes, Cache, cluster_size, local_cluster, pending_bags, Progress,
+                     run_tasks, SERIAL_BYTES, warm, WORKERS_PER_CORE)
 from .manifest import ManifestError, read_manifest, scan_folder
 from .sums import Sums, solve, total
 from .task import Task
@@ -85,14 +85,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument('--workers', type=workers_count, metavar='N',
                        help='local cluster of N worker processes (default: the cores, when '
-                       'the work is large enough; see --serial)')
+                       f'the work is large enough; at most {WORKERS_PER_CORE} a core; none when '
+                       'every bag is in the cache; see --serial)')
     where.add_argument('--serial', action='store_true',
                        help='no cluster: every bag in this process, one after the other '
                        '(the default when the bags to process are less than '
                        f'{SERIAL_BYTES >> 20} MB)')
     where.add_argument('--scheduler', metavar='ADDRESS', type=scheduler_address,
                        help='an existing Dask scheduler, tcp://host:port (tls:// is not '
-                       'supported)')
+                       'supported; not contacted when every bag is in the cache)')
     p.add_argument('--chunk', type=chunk_seconds, default=CHUNK, metavar='SECONDS',
                    help='cut a bag longer than this into tasks of this much bag time, their '
                    'sums added (default %(default)g; 0: one task per bag)')
@@ -452,9 +453,15 @@ def _run(args) -> int:
         ranges = cache.time_ranges(tasks, digests)     # an unchanged bag is not opened
         known = len(ranges)
         parts, owner = split(tasks, args.chunk, ranges)
-        # a cluster only for work worth its start-up, unless asked for (--workers, --scheduler)
-        serial = args.serial or (args.workers is None and args.scheduler is None
-                                 and pending_bytes(parts, cache, digests) < SERIAL_BYTES)
+        # a cluster only for work worth its start-up, unless asked for (--workers, --scheduler),
+        # and never for none
+        pending = pending_bags(parts, cache, digests)
+        asked = args.workers is not None or args.scheduler is not None
+        serial = (args.serial or not pending
+                  or (not asked and bag_bytes(pending) < SERIAL_BYTES))
+        if asked and not pending:
+            notes.append('note: every bag is in the cache: no cluster '
+                         + ('contacted' if args.scheduler else 'started'))
         progress = Progress(len(parts))
         try:
             if serial:
@@ -505,9 +512,12 @@ def _on_cluster(args, tasks, cache, progress, digests) -> List[Dict]:
         with Client(args.scheduler, timeout=30) as client:
             warm(client)
             return run_tasks(tasks, cache, client, progress, digests)
+    workers, note = cluster_size(args.workers)
+    if note:
+        print(note, file=sys.stderr)
     scratch = tempfile.mkdtemp(prefix='.dask-scratch-', dir=args.out)    # Dask's files
     try:
-        with local_cluster(args.workers, scratch) as cluster, Client(cluster) as client:
+        with local_cluster(workers, scratch) as cluster, Client(cluster) as client:
             warm(client)
             return run_tasks(tasks, cache, client, progress, digests)
     finally:

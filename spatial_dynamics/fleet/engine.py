@@ -27,7 +27,7 @@ import signal
 import sys
 import threading
 import time
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, Iterable, List, Optional, Sequence, Set, Tuple
 
 import numpy as np
 
@@ -43,6 +43,8 @@ BATCHES_PER_WORKER = 8
 #: Bytes of bag to process below which the command runs them here, without a cluster (about
 #: 20 s of one core: less than a local cluster's start-up and engine cost on a busy machine).
 SERIAL_BYTES = 1 << 30
+#: The most local workers a core: more only share the same cores, in more memory.
+WORKERS_PER_CORE = 4
 
 
 class Cache:
@@ -246,7 +248,10 @@ def local_cluster(workers: Optional[int] = None, directory: Optional[str] = None
     data), which the caller removes; by default Dask's own ``/tmp/dask-scratch-space``.
 
     Without a dashboard, and so without the workers' statistical profiler (it samples the
-    running task's stack every 10 ms for the dashboard: 3-4 % of a worker's CPU here). And
+    running task's stack every 10 ms for the dashboard: 3-4 % of a worker's CPU here). Dask
+    starts an HTTP server in the scheduler and each worker whatever the dashboard (by default
+    the scheduler's on port 8787, serving pages of the cluster's workers and tasks): here it
+    serves no page, on a free port of 127.0.0.1 (two runs at once do not compete for 8787). And
     without Dask's ``MALLOC_TRIM_THRESHOLD_`` in the workers' environment: set at all, it
     turns off glibc's adaptive mmap threshold, so every array over 128 kB is mapped and
     unmapped afresh, its pages faulted in each time (a task then takes 20-25 % more CPU).
@@ -255,13 +260,15 @@ def local_cluster(workers: Optional[int] = None, directory: Optional[str] = None
     from distributed import LocalCluster
     n = workers or len(os.sched_getaffinity(0))
     settings = {'distributed.worker.profile.enabled': False,
-                'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None}
+                'distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_': None,
+                'distributed.scheduler.http.routes': [], 'distributed.worker.http.routes': []}
     if directory:
         settings['temporary-directory'] = directory
     with dask.config.set(settings), _workers_ignore_ctrl_c():
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                             dashboard_address=None, silence_logs=40,
-                            local_directory=directory)
+                            local_directory=directory,
+                            scheduler_kwargs={'dashboard_address': '127.0.0.1:0'})
 
 
 @contextlib.contextmanager
@@ -336,8 +343,11 @@ def run_tasks(tasks: Sequence[Task], cache: Cache, client=None,
     return results
 
 
-def pending_bytes(tasks: Sequence[Task], cache: Cache, digests: Dict[str, bytes]) -> int:
-    """Return the bytes of bag the tasks not in ``cache`` would read (a bag not hashed: all)."""
+def pending_bags(tasks: Sequence[Task], cache: Cache, digests: Dict[str, bytes]) -> Set[str]:
+    """Return the bags of the tasks not in ``cache`` (a bag not hashed yet: pending).
+
+    A bag that cannot be hashed is not pending: its task fails without running.
+    """
     pending = set()
     for t in tasks:
         try:
@@ -346,7 +356,29 @@ def pending_bytes(tasks: Sequence[Task], cache: Cache, digests: Dict[str, bytes]
         except (OSError, ValueError):
             continue
         pending.add(t.bag)
-    return sum(_bytes(bag) for bag in pending)
+    return pending
+
+
+def bag_bytes(bags: Iterable[str]) -> int:
+    """Return the bytes of the bags (a bag that cannot be listed: 0)."""
+    return sum(_bytes(bag) for bag in bags)
+
+
+def cluster_size(workers: Optional[int]) -> Tuple[int, Optional[str]]:
+    """Return the local cluster's worker count for ``--workers`` and a note if it was cut.
+
+    Default: the cores this process may use. At most :data:`WORKERS_PER_CORE` a core: each
+    worker is a process of its own (~100 MB before its first bag), and more of them only
+    share the same cores.
+    """
+    cores = len(os.sched_getaffinity(0))
+    bound = WORKERS_PER_CORE * cores
+    if workers is None:
+        return cores, None
+    if workers > bound:
+        return bound, (f'note: --workers {workers} is more than {WORKERS_PER_CORE} a core '
+                       f'({cores} here): {bound} workers')
+    return workers, None
 
 
 def digests_on(client, tasks: Sequence[Task]) -> Dict[str, bytes]:
