@@ -128,6 +128,34 @@ def test_a_damaged_cache_entry_is_computed_again(small, tmp_path, capsys, damage
     assert table(out) == want
 
 
+def test_a_bag_edited_in_place_with_its_size_inode_and_mtime_kept_is_hashed_again(
+        small, tmp_path, capsys):
+    import sqlite3
+    import struct
+    folder = tmp_path / 'fleet'
+    shutil.copytree(small, folder)
+    run([folder, '--out', tmp_path / 'o'], capsys)
+    db3 = next((folder / 'r01' / 'day01').glob('*.db3'))
+    before = os.stat(db3)
+    with sqlite3.connect(db3) as con:     # one effort value (the message's last 8 bytes) + 1
+        rowid, data = con.execute('SELECT id, data FROM messages ORDER BY id LIMIT 1 OFFSET 50'
+                                  ).fetchone()
+        tau = struct.unpack('<d', data[-8:])[0] + 1.0
+        con.execute('UPDATE messages SET data = ? WHERE id = ?',
+                    (data[:-8] + struct.pack('<d', tau), rowid))
+    con.close()
+    os.utime(db3, ns=(before.st_atime_ns, before.st_mtime_ns))
+    after = os.stat(db3)
+    assert (after.st_size, after.st_ino, after.st_mtime_ns) == (
+        before.st_size, before.st_ino, before.st_mtime_ns)
+    status, text, _ = run([folder, '--out', tmp_path / 'o'], capsys)
+    assert '(3 from the cache, 0 failed)' in text, text
+    fresh = run([folder, '--out', tmp_path / 'fresh'], capsys)
+    assert table(tmp_path / 'o') == table(tmp_path / 'fresh')
+    assert (status, text.split('\n', 1)[1].replace(str(tmp_path / 'o'), '')) == (
+        fresh[0], fresh[1].split('\n', 1)[1].replace(str(tmp_path / 'fresh'), ''))
+
+
 # -- robot names, missing and repeated bags --------------------------------------------------
 
 @pytest.mark.parametrize('name', ['x/../../../ESCAPED', 'a/b', '../escape', '..', 'r' * 300,

@@ -86,8 +86,11 @@ class Cache:
         """Return bag path -> :func:`~.task.bag_digest` of the bags unchanged since hashed.
 
         A bag is unchanged when its resolved path and each of its files' name, size,
-        ``mtime_ns`` and inode are what they were when its bytes were hashed
-        (:meth:`remember`): its bytes are not read again. Any change hashes them again.
+        ``mtime_ns``, ``ctime_ns``, inode and device are what they were when its bytes were
+        hashed (:meth:`remember`): its bytes are not read again. A write changes
+        ``ctime_ns`` and so does setting the mtime back (``touch -d``, ``os.utime``): the
+        kernel sets it to the current time, no call sets it to a chosen one, so an edit in
+        place with the same size and the mtime restored hashes the bag again.
         """
         known: Dict[str, bytes] = {}
         for bag in dict.fromkeys(t.bag for t in tasks):
@@ -157,7 +160,7 @@ class Cache:
             info = os.stat(name)
             if os.path.isfile(name):
                 h.update(f'\0{os.path.basename(name)}\0{info.st_size}\0{info.st_mtime_ns}'
-                         f'\0{info.st_ino}'.encode())
+                         f'\0{info.st_ctime_ns}\0{info.st_ino}\0{info.st_dev}'.encode())
         folder = os.path.join(self.folder, 'bags')
         os.makedirs(folder, exist_ok=True)
         return os.path.join(folder, h.hexdigest())
