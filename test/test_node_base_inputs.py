@@ -579,7 +579,9 @@ def test_floating_a_split_that_pulls_is_re_solved_by_the_qp(solo_path, method, c
     contact answer).
     """
     cfg = floating(solo_path, **{'contacts.method': method, 'control_mode': control_mode,
-                                 'base_input.acceleration': 'difference'})
+                                 'base_input.acceleration': 'difference',
+                                 # the twist's difference as it is (no low-pass)
+                                 'base_input.acceleration_time_constant': 0.0})
     robot = cfg.robot
     answering = Answering(Log())
     a_world = np.array([3.0, 5.0, 0.0])
@@ -618,7 +620,9 @@ def test_floating_a_base_falling_faster_than_gravity_is_refused(solo_path, metho
     how much, and /diagnostics explains it; standing again, the node answers again.
     """
     cfg = floating(solo_path, **{'contacts.method': method,
-                                 'base_input.acceleration': 'difference'})
+                                 'base_input.acceleration': 'difference',
+                                 # the twist's difference as it is (no low-pass)
+                                 'base_input.acceleration_time_constant': 0.0})
     robot = cfg.robot
     answering = Answering(Log())
     q, zero = standing(robot.joints), np.zeros(12)
@@ -709,7 +713,9 @@ def test_floating_qp_without_friction_never_publishes_pulling_feet(solo_path):
     ice is answered, every foot pushing straight up.
     """
     cfg = floating(solo_path, **{'contacts.method': 'qp', 'contacts.mu': 0.0,
-                                 'base_input.acceleration': 'difference'})
+                                 'base_input.acceleration': 'difference',
+                                 # the twist's difference as it is (no low-pass)
+                                 'base_input.acceleration_time_constant': 0.0})
     robot = cfg.robot
     answering = Answering(Log())
     quat = np.array([0.02, -0.03, 0.01, 1.0]) / np.linalg.norm([0.02, -0.03, 0.01, 1.0])
