@@ -315,11 +315,21 @@ def floating_twin(model: Model) -> Model:
 _ORIGIN = np.zeros(3)
 
 
-def check_base_motion(base) -> None:
-    """Raise ``TypeError`` naming what ``base`` is, unless it is a :class:`BaseMotion`."""
+def check_base_motion(base, model: Optional[Model] = None) -> None:
+    """Refuse a ``base=`` that no function taking it can use.
+
+    ``TypeError`` naming what ``base`` is, unless it is a :class:`BaseMotion`; with
+    ``model``, ``ValueError`` when ``model`` has a floating base already (its base's motion
+    is its free-flyer's ``q``, ``q̇``, ``q̈``): every public function taking ``base=`` calls
+    this, so none answers a floating model's base twice.
+    """
     if not isinstance(base, BaseMotion):
         raise TypeError("base must be a spatial_dynamics.BaseMotion (the base's v, a and "
                         f'orientation), got {type(base).__name__}')
+    if model is not None and model.floating:
+        raise ValueError(f'base=: {model.name!r} has a floating base already, whose motion '
+                         "is its free-flyer's q, q̇ and q̈: load it with base='fixed' to "
+                         'give a base motion')
 
 
 def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=None):
@@ -328,7 +338,7 @@ def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=Non
     ``q̇``/``q̈`` ``None`` are zero; arrays broadcast against the base's batch. ``gravity``
     becomes zero when the base's ``a`` includes it.
     """
-    check_base_motion(base)
+    check_base_motion(base, model)
     from .algorithms.arguments import as_joint_arrays
     zero = np.zeros(model.nv)
     q, qd, qdd = as_joint_arrays(model, q, zero if qd is None else qd,
