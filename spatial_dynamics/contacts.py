@@ -22,6 +22,10 @@ is formed. Three ways to split it (:func:`contact_inverse_dynamics`):
   minimise ``½ τᵀ W τ + ½ ε |λ|²`` subject to all the rows of the equation and, per contact,
   ``n·f ≥ 0`` (unilateral, whatever ``μ``) and ``|f_t| ≤ μ f_n``; infeasible problems are
   reported, never answered with a base torque. :func:`warm_qp` imports the solver ahead.
+  The problem is scaled so that every coefficient is at most 1 whatever the numbers: the
+  weights over their largest, and a cone of ``μ > 1`` written ``|f_t| / μ ≤ f_n``; every
+  finite ``μ ≥ 0`` and positive weight is solved (``test_core_contacts.py``: μ 0 to 1e300,
+  weights 1e-300 to 1e300).
 
 Every answer says the base rows' residual (never a silent base torque) and which contacts
 violate their friction cone or pull on the ground, by how much (:class:`ContactResult`).
@@ -452,7 +456,8 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
             ``'forces'`` (least ``λᵀ W λ`` carrying the base rows) or ``'qp'`` (least
             ``½ τᵀ W τ + ½ force_weight |λ|²`` inside the friction cones, Clarabel).
         weights: ``W``, positive, one per joint (``'torques'``, ``'qp'``) or per contact row
-            (``'forces'``); default ones.
+            (``'forces'``); default ones. Only their ratios matter: the QP divides them and
+            ``force_weight`` by their largest, so any finite positive scale is solved.
         gravity: m/s², world coordinates.
         force_weight: the QP's small weight on the contact forces (makes λ unique).
         backend: as :func:`~spatial_dynamics.rnea`'s. ``'compiled'`` (``'auto'`` when built)
@@ -757,7 +762,9 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     nx = n + k
     if not (np.isfinite(force_weight) and force_weight > 0.0):
         raise ValueError(f'force_weight must be a positive number, got {force_weight}')
-    P = sparse.diags(np.r_[W, np.full(k, force_weight)]).tocsc()
+    # the argmin is that of the weights over their largest: every weight in (0, 1]
+    top = max(W.max(initial=0.0), force_weight)
+    P = sparse.diags(np.r_[W / top, np.full(k, force_weight / top)]).tocsc()
     # equality (zero cone): [Sᵀ J_cᵀ] x = b, all nv rows
     A_eq = np.zeros((len(b), nx))
     A_eq[6:, :n] = np.eye(n)
@@ -770,9 +777,12 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     cones, row = [clarabel.ZeroConeT(len(b)), clarabel.NonnegativeConeT(len(contacts))], 0
     for c in contacts:
         t1, t2 = _tangents(c.normal)
-        G = np.zeros((3, nx))       # s = (μ n·f, t1·f, t2·f) in the second-order cone
+        # s = (μ n·f, t1·f, t2·f) in the second-order cone; for μ > 1 the same cone as
+        # (n·f, t1·f / μ, t2·f / μ): every coefficient at most 1, whatever μ
+        G = np.zeros((3, nx))
         j = n + row + c.rows - 3    # the force's entries of λ
-        G[0, j:j + 3], G[1, j:j + 3], G[2, j:j + 3] = c.mu * c.normal, t1, t2
+        a, t = (c.mu, 1.0) if c.mu <= 1.0 else (1.0, 1.0 / c.mu)
+        G[0, j:j + 3], G[1, j:j + 3], G[2, j:j + 3] = a * c.normal, t * t1, t * t2
         blocks.append(-G)
         cones.append(clarabel.SecondOrderConeT(3))
         row += c.rows

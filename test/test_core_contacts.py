@@ -415,3 +415,84 @@ def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method
             sd.contact_inverse_dynamics(model, args['q'], args['qd'], args['qdd'], feet,
                                         backend=backend, **kw, **more)
     assert capfd.readouterr().err == ''
+
+
+# -------------------------------------------------------------------------------------------
+# the QP across the range of μ and of the weights
+
+def qp_reference(pm, q, contacts, a=1.0, c=1e-6, normal_only=False):
+    """The QP's answer when no cone is active, from Pinocchio: ``(τ, λ)`` by its KKT system.
+
+    Least ``½ a |τ|² + ½ c |λ|²`` with ``τ = b_j - J_jᵀ λ`` and the base rows
+    ``J_bᵀ λ = b_b``; with ``normal_only`` each force along its normal (μ = 0), ``λ = N s``.
+    """
+    b = to_pin(pin.rnea(pm, pm.createData(), q, np.zeros(pm.nv), np.zeros(pm.nv)))  # ours
+    Jc = pin_contact_jacobian(pm, q, contacts)
+    N = np.eye(len(Jc))
+    if normal_only:
+        N = np.zeros((len(Jc), len(contacts)))
+        for j, contact in enumerate(contacts):
+            N[3 * j:3 * j + 3, j] = contact.normal
+    Jj, Jb = N.T @ Jc[:, 6:], N.T @ Jc[:, :6]
+    m = len(N.T)
+    K = np.block([[a * Jj @ Jj.T + c * N.T @ N, Jb], [Jb.T, np.zeros((6, 6))]])
+    s = np.linalg.lstsq(K, np.r_[a * Jj @ b[6:], b[:6]], rcond=None)[0][:m]
+    return b[6:] - Jj.T @ s, N @ s
+
+
+def qp(model, q, feet, **options):
+    zero = np.zeros(model.nv)
+    return sd.contact_inverse_dynamics(model, q, zero, zero, feet, method='qp', **options)
+
+
+def test_qp_is_solved_for_every_mu_a_wider_cone_never_worse(solo):
+    """μ 1e6 was 'not solved', 1e9 to 1e20 'infeasible', 1e100 and 1e300 a numerical error.
+
+    A wider cone cannot make a standing robot infeasible: beyond the μ where no cone is
+    active (0.7 here) the answer is the KKT solution of the equality QP (Pinocchio's ``b``
+    and ``J_c``), at μ = 0 that of vertical forces; between, the least torque never grows
+    with μ.
+    """
+    model, pm = solo
+    q = standing_solo(model)
+
+    def solved(mu):
+        feet = [sd.Contact(f, mu=mu) for f in FEET]
+        r = qp(model, q, feet)
+        assert r.status == 'solved' and r.feasible, (mu, r.summary())
+        return feet, r
+
+    for mu in (0.7, 1.0, 10.0, 1e3, 1e6, 1e9, 1e12, 1e20, 1e100, 1e200, 1e300):
+        feet, r = solved(mu)
+        tau, lam = qp_reference(pm, q, feet)
+        np.testing.assert_allclose(r.tau, tau, atol=1e-8, err_msg=f'mu={mu}')
+        np.testing.assert_allclose(np.concatenate([r.forces[f] for f in FEET]), lam,
+                                   atol=1e-8, err_msg=f'mu={mu}')
+    feet, r = solved(0.0)
+    tau, lam = qp_reference(pm, q, feet, normal_only=True)
+    np.testing.assert_allclose(r.tau, tau, atol=1e-8)
+    least = [r.tau @ r.tau]
+    for mu in (1e-3, 0.1, 0.3, 0.7):
+        least.append(solved(mu)[1].tau @ solved(mu)[1].tau)
+    assert all(b <= a + 1e-6 for a, b in zip(least, least[1:])), least
+
+
+@pytest.mark.parametrize('what', ['weights', 'force_weight'])
+def test_qp_is_solved_for_every_weight_scale(solo, what):
+    """``weights=1e300`` or ``force_weight=1e300`` stopped with InsufficientProgress.
+
+    The argmin depends on the weights' ratio only: each is Pinocchio's KKT answer with the
+    weights over their largest.
+    """
+    model, pm = solo
+    q = standing_solo(model)
+    feet = [sd.Contact(f) for f in FEET]
+    for w in (1e-300, 1e-200, 1e-100, 1e-12, 1e-6, 1.0, 1e6, 1e12, 1e100, 1e200, 1e300):
+        W, eps = (w, 1e-6) if what == 'weights' else (1.0, w)
+        r = qp(model, q, feet, **{what: w})
+        assert r.status == 'solved' and r.feasible, (w, r.summary())
+        top = max(W, eps)
+        tau, lam = qp_reference(pm, q, feet, a=W / top, c=eps / top)
+        np.testing.assert_allclose(r.tau, tau, atol=1e-8, err_msg=f'{what}={w}')
+        np.testing.assert_allclose(np.concatenate([r.forces[f] for f in FEET]), lam,
+                                   atol=1e-8, err_msg=f'{what}={w}')
