@@ -421,7 +421,7 @@ def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method
 # the QP across the range of μ and of the weights
 
 def qp_reference(pm, q, contacts, a=1.0, c=1e-6, normal_only=False):
-    """The QP's answer when no cone is active, from Pinocchio: ``(τ, λ)`` by its KKT system.
+    """Return the QP's answer when no cone is active from Pinocchio: ``(τ, λ)`` by its KKT.
 
     Least ``½ a |τ|² + ½ c |λ|²`` with ``τ = b_j - J_jᵀ λ`` and the base rows
     ``J_bᵀ λ = b_b``; with ``normal_only`` each force along its normal (μ = 0), ``λ = N s``.
