@@ -10,6 +10,7 @@ their weight (the contact forces sum to ``m g``), the base rows hold to 1e-9, th
 
 import os
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -407,7 +408,8 @@ def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method
     zero_quat = q0.copy()
     zero_quat[3:7] = 0.0
     cases.append(({'q': zero_quat, 'qd': zero, 'qdd': zero}, {},
-                  r"q\[3:7\], the quaternion \(x, y, z, w\) of 'base_link'.* non-zero"))
+                  r"q: the free-flyer quaternion of joint 'root_joint' at q\[3:7\] has "
+                  r'norm 0'))
     cases.append(({'q': q0, 'qd': zero, 'qdd': zero}, {'gravity': (0.0, 0.0, np.nan)},
                   r'gravity must be finite: gravity\[2\] is nan'))
     for args, more, match in cases:
@@ -415,6 +417,65 @@ def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method
             sd.contact_inverse_dynamics(model, args['q'], args['qd'], args['qdd'], feet,
                                         backend=backend, **kw, **more)
     assert capfd.readouterr().err == ''
+
+
+@pytest.mark.parametrize('backend', ['numpy', 'compiled'])
+@pytest.mark.parametrize('method', ['torques', 'forces', 'qp', 'measured'])
+def test_a_state_too_large_to_compute_is_named_without_a_warning(solo, backend, method,
+                                                                capfd):
+    """``qdd = 1e300`` printed numpy's overflow RuntimeWarning before the ValueError.
+
+    The argument beyond what a real robot reaches is named (the bounds the node holds its
+    inputs to), and nothing is printed on stderr.
+    """
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f) for f in FEET]
+    kw = {'measured': {f: [0.0, 0.0, 6.0] for f in FEET}} if method == 'measured' else {
+        'method': method}
+    for qd, qdd, match in ((zero, zero + 1e300, r'qdd of index 0 is 1e\+300, beyond ±1e\+06'),
+                           (zero + 1e200, zero, r'qd of index 0 is 1e\+200, beyond ±10000')):
+        with warnings.catch_warnings():
+            warnings.simplefilter('error')
+            with pytest.raises(ValueError, match=match):
+                sd.contact_inverse_dynamics(model, q, qd, qdd, feet, backend=backend, **kw)
+    assert capfd.readouterr().err == ''
+
+
+def test_contact_arguments_out_of_any_range_are_refused_by_name(solo):
+    """A measured wrench, an offset and a mu no robot has are refused, each by its name.
+
+    A measured 1e300 N was 'solved' with τ = inf, an offset of 1e300 m blamed the state, and
+    mu='0.5' was a bare TypeError from np.isfinite.
+    """
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f) for f in FEET]
+    for value in (1e300, 1.1e6, -2e6):
+        measured = {f: [0.0, 0.0, 6.0] for f in FEET}
+        measured['FL_FOOT'] = [0.0, 0.0, value]
+        with pytest.raises(ValueError, match=r"measured\['FL_FOOT'\] must be 3 finite numbers "
+                           r'within ±1e\+06 N or N m'):
+            sd.contact_inverse_dynamics(model, q, zero, zero, feet, measured=measured)
+    # a real foot sensor's reading (1e6 N at most) is taken: τ = b - J_cᵀ λ (Pinocchio)
+    measured = {f: [0.0, 0.0, 1e6 if f == 'FL_FOOT' else 6.0] for f in FEET}
+    r = sd.contact_inverse_dynamics(model, q, zero, zero, feet, measured=measured)
+    _, pm = solo
+    b = pin.rnea(pm, pm.createData(), q, np.zeros(pm.nv), np.zeros(pm.nv))
+    lam = np.concatenate([measured[f] for f in FEET])
+    np.testing.assert_allclose(r.tau, b[6:] - (pin_contact_jacobian(pm, q, feet).T @ lam)[6:],
+                               rtol=1e-10, atol=1e-6)
+    for offset in ((1e300, 0.0, 0.0), (0.0, -2e5, 0.0), (np.inf, 0.0, 0.0)):
+        with pytest.raises(ValueError, match=r"contact 'FL_FOOT': offset must be 3 finite "
+                           r'numbers within ±100000 m'):
+            sd.Contact('FL_FOOT', offset=offset)
+    for mu in ('0.5', None, [0.5], True):
+        with pytest.raises(TypeError, match=r"contact 'FL_FOOT': mu must be a number"):
+            sd.Contact('FL_FOOT', mu=mu)
+    for mu in (np.float32(0.5), np.int64(1), 0.5):
+        assert sd.Contact('FL_FOOT', mu=mu).mu == float(mu)
 
 
 # -------------------------------------------------------------------------------------------
