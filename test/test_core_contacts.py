@@ -421,8 +421,7 @@ def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method
 
 @pytest.mark.parametrize('backend', ['numpy', 'compiled'])
 @pytest.mark.parametrize('method', ['torques', 'forces', 'qp', 'measured'])
-def test_a_state_too_large_to_compute_is_named_without_a_warning(solo, backend, method,
-                                                                capfd):
+def test_a_state_too_large_to_compute_is_named_without_a_warning(solo, backend, method, capfd):
     """``qdd = 1e300`` printed numpy's overflow RuntimeWarning before the ValueError.
 
     The argument beyond what a real robot reaches is named (the bounds the node holds its
