@@ -197,6 +197,34 @@ def test_imu_readings_of_mujoco_reproduce_its_inverse_dynamics(ur5):
         np.testing.assert_allclose(tau[idx], tau_mj, rtol=1e-10, atol=1e-10)
 
 
+def test_imus_of_a_batch_read_one_motion_and_bad_poses_are_named(ur5):
+    """A batch of IMU orientations was a bare "incompatible dimensions for cross product".
+
+    One motion of the base (``ω``, ``ω̇``, the specific force at its origin) read by IMUs
+    mounted at four poses (random orientations and positions, one batch): each reads
+    ``R_sᵀ (f_0 + ω̇ × r + ω × (ω × r))`` and ``R_sᵀ ω``, and every pose gives the same base
+    motion back; a NaN position (it was blamed on ``base.a``) or twist is named.
+    """
+    rng = np.random.default_rng(9)
+    w, wd, f_0 = rng.normal(size=(3, 3))
+    quats, r = unit_quaternions(rng, 4), rng.normal(size=(4, 3)) * 0.1
+    R_s = quaternion_matrix(quats)
+    f_r = f_0 + np.cross(wd, r) + np.cross(w, np.cross(w, r))
+    reading = np.einsum('kji,kj->ki', R_s, f_r)             # R_sᵀ f at each IMU
+    gyro, gyro_rate = np.einsum('kji,j->ki', R_s, w), np.einsum('kji,j->ki', R_s, wd)
+    for orientation in (quats, R_s):
+        base = sd.base_from_imu(ur5, 'base_link', reading, gyro, gyro_rate, position=r,
+                                orientation=orientation)
+        np.testing.assert_allclose(base.v, np.tile(np.r_[w, 0, 0, 0], (4, 1)), atol=1e-12)
+        np.testing.assert_allclose(base.a, np.tile(np.r_[wd, f_0], (4, 1)), atol=1e-12)
+    with pytest.raises(ValueError, match='base_from_imu: position must be finite'):
+        sd.base_from_imu(ur5, 'base_link', G, np.zeros(3), position=[np.nan, 0, 0])
+    with pytest.raises(ValueError, match=r'base_from_imu: the batch shapes .* do not broadcast'):
+        sd.base_from_imu(ur5, 'base_link', reading, gyro, orientation=quats[:3])
+    with pytest.raises(ValueError, match='base_from_odometry: twist_rate must be finite'):
+        sd.base_from_odometry(ur5, np.zeros(6), [0, 0, np.inf, 0, 0, 0])
+
+
 def test_jacobian_in_world_axes_on_a_tilted_base(ur5, pin_ur5):
     pin, pm, pd = pin_ur5
     rng = np.random.default_rng(8)
