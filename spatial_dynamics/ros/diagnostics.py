@@ -101,7 +101,9 @@ def model_status(robot: Optional[Robot], totals: Totals, strict: bool,
     message = f'robot {model.name!r} loaded, {dof_text(model)}'
     if urdf_warnings:
         message += f', {len(urdf_warnings)} URDF warning(s)'
-    values = [('robot name', model.name), ('dof', dof_text(model)),
+    # 'dof' stays the number of a fixed-base robot (what tools read); a floating one says it
+    values = [('robot name', model.name),
+              ('dof', dof_text(model) if model.floating else str(model.nv)),
               ('model joints', ', '.join(model.joint_names)),
               ('output joints', ', '.join(robot.joints)), ('source', robot.source),
               ('summary', robot.base.summary()), ('backend', backend),
