@@ -232,9 +232,10 @@ def test_base_parameters_are_checked_against_the_model(demo_text, solo_path):
                    **{'contacts.links': ['LF_FOOT']})
     with pytest.raises(ConfigError, match="wrench_estimate.link: not supported with base"):
         configured(robot_description_file=solo_path, base='floating',
-                   **{'wrench_estimate.link': 'FL_FOOT'})
+                   **{'wrench_estimate.link': 'FL_FOOT', 'contacts.links': list(FEET)})
     with pytest.raises(ConfigError, match='armature: expected 12 values for the actuated'):
-        configured(robot_description_file=solo_path, base='floating', armature=[0.1] * 13)
+        configured(robot_description_file=solo_path, base='floating', armature=[0.1] * 13,
+                   **{'contacts.links': list(FEET)})
     with pytest.raises(ConfigError, match='base'):
         configured(robot_description=demo_text, base='sideways')
     assert configured(robot_description=demo_text).params.base == 'fixed'
@@ -348,6 +349,87 @@ def test_floating_without_base_pose_publishes_nothing(solo_path):
                                                  zero, zero))
     assert out.answer is None and answering.totals.rejected['base_missing'] == 1
     assert any('no good base/pose yet' in text for _, text in answering.log.said)
+
+
+@pytest.mark.parametrize('method', ['torques', 'forces', 'qp'])
+@pytest.mark.parametrize('flags', [(1, 0, 0, 0), (1, 1, 0, 0), (1, 0, 0, 1)])
+def test_floating_contacts_that_cannot_carry_the_base_are_refused(solo_path, method, flags):
+    """Solo12 standing on one or two feet: no contact forces carry its base, nothing published.
+
+    The split's base residual is the least any contact forces leave (the QP, bound by the same
+    rows, is infeasible): the answer is refused (``contacts_unsolved``), the WARN names the
+    residual and the contacts in contact, the ``base`` status counts it; on four feet again
+    the node answers again.
+    """
+    cfg = floating(solo_path, **{'contacts.method': method})
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q, zero = standing(robot.joints), np.zeros(12)
+    msg = joint_state(robot.joints, 1.0, q, zero, zero)
+    good = answering.joint_state(cfg, msg).answer
+    assert good is not None
+    touching = [link for link, flag in zip(FEET, flags) if flag]
+    state = (robot.model, np.r_[base_q, q], np.zeros(18), np.zeros(18),
+             [sd.Contact(link) for link in touching])
+    split = sd.contact_inverse_dynamics(*state)
+    residual = np.abs(split.base_residual).max()
+    weight = robot.model.inertia[:, 3, 3].sum() * 9.81   # m g
+    assert residual > 1e3 * robot.residual_tolerance   # the least: no λ carries the base
+    assert robot.residual_tolerance == pytest.approx(1e-6 * weight)
+    assert sd.contact_inverse_dynamics(*state, method='qp').status.startswith('infeasible')
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=list(flags)))
+    out = answering.joint_state(cfg, msg)
+    assert out.answer is None
+    assert answering.totals.rejected['contacts_unsolved'] == 1
+    said = answering.log.said[-1]
+    assert said[0] == 'warn' and 'cannot carry the base' in said[1], said
+    assert str(touching) in said[1], said
+    if method != 'qp':     # the QP's infeasible answer has no λ: its residual is all of b
+        assert f'base residual {residual:.3g}' in said[1], said
+    level, text, values = base_status(cfg.params, robot, answering.base_inputs,
+                                      answering.base_inputs.period(),
+                                      answering.base_inputs.pose.receipt_ns)
+    values = dict(values)
+    assert level == 'WARN' and 'cannot carry the base' in text, text
+    assert values['refused: the contacts cannot carry the base (contacts_unsolved, '
+                  'no_contact)'] == '1'
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 1, 1, 1]))
+    again = answering.joint_state(cfg, msg).answer
+    np.testing.assert_array_equal(again.tau, good.tau)
+
+
+@pytest.mark.parametrize('changes', [{'contacts.method': 'torques'},
+                                     {'contacts.method': 'forces'},
+                                     {'contacts.method': 'qp'},
+                                     {'contacts.measured': True}])
+def test_floating_in_flight_every_answer_is_refused(solo_path, changes):
+    """Every contact_states flag 0: no contact carries the base, no answer, whatever the method."""
+    cfg = floating(solo_path, **changes)
+    robot = cfg.robot
+    answering = Answering(Log())
+    feed_base(cfg, answering)
+    q, zero = standing(robot.joints), np.zeros(12)
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[0, 0, 0, 0]))
+    for t in (1.0, 1.01):
+        out = answering.joint_state(cfg, joint_state(robot.joints, t, q, zero, zero))
+        assert out.answer is None
+    assert answering.totals.rejected['no_contact'] == 2
+    said = answering.log.said[-1]
+    assert said[0] == 'warn' and 'no contact carries the base' in said[1], said
+    level, text, _ = base_status(cfg.params, robot, answering.base_inputs,
+                                 answering.base_inputs.period(),
+                                 answering.base_inputs.pose.receipt_ns)
+    assert level == 'WARN' and 'no contact carries the base' in text, text
+
+
+def test_a_floating_base_without_contacts_is_refused_at_configuration(solo_path):
+    """Nothing would carry the base: contacts.links unset or empty is a ConfigError."""
+    for links in (None, []):
+        with pytest.raises(ConfigError, match='contacts.links: a floating base needs contacts '
+                           'to carry it'):
+            configured(robot_description_file=solo_path, base='floating',
+                       **{'contacts.links': links})
 
 
 def test_the_observer_is_off_on_a_moving_base_and_says_so(demo_text):
@@ -615,10 +697,12 @@ def test_floating_a_base_falling_faster_than_gravity_is_refused(solo_path, metho
 
     Nothing is published for it (the controller keeps the last good command): the reason
     ``contacts_unsolved`` is counted, the WARN names the contact that would pull most and by
-    how much, and /diagnostics explains it; standing again, the node answers again.
+    how much, and /diagnostics explains it; standing again, the node answers again. The
+    twist is differenced unfiltered: each step of the base is its own acceleration.
     """
     cfg = floating(solo_path, **{'contacts.method': method,
-                                 'base_input.acceleration': 'difference'})
+                                 'base_input.acceleration': 'difference',
+                                 'base_input.acceleration_time_constant': 0.0})
     robot = cfg.robot
     answering = Answering(Log())
     q, zero = standing(robot.joints), np.zeros(12)
@@ -672,7 +756,7 @@ def test_floating_without_the_qp_a_pulling_split_is_refused(solo_path, monkeypat
     assert "'qp' extra" in robot.qp_missing
     warning = qp_missing_warning(robot)
     assert "'qp' extra" in warning and 'refusing' in warning
-    assert qp_missing_warning(floating(solo_path, **{'contacts.links': []}).robot) != ''
+    assert qp_missing_warning(floating(solo_path, **{'contacts.links': ['FL_FOOT']}).robot) != ''
     answering = Answering(Log())
     base_q = feed_base(cfg, answering)
     q, zero = standing(robot.joints), np.zeros(12)

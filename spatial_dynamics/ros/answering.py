@@ -468,6 +468,8 @@ class Answering:
         except InputError as err:   # the base's state is not known: nothing is published
             if getattr(dynamics, 'pulls', None):   # a contact would pull, no QP answer
                 self.base_inputs.pulled(dynamics.pulls, err)
+            if getattr(dynamics, 'unsolved', None):   # the contacts cannot carry the base
+                self.base_inputs.unsolved(dynamics.unsolved[-1], err)
             self._reject(topic, err.reason, str(err))
             return None
         except Exception as err:  # never die on one message

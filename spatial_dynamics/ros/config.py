@@ -35,7 +35,7 @@ from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
 from spatial_dynamics.ros.bases import (
     BASE_ACCELERATIONS, BASE_SOURCES, BASES, check_base, CONTACT_KINDS, CONTACT_METHODS,
-    pull_tolerance)
+    pull_tolerance, residual_tolerance)
 from spatial_dynamics.ros.descriptions import (
     description_change, MAX_DESCRIPTION_BYTES, parse_description)
 from spatial_dynamics.ros.control import (
@@ -375,9 +375,12 @@ PARAMETERS = Table(NODE_NAME, [
         'which input), never computed as if the base were fixed. Live.'),
         bounds=(1e-3, 3600.0)),
     Param('contacts.links', 'string[]', None, (
-        'Floating base: the links that may touch the ground (feet, soles), each a contact '
-        'at its origin; all in contact until contact_states (std_msgs/UInt8MultiArray, one '
-        'flag per link in this order) says otherwise. Live.'), rules=(distinct,)),
+        'Floating base (required: nothing else carries the base): the links that may touch '
+        'the ground (feet, soles), each a contact at its origin; all in contact until '
+        'contact_states (std_msgs/UInt8MultiArray, one flag per link in this order) says '
+        'otherwise. An answer whose contacts in contact cannot carry the base (base residual '
+        'above 1e-6 m g), or with none in contact (in flight), is not published. Live.'),
+        rules=(distinct,)),
     Param('contacts.kind', 'string', 'point', (
         '"point" (a force: feet) or "surface" (a wrench: soles). Live.'),
         choices=CONTACT_KINDS),
@@ -563,7 +566,8 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
         external_torque_warn=_observer_check(check_warn, actuated,
                                              params.external_torque_warn),
         qp_missing=qp_missing,
-        pull_tolerance=pull_tolerance(model) if base.floating else 0.0)
+        pull_tolerance=pull_tolerance(model) if base.floating else 0.0,
+        residual_tolerance=residual_tolerance(model) if base.floating else 0.0)
 
 
 def _warm_qp(method: str) -> str:
