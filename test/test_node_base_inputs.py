@@ -937,7 +937,10 @@ def test_a_differenced_twist_is_filtered_and_bounded(ur5_text):
 # a typical /odom and IMU driver (issue 35)
 
 def test_odometry_of_base_footprint_is_taken_as_base_input_odometry_link(demo_text):
-    """``child_frame_id: base_footprint`` (no such link): named by the right field, then mapped."""
+    """``child_frame_id: base_footprint`` (no such link): named by the right field, then mapped.
+
+    Exactly ``base_input.odometry_frame`` is taken as ``base_input.odometry_link``.
+    """
     quat = np.array([0.0, 0.0, 0.0, 1.0])
     v0, v1 = np.array([0, 0, 0.1, 0.5, 0, 0.0]), np.array([0, 0, 0.12, 0.52, 0, 0.0])
     cfg = moving_on_twist(demo_text)
@@ -947,8 +950,10 @@ def test_odometry_of_base_footprint_is_taken_as_base_input_odometry_link(demo_te
     assert answering.base_inputs.rejected['base/odometry wrong_frame'] == 1
     said = answering.log.said[-1][1]
     assert "child_frame_id 'base_footprint'" in said and 'header.frame_id' not in said
+    assert "base_input.odometry_frame to 'base_footprint'" in said, said
     assert 'base_input.odometry_link' in said
-    cfg = moving_on_twist(demo_text, **{'base_input.odometry_link': 'base_link'})
+    cfg = moving_on_twist(demo_text, **{'base_input.odometry_frame': 'base_footprint',
+                                        'base_input.odometry_link': 'base_link'})
     robot = cfg.robot
     n = len(robot.joints)
     answering = Answering(Log())
@@ -960,13 +965,44 @@ def test_odometry_of_base_footprint_is_taken_as_base_input_odometry_link(demo_te
     expected = sd.rnea(robot.model, q, q, q, base=sd.base_from_odometry(
         robot.model, v1, (v1 - v0) / 0.01, quat, link='base_link'))
     np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
-    # a link of the URDF that moves is still refused; the parameter is checked
+    # a link of the URDF that moves is still refused; the parameters are checked
     answering.base_input(cfg, 'base/odometry', odometry(1.02, [0, 0, 0], quat, v1, 'link3'))
     assert answering.base_inputs.rejected['base/odometry wrong_frame'] == 1
     with pytest.raises(ConfigError, match="base_input.odometry_link: 'base_footprint' is not"):
         moving_on_twist(demo_text, **{'base_input.odometry_link': 'base_footprint'})
     with pytest.raises(ConfigError, match='base_input.odometry_link.*moves with a joint'):
         moving_on_twist(demo_text, **{'base_input.odometry_link': 'link3'})
+    with pytest.raises(ConfigError, match="base_input.odometry_frame: 'link3' is a link"):
+        moving_on_twist(demo_text, **{'base_input.odometry_frame': 'link3'})
+
+
+@pytest.mark.parametrize('child', ['odom_combined', 'base_footprint_2', 'robot2/base_footprint'])
+def test_odometry_of_another_frame_than_base_input_odometry_frame_is_refused(demo_text, child):
+    """A typo or another robot's odometry is never taken as the base's: ``wrong_frame``.
+
+    Only the frame named in ``base_input.odometry_frame`` stands for
+    ``base_input.odometry_link``; the twist held before stays and the answers keep using it.
+    """
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    v = np.array([0, 0, 0.1, 0.5, 0, 0.0])
+    cfg = moving_on_twist(demo_text, **{'base_input.odometry_frame': 'base_footprint',
+                                        'base_input.odometry_link': 'base_link',
+                                        'base_input.acceleration': 'zero'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/odometry', odometry(1.0, [0, 0, 0], quat, v,
+                                                        'base_footprint'))
+    answering.base_input(cfg, 'base/odometry', odometry(1.01, [0, 0, 0], quat, 10 * v, child))
+    assert answering.base_inputs.rejected['base/odometry wrong_frame'] == 1
+    said = answering.log.said[-1][1]
+    assert f"child_frame_id {child!r}" in said and "'base_footprint'" in said, said
+    assert 'base_input.odometry_frame' in said and 'base_input.odometry_link' in said, said
+    q = np.full(n, 0.2)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, q, q))
+    expected = sd.rnea(robot.model, q, q, q, base=sd.base_from_odometry(
+        robot.model, v, np.zeros(6), quat, link='base_link'))
+    np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
 
 
 def test_imu_frame_of_the_driver_is_taken_as_the_imu_link(demo_text):

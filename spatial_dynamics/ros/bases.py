@@ -41,7 +41,8 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
 * ``base/twist`` (``geometry_msgs/TwistStamped``): the twist of the root link (or, moving, of a
   link fixed to it) in its own axes, ``header.frame_id`` that link or empty: what
   ``nav_msgs/Odometry`` carries in its child frame. A frame that is not a link of the URDF
-  (``base_footprint``) is ``base_input.odometry_link`` when that is set (:func:`twist_link`).
+  (``base_footprint``) must be exactly ``base_input.odometry_frame``, then taken as
+  ``base_input.odometry_link`` (:func:`twist_link`); any other is refused (``wrong_frame``).
   Its rate, the base's spatial acceleration, is the difference of successive samples over
   their stamps (``base_input.acceleration: difference``: no closer than
   ``base_input.min_interval``, low-pass filtered and bounded by what a base reaches,
@@ -179,26 +180,35 @@ def twist_rate(before: Optional[np.ndarray], v_before: np.ndarray, v: np.ndarray
     return a
 
 
-def twist_link(model: 'sd.Model', frame: str, field: str, odometry_link: str = '') -> str:
+def twist_link(model: 'sd.Model', frame: str, field: str, odometry_link: str = '',
+               odometry_frame: str = '') -> str:
     """Return the link of ``model`` a base twist in ``frame`` is of ('' = the root link).
 
     ``frame`` is the message's ``field`` (``child_frame_id`` of ``nav_msgs/Odometry``,
-    ``header.frame_id`` of ``geometry_msgs/TwistStamped``); a frame that is not a link of
-    the model (``base_footprint`` of a typical /odom), or empty, is ``odometry_link`` when that
-    is set. InputError (wrong_frame) naming ``field`` unless the link is the root link or
-    (fixed base) a link fixed to it.
+    ``header.frame_id`` of ``geometry_msgs/TwistStamped``): a link of the model, or exactly
+    ``odometry_frame`` (the frame a source writes that the URDF does not have, the
+    ``base_footprint`` of a typical /odom), which is ``odometry_link`` ('' = the root link);
+    empty is ``odometry_link`` too. Any other frame (a typo, another robot's odometry) is
+    InputError (wrong_frame) naming ``field``, as is a link other than the root link or (fixed
+    base) a link fixed to it.
     """
-    link = odometry_link if odometry_link and (not frame or frame not in model.frames) else frame
+    aliased = not frame or (odometry_frame and frame == odometry_frame)
+    link = odometry_link if aliased else frame
     root = model.body_names[1 if model.floating else 0]
-    if link and link != root and (model.floating or link not in model.frames
-                                  or model.frames[link].body != 0):
-        where = 'not a link of the model' if link not in model.frames else (
-            'a link that moves with a joint' if not model.floating else 'not the root link')
-        hint = ('' if odometry_link or link in model.frames else
-                '; set base_input.odometry_link to the link of the URDF this frame is')
+    if link and link not in model.frames:
+        known = (f', nor base_input.odometry_frame {odometry_frame!r}' if odometry_frame
+                 else '')
+        raise InputError('wrong_frame', f'{field} {frame!r} is not a link of the model{known}: '
+                         f"the twist must be the base's, in its frame {root!r}" + (
+                             '' if model.floating else ' or a link fixed to it') + (
+                             f'; if {frame!r} is the frame your odometry writes, set '
+                             f'base_input.odometry_frame to {frame!r} and '
+                             'base_input.odometry_link to the link of the URDF it is'))
+    if link and link != root and (model.floating or model.frames[link].body != 0):
+        where = 'a link that moves with a joint' if not model.floating else 'not the root link'
         raise InputError('wrong_frame', f'{field} {frame!r} is {where}: the twist must be the '
                          f"base's, in its frame {root!r}" + (
-                             '' if model.floating else ' or a link fixed to it') + hint)
+                             '' if model.floating else ' or a link fixed to it'))
     return link
 
 
@@ -231,7 +241,7 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
                           f'it: set the links of robot {model.name!r} that touch the ground '
                           '(feet, soles), e.g. contacts.links:=[FL_FOOT, FR_FOOT, HL_FOOT, '
                           f'HR_FOOT] ({source})')
-    link = params.base_input_odometry_link
+    link, frame = params.base_input_odometry_link, params.base_input_odometry_frame
     if link:
         if link not in model.frames:
             raise ConfigError(f'parameter base_input.odometry_link: {link!r} is not a link of '
@@ -240,6 +250,10 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
             twist_link(model, link, 'base_input.odometry_link')
         except InputError as err:
             raise ConfigError(f'parameter base_input.odometry_link: {err}') from None
+    if frame in model.frames:
+        raise ConfigError(f'parameter base_input.odometry_frame: {frame!r} is a link of robot '
+                          f'{model.name!r} ({source}), taken as itself: odometry_frame names '
+                          'a frame the URDF does not have (e.g. base_footprint)')
     off = observer_off(params)
     if params.wrench_estimate_link and off:
         raise ConfigError(f'parameter wrench_estimate.link: not supported with {off}')
@@ -396,11 +410,12 @@ class BaseInputs:
                     now_ns: int) -> None:
         """Check and hold the base's ``twist`` (a ``geometry_msgs/Twist``) in ``frame``.
 
-        ``field`` names where the message carries ``frame``. A frame that is not a link of
-        the model is ``base_input.odometry_link``'s when that is set.
+        ``field`` names where the message carries ``frame``: a link of the model, or
+        ``base_input.odometry_frame``, taken as ``base_input.odometry_link`` (:func:`twist_link`).
         """
         robot, params = config.robot, config.params
-        frame = twist_link(robot.base, frame, field, params.base_input_odometry_link)
+        frame = twist_link(robot.base, frame, field, params.base_input_odometry_link,
+                           params.base_input_odometry_frame)
         v = twist_array(twist)
         before = self.twist
         rate = None

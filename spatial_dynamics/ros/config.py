@@ -334,12 +334,16 @@ PARAMETERS = Table(NODE_NAME, [
         'base_input.imu_link in the URDF (e.g. "imu" or "imu_link_optical" for a link named '
         "otherwise): that frame is taken as base_input.imu_link's. '' = the link's own name. "
         'Live.')),
+    Param('base_input.odometry_frame', 'string', '', (
+        "The child_frame_id base/odometry's source writes (base/twist's header.frame_id) when "
+        'it is not a link of the URDF (a typical /odom has child_frame_id base_footprint): '
+        'exactly this frame is taken as base_input.odometry_link; any other frame that is not '
+        "a link of the URDF is refused (wrong_frame). '' = the frame must be a link of the "
+        'URDF (or empty, the root link). Live.')),
     Param('base_input.odometry_link', 'string', '', (
-        "The link of the URDF whose twist base/odometry's child_frame_id (base/twist's "
-        "header.frame_id) names, when that frame is not a link of the URDF (a typical /odom "
-        'has child_frame_id base_footprint): that frame is taken as this link (moving: the '
-        "root link or a link fixed to it; floating: the root link). '' = the frame must be a "
-        "link (or empty, the root link). As replay's --odometry-link. Live.")),
+        'The link of the URDF that base_input.odometry_frame is (moving: the root link or a '
+        "link fixed to it; floating: the root link); '' = the root link. A twist with an "
+        "empty frame is this link's too. As replay's --odometry-link. Live.")),
     Param('base_input.acceleration', 'string', 'difference', (
         'The base\'s acceleration with base/twist (moving, source twist; and floating, '
         'the desired base acceleration): "difference", the difference of successive '
