@@ -1053,3 +1053,66 @@ def test_odometry_on_source_imu_suggests_source_twist(demo_text):
     assert level == 'ERROR' and "base_input.source 'twist'" in text
     with pytest.raises(ConfigError, match="base_input.source 'twist'"):
         configured(robot_description=demo_text, base='moving')
+
+
+# -------------------------------------------------------------------------------------------
+# efforts above the URDF's limits are published, counted and said (issue 34)
+
+def urdf_effort_limits(text):
+    """Joint name -> ``<limit effort>`` of each joint of a URDF that gives one (the oracle)."""
+    import xml.etree.ElementTree as ET
+    return {joint.get('name'): float(joint.find('limit').get('effort'))
+            for joint in ET.fromstring(text).iter('joint')
+            if joint.find('limit') is not None and joint.find('limit').get('effort')}
+
+
+def test_an_answer_above_the_urdf_effort_limit_is_published_counted_and_said(demo_text):
+    """An IMU reading within its bounds gives 1e4 N m on an 87 N m joint: published, WARNed.
+
+    The limits are the URDF's, read here with an XML parser; the worst joint is the one of
+    the largest ``|τ| / limit``. Clamping stays opt-in (``clamp_to_effort_limits``); a
+    reading of gravity alone is within every limit and says nothing.
+    """
+    from spatial_dynamics.ros.diagnostics import feedforward_status
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    limits = urdf_effort_limits(demo_text)
+    limit = np.array([limits.get(joint, np.inf) for joint in robot.joints])
+    answering = Answering(Log())
+    q = np.full(n, 0.3)
+    msg = joint_state(robot.joints, 1.0, q, np.zeros(n), np.zeros(n))
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 9.81], [0, 0, 0]))
+    quiet = answering.joint_state(cfg, msg).answer
+    assert np.all(np.abs(quiet.tau) <= limit)
+    f, w = np.array([3999.0, 0.0, 3999.0]), np.array([99.0, 0.0, 99.0])
+    answering.base_input(cfg, 'base/imu', imu(1.0, f, w))
+    out = answering.joint_state(cfg, msg)
+    expected = sd.rnea(robot.model, q, np.zeros(n), np.zeros(n),
+                       base=sd.base_from_imu(robot.model, 'base_link', f, w))
+    np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)   # published
+    ratio = np.abs(expected) / limit
+    worst = int(np.argmax(ratio))
+    assert ratio[worst] > 10.0
+    window = answering.window
+    assert window.above_limit == 1
+    assert window.above_worst[1] == robot.joints[worst]
+    assert window.above_worst[3] == limit[worst]
+    said = [text for level, text in answering.log.said if level == 'warn']
+    assert len(said) == 1 and 'URDF limit' in said[0], said
+    assert f'{robot.joints[worst]!r} {expected[worst]:+.4g}' in said[0], said
+    assert f'limit {limit[worst]:g}' in said[0], said
+    window, _ = answering.period()
+    level, text, values = feedforward_status(robot, window, answering.totals, cfg.params, {},
+                                             answering.totals.last_input_ns)
+    values = dict(values)
+    assert 'above the URDF effort limit' in text and robot.joints[worst] in text, text
+    assert values['above effort limit'] == '1'
+    assert values['above effort limit worst'].startswith(f'{robot.joints[worst]}: ')
+    clamped = configured(robot_description=demo_text, base='moving', clamp_to_effort_limits=True,
+                         **{'base_input.imu_link': 'base_link'})
+    answering.base_input(clamped, 'base/imu', imu(1.0, f, w))
+    out = answering.joint_state(clamped, msg)
+    np.testing.assert_allclose(out.answer.tau, np.clip(expected, -limit, limit))
+    assert answering.window.above_limit == 0 and answering.totals.saturated == 1

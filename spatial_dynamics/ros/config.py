@@ -256,7 +256,8 @@ PARAMETERS = Table(NODE_NAME, [
         bounds=(1e-9, 1e3)),
     Param('clamp_to_effort_limits', 'bool', False, (
         'Clamp tau to the URDF <limit effort> (joints without a positive limit are left '
-        'alone); a throttled warning names the saturated joints.')),
+        'alone); a throttled warning names the saturated joints. Off: an answer above a '
+        'limit is published, counted in /diagnostics (above effort limit) and warned.')),
     Param('external_wrench_timeout', 'double', DEFAULT_WRENCH_TIMEOUT, (
         'Seconds after its receipt that an external_wrenches message stops applying.'),
         bounds=(1e-3, 3600.0)),
@@ -571,7 +572,19 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
                                              params.external_torque_warn),
         qp_missing=qp_missing,
         pull_tolerance=pull_tolerance(model) if base.floating else 0.0,
-        residual_tolerance=residual_tolerance(model) if base.floating else 0.0)
+        residual_tolerance=residual_tolerance(model) if base.floating else 0.0,
+        effort_limit=_effort_limit(model))
+
+
+def _effort_limit(model: 'sd.Model') -> np.ndarray:
+    """Return the URDF's effort limit of each actuated joint (a floating base's rows out).
+
+    ``inf`` where the URDF gives none (``<limit effort>`` absent or not positive), read-only.
+    """
+    limit = model.effort_limit[6:] if model.floating else model.effort_limit
+    limit = np.where(limit > 0.0, limit, np.inf)
+    limit.setflags(write=False)
+    return limit
 
 
 def _warm_qp(method: str) -> str:

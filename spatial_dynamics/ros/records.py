@@ -61,7 +61,9 @@ class Robot:
     base, ``qp_missing`` says why the contacts' QP cannot run (``''``: imported and warmed)
     ``pull_tolerance`` is the N by which a contact may pull
     (:func:`~.bases.pull_tolerance`) and ``residual_tolerance`` the base residual (N m, N) a
-    split may leave (:func:`~.bases.residual_tolerance`).
+    split may leave (:func:`~.bases.residual_tolerance`). ``effort_limit`` (n,) is the URDF's
+    ``<limit effort>`` of each of ``joints`` (the model's, in their order; ``inf`` where the
+    URDF gives none): an answer above it is reported (clamped only with ``clamp``).
     """
 
     urdf: str
@@ -82,6 +84,7 @@ class Robot:
     qp_missing: str = ''
     pull_tolerance: float = 0.0
     residual_tolerance: float = 0.0
+    effort_limit: Optional[np.ndarray] = None
 
 
 @dataclass(frozen=True)
