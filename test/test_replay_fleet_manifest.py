@@ -8,7 +8,9 @@ import sys
 
 import pytest
 
-from spatial_dynamics.fleet.manifest import ManifestError, NAME_RULE, read_manifest, robot_name
+from spatial_dynamics.fleet import command
+from spatial_dynamics.fleet.manifest import (LISTED_TWICE, ManifestError, NAME_RULE,
+                                             read_manifest, robot_name)
 
 sys.path.insert(0, os.path.dirname(__file__))
 from conftest import robot_urdf_path  # noqa: E402
@@ -150,3 +152,34 @@ def test_one_robot_in_two_rows_with_the_same_urdf_has_the_bags_of_both(tmp_path,
     got = bags_of(tmp_path, 'm.csv', f'robot,urdf,bag,topic\nr01,{urdf},a.db3,/a\n'
                   f'r01,copy.urdf,b.db3,/b\n')
     assert got == [('r01', 'a.db3'), ('r01', 'b.db3')]
+
+
+# -- one bag, whatever its paths -------------------------------------------------------------
+
+def test_a_bag_by_its_directory_its_db3_a_hard_link_and_a_symlink_is_one_bag(tmp_path, urdf):
+    bag = tmp_path / 'day01'
+    bag.mkdir()
+    (bag / 'metadata.yaml').write_text('rosbag2_bagfile_information: {}\n')
+    (bag / 'day01_0.db3').write_bytes(b'SQLite format 3\0')
+    os.link(bag / 'day01_0.db3', tmp_path / 'hard.db3')
+    os.symlink(bag / 'day01_0.db3', tmp_path / 'soft.db3')
+    (tmp_path / 'other.db3').write_bytes(b'SQLite format 3\0')      # the same bytes: a bag
+    path = tmp_path / 'm.csv'
+    path.write_text(f'robot,urdf,bag\nr01,{urdf},day01\nr01,{urdf},day01/day01_0.db3\n'
+                    f'r01,{urdf},hard.db3\nr01,{urdf},soft.db3\nr01,{urdf},other.db3\n')
+    tasks, notes, _ = command.tasks_of(str(path), None)
+    assert [os.path.basename(t.bag) for t in tasks] == ['day01', 'other.db3']
+    lines = command.noted(notes)
+    assert len(lines) == 1 and lines[0].startswith(f'note: {LISTED_TWICE} (3): ')
+    assert all(f'line {k}' in lines[0] for k in (3, 4, 5))
+
+
+def test_twenty_thousand_repeated_rows_are_one_note_line(tmp_path, urdf):
+    (tmp_path / 'a.db3').write_bytes(b'SQLite format 3\0')
+    path = tmp_path / 'm.csv'
+    path.write_text('robot,urdf,bag\n' + f'r01,{urdf},a.db3\n' * 20000)
+    tasks, notes, _ = command.tasks_of(str(path), None)
+    assert len(tasks) == 1 and len(notes) == 19999
+    lines = command.noted(notes)
+    assert len(lines) == 1 and lines[0].endswith(
+        f'; and {19999 - command.NOTE_EXAMPLES} more')

@@ -19,8 +19,8 @@ changed bags.
 
 Every (robot, joint, parameter) series is judged or listed as not judged with the reason
 (too few bags in the baseline or after it, no estimate: the joint did not move enough).
-A bag listed twice (overlapping globs, the same file by two paths) is counted once, said in
-a ``note:`` line; a bag that cannot be used is one ``failed:`` line naming its manifest row.
+A bag listed twice (overlapping globs, the same storage file by two paths) is counted
+once, said in a ``note:`` line (one per kind, with the count); a bag that cannot be used is one ``failed:`` line naming its manifest row.
 
 Exit status: 0 done, every series judged, nothing drifted; 3 done, something drifted
 (drift.txt names it); 4 done, nothing drifted among the series judged but some (or all)
@@ -45,7 +45,7 @@ from . import drift as drift_of
 from .chunks import CHUNK, merge, MIN_CHUNK, split
 from .engine import (Cache, local_cluster, pending_bytes, Progress, run_tasks, SERIAL_BYTES,
                      warm)
-from .manifest import ManifestError, read_manifest, scan_folder
+from .manifest import ManifestError, once, read_manifest, scan_folder
 from .sums import Sums, solve, total
 from .task import Task
 from ..replay.identify import PARAMETERS
@@ -158,29 +158,21 @@ def parser() -> argparse.ArgumentParser:
 
 
 def tasks_of(source: str, urdf: Optional[str]
-             ) -> Tuple[List[Task], List[str], List[Dict]]:
+             ) -> Tuple[List[Task], List[Tuple[str, str]], List[Dict]]:
     """Return the tasks of ``source`` (each bag once), the notes and the globs matching none.
 
-    A note says which bag was left out; a glob of the manifest that matches no bag is a
-    failed result naming its row (:func:`~.manifest.read_manifest`). A bag is the same bag
-    when its path resolves to the same file (overlapping globs, a link): it is counted once,
+    A note ``(kind, which)`` says which bag was left out; a glob of the manifest that
+    matches no bag is a failed result naming its row (:func:`~.manifest.read_manifest`). A
+    bag is the same bag when it shares a storage file with another (overlapping globs, a
+    link, a directory and its own ``.db3``: :func:`~.manifest.once`): it is counted once,
     under its first row.
     """
     if os.path.isdir(source):
         tasks, unmatched = scan_folder(source, urdf), []
     else:
         tasks, unmatched = read_manifest(source)
-    first: Dict[str, Task] = {}
-    once, notes = [], []
-    for t in tasks:
-        real = os.path.realpath(t.bag)
-        if real in first:
-            notes.append(f'note: {t.bag} ({t.where}) is listed twice, counted once '
-                         f'(as {first[real].bag} of {first[real].robot}, {first[real].where})')
-            continue
-        first[real] = t
-        once.append(t)
-    return once, notes, unmatched
+    tasks, notes = once(tasks)
+    return tasks, notes, unmatched
 
 
 def per_bag_rows(results: List[Dict]) -> List[Dict]:
@@ -382,7 +374,28 @@ def verdict(judgement: drift_of.Judgement) -> List[str]:
     return lines
 
 
-def report(args, results: List[Dict], notes: Sequence[str] = ()) -> int:
+#: How many examples a note of one kind shows (a manifest of 20 000 repeated rows is one line).
+NOTE_EXAMPLES = 3
+
+
+def noted(notes: Sequence[Tuple[str, str]]) -> List[str]:
+    """Return one ``note:`` line per kind of ``notes`` ``(kind, which)``: its count, examples.
+
+    ``note: bags listed twice, each counted once (2): A (row) is B of r01 (row); C ...``;
+    kinds in the order they first appear, at most :data:`NOTE_EXAMPLES` examples each.
+    """
+    kinds: Dict[str, List[str]] = {}
+    for kind, which in notes:
+        kinds.setdefault(kind, []).append(which)
+    lines = []
+    for kind, which in kinds.items():
+        more = len(which) - NOTE_EXAMPLES
+        lines.append(f'note: {kind} ({len(which)}): ' + '; '.join(which[:NOTE_EXAMPLES])
+                     + (f'; and {more} more' if more > 0 else ''))
+    return lines
+
+
+def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> int:
     """Write the files, print the verdict and the bags that failed; return the status."""
     rows = per_bag_rows(results)
     failed = [r for r in results if not r.get('ok')]
@@ -402,7 +415,7 @@ def report(args, results: List[Dict], notes: Sequence[str] = ()) -> int:
     cached = sum(1 for r in results if r.get('cached'))
     lines = [f'{len(results)} bags of {len({r["robot"] for r in results})} robots, '
              f'{hours:.3g} h of data ({cached} from the cache, {len(failed)} failed)']
-    lines += list(notes)
+    lines += noted(notes)
     lines += verdict(judgement)
     lines += [f'failed: {r["robot"]} {r["bag"]}'
               + (f' ({r["where"]})' if r.get('where') else '') + f': {r["reason"]}'

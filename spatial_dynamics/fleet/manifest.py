@@ -23,7 +23,7 @@ import filecmp
 import glob
 import io
 import os
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 import unicodedata
 
 import numpy as np
@@ -38,6 +38,8 @@ MANIFEST_LIMIT = 64 << 20
 BAG_SUFFIXES = ('.db3', '.mcap')
 #: Longest robot name (it names files: ``trend_ROBOT.png``).
 NAME_LIMIT = 64
+#: The note of a bag listed twice (:func:`once`).
+LISTED_TWICE = 'bags listed twice, each counted once'
 #: The per-robot options checked as ``replay``'s options of the same name are.
 CHECKED = {'window': window_s, 'threshold': velocity_threshold}
 
@@ -302,6 +304,47 @@ def read_manifest(path: str) -> Tuple[List[Task], List[Dict]]:
     if not tasks and not unmatched:
         raise ManifestError(f'manifest {path}: no bags')
     return tasks, unmatched
+
+
+def storage_identity(bag: str) -> frozenset:
+    """Return what makes a bag the same bag: its storage files' ``(st_dev, st_ino)``.
+
+    A bag directory's files whose name has ``.db3`` or ``.mcap`` (compressed ones too), or
+    the ``.db3``/``.mcap`` file itself, links followed: a directory and its own ``.db3``, a
+    hard link, a symbolic link and two spellings of a path are one bag. A path that cannot
+    be looked at is itself (its task then says what is wrong with it).
+    """
+    try:
+        if os.path.isdir(bag):
+            files = [os.path.join(bag, f) for f in sorted(os.listdir(bag))
+                     if any(s in f for s in BAG_SUFFIXES)]
+            files = [f for f in files if os.path.isfile(f)] or [bag]
+        else:
+            files = [bag]
+        return frozenset((st.st_dev, st.st_ino) for st in map(os.stat, files))
+    except (OSError, ValueError):
+        return frozenset([('path', os.path.realpath(bag))])
+
+
+def once(tasks: Sequence[Task]) -> Tuple[List[Task], List[Tuple[str, str]]]:
+    """Return each bag's first task and a note ``(kind, which)`` for each bag left out.
+
+    Bags are the same when they share a storage file (:func:`storage_identity`): the later
+    one is left out, whatever its robot (it is counted under its first row's).
+    """
+    first: Dict[object, Task] = {}
+    kept: List[Task] = []
+    notes: List[Tuple[str, str]] = []
+    for t in tasks:
+        ids = storage_identity(t.bag)
+        seen = next((first[i] for i in ids if i in first), None)
+        if seen is not None:
+            notes.append((LISTED_TWICE, f'{t.bag} ({t.where}) is {seen.bag} of {seen.robot} '
+                          f'({seen.where})'))
+            continue
+        first.update((i, t) for i in ids)
+        kept.append(t)
+    return kept, notes
 
 
 def _is_bag_dir(path: str) -> bool:
