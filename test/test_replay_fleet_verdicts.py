@@ -109,3 +109,22 @@ def test_a_joint_that_never_moved_is_not_judged_with_the_reason():
     got = detect(rows, 5.0)
     assert got.judged == 1 and not got.drifts
     assert 'did not move' in got.not_judged['r1', 'j1', 'friction']
+
+
+def test_a_robot_whose_bags_all_failed_is_not_judged_and_the_status_says_so(
+        worn_early, tmp_path, capsys):
+    folder = subset(worn_early, tmp_path / 'r01', ['r01'])
+    urdf = os.path.join(worn_early, 'r01', 'robot.urdf')
+    (tmp_path / 'junk.db3').write_bytes(b'not a bag')
+    path = tmp_path / 'm.csv'
+    path.write_text(f'robot,urdf,bag\nr01,{urdf},{folder}/r01/day*\n'
+                    f'r09,{urdf},{tmp_path}/gone.db3\nr09,{urdf},{tmp_path}/junk.db3\n')
+    status, out = run([str(path), '--out', str(tmp_path / 'o')], capsys)
+    assert len(lines(out, 'failed: r09')) == 2, out
+    assert lines(out, 'not judged: r09: ') == [
+        'not judged: r09: all 2 of its bags failed (see failed: below)'], out
+    assert 'no drift among the 18 series judged; 1 robot with no usable bag not judged' in out
+    assert status == command.NOT_JUDGED
+    # r01 alone, every series judged: the same verdict on it, and "no drift"
+    status, alone = run([folder, '--out', str(tmp_path / 'o1')], capsys)
+    assert status == 0 and 'no drift' in lines(alone, 'no drift')

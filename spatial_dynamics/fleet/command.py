@@ -18,14 +18,17 @@ cached by the content of the bag, the URDF and the options: a re-run does only n
 changed bags.
 
 Every (robot, joint, parameter) series is judged or listed as not judged with the reason
-(too few bags in the baseline or after it, no estimate: the joint did not move enough).
-A bag listed twice (overlapping globs, the same storage file by two paths) is counted
-once, said in a ``note:`` line (one per kind, with the count); a bag that cannot be used is one ``failed:`` line naming its manifest row.
+(too few bags in the baseline or after it, no estimate: the joint did not move enough), and
+so is every robot none of whose bags could be used. A bag listed twice (overlapping globs,
+the same storage file by two paths) is counted once, said in a ``note:`` line (one per
+kind, with the count); a bag that cannot be used is one ``failed:`` line naming its
+manifest row.
 
 Exit status: 0 done, every series judged, nothing drifted; 3 done, something drifted
 (drift.txt names it); 4 done, nothing drifted among the series judged but some (or all)
-could not be judged (drift.txt says which and why); 1 refused (no usable manifest, no bag
-usable); 2 bad usage. A failed bag does not change the status of the others' verdict.
+could not be judged, or a robot had no usable bag (drift.txt says which and why); 1 refused
+(no usable manifest, no bag usable); 2 bad usage. A failed bag alone does not change the
+status: the robot's other bags are judged; a robot left with none is not judged (4).
 """
 
 from __future__ import annotations
@@ -58,8 +61,8 @@ NOT_JUDGED = 4
 MAX_CHUNK = 366 * 86400.0
 #: What each exit status says, in every --help.
 EXIT_STATUS = ('Exit status: 0 every series judged, nothing drifted; 3 something drifted; '
-               '4 nothing drifted but some series not judged (drift.txt says why); 1 refused; '
-               '2 bad usage.')
+               '4 nothing drifted but some series or robots not judged (drift.txt says why); '
+               '1 refused; 2 bad usage.')
 COLUMNS = ['robot', 'bag', 'start', 'joint', 'parameter', 'value', 'sigma', 'rms_residual',
            'samples']
 
@@ -348,24 +351,37 @@ def _on_cluster(args, tasks, cache, progress, digests) -> List[Dict]:
         return run_tasks(tasks, cache, client, progress, digests)
 
 
-def verdict(judgement: drift_of.Judgement) -> List[str]:
+def count(n: int, noun: str) -> str:
+    """``1 robot``, ``2 robots``: ``n`` and ``noun``, plural unless ``n`` is 1."""
+    return f'{n} {noun}' + ('' if n == 1 else 's')
+
+
+def verdict(judgement: drift_of.Judgement, unusable: Optional[Dict[str, int]] = None
+            ) -> List[str]:
     """Return drift.txt's verdict lines: the drifts or no drift, and what was not judged.
 
-    "no drift" only when every series was judged; each series not judged is listed with the
-    reason (a joint's parameters with the same reason on one line).
+    "no drift" only when every series was judged and every robot had a usable bag; each
+    series not judged is listed with the reason (a joint's parameters with the same reason on
+    one line), and each robot of ``unusable`` (robot -> its bags, all failed) as not judged.
     """
+    unusable = unusable or {}
     lines = [f'drift: {d.text()}' for d in judgement.drifts]
     missing = len(judgement.not_judged)
     total_series = judgement.judged + missing
+    left = ([f'{missing} of {total_series} series not judged'] if missing else []) + (
+        [f'{count(len(unusable), "robot")} with no usable bag not judged'] if unusable else [])
     if not judgement.judged:
         lines.append(f'nothing judged: none of the {total_series} series (robot, joint, '
-                     'parameter) could be judged')
+                     'parameter) could be judged' if total_series else
+                     'nothing judged: no bag could be used')
     elif not lines:
-        lines.append('no drift' if not missing else
-                     f'no drift among the {judgement.judged} series judged; {missing} of '
-                     f'{total_series} not judged')
-    elif missing:
-        lines.append(f'{missing} of {total_series} series not judged')
+        lines.append('no drift' if not left else
+                     f'no drift among the {judgement.judged} series judged; ' + '; '.join(left))
+    elif left:
+        lines.append('; '.join(left))
+    lines += [f'not judged: {robot}: ' + (f'all {n} of its bags failed' if n > 1 else
+                                          'its one bag failed') + ' (see failed: below)'
+              for robot, n in sorted(unusable.items())]
     grouped: Dict[Tuple[str, str, str], List[str]] = {}
     for (robot, joint, parameter), reason in judgement.not_judged.items():
         grouped.setdefault((robot, joint, reason), []).append(drift_of.LABELS[parameter])
@@ -416,7 +432,12 @@ def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> 
     lines = [f'{len(results)} bags of {len({r["robot"] for r in results})} robots, '
              f'{hours:.3g} h of data ({cached} from the cache, {len(failed)} failed)']
     lines += noted(notes)
-    lines += verdict(judgement)
+    usable = {r['robot'] for r in results if r.get('ok')}
+    unusable: Dict[str, int] = {}
+    for r in failed:
+        if r['robot'] not in usable:
+            unusable[r['robot']] = unusable.get(r['robot'], 0) + 1
+    lines += verdict(judgement, unusable)
     lines += [f'failed: {r["robot"]} {r["bag"]}'
               + (f' ({r["where"]})' if r.get('where') else '') + f': {r["reason"]}'
               for r in failed]
@@ -427,7 +448,7 @@ def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> 
         written += plot_trends(args.out, rows, drifts,
                                os.path.join(args.cache or os.path.join(args.out, 'cache'),
                                             'plots'))
-    status = DRIFTED if drifts else NOT_JUDGED if judgement.not_judged else 0
+    status = DRIFTED if drifts else NOT_JUDGED if judgement.not_judged or unusable else 0
     if not rows:
         status = 1
     say(text + f'written to {args.out}: {", ".join(written)}')
