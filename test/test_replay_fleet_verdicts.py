@@ -128,3 +128,25 @@ def test_a_robot_whose_bags_all_failed_is_not_judged_and_the_status_says_so(
     # r01 alone, every series judged: the same verdict on it, and "no drift"
     status, alone = run([folder, '--out', str(tmp_path / 'o1')], capsys)
     assert status == 0 and 'no drift' in lines(alone, 'no drift')
+
+
+def test_a_still_bag_after_the_baseline_is_not_judged_as_still_not_as_missing():
+    values = [1.0, 1.01, 0.99, 1.0, 1.02, np.nan, np.nan]
+    rows = series('r1', 'j1', values, [0.01] * 5 + [np.nan] * 2)
+    reason = detect(rows, 5.0).not_judged['r1', 'j1', 'friction']
+    assert reason == ('no estimate after its first 5 days: none of its 2 bags after them '
+                      'gives one (the joint did not move enough to determine it)')
+    reason = detect(rows[:6], 5.0).not_judged['r1', 'j1', 'friction']
+    assert 'its one bag after them gives none' in reason
+    # and no bag at all after the baseline says that
+    assert detect(rows[:5], 5.0).not_judged['r1', 'j1', 'friction'] == (
+        'no estimate after its first 5 days (5 in all)')
+
+
+def test_a_count_of_one_is_singular():
+    rows = series('r1', 'j1', [1.0, np.nan], 0.01)
+    assert detect(rows[:1], 5.0).not_judged['r1', 'j1', 'friction'] == (
+        '1 estimate in its first 5 days; a baseline needs 3')
+    rows = series('r1', 'j1', [np.nan], np.nan)
+    assert detect(rows, 5.0).not_judged['r1', 'j1', 'friction'] == (
+        'no estimate in its one bag (the joint did not move enough to determine it)')

@@ -45,6 +45,7 @@ import numpy as np
 from ..files import check_output, read_regular, write_atomic
 from ..replay.arguments import one_line
 from . import drift as drift_of
+from .drift import count
 from .chunks import CHUNK, merge, MIN_CHUNK, split
 from .engine import (Cache, local_cluster, pending_bytes, Progress, run_tasks, SERIAL_BYTES,
                      warm)
@@ -351,11 +352,6 @@ def _on_cluster(args, tasks, cache, progress, digests) -> List[Dict]:
         return run_tasks(tasks, cache, client, progress, digests)
 
 
-def count(n: int, noun: str) -> str:
-    """``1 robot``, ``2 robots``: ``n`` and ``noun``, plural unless ``n`` is 1."""
-    return f'{n} {noun}' + ('' if n == 1 else 's')
-
-
 def verdict(judgement: drift_of.Judgement, unusable: Optional[Dict[str, int]] = None
             ) -> List[str]:
     """Return drift.txt's verdict lines: the drifts or no drift, and what was not judged.
@@ -429,7 +425,8 @@ def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> 
          for j, joint in enumerate(names) for k, p in enumerate(PARAMETERS)]), 'robots.csv')
     hours = sum(r['seconds'] for r in results if r.get('ok')) / 3600.0
     cached = sum(1 for r in results if r.get('cached'))
-    lines = [f'{len(results)} bags of {len({r["robot"] for r in results})} robots, '
+    n_robots = len({r['robot'] for r in results})
+    lines = [f'{count(len(results), "bag")} of {count(n_robots, "robot")}, '
              f'{hours:.3g} h of data ({cached} from the cache, {len(failed)} failed)']
     lines += noted(notes)
     usable = {r['robot'] for r in results if r.get('ok')}
