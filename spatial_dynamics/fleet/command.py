@@ -180,7 +180,12 @@ def tasks_of(source: str, urdf: Optional[str]
 
 
 def per_bag_rows(results: List[Dict]) -> List[Dict]:
-    """Return fleet.csv's rows: each bag's fit from its own sums."""
+    """Return fleet.csv's rows: each bag's fit from its own sums.
+
+    A bag's date (``start_s``, the trend's time axis) is when its first message was
+    recorded (the storage's bag time), not its ``header.stamp``: the stamps may run on
+    another clock (a simulation's, restarting at 0 in every bag).
+    """
     rows = []
     for r in results:
         if not r.get('ok'):
@@ -188,7 +193,7 @@ def per_bag_rows(results: List[Dict]) -> List[Dict]:
         fit = solve(Sums.from_dict(r['sums']), r['joints'])
         for j, joint in enumerate(r['joints']):
             for k, parameter in enumerate(PARAMETERS):
-                rows.append({'robot': r['robot'], 'bag': r['bag'], 'start_s': r['start'],
+                rows.append({'robot': r['robot'], 'bag': r['bag'], 'start_s': r['recorded'],
                              'joint': joint, 'parameter': parameter,
                              'value': float(getattr(fit, parameter)[j]),
                              'sigma': float(fit.sigma[j, k]),
@@ -205,7 +210,7 @@ def per_robot(results: List[Dict]) -> Dict[str, object]:
             by_robot.setdefault(r['robot'], []).append(r)
     out = {}
     for robot, rs in by_robot.items():
-        rs = sorted(rs, key=lambda r: (r['start'], r['bag']))
+        rs = sorted(rs, key=lambda r: (r['recorded'], r['bag']))
         names = rs[0]['joints']
         same = [r for r in rs if r['joints'] == names]
         out[robot] = (names, solve(total(Sums.from_dict(r['sums']) for r in same), names),
@@ -386,6 +391,11 @@ def verdict(judgement: drift_of.Judgement, unusable: Optional[Dict[str, int]] = 
     return lines
 
 
+#: The earliest bag time taken for a wall-clock date without a note (2000-01-01).
+PLAUSIBLE = 946684800.0
+#: The note of a bag whose bag time is before :data:`PLAUSIBLE`.
+EARLY = ('bags recorded before 2000 (recorded on a simulated clock?), dated and ordered by '
+         'that time')
 #: How many examples a note of one kind shows (a manifest of 20 000 repeated rows is one line).
 NOTE_EXAMPLES = 3
 
@@ -428,7 +438,9 @@ def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> 
     n_robots = len({r['robot'] for r in results})
     lines = [f'{count(len(results), "bag")} of {count(n_robots, "robot")}, '
              f'{hours:.3g} h of data ({cached} from the cache, {len(failed)} failed)']
-    lines += noted(notes)
+    lines += noted(list(notes) + [
+        (EARLY, f'{r["robot"]} {r["bag"]} on {drift_of.day(r["recorded"])}') for r in results
+        if r.get('ok') and r['recorded'] < PLAUSIBLE])
     usable = {r['robot'] for r in results if r.get('ok')}
     unusable: Dict[str, int] = {}
     for r in failed:
