@@ -38,7 +38,7 @@ def dates(out):
         return sorted({(os.path.basename(r['bag']), r['start']) for r in csv.DictReader(f)})
 
 
-def on_sim_clock(src, dst, start_s=5.0, recorder_too=False):
+def on_sim_clock(src, dst, start_s=5.0, recorder_too=False, storage='sqlite3'):
     """Copy bag ``src`` to ``dst`` with header stamps from ``start_s`` (a simulation's clock).
 
     The bag times (when each message was recorded) stay the wall clock's, unless
@@ -53,8 +53,8 @@ def on_sim_clock(src, dst, start_s=5.0, recorder_too=False):
     stamp = np.round((js.stamp - js.stamp[0] + start_s) * 1e9).astype(np.int64)
     block = bags.encode_joint_states(js.names, stamp, js.position, js.velocity, js.effort)
     received = stamp if recorder_too else received
-    bags.write_bag(dst, 'sqlite3', [('/joint_states', bags.JOINT_STATE, received,
-                                     [x.tobytes() for x in block])])
+    bags.write_bag(dst, storage, [('/joint_states', bags.JOINT_STATE, received,
+                                   [x.tobytes() for x in block])])
 
 
 def _names(bag):
@@ -101,3 +101,32 @@ def test_a_bag_recorded_on_a_simulated_clock_is_dated_by_it_and_said(worn, tmp_p
     notes = [line for line in out.splitlines() if line.startswith('note:')]
     assert notes == [f'note: {command.EARLY} (1): r01 {folder}/r01/day03 on 1970-01-01'], out
     assert ('day03', '1970-01-01T00:00:05+00:00') in dates(tmp_path / 'o')
+
+
+def damaged(folder):
+    """Overwrite 4000 bytes a third into the MCAP file of bag ``folder``; return its path."""
+    path = os.path.join(folder, [f for f in os.listdir(folder) if f.endswith('.mcap')][0])
+    with open(path, 'r+b') as f:
+        f.seek(os.path.getsize(path) // 3)
+        f.write(b'\xff' * 4000)
+    return path
+
+
+def test_a_damaged_mcap_is_refused_saying_how_much_of_it_could_be_read(worn, tmp_path, capsys):
+    source = os.path.join(worn, 'r01', 'day01')
+    listed = len(bags.read_joint_states(source, '/joint_states', _names(source)).stamp)
+    folder = copy(worn, tmp_path / 'f', [])
+    bag = folder / 'r01' / 'day11'
+    on_sim_clock(source, bag, storage='mcap')
+    whole = bags.read_joint_states(str(bag), '/joint_states', _names(source))
+    assert len(whole.stamp) == listed              # read whole before the damage
+    mcap = damaged(bag)
+    for path in (str(bag), mcap):                  # metadata.yaml's count, the MCAP summary's
+        with pytest.raises(bags.BagError) as err:
+            bags.read_joint_states(path, '/joint_states', _names(source))
+        assert f'of the {listed} messages of /joint_states' in str(err.value)
+        assert 'damaged' in str(err.value)
+    status, out = run([folder, '--out', tmp_path / 'o'], capsys)
+    failed = [line for line in out.splitlines() if line.startswith('failed:')]
+    assert len(failed) == 1 and 'day11' in failed[0] and f'of the {listed} messages' in failed[0]
+    assert '(0 from the cache, 1 failed)' in out

@@ -419,31 +419,53 @@ def read_joint_states(path: str, topic: str, names: Sequence[str], fast: bool = 
     """Read a JointState topic of a bag into arrays in the order of ``names``.
 
     ``fast=False`` reads through ``rosbags`` alone (its readers and deserialiser).
-    ``progress(done, total)`` is called after each batch.
+    ``progress(done, total)`` is called after each batch. A bag from which fewer messages
+    of the topic could be read than its metadata lists (metadata.yaml, or an MCAP file's
+    summary statistics) is refused (:func:`check_complete`).
     """
     if fast:
         # An uncompressed sqlite3 bag is read without opening it in rosbags, which counts
         # every topic's messages and their time range first (1.7 s for an hour at 1 kHz).
         staged, stage = _stage(path)
         try:
-            files, total = _sqlite_bag(staged, topic)
+            files, listed = _sqlite_bag(staged, topic)
             if files is not None:
-                found, total = _sqlite_topics(files, total)
+                found, total = _sqlite_topics(files, listed)
                 check_topic(found, topic, JOINT_STATE)
-                return decode_joint_states(_sqlite_batches(files, topic), names, fast,
-                                           progress and (lambda k: progress(k, total)), total)
+                return check_complete(
+                    decode_joint_states(_sqlite_batches(files, topic), names, fast,
+                                        progress and (lambda k: progress(k, total)), total),
+                    listed, path, topic)
         finally:
             shutil.rmtree(stage, ignore_errors=True)
     reader = open_reader(path)
     try:
-        total = topics(reader).get(topic, ('', 0))[1]      # metadata.yaml's, for a bag dir
+        listed = total = topics(reader).get(topic, ('', 0))[1]   # metadata.yaml's, MCAP's
         paths = storage_files(reader)[1]
         if paths:       # only a size hint: capped by the files' size (16 bytes a message)
             total = min(total, sum(os.path.getsize(p) for p in paths) // 16)
-        return decode_joint_states(raw_batches(reader, topic, JOINT_STATE, fast), names, fast,
-                                   progress and (lambda k: progress(k, total)), total)
+        return check_complete(
+            decode_joint_states(raw_batches(reader, topic, JOINT_STATE, fast), names, fast,
+                                progress and (lambda k: progress(k, total)), total),
+            listed, path, topic)
     finally:
         reader.close()
+
+
+def check_complete(js: JointStates, listed: int, path: str, topic: str) -> JointStates:
+    """Return ``js`` if every message the bag lists for ``topic`` was read; else refuse it.
+
+    ``listed``: the topic's message count in the bag's metadata (metadata.yaml, or the MCAP
+    summary's statistics; 0: not known). A damaged storage file (a corrupt or cut MCAP
+    chunk) ends the reading early without an error: fewer messages read (decoded or
+    skipped) than listed is a :class:`BagError` saying how many, not a partial fit.
+    """
+    read = len(js.stamp) + sum(js.skipped.values())
+    if read < listed:
+        raise BagError(f'{path}: {read} of the {listed} messages of {topic} its metadata lists '
+                       'could be read: the storage file is damaged or cut short (ros2 bag '
+                       'reindex, or mcap recover, may repair it)')
+    return js
 
 
 def read_stamped(path: str, topic: str, msgtype: str, start: Optional[int] = None,
