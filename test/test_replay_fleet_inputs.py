@@ -207,8 +207,9 @@ def test_a_bag_listed_twice_is_counted_once_and_said(small, tmp_path, capsys):
     status, text, _ = run([path, '--out', tmp_path / 'o'], capsys)
     rows = table(tmp_path / 'o')
     assert len(rows) == 2 * 6 * 3            # two bags, six joints, three parameters
-    assert text.startswith('2 bags of 1 robots')
-    assert len([line for line in text.splitlines() if 'listed twice' in line]) == 2
+    assert text.startswith('2 bags of 1 robot,')
+    twice = [line for line in text.splitlines() if 'listed twice' in line]
+    assert len(twice) == 1 and '(2): ' in twice[0]       # one line per kind, with its count
 
 
 # -- options ---------------------------------------------------------------------------------
