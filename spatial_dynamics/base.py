@@ -203,7 +203,8 @@ def base_from_imu(model: Model, link: str, specific_force, angular_velocity,
             and filtered; an IMU does not give it, zero by default.
         position, orientation: the IMU's pose in ``link``'s frame (m; quaternion x y z w
             or rotation matrix mapping IMU to link coordinates, held to
-            :class:`BaseMotion`'s tolerances), as in the URDF joint or TF of the sensor.
+            :class:`BaseMotion`'s tolerances), as in the URDF joint or TF of the sensor;
+            (..., 3) and (..., 4) or (..., 3, 3), batched like the readings.
 
     Returns:
         ``BaseMotion(v=[ω; 0], a=[ω̇; r̈_0 - g], gravity_included=True)`` in base
@@ -215,10 +216,12 @@ def base_from_imu(model: Model, link: str, specific_force, angular_velocity,
     E_lb, r_l = plux_Er(frame.lXb)          # lXb: E rotates base -> link, r the link origin
     R_ls = _rotation(orientation, 'base_from_imu: orientation')
     p_l = as_real_array('base_from_imu: position', position).astype(float)
-    if p_l.shape != (3,):
-        raise ValueError(f'base_from_imu: position must be 3 numbers (m), got shape {p_l.shape}')
-    R_bs = E_lb.T @ R_ls                    # IMU -> base coordinates
-    r = r_l + E_lb.T @ p_l                  # the IMU's position in base coordinates
+    if p_l.ndim == 0 or p_l.shape[-1] != 3:
+        raise ValueError('base_from_imu: position must have shape (..., 3) (m), got shape '
+                         f'{p_l.shape}')
+    _finite('base_from_imu: position', p_l)
+    R_bs = E_lb.T @ R_ls                    # IMU -> base coordinates, (..., 3, 3)
+    r = r_l + p_l @ E_lb                    # the IMU's position in base coordinates: E_lbᵀ p
     vectors = []
     for what, x in (('specific_force', specific_force),
                     ('angular_velocity', angular_velocity),
@@ -227,8 +230,16 @@ def base_from_imu(model: Model, link: str, specific_force, angular_velocity,
         if x.ndim == 0 or x.shape[-1] != 3:
             raise ValueError(f'base_from_imu: {what} must have shape (..., 3), got {x.shape}')
         _finite(f'base_from_imu: {what}', x)
-        vectors.append(x @ R_bs.T)
-    f_s, w, wd = np.broadcast_arrays(*vectors)
+        vectors.append(x)
+    try:
+        np.broadcast_shapes(*(x.shape[:-1] for x in vectors), R_bs.shape[:-2], r.shape[:-1])
+    except ValueError:
+        raise ValueError('base_from_imu: the batch shapes of specific_force '
+                         f'{vectors[0].shape}, angular_velocity {vectors[1].shape}, '
+                         f'angular_acceleration {vectors[2].shape}, orientation '
+                         f'{R_ls.shape[:-2]} and position {p_l.shape} do not broadcast') from None
+    f_s, w, wd = np.broadcast_arrays(*(np.einsum('...ij,...j->...i', R_bs, x) for x in vectors))
+    f_s, w, wd, r = np.broadcast_arrays(f_s, w, wd, r)
     f_0 = f_s - np.cross(wd, r) - np.cross(w, np.cross(w, r))    # r̈_0 - g, base frame
     return BaseMotion(np.concatenate([w, np.zeros_like(w)], -1),
                       np.concatenate([wd, f_0], -1), gravity_included=True)
@@ -259,6 +270,7 @@ def base_from_odometry(model: Model, twist, twist_rate, orientation=None,
         if x.ndim == 0 or x.shape[-1] != 6:
             raise ValueError(f'base_from_odometry: {what} must have shape (..., 6) '
                              f'([angular; linear]), got {x.shape}')
+        _finite(f'base_from_odometry: {what}', x)
     if orientation is not None:
         E_lb, _ = plux_Er(frame.lXb)
         R_wb = _rotation(orientation, 'base_from_odometry: orientation') @ E_lb
@@ -315,11 +327,21 @@ def floating_twin(model: Model) -> Model:
 _ORIGIN = np.zeros(3)
 
 
-def check_base_motion(base) -> None:
-    """Raise ``TypeError`` naming what ``base`` is, unless it is a :class:`BaseMotion`."""
+def check_base_motion(base, model: Optional[Model] = None) -> None:
+    """Refuse a ``base=`` that no function taking it can use.
+
+    ``TypeError`` naming what ``base`` is, unless it is a :class:`BaseMotion`; with
+    ``model``, ``ValueError`` when ``model`` has a floating base already (its base's motion
+    is its free-flyer's ``q``, ``q̇``, ``q̈``): every public function taking ``base=`` calls
+    this, so none answers a floating model's base twice.
+    """
     if not isinstance(base, BaseMotion):
         raise TypeError("base must be a spatial_dynamics.BaseMotion (the base's v, a and "
                         f'orientation), got {type(base).__name__}')
+    if model is not None and model.floating:
+        raise ValueError(f'base=: {model.name!r} has a floating base already, whose motion '
+                         "is its free-flyer's q, q̇ and q̈: load it with base='fixed' to "
+                         'give a base motion')
 
 
 def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=None):
@@ -328,7 +350,7 @@ def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=Non
     ``q̇``/``q̈`` ``None`` are zero; arrays broadcast against the base's batch. ``gravity``
     becomes zero when the base's ``a`` includes it.
     """
-    check_base_motion(base)
+    check_base_motion(base, model)
     from .algorithms.arguments import as_joint_arrays
     zero = np.zeros(model.nv)
     q, qd, qdd = as_joint_arrays(model, q, zero if qd is None else qd,

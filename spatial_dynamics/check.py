@@ -26,7 +26,7 @@ import numpy as np
 
 from . import mass_matrix, Model, urdf, URDFWarning
 from .bounds import MAX_POSITION
-from .joints import KIND_NAMES
+from .joints import FREE_FLYER, KIND_NAMES
 
 WIDTH = 99
 
@@ -100,39 +100,135 @@ def body_lines(model: Model) -> List[str]:
     rows = []
     for i in range(model.NB + 1):
         label = 'pruned (fixed to the base): ' if i == 0 else 'lumped: '
-        rows.append(([str(i), model.body_names[i], model.body_joints[i] or '(fixed base)',
+        base = '(the world)' if model.floating else '(fixed base)'
+        rows.append(([str(i), model.body_names[i], model.body_joints[i] or base,
                       '-' if i == 0 else str(int(model.parent[i])), num(model.inertia[i][3, 3])],
                      wrapped(label, links[i], 8) if links[i] else []))
     return table(('body', 'link', 'joint', 'parent', 'mass (kg)'), rows, left=(1, 2))
 
 
-def singular_base(model: Model) -> List[str]:
-    """Return a warning when a floating ``model``'s mass matrix is singular, else nothing.
+#: An eigenvalue of ``M`` at most this fraction of its largest counts as zero (rank lost).
+#: Rounding leaves ~1e-16 of the largest; the robots of example-robot-data whose every joint
+#: moves some inertia have 1e-8 (Tiago) or more, those with a joint that moves none
+#: (iCub, Romeo) 1e-17 or less.
+RANK_TOLERANCE = 1e-12
+#: Largest ``nv`` whose ``M`` is checked for rank (an eigendecomposition is O(nv³)).
+RANK_CHECK_LIMIT = 1000
+#: Seeded random configurations ``M``'s rank is checked at besides the neutral one.
+RANK_SAMPLES = 2
 
-    The base rows of ``M`` at the neutral configuration are the whole robot's spatial inertia
-    about its base (RBDA §6.2's composite ``I^c_1``): without mass, or with its mass on a line
-    and no rotational inertia, no wrench on the base gives it an acceleration, and ``M``, the
-    contact split and the forward dynamics have no answer.
+
+def velocity_names(model: Model) -> List[str]:
+    """Name each velocity coordinate: its joint, or ``'root_joint ωz'`` for a free-flyer's."""
+    names = [''] * model.nv
+    joints = set(model.joint_names)
+    for i in range(1, model.NB + 1):
+        joint, kv = model.body_joints[i], int(model.vidx[i])
+        if joint not in joints:         # a mimic joint: its source's coordinate
+            continue
+        if int(model.jtype[i]) == FREE_FLYER:
+            names[kv:kv + 6] = [f'{joint} {c}' for c in ('ωx', 'ωy', 'ωz', 'vx', 'vy', 'vz')]
+        else:
+            names[kv] = joint
+    return names
+
+
+def configurations(model: Model, samples: int = RANK_SAMPLES) -> List[np.ndarray]:
+    """Return the neutral ``q`` and ``samples`` seeded random ones within the joints' limits.
+
+    A joint without finite limits is drawn in ``[-π, π]``, a free-flyer's orientation
+    uniformly (its position stays 0: ``M`` does not depend on it).
     """
-    if not model.floating:
+    rng = np.random.default_rng(0)
+    neutral = np.zeros(model.nq)
+    for _, k in model.free_flyers:
+        neutral[k + 6] = 1.0
+    out = [neutral]
+    joints = set(model.joint_names)
+    for _ in range(samples):
+        q = neutral.copy()
+        for i in range(1, model.NB + 1):
+            if model.body_joints[i] not in joints:
+                continue
+            k, kv = int(model.qidx[i]), int(model.vidx[i])
+            if int(model.jtype[i]) == FREE_FLYER:
+                u = rng.normal(size=4)
+                q[k + 3:k + 7] = u / np.linalg.norm(u)
+                continue
+            lo, hi = model.lower[kv], model.upper[kv]
+            finite = np.isfinite(lo) and np.isfinite(hi) and lo <= hi
+            q[k] = rng.uniform(lo, hi) if finite else rng.uniform(-np.pi, np.pi)
+        out.append(q)
+    return out
+
+
+def singular_mass_matrix(model: Model) -> List[str]:
+    """Return a warning when ``model``'s mass matrix ``M`` is singular, else nothing.
+
+    ``M`` (RBDA §6.2) at the neutral configuration and at :data:`RANK_SAMPLES` seeded random
+    ones (:func:`configurations`) is singular when its smallest eigenvalue is at most
+    :data:`RANK_TOLERANCE` of its largest: some motion ``q̇`` moves no inertia (a joint whose
+    links have no inertia about its axis; a floating tree without mass, or whose base yaw
+    and a joint turn the same inertia), so no torque accelerates it and forward dynamics
+    (the simulator), the contact split and a floating base's dynamics have no answer;
+    inverse dynamics still does. The warning names the coordinates of the lost motions
+    (their weight in the null space of ``M``, the largest first). A model of more than
+    :data:`RANK_CHECK_LIMIT` coordinates is not judged, and says so.
+    """
+    if model.nv == 0:
         return []
-    q = np.zeros(model.nq)
-    q[6] = 1.0
-    Ic = mass_matrix(model, q, backend='numpy')[:6, :6]
-    eig = np.linalg.eigvalsh(Ic)
-    if eig[-1] <= 0.0:
-        return ['the tree has no mass: on the free-flyer its mass matrix M is singular (no '
-                "wrench moves the base); give the links <inertial>, or load it with "
-                "base='fixed'"]
-    if eig[0] <= 1e-12 * eig[-1]:
-        return [f'the whole robot\'s spatial inertia about its base has rank '
-                f'{int(np.sum(eig > 1e-12 * eig[-1]))} of 6: on the free-flyer its mass '
-                'matrix M is singular; give the links <inertial> with rotational inertia']
+    if model.nv > RANK_CHECK_LIMIT:
+        return [f'the rank of the mass matrix M was not checked: {model.nv} coordinates, '
+                f'above the {RANK_CHECK_LIMIT} an eigendecomposition is run for']
+    qs = configurations(model)
+    where = ['the neutral configuration'] + ['a seeded random configuration'] * RANK_SAMPLES
+    for q, at in zip(qs, where):
+        M = mass_matrix(model, q)
+        lam, V = np.linalg.eigh(0.5 * (M + M.T))
+        if lam[-1] <= 0.0:
+            if model.floating:
+                return ['the tree has no mass: on the free-flyer its mass matrix M is '
+                        'singular (no wrench moves the base); give the links <inertial>, or '
+                        "load it with base='fixed'"]
+            return ['no joint moves any mass: the mass matrix M is zero (no torque '
+                    'accelerates a joint); give the links <inertial>']
+        lost = lam <= RANK_TOLERANCE * lam[-1]
+        if lost.any():
+            return [lost_motions(model, lam, V[:, lost], at)]
     return []
 
 
-def report(model: Model, types: Dict[str, str]) -> str:
-    """Return the whole check as text: robot, joints, bodies, mass and warnings."""
+def lost_motions(model: Model, lam: np.ndarray, null: np.ndarray, at: str) -> str:
+    """Describe a singular ``M``: its rank and the coordinates of the motions it loses."""
+    names = velocity_names(model)
+    weight = np.sum(null ** 2, axis=1)      # diagonal of the null space's projector
+    order = [int(k) for k in np.argsort(-weight, kind='stable') if weight[k] >= 1e-2]
+    shown = ', '.join(names[k] for k in order[:8]) + (
+        f' and {len(order) - 8} more' if len(order) > 8 else '')
+    if null.shape[1] == 1:
+        v = null[:, 0] * np.sign(null[order[0], 0])
+        motion = ' + '.join(f'{v[k]:.2g} {names[k]}' for k in order[:8]).replace('+ -', '- ')
+        lost = f'the motion {motion} moves no inertia, so no torque accelerates it'
+    else:
+        lost = (f'{null.shape[1]} motions of {shown} move no inertia, so no torque '
+                'accelerates them')
+    return (f'the mass matrix M is singular at {at} (rank {model.nv - null.shape[1]} of '
+            f'{model.nv}; eigenvalues {lam[0]:.3g} to {lam[-1]:.3g}, below '
+            f'{RANK_TOLERANCE:g} of the largest counted as zero): {lost} and forward '
+            'dynamics and a contact split have no answer; give '
+            'the links these joints move <inertial> with inertia about their axes')
+
+
+def warnings_of(model: Model) -> List[str]:
+    """Return every warning of the check: the model's and a singular mass matrix's."""
+    return list(model.warnings) + singular_mass_matrix(model)
+
+
+def report(model: Model, types: Dict[str, str], said: Optional[List[str]] = None) -> str:
+    """Return the whole check as text: robot, joints, bodies, mass and warnings.
+
+    ``said``: the warnings (:func:`warnings_of`) when they were computed already.
+    """
     base = (f'floating base (link {model.body_names[1]!r} on the free-flyer joint '
             f'{model.joint_names[0]!r}: q has {model.nq} numbers, position and quaternion x y z '
             f'w first, q̇ {model.nv}, the base twist [ω; v] first), '
@@ -148,13 +244,19 @@ def report(model: Model, types: Dict[str, str]) -> str:
         lines += wrapped('locked by model reduction: ',
                          [f'{j}={num(model.locked[j])}' for j in types if j in model.locked],
                          2)
-    lines += ['', f'bodies after lumping fixed joints ({model.NB} moving + the fixed base):']
+    lines += ['', f'bodies after lumping fixed joints ({model.NB} moving + '
+              f'{"the world" if model.floating else "the fixed base"}):']
     lines += body_lines(model)
     mass = model.inertia[:, 3, 3]
-    lines += ['', f'total mass: {num(float(np.sum(mass)))} kg '
-              f'({num(float(mass[0]))} kg on the fixed base, {num(float(np.sum(mass[1:])))} kg '
-              'moving)', '']
-    said = list(model.warnings) + singular_base(model)
+    if model.floating:      # body 0 is the world: body 1 (the root link) moves on the base
+        share = (f'{num(float(mass[1]))} kg on the root link {model.body_names[1]!r} (on the '
+                 f'free-flyer), {num(float(np.sum(mass[2:])))} kg on the links beyond it')
+    else:
+        share = (f'{num(float(mass[0]))} kg on the fixed base, '
+                 f'{num(float(np.sum(mass[1:])))} kg moving')
+    lines += ['', f'total mass: {num(float(np.sum(mass)))} kg ({share})', '']
+    if said is None:
+        said = warnings_of(model)
     if said:
         lines.append(f'warnings ({len(said)}):')
         for w in said:
@@ -207,10 +309,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except ValueError as err:
         print(f'error: {err}', file=sys.stderr)
         return 1
-    print(report(model, model.joint_types))
-    said = len(model.warnings) + len(singular_base(model))
+    said = warnings_of(model)
+    print(report(model, model.joint_types, said))
     if args.strict and said:
-        print(f'error: {said} warning(s) with --strict', file=sys.stderr)
+        print(f'error: {len(said)} warning(s) with --strict', file=sys.stderr)
         return 1
     return 0
 

@@ -22,6 +22,10 @@ is formed. Three ways to split it (:func:`contact_inverse_dynamics`):
   minimise ``½ τᵀ W τ + ½ ε |λ|²`` subject to all the rows of the equation and, per contact,
   ``n·f ≥ 0`` (unilateral, whatever ``μ``) and ``|f_t| ≤ μ f_n``; infeasible problems are
   reported, never answered with a base torque. :func:`warm_qp` imports the solver ahead.
+  The problem is scaled so that every coefficient is at most 1 whatever the numbers: the
+  weights over their largest, and a cone of ``μ > 1`` written ``|f_t| / μ ≤ f_n``; every
+  finite ``μ ≥ 0`` and positive weight is solved (``test_core_contacts.py``: μ 0 to 1e300,
+  weights 1e-300 to 1e300).
 
 Every answer says the base rows' residual (never a silent base torque) and which contacts
 violate their friction cone or pull on the ground, by how much (:class:`ContactResult`).
@@ -36,6 +40,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
+import numbers
 import weakref
 from typing import Mapping, Optional, Sequence
 
@@ -47,6 +52,8 @@ from .algorithms.jacobian import PLACEMENT
 from .algorithms.rnea import xup_kernel
 from .algorithms.split import DEPENDENT, RANK_TOLERANCE
 from .backends import compiled, GRAVITY, kernels, layout, rnea
+from .bounds import (beyond, check_bounded, MAX_ACCELERATION, MAX_GRAVITY, MAX_POSITION,
+                     MAX_VELOCITY, MAX_WRENCH)
 from .joints import FREE_FLYER, REVOLUTE
 from .model import Model
 
@@ -61,7 +68,8 @@ class Contact:
 
     Attributes:
         link: a link of the model (lumped links too), by URDF name.
-        offset: the contact point in the link's frame (m).
+        offset: the contact point in the link's frame (m), within
+            ±:data:`~spatial_dynamics.bounds.MAX_POSITION`.
         kind: ``'point'`` (a force, 3 rows) or ``'surface'`` (a wrench, 6 rows).
         normal: the contact normal in world axes, pointing into the robot (up for a floor).
         mu: Coulomb friction coefficient (the cone's half-angle is ``atan(μ)``).
@@ -81,14 +89,17 @@ class Contact:
                              f'got {self.kind!r}')
         offset = as_real_array(f'contact {self.link!r} offset', self.offset).astype(float)
         normal = as_real_array(f'contact {self.link!r} normal', self.normal).astype(float)
-        if offset.shape != (3,) or not np.isfinite(offset).all():
-            raise ValueError(f'contact {self.link!r}: offset must be 3 finite numbers (m), '
-                             f'got {self.offset}')
+        if offset.shape != (3,) or beyond(offset, MAX_POSITION).size:
+            raise ValueError(f'contact {self.link!r}: offset must be 3 finite numbers within '
+                             f'±{MAX_POSITION:g} m (bounds.MAX_POSITION), got {self.offset}')
         if normal.shape != (3,) or not (np.isfinite(normal).all()
                                         and np.abs(normal).max() > 0.0):
             raise ValueError(f'contact {self.name or self.link!r}: normal must be a finite '
                              f'non-zero 3-vector, got {self.normal}')
-        if not (np.isfinite(self.mu) and self.mu >= 0.0):
+        if isinstance(self.mu, (bool, np.bool_)) or not isinstance(self.mu, numbers.Real):
+            raise TypeError(f'contact {self.link!r}: mu must be a number (the friction '
+                            f'coefficient), got {type(self.mu).__name__} {self.mu!r}')
+        if not (math.isfinite(self.mu) and self.mu >= 0.0):
             raise ValueError(f'contact {self.link!r}: mu must be a finite number >= 0, '
                              f'got {self.mu}')
         normal = normal / np.abs(normal).max()          # scaled first: 1e200 and 1e-320
@@ -98,6 +109,7 @@ class Contact:
         object.__setattr__(self, 'offset', offset)
         object.__setattr__(self, 'normal', normal)
         object.__setattr__(self, 'name', self.name or self.link)
+        object.__setattr__(self, 'mu', float(self.mu))
 
     @property
     def rows(self) -> int:
@@ -447,12 +459,14 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         q, qd, qdd: one state (nq,), (nv,), (nv,): the desired base and joint accelerations.
         contacts: the :class:`Contact` s in force.
         measured: contact name -> measured force (3,) or wrench (6,) (world axes, at the
-            contact point) for every contact: τ directly, the base rows as a check.
+            contact point) for every contact: τ directly, the base rows as a check. Each
+            component within ±:data:`~spatial_dynamics.bounds.MAX_WRENCH` (1e6 N, N m).
         method: without ``measured``: ``'torques'`` (contact-consistent, least ``τᵀ W τ``),
             ``'forces'`` (least ``λᵀ W λ`` carrying the base rows) or ``'qp'`` (least
             ``½ τᵀ W τ + ½ force_weight |λ|²`` inside the friction cones, Clarabel).
         weights: ``W``, positive, one per joint (``'torques'``, ``'qp'``) or per contact row
-            (``'forces'``); default ones.
+            (``'forces'``); default ones. Only their ratios matter: the QP divides them and
+            ``force_weight`` by their largest, so any finite positive scale is solved.
         gravity: m/s², world coordinates.
         force_weight: the QP's small weight on the contact forces (makes λ unique).
         backend: as :func:`~spatial_dynamics.rnea`'s. ``'compiled'`` (``'auto'`` when built)
@@ -488,7 +502,9 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
             raise _not_finite(model, q, qd, qdd, gravity)
         b = rnea(model, q, qd, qdd, gravity, backend=backend)   # M q̈ + h
         Jc = contact_jacobian(model, q, contacts, backend)
-    if not math.isfinite(b @ b + np.vdot(Jc, Jc)):     # NaN, ∞ or overflow: before LAPACK
+    with np.errstate(over='ignore', invalid='ignore'):     # the guard's own squares
+        finite = math.isfinite(b @ b + np.vdot(Jc, Jc))     # NaN, ∞ or overflow: before LAPACK
+    if not finite:
         raise _not_finite(model, q, qd, qdd, gravity)
     n = len(b) - 6
     if measured is not None:
@@ -531,6 +547,15 @@ def _not_finite(model: Model, q, qd, qdd, gravity) -> ValueError:
         check_configuration(model, np.asarray(q, dtype=float))
     except ValueError as err:
         return err
+    for what, x, bound, unit, name in (
+            ('qd', qd, MAX_VELOCITY, 'rad/s or m/s', 'MAX_VELOCITY'),
+            ('qdd', qdd, MAX_ACCELERATION, 'rad/s² or m/s²', 'MAX_ACCELERATION'),
+            ('gravity', gravity, MAX_GRAVITY, 'm/s²', 'MAX_GRAVITY'),
+            ('q', q, MAX_POSITION, 'rad or m', 'MAX_POSITION')):
+        why = check_bounded(what, x, bound, unit)
+        if why is not None:
+            return ValueError(f'M q̈ + h or J_c of this state overflows: {why} '
+                              f'(bounds.{name})')
     return ValueError('M q̈ + h or J_c of this state is not finite (or its square overflows): '
                       'q, qd, qdd or gravity too large to compute with')
 
@@ -674,8 +699,9 @@ def _measured(contacts, measured) -> np.ndarray:
         if c.name not in measured:
             raise ValueError(f'measured: no force for contact {c.name!r}')
         f = as_real_array(f'measured[{c.name!r}]', measured[c.name]).astype(float)
-        if f.shape != (c.rows,) or not np.isfinite(f).all():
-            raise ValueError(f'measured[{c.name!r}] must be {c.rows} finite numbers '
+        if f.shape != (c.rows,) or beyond(f, MAX_WRENCH).size:
+            raise ValueError(f'measured[{c.name!r}] must be {c.rows} finite numbers within '
+                             f'±{MAX_WRENCH:g} N or N m (bounds.MAX_WRENCH) '
                              f'({"[f]" if c.rows == 3 else "[n; f]"}, world axes), got {f}')
         out.append(f)
     return np.concatenate(out) if out else np.zeros(0)
@@ -757,7 +783,9 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     nx = n + k
     if not (np.isfinite(force_weight) and force_weight > 0.0):
         raise ValueError(f'force_weight must be a positive number, got {force_weight}')
-    P = sparse.diags(np.r_[W, np.full(k, force_weight)]).tocsc()
+    # the argmin is that of the weights over their largest: every weight in (0, 1]
+    top = max(W.max(initial=0.0), force_weight)
+    P = sparse.diags(np.r_[W / top, np.full(k, force_weight / top)]).tocsc()
     # equality (zero cone): [Sᵀ J_cᵀ] x = b, all nv rows
     A_eq = np.zeros((len(b), nx))
     A_eq[6:, :n] = np.eye(n)
@@ -770,9 +798,12 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     cones, row = [clarabel.ZeroConeT(len(b)), clarabel.NonnegativeConeT(len(contacts))], 0
     for c in contacts:
         t1, t2 = _tangents(c.normal)
-        G = np.zeros((3, nx))       # s = (μ n·f, t1·f, t2·f) in the second-order cone
+        # s = (μ n·f, t1·f, t2·f) in the second-order cone; for μ > 1 the same cone as
+        # (n·f, t1·f / μ, t2·f / μ): every coefficient at most 1, whatever μ
+        G = np.zeros((3, nx))
         j = n + row + c.rows - 3    # the force's entries of λ
-        G[0, j:j + 3], G[1, j:j + 3], G[2, j:j + 3] = c.mu * c.normal, t1, t2
+        a, t = (c.mu, 1.0) if c.mu <= 1.0 else (1.0, 1.0 / c.mu)
+        G[0, j:j + 3], G[1, j:j + 3], G[2, j:j + 3] = a * c.normal, t * t1, t * t2
         blocks.append(-G)
         cones.append(clarabel.SecondOrderConeT(3))
         row += c.rows

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 import stat
-from typing import Any, Callable, Iterator, Sequence, Tuple, Union
+from typing import Any, Callable, Iterator, Optional, Sequence, Tuple, Union
 
 #: What a path is when it is not a regular file, by the test of its mode.
 _KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
@@ -138,12 +138,40 @@ def _expanded_nodes(root) -> int:
     return size[id(root)]
 
 
+def _duplicate_key(root) -> Optional[Tuple[str, int]]:
+    """Return ``(key, line)`` of the first key a mapping of a composed graph has twice.
+
+    Keys are compared as scalars with their resolved tag (``1`` and ``'1'`` differ); the
+    merge key ``<<`` and keys that are collections are left to the constructor.
+    """
+    from yaml.nodes import MappingNode, ScalarNode, SequenceNode
+    seen_nodes = set()
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if id(node) in seen_nodes:
+            continue
+        seen_nodes.add(id(node))
+        if isinstance(node, SequenceNode):
+            stack.extend(node.value)
+        elif isinstance(node, MappingNode):
+            keys = set()
+            for key, value in node.value:
+                if isinstance(key, ScalarNode) and key.value != '<<':
+                    if (key.tag, key.value) in keys:
+                        return key.value, key.start_mark.line + 1
+                    keys.add((key.tag, key.value))
+                stack.extend((key, value))
+    return None
+
+
 def load_yaml(data: Union[str, bytes], what: str, max_nodes: int = MAX_YAML_NODES) -> Any:
     """Return the first document of YAML ``data`` (``None`` if empty), safe-loaded in budget.
 
     PyYAML's safe loader: tags such as ``!!python/object`` are refused. Before any Python
     object is built, the composed document is measured with its aliases expanded; one that
-    stands for more than ``max_nodes`` nodes is refused. Further documents are ignored (as
+    stands for more than ``max_nodes`` nodes is refused, and so is a mapping with a key twice
+    (PyYAML keeps the last silently; YAML says keys are unique). Further documents are ignored (as
     ``ros2 topic echo --once`` ends its output with ``---``). ``ValueError`` names ``what``.
     """
     import yaml
@@ -164,6 +192,10 @@ def load_yaml(data: Union[str, bytes], what: str, max_nodes: int = MAX_YAML_NODE
         if _expanded_nodes(node) > max_nodes:
             raise ValueError(f'{what}: the YAML stands for more than {max_nodes:,} values '
                              'once its aliases are expanded (an alias bomb?)')
+        twice = _duplicate_key(node)
+        if twice:
+            raise ValueError(f'{what}: the key {twice[0]!r} is given twice in one mapping '
+                             f'(line {twice[1]}); YAML keys are unique')
         return loader.construct_document(node)
     except yaml.YAMLError as err:
         text = ' '.join(str(err).split())

@@ -27,7 +27,7 @@ import numpy as np
 
 from .algorithms.regressor import parameters, PARAMETERS
 from .backends import regressor, rnea
-from .base import BaseMotion
+from .base import BaseMotion, check_base_motion
 from .model import Model
 
 #: A pivot of ``R`` below ``RTOL`` times the largest counts as zero (the rank's threshold).
@@ -281,6 +281,8 @@ def identify_payload(model: Model, link: str, q, qd, qdd, tau,
     each sample (a mobile manipulator), as for :func:`~spatial_dynamics.rnea`. Raises
     ``ValueError`` when the states cannot tell the payload (the columns are rank deficient).
     """
+    if base is not None:
+        check_base_motion(base, model)
     q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
     body, T = link_to_body(model, link)
     Y_all = regressor(model, q, qd, qdd, gravity, base=base)
@@ -638,6 +640,8 @@ def identify_inertias(model: Model, q, qd, qdd, tau, links: Optional[Sequence[st
     (a mobile manipulator), as for :func:`~spatial_dynamics.rnea`.
     """
     from threadpoolctl import threadpool_limits
+    if base is not None:
+        check_base_motion(base, model)
     q, qd, qdd, tau = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd, tau))
     if links is None:
         bodies = tuple(range(1, model.NB + 1))

@@ -10,6 +10,7 @@ their weight (the contact forces sum to ``m g``), the base rows hold to 1e-9, th
 
 import os
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -407,7 +408,8 @@ def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method
     zero_quat = q0.copy()
     zero_quat[3:7] = 0.0
     cases.append(({'q': zero_quat, 'qd': zero, 'qdd': zero}, {},
-                  r"q: the free-flyer quaternion of joint 'root_joint' at q\[3:7\] has norm 0"))
+                  r"q: the free-flyer quaternion of joint 'root_joint' at q\[3:7\] has "
+                  r'norm 0'))
     cases.append(({'q': q0, 'qd': zero, 'qdd': zero}, {'gravity': (0.0, 0.0, np.nan)},
                   r'gravity must be finite: gravity\[2\] is nan'))
     for args, more, match in cases:
@@ -415,3 +417,142 @@ def test_non_finite_state_is_one_clear_error_before_lapack(solo, backend, method
             sd.contact_inverse_dynamics(model, args['q'], args['qd'], args['qdd'], feet,
                                         backend=backend, **kw, **more)
     assert capfd.readouterr().err == ''
+
+
+@pytest.mark.parametrize('backend', ['numpy', 'compiled'])
+@pytest.mark.parametrize('method', ['torques', 'forces', 'qp', 'measured'])
+def test_a_state_too_large_to_compute_is_named_without_a_warning(solo, backend, method, capfd):
+    """``qdd = 1e300`` printed numpy's overflow RuntimeWarning before the ValueError.
+
+    The argument beyond what a real robot reaches is named (the bounds the node holds its
+    inputs to), and nothing is printed on stderr.
+    """
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f) for f in FEET]
+    kw = {'measured': {f: [0.0, 0.0, 6.0] for f in FEET}} if method == 'measured' else {
+        'method': method}
+    for qd, qdd, match in ((zero, zero + 1e300, r'qdd of index 0 is 1e\+300, beyond ±1e\+06'),
+                           (zero + 1e200, zero, r'qd of index 0 is 1e\+200, beyond ±10000')):
+        with warnings.catch_warnings():
+            warnings.simplefilter('error')
+            with pytest.raises(ValueError, match=match):
+                sd.contact_inverse_dynamics(model, q, qd, qdd, feet, backend=backend, **kw)
+    assert capfd.readouterr().err == ''
+
+
+def test_contact_arguments_out_of_any_range_are_refused_by_name(solo):
+    """A measured wrench, an offset and a mu no robot has are refused, each by its name.
+
+    A measured 1e300 N was 'solved' with τ = inf, an offset of 1e300 m blamed the state, and
+    mu='0.5' was a bare TypeError from np.isfinite.
+    """
+    model, _ = solo
+    q = standing_solo(model)
+    zero = np.zeros(model.nv)
+    feet = [sd.Contact(f) for f in FEET]
+    for value in (1e300, 1.1e6, -2e6):
+        measured = {f: [0.0, 0.0, 6.0] for f in FEET}
+        measured['FL_FOOT'] = [0.0, 0.0, value]
+        with pytest.raises(ValueError, match=r"measured\['FL_FOOT'\] must be 3 finite numbers "
+                           r'within ±1e\+06 N or N m'):
+            sd.contact_inverse_dynamics(model, q, zero, zero, feet, measured=measured)
+    # a real foot sensor's reading (1e6 N at most) is taken: τ = b - J_cᵀ λ (Pinocchio)
+    measured = {f: [0.0, 0.0, 1e6 if f == 'FL_FOOT' else 6.0] for f in FEET}
+    r = sd.contact_inverse_dynamics(model, q, zero, zero, feet, measured=measured)
+    _, pm = solo
+    b = pin.rnea(pm, pm.createData(), q, np.zeros(pm.nv), np.zeros(pm.nv))
+    lam = np.concatenate([measured[f] for f in FEET])
+    np.testing.assert_allclose(r.tau, b[6:] - (pin_contact_jacobian(pm, q, feet).T @ lam)[6:],
+                               rtol=1e-10, atol=1e-6)
+    for offset in ((1e300, 0.0, 0.0), (0.0, -2e5, 0.0), (np.inf, 0.0, 0.0)):
+        with pytest.raises(ValueError, match=r"contact 'FL_FOOT': offset must be 3 finite "
+                           r'numbers within ±100000 m'):
+            sd.Contact('FL_FOOT', offset=offset)
+    for mu in ('0.5', None, [0.5], True):
+        with pytest.raises(TypeError, match=r"contact 'FL_FOOT': mu must be a number"):
+            sd.Contact('FL_FOOT', mu=mu)
+    for mu in (np.float32(0.5), np.int64(1), 0.5):
+        assert sd.Contact('FL_FOOT', mu=mu).mu == float(mu)
+
+
+# -------------------------------------------------------------------------------------------
+# the QP across the range of μ and of the weights
+
+def qp_reference(pm, q, contacts, a=1.0, c=1e-6, normal_only=False):
+    """Return the QP's answer when no cone is active from Pinocchio: ``(τ, λ)`` by its KKT.
+
+    Least ``½ a |τ|² + ½ c |λ|²`` with ``τ = b_j - J_jᵀ λ`` and the base rows
+    ``J_bᵀ λ = b_b``; with ``normal_only`` each force along its normal (μ = 0), ``λ = N s``.
+    """
+    b = to_pin(pin.rnea(pm, pm.createData(), q, np.zeros(pm.nv), np.zeros(pm.nv)))  # ours
+    Jc = pin_contact_jacobian(pm, q, contacts)
+    N = np.eye(len(Jc))
+    if normal_only:
+        N = np.zeros((len(Jc), len(contacts)))
+        for j, contact in enumerate(contacts):
+            N[3 * j:3 * j + 3, j] = contact.normal
+    Jj, Jb = N.T @ Jc[:, 6:], N.T @ Jc[:, :6]
+    m = len(N.T)
+    K = np.block([[a * Jj @ Jj.T + c * N.T @ N, Jb], [Jb.T, np.zeros((6, 6))]])
+    s = np.linalg.lstsq(K, np.r_[a * Jj @ b[6:], b[:6]], rcond=None)[0][:m]
+    return b[6:] - Jj.T @ s, N @ s
+
+
+def qp(model, q, feet, **options):
+    zero = np.zeros(model.nv)
+    return sd.contact_inverse_dynamics(model, q, zero, zero, feet, method='qp', **options)
+
+
+def test_qp_is_solved_for_every_mu_a_wider_cone_never_worse(solo):
+    """μ 1e6 was 'not solved', 1e9 to 1e20 'infeasible', 1e100 and 1e300 a numerical error.
+
+    A wider cone cannot make a standing robot infeasible: beyond the μ where no cone is
+    active (0.7 here) the answer is the KKT solution of the equality QP (Pinocchio's ``b``
+    and ``J_c``), at μ = 0 that of vertical forces; between, the least torque never grows
+    with μ.
+    """
+    model, pm = solo
+    q = standing_solo(model)
+
+    def solved(mu):
+        feet = [sd.Contact(f, mu=mu) for f in FEET]
+        r = qp(model, q, feet)
+        assert r.status == 'solved' and r.feasible, (mu, r.summary())
+        return feet, r
+
+    for mu in (0.7, 1.0, 10.0, 1e3, 1e6, 1e9, 1e12, 1e20, 1e100, 1e200, 1e300):
+        feet, r = solved(mu)
+        tau, lam = qp_reference(pm, q, feet)
+        np.testing.assert_allclose(r.tau, tau, atol=1e-8, err_msg=f'mu={mu}')
+        np.testing.assert_allclose(np.concatenate([r.forces[f] for f in FEET]), lam,
+                                   atol=1e-8, err_msg=f'mu={mu}')
+    feet, r = solved(0.0)
+    tau, lam = qp_reference(pm, q, feet, normal_only=True)
+    np.testing.assert_allclose(r.tau, tau, atol=1e-8)
+    least = [r.tau @ r.tau]
+    for mu in (1e-3, 0.1, 0.3, 0.7):
+        least.append(solved(mu)[1].tau @ solved(mu)[1].tau)
+    assert all(b <= a + 1e-6 for a, b in zip(least, least[1:])), least
+
+
+@pytest.mark.parametrize('what', ['weights', 'force_weight'])
+def test_qp_is_solved_for_every_weight_scale(solo, what):
+    """``weights=1e300`` or ``force_weight=1e300`` stopped with InsufficientProgress.
+
+    The argmin depends on the weights' ratio only: each is Pinocchio's KKT answer with the
+    weights over their largest.
+    """
+    model, pm = solo
+    q = standing_solo(model)
+    feet = [sd.Contact(f) for f in FEET]
+    for w in (1e-300, 1e-200, 1e-100, 1e-12, 1e-6, 1.0, 1e6, 1e12, 1e100, 1e200, 1e300):
+        W, eps = (w, 1e-6) if what == 'weights' else (1.0, w)
+        r = qp(model, q, feet, **{what: w})
+        assert r.status == 'solved' and r.feasible, (w, r.summary())
+        top = max(W, eps)
+        tau, lam = qp_reference(pm, q, feet, a=W / top, c=eps / top)
+        np.testing.assert_allclose(r.tau, tau, atol=1e-8, err_msg=f'{what}={w}')
+        np.testing.assert_allclose(np.concatenate([r.forces[f] for f in FEET]), lam,
+                                   atol=1e-8, err_msg=f'{what}={w}')

@@ -313,6 +313,42 @@ def test_integrate_is_pinocchios(rng):
     assert np.allclose(np.linalg.norm(batch[:, 3:7], axis=-1), 1.0)
 
 
+def test_integrate_refuses_a_step_it_cannot_take_and_takes_one_dt_per_state(rng, capfd):
+    """A step that cannot be taken is refused by name, and ``dt`` may be one per state.
+
+    dt = inf, dt = nan and qd = 1e300 gave NaN q and ~15 RuntimeWarnings, a dt of a batch
+    shape a bare broadcast error. Now nothing on stderr; a ``dt`` per state is each state's
+    Pinocchio step.
+    """
+    model, oracle = floating_robot('solo_description/robots/solo12.urdf')
+    q0 = np.r_[np.zeros(6), 1.0, np.zeros(12)]
+    v = np.ones(model.nv)
+    for qd, dt, named in ((v, np.inf, 'dt must be finite'), (v, np.nan, 'dt must be finite'),
+                          (v, -np.inf, 'dt must be finite'),
+                          (v + 1e300, 0.01, r'qd · dt must stay within ±100000'),
+                          (v * 1e6, 1.0, r'qd · dt must stay within ±100000'),
+                          (np.r_[np.nan, v[1:]], 0.01, r'qd must be finite: qd\[0, 0\] is nan'),
+                          (v, np.full(3, 0.01), r'dt must be a number .* batch \(4,\) .* '
+                           r'shape \(3,\)')):
+        with warnings.catch_warnings():
+            warnings.simplefilter('error')
+            with pytest.raises(ValueError, match=named):
+                sd.integrate(model, np.tile(q0, (4, 1)), qd, dt)
+    assert capfd.readouterr().err == ''
+    q, qd, _ = random_floating_state(rng, model, (2,))
+    dts = np.array([0.01, 0.02])
+    ours = sd.integrate(model, q, qd, dts)
+    assert ours.shape == (2, model.nq)
+    for k in range(2):
+        q_pin, v_pin, _ = oracle.expand(model.joint_names, q[k], qd[k], qd[k])
+        theirs = pin.integrate(oracle.model, q_pin, v_pin * dts[k])
+        sign = np.sign(ours[k, 6] * theirs[6]) or 1.0
+        assert np.allclose(ours[k, :3], theirs[:3], rtol=0, atol=1e-12)
+        assert np.allclose(ours[k, 3:7], sign * theirs[3:7], rtol=0, atol=1e-12)
+    # one state, a dt per row: the batch is dt's
+    assert sd.integrate(model, q[0], qd[0], dts).shape == (2, model.nq)
+
+
 def test_reduction_keeps_the_free_flyer(rng):
     """Reduce a floating base: the free-flyer stays, the rest as for a fixed base.
 

@@ -197,6 +197,34 @@ def test_imu_readings_of_mujoco_reproduce_its_inverse_dynamics(ur5):
         np.testing.assert_allclose(tau[idx], tau_mj, rtol=1e-10, atol=1e-10)
 
 
+def test_imus_of_a_batch_read_one_motion_and_bad_poses_are_named(ur5):
+    """A batch of IMU orientations was a bare "incompatible dimensions for cross product".
+
+    One motion of the base (``ω``, ``ω̇``, the specific force at its origin) read by IMUs
+    mounted at four poses (random orientations and positions, one batch): each reads
+    ``R_sᵀ (f_0 + ω̇ × r + ω × (ω × r))`` and ``R_sᵀ ω``, and every pose gives the same base
+    motion back; a NaN position (it was blamed on ``base.a``) or twist is named.
+    """
+    rng = np.random.default_rng(9)
+    w, wd, f_0 = rng.normal(size=(3, 3))
+    quats, r = unit_quaternions(rng, 4), rng.normal(size=(4, 3)) * 0.1
+    R_s = quaternion_matrix(quats)
+    f_r = f_0 + np.cross(wd, r) + np.cross(w, np.cross(w, r))
+    reading = np.einsum('kji,kj->ki', R_s, f_r)             # R_sᵀ f at each IMU
+    gyro, gyro_rate = np.einsum('kji,j->ki', R_s, w), np.einsum('kji,j->ki', R_s, wd)
+    for orientation in (quats, R_s):
+        base = sd.base_from_imu(ur5, 'base_link', reading, gyro, gyro_rate, position=r,
+                                orientation=orientation)
+        np.testing.assert_allclose(base.v, np.tile(np.r_[w, 0, 0, 0], (4, 1)), atol=1e-12)
+        np.testing.assert_allclose(base.a, np.tile(np.r_[wd, f_0], (4, 1)), atol=1e-12)
+    with pytest.raises(ValueError, match='base_from_imu: position must be finite'):
+        sd.base_from_imu(ur5, 'base_link', G, np.zeros(3), position=[np.nan, 0, 0])
+    with pytest.raises(ValueError, match=r'base_from_imu: the batch shapes .* do not broadcast'):
+        sd.base_from_imu(ur5, 'base_link', reading, gyro, orientation=quats[:3])
+    with pytest.raises(ValueError, match='base_from_odometry: twist_rate must be finite'):
+        sd.base_from_odometry(ur5, np.zeros(6), [0, 0, np.inf, 0, 0, 0])
+
+
 def test_jacobian_in_world_axes_on_a_tilted_base(ur5, pin_ur5):
     pin, pm, pd = pin_ur5
     rng = np.random.default_rng(8)
@@ -224,7 +252,8 @@ def test_bad_base_motions_are_refused_by_name(ur5):
         sd.base_from_imu(ur5, 'wrist_3_link', G, np.zeros(3))
     with pytest.raises(ValueError, match="'nowhere' is not a link"):
         sd.base_from_imu(ur5, 'nowhere', G, np.zeros(3))
-    floating = sd.Model.from_urdf(robot_urdf_path('ur5'), base='floating')
+    with pytest.warns(sd.URDFWarning, match="fixed joint 'world_joint'"):
+        floating = sd.Model.from_urdf(robot_urdf_path('ur5'), base='floating')
     with pytest.raises(ValueError, match='floating base'):
         sd.base_from_imu(floating, 'base_link', G, np.zeros(3))
     with pytest.raises(ValueError, match='floating base'):
@@ -234,7 +263,8 @@ def test_bad_base_motions_are_refused_by_name(ur5):
 
 def test_mass_matrix_refuses_a_base_motion_on_a_floating_model_as_rnea_does():
     """``mass_matrix(floating, q, base=...)`` was accepted where rnea refused it."""
-    floating = sd.Model.from_urdf(robot_urdf_path('ur5'), base='floating')
+    with pytest.warns(sd.URDFWarning, match="fixed joint 'world_joint'"):
+        floating = sd.Model.from_urdf(robot_urdf_path('ur5'), base='floating')
     q = np.r_[np.zeros(6), 1, np.zeros(6)]
     for call in (lambda: sd.rnea(floating, q, np.zeros(12), np.zeros(12),
                                  base=sd.BaseMotion.at_rest()),
@@ -243,3 +273,58 @@ def test_mass_matrix_refuses_a_base_motion_on_a_floating_model_as_rnea_does():
                  lambda: sd.mass_matrix(floating, q, base=sd.BaseMotion.at_rest())):
         with pytest.raises(ValueError, match="'ur5' has a floating base already"):
             call()
+
+
+def test_every_function_taking_base_refuses_it_on_a_floating_model():
+    """``jacobian(floating, q, link, 'world', base=...)`` turned the rows twice.
+
+    A floating model's world rows are Pinocchio's ``LOCAL_WORLD_ALIGNED`` already (its
+    free-flyer's quaternion is the base's orientation); a ``base=`` on top is refused by
+    every public function that takes one, as ``rnea`` refuses it.
+    """
+    import inspect
+    from spatial_dynamics import identification
+    floating = sd.Model.from_urdf(robot_urdf_path('solo12'), base='floating')
+    q = np.r_[np.zeros(6), 1, np.zeros(12)]
+    z = np.zeros(18)
+    tilted = sd.BaseMotion.at_rest(orientation=[0.0, 0.0, np.sin(0.4), np.cos(0.4)])
+    calls = {
+        'rnea': lambda b: sd.rnea(floating, q, z, z, base=b),
+        'gravity_torque': lambda b: sd.gravity_torque(floating, q, base=b),
+        'bias_torque': lambda b: sd.bias_torque(floating, q, z, base=b),
+        'mass_matrix': lambda b: sd.mass_matrix(floating, q, base=b),
+        'generalized_momentum': lambda b: sd.generalized_momentum(floating, q, z, base=b),
+        'regressor': lambda b: sd.regressor(floating, q, z, z, base=b),
+        'jacobian': lambda b: sd.jacobian(floating, q, 'FL_FOOT', 'world', base=b),
+        'identify_payload': lambda b: identification.identify_payload(
+            floating, 'FL_FOOT', q, z, z, z, base=b),
+        'identify_inertias': lambda b: identification.identify_inertias(
+            floating, q, z, z, z, base=b),
+        'predicted_torque': lambda b: identification.predicted_torque(
+            floating, q, z, z, G, base=b),
+    }
+    public = set()
+    for module in (sd, identification):
+        for name in dir(module):
+            function = getattr(module, name)
+            if inspect.isfunction(function) and not name.startswith('_'):
+                parameters = list(inspect.signature(function).parameters)
+                if parameters[:1] == ['model'] and 'base' in parameters:
+                    public.add(name)
+    assert public <= set(calls), public - set(calls)
+    for name, call in calls.items():
+        with pytest.raises(ValueError, match="'solo' has a floating base already"):
+            call(tilted)
+        with pytest.raises(TypeError, match='base must be a spatial_dynamics.BaseMotion'):
+            call('world')
+    # without base= the world rows are Pinocchio's LOCAL_WORLD_ALIGNED at the base's pose
+    pin = pytest.importorskip('pinocchio')
+    pm = pin.buildModelFromUrdf(robot_urdf_path('solo12'), pin.JointModelFreeFlyer())
+    pdata = pm.createData()
+    qt = np.r_[0.1, -0.2, 0.3, tilted.orientation, np.linspace(-0.5, 0.5, 12)]
+    pin.computeJointJacobians(pm, pdata, qt)
+    pin.updateFramePlacements(pm, pdata)
+    Jp = pin.getFrameJacobian(pm, pdata, pm.getFrameId('FL_FOOT'), pin.LOCAL_WORLD_ALIGNED)
+    cols = np.r_[3:6, 0:3, 6:18]          # Pinocchio's rows and base columns linear first
+    np.testing.assert_allclose(sd.jacobian(floating, qt, 'FL_FOOT', 'world'),
+                               np.r_[Jp[3:], Jp[:3]][:, cols], atol=1e-12)

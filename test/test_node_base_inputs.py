@@ -232,9 +232,10 @@ def test_base_parameters_are_checked_against_the_model(demo_text, solo_path):
                    **{'contacts.links': ['LF_FOOT']})
     with pytest.raises(ConfigError, match="wrench_estimate.link: not supported with base"):
         configured(robot_description_file=solo_path, base='floating',
-                   **{'wrench_estimate.link': 'FL_FOOT'})
+                   **{'wrench_estimate.link': 'FL_FOOT', 'contacts.links': list(FEET)})
     with pytest.raises(ConfigError, match='armature: expected 12 values for the actuated'):
-        configured(robot_description_file=solo_path, base='floating', armature=[0.1] * 13)
+        configured(robot_description_file=solo_path, base='floating', armature=[0.1] * 13,
+                   **{'contacts.links': list(FEET)})
     with pytest.raises(ConfigError, match='base'):
         configured(robot_description=demo_text, base='sideways')
     assert configured(robot_description=demo_text).params.base == 'fixed'
@@ -348,6 +349,87 @@ def test_floating_without_base_pose_publishes_nothing(solo_path):
                                                  zero, zero))
     assert out.answer is None and answering.totals.rejected['base_missing'] == 1
     assert any('no good base/pose yet' in text for _, text in answering.log.said)
+
+
+@pytest.mark.parametrize('method', ['torques', 'forces', 'qp'])
+@pytest.mark.parametrize('flags', [(1, 0, 0, 0), (1, 1, 0, 0), (1, 0, 0, 1)])
+def test_floating_contacts_that_cannot_carry_the_base_are_refused(solo_path, method, flags):
+    """Solo12 standing on one or two feet: no contact forces carry its base, nothing published.
+
+    The split's base residual is the least any contact forces leave (the QP, bound by the same
+    rows, is infeasible): the answer is refused (``contacts_unsolved``), the WARN names the
+    residual and the contacts in contact, the ``base`` status counts it; on four feet again
+    the node answers again.
+    """
+    cfg = floating(solo_path, **{'contacts.method': method})
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q, zero = standing(robot.joints), np.zeros(12)
+    msg = joint_state(robot.joints, 1.0, q, zero, zero)
+    good = answering.joint_state(cfg, msg).answer
+    assert good is not None
+    touching = [link for link, flag in zip(FEET, flags) if flag]
+    state = (robot.model, np.r_[base_q, q], np.zeros(18), np.zeros(18),
+             [sd.Contact(link) for link in touching])
+    split = sd.contact_inverse_dynamics(*state)
+    residual = np.abs(split.base_residual).max()
+    weight = robot.model.inertia[:, 3, 3].sum() * 9.81   # m g
+    assert residual > 1e3 * robot.residual_tolerance   # the least: no λ carries the base
+    assert robot.residual_tolerance == pytest.approx(1e-6 * weight)
+    assert sd.contact_inverse_dynamics(*state, method='qp').status.startswith('infeasible')
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=list(flags)))
+    out = answering.joint_state(cfg, msg)
+    assert out.answer is None
+    assert answering.totals.rejected['contacts_unsolved'] == 1
+    said = answering.log.said[-1]
+    assert said[0] == 'warn' and 'cannot carry the base' in said[1], said
+    assert str(touching) in said[1], said
+    if method != 'qp':     # the QP's infeasible answer has no λ: its residual is all of b
+        assert f'base residual {residual:.3g}' in said[1], said
+    level, text, values = base_status(cfg.params, robot, answering.base_inputs,
+                                      answering.base_inputs.period(),
+                                      answering.base_inputs.pose.receipt_ns)
+    values = dict(values)
+    assert level == 'WARN' and 'cannot carry the base' in text, text
+    assert values['refused: the contacts cannot carry the base (contacts_unsolved, '
+                  'no_contact)'] == '1'
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 1, 1, 1]))
+    again = answering.joint_state(cfg, msg).answer
+    np.testing.assert_array_equal(again.tau, good.tau)
+
+
+@pytest.mark.parametrize('changes', [{'contacts.method': 'torques'},
+                                     {'contacts.method': 'forces'},
+                                     {'contacts.method': 'qp'},
+                                     {'contacts.measured': True}])
+def test_floating_in_flight_every_answer_is_refused(solo_path, changes):
+    """Every contact_states flag 0: no contact carries the base, no answer, whatever the method."""
+    cfg = floating(solo_path, **changes)
+    robot = cfg.robot
+    answering = Answering(Log())
+    feed_base(cfg, answering)
+    q, zero = standing(robot.joints), np.zeros(12)
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[0, 0, 0, 0]))
+    for t in (1.0, 1.01):
+        out = answering.joint_state(cfg, joint_state(robot.joints, t, q, zero, zero))
+        assert out.answer is None
+    assert answering.totals.rejected['no_contact'] == 2
+    said = answering.log.said[-1]
+    assert said[0] == 'warn' and 'no contact carries the base' in said[1], said
+    level, text, _ = base_status(cfg.params, robot, answering.base_inputs,
+                                 answering.base_inputs.period(),
+                                 answering.base_inputs.pose.receipt_ns)
+    assert level == 'WARN' and 'no contact carries the base' in text, text
+
+
+def test_a_floating_base_without_contacts_is_refused_at_configuration(solo_path):
+    """Nothing would carry the base: contacts.links unset or empty is a ConfigError."""
+    for links in (None, []):
+        with pytest.raises(ConfigError, match='contacts.links: a floating base needs contacts '
+                           'to carry it'):
+            configured(robot_description_file=solo_path, base='floating',
+                       **{'contacts.links': links})
 
 
 def test_the_observer_is_off_on_a_moving_base_and_says_so(demo_text):
@@ -579,7 +661,9 @@ def test_floating_a_split_that_pulls_is_re_solved_by_the_qp(solo_path, method, c
     contact answer).
     """
     cfg = floating(solo_path, **{'contacts.method': method, 'control_mode': control_mode,
-                                 'base_input.acceleration': 'difference'})
+                                 'base_input.acceleration': 'difference',
+                                 # the twist's difference as it is (no low-pass)
+                                 'base_input.acceleration_time_constant': 0.0})
     robot = cfg.robot
     answering = Answering(Log())
     a_world = np.array([3.0, 5.0, 0.0])
@@ -615,10 +699,13 @@ def test_floating_a_base_falling_faster_than_gravity_is_refused(solo_path, metho
 
     Nothing is published for it (the controller keeps the last good command): the reason
     ``contacts_unsolved`` is counted, the WARN names the contact that would pull most and by
-    how much, and /diagnostics explains it; standing again, the node answers again.
+    how much, and /diagnostics explains it; standing again, the node answers again. The
+    twist is differenced unfiltered: each step of the base is its own acceleration.
     """
     cfg = floating(solo_path, **{'contacts.method': method,
-                                 'base_input.acceleration': 'difference'})
+                                 'base_input.acceleration': 'difference',
+                                 # the twist's difference as it is (no low-pass)
+                                 'base_input.acceleration_time_constant': 0.0})
     robot = cfg.robot
     answering = Answering(Log())
     q, zero = standing(robot.joints), np.zeros(12)
@@ -672,7 +759,7 @@ def test_floating_without_the_qp_a_pulling_split_is_refused(solo_path, monkeypat
     assert "'qp' extra" in robot.qp_missing
     warning = qp_missing_warning(robot)
     assert "'qp' extra" in warning and 'refusing' in warning
-    assert qp_missing_warning(floating(solo_path, **{'contacts.links': []}).robot) != ''
+    assert qp_missing_warning(floating(solo_path, **{'contacts.links': ['FL_FOOT']}).robot) != ''
     answering = Answering(Log())
     base_q = feed_base(cfg, answering)
     q, zero = standing(robot.joints), np.zeros(12)
@@ -709,7 +796,9 @@ def test_floating_qp_without_friction_never_publishes_pulling_feet(solo_path):
     ice is answered, every foot pushing straight up.
     """
     cfg = floating(solo_path, **{'contacts.method': 'qp', 'contacts.mu': 0.0,
-                                 'base_input.acceleration': 'difference'})
+                                 'base_input.acceleration': 'difference',
+                                 # the twist's difference as it is (no low-pass)
+                                 'base_input.acceleration_time_constant': 0.0})
     robot = cfg.robot
     answering = Answering(Log())
     quat = np.array([0.02, -0.03, 0.01, 1.0]) / np.linalg.norm([0.02, -0.03, 0.01, 1.0])
@@ -853,7 +942,10 @@ def test_a_differenced_twist_is_filtered_and_bounded(ur5_text):
 # a typical /odom and IMU driver (issue 35)
 
 def test_odometry_of_base_footprint_is_taken_as_base_input_odometry_link(demo_text):
-    """``child_frame_id: base_footprint`` (no such link): named by the right field, then mapped."""
+    """``child_frame_id: base_footprint`` (no such link): named by the right field, then mapped.
+
+    Exactly ``base_input.odometry_frame`` is taken as ``base_input.odometry_link``.
+    """
     quat = np.array([0.0, 0.0, 0.0, 1.0])
     v0, v1 = np.array([0, 0, 0.1, 0.5, 0, 0.0]), np.array([0, 0, 0.12, 0.52, 0, 0.0])
     cfg = moving_on_twist(demo_text)
@@ -863,8 +955,10 @@ def test_odometry_of_base_footprint_is_taken_as_base_input_odometry_link(demo_te
     assert answering.base_inputs.rejected['base/odometry wrong_frame'] == 1
     said = answering.log.said[-1][1]
     assert "child_frame_id 'base_footprint'" in said and 'header.frame_id' not in said
+    assert "base_input.odometry_frame to 'base_footprint'" in said, said
     assert 'base_input.odometry_link' in said
-    cfg = moving_on_twist(demo_text, **{'base_input.odometry_link': 'base_link'})
+    cfg = moving_on_twist(demo_text, **{'base_input.odometry_frame': 'base_footprint',
+                                        'base_input.odometry_link': 'base_link'})
     robot = cfg.robot
     n = len(robot.joints)
     answering = Answering(Log())
@@ -876,13 +970,44 @@ def test_odometry_of_base_footprint_is_taken_as_base_input_odometry_link(demo_te
     expected = sd.rnea(robot.model, q, q, q, base=sd.base_from_odometry(
         robot.model, v1, (v1 - v0) / 0.01, quat, link='base_link'))
     np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
-    # a link of the URDF that moves is still refused; the parameter is checked
+    # a link of the URDF that moves is still refused; the parameters are checked
     answering.base_input(cfg, 'base/odometry', odometry(1.02, [0, 0, 0], quat, v1, 'link3'))
     assert answering.base_inputs.rejected['base/odometry wrong_frame'] == 1
     with pytest.raises(ConfigError, match="base_input.odometry_link: 'base_footprint' is not"):
         moving_on_twist(demo_text, **{'base_input.odometry_link': 'base_footprint'})
     with pytest.raises(ConfigError, match='base_input.odometry_link.*moves with a joint'):
         moving_on_twist(demo_text, **{'base_input.odometry_link': 'link3'})
+    with pytest.raises(ConfigError, match="base_input.odometry_frame: 'link3' is a link"):
+        moving_on_twist(demo_text, **{'base_input.odometry_frame': 'link3'})
+
+
+@pytest.mark.parametrize('child', ['odom_combined', 'base_footprint_2', 'robot2/base_footprint'])
+def test_odometry_of_another_frame_than_base_input_odometry_frame_is_refused(demo_text, child):
+    """A typo or another robot's odometry is never taken as the base's: ``wrong_frame``.
+
+    Only the frame named in ``base_input.odometry_frame`` stands for
+    ``base_input.odometry_link``; the twist held before stays and the answers keep using it.
+    """
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    v = np.array([0, 0, 0.1, 0.5, 0, 0.0])
+    cfg = moving_on_twist(demo_text, **{'base_input.odometry_frame': 'base_footprint',
+                                        'base_input.odometry_link': 'base_link',
+                                        'base_input.acceleration': 'zero'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    answering.base_input(cfg, 'base/odometry', odometry(1.0, [0, 0, 0], quat, v,
+                                                        'base_footprint'))
+    answering.base_input(cfg, 'base/odometry', odometry(1.01, [0, 0, 0], quat, 10 * v, child))
+    assert answering.base_inputs.rejected['base/odometry wrong_frame'] == 1
+    said = answering.log.said[-1][1]
+    assert f"child_frame_id {child!r}" in said and "'base_footprint'" in said, said
+    assert 'base_input.odometry_frame' in said and 'base_input.odometry_link' in said, said
+    q = np.full(n, 0.2)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, q, q))
+    expected = sd.rnea(robot.model, q, q, q, base=sd.base_from_odometry(
+        robot.model, v, np.zeros(6), quat, link='base_link'))
+    np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)
 
 
 def test_imu_frame_of_the_driver_is_taken_as_the_imu_link(demo_text):
@@ -933,3 +1058,66 @@ def test_odometry_on_source_imu_suggests_source_twist(demo_text):
     assert level == 'ERROR' and "base_input.source 'twist'" in text
     with pytest.raises(ConfigError, match="base_input.source 'twist'"):
         configured(robot_description=demo_text, base='moving')
+
+
+# -------------------------------------------------------------------------------------------
+# efforts above the URDF's limits are published, counted and said (issue 34)
+
+def urdf_effort_limits(text):
+    """Joint name -> ``<limit effort>`` of each joint of a URDF that gives one (the oracle)."""
+    import xml.etree.ElementTree as ET
+    return {joint.get('name'): float(joint.find('limit').get('effort'))
+            for joint in ET.fromstring(text).iter('joint')
+            if joint.find('limit') is not None and joint.find('limit').get('effort')}
+
+
+def test_an_answer_above_the_urdf_effort_limit_is_published_counted_and_said(demo_text):
+    """An IMU reading within its bounds gives 1e4 N m on an 87 N m joint: published, WARNed.
+
+    The limits are the URDF's, read here with an XML parser; the worst joint is the one of
+    the largest ``|τ| / limit``. Clamping stays opt-in (``clamp_to_effort_limits``); a
+    reading of gravity alone is within every limit and says nothing.
+    """
+    from spatial_dynamics.ros.diagnostics import feedforward_status
+    cfg = configured(robot_description=demo_text, base='moving',
+                     **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    limits = urdf_effort_limits(demo_text)
+    limit = np.array([limits.get(joint, np.inf) for joint in robot.joints])
+    answering = Answering(Log())
+    q = np.full(n, 0.3)
+    msg = joint_state(robot.joints, 1.0, q, np.zeros(n), np.zeros(n))
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 9.81], [0, 0, 0]))
+    quiet = answering.joint_state(cfg, msg).answer
+    assert np.all(np.abs(quiet.tau) <= limit)
+    f, w = np.array([3999.0, 0.0, 3999.0]), np.array([99.0, 0.0, 99.0])
+    answering.base_input(cfg, 'base/imu', imu(1.0, f, w))
+    out = answering.joint_state(cfg, msg)
+    expected = sd.rnea(robot.model, q, np.zeros(n), np.zeros(n),
+                       base=sd.base_from_imu(robot.model, 'base_link', f, w))
+    np.testing.assert_allclose(out.answer.tau, expected, rtol=1e-9, atol=1e-9)   # published
+    ratio = np.abs(expected) / limit
+    worst = int(np.argmax(ratio))
+    assert ratio[worst] > 10.0
+    window = answering.window
+    assert window.above_limit == 1
+    assert window.above_worst[1] == robot.joints[worst]
+    assert window.above_worst[3] == limit[worst]
+    said = [text for level, text in answering.log.said if level == 'warn']
+    assert len(said) == 1 and 'URDF limit' in said[0], said
+    assert f'{robot.joints[worst]!r} {expected[worst]:+.4g}' in said[0], said
+    assert f'limit {limit[worst]:g}' in said[0], said
+    window, _ = answering.period()
+    level, text, values = feedforward_status(robot, window, answering.totals, cfg.params, {},
+                                             answering.totals.last_input_ns)
+    values = dict(values)
+    assert 'above the URDF effort limit' in text and robot.joints[worst] in text, text
+    assert values['above effort limit'] == '1'
+    assert values['above effort limit worst'].startswith(f'{robot.joints[worst]}: ')
+    clamped = configured(robot_description=demo_text, base='moving', clamp_to_effort_limits=True,
+                         **{'base_input.imu_link': 'base_link'})
+    answering.base_input(clamped, 'base/imu', imu(1.0, f, w))
+    out = answering.joint_state(clamped, msg)
+    np.testing.assert_allclose(out.answer.tau, np.clip(expected, -limit, limit))
+    assert answering.window.above_limit == 0 and answering.totals.saturated == 1

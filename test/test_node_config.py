@@ -92,7 +92,7 @@ def test_every_parameter_is_in_the_params_file():
         assert f'{key}:' in text, f'{spec.name} is not described in inverse_dynamics.yaml'
     read_only = {s.name for s in config.PARAMETERS if s.read_only}
     assert read_only == {'backend', 'trajectory_max_bytes', 'trajectory_annotation_max_values',
-                         'base'}
+                         'base', 'thread_priority', 'cpu_affinity', 'lock_memory'}
     for name in read_only:   # the header says which cannot change: those marked so
         assert f'# {name} (' in text and 'read-only)' in text.split(f'# {name} (')[1][:20]
     assert set(config.SLOW_PARAMETERS) <= set(config.PARAMETER_NAMES)
@@ -465,7 +465,8 @@ def test_model_status_of_a_floating_robot_counts_its_joints_and_the_free_flyer()
     joints = oracle.njoints - 2               # the universe and the free-flyer aside
     with open(path, encoding='utf-8') as f:
         text = f.read()
-    robot = config.prepare({}, defaults(robot_description=text, base='floating'), None).robot
+    robot = config.prepare({}, defaults(robot_description=text, base='floating', **{
+        'contacts.links': ['FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT']}), None).robot
     level, message, values = diagnostics.model_status(robot, diagnostics.Totals(), False,
                                                       'numpy')
     expected = f'{joints} joints + free-flyer (nv {oracle.nv})'

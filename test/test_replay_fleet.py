@@ -148,7 +148,7 @@ def test_a_bad_bag_is_one_line_and_the_rest_finish(fleet, tmp_path, capsys):
     assert status == 0
     failed = [line for line in out.splitlines() if line.startswith('failed:')]
     assert len(failed) == 1 and 'broken.db3' in failed[0]
-    assert '13 bags of 1 robots' in out and '1 failed' in out
+    assert '13 bags of 1 robot,' in out and '1 failed' in out
 
 
 def test_a_missing_manifest_is_refused(tmp_path, capsys):

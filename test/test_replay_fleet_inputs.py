@@ -275,8 +275,9 @@ def test_a_bag_listed_twice_is_counted_once_and_said(small, tmp_path, capsys):
     status, text, _ = run([path, '--out', tmp_path / 'o'], capsys)
     rows = table(tmp_path / 'o')
     assert len(rows) == 2 * 6 * 3            # two bags, six joints, three parameters
-    assert text.startswith('2 bags of 1 robots')
-    assert len([line for line in text.splitlines() if 'listed twice' in line]) == 2
+    assert text.startswith('2 bags of 1 robot,')
+    twice = [line for line in text.splitlines() if 'listed twice' in line]
+    assert len(twice) == 1 and '(2): ' in twice[0]       # one line per kind, with its count
 
 
 # -- options ---------------------------------------------------------------------------------
@@ -487,9 +488,9 @@ def test_a_cached_rerun_starts_or_contacts_no_cluster_whatever_the_options(
     monkeypatch.setattr(command, 'local_cluster', no_cluster)
     monkeypatch.setattr(distributed, 'Client', no_cluster)
     assert main([small, '--out', out, '--no-plots'] + where) == first
-    text = capsys.readouterr().out
-    assert '(4 from the cache, 0 failed)' in text
-    assert [line for line in text.splitlines() if 'no cluster' in line] == [
+    said = capsys.readouterr()
+    assert '(4 from the cache, 0 failed)' in said.out
+    assert said.err.splitlines() == [
         'note: every bag is in the cache: no cluster '
         + ('contacted' if '--scheduler' in where else 'started')]
 

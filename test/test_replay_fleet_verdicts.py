@@ -109,3 +109,44 @@ def test_a_joint_that_never_moved_is_not_judged_with_the_reason():
     got = detect(rows, 5.0)
     assert got.judged == 1 and not got.drifts
     assert 'did not move' in got.not_judged['r1', 'j1', 'friction']
+
+
+def test_a_robot_whose_bags_all_failed_is_not_judged_and_the_status_says_so(
+        worn_early, tmp_path, capsys):
+    folder = subset(worn_early, tmp_path / 'r01', ['r01'])
+    urdf = os.path.join(worn_early, 'r01', 'robot.urdf')
+    (tmp_path / 'junk.db3').write_bytes(b'not a bag')
+    path = tmp_path / 'm.csv'
+    path.write_text(f'robot,urdf,bag\nr01,{urdf},{folder}/r01/day*\n'
+                    f'r09,{urdf},{tmp_path}/gone.db3\nr09,{urdf},{tmp_path}/junk.db3\n')
+    status, out = run([str(path), '--out', str(tmp_path / 'o')], capsys)
+    assert len(lines(out, 'failed: r09')) == 2, out
+    assert lines(out, 'not judged: r09: ') == [
+        'not judged: r09: all 2 of its bags failed (see failed: below)'], out
+    assert 'no drift among the 18 series judged; 1 robot with no usable bag not judged' in out
+    assert status == command.NOT_JUDGED
+    # r01 alone, every series judged: the same verdict on it, and "no drift"
+    status, alone = run([folder, '--out', str(tmp_path / 'o1')], capsys)
+    assert status == 0 and 'no drift' in lines(alone, 'no drift')
+
+
+def test_a_still_bag_after_the_baseline_is_not_judged_as_still_not_as_missing():
+    values = [1.0, 1.01, 0.99, 1.0, 1.02, np.nan, np.nan]
+    rows = series('r1', 'j1', values, [0.01] * 5 + [np.nan] * 2)
+    reason = detect(rows, 5.0).not_judged['r1', 'j1', 'friction']
+    assert reason == ('no estimate after its first 5 days: none of its 2 bags after them '
+                      'gives one (the joint did not move enough to determine it)')
+    reason = detect(rows[:6], 5.0).not_judged['r1', 'j1', 'friction']
+    assert 'its one bag after them gives none' in reason
+    # and no bag at all after the baseline says that
+    assert detect(rows[:5], 5.0).not_judged['r1', 'j1', 'friction'] == (
+        'no estimate after its first 5 days (5 in all)')
+
+
+def test_a_count_of_one_is_singular():
+    rows = series('r1', 'j1', [1.0, np.nan], 0.01)
+    assert detect(rows[:1], 5.0).not_judged['r1', 'j1', 'friction'] == (
+        '1 estimate in its first 5 days; a baseline needs 3')
+    rows = series('r1', 'j1', [np.nan], np.nan)
+    assert detect(rows, 5.0).not_judged['r1', 'j1', 'friction'] == (
+        'no estimate in its one bag (the joint did not move enough to determine it)')

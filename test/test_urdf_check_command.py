@@ -11,6 +11,7 @@ import os
 import re
 import subprocess
 import sys
+import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -328,3 +329,75 @@ def test_a_floating_tree_without_mass_is_said_to_have_a_singular_mass_matrix(
         assert 'the tree has no mass' in out and 'mass matrix M is singular' in out
     else:
         assert status == 0 and out.rstrip().endswith('no warnings')
+
+
+INERTIA = '<inertia ixx="{}" ixy="0" ixz="0" iyy="{}" iyz="0" izz="{}"/>'
+# a root 'a' without <inertial> on the free-flyer and 'b' (1 kg, full inertia) on a z joint:
+# the base's yaw and j turn the same inertia
+YAW = f"""<robot name="yaw"><link name="a"/>
+  <link name="b"><inertial><mass value="1"/>{INERTIA.format(0.1, 0.2, 0.3)}</inertial></link>
+  <joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"""
+# a fixed arm whose last link 'c' has no inertia about its joint's axis (z): a point on it
+FLAT = f"""<robot name="flat"><link name="a"/>
+  <link name="b"><inertial><mass value="2"/>{INERTIA.format(0.1, 0.2, 0.3)}</inertial></link>
+  <link name="c"><inertial><mass value="1"/>{INERTIA.format(0.01, 0.01, 0)}</inertial></link>
+  <joint name="j1" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="continuous"><parent link="b"/><child link="c"/>
+    <origin xyz="0 0 0.5"/><axis xyz="0 0 1"/></joint>
+</robot>"""
+
+
+@pytest.mark.parametrize('xml, base, lost', ((YAW, 'floating', {'root_joint ωz', 'j'}),
+                                             (FLAT, 'fixed', {'j2'})))
+def test_a_mass_matrix_that_loses_a_motion_is_said_with_the_motion_named(
+        capsys, tmp_path, xml, base, lost):
+    """``check --base floating`` said "no warnings" for the yaw tree (smallest eigenvalue 4e-18).
+
+    Oracle: Pinocchio's CRBA on the same URDF is singular there, and its null motion is the
+    one named (the base's yaw against j; j2 alone).
+    """
+    pin = pytest.importorskip('pinocchio')
+    path = tmp_path / 'robot.urdf'
+    path.write_text(xml)
+    pm = (pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer()) if base == 'floating'
+          else pin.buildModelFromUrdf(str(path)))
+    M = pin.crba(pm, pm.createData(), pin.neutral(pm))
+    M = np.triu(M) + np.triu(M, 1).T
+    lam, V = np.linalg.eigh(M)
+    assert lam[0] < 1e-15 * lam[-1]                         # the physics said
+    names = ([f'root_joint {c}' for c in ('vx', 'vy', 'vz', 'ωx', 'ωy', 'ωz')]
+             if base == 'floating' else []) + list(pm.names[1 + (base == 'floating'):])
+    assert {names[k] for k in np.flatnonzero(np.abs(V[:, 0]) > 0.1)} == lost
+    status, out, _ = run(capsys, path, '--base', base, '--strict')
+    assert status == 1 and 'warnings (1)' in out, out
+    said = ' '.join(section(out, 'warnings')).replace('\n', ' ')
+    said = re.sub(r'\s+', ' ', said)
+    assert f'singular at the neutral configuration (rank {len(names) - 1} of {len(names)}' in said
+    motion = re.search(r'the motion (.*) moves no inertia', said).group(1)
+    assert {term.split(' ', 1)[1] for term in re.split(' [+-] ', motion)} == lost, said
+
+
+@pytest.mark.parametrize('robot, base', (('ur5', 'fixed'), ('panda', 'fixed'),
+                                         ('solo12', 'floating'), ('talos', 'floating')))
+def test_a_robot_whose_joints_all_move_inertia_has_no_mass_matrix_warning(robot, base):
+    from spatial_dynamics import check
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', sd.URDFWarning)
+        model = sd.Model.from_urdf(robot_urdf_path(robot), base=base)
+    assert check.singular_mass_matrix(model) == []
+
+
+def test_a_floating_model_names_body_0_the_world(capsys):
+    """``check --base floating`` called the world ``(fixed base)`` and put 0 kg on it."""
+    status, out, _ = run(capsys, robot_urdf_path('solo12'), '--base', 'floating')
+    assert status == 0
+    assert 'fixed base' not in out, out
+    rows = section(out, 'bodies after lumping')[1:]
+    assert rows[0].split()[:2] == ['0', 'universe'] and ' (the world) ' in rows[0], rows[0]
+    model = sd.Model.from_urdf(robot_urdf_path('solo12'), base='floating')
+    mass = model.inertia[:, 3, 3]
+    assert re.search(rf"\({mass[1]:g} kg on the root link 'base_link' \(on the free-flyer\), "
+                     rf'{np.sum(mass[2:]):g} kg on the links beyond it\)', out), out

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arguments import as_joint_arrays, check_model
+from ..base import check_base_motion
 from ..joints import jcalc, joint_axis, joint_coordinates, NV, quaternion_matrix
 from ..model import Model
 
@@ -47,7 +48,8 @@ def jacobian(model: Model, q, link: str, frame: str = 'local', *, base=None) -> 
               (Pinocchio's ``LOCAL_WORLD_ALIGNED``; what KDL's ``ChainJntToJacSolver`` and
               MoveIt's ``getJacobian`` return, angular and linear rows swapped). Not
               Pinocchio's ``WORLD``, whose ``v`` is that of the point at the base origin.
-        base: a fixed-base model's :class:`~spatial_dynamics.base.BaseMotion`: with
+        base: a fixed-base model's :class:`~spatial_dynamics.base.BaseMotion` (a floating
+            model's is refused: its rows are the world's already): with
             ``frame='world'``, the rows are turned by its orientation into the world's axes
             (the columns stay those of the joints: the base's own motion adds
             ``lX0 v_base`` to the link's velocity).
@@ -59,6 +61,8 @@ def jacobian(model: Model, q, link: str, frame: str = 'local', *, base=None) -> 
     check_model(model)
     if frame not in FRAMES:
         raise ValueError(f'frame must be one of {list(FRAMES)}, got {frame!r}')
+    if base is not None:
+        check_base_motion(base, model)      # a floating model's rows are the world's already
     J, lX0 = local_jacobian(model, q, link)
     if frame == 'world':
         E = np.swapaxes(lX0[..., :3, :3], -1, -2)      # lX0 = [[E, 0], [-E r×, E]]: 0 ← l is Eᵀ

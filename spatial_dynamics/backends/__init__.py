@@ -224,8 +224,7 @@ def mass_matrix(model: Model, q, backend: str = 'auto', *,
     only, never on the base's motion (only broadcast against its batch).
     """
     if base is not None:
-        check_base_motion(base)
-        floating_twin(model)        # refuses a floating model as rnea(base=) does
+        check_base_motion(base, model)
         H = mass_matrix(model, q, backend)
         shape = np.broadcast_shapes(H.shape[:-2], base.v.shape[:-1], base.a.shape[:-1], (
             () if base.orientation is None else base.orientation.shape[:-1])) + H.shape[-2:]
@@ -258,6 +257,7 @@ def generalized_momentum(model: Model, q, qd, backend: str = 'auto', *,
     are true coordinates, so their Lagrange equations hold as on a fixed base.
     """
     if base is not None:
+        check_base_motion(base, model)
         twin = floating_twin(model)
         q, qd, _, _ = twin_state(model, base, q, qd)
         p, ctv = generalized_momentum(twin, q, qd, backend)
@@ -304,6 +304,7 @@ def _on_base(algorithm, model: Model, base: BaseMotion, q, qd, qdd, gravity, **o
     The floating twin's (:func:`~spatial_dynamics.base.floating_twin`) with the base's rows
     given by ``base``; the compiled kernels run it as any floating-base model.
     """
+    check_base_motion(base, model)
     twin = floating_twin(model)
     q, qd, qdd, gravity = twin_state(model, base, q, qd, qdd, gravity)
     return algorithm(twin, q, qd, qdd, gravity, **options)

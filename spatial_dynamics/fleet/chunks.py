@@ -104,7 +104,8 @@ def _merged(task: Task, rs: List[Dict]) -> Dict:
         for k, v in r.get('skipped', {}).items():
             skipped[k] = skipped.get(k, 0) + v
     start, end = min(r['start'] for r in used), max(r['end'] for r in used)
-    return dict(head, ok=True, start=start, end=end, seconds=end - start, samples=sums.N,
+    return dict(head, ok=True, start=start, end=end, seconds=end - start,
+                recorded=min(r['recorded'] for r in used), samples=sums.N,
                 joints=used[0]['joints'], sums=sums.to_dict(),
                 rms_residual=np.sqrt(sums.rr / sums.N).tolist(), skipped=skipped,
                 chunks=len(rs), messages=max(r['messages'] for r in rs),

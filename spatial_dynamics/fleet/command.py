@@ -18,15 +18,19 @@ cached by the content of the bag, the URDF and the options: a re-run does only n
 changed bags.
 
 Every (robot, joint, parameter) series is judged or listed as not judged with the reason
-(too few bags in the baseline or after it, no estimate: the joint did not move enough).
-A bag listed twice (overlapping globs, the same file by two paths) is counted once, said in
-a ``note:`` line; a bag that cannot be used is one ``failed:`` line naming its manifest row.
+(too few bags in the baseline or after it, no estimate: the joint did not move enough), and
+so is every robot none of whose bags could be used. A bag listed twice (overlapping globs,
+the same storage file by two paths) is counted once, said in a ``note:`` line (one per
+kind, with the count); a bag that cannot be used is one ``failed:`` line naming its
+manifest row.
 
 Exit status: 0 done, every series judged, nothing drifted; 3 done, something drifted
 (drift.txt names it); 4 done, nothing drifted among the series judged but some (or all)
-could not be judged (drift.txt says which and why); 1 refused (no usable manifest, no bag
-usable); 2 bad usage; 130 interrupted (Ctrl-C), 143 terminated (SIGTERM): each file is whole
-or as it was, no temporary left. A failed bag does not change the status of the others' verdict.
+could not be judged, or a robot had no usable bag (drift.txt says which and why); 1 refused
+(no usable manifest, no bag usable); 2 bad usage; 130 interrupted (Ctrl-C), 143 terminated
+(SIGTERM): each file is whole or as it was, no temporary left. A failed bag alone does not
+change the status: the robot's other bags are judged; a robot left with none is not judged
+(4).
 """
 
 from __future__ import annotations
@@ -49,10 +53,11 @@ from ..files import (check_output, check_outside_recordings, read_regular, regul
                      write_atomic)
 from ..replay.arguments import one_line
 from . import drift as drift_of
+from .drift import count
 from .chunks import CHUNK, merge, MIN_CHUNK, split
 from .engine import (bag_bytes, Cache, cluster_size, local_cluster, pending_bags, Progress,
                      run_tasks, SERIAL_BYTES, warm, WORKERS_PER_CORE)
-from .manifest import ManifestError, read_manifest, scan_folder
+from .manifest import ManifestError, once, read_manifest, scan_folder
 from .sums import Sums, solve, total
 from .task import Task
 from ..replay.identify import PARAMETERS
@@ -66,8 +71,8 @@ NOT_JUDGED = 4
 MAX_CHUNK = 366 * 86400.0
 #: What each exit status says, in every --help.
 EXIT_STATUS = ('Exit status: 0 every series judged, nothing drifted; 3 something drifted; '
-               '4 nothing drifted but some series not judged (drift.txt says why); 1 refused; '
-               '2 bad usage; 130 interrupted; 143 terminated.')
+               '4 nothing drifted but some series or robots not judged (drift.txt says why); '
+               '1 refused; 2 bad usage; 130 interrupted; 143 terminated.')
 COLUMNS = ['robot', 'bag', 'start', 'joint', 'parameter', 'value', 'sigma', 'rms_residual',
            'samples']
 
@@ -254,33 +259,30 @@ def parser() -> argparse.ArgumentParser:
 
 
 def tasks_of(source: str, urdf: Optional[str]
-             ) -> Tuple[List[Task], List[str], List[Dict]]:
+             ) -> Tuple[List[Task], List[Tuple[str, str]], List[Dict]]:
     """Return the tasks of ``source`` (each bag once), the notes and the globs matching none.
 
-    A note says which bag was left out; a glob of the manifest that matches no bag is a
-    failed result naming its row (:func:`~.manifest.read_manifest`). A bag is the same bag
-    when its path resolves to the same file (overlapping globs, a link): it is counted once,
+    A note ``(kind, which)`` says which bag was left out; a glob of the manifest that
+    matches no bag is a failed result naming its row (:func:`~.manifest.read_manifest`). A
+    bag is the same bag when it shares a storage file with another (overlapping globs, a
+    link, a directory and its own ``.db3``: :func:`~.manifest.once`): it is counted once,
     under its first row.
     """
     if os.path.isdir(source):
         tasks, unmatched = scan_folder(source, urdf), []
     else:
         tasks, unmatched = read_manifest(source)
-    first: Dict[str, Task] = {}
-    once, notes = [], []
-    for t in tasks:
-        real = os.path.realpath(t.bag)
-        if real in first:
-            notes.append(f'note: {t.bag} ({t.where}) is listed twice, counted once '
-                         f'(as {first[real].bag} of {first[real].robot}, {first[real].where})')
-            continue
-        first[real] = t
-        once.append(t)
-    return once, notes, unmatched
+    tasks, notes = once(tasks)
+    return tasks, notes, unmatched
 
 
 def per_bag_rows(results: List[Dict]) -> List[Dict]:
-    """Return fleet.csv's rows: each bag's fit from its own sums."""
+    """Return fleet.csv's rows: each bag's fit from its own sums.
+
+    A bag's date (``start_s``, the trend's time axis) is when its first message was
+    recorded (the storage's bag time), not its ``header.stamp``: the stamps may run on
+    another clock (a simulation's, restarting at 0 in every bag).
+    """
     rows = []
     for r in results:
         if not r.get('ok'):
@@ -288,7 +290,7 @@ def per_bag_rows(results: List[Dict]) -> List[Dict]:
         fit = solve(Sums.from_dict(r['sums']), r['joints'])
         for j, joint in enumerate(r['joints']):
             for k, parameter in enumerate(PARAMETERS):
-                rows.append({'robot': r['robot'], 'bag': r['bag'], 'start_s': r['start'],
+                rows.append({'robot': r['robot'], 'bag': r['bag'], 'start_s': r['recorded'],
                              'joint': joint, 'parameter': parameter,
                              'value': float(getattr(fit, parameter)[j]),
                              'sigma': float(fit.sigma[j, k]),
@@ -305,7 +307,7 @@ def per_robot(results: List[Dict]) -> Dict[str, object]:
             by_robot.setdefault(r['robot'], []).append(r)
     out = {}
     for robot, rs in by_robot.items():
-        rs = sorted(rs, key=lambda r: (r['start'], r['bag']))
+        rs = sorted(rs, key=lambda r: (r['recorded'], r['bag']))
         names = rs[0]['joints']
         same = [r for r in rs if r['joints'] == names]
         out[robot] = (names, solve(total(Sums.from_dict(r['sums']) for r in same), names),
@@ -460,8 +462,8 @@ def _run(args) -> int:
         serial = (args.serial or not pending
                   or (not asked and bag_bytes(pending) < SERIAL_BYTES))
         if asked and not pending:
-            notes.append('note: every bag is in the cache: no cluster '
-                         + ('contacted' if args.scheduler else 'started'))
+            print('note: every bag is in the cache: no cluster '
+                  + ('contacted' if args.scheduler else 'started'), file=sys.stderr)
         progress = Progress(len(parts))
         try:
             if serial:
@@ -524,24 +526,32 @@ def _on_cluster(args, tasks, cache, progress, digests) -> List[Dict]:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
-def verdict(judgement: drift_of.Judgement) -> List[str]:
+def verdict(judgement: drift_of.Judgement, unusable: Optional[Dict[str, int]] = None
+            ) -> List[str]:
     """Return drift.txt's verdict lines: the drifts or no drift, and what was not judged.
 
-    "no drift" only when every series was judged; each series not judged is listed with the
-    reason (a joint's parameters with the same reason on one line).
+    "no drift" only when every series was judged and every robot had a usable bag; each
+    series not judged is listed with the reason (a joint's parameters with the same reason on
+    one line), and each robot of ``unusable`` (robot -> its bags, all failed) as not judged.
     """
+    unusable = unusable or {}
     lines = [f'drift: {d.text()}' for d in judgement.drifts]
     missing = len(judgement.not_judged)
     total_series = judgement.judged + missing
+    left = ([f'{missing} of {total_series} series not judged'] if missing else []) + (
+        [f'{count(len(unusable), "robot")} with no usable bag not judged'] if unusable else [])
     if not judgement.judged:
         lines.append(f'nothing judged: none of the {total_series} series (robot, joint, '
-                     'parameter) could be judged')
+                     'parameter) could be judged' if total_series else
+                     'nothing judged: no bag could be used')
     elif not lines:
-        lines.append('no drift' if not missing else
-                     f'no drift among the {judgement.judged} series judged; {missing} of '
-                     f'{total_series} not judged')
-    elif missing:
-        lines.append(f'{missing} of {total_series} series not judged')
+        lines.append('no drift' if not left else
+                     f'no drift among the {judgement.judged} series judged; ' + '; '.join(left))
+    elif left:
+        lines.append('; '.join(left))
+    lines += [f'not judged: {robot}: ' + (f'all {n} of its bags failed' if n > 1 else
+                                          'its one bag failed') + ' (see failed: below)'
+              for robot, n in sorted(unusable.items())]
     grouped: Dict[Tuple[str, str, str], List[str]] = {}
     for (robot, joint, parameter), reason in judgement.not_judged.items():
         grouped.setdefault((robot, joint, reason), []).append(drift_of.LABELS[parameter])
@@ -550,7 +560,33 @@ def verdict(judgement: drift_of.Judgement) -> List[str]:
     return lines
 
 
-def report(args, results: List[Dict], notes: Sequence[str] = ()) -> int:
+#: The earliest bag time taken for a wall-clock date without a note (2000-01-01).
+PLAUSIBLE = 946684800.0
+#: The note of a bag whose bag time is before :data:`PLAUSIBLE`.
+EARLY = ('bags recorded before 2000 (recorded on a simulated clock?), dated and ordered by '
+         'that time')
+#: How many examples a note of one kind shows (a manifest of 20 000 repeated rows is one line).
+NOTE_EXAMPLES = 3
+
+
+def noted(notes: Sequence[Tuple[str, str]]) -> List[str]:
+    """Return one ``note:`` line per kind of ``notes`` ``(kind, which)``: its count, examples.
+
+    ``note: bags listed twice, each counted once (2): A (row) is B of r01 (row); C ...``;
+    kinds in the order they first appear, at most :data:`NOTE_EXAMPLES` examples each.
+    """
+    kinds: Dict[str, List[str]] = {}
+    for kind, which in notes:
+        kinds.setdefault(kind, []).append(which)
+    lines = []
+    for kind, which in kinds.items():
+        more = len(which) - NOTE_EXAMPLES
+        lines.append(f'note: {kind} ({len(which)}): ' + '; '.join(which[:NOTE_EXAMPLES])
+                     + (f'; and {more} more' if more > 0 else ''))
+    return lines
+
+
+def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> int:
     """Write the files, print the verdict and the bags that failed; return the status."""
     rows = per_bag_rows(results)
     failed = [r for r in results if not r.get('ok')]
@@ -568,10 +604,18 @@ def report(args, results: List[Dict], notes: Sequence[str] = ()) -> int:
          for j, joint in enumerate(names) for k, p in enumerate(PARAMETERS)]), 'robots.csv')
     hours = sum(r['seconds'] for r in results if r.get('ok')) / 3600.0
     cached = sum(1 for r in results if r.get('cached'))
-    lines = [f'{len(results)} bags of {len({r["robot"] for r in results})} robots, '
+    n_robots = len({r['robot'] for r in results})
+    lines = [f'{count(len(results), "bag")} of {count(n_robots, "robot")}, '
              f'{hours:.3g} h of data ({cached} from the cache, {len(failed)} failed)']
-    lines += list(notes)
-    lines += verdict(judgement)
+    lines += noted(list(notes) + [
+        (EARLY, f'{r["robot"]} {r["bag"]} on {drift_of.day(r["recorded"])}') for r in results
+        if r.get('ok') and r['recorded'] < PLAUSIBLE])
+    usable = {r['robot'] for r in results if r.get('ok')}
+    unusable: Dict[str, int] = {}
+    for r in failed:
+        if r['robot'] not in usable:
+            unusable[r['robot']] = unusable.get(r['robot'], 0) + 1
+    lines += verdict(judgement, unusable)
     lines += [f'failed: {r["robot"]} {r["bag"]}'
               + (f' ({r["where"]})' if r.get('where') else '') + f': {r["reason"]}'
               for r in failed]
@@ -582,7 +626,7 @@ def report(args, results: List[Dict], notes: Sequence[str] = ()) -> int:
         written += plot_trends(args.out, rows, drifts,
                                os.path.join(args.cache or os.path.join(args.out, 'cache'),
                                             'plots'))
-    status = DRIFTED if drifts else NOT_JUDGED if judgement.not_judged else 0
+    status = DRIFTED if drifts else NOT_JUDGED if judgement.not_judged or unusable else 0
     if not rows:
         status = 1
     say(text + f'written to {args.out}: {", ".join(written)}')

@@ -83,6 +83,11 @@ class Judgement:
     not_judged: Dict[Tuple[str, str, str], str] = field(default_factory=dict)
 
 
+def count(n: int, noun: str) -> str:
+    """``1 robot``, ``2 robots``: ``n`` and ``noun``, plural unless ``n`` is 1."""
+    return f'{n} {noun}' + ('' if n == 1 else 's')
+
+
 def day(t: float) -> str:
     """Return the UTC date of ``t`` (s since the epoch)."""
     return datetime.fromtimestamp(t, timezone.utc).strftime('%Y-%m-%d')
@@ -135,24 +140,36 @@ def cusum(start: Sequence[float], x: Sequence[float], sigma: Sequence[float],
     """Judge one series: ``((onset index, reference, latest z, within baseline), None)``.
 
     ``start`` sorted. Returns ``(None, None)`` when judged without a change, ``(None,
-    reason)`` when it cannot be judged. The onset index counts the estimates with a finite
-    value and σ; the reference is the baseline's mean (the first estimate's value when the
-    baseline itself drifts).
+    reason)`` when it cannot be judged: a bag without an estimate (NaN) counts where it is,
+    so a still bag after the baseline reads as such, not as no bag after it. The onset index
+    counts the estimates with a finite value and σ; the reference is the baseline's mean
+    (the first estimate's value when the baseline itself drifts).
     """
-    n_all = len(start)
+    every = np.asarray(start, float)
     t, x, s = _clean(start, x, sigma)
+    still = ' (the joint did not move enough to determine it)'
     if not len(t):
-        return None, (f'no estimate in any of its {n_all} bags (the joint did not move enough '
-                      'to determine it)')
+        bags = 'its one bag' if len(every) == 1 else f'any of its {len(every)} bags'
+        return None, f'no estimate in {bags}{still}'
     nb = _baseline(t, baseline_days)
+    end = t[0] + baseline_days * 86400.0
     if nb < MIN_BASELINE:
-        return None, (f'{nb} estimate(s) in its first {baseline_days:g} days; a baseline needs '
-                      f'{MIN_BASELINE}')
+        idle = int(np.sum(every < end)) - nb
+        return None, (f'{count(nb, "estimate")} in its first {baseline_days:g} days; a '
+                      f'baseline needs {MIN_BASELINE}'
+                      + (f'; {count(idle, "bag")} there gave none{still}' if idle else ''))
     if nb >= len(t):
-        return None, f'no estimate after its first {baseline_days:g} days ({len(t)} in all)'
+        idle = int(np.sum(every >= end))
+        if idle:
+            return None, (f'no estimate after its first {baseline_days:g} days: '
+                          + ('its one bag after them gives none' if idle == 1 else
+                             f'none of its {idle} bags after them gives one') + still)
+        return None, (f'no estimate after its first {baseline_days:g} days '
+                      f'({len(t)} in all)')
     phi = scatter(x, s)
     if not np.isfinite(phi):
-        return None, (f'{len(t)} estimates; its scatter needs {MIN_SCATTER + 1} at least')
+        return None, (f'{count(len(t), "estimate")}; its scatter needs {MIN_SCATTER + 1} at '
+                      'least')
     w = 1.0 / s[:nb] ** 2
     mu0 = float(np.sum(w * x[:nb]) / np.sum(w))
     from scipy.special import chdtri        # chi2.isf: scipy.stats takes seconds to import

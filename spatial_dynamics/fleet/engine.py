@@ -208,9 +208,10 @@ def valid(result: Dict) -> bool:
             a = np.asarray(sums[name], dtype=float)
             ok = ok and a.shape == shape and bool(np.isfinite(a).all())
         if result['samples']:
-            numbers = np.asarray([result['start'], result['end'], result['seconds']]
-                                 + list(result['rms_residual']), dtype=float)
-            ok = ok and numbers.shape == (3 + n,) and bool(np.isfinite(numbers).all())
+            numbers = np.asarray([result['start'], result['end'], result['seconds'],
+                                  result['recorded']] + list(result['rms_residual']),
+                                 dtype=float)
+            ok = ok and numbers.shape == (4 + n,) and bool(np.isfinite(numbers).all())
         return bool(ok)
     except (KeyError, TypeError, ValueError):
         return False

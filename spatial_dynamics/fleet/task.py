@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from ..replay.bags import JointStates
 
 #: Changes when what a task computes changes (the cache's results are then stale).
-VERSION = 'fleet-2'
+VERSION = 'fleet-3'
 
 #: Bag time read on each side of a chunk, s, at least: four differentiation windows or this.
 MARGIN = 1.0
@@ -127,13 +127,14 @@ def prepare(task: Task, model) -> Dict:
     """Read and clean the bag, derive q̇ and q̈: ``{t, q, qd, qdd, effort, skipped, ...}``.
 
     ``owned`` (bool (N,), or None for a whole bag) marks the samples that are the chunk's;
-    ``messages``: how many messages were read (held in memory at once).
+    ``messages``: how many messages were read (held in memory at once); ``recorded``: the
+    bag time (s since the epoch) of the first message of the bag or chunk, its date.
     """
     from ..replay import bags
     if not task.chunked:
         js = bags.read_joint_states(task.bag, task.option('topic'), model.joint_names)
         return dict(_derive(task, model, js, (None, None)), owned=None,
-                    messages=len(js.stamp))
+                    messages=len(js.stamp), recorded=_first(js))
     margin = int(max(MARGIN, 4.0 * float(task.option('window'))) * 1e9)
     for _ in range(WIDENINGS):
         d = _prepare_chunk(task, model, margin)
@@ -207,7 +208,12 @@ def _prepare_chunk(task: Task, model, margin: Optional[int]) -> Optional[Dict]:
     if k.size and ((lo is not None and k[0] < need)
                    or (hi is not None and len(d['t']) - 1 - k[-1] < need)):
         return None
-    return dict(d, owned=owned, messages=messages)
+    return dict(d, owned=owned, messages=messages, recorded=_first(own))
+
+
+def _first(js: 'JointStates') -> float:
+    """Return the bag time (s since the epoch) of the first message of ``js`` (NaN: none)."""
+    return float(np.min(js.received)) if len(js.received) else float('nan')
 
 
 def _joined(parts) -> 'JointStates':
@@ -222,15 +228,18 @@ def _joined(parts) -> 'JointStates':
     return JointStates(parts[0].names, *(np.concatenate([getattr(p, f) for p in parts])
                                          for f in ('stamp', 'position', 'velocity', 'effort')),
                        skipped=skipped, fast=sum(p.fast for p in parts),
-                       generic=sum(p.generic for p in parts))
+                       generic=sum(p.generic for p in parts),
+                       received=np.concatenate([p.received for p in parts]))
 
 
 def process(task: Task) -> Dict:
     """Run one bag or chunk: the fit's sums and the residual statistics, or why it is refused.
 
-    Returns ``{ok, robot, bag, start, end (s since the epoch: the first and last sample),
-    seconds, samples, joints, sums, rms_residual (rigid body), skipped, messages (read at
-    once), peak_rss_mb (of the process so far)}`` or ``{ok: False, robot, bag, reason}``.
+    Returns ``{ok, robot, bag, start, end (the first and last sample's header.stamp, s),
+    seconds, recorded (s since the epoch: when its first message was recorded, the bag's
+    date whatever clock the stamps are on), samples, joints, sums, rms_residual (rigid
+    body), skipped, messages (read at once), peak_rss_mb (of the process so far)}`` or
+    ``{ok: False, robot, bag, reason}``.
     A chunk with no usable sample has ``samples`` 0 and ``empty``: why. BLAS and the
     package's own threads (the kernels' batches, the derivatives' filter) run on one thread:
     the engine gives each worker one core.
@@ -266,7 +275,7 @@ def process(task: Task) -> Dict:
             MemoryError) as err:
         return dict(head, ok=False, reason=one_line(err))
     return dict(head, ok=True, start=float(t[0]), end=float(t[-1]),
-                seconds=float(t[-1] - t[0]), samples=int(len(t)),
+                seconds=float(t[-1] - t[0]), recorded=d['recorded'], samples=int(len(t)),
                 joints=list(model.joint_names), sums=sums.to_dict(),
                 rms_residual=np.sqrt(np.mean(residual ** 2, axis=0)).tolist(),
                 skipped={k: int(v) for k, v in d['skipped'].items()},

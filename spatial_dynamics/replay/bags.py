@@ -422,7 +422,10 @@ def read_joint_states(path: str, topic: str, names: Sequence[str], fast: bool = 
     """Read a JointState topic of a bag into arrays in the order of ``names``.
 
     ``fast=False`` reads through ``rosbags`` alone (its readers and deserialiser).
-    ``progress(done, total)`` is called after each batch.
+    ``progress(done, total)`` is called after each batch. An MCAP file from which fewer
+    messages of the topic could be read than its own summary's statistics list is refused
+    (:func:`check_complete`). metadata.yaml's counts are only a hint (another file, which may
+    be stale or say anything); sqlite3 reads every row of the topic or fails.
     """
     if fast:
         # An uncompressed sqlite3 bag is read without opening it in rosbags, which counts
@@ -440,13 +443,31 @@ def read_joint_states(path: str, topic: str, names: Sequence[str], fast: bool = 
     reader = open_reader(path)
     try:
         total = topics(reader).get(topic, ('', 0))[1]      # metadata.yaml's, for a bag dir
-        paths = storage_files(reader)[1]
+        storage, paths = storage_files(reader)
         if paths:       # only a size hint: capped by the files' size (16 bytes a message)
             total = min(total, sum(os.path.getsize(p) for p in paths) // 16)
-        return decode_joint_states(raw_batches(reader, topic, JOINT_STATE, fast), names, fast,
-                                   progress and (lambda k: progress(k, total)), total)
+        js = decode_joint_states(raw_batches(reader, topic, JOINT_STATE, fast), names, fast,
+                                 progress and (lambda k: progress(k, total)), total)
+        if fast and storage == 'mcap':
+            check_complete(js, mcap_listed(paths, topic), path, topic)
+        return js
     finally:
         reader.close()
+
+
+def check_complete(js: JointStates, listed: int, path: str, topic: str) -> None:
+    """Refuse ``js`` unless every message the storage lists for ``topic`` was read.
+
+    ``listed``: the topic's message count in the MCAP files' statistics (0: not known). A
+    damaged MCAP (a chunk overwritten) ends the reading early without an error: fewer
+    messages read (decoded or skipped) than listed is a :class:`BagError` saying how many,
+    not a partial fit.
+    """
+    read = len(js.stamp) + sum(js.skipped.values())
+    if read < listed:
+        raise BagError(f'{path}: {read} of the {listed} messages of {topic} its MCAP '
+                       'statistics list could be read: the file is damaged (mcap recover may '
+                       'repair it)')
 
 
 def read_stamped(path: str, topic: str, msgtype: str, start: Optional[int] = None,
@@ -507,6 +528,42 @@ def _mcap_channels(buf: memoryview, data_end: int) -> Dict[int, str]:
                 buf[b + 8:b + 8 + n]).decode('utf-8', 'replace')
         o += 9 + length
     return channels
+
+
+OP_STATISTICS = 0x0B
+
+
+def mcap_listed(paths: Sequence[str], topic: str) -> int:
+    """Return how many messages of ``topic`` the MCAP files' statistics records list (0: none).
+
+    Each file's summary section, found from its footer (so a damaged data section does not
+    hide it): the Statistics record's ``channel_message_counts`` of the channels of
+    ``topic``, named by the summary's Channel records.
+    """
+    listed = 0
+    for buf in _mcap_buffers(paths):
+        foot = len(buf) - len(MCAP_MAGIC) - (9 + 20)        # the footer record, then magic
+        if foot < 8 or buf[foot] != 0x02:
+            continue
+        o = int.from_bytes(buf[foot + 9:foot + 17], 'little')      # summary_start
+        channels: Dict[int, str] = {}
+        counts: Dict[int, int] = {}
+        while 8 <= o and o + 9 <= foot:
+            length = int.from_bytes(buf[o + 1:o + 9], 'little')
+            end = min(o + 9 + length, foot)
+            if buf[o] == OP_CHANNEL:
+                n = int.from_bytes(buf[o + 13:o + 17], 'little')
+                channels[int.from_bytes(buf[o + 9:o + 11], 'little')] = bytes(
+                    buf[o + 17:o + 17 + n]).decode('utf-8', 'replace')
+            elif buf[o] == OP_STATISTICS:
+                b = o + 9 + 8 + 2 + 4 * 4 + 8 + 8            # to channel_message_counts
+                size = int.from_bytes(buf[b:b + 4], 'little')
+                for k in range(b + 4, min(b + 4 + size, end) - 9, 10):
+                    counts[int.from_bytes(buf[k:k + 2], 'little')] = int.from_bytes(
+                        buf[k + 2:k + 10], 'little')
+            o += 9 + length
+        listed += sum(n for chan, n in counts.items() if channels.get(chan) == topic)
+    return listed
 
 
 def _mcap_batches_between(paths: Sequence[str], topic: str, start: Optional[int],

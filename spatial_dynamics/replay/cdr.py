@@ -50,7 +50,9 @@ class JointStates:
 
     ``stamp`` (N,) s: ``header.stamp``, or the bag's receive time when the stamp is zero;
     ``position``, ``velocity``, ``effort``: (N, n). Messages are in bag order (not sorted).
-    ``skipped`` counts the messages dropped while reading, by reason.
+    ``skipped`` counts the messages dropped while reading, by reason. ``received`` (N,) s
+    since the epoch: each message's bag time, when the recorder received it (wall time,
+    whatever clock the stamps are on), or None when not known.
     """
 
     names: Tuple[str, ...]
@@ -61,6 +63,7 @@ class JointStates:
     skipped: Dict[str, int] = field(default_factory=dict)
     fast: int = 0           # messages read by the numpy path
     generic: int = 0        # messages read by rosbags' deserialiser
+    received: Optional[np.ndarray] = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -192,7 +195,9 @@ def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bo
     skipped: Dict[str, int] = {}
     width = len(names)
     size = max(int(expected), 1)
-    columns = [np.full(size, np.nan)] + [np.full((size, width), np.nan) for _ in FIELDS]
+    # the stamps, the fields, the bag times
+    columns = ([np.full(size, np.nan)] + [np.full((size, width), np.nan) for _ in FIELDS]
+               + [np.full(size, np.nan)])
     used = 0            # rows of ``columns`` filled
     counts = {'fast': 0, 'generic': 0}
     store = None
@@ -267,7 +272,8 @@ def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bo
             columns = [np.concatenate((c[:used], np.full((grow - used,) + c.shape[1:],
                                                          np.nan))) for c in columns]
         stamp = columns[0][used:used + N]
-        out = [c[used:used + N] for c in columns[1:]]
+        out = [c[used:used + N] for c in columns[1:-1]]
+        columns[-1][used:used + N] = np.asarray(times, dtype=np.int64) * 1e-9
         keep = np.ones(N, dtype=bool)
         if isinstance(messages, np.ndarray):
             block_run(messages, times, 0, stamp, out, keep)
@@ -290,7 +296,8 @@ def decode_joint_states(batches: Iterable[Batch], names: Sequence[str], fast: bo
         done += N
         if progress is not None:
             progress(done)
-    return JointStates(names, *(c[:used] for c in columns), skipped=skipped, **counts)
+    return JointStates(names, *(c[:used] for c in columns[:-1]), skipped=skipped,
+                       received=columns[-1][:used], **counts)
 
 
 def verify_layout(data: bytes) -> bool:

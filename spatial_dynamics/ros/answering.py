@@ -468,6 +468,8 @@ class Answering:
         except InputError as err:   # the base's state is not known: nothing is published
             if getattr(dynamics, 'pulls', None):   # a contact would pull, no QP answer
                 self.base_inputs.pulled(dynamics.pulls, err)
+            if getattr(dynamics, 'unsolved', None):   # the contacts cannot carry the base
+                self.base_inputs.unsolved(dynamics.unsolved[-1], err)
             self._reject(topic, err.reason, str(err))
             return None
         except Exception as err:  # never die on one message
@@ -480,6 +482,8 @@ class Answering:
             tau, saturated = self._clamp(robot, tau)
             if saturated.any():
                 self._count_saturated(robot, tau, saturated)
+        else:
+            self._count_above_limit(robot, tau)
         contacts = None
         if robot.base.floating and dynamics.pulls:   # re-solved by qp: a contact would pull
             self.base_inputs.pulled(dynamics.pulls)
@@ -534,6 +538,24 @@ class Answering:
             'clamped to the URDF effort limit: '
             + ', '.join(f'{name!r} at {tau[robot.joints.index(name)]:+g}' for name in names),
             throttle_duration_sec=1.0)
+
+    def _count_above_limit(self, robot: Robot, tau: np.ndarray) -> None:
+        """Count (and WARN, throttled) an answer above a joint's URDF effort limit.
+
+        Published as it is: the URDF's limits are often wrong; clamping is
+        ``clamp_to_effort_limits``'s, opt-in.
+        """
+        ratio = np.abs(tau) / robot.effort_limit
+        i = int(np.argmax(ratio))
+        if not ratio[i] > 1.0:
+            return
+        window, joint, limit = self.window, robot.joints[i], float(robot.effort_limit[i])
+        window.above_limit += 1
+        if window.above_worst is None or ratio[i] > window.above_worst[0]:
+            window.above_worst = (float(ratio[i]), joint, float(tau[i]), limit)
+        self.log.warn(f'effort above the URDF limit, published (clamp_to_effort_limits is '
+                      f'off): {joint!r} {tau[i]:+.4g}, limit {limit:g} ({ratio[i]:.3g}x)',
+                      throttle_duration_sec=1.0)
 
     def _active_wrenches(self, robot: Robot, now_ns: int) -> Optional[dict]:
         """Link -> wrench of the unexpired external wrenches on links of the model."""

@@ -17,8 +17,10 @@ Pure Python + numpy + the library (no rclpy import), tested in
              (or measured) joint state, and :func:`~spatial_dynamics.contact_inverse_dynamics`
              splits ``M q̈ + h`` between the joints' efforts and the contact wrenches of
              ``contacts.links``; a split that makes a contact pull (beyond
-             :func:`pull_tolerance`) is re-solved by the QP, or refused
-             (:class:`FloatingDynamics`).
+             :func:`pull_tolerance`) is re-solved by the QP, or refused; one that leaves
+             the base unbalanced (:func:`residual_tolerance`: the contacts in contact cannot
+             carry it) or has no contact in force is refused (:class:`FloatingDynamics`).
+             ``contacts.links`` is required.
 ===========  ===================================================================================
 
 Inputs (each sampled, checked and held; an answer whose base input is missing or older than
@@ -39,7 +41,8 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
 * ``base/twist`` (``geometry_msgs/TwistStamped``): the twist of the root link (or, moving, of a
   link fixed to it) in its own axes, ``header.frame_id`` that link or empty: what
   ``nav_msgs/Odometry`` carries in its child frame. A frame that is not a link of the URDF
-  (``base_footprint``) is ``base_input.odometry_link`` when that is set (:func:`twist_link`).
+  (``base_footprint``) must be exactly ``base_input.odometry_frame``, then taken as
+  ``base_input.odometry_link`` (:func:`twist_link`); any other is refused (``wrong_frame``).
   Its rate, the base's spatial acceleration, is the difference of successive samples over
   their stamps (``base_input.acceleration: difference``: no closer than
   ``base_input.min_interval``, low-pass filtered and bounded by what a base reaches,
@@ -81,19 +84,24 @@ CONTACT_METHODS = sd.contacts.METHODS
 QUATERNION_TOLERANCE = sd.joints.QUATERNION_TOLERANCE
 #: Why an answer is refused on a moving or floating base (diagnostics counter keys).
 BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved',
-                'contacts_missing', 'contacts_pull')
+                'contacts_missing', 'contacts_pull', 'no_contact')
 #: Why a base input message is refused.
 BASE_INPUT_REASONS = ('non_finite', 'out_of_bounds', 'not_unit', 'wrong_frame', 'unstamped',
                       'stamp_not_increasing', 'interval_too_short', 'length_mismatch',
                       'no_model', 'unknown_link')
-#: The base rows' residual (N, N m) above which the status WARNs: the contacts cannot carry it.
-RESIDUAL_WARN = 1e-6
 #: A contact pulls when its normal force ``n·f`` is below ``−PULL_TOLERANCE · m · 9.81`` N, ``m``
 #: the model's mass (:func:`pull_tolerance`): relative to the weight, because the split's
 #: rounding and the QP's convergence tolerance (relative, ~1e-8) scale with the forces, which
 #: scale with the weight; an absolute 1e-6 N would refuse a 100 kg robot's QP answers for
 #: their solver noise, and let a 0.1 kg one pull a tenth of a mN unseen.
 PULL_TOLERANCE = 1e-6
+#: A split leaves the base rows unbalanced when a component of its base residual
+#: ``(M q̈ + h)_base − J_c,baseᵀ λ`` (N m, N) exceeds ``RESIDUAL_TOLERANCE · m · 9.81``
+#: (:func:`residual_tolerance`), relative to the weight as :data:`PULL_TOLERANCE` and for the
+#: same reasons: the contacts in force cannot carry the base (one foot, none), the answer is
+#: refused (``contacts_unsolved``). A split that carries it leaves rounding (~1e-15 of the
+#: weight); the QP its convergence tolerance (~1e-8).
+RESIDUAL_TOLERANCE = 1e-6
 
 _XYZ = ('x', 'y', 'z')
 
@@ -172,26 +180,35 @@ def twist_rate(before: Optional[np.ndarray], v_before: np.ndarray, v: np.ndarray
     return a
 
 
-def twist_link(model: 'sd.Model', frame: str, field: str, odometry_link: str = '') -> str:
+def twist_link(model: 'sd.Model', frame: str, field: str, odometry_link: str = '',
+               odometry_frame: str = '') -> str:
     """Return the link of ``model`` a base twist in ``frame`` is of ('' = the root link).
 
     ``frame`` is the message's ``field`` (``child_frame_id`` of ``nav_msgs/Odometry``,
-    ``header.frame_id`` of ``geometry_msgs/TwistStamped``); a frame that is not a link of
-    the model (``base_footprint`` of a typical /odom), or empty, is ``odometry_link`` when that
-    is set. InputError (wrong_frame) naming ``field`` unless the link is the root link or
-    (fixed base) a link fixed to it.
+    ``header.frame_id`` of ``geometry_msgs/TwistStamped``): a link of the model, or exactly
+    ``odometry_frame`` (the frame a source writes that the URDF does not have, the
+    ``base_footprint`` of a typical /odom), which is ``odometry_link`` ('' = the root link);
+    empty is ``odometry_link`` too. Any other frame (a typo, another robot's odometry) is
+    InputError (wrong_frame) naming ``field``, as is a link other than the root link or (fixed
+    base) a link fixed to it.
     """
-    link = odometry_link if odometry_link and (not frame or frame not in model.frames) else frame
+    aliased = not frame or (odometry_frame and frame == odometry_frame)
+    link = odometry_link if aliased else frame
     root = model.body_names[1 if model.floating else 0]
-    if link and link != root and (model.floating or link not in model.frames
-                                  or model.frames[link].body != 0):
-        where = 'not a link of the model' if link not in model.frames else (
-            'a link that moves with a joint' if not model.floating else 'not the root link')
-        hint = ('' if odometry_link or link in model.frames else
-                '; set base_input.odometry_link to the link of the URDF this frame is')
+    if link and link not in model.frames:
+        known = (f', nor base_input.odometry_frame {odometry_frame!r}' if odometry_frame
+                 else '')
+        raise InputError('wrong_frame', f'{field} {frame!r} is not a link of the model{known}: '
+                         f"the twist must be the base's, in its frame {root!r}" + (
+                             '' if model.floating else ' or a link fixed to it') + (
+                             f'; if {frame!r} is the frame your odometry writes, set '
+                             f'base_input.odometry_frame to {frame!r} and '
+                             'base_input.odometry_link to the link of the URDF it is'))
+    if link and link != root and (model.floating or model.frames[link].body != 0):
+        where = 'a link that moves with a joint' if not model.floating else 'not the root link'
         raise InputError('wrong_frame', f'{field} {frame!r} is {where}: the twist must be the '
                          f"base's, in its frame {root!r}" + (
-                             '' if model.floating else ' or a link fixed to it') + hint)
+                             '' if model.floating else ' or a link fixed to it'))
     return link
 
 
@@ -219,7 +236,12 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
         if links:
             raise ConfigError("parameter contacts.links: contacts need base 'floating' (a "
                               "moving base's motion is given, nothing carries it)")
-    link = params.base_input_odometry_link
+    elif not links:
+        raise ConfigError('parameter contacts.links: a floating base needs contacts to carry '
+                          f'it: set the links of robot {model.name!r} that touch the ground '
+                          '(feet, soles), e.g. contacts.links:=[FL_FOOT, FR_FOOT, HL_FOOT, '
+                          f'HR_FOOT] ({source})')
+    link, frame = params.base_input_odometry_link, params.base_input_odometry_frame
     if link:
         if link not in model.frames:
             raise ConfigError(f'parameter base_input.odometry_link: {link!r} is not a link of '
@@ -228,6 +250,10 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
             twist_link(model, link, 'base_input.odometry_link')
         except InputError as err:
             raise ConfigError(f'parameter base_input.odometry_link: {err}') from None
+    if frame in model.frames:
+        raise ConfigError(f'parameter base_input.odometry_frame: {frame!r} is a link of robot '
+                          f'{model.name!r} ({source}), taken as itself: odometry_frame names '
+                          'a frame the URDF does not have (e.g. base_footprint)')
     off = observer_off(params)
     if params.wrench_estimate_link and off:
         raise ConfigError(f'parameter wrench_estimate.link: not supported with {off}')
@@ -275,6 +301,11 @@ def pull_tolerance(model: 'sd.Model') -> float:
     return PULL_TOLERANCE * float(model.inertia[:, 3, 3].sum()) * 9.81
 
 
+def residual_tolerance(model: 'sd.Model') -> float:
+    """Return the base residual (N m, N) a split may leave: :data:`RESIDUAL_TOLERANCE` · m g."""
+    return RESIDUAL_TOLERANCE * float(model.inertia[:, 3, 3].sum()) * 9.81
+
+
 def qp_missing_warning(robot) -> str:
     """Return the WARN, once at configuration, of a floating base without its QP ('': none)."""
     if robot is None or not robot.qp_missing:
@@ -310,6 +341,9 @@ class BaseWindow:
     pull_max: float = 0.0       # the worst pull seen (N) of those, and its contact
     pull_contact: str = ''
     refused_last: str = ''      # why the last of them was refused
+    unsolved: int = 0           # answers refused: the contacts could not carry the base
+    unsolved_residual: float = 0.0   # the largest base residual of those (N m, N)
+    unsolved_last: str = ''     # why the last of them was refused
 
 
 class BaseInputs:
@@ -376,11 +410,12 @@ class BaseInputs:
                     now_ns: int) -> None:
         """Check and hold the base's ``twist`` (a ``geometry_msgs/Twist``) in ``frame``.
 
-        ``field`` names where the message carries ``frame``. A frame that is not a link of
-        the model is ``base_input.odometry_link``'s when that is set.
+        ``field`` names where the message carries ``frame``: a link of the model, or
+        ``base_input.odometry_frame``, taken as ``base_input.odometry_link`` (:func:`twist_link`).
         """
         robot, params = config.robot, config.params
-        frame = twist_link(robot.base, frame, field, params.base_input_odometry_link)
+        frame = twist_link(robot.base, frame, field, params.base_input_odometry_link,
+                           params.base_input_odometry_frame)
         v = twist_array(twist)
         before = self.twist
         rate = None
@@ -538,7 +573,7 @@ class BaseInputs:
             robot.friction_threshold, f_ext,
             None, np.concatenate((position, quat)), v, self._rate(params, 'base/twist'),
             contacts, params.contacts_method, [], self._measured(params, contacts, now_ns),
-            robot.qp_missing, robot.pull_tolerance, [])
+            robot.qp_missing, robot.pull_tolerance, [], robot.residual_tolerance, [])
 
     def solved(self, result: 'sd.ContactResult', tolerance: float) -> None:
         """Count a contact solution's residual and violations for the period.
@@ -574,6 +609,17 @@ class BaseInputs:
             if pull.amount > window.pull_max:
                 window.pull_max, window.pull_contact = pull.amount, pull.contact
 
+    def unsolved(self, residual: float, refused: InputError) -> None:
+        """Count an answer refused because its contacts could not carry the base.
+
+        ``residual``: the largest component of its base residual (N m, N; the whole
+        ``(M q̈ + h)_base`` when no contact is in force).
+        """
+        window = self.window
+        window.unsolved += 1
+        window.unsolved_residual = max(window.unsolved_residual, residual)
+        window.unsolved_last = str(refused)
+
 
 @dataclass(frozen=True)
 class FloatingDynamics(Dynamics):
@@ -593,8 +639,16 @@ class FloatingDynamics(Dynamics):
     is re-solved by ``'qp'`` (friction cones of the contacts' ``μ``, ``n·f ≥ 0``), whose
     answer is used; each such pull is kept in ``pulls``. InputError ``contacts_unsolved``
     when the QP finds none, ``contacts_pull`` when ``qp_missing`` says why the QP cannot run
-    (or it pulls itself). :meth:`inertia_times` is not checked: its forces are the
+    (or it pulls itself). :meth:`inertia_times` is not checked for pulls: its forces are the
     increments of a linear split (no gravity), which have no sign of their own.
+
+    Every split (each method, :meth:`inertia_times` too) must carry the base: a base
+    residual above ``residual_tolerance`` (N m, N; :func:`residual_tolerance`) is
+    InputError ``contacts_unsolved``, its residual kept in ``unsolved``, and no contact in
+    force at all (in flight) InputError ``no_contact``, whatever the residual. The split's
+    residual is the least any ``λ`` leaves (``J_cᵀ``'s range), so the QP, bound by the same
+    rows, cannot carry what it could not: it is refused, not re-solved. Measured wrenches
+    are the sensors': their residual is reported, not refused.
     """
 
     base_q: np.ndarray = None
@@ -607,6 +661,8 @@ class FloatingDynamics(Dynamics):
     qp_missing: str = ''
     pull_tolerance: float = 0.0
     pulls: List = None
+    residual_tolerance: float = 0.0
+    unsolved: List = None
 
     def _solve(self, q, qd, qdd, base_v, base_a, gravity, measured=None,
                unilateral: bool = True) -> np.ndarray:
@@ -619,8 +675,13 @@ class FloatingDynamics(Dynamics):
                  np.concatenate((base_a, qdd)), self.contacts)
         result = sd.contact_inverse_dynamics(*state, measured=measured, method=self.method,
                                              gravity=gravity)
-        if result.status != 'solved':
-            raise InputError('contacts_unsolved', f'contacts {self.method}: {result.summary()}')
+        if result.status != 'solved' and self.contacts:   # the QP: no forces in the cones
+            self.unsolved.append(float(np.abs(result.base_residual).max()))
+            raise InputError('contacts_unsolved', f'contacts {self.method}: the contacts in '
+                             f'contact {[c.link for c in self.contacts]} cannot carry the '
+                             f'base: {result.summary()}; not publishing')
+        if measured is None or not self.contacts:
+            self._carries(result)
         if measured is not None or not unilateral:
             return result
         pull = _worst_pull(result, self.pull_tolerance)
@@ -637,12 +698,31 @@ class FloatingDynamics(Dynamics):
         if result.status != 'solved':
             raise InputError('contacts_unsolved', f'{what}; re-solved by qp: '
                              f'{result.summary()}; not publishing')
+        self._carries(result)
         again = _worst_pull(result, self.pull_tolerance)
         if again is not None:
             raise InputError('contacts_pull', f'{what}; re-solved by qp, contact '
                              f'{again.contact!r} still pulls {again.amount:.3g} N; '
                              'not publishing')
         return result
+
+    def _carries(self, result: 'sd.ContactResult') -> None:
+        """Refuse ``result`` unless it carries the base rows (InputError ``contacts_unsolved``).
+
+        ``no_contact`` whatever its residual when no contact is in force (in flight).
+        """
+        residual = float(np.abs(result.base_residual).max())
+        if not self.contacts:
+            self.unsolved.append(residual)
+            raise InputError('no_contact', 'no contact carries the base: no link of '
+                             'contacts.links is in contact (contact_states all 0: in flight), '
+                             f'base residual {residual:.3g} (N m, N); not publishing')
+        if residual > self.residual_tolerance:
+            self.unsolved.append(residual)
+            raise InputError('contacts_unsolved', f'contacts {result.method}: the contacts in '
+                             f'contact {[c.link for c in self.contacts]} cannot carry the '
+                             f'base: base residual {residual:.3g} (N m, N; tolerance '
+                             f'{self.residual_tolerance:.3g}, 1e-6 m g); not publishing')
 
     def full(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
         """Return the joints' efforts of ``M q̈ + h = Sᵀ τ + J_cᵀ λ``, + armature, friction."""
@@ -716,8 +796,9 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
 
     ERROR while a needed input is missing or stale (nothing is published), WARN when a
     contact solution of the period violated a friction cone or pulled on the ground, left
-    a base residual above :data:`RESIDUAL_WARN`, or when an answer was refused because its
-    split made a contact pull and the QP could not re-solve it. Answers re-solved by the QP
+    a base residual above :func:`residual_tolerance` (measured wrenches), when an answer
+    was refused because its split made a contact pull and the QP could not re-solve it, or
+    because its contacts could not carry the base. Answers re-solved by the QP
     (a contact would have pulled) are counted, with the worst pull seen: that is the node
     working as documented, not a warning.
     """
@@ -758,6 +839,9 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
                        f' ({window.pull_contact})' if window.pull_contact else ''))]
         values += [(f'refused {reason} (a contact would pull)', str(count))
                    for reason, count in window.refused.items()]
+        values += [('refused: the contacts cannot carry the base (contacts_unsolved, '
+                    'no_contact)', str(window.unsolved)),
+                   ('worst refused base residual', f'{window.unsolved_residual:.3g}')]
     if robot is None:
         return 'ERROR', 'no robot model', values
     hint = source_hint(params, inputs)
@@ -773,9 +857,13 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
         warnings.append('contact violations: ' + ', '.join(
             f'{key} ({count}x, worst {window.worst[key]:.3g} N)'
             for key, count in window.violations.items()))
-    if window.residual_max > RESIDUAL_WARN:
-        warnings.append(f'base residual {window.residual_max:.3g} (the contacts cannot carry '
-                        'the base rows)')
+    if window.unsolved:
+        warnings.append(f'{window.unsolved} answer(s) refused, the contacts cannot carry the '
+                        f'base (worst base residual {window.unsolved_residual:.3g}): '
+                        f'{window.unsolved_last}')
+    if window.residual_max > robot.residual_tolerance:
+        warnings.append(f'base residual {window.residual_max:.3g} (the measured contact '
+                        'wrenches do not carry the base rows)')
     if warnings:
         return 'WARN', '; '.join(warnings), values
     return 'OK', f'base {params.base}: inputs fresh', values

@@ -35,7 +35,7 @@ from spatial_dynamics.effort import MAX_ANNOTATED_VALUES, MEASURED_EFFORT
 from spatial_dynamics.wrench import EPSILON as WRENCH_EPSILON
 from spatial_dynamics.ros.bases import (
     BASE_ACCELERATIONS, BASE_SOURCES, BASES, check_base, CONTACT_KINDS, CONTACT_METHODS,
-    pull_tolerance)
+    pull_tolerance, residual_tolerance)
 from spatial_dynamics.ros.descriptions import (
     description_change, MAX_DESCRIPTION_BYTES, parse_description)
 from spatial_dynamics.ros.control import (
@@ -256,7 +256,8 @@ PARAMETERS = Table(NODE_NAME, [
         bounds=FRICTION_THRESHOLD_RANGE),
     Param('clamp_to_effort_limits', 'bool', False, (
         'Clamp tau to the URDF <limit effort> (joints without a positive limit are left '
-        'alone); a throttled warning names the saturated joints.')),
+        'alone); a throttled warning names the saturated joints. Off: an answer above a '
+        'limit is published, counted in /diagnostics (above effort limit) and warned.')),
     Param('external_wrench_timeout', 'double', DEFAULT_WRENCH_TIMEOUT, (
         'Seconds after its receipt that an external_wrenches message stops applying.'),
         bounds=(1e-3, 3600.0)),
@@ -334,12 +335,16 @@ PARAMETERS = Table(NODE_NAME, [
         'base_input.imu_link in the URDF (e.g. "imu" or "imu_link_optical" for a link named '
         "otherwise): that frame is taken as base_input.imu_link's. '' = the link's own name. "
         'Live.')),
+    Param('base_input.odometry_frame', 'string', '', (
+        "The child_frame_id base/odometry's source writes (base/twist's header.frame_id) when "
+        'it is not a link of the URDF (a typical /odom has child_frame_id base_footprint): '
+        'exactly this frame is taken as base_input.odometry_link; any other frame that is not '
+        "a link of the URDF is refused (wrong_frame). '' = the frame must be a link of the "
+        'URDF (or empty, the root link). Live.')),
     Param('base_input.odometry_link', 'string', '', (
-        "The link of the URDF whose twist base/odometry's child_frame_id (base/twist's "
-        "header.frame_id) names, when that frame is not a link of the URDF (a typical /odom "
-        'has child_frame_id base_footprint): that frame is taken as this link (moving: the '
-        "root link or a link fixed to it; floating: the root link). '' = the frame must be a "
-        "link (or empty, the root link). As replay's --odometry-link. Live.")),
+        'The link of the URDF that base_input.odometry_frame is (moving: the root link or a '
+        "link fixed to it; floating: the root link); '' = the root link. A twist with an "
+        "empty frame is this link's too. As replay's --odometry-link. Live.")),
     Param('base_input.acceleration', 'string', 'difference', (
         'The base\'s acceleration with base/twist (moving, source twist; and floating, '
         'the desired base acceleration): "difference", the difference of successive '
@@ -375,9 +380,12 @@ PARAMETERS = Table(NODE_NAME, [
         'which input), never computed as if the base were fixed. Live.'),
         bounds=(1e-3, 3600.0)),
     Param('contacts.links', 'string[]', None, (
-        'Floating base: the links that may touch the ground (feet, soles), each a contact '
-        'at its origin; all in contact until contact_states (std_msgs/UInt8MultiArray, one '
-        'flag per link in this order) says otherwise. Live.'), rules=(distinct,)),
+        'Floating base (required: nothing else carries the base): the links that may touch '
+        'the ground (feet, soles), each a contact at its origin; all in contact until '
+        'contact_states (std_msgs/UInt8MultiArray, one flag per link in this order) says '
+        'otherwise. An answer whose contacts in contact cannot carry the base (base residual '
+        'above 1e-6 m g), or with none in contact (in flight), is not published. Live.'),
+        rules=(distinct,)),
     Param('contacts.kind', 'string', 'point', (
         '"point" (a force: feet) or "surface" (a wrench: soles). Live.'),
         choices=CONTACT_KINDS),
@@ -563,7 +571,20 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
         external_torque_warn=_observer_check(check_warn, actuated,
                                              params.external_torque_warn),
         qp_missing=qp_missing,
-        pull_tolerance=pull_tolerance(model) if base.floating else 0.0)
+        pull_tolerance=pull_tolerance(model) if base.floating else 0.0,
+        residual_tolerance=residual_tolerance(model) if base.floating else 0.0,
+        effort_limit=_effort_limit(model))
+
+
+def _effort_limit(model: 'sd.Model') -> np.ndarray:
+    """Return the URDF's effort limit of each actuated joint (a floating base's rows out).
+
+    ``inf`` where the URDF gives none (``<limit effort>`` absent or not positive), read-only.
+    """
+    limit = model.effort_limit[6:] if model.floating else model.effort_limit
+    limit = np.where(limit > 0.0, limit, np.inf)
+    limit.setflags(write=False)
+    return limit
 
 
 def _warm_qp(method: str) -> str:

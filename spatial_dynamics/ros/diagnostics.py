@@ -38,6 +38,9 @@ class Window:
         self.delay_count = 0
         self.delay_max_ns = 0
         self.measured = 0          # good measured states (joint_states)
+        self.above_limit = 0       # answers published above a joint's URDF effort limit
+        self.above_worst: Optional[Tuple[float, str, float, float]] = None
+        #                            (|τ| / limit, joint, τ, limit) of the worst of them
 
 
 class Totals:
@@ -101,7 +104,9 @@ def model_status(robot: Optional[Robot], totals: Totals, strict: bool,
     message = f'robot {model.name!r} loaded, {dof_text(model)}'
     if urdf_warnings:
         message += f', {len(urdf_warnings)} URDF warning(s)'
-    values = [('robot name', model.name), ('dof', dof_text(model)),
+    # 'dof' stays the number of a fixed-base robot (what tools read); a floating one says it
+    values = [('robot name', model.name),
+              ('dof', dof_text(model) if model.floating else str(model.nv)),
               ('model joints', ', '.join(model.joint_names)),
               ('output joints', ', '.join(robot.joints)), ('source', robot.source),
               ('summary', robot.base.summary()), ('backend', backend),
@@ -153,14 +158,23 @@ def _input_state(robot: Optional[Robot], window: Window, params, period: float,
     elif age > params.input_timeout:
         return 'ERROR', (f'input stale: no good input for {age:.2f} s '
                          f'(input_timeout {params.input_timeout} s); not publishing')
+    above = ''    # said, not a fault: the URDF's limits are often wrong, clamping is opt-in
+    if window.above_limit:
+        ratio, joint, value, limit = window.above_worst
+        above = (f', {window.above_limit} answer(s) above the URDF effort limit (worst '
+                 f'{joint!r} {value:+.4g}, limit {limit:g}, {ratio:.3g}x)')
     if rejected_now:
-        return 'WARN', f'{window.answered / period:.1f} Hz, {rejected_now} rejected'
-    return 'OK', f'{window.answered / period:.1f} Hz'
+        return 'WARN', f'{window.answered / period:.1f} Hz, {rejected_now} rejected{above}'
+    return 'OK', f'{window.answered / period:.1f} Hz{above}'
 
 
 def _window_values(window: Window, period: float) -> List[Tuple[str, str]]:
     answered, delays = window.answered, window.delay_count
+    worst = window.above_worst
     return [
+        ('above effort limit', str(window.above_limit)),
+        ('above effort limit worst', '' if worst is None else
+         f'{worst[1]}: {worst[2]:+.4g} (limit {worst[3]:g}, {worst[0]:.3g}x)'),
         ('input rate [Hz]', f'{window.received / period:.1f}'),
         ('output rate [Hz]', f'{answered / period:.1f}'),
         ('compute time mean [us]', _us(window.compute_ns / answered) if answered else ''),

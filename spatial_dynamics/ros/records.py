@@ -59,8 +59,11 @@ class Robot:
     ``backend`` is what the answers run on (``'numpy'`` or ``'compiled'``, see
     :func:`~.config.resolve_backend`), ``setting`` the ``backend`` parameter. On a floating
     base, ``qp_missing`` says why the contacts' QP cannot run (``''``: imported and warmed)
-    and ``pull_tolerance`` is the N by which a contact may pull
-    (:func:`~.bases.pull_tolerance`).
+    ``pull_tolerance`` is the N by which a contact may pull
+    (:func:`~.bases.pull_tolerance`) and ``residual_tolerance`` the base residual (N m, N) a
+    split may leave (:func:`~.bases.residual_tolerance`). ``effort_limit`` (n,) is the URDF's
+    ``<limit effort>`` of each of ``joints`` (the model's, in their order; ``inf`` where the
+    URDF gives none): an answer above it is reported (clamped only with ``clamp``).
     """
 
     urdf: str
@@ -80,6 +83,8 @@ class Robot:
     external_torque_warn: Optional[np.ndarray] = None
     qp_missing: str = ''
     pull_tolerance: float = 0.0
+    residual_tolerance: float = 0.0
+    effort_limit: Optional[np.ndarray] = None
 
 
 @dataclass(frozen=True)
