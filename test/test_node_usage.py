@@ -15,7 +15,7 @@ import pytest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import ROOT  # noqa: E402
-from spatial_dynamics.ros.usage import help_requested  # noqa: E402
+from spatial_dynamics.ros.usage import help_requested, params_files, split_args  # noqa: E402
 
 #: What the launcher's process reports after the usage: its exit status, and whether rclpy
 #: was imported and initialised.
@@ -65,8 +65,62 @@ def test_help_prints_the_usage_and_starts_nothing(name, page, flag):
     assert page in ' '.join(usage)
 
 
-def test_help_after_ros_args_is_ros_s():
+def test_help_anywhere_and_the_ros_arguments_read_as_rcl_does():
     assert help_requested(['--help'])
     assert help_requested(['-h', '--ros-args', '-p', 'a:=1'])
-    assert not help_requested(['--ros-args', '--help'])
+    assert help_requested(['--ros-args', '--help'])
+    assert help_requested(['--ros-args', '-p', 'a:=1', '-h'])
     assert not help_requested(['--ros-args', '-p', 'robot_description_file:=x.urdf'])
+    assert not help_requested(['--ros-args', '-r', '__node:=x'])
+    # the value of an option is not an option, and -- ends the ROS arguments
+    assert split_args(['a', '--ros-args', '--params-file', '-h', '--', 'b']) == (
+        ['a', 'b'], [('--params-file', '-h')])
+    assert params_files(['x', '--ros-args', '-p', 'a:=1', '--params-file', 'f.yaml',
+                         '--', '--ros-args', '--params-file', 'g.yaml']) == ['f.yaml', 'g.yaml']
+
+
+@pytest.mark.parametrize('name', ['inverse_dynamics', 'sim'])
+@pytest.mark.parametrize('flag', ['--help', '-h'])
+def test_help_after_ros_args_prints_the_usage(name, flag):
+    pytest.importorskip('rclpy')
+    proc = run_launcher(name, '--ros-args', '-p', 'a:=1', flag)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith(f'usage: {name} [--ros-args'), proc.stdout
+    assert 'Traceback' not in proc.stderr, proc.stderr
+    assert proc.stdout.rstrip('\n').split('\n')[-1].startswith('STATUS 0 rclpy')
+
+
+def cannot_start(proc, status, *words):
+    """Assert one ``cannot start:`` line naming ``words`` and exit ``status``, no traceback."""
+    assert 'Traceback' not in proc.stderr, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if 'cannot start:' in line]
+    assert len(lines) == 1, proc.stderr
+    assert all(word in lines[0] for word in words), lines
+    assert f'STATUS {status} ' in proc.stdout, (proc.stdout, proc.stderr)
+
+
+@pytest.mark.parametrize('name', ['inverse_dynamics', 'sim'])
+def test_an_unknown_option_is_refused_before_anything_starts(name):
+    pytest.importorskip('rclpy')
+    proc = run_launcher(name, '--bogus', '--ros-args', '-p', 'a:=1')
+    cannot_start(proc, 2, 'unknown option', '--bogus')
+    assert proc.stdout.rstrip('\n').split('\n')[-1].endswith('False')   # rclpy never started
+
+
+def test_an_unknown_ros_argument_is_one_line():
+    pytest.importorskip('rclpy')
+    cannot_start(run_launcher('inverse_dynamics', '--ros-args', '--bogus'), 1, '--bogus')
+
+
+@pytest.mark.parametrize('kind', ['missing', 'fifo', 'directory', 'unparsable'])
+def test_a_bad_params_file_is_one_line(kind, tmp_path):
+    pytest.importorskip('rclpy')
+    path = tmp_path / 'params.yaml'
+    if kind == 'fifo':
+        os.mkfifo(path)   # rcl would block opening it, the node never started
+    elif kind == 'directory':
+        path.mkdir()
+    elif kind == 'unparsable':
+        path.write_text('a: [\n')
+    proc = run_launcher('inverse_dynamics', '--ros-args', '--params-file', str(path))
+    cannot_start(proc, 1, str(path))

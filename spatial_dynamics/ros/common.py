@@ -12,6 +12,7 @@ start-up configuration).
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 import time
 from typing import Callable, Optional, Sequence
@@ -19,6 +20,7 @@ from typing import Callable, Optional, Sequence
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.executors import (ExternalShutdownException, MultiThreadedExecutor,
                              SingleThreadedExecutor)
 import rclpy.logging
@@ -26,8 +28,13 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, QoSReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
+from spatial_dynamics.files import read_regular
 from spatial_dynamics.ros.parameters import ConfigError, ParameterError
 from spatial_dynamics.ros.realtime import GroupExecutor, OthersExecutor
+from spatial_dynamics.ros.usage import params_files
+
+#: The largest ``--params-file`` read (rcl parses it whole at ``rclpy.init``).
+PARAMS_FILE_LIMIT = 64 << 20
 
 
 def input_qos(depth: int = 1) -> QoSProfile:
@@ -117,10 +124,23 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
     executor, which returns between two callbacks. Python's own SIGINT handler is not chained
     to it: its KeyboardInterrupt would fire at any bytecode, inside rclpy's bookkeeping too
     (half-built tasks, a taken message lost in pybind11's conversion).
+
+    Before ``rclpy.init``, each ``--params-file`` must be a readable regular file (rcl would
+    block on a named pipe); that, and what ``rclpy.init`` refuses (an unknown ROS argument, a
+    params file it cannot parse), is one ``cannot start:`` line and status 1.
     """
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_DFL)
-    rclpy.init(args=args)
+    try:
+        for path in params_files(sys.argv if args is None else args):
+            read_regular(path, f'params file {path!r}', PARAMS_FILE_LIMIT)
+        rclpy.init(args=args)
+    except (ValueError, _rclpy.UnknownROSArgsError, _rclpy.RCLError) as err:
+        reason = str(err).strip().split('\n')[0]
+        if isinstance(err, _rclpy.UnknownROSArgsError):
+            reason = f'unknown ROS argument(s) {reason} (see --help)'
+        rclpy.logging.get_logger(name).fatal(f'cannot start: {reason}')
+        return 1
     node = None
     status = 0
     failed: list = []

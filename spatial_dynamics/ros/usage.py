@@ -1,33 +1,64 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""The nodes' ``-h``/``--help``: their usage from the parameter table, before ROS starts.
+"""The nodes' command lines: ``-h``/``--help`` and unknown options, before ROS starts.
 
-rclpy takes an argument it does not know (``--help``) as the program's and starts the node
-anyway; ``inverse_dynamics --help`` used to start it. :func:`main` is the
-``inverse_dynamics`` command: with ``-h`` or ``--help`` before ``--ros-args`` (after it they
-are ROS's) it prints the usage and returns 0 without importing rclpy; otherwise it runs the
-node (imported here, inside :func:`main`, so the usage never pays for rclpy's start-up).
+rclpy takes an argument it does not know (``--help``, ``--bogus``) before ``--ros-args`` as
+the program's and starts the node anyway, and refuses one after it with a traceback
+(``UnknownROSArgsError``). :func:`launch` answers both before rclpy is imported: ``-h`` or
+``--help`` anywhere prints the usage and returns 0; any other argument outside the
+``--ros-args`` blocks is one ``cannot start: unknown option`` line and status 2. :func:`main`
+is the ``inverse_dynamics`` command (the node is imported inside it, so the usage never pays
+for rclpy's start-up).
 """
 
 from __future__ import annotations
 
 import sys
 import textwrap
-from typing import Optional, Sequence
+from typing import Callable, List, Optional, Sequence, Tuple
 
 from spatial_dynamics.ros.config import PARAMETERS
 from spatial_dynamics.ros.parameters import Table
 
 HELP = ('-h', '--help')
 WIDTH = 99
+#: The options of rcl's ``--ros-args`` that take the next argument as their value.
+ROS_VALUE_OPTIONS = ('-p', '--param', '-r', '--remap', '-e', '--enclave', '--params-file',
+                     '--log-level', '--log-config-file', '--log-file-name')
+
+
+def split_args(argv: Sequence[str]) -> Tuple[List[str], List[Tuple[str, Optional[str]]]]:
+    """Split a command line (without the program) into the program's and ROS's arguments.
+
+    ROS's are those of each ``--ros-args`` block, up to ``--`` or the end, as (option, value)
+    pairs (value None for an option without one, such as ``--help``).
+    """
+    program: List[str] = []
+    ros: List[Tuple[str, Optional[str]]] = []
+    args = iter(argv)
+    inside = False
+    for arg in args:
+        if arg == '--ros-args':
+            inside = True
+        elif inside and arg == '--':
+            inside = False
+        elif inside:
+            ros.append((arg, next(args, None) if arg in ROS_VALUE_OPTIONS else None))
+        else:
+            program.append(arg)
+    return program, ros
 
 
 def help_requested(argv: Sequence[str]) -> bool:
-    """Return whether ``-h``/``--help`` is among the arguments before ``--ros-args``."""
-    args = list(argv)
-    if '--ros-args' in args:
-        args = args[:args.index('--ros-args')]
-    return any(arg in HELP for arg in args)
+    """Return whether ``-h``/``--help`` is among the arguments, before or after ``--ros-args``."""
+    program, ros = split_args(argv)
+    return any(arg in HELP for arg in program + [option for option, _ in ros])
+
+
+def params_files(argv: Sequence[str]) -> List[str]:
+    """Return the files of the ``--params-file`` options in ``argv``'s ``--ros-args``."""
+    return [value for option, value in split_args(argv)[1]
+            if option == '--params-file' and value is not None]
 
 
 def usage(table: Table, summary: str, page: str) -> str:
@@ -42,8 +73,8 @@ def usage(table: Table, summary: str, page: str) -> str:
             list(p.default) if isinstance(p.default, tuple) else p.default)
         unit = f', {p.unit}' if p.unit else ''
         lines.append(f'  {p.name} ({p.type}, default {default}{unit})')
-        first = p.description.split('. ')[0].rstrip('.') + '.'
-        lines += textwrap.wrap(first, WIDTH, initial_indent=' ' * 6, subsequent_indent=' ' * 6)
+        lines += textwrap.wrap(p.description, WIDTH, initial_indent=' ' * 6,
+                               subsequent_indent=' ' * 6)
     lines += ['', textwrap.fill(
         f'Every parameter in full, the topics and their QoS: {page} in the source tree; the '
         f'parameter file: share/spatial_dynamics/config/{table.node}.yaml of the install.',
@@ -51,13 +82,32 @@ def usage(table: Table, summary: str, page: str) -> str:
     return '\n'.join(lines) + '\n'
 
 
+def launch(argv: Optional[Sequence[str]], table: Table, summary: str, page: str,
+           run: Callable[[], int]) -> int:
+    """Print the usage for ``-h``/``--help``, refuse an unknown option, or return ``run()``.
+
+    ``argv``: the command line without the program (None: ``sys.argv[1:]``). An argument
+    outside the ``--ros-args`` blocks is none of the node's: one ``cannot start: unknown
+    option`` line on stderr and status 2, nothing started.
+    """
+    args = sys.argv[1:] if argv is None else list(argv)
+    if help_requested(args):
+        sys.stdout.write(usage(table, summary, page))
+        return 0
+    program = split_args(args)[0]
+    if program:
+        print(f'{table.node}: cannot start: unknown option {program[0]!r} (the parameters '
+              'go after --ros-args; see --help)', file=sys.stderr)
+        return 2
+    return run()
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the ``inverse_dynamics`` node, or print its usage for ``-h``/``--help``."""
-    if help_requested(sys.argv[1:] if argv is None else argv):
-        sys.stdout.write(usage(
-            PARAMETERS, 'Inverse dynamics node: desired joint states or whole plans in, '
-            'feed-forward joint efforts out (ros2_control), on a fixed, moving or floating '
-            'base.', 'doc/node.md'))
-        return 0
-    from spatial_dynamics.ros.node import main as run
-    return run(argv)
+    def run() -> int:
+        from spatial_dynamics.ros.node import main as node
+        return node(argv)
+
+    return launch(argv, PARAMETERS, 'Inverse dynamics node: desired joint states or whole '
+                  'plans in, feed-forward joint efforts out (ros2_control), on a fixed, moving '
+                  'or floating base.', 'doc/node.md', run)

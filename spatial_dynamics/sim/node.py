@@ -71,7 +71,7 @@ from spatial_dynamics.ros.descriptions import read_description
 
 from spatial_dynamics.ros.parameters import ConfigError, Param, ParameterError, Table
 from spatial_dynamics.ros.common import advertise, spin
-from spatial_dynamics.ros.usage import help_requested, usage
+from spatial_dynamics.ros.usage import launch
 from spatial_dynamics import Contact
 from spatial_dynamics.sim.robot import (FloatingRobot, Foot, import_mujoco, INTEGRATORS,
                                         MujocoMissing, SimulatedRobot)
@@ -371,20 +371,19 @@ def floating_robot(urdf: str, p: dict) -> FloatingRobot:
 def main(args: Optional[Sequence[str]] = None) -> int:
     """Run the simulator until SIGINT/SIGTERM; 0 on a clean exit, 1 on a bad start-up.
 
-    With ``-h``/``--help`` before ``--ros-args``: its usage, exit 0, nothing started.
+    With ``-h``/``--help``: its usage, exit 0, nothing started; an unknown option: exit 2.
     """
-    if help_requested(sys.argv[1:] if args is None else args):
-        sys.stdout.write(usage(PARAMETERS, 'The URDF\'s robot simulated by MuJoCo, driven by '
-                               'effort commands (std_msgs/Float64MultiArray on '
-                               'effort_commands), its joint states on joint_states.',
-                               'doc/simulator.md'))
-        return 0
-    try:
-        import_mujoco()
-    except MujocoMissing as err:
-        print(f'{NODE_NAME}: {err}', file=sys.stderr)
-        return 1
-    return spin(SimNode, args, name=NODE_NAME, threads=1)
+    def run() -> int:
+        try:
+            import_mujoco()
+        except MujocoMissing as err:
+            print(f'{NODE_NAME}: {err}', file=sys.stderr)
+            return 1
+        return spin(SimNode, args, name=NODE_NAME, threads=1)
+
+    return launch(args, PARAMETERS, 'The URDF\'s robot simulated by MuJoCo, driven by effort '
+                  'commands (std_msgs/Float64MultiArray on effort_commands), its joint states '
+                  'on joint_states.', 'doc/simulator.md', run)
 
 
 if __name__ == '__main__':
