@@ -6,6 +6,7 @@ Where ros2cli is not installed (the quick start's venv), against a node in this 
 """
 
 import os
+import signal
 import subprocess
 import sys
 
@@ -56,7 +57,46 @@ def test_param_set_sets_the_value_as_ros2_reads_it(driver, target):
     assert status == 0, err
     assert target.get_parameter('payload.link').value == ''
     status, out, err = ros_cli(driver, 'param', 'set', name, 'gravity', '3')
-    assert status == 1 and 'Setting parameter failed' in err and 'INTEGER' in err  # its reason
+    assert status == 1 and 'Setting parameter gravity failed' in err and 'INTEGER' in err
+
+
+def test_param_set_of_empty_lists_mappings_and_unknown_names(driver, target):
+    name = target.get_fully_qualified_name()
+    # [] takes the declared type (a double array), as the node's armature: [] needs
+    status, out, err = ros_cli(driver, 'param', 'set', name, 'gravity', '[]')
+    assert status == 0 and 'successful' in out, err
+    assert list(target.get_parameter('gravity').value) == []
+    # what YAML reads as no parameter type is sent as the string, as ros2 param set does
+    for text in ('{a: 1}', '!!binary aGk='):
+        status, out, err = ros_cli(driver, 'param', 'set', name, 'payload.link', text)
+        assert status == 0 and 'Traceback' not in err, err
+        assert target.get_parameter('payload.link').value == text
+    status, out, err = ros_cli(driver, 'param', 'set', name, 'no_such_parameter', '1')
+    assert status == 1 and 'no_such_parameter' in err and 'Traceback' not in err, err
+
+
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+def test_topic_pub_stops_on_a_signal_without_a_traceback(driver, target, signum):
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID),
+               PYTHONPATH=os.pathsep.join([ROOT, os.environ.get('PYTHONPATH', '')]))
+    from geometry_msgs.msg import WrenchStamped
+    received = []
+    topic = f'ros_cli_signal_{signum}'
+    subscription = target.create_subscription(WrenchStamped, topic, received.append, 10)
+    proc = subprocess.Popen([sys.executable, '-m', 'spatial_dynamics.tools.ros_cli', 'topic',
+                             'pub', '-r', '20', '/' + topic,
+                             'geometry_msgs/msg/WrenchStamped'], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        driver.spin_until(lambda: received, what='a published wrench')
+        proc.send_signal(signum)
+        driver.spin_until(lambda: proc.poll() is not None, what='ros_cli to stop')
+    finally:
+        target.destroy_subscription(subscription)
+        proc.kill()
+    _, err = proc.communicate()
+    assert proc.returncode == 128 + signum, err
+    assert 'Traceback' not in err, err
 
 
 def test_param_set_of_a_missing_node_is_refused_in_time(driver):
