@@ -80,13 +80,27 @@ def test_refused_knobs_warn_once_with_how_to_grant_and_run_on(monkeypatch):
         realtime.apply(50, [core], True), os.sched_getscheduler(0), os.sched_getaffinity(0)))
     assert policy == os.SCHED_OTHER and affinity == os.sched_getaffinity(0)
     assert effect.priority.startswith('normal') and effect.memory == 'not locked'
-    assert len(effect.refused) == 3
+    assert len(effect.refused) == 2 and len(effect.invalid) == 1
     text = realtime.warning(effect)
     for words in ('thread_priority 50', 'EPERM', 'lock_memory', f'cpu_affinity [{core}]',
                   'limits.conf', 'rtprio', 'memlock', 'ulimit -r', '--cap-add=sys_nice'):
         assert words in text, (words, text)
     level, message, values = realtime.status(effect)
-    assert level == 'OK' and 'normal' in message and 'not permitted' in message
+    assert level == 'WARN' and 'normal' in message and 'not permitted' in message
+
+
+def test_a_core_not_allowed_is_no_permission_problem():
+    """EINVAL (no core of the list is the process's) says so, without privilege advice."""
+    core = max(os.sched_getaffinity(0)) + 1
+    effect = in_thread(lambda: realtime.apply(0, [core], False))
+    assert effect.refused == () and len(effect.invalid) == 1
+    text = realtime.warning(effect)
+    assert f'cpu_affinity [{core}]' in text and 'EINVAL' in text
+    assert str(sorted(os.sched_getaffinity(0))) in text
+    for advice in ('not permitted', 'limits.conf', 'rtprio', '--cap-add'):
+        assert advice not in text, (advice, text)
+    level, message, _ = realtime.status(effect)
+    assert level == 'WARN' and 'not permitted' not in message and f'[{core}]' in message
 
 
 def test_garbage_collector_is_frozen_and_collected_off_the_answers():
@@ -185,10 +199,10 @@ def test_node_refused_a_knob_warns_once_and_answers(install, driver, tmp_path):
         io.wait_connected()
         assert_answers_equal_the_library(io)
         status = io.fresh_status('real-time')
-        assert status.level == DiagnosticStatus.OK and 'not permitted' in status.message
+        assert status.level == DiagnosticStatus.WARN and f'[{core}]' in status.message
         log = node.log()
-        assert log.count('real-time settings not permitted') == 1, log
-        assert f'cpu_affinity [{core}]' in log and 'limits.conf' in log
+        assert log.count('real-time settings impossible here') == 1, log
+        assert f'cpu_affinity [{core}]' in log and 'limits.conf' not in log
         assert 'Traceback' not in log
     finally:
         io.close()

@@ -53,12 +53,17 @@ FULL_COLLECTION_EVERY = 60
 
 
 class InEffect(NamedTuple):
-    """What :func:`apply` achieved: each knob in words, and what was refused (with why)."""
+    """What :func:`apply` achieved: each knob in words, and what was refused (with why).
+
+    ``refused``: what the system did not permit (a privilege :data:`HOW_TO_GRANT` grants);
+    ``invalid``: what no privilege makes possible (a core not among the allowed ones).
+    """
 
     priority: str
     affinity: str
     memory: str
     refused: Tuple[str, ...] = ()
+    invalid: Tuple[str, ...] = ()
 
     def values(self) -> List[Tuple[str, str]]:
         """Return the key-values of the ``real-time`` diagnostics status."""
@@ -114,6 +119,7 @@ def apply(priority: int, cores: Optional[Sequence[int]], memory: bool) -> InEffe
     """
     name_thread(ANSWERING_THREAD)
     refused = []
+    invalid = []
     in_effect = 'normal (SCHED_OTHER)'
     if priority > 0:
         done = []
@@ -136,8 +142,13 @@ def apply(priority: int, cores: Optional[Sequence[int]], memory: bool) -> InEffe
             os.sched_setaffinity(0, cores)
             affinity = 'cores ' + ', '.join(map(str, sorted(os.sched_getaffinity(0))))
         except OSError as err:
-            refused.append(f'cpu_affinity {list(cores)}: {_reason(err)} (allowed: '
-                           f'{sorted(os.sched_getaffinity(0))})')
+            allowed = sorted(os.sched_getaffinity(0))
+            if err.errno == errno.EINVAL:   # no core of the list is one this process may use
+                invalid.append(f'cpu_affinity {list(cores)}: none of these cores is among the '
+                               f'cores this process may use, {allowed} ({_reason(err)})')
+            else:
+                refused.append(f'cpu_affinity {list(cores)}: {_reason(err)} (allowed: '
+                               f'{allowed})')
     locked = 'not locked'
     if memory:
         try:
@@ -145,27 +156,37 @@ def apply(priority: int, cores: Optional[Sequence[int]], memory: bool) -> InEffe
             locked = 'locked (mlockall)'
         except OSError as err:
             refused.append(f'lock_memory: {_reason(err)}')
-    return InEffect(in_effect, affinity, locked, tuple(refused))
+    return InEffect(in_effect, affinity, locked, tuple(refused), tuple(invalid))
 
 
 def warning(in_effect: InEffect) -> Optional[str]:
-    """Return the one WARN: what was refused, how to grant it (None: all applied)."""
-    if not in_effect.refused:
-        return None
-    return ('real-time settings not permitted, answering without them: '
-            + '; '.join(in_effect.refused) + '. To use them, ' + HOW_TO_GRANT)
+    """Return the one WARN: what was refused, how to grant it (None: all applied).
+
+    The advice on privileges only for what a privilege would grant.
+    """
+    parts = []
+    if in_effect.invalid:
+        parts.append('real-time settings impossible here, answering without them: '
+                     + '; '.join(in_effect.invalid) + '.')
+    if in_effect.refused:
+        parts.append('real-time settings not permitted, answering without them: '
+                     + '; '.join(in_effect.refused) + '. To use them, ' + HOW_TO_GRANT)
+    return ' '.join(parts) or None
 
 
 def status(in_effect: Optional[InEffect]) -> Tuple[str, str, list]:
-    """Return the ``real-time`` diagnostics status: OK, what is in effect, what not."""
+    """Return the ``real-time`` diagnostics status: OK, or WARN when a knob was refused."""
     if in_effect is None:
         return 'OK', 'answering thread not started yet', []
     message = in_effect.priority
     values = in_effect.values()
+    if in_effect.invalid:
+        message += ' (impossible: ' + '; '.join(in_effect.invalid) + ')'
+        values.append(('impossible', '; '.join(in_effect.invalid)))
     if in_effect.refused:
         message += ' (not permitted: ' + '; '.join(in_effect.refused) + ')'
         values.append(('refused', '; '.join(in_effect.refused)))
-    return 'OK', message, values
+    return ('WARN' if in_effect.refused or in_effect.invalid else 'OK'), message, values
 
 
 # -- garbage collection ------------------------------------------------------------------------
