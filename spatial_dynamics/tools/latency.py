@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import signal
 import subprocess
@@ -39,6 +40,8 @@ import time
 from typing import Callable, Dict, List, Optional, Sequence, Set
 
 import numpy as np
+
+from spatial_dynamics.files import check_output
 
 from .driving import (
     cpu_seconds, die_with_parent, node_command, pyplot, robot_model, save_figure, Sinusoids,
@@ -264,31 +267,61 @@ def plot(path: str, targets: List[Target], title: str) -> Optional[str]:
     return path
 
 
+def in_range(kind: Callable[[str], float], low: float, high: float, low_open: bool = False):
+    """Return an argparse type: ``kind`` of the text, within ``low`` .. ``high``.
+
+    ``low_open``: ``low`` itself is refused (above 0). A bound of ``inf`` is none; NaN and
+    infinities never pass.
+    """
+    def convert(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+        above = value > low if low_open else value >= low
+        if not (above and value <= high and math.isfinite(value)):
+            where = f'above {low:g}' if low_open else f'at least {low:g}'
+            limit = '' if high == float('inf') else f' and at most {high:g}'
+            raise argparse.ArgumentTypeError(f'{where}{limit}, got {text}')
+        return value
+    return convert
+
+
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         prog='python -m spatial_dynamics.tools.latency', description=__doc__.split('\n\n')[0])
-    parser.add_argument('--rate', type=float, default=1000.0, help='Hz (default 1000)')
-    parser.add_argument('--seconds', type=float, default=10.0,
-                        help='measured seconds per target (default 10)')
-    parser.add_argument('--block', type=float, default=2.0,
+    parser.add_argument('--rate', type=in_range(float, 0.0, 1e5, True), default=1000.0,
+                        help='Hz, above 0 and at most 1e5 (default 1000)')
+    parser.add_argument('--seconds', type=in_range(float, 0.0, 3600.0, True), default=10.0,
+                        help='measured seconds per target, at most 3600 (default 10)')
+    parser.add_argument('--block', type=in_range(float, 0.0, float('inf'), True), default=2.0,
                         help='seconds per block; targets alternate (default 2)')
-    parser.add_argument('--warmup', type=float, default=1.0,
+    parser.add_argument('--warmup', type=in_range(float, 0.0, float('inf')), default=1.0,
                         help='unmeasured seconds at full rate per target first (default 1)')
     parser.add_argument('--robot', choices=sorted(ROBOTS), default='demo_arm',
                         help='robot (default demo_arm; ur5 from example-robot-data)')
     parser.add_argument('--urdf', default=None, help='any other robot (overrides --robot)')
-    parser.add_argument('--busy', type=int, default=0,
-                        help='busy loops beside the run, one process each (default 0)')
-    parser.add_argument('--priority', type=int, default=0,
-                        help='SCHED_FIFO priority of node, relay and publisher (default 0: '
-                             'normal scheduling)')
+    cpus = os.cpu_count() or 1
+    parser.add_argument('--busy', type=in_range(int, 0, 4 * cpus), default=0,
+                        help=f'busy loops beside the run, one process each, 0 .. {4 * cpus} '
+                             '(4 per core; default 0)')
+    parser.add_argument('--priority', type=in_range(int, 0, 99), default=0,
+                        help='SCHED_FIFO priority of node, relay and publisher, 0 .. 99 '
+                             '(default 0: normal scheduling)')
     parser.add_argument('--plot', default=None, help='draw the histograms here (PNG)')
     parser.add_argument('--json', default=None, help='also write the results here')
-    parser.add_argument('--input-depth', type=int, default=None,
-                        help='override the input subscription depth of node and relay (QoS '
-                             'override parameter; default: their keep last 1)')
+    parser.add_argument('--input-depth', type=in_range(int, 1, float('inf')), default=None,
+                        help='override the input subscription depth (at least 1) of node and '
+                             'relay (QoS override parameter; default: their keep last 1)')
     parser.add_argument('--log-dir', default=None, help='node and relay logs (default: none)')
-    return parser.parse_args(argv)
+    args = parser.parse_args(argv)
+    for option, path in (('--plot', args.plot), ('--json', args.json)):
+        if path is not None:
+            try:
+                check_output(path, option)
+            except ValueError as err:
+                parser.error(str(err))
+    return args
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

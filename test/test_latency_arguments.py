@@ -1,0 +1,48 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The latency benchmark's options: out of range or an unwritable output is refused first."""
+
+import os
+
+import pytest
+
+from spatial_dynamics.tools.latency import parse_args
+
+
+@pytest.mark.parametrize('option, value', [
+    ('--rate', '0'), ('--rate', '-5'), ('--rate', '1e6'), ('--rate', 'nan'),
+    ('--seconds', '0'), ('--seconds', '3601'), ('--seconds', 'inf'),
+    ('--busy', '-1'), ('--busy', str(4 * (os.cpu_count() or 1) + 1)),
+    ('--priority', '-1'), ('--priority', '100'),
+    ('--input-depth', '0'), ('--block', '0'), ('--warmup', '-1'), ('--warmup', 'inf'),
+])
+def test_out_of_range_numbers_are_refused(option, value, capsys):
+    with pytest.raises(SystemExit) as exit:
+        parse_args([option, value])
+    assert exit.value.code == 2
+    assert option in capsys.readouterr().err
+
+
+def test_the_ranges_keep_the_defaults_and_real_values():
+    args = parse_args(['--rate', '1e5', '--seconds', '3600', '--priority', '99', '--busy', '0',
+                       '--input-depth', '1', '--warmup', '0', '--block', '0.5'])
+    assert (args.rate, args.seconds, args.priority, args.input_depth) == (1e5, 3600, 99, 1)
+    defaults = parse_args([])
+    assert (defaults.rate, defaults.seconds, defaults.warmup) == (1000.0, 10.0, 1.0)
+
+
+@pytest.mark.parametrize('option', ['--plot', '--json'])
+@pytest.mark.parametrize('kind', ['directory', 'fifo', 'missing folder'])
+def test_an_output_that_cannot_be_written_is_refused_first(option, kind, tmp_path, capsys):
+    path = tmp_path / 'out'
+    if kind == 'directory':
+        path.mkdir()
+    elif kind == 'fifo':
+        os.mkfifo(path)
+    else:
+        path = tmp_path / 'missing' / 'out'
+    with pytest.raises(SystemExit) as exit:
+        parse_args([option, str(path)])
+    assert exit.value.code == 2
+    err = capsys.readouterr().err
+    assert option in err and str(path) in err, err
