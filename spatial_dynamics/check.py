@@ -17,6 +17,7 @@ warnings), 2 for bad usage.
 
 import argparse
 import math
+import os
 import sys
 import textwrap
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -32,8 +33,8 @@ WIDTH = 99
 
 
 def read_description(path: str) -> bytes:
-    """Return the URDF XML of a file (:func:`spatial_dynamics.urdf.read_description`)."""
-    return urdf.read_description(path, urdf.MAX_FILE_BYTES, path).encode('utf-8')
+    """Return the URDF XML of a file, read as the node reads it (its size limit too)."""
+    return urdf.read_description(path, urdf.MAX_DESCRIPTION_BYTES, path).encode('utf-8')
 
 
 def num(x: float) -> str:
@@ -298,6 +299,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         "(Model.from_urdf(..., base='floating')); default %(default)s")
     args = parser.parse_args(argv)
     locked = dict(args.locked)
+    names = [name for name, _ in args.locked]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:   # as the node refuses a joint repeated in locked_joints
+        parser.error(f'--locked: joint(s) given more than once: {", ".join(twice)}')
     if locked and not args.joints:
         parser.error('--locked needs --joints (the joints kept movable)')
     try:
@@ -310,7 +315,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f'error: {err}', file=sys.stderr)
         return 1
     said = warnings_of(model)
-    print(report(model, model.joint_types, said))
+    try:
+        print(report(model, model.joint_types, said), flush=True)
+    except BrokenPipeError:   # | head: the reader has what it wanted
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     if args.strict and said:
         print(f'error: {len(said)} warning(s) with --strict', file=sys.stderr)
         return 1

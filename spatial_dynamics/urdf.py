@@ -41,6 +41,9 @@ Source = Union[str, bytes, os.PathLike]
 
 #: Largest URDF file read (bytes): a robot description is text of at most a few MB.
 MAX_FILE_BYTES = 64 * 1024 * 1024
+#: Largest robot description file the node reads, and ``spatial_dynamics_check`` with it
+#: (the largest URDF of example-robot-data is < 1 MiB).
+MAX_DESCRIPTION_BYTES = 32 * 1024 * 1024
 
 __all__ = ['MAX_FILE_BYTES', 'model_from_urdf', 'read_description', 'read_urdf_file',
            'URDFWarning']

@@ -401,3 +401,34 @@ def test_a_floating_model_names_body_0_the_world(capsys):
     mass = model.inertia[:, 3, 3]
     assert re.search(rf"\({mass[1]:g} kg on the root link 'base_link' \(on the free-flyer\), "
                      rf'{np.sum(mass[2:]):g} kg on the links beyond it\)', out), out
+
+
+def test_a_description_the_node_refuses_for_its_size_is_refused(capsys, tmp_path):
+    """The node's limit (32 MiB), not the library's: what the check accepts, the node loads."""
+    from spatial_dynamics.ros.descriptions import MAX_DESCRIPTION_BYTES
+    path = tmp_path / 'large.urdf'
+    text = open(DEMO_URDF).read()
+    path.write_text(text + ' ' * (MAX_DESCRIPTION_BYTES + 1 - len(text.encode())))
+    status, _, err = run(capsys, path)
+    assert status == 1 and 'too large' in err and str(path) in err, err
+
+
+def test_a_repeated_locked_joint_is_refused_as_the_node_refuses_it(capsys):
+    joints = sd.Model.from_urdf(DEMO_URDF).joint_names
+    with pytest.raises(SystemExit) as exit:
+        main([DEMO_URDF, '--joints', joints[0], '--locked', f'{joints[1]}=0.1',
+              f'{joints[1]}=0.2'])
+    assert exit.value.code == 2
+    err = capsys.readouterr().err
+    assert '--locked' in err and joints[1] in err, err
+
+
+def test_a_closed_pipe_is_no_traceback():
+    """``spatial_dynamics_check ROBOT | head -1``: the reader leaves early, no traceback."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([ROOT, os.environ.get('PYTHONPATH', '')]))
+    proc = subprocess.Popen([sys.executable, '-m', 'spatial_dynamics.check', DEMO_URDF],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=ROOT)
+    proc.stdout.close()   # as head does after its lines
+    err = proc.stderr.read().decode()
+    proc.wait(timeout=120)
+    assert 'Traceback' not in err and 'BrokenPipeError' not in err, err

@@ -20,11 +20,8 @@ import spatial_dynamics as sd
 from spatial_dynamics.ros.parameters import ConfigError
 from spatial_dynamics.ros.records import Robot
 from spatial_dynamics.ros.worker import Newest
+from spatial_dynamics.urdf import MAX_DESCRIPTION_BYTES
 from spatial_dynamics.urdf import read_description as read_urdf_description
-
-#: Largest robot_description_file read, bytes (the largest URDF of example-robot-data is
-#: < 1 MiB).
-MAX_DESCRIPTION_BYTES = 32 * 1024 * 1024
 
 
 # --------------------------------------------------------------------------------------------
