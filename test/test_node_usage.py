@@ -124,3 +124,32 @@ def test_a_bad_params_file_is_one_line(kind, tmp_path):
         path.write_text('a: [\n')
     proc = run_launcher('inverse_dynamics', '--ros-args', '--params-file', str(path))
     cannot_start(proc, 1, str(path))
+
+
+def test_usage_gives_each_description_whole_with_its_range_values_and_read_only():
+    from spatial_dynamics.ros.config import PARAMETERS
+    from spatial_dynamics.ros.usage import usage
+    text = usage(PARAMETERS, 'summary', 'doc/node.md')
+    flat = ' '.join(text.split())
+    for p in PARAMETERS:
+        assert ' '.join(p.description.split()) in flat, p.name   # whole, not to its first '. '
+        head = next(line for line in text.splitlines() if line.startswith(f'  {p.name} ('))
+        entry = ' '.join(text[text.index(head):].split('\n      ')[0].split())
+        if p.bounds is not None:
+            assert f'{p.bounds[0]:g} .. {p.bounds[1]:g}' in entry, entry
+        assert all(str(c) in entry for c in p.choices), entry
+        assert ('read-only' in entry) == p.read_only, entry
+
+
+def test_usage_lists_every_topic_the_node_has():
+    import re
+    from spatial_dynamics.ros.config import PARAMETERS
+    from spatial_dynamics.ros.usage import usage
+    with open(os.path.join(ROOT, 'spatial_dynamics', 'ros', 'node.py')) as f:
+        source = f.read()
+    topics = set(re.findall(r"(?:advertise|subscribe)\(self, \w+, '([\w/]+)'", source))
+    assert {'external_wrench_estimate', 'annotated_trajectory',
+            'measured_contact_wrenches'} <= topics
+    text = usage(PARAMETERS, 'summary', 'doc/node.md')
+    listed = set(re.findall(r'^  (?:in|out)\s+([\w/]+)', text, re.M))
+    assert topics <= listed, topics - listed

@@ -67,14 +67,23 @@ def usage(table: Table, summary: str, page: str) -> str:
              f'[--params-file FILE]]', '', textwrap.fill(summary, WIDTH), '']
     topics = table.header.split('\n\n')[2:]    # after the licence and the file's origin
     lines += [*topics, ''] if topics else []
-    lines += ['parameters (type, default, unit):']
+    lines += ['parameters (type; default, unit; range or values; read-only):']
     for p in table:
         default = 'unset' if p.default is None else repr(
             list(p.default) if isinstance(p.default, tuple) else p.default)
         unit = f', {p.unit}' if p.unit else ''
-        lines.append(f'  {p.name} ({p.type}, default {default}{unit})')
-        lines += textwrap.wrap(p.description, WIDTH, initial_indent=' ' * 6,
+        notes = [p.type, f'default {default}{unit}']
+        if p.bounds is not None:
+            each = ' each' if '[]' in p.type else ''
+            notes.append(f'{p.bounds[0]:g} .. {p.bounds[1]:g}{each}')
+        if p.choices:
+            notes.append('one of ' + ', '.join(map(str, p.choices)))
+        if p.read_only:
+            notes.append('read-only')
+        lines += textwrap.wrap(f'{p.name} ({"; ".join(notes)})', WIDTH, initial_indent='  ',
                                subsequent_indent=' ' * 6)
+        lines += textwrap.wrap(p.description, WIDTH, initial_indent=' ' * 6,
+                               subsequent_indent=' ' * 6, break_on_hyphens=False)
     lines += ['', textwrap.fill(
         f'Every parameter in full, the topics and their QoS: {page} in the source tree; the '
         f'parameter file: share/spatial_dynamics/config/{table.node}.yaml of the install.',
