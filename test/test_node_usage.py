@@ -15,7 +15,8 @@ import pytest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import ROOT  # noqa: E402
-from spatial_dynamics.ros.usage import help_requested, params_files, split_args  # noqa: E402
+from spatial_dynamics.ros.arguments import params_files, split_args  # noqa: E402
+from spatial_dynamics.ros.usage import help_requested  # noqa: E402
 
 #: What the launcher's process reports after the usage: its exit status, and whether rclpy
 #: was imported and initialised.

@@ -31,7 +31,7 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from spatial_dynamics.files import read_regular
 from spatial_dynamics.ros.parameters import ConfigError, ParameterError
 from spatial_dynamics.ros.realtime import GroupExecutor, OthersExecutor
-from spatial_dynamics.ros.usage import params_files
+from spatial_dynamics.ros.arguments import params_files
 
 #: The largest ``--params-file`` read (rcl parses it whole at ``rclpy.init``).
 PARAMS_FILE_LIMIT = 64 << 20

@@ -15,50 +15,20 @@ from __future__ import annotations
 
 import sys
 import textwrap
-from typing import Callable, List, Optional, Sequence, Tuple
+from typing import Callable, Optional, Sequence
 
+from spatial_dynamics.ros.arguments import split_args
 from spatial_dynamics.ros.config import PARAMETERS
 from spatial_dynamics.ros.parameters import Table
 
 HELP = ('-h', '--help')
 WIDTH = 99
-#: The options of rcl's ``--ros-args`` that take the next argument as their value.
-ROS_VALUE_OPTIONS = ('-p', '--param', '-r', '--remap', '-e', '--enclave', '--params-file',
-                     '--log-level', '--log-config-file', '--log-file-name')
-
-
-def split_args(argv: Sequence[str]) -> Tuple[List[str], List[Tuple[str, Optional[str]]]]:
-    """Split a command line (without the program) into the program's and ROS's arguments.
-
-    ROS's are those of each ``--ros-args`` block, up to ``--`` or the end, as (option, value)
-    pairs (value None for an option without one, such as ``--help``).
-    """
-    program: List[str] = []
-    ros: List[Tuple[str, Optional[str]]] = []
-    args = iter(argv)
-    inside = False
-    for arg in args:
-        if arg == '--ros-args':
-            inside = True
-        elif inside and arg == '--':
-            inside = False
-        elif inside:
-            ros.append((arg, next(args, None) if arg in ROS_VALUE_OPTIONS else None))
-        else:
-            program.append(arg)
-    return program, ros
 
 
 def help_requested(argv: Sequence[str]) -> bool:
     """Return whether ``-h``/``--help`` is among the arguments, before or after ``--ros-args``."""
     program, ros = split_args(argv)
     return any(arg in HELP for arg in program + [option for option, _ in ros])
-
-
-def params_files(argv: Sequence[str]) -> List[str]:
-    """Return the files of the ``--params-file`` options in ``argv``'s ``--ros-args``."""
-    return [value for option, value in split_args(argv)[1]
-            if option == '--params-file' and value is not None]
 
 
 def usage(table: Table, summary: str, page: str) -> str:
