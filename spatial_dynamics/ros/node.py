@@ -40,6 +40,7 @@ from array import array
 from collections import deque
 from dataclasses import replace
 import sys
+import threading
 import time
 from typing import Optional, Sequence, Tuple
 import warnings
@@ -104,6 +105,10 @@ class InverseDynamicsNode(Node):
         self._plan_queue: deque = deque()
         self.config: Optional[Config] = None
         self.answering = Answering(self.get_logger())
+        # Held while one message is counted and answered, and while diagnostics swap the
+        # period's counters (another thread): a swap between a message's 'received' and its
+        # 'answered' would report it rejected.
+        self._counting = threading.Lock()
         self.realtime: Optional[realtime.InEffect] = None   # set by the answering thread
         self._collections = 0      # diagnostics periods, each with a young-generation collection
         self._collection_ns = 0    # the pause of the last one
@@ -187,7 +192,8 @@ class InverseDynamicsNode(Node):
 
     def _base_callback(self, topic: str):
         def take(msg) -> None:
-            self.answering.base_input(self.config, topic, msg)
+            with self._counting:
+                self.answering.base_input(self.config, topic, msg)
         return take
 
     def destroy_node(self) -> None:
@@ -358,7 +364,9 @@ class InverseDynamicsNode(Node):
     # -- inputs, answered by ``answering`` ----------------------------------------------------
 
     def _on_joint_state(self, msg: JointState) -> None:
-        self._send(self.answering.joint_state(self.config, msg, self._wants_terms()))
+        with self._counting:
+            out = self.answering.joint_state(self.config, msg, self._wants_terms())
+        self._send(out)
 
     def _on_plan(self, raw: bytes) -> None:
         """Size, convert and check a serialized plan; hand it to the answers (plans group)."""
@@ -380,14 +388,20 @@ class InverseDynamicsNode(Node):
         """Schedule (or answer) the plans checked since, oldest first (inputs group)."""
         while self._plan_queue:
             item = self._plan_queue.popleft()
-            self._send(self.answering.take_plan(self.config, item,
-                                                self.get_clock().now().nanoseconds,
-                                                self._wants_terms()))
+            with self._counting:
+                out = self.answering.take_plan(self.config, item,
+                                               self.get_clock().now().nanoseconds,
+                                               self._wants_terms())
+            self._send(out)
 
     def _on_measured(self, msg: JointState) -> None:
         config = self.config
-        self._send(self.answering.measured(config, msg, self._wants_terms()))
-        self._send(self.answering.observe(config, msg))   # after the command is out
+        with self._counting:
+            out = self.answering.measured(config, msg, self._wants_terms())
+        self._send(out)
+        with self._counting:
+            out = self.answering.observe(config, msg)
+        self._send(out)   # after the command is out
 
     def _on_wrench(self, msg: WrenchStamped) -> None:
         self.answering.wrench(self.config, msg)
@@ -454,8 +468,11 @@ class InverseDynamicsNode(Node):
         self._collections += 1
         now_ns = time.monotonic_ns()
         answering = self.answering
-        answering.drain(self.annotator)
-        window, estimates = answering.period()
+        with self._counting:   # between two messages: a period never splits one's counts
+            answering.drain(self.annotator)
+            window, estimates = answering.period()
+            base_period = (answering.base_inputs.period()
+                           if self.config.params.base != 'fixed' else None)
         config = self.config
         robot = config.robot
         if robot is None:
@@ -475,7 +492,7 @@ class InverseDynamicsNode(Node):
         statuses.append(('real-time', (level, message, values)))
         if config.params.base != 'fixed':
             statuses.append(('base', base_status(config.params, robot, answering.base_inputs,
-                                                 answering.base_inputs.period(), now_ns)))
+                                                 base_period, now_ns)))
         name = self.get_fully_qualified_name().lstrip('/')  # 'inverse_dynamics' in the root ns
         diagnostics = messages.diagnostic_array(
             name, '' if robot is None else robot.model.name, statuses,
