@@ -36,9 +36,9 @@ def permission_denied(*args):
 
 
 def test_knobs_are_controller_managers_in_the_one_table():
-    """Named and defaulted as ros2_control's controller_manager (Jazzy), read-only."""
+    """Named as ros2_control's controller_manager (Jazzy), read-only; real-time asked for."""
     table = PARAMETERS.by_name
-    assert table['thread_priority'].default == 50 and table['thread_priority'].type == 'int'
+    assert table['thread_priority'].default == 0 and table['thread_priority'].type == 'int'
     assert table['cpu_affinity'].default is None and table['cpu_affinity'].type == 'int[]'
     assert table['lock_memory'].default is False   # Jazzy's default on a standard kernel
     assert all(table[name].read_only for name in ('thread_priority', 'cpu_affinity',

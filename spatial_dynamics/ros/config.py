@@ -60,7 +60,7 @@ DEFAULT_MEASURED_TIMEOUT = 0.5      # s
 DEFAULT_BASE_TIMEOUT = 0.5          # s
 DEFAULT_BASE_MIN_INTERVAL = 1e-4    # s: twist sources up to 10 kHz
 DEFAULT_BASE_FILTER = 0.01          # s: the differenced twist's low-pass, ~16 Hz
-DEFAULT_THREAD_PRIORITY = 50        # SCHED_FIFO, as ros2_control's controller_manager
+DEFAULT_THREAD_PRIORITY = 0         # normal scheduling: real-time is asked for (see the table)
 DEFAULT_CONTACT_MU = 0.7            # Coulomb friction of a foot on a floor
 MAX_CONTACT_MU = 10.0               # beyond it a cone is a wall: a mistake, not a floor
 #: ``observer_gain`` K_O, 1/s: a 50 ms time constant (3.2 Hz bandwidth). A collision or a
@@ -420,11 +420,13 @@ PARAMETERS = Table(NODE_NAME, [
         'Read-only.'), choices=BACKEND_SETTINGS, read_only=True),
     Param('thread_priority', 'int', DEFAULT_THREAD_PRIORITY, (
         'SCHED_FIFO priority of the thread that answers the inputs and of the middleware '
-        "threads that receive them (controller_manager's parameter and default); 0 = normal "
-        'scheduling. A real-time thread runs before every normal one on its core: the '
-        'answers keep their period on a busy machine, and a busy loop in the node would '
-        'starve the core (the node only waits or answers). Needs the rtprio limit or '
-        'CAP_SYS_NICE (a realtime group in /etc/security/limits.conf, ulimit -r, '
+        "threads that receive them (controller_manager's parameter; it defaults to 50, "
+        'this node to 0 = normal scheduling: measured on 2 loaded cores, a real-time Python '
+        "thread holding the GIL starved the node's own diagnostics; ask for it, e.g. 50, "
+        'where the node has a core to itself). A real-time thread runs before every normal '
+        'one on its core: the answers keep their period on a busy machine, and a busy loop '
+        'in the node would starve the core (the node only waits or answers). Needs the '
+        'rtprio limit or CAP_SYS_NICE (a realtime group in /etc/security/limits.conf, ulimit -r, '
         'docker run --cap-add=sys_nice --ulimit rtprio=99); without it one WARN says so '
         'and the node answers under normal scheduling. /diagnostics (real-time) says what '
         'is in effect. Read-only.'), bounds=(0, 99), read_only=True),
