@@ -239,7 +239,9 @@ class Io:
         sees our publisher, and what is published in between is lost. Two answers (stamp -1)
         prove both directions work; they count in the node's ``answered``, and so does every
         priming message answered after the next was sent (a busy node answers slower than
-        one publish period): ``self.primed`` is how many were answered.
+        one publish period): ``self.primed`` is how many answers arrived, a lower bound of
+        the node's count (an answer sent before the node's publisher matched our subscription
+        is counted there and lost here).
         """
         from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
         zeros = [0.0] * len(names)

@@ -10,6 +10,7 @@ asserted anywhere (the benchmark measures; these check behaviour).
 import errno
 import os
 import threading
+import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
@@ -151,6 +152,50 @@ def test_group_executor_runs_only_its_group_in_its_thread():
         thread.join(TIMEOUT)
         assert threads['inputs'] == {thread.ident}
         assert threads['other'] and thread.ident not in threads['other']
+        others.shutdown()
+        answering.shutdown()
+        node.destroy_node()
+    finally:
+        rclpy.shutdown(context=context)
+
+
+@pytest.mark.ros
+def test_executors_never_run_each_others_guard_conditions():
+    """A guard condition left marked triggered by one executor's wait runs in that one only.
+
+    rclpy marks a ready guard condition on the entity and then runs whatever of the node's
+    guards is marked: the answering executor ran the description's guard condition (rclpy's
+    default group) while the other executor had left the group's timer out of its wait set;
+    nothing woke that executor again and the diagnostics stopped (CI, a 6000-link description
+    on a busy machine). Each must run only its part of the node.
+    """
+    import rclpy
+    from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = rclpy.create_node('guard_executor_test', context=context)
+        group = MutuallyExclusiveCallbackGroup()
+        ran = []
+        inside = node.create_guard_condition(lambda: ran.append(('inside', threading.get_ident())),
+                                             callback_group=group)
+        outside = node.create_guard_condition(lambda: ran.append(('outside',
+                                                                  threading.get_ident())))
+        answering = realtime.GroupExecutor(node, group)
+        others = realtime.OthersExecutor(group, 2, context)
+        others.add_node(node)
+        outside._executor_triggered = True   # what the other executor's wait leaves on it
+        answering.spin_once(0.0)
+        assert ran == [], 'the answering executor ran a guard condition of another group'
+        inside._executor_triggered = True
+        deadline = time.monotonic() + TIMEOUT
+        while not ran and time.monotonic() < deadline:
+            others.spin_once(0.01)
+        assert [name for name, _ in ran] == ['outside'], ran
+        assert ran[0][1] != threading.get_ident()   # in the others' pool
+        answering.spin_once(0.0)
+        assert [name for name, _ in ran] == ['outside', 'inside'], ran
+        assert ran[1][1] == threading.get_ident()
         others.shutdown()
         answering.shutdown()
         node.destroy_node()

@@ -210,26 +210,73 @@ def collect(calls: int) -> int:
 
 # -- executors ---------------------------------------------------------------------------------
 
+class _Part:
+    """The entities of a node that one executor serves: those ``keep`` accepts.
+
+    rclpy's executors gather their wait set through ``can_execute`` but then go over all of a
+    node's entities to run what is ready, asking only the entity's callback group; a guard
+    condition's "triggered" mark is on the entity itself, set by whichever executor waited on
+    it. Two executors on one node therefore ran each other's guard conditions (the parsed
+    description's in the answering thread, a plan's outside it), and the executor whose entity
+    ran elsewhere was never woken when it ended: its timer left out of its wait set while the
+    group was busy, the diagnostics stopped. Each executor sees this view of the node instead:
+    the same node, with its entity lists cut to the part the executor serves.
+    """
+
+    def __init__(self, node, keep) -> None:
+        self._node = node
+        self._keep = keep
+
+    def __getattr__(self, name: str):
+        return getattr(self._node, name)
+
+    def _cut(self, entities) -> list:
+        return [entity for entity in entities if self._keep(entity)]
+
+    @property
+    def subscriptions(self) -> list:
+        return self._cut(self._node.subscriptions)
+
+    @property
+    def timers(self) -> list:
+        return self._cut(self._node.timers)
+
+    @property
+    def clients(self) -> list:
+        return self._cut(self._node.clients)
+
+    @property
+    def services(self) -> list:
+        return self._cut(self._node.services)
+
+    @property
+    def guards(self) -> list:
+        return self._cut(self._node.guards)
+
+    @property
+    def waitables(self) -> list:
+        return self._cut(self._node.waitables)
+
+
 class GroupExecutor(SingleThreadedExecutor):
     """Run the callbacks of ``group`` of ``node`` only, in the thread that spins it.
 
     The node belongs to another executor (its ``executor`` property, woken when entities
-    change); this one waits on the group's entities alone, so its wait set is a few entities
-    and never holds a parameter service, a plan or a timer.
+    change); this one waits on, and runs, the group's entities alone (:class:`_Part`), so its
+    wait set is a few entities and never holds a parameter service, a plan or a timer.
     """
 
     def __init__(self, node, group) -> None:
         super().__init__(context=node.context)
-        self._node = node
         self._group = group
+        self._part = [_Part(node, self._in_group)]
+
+    def _in_group(self, entity) -> bool:
+        return entity.callback_group is self._group
 
     def get_nodes(self) -> list:
-        """Return the one node served (never added: its executor stays the other one)."""
-        return [self._node]
-
-    def can_execute(self, entity) -> bool:
-        """Whether ``entity`` is of the group, and free to run."""
-        return entity.callback_group is self._group and super().can_execute(entity)
+        """Return the one node served, cut to the group (never added: see above)."""
+        return self._part
 
 
 class OthersExecutor(MultiThreadedExecutor):
@@ -238,7 +285,16 @@ class OthersExecutor(MultiThreadedExecutor):
     def __init__(self, excluded, threads: int, context=None) -> None:
         super().__init__(num_threads=threads, context=context)
         self._excluded = excluded
+        self._parts: dict = {}
 
-    def can_execute(self, entity) -> bool:
-        """Whether ``entity`` is outside the excluded group, and free to run."""
-        return entity.callback_group is not self._excluded and super().can_execute(entity)
+    def _outside(self, entity) -> bool:
+        return entity.callback_group is not self._excluded
+
+    def get_nodes(self) -> list:
+        """Return the nodes added, each cut to what is outside the excluded group."""
+        nodes = super().get_nodes()
+        parts = [self._parts.get(id(node)) for node in nodes]
+        if any(part is None or part._node is not node for part, node in zip(parts, nodes)):
+            self._parts = {id(node): _Part(node, self._outside) for node in nodes}
+            parts = [self._parts[id(node)] for node in nodes]
+        return parts
