@@ -34,7 +34,7 @@ import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics.files import check_output, write_atomic
-from spatial_dynamics.sim.robot import import_mujoco, mujoco_model, urdf_text
+from spatial_dynamics.sim.mujoco_model import import_mujoco, mujoco_model, urdf_text
 
 LAWS = ('PD alone', 'PD + feed-forward, fixed base', 'PD + feed-forward, IMU base')
 KP, KD = 200.0, 20.0
