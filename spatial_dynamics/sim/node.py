@@ -65,6 +65,7 @@ from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, QoSReliabilityPolicy
+from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from spatial_dynamics.bounds import MAX_EFFORT, MAX_POSITION, MAX_WRENCH
 from spatial_dynamics.ros.descriptions import read_description
@@ -232,7 +233,6 @@ class SimNode(Node):
             self.twist_pub = advertise(self, TwistStamped, 'base_twist')
         self.clock_pub = None
         if p['publish_clock']:
-            from rosgraph_msgs.msg import Clock
             self.clock_pub = self.create_publisher(Clock, '/clock', 10)
             self._clock_msg = Clock
         self.create_subscription(Float64MultiArray, p['command_topic'], self._on_command,
