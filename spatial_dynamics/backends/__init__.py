@@ -25,6 +25,7 @@ table is prepared once per model (:mod:`.layout`).
 
 from __future__ import annotations
 
+import functools
 from typing import Mapping, Optional, Sequence
 
 import numpy as np
@@ -389,7 +390,6 @@ def _doors() -> None:
     name, docstring and signature (``__wrapped__``). The extension names the functions it
     has an entry for (``ALGORITHMS``, in the order of the doors' kinds).
     """
-    import functools
     g = globals()
     for kind, name in enumerate(_ext.ALGORITHMS):
         function = g.get(name)

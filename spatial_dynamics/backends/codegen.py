@@ -30,13 +30,13 @@ source (Python backends)                        generated (flat arrays)
 ``f(…, m)``, ``def f(…, m)`` (the sin/cos kind)  ``f(…)``, ``def f(…)``
 ==============================================  ==============================================
 
-The C is the flat text typed (:class:`_ToC`): integer names ``long``, the rest ``double``;
-``K[i, j]`` is ``K[i * WIDTH + j]``, a tuple assignment evaluates every value before it
-stores one, a component product returns its values through an output array.
+The C is the flat text typed (:class:`.c_printer._ToC`): integer names ``long``, the rest
+``double``; ``K[i, j]`` is ``K[i * WIDTH + j]``, a tuple assignment evaluates every value
+before it stores one, a component product returns its values through an output array.
 
 The RNEA kernels (with the components they call) are printed again on vectors of 2, 4 and
-8 states (:class:`_ToCLanes`: SIMD across the states of a batch, GCC and Clang vector
-extensions), each lane doing the scalar kernel's operations in its order.
+8 states (:class:`.c_lanes._ToCLanes`: SIMD across the states of a batch, GCC and Clang
+vector extensions), each lane doing the scalar kernel's operations in its order.
 
 Both are build products, not sources: a change to an algorithm is a change to its source
 here, and the next build compiles it (``setup.py`` lists the sources the extension depends
@@ -52,10 +52,12 @@ import inspect
 import os
 import sys
 import textwrap
+import types
 from typing import Optional, Sequence
 
 from . import layout
-from .c_printer import _ToC, lanes_c
+from .c_lanes import lanes_c
+from .c_printer import _ToC
 from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_torque,
                       joint_transform, joint_velocity, rotation_product)
 from ..algorithms import components, crba, jacobian, momentum, regressor, rnea, split
@@ -326,7 +328,6 @@ def generate_c() -> str:
 
 def flat_module():
     """Return the flat-array listing (:func:`generate`) as a module, to run it on floats."""
-    import types
     module = types.ModuleType('spatial_dynamics.backends.' + LISTING[:-3])
     exec(compile(generate(), LISTING, 'exec'), module.__dict__)
     return module

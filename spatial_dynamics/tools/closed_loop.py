@@ -54,7 +54,11 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
+import spatial_dynamics as sd
 from .driving import node_command, pyplot, redraw, robot_model, save_figure, start, stop
+
+# rclpy and the ROS messages are imported inside the functions that run a node: the options
+# are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
 
 LAWS = (('PD alone', {'control_mode': 'pd_feedforward', 'output': 'none'}),
         ('PD + feed-forward', {'control_mode': 'pd_feedforward', 'output': 'full'}),
@@ -118,7 +122,6 @@ def start_point(model) -> np.ndarray:
 
 def gains(model, q0: np.ndarray, law: str, frequency: float):
     """``(kp, kd)`` per joint for ``law`` (see the module docstring)."""
-    import spatial_dynamics as sd
     w = 2.0 * math.pi * frequency
     if law == 'computed_torque':
         return np.full(model.nq, w * w), np.full(model.nq, 2.0 * w)

@@ -47,6 +47,9 @@ from .driving import (
     cpu_seconds, die_with_parent, node_command, pyplot, robot_model, save_figure, Sinusoids,
     start, stop)
 
+# rclpy and the ROS messages are imported inside the functions that run a node: the options
+# are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
+
 #: Robots ``--robot`` names: the embedded demo arm, or example-robot-data's (a test dependency).
 ROBOTS = {'demo_arm': None, 'ur5': 'ur_description/urdf/ur5_robot.urdf'}
 QUANTILES = (('p50', 50.0), ('p99', 99.0), ('p99.9', 99.9))
