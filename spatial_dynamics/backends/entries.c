@@ -57,6 +57,12 @@ const Algorithm ALGORITHMS[] = {
      "axes.",
      "bodies_batch(kernels, N, q, J, threads) -> None: the rows of bodies() of N states into\n"
      "J (N x (NB + 1) x (16 + 6 n))."},
+    {"derivatives", "derivatives_batch", 3, 1, 1, DERIVATIVES, {"D"},
+     "derivatives(kernels, q, qd, qdd, gravity, f_body=None) -> D (3 n, n), or None\n\n"
+     "The analytical derivatives of rnea (algorithms/derivatives.py) of one state, stacked:\n"
+     "dtau/dq (tangent space), dtau/dqd, then M = dtau/dqdd; arguments as for rnea.",
+     "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, D, threads) -> None: the\n"
+     "derivatives of N states into D (N x 3 n x n); fext as for rnea_batch."},
 };
 #define ROWS (sizeof ALGORITHMS / sizeof ALGORITHMS[0])
 const int ALGORITHM_COUNT = (int)ROWS;
