@@ -147,7 +147,10 @@ def Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1,
 
 
 def crm_motion(a0, a1, a2, a3, a4, a5, b0, b1, b2, b3, b4, b5):
-    """``a × b`` of two motion vectors (``crm(a) b``, RBDA eq. 2.31): ``[ω×ω'; ω×v' + v×ω']``."""
+    """Return ``a × b`` of two motion vectors (``crm(a) b``, RBDA eq. 2.31).
+
+    ``[ω; v] × [ω'; v'] = [ω × ω'; ω × v' + v × ω']``.
+    """
     return (a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0,
             (a1 * b5 - a2 * b4) + (a4 * b2 - a5 * b1),
             (a2 * b3 - a0 * b5) + (a5 * b0 - a3 * b2),
@@ -155,7 +158,7 @@ def crm_motion(a0, a1, a2, a3, a4, a5, b0, b1, b2, b3, b4, b5):
 
 
 def crf_force(a0, a1, a2, a3, a4, a5, n0, n1, n2, f0, f1, f2):
-    """``a ×* f`` of a motion vector and a force (``crf(a) f``, RBDA eq. 2.32).
+    """Return ``a ×* f`` of a motion vector and a force (``crf(a) f``, RBDA eq. 2.32).
 
     ``[ω; v] ×* [n; f] = [ω × n + v × f; ω × f]``.
     """
@@ -166,9 +169,9 @@ def crf_force(a0, a1, a2, a3, a4, a5, n0, n1, n2, f0, f1, f2):
 
 
 def I_rate(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, w0, w1, w2, u0, u1, u2):
-    """The rate ``İ = v ×* I − I v×`` of an inertia moving with ``v = [ω; u]``: 9 scalars.
+    """Return the rate ``İ = v ×* I − I v×`` of an inertia moving with ``v = [ω; u]``.
 
-    ``İ = [[Ī', g×], [g×ᵀ, 0]]`` (symmetric, a spatial inertia of no mass), with
+    9 scalars: ``İ = [[Ī', g×], [g×ᵀ, 0]]`` (symmetric, a spatial inertia of no mass), with
     ``g = ω × h + m u`` and ``Ī' = ω×Ī − Īω× − (u hᵀ + h uᵀ) + 2 (u·h) 1``; returns
     ``(g, Ī')`` as ``I_motion`` takes them after a zero mass.
     """

@@ -31,7 +31,7 @@ An ancestor ``i`` of ``j`` sees the whole subtree of ``j`` move: ``∂τ_i = S_i
 
 :func:`derivatives_kernel` is written on scalar components in the subset of
 :mod:`~.rnea` (per-body rows unpacked whole, whole-tuple stores, the products of
-:mod:`.components`); per column it keeps ``(s, α, β)`` in ``dcol[6 i + c]``.
+:mod:`.components`); per column it keeps ``(s, α, β, α')`` in ``dcol[6 i + c]``.
 """
 
 from __future__ import annotations
@@ -75,6 +75,7 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
         j0 = j1 = j2 = j3 = j4 = j5 = zero                  # vJ = Σ s q̇
         a0, a1, a2, l0, l1, l2 = pa0, pa1, pa2, pl0, pl1, pl2
         for c in range(dof):
+            # vJ = Σ s q̇ and a_λ + Σ s q̈
             s0, s1, s2, s3, s4, s5 = joint_axis(code, c, ax, ay, az)
             s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                                  rx, ry, rz, s0, s1, s2, s3, s4, s5)
@@ -84,20 +85,27 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                                       j3 + s3 * qdi, j4 + s4 * qdi, j5 + s5 * qdi)
             a0, a1, a2, l0, l1, l2 = (a0 + s0 * qddi, a1 + s1 * qddi, a2 + s2 * qddi,
                                       l0 + s3 * qddi, l1 + s4 * qddi, l2 + s5 * qddi)
-            # ψ = s × v_λ;  α = -(s × a_λ + v_λ × ψ),  β = -ψ
+        w0, w1, w2, v0, v1, v2 = w0 + j0, w1 + j1, w2 + j2, v0 + j3, v1 + j4, v2 + j5
+        c0, c1, c2, c3, c4, c5 = crm_motion(w0, w1, w2, v0, v1, v2, j0, j1, j2, j3, j4, j5)
+        a0, a1, a2, l0, l1, l2 = a0 + c0, a1 + c1, a2 + c2, l0 + c3, l1 + c4, l2 + c5
+        for c in range(dof):
+            # per column: ψ = s × v_λ;  α = -(s × a_λ + v_λ × ψ),  β = -ψ;  α' = (v_λ + v_i) × s
+            s0, s1, s2, s3, s4, s5 = joint_axis(code, c, ax, ay, az)
+            s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                                 rx, ry, rz, s0, s1, s2, s3, s4, s5)
+            s0, s1, s2, s3, s4, s5 = mul * s0, mul * s1, mul * s2, mul * s3, mul * s4, mul * s5
             y0, y1, y2, y3, y4, y5 = crm_motion(s0, s1, s2, s3, s4, s5,
                                                 pw0, pw1, pw2, pv0, pv1, pv2)
             b0, b1, b2, b3, b4, b5 = crm_motion(s0, s1, s2, s3, s4, s5,
                                                 pa0, pa1, pa2, pl0, pl1, pl2)
             d0, d1, d2, d3, d4, d5 = crm_motion(pw0, pw1, pw2, pv0, pv1, pv2,
                                                 y0, y1, y2, y3, y4, y5)
-            dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5,
-                              -(b0 + d0), -(b1 + d1), -(b2 + d2),
-                              -(b3 + d3), -(b4 + d4), -(b5 + d5),
-                              -y0, -y1, -y2, -y3, -y4, -y5)
-        w0, w1, w2, v0, v1, v2 = w0 + j0, w1 + j1, w2 + j2, v0 + j3, v1 + j4, v2 + j5
-        c0, c1, c2, c3, c4, c5 = crm_motion(w0, w1, w2, v0, v1, v2, j0, j1, j2, j3, j4, j5)
-        a0, a1, a2, l0, l1, l2 = a0 + c0, a1 + c1, a2 + c2, l0 + c3, l1 + c4, l2 + c5
+            x0, x1, x2, x3, x4, x5 = crm_motion(pw0 + w0, pw1 + w1, pw2 + w2,
+                                                pv0 + v0, pv1 + v1, pv2 + v2,
+                                                s0, s1, s2, s3, s4, s5)
+            dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5, -(b0 + d0), -(b1 + d1), -(b2 + d2),
+                               -(b3 + d3), -(b4 + d4), -(b5 + d5), -y0, -y1, -y2, -y3, -y4,
+                               -y5, x0, x1, x2, x3, x4, x5)
         vel[i] = (w0, w1, w2, v0, v1, v2)
         acc[i] = (a0, a1, a2, l0, l1, l2)
         # I_i in world coordinates, h_i = I_i v_i, f_i = I_i a_i + v_i ×* h_i - f_ext_i
@@ -150,14 +158,8 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
         Fn0, Fn1, Fn2, Ff0, Ff1, Ff2 = frc[i]
         for c in range(dof):
             k = kv + c
-            (s0, s1, s2, s3, s4, s5, al0, al1, al2, al3, al4, al5,
-             be0, be1, be2, be3, be4, be5) = dcol[6 * i + c]
-            pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
-            w0, w1, w2, v0, v1, v2 = vel[i]
-            # α' = (v_λ + v_i) × s
-            (ad0, ad1, ad2, ad3, ad4, ad5) = crm_motion(pw0 + w0, pw1 + w1, pw2 + w2,
-                                                        pv0 + v0, pv1 + v1, pv2 + v2,
-                                                        s0, s1, s2, s3, s4, s5)
+            (s0, s1, s2, s3, s4, s5, al0, al1, al2, al3, al4, al5, be0, be1, be2, be3, be4, be5,
+             ad0, ad1, ad2, ad3, ad4, ad5) = dcol[6 * i + c]
             # rows of body i: A = IC s, B = İC s - s ×* hC
             A0, A1, A2, A3, A4, A5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
                                               s0, s1, s2, s3, s4, s5)
@@ -188,11 +190,8 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             # body i's own columns: the subtree formula
             for d in range(dof):
                 r = kv + d
-                (t0, t1, t2, t3, t4, t5, bl0, bl1, bl2, bl3, bl4, bl5,
-                 bb0, bb1, bb2, bb3, bb4, bb5) = dcol[6 * i + d]
-                (bd0, bd1, bd2, bd3, bd4, bd5) = crm_motion(pw0 + w0, pw1 + w1, pw2 + w2,
-                                                            pv0 + v0, pv1 + v1, pv2 + v2,
-                                                            t0, t1, t2, t3, t4, t5)
+                (t0, t1, t2, t3, t4, t5, bl0, bl1, bl2, bl3, bl4, bl5, bb0, bb1, bb2, bb3, bb4,
+                 bb5, bd0, bd1, bd2, bd3, bd4, bd5) = dcol[6 * i + d]
                 dq[k * n + r] = dq[k * n + r] + (
                     (A0 * bl0 + A1 * bl1 + A2 * bl2 + A3 * bl3 + A4 * bl4 + A5 * bl5)
                     + (B0 * bb0 + B1 * bb1 + B2 * bb2 + B3 * bb3 + B4 * bb4 + B5 * bb5))
@@ -206,15 +205,10 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             while j != 0:
                 (pj, _, _, kj, dj, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
                  _, _, _, _, _, _, _, _, _, _, _, _) = rows[j]
-                uw0, uw1, uw2, uv0, uv1, uv2 = vel[pj]
-                xw0, xw1, xw2, xv0, xv1, xv2 = vel[j]
                 for d in range(dj):
                     r = kj + d
-                    (t0, t1, t2, t3, t4, t5, bl0, bl1, bl2, bl3, bl4, bl5,
-                     bb0, bb1, bb2, bb3, bb4, bb5) = dcol[6 * j + d]
-                    (bd0, bd1, bd2, bd3, bd4, bd5) = crm_motion(
-                        uw0 + xw0, uw1 + xw1, uw2 + xw2, uv0 + xv0, uv1 + xv1, uv2 + xv2,
-                        t0, t1, t2, t3, t4, t5)
+                    (t0, t1, t2, t3, t4, t5, bl0, bl1, bl2, bl3, bl4, bl5, bb0, bb1, bb2, bb3,
+                     bb4, bb5, bd0, bd1, bd2, bd3, bd4, bd5) = dcol[6 * j + d]
                     # row k (body i, in the subtree of j), column r (joint j)
                     dq[k * n + r] = dq[k * n + r] + (
                         (A0 * bl0 + A1 * bl1 + A2 * bl2 + A3 * bl3 + A4 * bl4 + A5 * bl5)

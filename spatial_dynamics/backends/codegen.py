@@ -68,13 +68,13 @@ STORES = {'Xup': ('XUP', 0, 12), 'vel': ('VEL', 12, 6), 'acc': ('ACC', 18, 6),
 WORK = 40
 #: The derivatives' scratch after the per-body rows (``rows * WORK`` doubles in): per body
 #: its world transform ``oX`` (12), ``İC`` (9) and ``hC`` (6) in ``DWORK`` doubles, then six
-#: columns a body of ``(s, α, β)`` (18 each); name -> (constant, offset, values, start,
+#: columns a body of ``(s, α, β, α')`` (24 each); name -> (constant, offset, values, start,
 #: stride), a slot ``work[start + index * stride + offset + j]``.
-DWORK, CWORK = 27, 18
+DWORK, CWORK = 27, 24
 MORE_STORES = {'oX': ('OXS', 0, 12, 'K.shape[0] * WORK', 'DWORK'),
                'dIC': ('DIC', 12, 9, 'K.shape[0] * WORK', 'DWORK'),
                'hC': ('HCS', 21, 6, 'K.shape[0] * WORK', 'DWORK'),
-               'dcol': ('DCOL', 0, 18, 'K.shape[0] * (WORK + DWORK)', 'CWORK')}
+               'dcol': ('DCOL', 0, 24, 'K.shape[0] * (WORK + DWORK)', 'CWORK')}
 #: Every store's number of values.
 WIDTHS = {**{k: v[2] for k, v in STORES.items()}, **{k: v[2] for k, v in MORE_STORES.items()}}
 #: The functions translated, in order (a function is generated after those it calls).
