@@ -53,7 +53,7 @@ _c_bias_torque = _ext.bias_torque if _ext else None
 _c_mass_matrix = _ext.mass_matrix if _ext else None
 _c_momentum = _ext.generalized_momentum if _ext else None
 _c_regressor = _ext.regressor if _ext else None
-_c_derivatives = getattr(_ext, 'derivatives', None)   # None in a build older than it
+_c_derivatives = getattr(_ext, 'rnea_derivatives', None)     # None: a build before it
 
 
 class CompiledBackendUnavailable(ImportError):
@@ -327,8 +327,7 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
         # one state that the extension reads as it is: answered in C
         lay, kern, D = _entered(model, backend, _c_derivatives, q, qd, qdd, gravity)
         if D is not None:
-            nv = lay.nv
-            return D[:nv], D[nv:2 * nv], D[2 * nv:]
+            return D
     if base is not None:
         check_base_motion(base, model)
         twin = floating_twin(model)
@@ -351,8 +350,7 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
             fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
                     if fb else None)
             D = _c_derivatives(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g, fext)
-            shape = qd.shape + (lay.nv,)
-            out = tuple(D[k * lay.nv:(k + 1) * lay.nv].reshape(shape) for k in range(3))
+            out = tuple(x.reshape(qd.shape + (lay.nv,)) for x in D)
         else:
             out = compiled.derivatives(lay, q, qd, qdd, g, fb)
     else:
