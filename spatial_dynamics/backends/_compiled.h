@@ -72,7 +72,7 @@ typedef struct {
 
 extern PyTypeObject KernelsType;
 
-enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3, BODIES = 4 };  /* the kernels */
+enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3, BODIES = 4, DERIVATIVES = 5 };
 
 /* One batch's job: N states, each through `kernel`; threads.c shares it out in slices of
  * states [lo, hi), kernels.c runs them. */
@@ -84,7 +84,7 @@ typedef struct {
     const double *q, *qd, *qdd, *fext;  /* (N, n) each or NULL; fext (1 or N, rows, 6) or NULL */
     int fext_per_state;
     double g[3];
-    double *out1, *out2;                 /* tau | H | mom, ctq | Y | J */
+    double *out1, *out2;                 /* tau | H | mom, ctq | Y | J | dq, dv, M */
 } Slice;
 
 int result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count);

@@ -141,6 +141,20 @@ def regressor(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tupl
     return _batch(ext.regressor_batch, lay, (q, qd, qdd), (gravity,), shape)[0]
 
 
+def derivatives(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
+                f_body: dict) -> tuple:
+    """``(∂τ/∂q, ∂τ/∂q̇, M)``, each (..., nv, nv), from validated arrays (as :func:`rnea`)."""
+    fext = None
+    if f_body:
+        shared = all(np.ndim(f) <= 1 for f in f_body.values())
+        fext = np.zeros(((1,) if shared else q.shape[:-1]) + (lay.table.shape[0], 6))
+        for b, f in f_body.items():
+            fext[..., b, :] = f
+    nv = lay.nv
+    D = _batch(ext.derivatives_batch, lay, (q, qd, qdd), (gravity, fext), (3, nv, nv))[0]
+    return D[..., 0, :, :], D[..., 1, :, :], D[..., 2, :, :]
+
+
 def describe() -> str:
     """``'compiled (C extension, 2 threads)'``, or why there is no extension."""
     if ext is None:
