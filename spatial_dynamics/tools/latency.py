@@ -439,8 +439,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         depth = 'keep last 1' if args.input_depth is None else f'depth {args.input_depth}'
         base = ', floating base' if root is not None else ''
         title = (f'latency: {model.name} ({len(model.joint_names)} joints{base}), '
-                 f'{args.rate:g} Hz, {args.seconds:g} s per target in {args.block:g} s blocks, same run, input '
-                 f'{depth}; {args.busy} busy loops; {scheduling}; load '
+                 f'{args.rate:g} Hz, {args.seconds:g} s per target in {args.block:g} s blocks, '
+                 f'same run, input {depth}; {args.busy} busy loops; {scheduling}; load '
                  f'{os.getloadavg()[0]:.2f}')
         print(title)
         print(format_table(rows))
