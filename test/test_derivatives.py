@@ -200,6 +200,27 @@ def test_M_is_mass_matrix_and_the_backends_agree(robot, rng):
     assert all(x.dtype == np.float64 for x in single)
 
 
+def test_one_state_gives_three_arrays_of_their_own(rng):
+    """One state's ``(∂τ/∂q, ∂τ/∂q̇, M)``: three arrays, none a view keeping the others alive.
+
+    float64 and float32 states (float32: the float64 results rounded once), equal to the
+    same state in a batch.
+    """
+    model = sd.Model.from_urdf(robot_urdf_path('panda'))
+    q, qd, qdd = random_state(rng, (), model.nq)
+    batch = sd.rnea_derivatives(model, q[None], qd[None], qdd[None])
+    for dtype in (np.float64, np.float32):
+        one = sd.rnea_derivatives(model, *(x.astype(dtype) for x in (q, qd, qdd)))
+        assert isinstance(one, tuple) and len(one) == 3
+        for x, b in zip(one, batch):
+            assert x.shape == (model.nv, model.nv) and x.dtype == dtype
+            assert x.flags.owndata and x.flags.c_contiguous, 'a view of a stacked array'
+        wide = batch if dtype == np.float64 else sd.rnea_derivatives(
+            model, *(x.astype(dtype).astype(np.float64)[None] for x in (q, qd, qdd)))
+        for x, w in zip(one, wide):
+            assert np.array_equal(x, w[0].astype(dtype))
+
+
 def test_a_moving_base_differentiates_the_joint_rows(rng):
     """On a moving base: the joint block, by central differences of ``rnea(base=)``."""
     model = sd.Model.from_urdf(robot_urdf_path('ur5'))

@@ -163,11 +163,11 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             # rows of body i: A = IC s, B = İC s - s ×* hC
             A0, A1, A2, A3, A4, A5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
                                               s0, s1, s2, s3, s4, s5)
-            B0, B1, B2, B3, B4, B5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
-                                              s0, s1, s2, s3, s4, s5)
-            x0, x1, x2, x3, x4, x5 = crf_force(s0, s1, s2, s3, s4, s5,
-                                               hn0, hn1, hn2, hf0, hf1, hf2)
-            B0, B1, B2, B3, B4, B5 = B0 - x0, B1 - x1, B2 - x2, B3 - x3, B4 - x4, B5 - x5
+            u0, u1, u2, u3, u4, u5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
+                                              s0, s1, s2, s3, s4, s5)       # İC s
+            o0, o1, o2, o3, o4, o5 = crf_force(s0, s1, s2, s3, s4, s5,
+                                               hn0, hn1, hn2, hf0, hf1, hf2)   # s ×* hC
+            B0, B1, B2, B3, B4, B5 = u0 - o0, u1 - o1, u2 - o2, u3 - o3, u4 - o4, u5 - o5
             # columns of body i for its ancestors: IC α + İC β + β ×* hC + s ×* F, and q̇'s
             Q0, Q1, Q2, Q3, Q4, Q5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
                                               al0, al1, al2, al3, al4, al5)
@@ -181,12 +181,8 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             Q3, Q4, Q5 = Q3 + x3 + y3 + z3, Q4 + x4 + y4 + z4, Q5 + x5 + y5 + z5
             V0, V1, V2, V3, V4, V5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
                                               ad0, ad1, ad2, ad3, ad4, ad5)
-            x0, x1, x2, x3, x4, x5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
-                                              s0, s1, s2, s3, s4, s5)
-            y0, y1, y2, y3, y4, y5 = crf_force(s0, s1, s2, s3, s4, s5,
-                                               hn0, hn1, hn2, hf0, hf1, hf2)
-            V0, V1, V2 = V0 + x0 + y0, V1 + x1 + y1, V2 + x2 + y2
-            V3, V4, V5 = V3 + x3 + y3, V4 + x4 + y4, V5 + x5 + y5
+            V0, V1, V2 = V0 + u0 + o0, V1 + u1 + o1, V2 + u2 + o2     # + İC s + s ×* hC
+            V3, V4, V5 = V3 + u3 + o3, V4 + u4 + o4, V5 + u5 + o5
             # body i's own columns: the subtree formula
             for d in range(dof):
                 r = kv + d

@@ -60,8 +60,8 @@ const Algorithm ALGORITHMS[] = {
     {"rnea_derivatives", "derivatives_batch", 3, 1, 1, DERIVATIVES, {"D"},
      "rnea_derivatives(kernels, q, qd, qdd, gravity, f_body=None) -> (dq, dqd, M), or None\n\n"
      "The analytical derivatives of rnea (algorithms/derivatives.py) of one state: dtau/dq\n"
-     "(tangent space), dtau/dqd and M = dtau/dqdd, each (n, n), views of one array;\n"
-     "arguments as for rnea.",
+     "(tangent space), dtau/dqd and M = dtau/dqdd, each a new (n, n) array; arguments as\n"
+     "for rnea.",
      "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, D, threads) -> None: the\n"
      "derivatives of N states into D (N x 3 n x n); fext as for rnea_batch."},
 };
@@ -124,6 +124,12 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     npy_intp dims[2];
     int count;
     const int ndim = result_shape(h, a->kernel, dims, &count);
+    if (a->kernel == DERIVATIVES) {
+        /* three arrays (nv, nv), not views of one stacked (3 nv, nv): a view costs as much
+         * as an array, and the stacked one and its reshaping come on top */
+        count = 3;
+        dims[0] = dims[1];
+    }
     const Py_ssize_t size = dims[0] * dims[1];
     /* Room for float32 results, computed in doubles first, only when q may be float32. */
     PyObject *q_arg = args[1];
@@ -138,7 +144,7 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         return NULL;
     double *x[3] = {buf, buf + n, buf + n + nv}, *g = buf + n + 2 * nv, *res = g + 3;
     double *work = res + (may_float ? count * size : 0);
-    PyObject *results[2] = {NULL, NULL}, *out = NULL;
+    PyObject *results[3] = {NULL, NULL, NULL}, *out = NULL;
     Py_buffer fb = {0};
     const double *f = NULL;
     int floats = 0;         /* joint vectors read from float32 */
@@ -169,7 +175,7 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         f = fb.buf;
     }
     const int single_precision = may_float && floats == a->vectors;   /* res has room */
-    double *data[2];
+    double *data[3] = {NULL, NULL, NULL};
     for (int k = 0; k < count; k++) {
         results[k] = PyArray_SimpleNew(ndim, dims, single_precision ? NPY_FLOAT : NPY_DOUBLE);
         if (results[k] == NULL)
@@ -177,25 +183,18 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         data[k] = single_precision ? res + k * size
                                    : (double *)PyArray_DATA((PyArrayObject *)results[k]);
     }
-    run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, data[0],
-              count == 2 ? data[1] : NULL, work);
+    run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, data[0], data[1], data[2], work);
     for (int k = 0; single_precision && k < count; k++) {
         float *out32 = (float *)PyArray_DATA((PyArrayObject *)results[k]);
         for (Py_ssize_t i = 0; i < size; i++)
             out32[i] = (float)data[k][i];
     }
-    if (a->kernel == DERIVATIVES) {
-        /* the three matrices stacked (3 nv, nv): a tuple of their (nv, nv) views */
-        npy_intp three[3] = {3, nv, nv};
-        PyArray_Dims shape = {three, 3};
-        PyObject *stacked = PyArray_Newshape((PyArrayObject *)results[0], &shape, NPY_CORDER);
-        out = stacked ? PySequence_Tuple(stacked) : NULL;
-        Py_XDECREF(stacked);
-    } else if (count == 1) {
+    if (count == 1) {
         out = results[0];       /* its reference */
         results[0] = NULL;
     } else {
-        out = PyTuple_Pack(2, results[0], results[1]);
+        out = count == 2 ? PyTuple_Pack(2, results[0], results[1])
+                         : PyTuple_Pack(3, results[0], results[1], results[2]);
     }
     goto done;
 declined:
@@ -204,6 +203,7 @@ declined:
 done:
     Py_XDECREF(results[0]);
     Py_XDECREF(results[1]);
+    Py_XDECREF(results[2]);
     if (fb.obj != NULL)
         PyBuffer_Release(&fb);
     scratch_free(buf, stack);

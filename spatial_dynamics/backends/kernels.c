@@ -172,11 +172,12 @@ work_size(int kernel, long rows)
 }
 
 /* One state through the generated kernels: the body transforms, then `kernel`'s passes.
- * g: 3 numbers; f: rows x 6 external forces or NULL; out2: momentum's second result. */
+ * g: 3 numbers; f: rows x 6 external forces or NULL; out2: momentum's second result, out2
+ * and out3 the derivatives' second and third (dtau/dqd, M). */
 void
 run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
           const double *qdd, const double *g, const double *f, double *out1, double *out2,
-          double *work)
+          double *out3, double *work)
 {
     xup_kernel(K, rows, q, work);
     switch (kernel) {
@@ -192,12 +193,10 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
     case BODIES:
         bodies_kernel(K, rows, work, out1);
         break;
-    case DERIVATIVES: {
-        const Py_ssize_t nv2 = (Py_ssize_t)K[VIDX] * (Py_ssize_t)K[VIDX];
-        derivatives_kernel(K, rows, qd, qdd, g[0], g[1], g[2], f, f != NULL, out1, out1 + nv2,
-                           out1 + 2 * nv2, work);
+    case DERIVATIVES:
+        derivatives_kernel(K, rows, qd, qdd, g[0], g[1], g[2], f, f != NULL, out1, out2, out3,
+                           work);
         break;
-    }
     default:
         regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1,
                          work + (Py_ssize_t)rows * WORK, work);
@@ -223,11 +222,15 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
         lo += done;
     }
 #endif
+    /* the derivatives of a state stacked: dtau/dq, dtau/dqd, M (nv x nv each) */
+    const Py_ssize_t nv2 = s->kernel == DERIVATIVES ? (Py_ssize_t)nv * nv : 0;
     for (Py_ssize_t k = lo; k < hi; k++) {
         const double *f = s->fext ? s->fext + (s->fext_per_state ? k : 0) * rows * 6 : NULL;
+        double *out = s->out1 + k * s->size;
         run_state(s->kernel, s->K, rows, s->q + k * n, s->qd ? s->qd + k * nv : NULL,
-                  s->qdd ? s->qdd + k * nv : NULL, s->g, f, s->out1 + k * s->size,
-                  s->out2 ? s->out2 + k * s->size : NULL, work);
+                  s->qdd ? s->qdd + k * nv : NULL, s->g, f, out,
+                  s->out2 ? s->out2 + k * s->size : (nv2 ? out + nv2 : NULL),
+                  nv2 ? out + 2 * nv2 : NULL, work);
     }
     return 0;
 }
