@@ -221,6 +221,37 @@ def test_one_state_gives_three_arrays_of_their_own(rng):
             assert np.array_equal(x, w[0].astype(dtype))
 
 
+@pytest.mark.parametrize('robot', ['panda', 'solo12'])
+def test_a_batch_is_each_state_alone_bit_for_bit(robot, rng):
+    """A batch (several states at once in SIMD lanes, and threads) is each state's single call.
+
+    Sizes around the lanes (2, 4, 8 states) and a chunk of the threads; states at rest among
+    moving ones; wrenches shared and per state; a floating base (Solo12) with its quaternion.
+    """
+    floating = robot == 'solo12'
+    path = path_of('solo_description/robots/solo12.urdf') if floating else robot_urdf_path(robot)
+    model = sd.Model.from_urdf(path, **({'base': 'floating'} if floating else {}))
+    # a link that is its body's frame (another's wrench is moved to the body by a product whose
+    # rounding depends on the batch's shape, the same in both backends)
+    link = [name for name, frame in model.frames.items()
+            if frame.body > 1 and np.array_equal(frame.lXb, np.eye(6))][-1]
+    for N in (1, 3, 7, 9, 17, 300):
+        if floating:
+            q, qd, qdd = zip(*(random_floating_state(rng, model) for _ in range(N)))
+            q, qd, qdd = np.array(q), np.array(qd), np.array(qdd)
+        else:
+            q, qd, qdd = random_state(rng, (N,), model.nq)
+        qd[::3] = 0.0
+        for f_ext in (None, {link: rng.normal(size=6)}, {link: rng.normal(size=(N, 6))}):
+            batch = sd.rnea_derivatives(model, q, qd, qdd, (0.5, -1.0, -9.0), f_ext)
+            for s in range(N):
+                one = {} if f_ext is None else {link: np.broadcast_to(f_ext[link], (N, 6))[s]}
+                alone = sd.rnea_derivatives(model, q[s], qd[s], qdd[s], (0.5, -1.0, -9.0),
+                                            one or None)
+                for b, o in zip(batch, alone):
+                    assert np.array_equal(b[s], o), (N, s, f_ext is None)
+
+
 def test_a_moving_base_differentiates_the_joint_rows(rng):
     """On a moving base: the joint block, by central differences of ``rnea(base=)``."""
     model = sd.Model.from_urdf(robot_urdf_path('ur5'))

@@ -11,8 +11,8 @@
  * single-state entries read q, qd, qdd and gravity once each into C doubles from numpy
  * arrays, buffers, lists and tuples, and decline anything else to the Python caller's
  * general path (arguments.c). The batch entries release the GIL and let POSIX threads claim
- * the states chunk by chunk (threads.c); the RNEA of a batch runs several states at once in
- * the SIMD lanes of _kernels_generated.h. A Door enters a public function of the package in
+ * the states chunk by chunk (threads.c); the RNEA of a batch, and its derivatives, run
+ * several states at once in the SIMD lanes of _kernels_generated.h. A Door enters a public function of the package in
  * C for one state (door.c). This file is the module: its interface version, and each
  * file's part of it.
  */

@@ -2,26 +2,30 @@
 # SPDX-License-Identifier: Apache-2.0
 """Print the RNEA's flat kernels a second time in SIMD lanes: several states at once.
 
-:class:`_ToCLanes` prints the RNEA's kernels on GCC/Clang vectors of 2, 4 or 8 states
-(:func:`lanes_c`): table values stay scalars, state values become lanes, each lane the scalar
-kernel's operations in the same order (bit for bit the results of :class:`.c_printer._ToC`'s
-kernels).
+:class:`_ToCLanes` prints the RNEA's kernels and its derivatives' on GCC/Clang vectors of 2,
+4 or 8 states (:func:`lanes_c`): table values stay scalars, state values become lanes, each
+lane the scalar kernel's operations in the same order (bit for bit the results of
+:class:`.c_printer._ToC`'s kernels).
 """
 
 from __future__ import annotations
 
 import ast
 
-from ..algorithms import components, rnea
-from ..joints import joint_motion, joint_torque, joint_transform, joint_velocity, rotation_product
+from ..algorithms import components, derivatives, rnea
+from ..joints import (joint_axis, joint_motion, joint_torque, joint_transform, joint_velocity,
+                      rotation_product)
 from .c_printer import _C_ARRAYS, _c_name, _ToC
 
 
 #: The kernels printed a second time on lanes, and the arrays holding one value per state.
 LANE_SOURCES = (components.cross, components.X_motion, components.XT_force,
                 components.XT_force_plus, components.I_motion, rotation_product, joint_transform,
-                joint_motion, joint_velocity, joint_torque, rnea.xup_kernel, rnea.rnea_kernel)
-_LANE_ARRAYS = {'q', 'qd', 'qdd', 'f_body', 'tau', 'work'}
+                joint_motion, joint_velocity, joint_torque, joint_axis, components.X_compose,
+                components.Xinv_motion, components.crm_motion, components.crf_force,
+                components.I_rate, components.XT_I_X, rnea.xup_kernel, rnea.rnea_kernel,
+                derivatives.derivatives_kernel)
+_LANE_ARRAYS = {'q', 'qd', 'qdd', 'f_body', 'tau', 'work', 'dq', 'dv', 'H'}
 
 
 class _ToCLanes(_ToC):
@@ -187,6 +191,44 @@ static void rnea_batch_lanes{L}(const double *K, long rows, long N, const double
                 TAU[(b + s) * nv + k] = tau[k][s];
     }}
 }}
+
+/* The derivatives (dtau/dq, dtau/dqd, M stacked: 3 nv x nv numbers a state, into the rows
+ * of D) of the states [0, N - N % {L}) of a batch, {L} at a time; arguments as for
+ * rnea_batch_lanes{L}, `work` holding rows * (WORK + DWORK + 6 CWORK) + nq + 2 nv
+ * + 6 rows + 3 nv nv vectors. Each state's, bit for bit, those of derivatives_kernel on it
+ * alone. */
+static void derivatives_batch_lanes{L}(const double *K, long rows, long N, const double *Q,
+    const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
+    long F_each, double *D, sd_vd{L} *work)
+{{
+    const long nq = (long)K[QIDX], nv = (long)K[VIDX], nv2 = nv * nv;
+    sd_vd{L} *q = work + rows * (WORK + DWORK + 6 * CWORK), *qd = q + nq, *qdd = qd + nv;
+    sd_vd{L} *f_body = qdd + nv, *dq = f_body + 6 * rows, *dv = dq + nv2, *H = dv + nv2;
+    for (long b = 0; b + {L} <= N; b += {L}) {{
+        for (long k = 0; k < nq; k++)
+            for (int s = 0; s < {L}; s++)
+                q[k][s] = Q[(b + s) * nq + k];
+        for (long k = 0; k < nv; k++)
+            for (int s = 0; s < {L}; s++) {{
+                qd[k][s] = QD[(b + s) * nv + k];
+                qdd[k][s] = QDD[(b + s) * nv + k];
+            }}
+        for (long k = 0; F != NULL && k < rows * 6; k++)
+            for (int s = 0; s < {L}; s++)
+                f_body[k][s] = F[(F_each ? b + s : 0) * rows * 6 + k];
+        xup_kernel_lanes{L}(K, rows, q, work);
+        derivatives_kernel_lanes{L}(K, rows, qd, qdd, gx, gy, gz, f_body, F != NULL, dq, dv, H,
+                                    work);
+        for (int s = 0; s < {L}; s++) {{
+            double *out = D + (b + s) * 3 * nv2;
+            for (long k = 0; k < nv2; k++) {{
+                out[k] = dq[k][s];
+                out[nv2 + k] = dv[k][s];
+                out[2 * nv2 + k] = H[k][s];
+            }}
+        }}
+    }}
+}}
 """
 
 #: How the lane kernels are compiled: two lanes (SSE2, NEON: every 64-bit target), and on
@@ -234,6 +276,37 @@ static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q
     else
 #endif
         rnea_batch_lanes2(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, TAU, work);
+    free(raw);
+    return N - N % lanes;
+}
+
+/* The derivatives of the first states of a batch of N (see above) in lanes: the number of
+ * states done (N rounded down to the lanes), or -1 without memory. */
+static long derivatives_batch_lanes(const double *K, long rows, long N, const double *Q,
+    const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
+    long F_each, double *D)
+{
+    const long nq = (long)K[QIDX], nv = (long)K[VIDX];
+    const long size = 8 * (rows * (WORK + DWORK + 6 * CWORK) + nq + 2 * nv + 6 * rows
+                           + 3 * nv * nv);      /* doubles */
+    long lanes = 2;
+#ifdef SD_AVX
+    lanes = __builtin_cpu_supports("avx512f") ? 8 : __builtin_cpu_supports("avx") ? 4 : 2;
+#endif
+    if (N < lanes)
+        return 0;
+    double *raw = malloc(sizeof(double) * size + 64);
+    if (raw == NULL)
+        return -1;
+    void *work = (void *)(((uintptr_t)raw + 63) & ~(uintptr_t)63);
+#ifdef SD_AVX
+    if (lanes == 8)
+        derivatives_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, D, work);
+    else if (lanes == 4)
+        derivatives_batch_lanes4(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, D, work);
+    else
+#endif
+        derivatives_batch_lanes2(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, D, work);
     free(raw);
     return N - N % lanes;
 }

@@ -5,8 +5,9 @@
  * copy of a model's table (the rows of backends/layout.py, prepared once in Python), checked
  * once so that no table makes the kernels read or write out of bounds. run_state runs one
  * state through the kernels of _kernels_generated.h, run_states a slice of a batch (the RNEA
- * several states at once in SIMD lanes). The only file of the extension that includes the
- * generated header: the others know its kernels by RNEA, CRBA, MOMENTUM, REGRESSOR.
+ * and its derivatives several states at once in SIMD lanes). The only file of the extension
+ * that includes the generated header: the others know its kernels by RNEA, CRBA, MOMENTUM,
+ * REGRESSOR.
  */
 #include "_compiled.h"
 #include <structmember.h>
@@ -217,6 +218,17 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
         long done = rnea_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
                                      s->qd + lo * nv, s->qdd + lo * nv, s->g[0], s->g[1],
                                      s->g[2], f, s->fext_per_state, s->out1 + lo * s->size);
+        if (done < 0)
+            return -1;
+        lo += done;
+    }
+    if (s->kernel == DERIVATIVES && s->qd != NULL && s->qdd != NULL) {
+        /* the same for the derivatives: several states at once, each one's bits */
+        const double *f = s->fext ? s->fext + (s->fext_per_state ? lo : 0) * rows * 6 : NULL;
+        long done = derivatives_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
+                                            s->qd + lo * nv, s->qdd + lo * nv, s->g[0],
+                                            s->g[1], s->g[2], f, s->fext_per_state,
+                                            s->out1 + lo * s->size);
         if (done < 0)
             return -1;
         lo += done;
