@@ -15,7 +15,7 @@ import ast
 from ..algorithms import components, derivatives, rnea
 from ..joints import (joint_axis, joint_motion, joint_torque, joint_transform, joint_velocity,
                       rotation_product)
-from .c_printer import _C_ARRAYS, _c_name, _ToC
+from .c_printer import _C_ARRAYS, _C_RESTRICT, _c_name, _ToC
 
 
 #: The kernels printed a second time on lanes, and the arrays holding one value per state.
@@ -124,7 +124,8 @@ class _ToCLanes(_ToC):
 
     def _parameter(self, p: str, written: set) -> list:
         if p in self.lanes and p in _C_ARRAYS:
-            return [('' if p in written else 'const ') + f'{self.REAL} *{p}']
+            restrict = 'restrict ' if self.func.name in _C_RESTRICT else ''
+            return [('' if p in written else 'const ') + f'{self.REAL} *{restrict}{p}']
         if p in self.lanes:
             return [f'{self.REAL} {_c_name(p)}']
         return super()._parameter(p, written)

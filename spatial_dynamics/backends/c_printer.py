@@ -24,6 +24,10 @@ _C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'dq', 'dv', 'f_body', 'tau', 'work', 'H', 'm
              'Y', 'axes', 'J', 'QR', 'wts', 'res', 'scr'}
 #: Parameters that are integers: flags, and the joints' code, indices and column.
 _C_FLAGS = {'has_fext', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row', 'nb'}
+#: Kernels whose written arrays never overlap (every caller passes distinct results and
+#: scratch): printed ``restrict``, so the compiler keeps values read from one in registers
+#: across stores to the others (~4 % fewer instructions for the derivatives).
+_C_RESTRICT = {'derivatives_kernel'}
 #: ``len(x)`` of an array parameter: the number of velocity coordinates ``nv`` (``q̇``, ``τ``),
 #: ``nv * nv`` for M(q), ``nv * 10 NB`` for the regressor.
 _C_LENGTH = {'H': 'nv * nv', 'Y': 'nv * 10 * (rows - 1)'}
@@ -292,7 +296,8 @@ class _ToC:
 
     def _parameter(self, p: str, written: set) -> list:
         if p in _C_ARRAYS:
-            return [('double *' if p in written else 'const double *') + p] + (
+            restrict = 'restrict ' if self.func.name in _C_RESTRICT else ''
+            return [(f'double *{restrict}' if p in written else 'const double *') + p] + (
                 ['long rows'] if p == 'K' else [])
         return [('long ' if p in _C_FLAGS else 'double ') + _c_name(p)]
 
