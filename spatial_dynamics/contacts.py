@@ -378,7 +378,8 @@ class _Plan:
     from the body's placement ``H = [R_b p_b; 0 1]`` flat, ``T = H shift``: the three ``v``
     rows (m = 3) when every contact is a point, else all six, of which a point keeps its
     ``v`` (``rows``; ``None``: all); and per contact ``(name, first row, rows, normal, μ)``
-    for the result (plain floats).
+    for the result (plain floats). ``points`` (nc, 5): the compiled entry's contacts, a row
+    each: body, rows, ``r_c``; ``floating`` the model's; ``n`` its joints, ``nv - 6``.
     """
 
     contacts: tuple
@@ -387,6 +388,9 @@ class _Plan:
     rows: Optional[np.ndarray]
     k: int
     checks: tuple
+    points: np.ndarray
+    floating: bool
+    n: int
 
 
 #: model -> {ids of its contacts: their _Plan}; a plan holds its contacts, so their ids stay
@@ -423,12 +427,15 @@ def _plan(model: Model, contacts) -> _Plan:
     shift[:, :3, :3] = np.einsum('cj,arx->cajrx', np.array(offsets).reshape(-1, 3),
                                  _SHIFT[:, kept])
     shift[:, 3, 3] = np.eye(6)[kept]
+    table = np.c_[bodies, [c.rows for c in contacts], np.reshape(offsets, (-1, 3))].reshape(
+        nc, 5).astype(float)
+    table.setflags(write=False)
     if len(plans) >= 64:        # contacts made anew for each call: keep the last ones
         plans.clear()
     plan = plans[key] = _Plan(contacts, np.array(bodies, dtype=np.intp),
                               shift.reshape(nc, 16, 6 * m),
                               None if points or len(rows) == 6 * nc else np.array(rows), row,
-                              tuple(checks))
+                              tuple(checks), table, model.floating, len(model.damping) - 6)
     return plan
 
 
@@ -482,12 +489,20 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
     """
     plan = _plan(model, contacts)
     contacts = plan.contacts
-    if not model.floating:
+    if not plan.floating:
         raise ValueError(f'{model.name!r} has a fixed base: contact inverse dynamics needs a '
                          "floating base (Model.from_urdf(..., base='floating'))")
     if method not in METHODS:
         raise ValueError(f'method must be one of {METHODS}, got {method!r}')
     kern = kernels(model, backend)
+    n = plan.n
+    torques = method == 'torques' and measured is None
+    w = np.sqrt(_weights(weights, n, 'joint')) if torques and weights is not None else None
+    if torques and kern is not None:      # one float64 state: the whole answer compiled
+        residual = np.empty(6)
+        split = _split_compiled(kern, plan, q, qd, qdd, gravity, w, residual)
+        if split is not None:
+            return _result(plan, residual, *split[:2], 'torques', 'solved', split[2])
     b = Jc = None
     if kern is not None:        # one float64 state the compiled entries read as it is
         b = _c_rnea(kern, q, qd, qdd, gravity)
@@ -506,11 +521,10 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         finite = math.isfinite(b @ b + np.vdot(Jc, Jc))     # NaN, ∞ or overflow: before LAPACK
     if not finite:
         raise _not_finite(model, q, qd, qdd, gravity)
-    n = len(b) - 6
     if measured is not None:
         lam = _measured(contacts, measured)
-        return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'measured', 'solved',
-                       _rank(Jc))
+        return _result(plan, _residual(b, Jc, lam), b[6:] - Jc[:, 6:].T @ lam, lam,
+                       'measured', 'solved', _rank(Jc))
     if method == 'qp':
         return _qp(plan, b, Jc, n, _weights(weights, n, 'joint'), force_weight)
     if method == 'forces':
@@ -518,18 +532,20 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
         A = Jc[:, :6].T                                 # base rows: A λ = b_base
         AWi = A / W
         lam = AWi.T @ np.linalg.lstsq(AWi @ A.T, b[:6], rcond=None)[0] if len(Jc) else Jc[:, 0]
-        return _result(plan, b, Jc, b[6:] - Jc[:, 6:].T @ lam, lam, 'forces', 'solved',
-                       _rank(Jc))
+        return _result(plan, _residual(b, Jc, lam), b[6:] - Jc[:, 6:].T @ lam, lam, 'forces',
+                       'solved', _rank(Jc))
     # contact-consistent (algorithms/split.py): J_cᵀ P = Q [R; 0] pivoted, Q2ᵀ Sᵀ τ = Q2ᵀ b
-    w = np.sqrt(_weights(weights, n, 'joint')) if weights is not None else None
-    split = _split_compiled(Jc, b, n, w) if kern is not None else None
-    if split is None:
-        split = _split_numpy(Jc, b, n, np.ones(n) if w is None else w)
-    return _result(plan, b, Jc, *split[:2], 'torques', 'solved', split[2])
+    tau, lam, r = _split_numpy(Jc, b, n, np.ones(n) if w is None else w)
+    return _result(plan, _residual(b, Jc, lam), tau, lam, 'torques', 'solved', r)
+
+
+def _residual(b: np.ndarray, Jc: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """Return the base rows' residual ``b_base - J_c,baseᵀ λ`` (6,), base frame."""
+    return b[:6] - Jc[:, :6].T @ lam
 
 
 _c_rnea = compiled.ext.rnea if compiled.ext is not None else None
-_c_split = compiled.ext.split if compiled.ext is not None else None
+_c_contact = compiled.ext.contact if compiled.ext is not None else None
 
 
 def _not_finite(model: Model, q, qd, qdd, gravity) -> ValueError:
@@ -631,39 +647,30 @@ def _rank(Jc: np.ndarray) -> int:
     return _pivoted_qr(Jc.T.copy(), len(Jc))[0]
 
 
-def _split_compiled(Jc: np.ndarray, b: np.ndarray, n: int, w) -> Optional[tuple]:
-    """Return the contact-consistent ``(τ, λ, r)`` by the compiled split, or ``None``.
+def _split_compiled(kern, plan: _Plan, q, qd, qdd, gravity, w,
+                    residual: np.ndarray) -> Optional[tuple]:
+    """Return the contact-consistent ``(τ, λ, r)`` of one state, all compiled, or ``None``.
 
-    :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars: a
-    Householder QR with column pivoting of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ`` by
-    Cholesky, ``λ`` by back substitution or, for redundant contact rows, a second QR).
-    ``None`` (the numpy split then answers) for fewer contact rows than six and for the
-    cases the kernel leaves to it: base rows the contacts cannot carry.
+    One call of the extension's ``contact`` entry: ``M q̈ + h`` and the bodies' rows of the
+    compiled kernels, ``J_c`` from them (:func:`_contact_rows`' products on scalars), the
+    split of :func:`~.algorithms.split.split_kernel` (the numpy split's equations on scalars:
+    a Householder QR with column pivoting of ``J_cᵀ`` applied to ``b`` and ``Sᵀ``, ``A Aᵀ``
+    by Cholesky, ``λ`` by back substitution or, for redundant contact rows, a second QR);
+    the base rows' residual into ``residual``. ``None`` (the general path then answers, or
+    names what is wrong) when ``q``, ``qd``, ``qdd`` or ``gravity`` is not one float64
+    state, when ``M q̈ + h`` or ``J_c`` is not finite, for fewer contact rows than six and
+    for the cases the kernel leaves to the numpy split: base rows the contacts cannot carry.
     """
-    k, nv = Jc.shape
-    if k < 6:
+    n, k = plan.n, plan.k
+    out = _c_contact(kern, q, qd, qdd, gravity, plan.points, _ones(n) if w is None else w,
+                     RANK_TOLERANCE)
+    if out is None or out[n + k] != 0.0:
         return None
-    QR = _augmented(nv, k, n)                   # [J_cᵀ, b, Sᵀ] by columns: (k + 1 + n, nv)
-    QR[:k] = Jc
-    QR[k] = b
-    res = np.empty(n + k + 2)
-    _c_split(QR, k, _ones(n) if w is None else w, res, np.empty(k + (nv + k + 2) * nv),
-             RANK_TOLERANCE)
-    return (res[:n], res[n:n + k], int(res[n + k + 1])) if res[n + k] == 0.0 else None
+    residual[:] = out[n + k + 2:]
+    return out[:n], out[n:n + k], int(out[n + k + 1])
 
 
 _made: dict = {}
-
-
-def _augmented(nv: int, k: int, n: int) -> np.ndarray:
-    """Return a new (k + 1 + n, nv) array whose last ``n`` rows are the columns of ``Sᵀ``."""
-    M = _made.get((nv, k, n))
-    if M is None:
-        M = np.zeros((k + 1 + n, nv))
-        M[k + 1:, nv - n:] = np.eye(n)
-        M.setflags(write=False)
-        _made[nv, k, n] = M
-    return M.copy()
 
 
 def _ones(n: int) -> np.ndarray:
@@ -707,13 +714,12 @@ def _measured(contacts, measured) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros(0)
 
 
-def _result(plan: _Plan, b, Jc, tau, lam, method, status, rank) -> ContactResult:
+def _result(plan: _Plan, residual, tau, lam, method, status, rank) -> ContactResult:
     """Assemble the result: forces by name, base residual, cone and unilateral checks.
 
     Per contact, its force ``f`` (the last three of its λ), normal ``n`` and ``μ``: the
     normal force ``f_n = n · f`` and the tangential ``f_t = |f - f_n n|`` (on floats).
     """
-    residual = b[:6] - Jc[:, :6].T @ lam
     forces, violations, values = {}, [], lam.tolist()
     for name, k, rows, (n0, n1, n2), mu in plan.checks:
         forces[name] = lam[k:k + rows]
@@ -818,8 +824,7 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
         kind = ('infeasible: no contact forces inside the friction cones carry the base rows'
                 if 'Infeasible' in status else f'not solved ({status})')
         nan = np.full(nx, np.nan)
-        result = _result(plan, b, Jc, nan[:n], nan[n:], 'qp', kind, 0)
-        result.base_residual = b[:6].copy()     # nothing carries the base rows
-        result.violations = []
+        result = _result(plan, b[:6].copy(), nan[:n], nan[n:], 'qp', kind, 0)
+        result.violations = []      # nothing carries the base rows: the residual is b_base
         return result
-    return _result(plan, b, Jc, x[:n], x[n:], 'qp', 'solved', _rank(Jc))
+    return _result(plan, _residual(b, Jc, x[n:]), x[:n], x[n:], 'qp', 'solved', _rank(Jc))
