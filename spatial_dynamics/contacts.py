@@ -377,9 +377,11 @@ class _Plan:
     ``[1 0; -d× 1]`` with ``d = R_b r_c`` (``r_c`` the contact point in body coordinates)
     from the body's placement ``H = [R_b p_b; 0 1]`` flat, ``T = H shift``: the three ``v``
     rows (m = 3) when every contact is a point, else all six, of which a point keeps its
-    ``v`` (``rows``; ``None``: all); and per contact ``(name, first row, rows, normal, μ)``
-    for the result (plain floats). ``points`` (nc, 5): the compiled entry's contacts, a row
-    each: body, rows, ``r_c``; ``floating`` the model's; ``n`` its joints, ``nv - 6``.
+    ``v`` (``rows``; ``None``: all). For the result: the contacts' ``names``, their
+    ``slices`` of λ ``(first row, rows)``, ``points_only`` (λ is ``(nc, 3)`` forces), and
+    per contact ``cones`` ``(name, row of its force, n0, n1, n2, μ)`` (plain floats).
+    ``points`` (nc, 5): the compiled entry's contacts, a row each: body, rows, ``r_c``;
+    ``floating`` the model's; ``n`` its joints, ``nv - 6``.
     """
 
     contacts: tuple
@@ -387,7 +389,10 @@ class _Plan:
     shift: np.ndarray
     rows: Optional[np.ndarray]
     k: int
-    checks: tuple
+    names: tuple
+    slices: tuple
+    points_only: bool
+    cones: tuple
     points: np.ndarray
     floating: bool
     n: int
@@ -410,14 +415,15 @@ def _plan(model: Model, contacts) -> _Plan:
     if plan is not None:
         return plan
     contacts = _contacts(model, contacts)
-    bodies, offsets, rows, checks, row = [], [], [], [], 0
+    bodies, offsets, rows, slices, cones, row = [], [], [], [], [], 0
     for j, c in enumerate(contacts):
         frame = model.frames[c.link]
         E_lb, r_lb = _Er(frame.lXb)
         bodies.append(frame.body)
         offsets.append(r_lb + E_lb.T @ c.offset)
         rows += range(6 * j + 6 - c.rows, 6 * j + 6)
-        checks.append((c.name, row, c.rows, tuple(c.normal.tolist()), float(c.mu)))
+        slices.append((row, c.rows))
+        cones.append((c.name, row + c.rows - 3, *c.normal.tolist(), float(c.mu)))
         row += c.rows
     points = all(c.kind == 'point' for c in contacts)
     kept = slice(3, 6) if points else slice(0, 6)
@@ -435,7 +441,8 @@ def _plan(model: Model, contacts) -> _Plan:
     plan = plans[key] = _Plan(contacts, np.array(bodies, dtype=np.intp),
                               shift.reshape(nc, 16, 6 * m),
                               None if points or len(rows) == 6 * nc else np.array(rows), row,
-                              tuple(checks), table, model.floating, len(model.damping) - 6)
+                              tuple(c.name for c in contacts), tuple(slices), points,
+                              tuple(cones), table, model.floating, len(model.damping) - 6)
     return plan
 
 
@@ -718,21 +725,25 @@ def _result(plan: _Plan, residual, tau, lam, method, status, rank) -> ContactRes
     """Assemble the result: forces by name, base residual, cone and unilateral checks.
 
     Per contact, its force ``f`` (the last three of its λ), normal ``n`` and ``μ``: the
-    normal force ``f_n = n · f`` and the tangential ``f_t = |f - f_n n|`` (on floats).
+    normal force ``f_n = n · f`` and the tangential ``f_t = |f - f_n n|`` (on floats); it
+    slips when ``f_t > μ max(f_n, 0) + 1e-9 max(1, |f_n|)`` (compared squared: both sides
+    are not negative).
     """
-    forces, violations, values = {}, [], lam.tolist()
-    for name, k, rows, (n0, n1, n2), mu in plan.checks:
-        forces[name] = lam[k:k + rows]
-        f0, f1, f2 = values[k + rows - 3:k + rows]
+    forces = dict(zip(plan.names, lam.reshape(-1, 3) if plan.points_only else (
+        lam[k:k + rows] for k, rows in plan.slices)))
+    violations, values = [], lam.tolist()
+    for name, j, n0, n1, n2, mu in plan.cones:
+        f0, f1, f2 = values[j:j + 3]
         fn = n0 * f0 + n1 * f1 + n2 * f2
         t0, t1, t2 = f0 - fn * n0, f1 - fn * n1, f2 - fn * n2
-        ft = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+        bound = mu * fn + 1e-9 * (fn if fn > 1.0 else 1.0) if fn > 0.0 else 1e-9 * (
+            -fn if fn < -1.0 else 1.0)
         if fn < 0.0:
             violations.append(Violation(name, 'unilateral', -fn))
-        if ft > mu * max(fn, 0.0) + 1e-9 * max(1.0, abs(fn)):
+        if t0 * t0 + t1 * t1 + t2 * t2 > bound * bound:
+            ft = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
             violations.append(Violation(name, 'friction', ft - mu * max(fn, 0.0)))
-    return ContactResult(np.asarray(tau, dtype=float), forces, residual, violations, method,
-                         status, rank)
+    return ContactResult(tau, forces, residual, violations, method, status, rank)
 
 
 def _tangents(normal: np.ndarray) -> tuple:
@@ -798,7 +809,7 @@ def _qp(plan: _Plan, b, Jc, n, W, force_weight) -> ContactResult:
     A_eq[:, n:] = Jc.T
     # unilateral (nonnegative cone): n·f ≥ 0 of each contact, whatever its μ
     N = np.zeros((len(contacts), nx))
-    for j, (c, (_, row, rows, _, _)) in enumerate(zip(contacts, plan.checks)):
+    for j, (c, (row, rows)) in enumerate(zip(contacts, plan.slices)):
         N[j, n + row + rows - 3:n + row + rows] = c.normal
     blocks = [A_eq, -N]
     cones, row = [clarabel.ZeroConeT(len(b)), clarabel.NonnegativeConeT(len(contacts))], 0
