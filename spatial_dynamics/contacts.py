@@ -381,7 +381,7 @@ class _Plan:
     ``slices`` of λ ``(first row, rows)``, ``points_only`` (λ is ``(nc, 3)`` forces), and
     per contact ``cones`` ``(name, row of its force, n0, n1, n2, μ)`` (plain floats).
     ``points`` (nc, 5): the compiled entry's contacts, a row each: body, rows, ``r_c``;
-    ``floating`` the model's; ``n`` its joints, ``nv - 6``.
+    ``floating`` the model's; ``n`` its joints, ``nv - 6``, and ``ones`` n ones (weights).
     """
 
     contacts: tuple
@@ -396,20 +396,24 @@ class _Plan:
     points: np.ndarray
     floating: bool
     n: int
+    ones: np.ndarray
 
 
-#: model -> {ids of its contacts: their _Plan}; a plan holds its contacts, so their ids stay
-#: theirs while it lives (a cache of a pure function of immutable records).
-_plans: 'weakref.WeakKeyDictionary[Model, dict]' = weakref.WeakKeyDictionary()
+#: id(model) -> {ids of its contacts: their _Plan}, while the model lives (as the backends'
+#: layouts); a plan holds its contacts, so their ids stay theirs while it lives (a cache of a
+#: pure function of immutable records).
+_plans: dict = {}
 
 
 def _plan(model: Model, contacts) -> _Plan:
     """Check the contacts on ``model`` (once per model and contacts) and plan their rows."""
-    check_model(model)
-    contacts = tuple(contacts)
-    plans = _plans.get(model)
-    if plans is None:
-        plans = _plans[model] = {}
+    plans = _plans.get(id(model))
+    if plans is None:       # a model seen first (its id is no other live model's)
+        check_model(model)
+        plans = _plans[id(model)] = {}
+        weakref.finalize(model, _plans.pop, id(model), None)
+    if not isinstance(contacts, (tuple, list)):
+        contacts = tuple(contacts)
     key = tuple(map(id, contacts))
     plan = plans.get(key)
     if plan is not None:
@@ -442,7 +446,8 @@ def _plan(model: Model, contacts) -> _Plan:
                               shift.reshape(nc, 16, 6 * m),
                               None if points or len(rows) == 6 * nc else np.array(rows), row,
                               tuple(c.name for c in contacts), tuple(slices), points,
-                              tuple(cones), table, model.floating, len(model.damping) - 6)
+                              tuple(cones), table, model.floating, len(model.damping) - 6,
+                              _ones(max(len(model.damping) - 6, 0)))
     return plan
 
 
@@ -668,13 +673,8 @@ def _split_compiled(kern, plan: _Plan, q, qd, qdd, gravity, w,
     state, when ``M q̈ + h`` or ``J_c`` is not finite, for fewer contact rows than six and
     for the cases the kernel leaves to the numpy split: base rows the contacts cannot carry.
     """
-    n, k = plan.n, plan.k
-    out = _c_contact(kern, q, qd, qdd, gravity, plan.points, _ones(n) if w is None else w,
-                     RANK_TOLERANCE)
-    if out is None or out[n + k] != 0.0:
-        return None
-    residual[:] = out[n + k + 2:]
-    return out[:n], out[n:n + k], int(out[n + k + 1])
+    return _c_contact(kern, q, qd, qdd, gravity, plan.points, plan.ones if w is None else w,
+                      RANK_TOLERANCE, residual)
 
 
 _made: dict = {}

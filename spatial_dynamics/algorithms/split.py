@@ -59,17 +59,21 @@ def split_kernel(QR, k, n, nb, wts, res, scr, tol, m) -> None:
             big = s
     floor = tol * m.sqrt(big)
     # J_cᵀ P = Q [R; 0]: step j swaps in the column of the largest norm below row j (pivot
-    # scr[j]), then reflector j, H = 1 - 2 v vᵀ / vᵀv, v = x - α e_j, applied to the right
+    # scr[j]), then reflector j, H = 1 - 2 v vᵀ / vᵀv, v = x - α e_j, applied to the right.
+    # Each column's sum runs down its rows in order, the columns side by side (scr[k + c],
+    # free until the Cholesky factor): independent sums, not one chain after another
     r = 0
     for j in range(k):
+        for c in range(j, k):
+            scr[k + c] = 0.0
+        for i in range(j, nv):
+            for c in range(j, k):
+                scr[k + c] = scr[k + c] + QR[i + c * nv] * QR[i + c * nv]
         best = -1.0
         piv = j
         for c in range(j, k):
-            s = 0.0
-            for i in range(j, nv):
-                s = s + QR[i + c * nv] * QR[i + c * nv]
-            if s > best:
-                best = s
+            if scr[k + c] > best:
+                best = scr[k + c]
                 piv = c
         if not m.sqrt(best) > floor:
             break
@@ -86,10 +90,13 @@ def split_kernel(QR, k, n, nb, wts, res, scr, tol, m) -> None:
         QR[j + j * nv] = alpha
         if vv > 0.0:
             for c in range(j + 1, cols):
-                t = v0 * QR[j + c * nv]
-                for i in range(j + 1, nv):
-                    t = t + QR[i + j * nv] * QR[i + c * nv]
-                t = 2.0 * t / vv
+                scr[k + c] = v0 * QR[j + c * nv]
+            for i in range(j + 1, nv):
+                vi = QR[i + j * nv]
+                for c in range(j + 1, cols):
+                    scr[k + c] = scr[k + c] + vi * QR[i + c * nv]
+            for c in range(j + 1, cols):
+                t = 2.0 * scr[k + c] / vv
                 QR[j + c * nv] = QR[j + c * nv] - t * v0
                 for i in range(j + 1, nv):
                     QR[i + c * nv] = QR[i + c * nv] - t * QR[i + j * nv]

@@ -278,7 +278,7 @@ fail:
 /* ------------------------------------------------------------------------------------------
  * Contact inverse dynamics of one state, whole: M q̈ + h, J_c, the split, the base residual */
 
-/* contact(kernels, q, qd, qdd, gravity, points, wts, tol) -> out (n + k + 8,), or None.
+/* contact(kernels, q, qd, qdd, gravity, points, wts, tol, residual) -> (τ, λ, r), or None.
  *
  * points: C-contiguous float64, a row of five a contact: its body, its rows (3, a point's
  * force; 6, a surface's wrench) and r_c (3, the contact point in body coordinates). The
@@ -286,16 +286,17 @@ fail:
  * every body's placement and Jacobian J_b (bodies_kernel); each contact's rows of J_c,
  * [1 0; -d× 1] J_b with d = R_b r_c (contact_jacobian's _contact_rows: ω, then v + ω × d,
  * a point keeps the v rows); the split of split_kernel on [J_cᵀ, b, Sᵀ]; the base rows'
- * residual b_base - J_c,baseᵀ λ. out: τ (n), λ (k), the status (0 solved; 1 the numpy
- * split's case: fewer than six contact rows, or split_kernel's 1; 2 b or J_c not finite, or
- * their squares overflow: the general path names why), the rank, then the residual (6).
- * None when q, qd, qdd or gravity is not one float64 state (the caller's general path). */
+ * residual b_base - J_c,baseᵀ λ, written into `residual` (6 float64). τ (n,) and λ (k,)
+ * new arrays, r the rank found. None (the caller's general path then answers, or names what
+ * is wrong) when q, qd, qdd or gravity is not one float64 state, when b or J_c is not finite
+ * (or their squares overflow), for fewer than six contact rows, and for split_kernel's 1
+ * (the numpy split's case). */
 static PyObject *
 c_contact(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     (void)self;
-    if (nargs != 8) {
-        PyErr_SetString(PyExc_TypeError, "contact takes 8 arguments");
+    if (nargs != 9) {
+        PyErr_SetString(PyExc_TypeError, "contact takes 9 arguments");
         return NULL;
     }
     if (!PyObject_TypeCheck(args[0], &KernelsType)) {
@@ -308,18 +309,23 @@ c_contact(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     if (tol == -1.0 && PyErr_Occurred())
         return NULL;
     const long rows = h->rows, nq = h->n, nv = h->nv, n = nv - 6;
-    Py_buffer pv, wv;
+    Py_buffer pv, wv, rv;
     if (get_table(args[5], &pv, 0, "points") < 0)
         return NULL;
     if (get_table(args[6], &wv, 0, "wts") < 0) {
         PyBuffer_Release(&pv);
         return NULL;
     }
+    if (get_table(args[8], &rv, 1, "residual") < 0) {
+        PyBuffer_Release(&pv);
+        PyBuffer_Release(&wv);
+        return NULL;
+    }
     const Py_ssize_t d = (Py_ssize_t)sizeof(double), nc = pv.len / d / 5;
     const double *P = pv.buf, *wts = wv.buf;
     long k = 0;
     int ok = h->quaternion >= 0 && n >= 1 && pv.len == nc * 5 * d && wv.len == n * d
-             && tol >= 0.0;
+             && rv.len == 6 * d && tol >= 0.0;
     for (Py_ssize_t c = 0; ok && c < nc; c++) {
         const double body = P[5 * c], m = P[5 * c + 1];
         ok = body >= 0.0 && body < (double)rows && body == (double)(long)body
@@ -329,13 +335,14 @@ c_contact(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     PyObject *out = NULL;
     if (!ok) {
         PyErr_SetString(PyExc_ValueError, "contact: a floating-base model's kernels, points "
-                        "of rows (body, 3 or 6, r_c), wts of nv - 6 numbers, tol >= 0");
+                        "of rows (body, 3 or 6, r_c), wts of nv - 6 numbers, tol >= 0, "
+                        "residual of 6");
         goto release;
     }
     const long width = 16 + 6 * nv, cols = k + 1 + n;
-    /* q, qd, qdd, gravity | work | the bodies' rows | b | QR | J_c,base | scr */
+    /* q, qd, qdd, gravity | work | the bodies' rows | b | QR | J_c,base | scr | res */
     const Py_ssize_t size = nq + 2 * nv + 3 + rows * WORK + rows * width + nv + cols * nv
-                            + 6 * k + k + (nv + k + 2) * nv;
+                            + 6 * k + k + (nv + k + 2) * nv + n + k + 2;
     double *buf = PyMem_Malloc(sizeof(double) * size);
     if (buf == NULL) {
         PyErr_NoMemory();
@@ -343,7 +350,7 @@ c_contact(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     }
     double *x[3] = {buf, buf + nq, buf + nq + nv}, *g = buf + nq + 2 * nv, *work = g + 3;
     double *B = work + rows * WORK, *b = B + rows * width, *QR = b + nv, *base = QR + cols * nv;
-    double *scr = base + 6 * k;
+    double *scr = base + 6 * k, *res = scr + k + (nv + k + 2) * nv;
     for (int i = 0; i < 3; i++)
         if (as_doubles(args[1 + i], i == 0 ? nq : nv, x[i]) != AS_DOUBLE)
             goto declined;
@@ -354,13 +361,8 @@ c_contact(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         if (!(n2 >= UNIT_SQUARED_LOW && n2 <= UNIT_SQUARED_HIGH))
             goto declined;
     }
-    if (!as_doubles(args[4], 3, g))
+    if (!as_doubles(args[4], 3, g) || k < 6)
         goto declined;
-    const npy_intp dims[1] = {n + k + 8};
-    out = PyArray_SimpleNew(1, dims, NPY_DOUBLE);
-    if (out == NULL)
-        goto done;
-    double *res = PyArray_DATA((PyArrayObject *)out);
     xup_kernel(h->K, rows, x[0], work);
     bodies_kernel(h->K, rows, work, B);
     rnea_kernel(h->K, rows, x[0], x[1], x[2], g[0], g[1], g[2], NULL, 0, b, work);
@@ -397,20 +399,29 @@ c_contact(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     for (long r2 = 0; r2 < k; r2++)
         for (long a = 0; a < 6; a++)
             base[r2 * 6 + a] = QR[r2 * nv + a];
-    if (!isfinite(squares)) {
-        res[n + k] = 2.0;
-        goto done;
-    }
-    if (k < 6) {
-        res[n + k] = 1.0;
-        goto done;
-    }
+    if (!isfinite(squares))
+        goto declined;
     split_kernel(QR, k, n, nv - n, wts, res, scr, tol);
+    if (res[n + k] != 0.0)
+        goto declined;
+    double *residual = rv.buf;
     for (long a = 0; a < 6; a++) {
         double t = 0.0;
         for (long r2 = 0; r2 < k; r2++)
             t += base[r2 * 6 + a] * res[n + r2];
-        res[n + k + 2 + a] = b[a] - t;
+        residual[a] = b[a] - t;
+    }
+    npy_intp dims[1] = {n};
+    PyObject *tau = PyArray_SimpleNew(1, dims, NPY_DOUBLE);
+    dims[0] = k;
+    PyObject *lam = PyArray_SimpleNew(1, dims, NPY_DOUBLE);
+    if (tau != NULL && lam != NULL) {
+        memcpy(PyArray_DATA((PyArrayObject *)tau), res, sizeof(double) * n);
+        memcpy(PyArray_DATA((PyArrayObject *)lam), res + n, sizeof(double) * k);
+        out = Py_BuildValue("(NNl)", tau, lam, (long)res[n + k + 1]);
+    } else {
+        Py_XDECREF(tau);
+        Py_XDECREF(lam);
     }
     goto done;
 declined:
@@ -421,6 +432,7 @@ done:
 release:
     PyBuffer_Release(&pv);
     PyBuffer_Release(&wv);
+    PyBuffer_Release(&rv);
     return out;
 }
 
@@ -433,11 +445,11 @@ static PyMethodDef split_methods[] = {
      "lambda (k), the status (0 solved, 1 the numpy split's case) and the rank into res;\n"
      "scr is scratch."},
     {"contact", (PyCFunction)(void (*)(void))c_contact, METH_FASTCALL,
-     "contact(kernels, q, qd, qdd, gravity, points, wts, tol) -> out (n + k + 8,), or None\n\n"
+     "contact(kernels, q, qd, qdd, gravity, points, wts, tol, residual) -> (tau, lambda, r)\n\n"
      "Contact inverse dynamics of one float64 state of a floating base: M q̈ + h, the contact\n"
      "rows of J_c (points: a row (body, 3 or 6, r_c) a contact), the split of split(), the\n"
-     "base residual. out: tau (n), lambda (k), the status (0 solved, 1 the numpy split's case,\n"
-     "2 not finite), the rank, the base residual (6). None when an argument is not one state."},
+     "base residual written into residual (6). None when an argument is not one state, b or\n"
+     "J_c is not finite, k < 6, or the split leaves the answer to the numpy split."},
     {NULL, NULL, 0, NULL},
 };
 
