@@ -111,7 +111,8 @@ def test_the_contact_entry_declines_what_it_cannot_answer(robots):
         assert entry(kern, *args, g, plan.points, w, RANK_TOLERANCE, res) is None
     one = sd.contacts._plan(model, [sd.Contact(FEET[0])])       # 3 rows: the numpy split's
     assert entry(kern, q, zero, zero, g, one.points, w, RANK_TOLERANCE, res) is None
-    for points, weights, residual in ((plan.points[:, :4].copy(), w, res), (plan.points, w[1:], res),
+    for points, weights, residual in ((plan.points[:, :4].copy(), w, res),
+                                      (plan.points, w[1:], res),
                                       (plan.points + [[99, 0, 0, 0, 0]] * 4, w, res),
                                       (plan.points + [[0, 1, 0, 0, 0]] * 4, w, res),
                                       (plan.points, w, np.zeros(5))):
