@@ -95,7 +95,7 @@ def test_the_contact_entry_declines_what_it_cannot_answer(robots):
     """float32, a zero quaternion, NaN, too few rows: None (the general path's to answer)."""
     model, _ = robots['solo']
     kern = kernels(model)
-    plan = sd.contacts._plan(model, [sd.Contact(f) for f in FEET])
+    plan = sd.contacts.plan_contacts(model, [sd.Contact(f) for f in FEET])
     q, zero, g = standing_solo(model), np.zeros(model.nv), (0.0, 0.0, -9.81)
     w, res = np.ones(model.nv - 6), np.zeros(6)
     entry = compiled.ext.contact
@@ -109,7 +109,7 @@ def test_the_contact_entry_declines_what_it_cannot_answer(robots):
     for args in ((q.astype(np.float32), zero, zero), (bad_q, zero, zero), (q, nan, zero),
                  (q, zero, np.full(model.nv, 1e200))):
         assert entry(kern, *args, g, plan.points, w, RANK_TOLERANCE, res) is None
-    one = sd.contacts._plan(model, [sd.Contact(FEET[0])])       # 3 rows: the numpy split's
+    one = sd.contacts.plan_contacts(model, [sd.Contact(FEET[0])])       # 3 rows: the numpy split's
     assert entry(kern, q, zero, zero, g, one.points, w, RANK_TOLERANCE, res) is None
     for points, weights, residual in ((plan.points[:, :4].copy(), w, res),
                                       (plan.points, w[1:], res),

@@ -17,7 +17,7 @@ PACKAGE = os.path.join(ROOT, 'spatial_dynamics')
 RANKS = {
     'spatial': 0, 'files': 0, 'bounds': 0, 'extras': 0, 'joints': 1, 'model': 2,
     'urdf': 3, 'base': 3, 'terms': 3, 'algorithms': 3, 'trajectory': 3, 'wrench': 3, 'effort': 5,
-    'identification': 5, 'excitation': 5, 'contacts': 5,
+    'identification': 5, 'excitation': 5, 'contacts': 5, 'contact_kinematics': 5, 'contact_qp': 5,
     'backends': 4,
     '': 5,                  # the package itself: the public API (spatial_dynamics/__init__.py)
     'check': 6,             # a command on the library
