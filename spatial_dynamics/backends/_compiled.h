@@ -6,7 +6,8 @@
  *
  *   _compiled.c   the module: its interface version, and each file's part of it
  *   kernels.c     Kernels, a model's table; one state, or a run of states, through the
- *                 generated kernels (the only file that includes _kernels_generated.h)
+ *                 generated kernels (the only file that includes _kernels_generated.h);
+ *                 the split, and the contact entry (one state's contact inverse dynamics)
  *   arguments.c   the argument reader: a joint vector or gravity as C doubles (13 item
  *                 types, numpy arrays, buffers, lists, tuples), a C-contiguous float64 table
  *   entries.c     ALGORITHMS, one row per algorithm, and the two generic entries that serve

@@ -6,7 +6,9 @@
  * once so that no table makes the kernels read or write out of bounds. run_state runs one
  * state through the kernels of _kernels_generated.h, run_states a slice of a batch (the RNEA
  * several states at once in SIMD lanes). The only file of the extension that includes the
- * generated header: the others know its kernels by RNEA, CRBA, MOMENTUM, REGRESSOR.
+ * generated header: the others know its kernels by RNEA, CRBA, MOMENTUM, REGRESSOR. Its two
+ * entries of their own: split (split_kernel on arrays the caller prepares) and contact (one
+ * state's contact inverse dynamics, M q̈ + h to the base residual, in one call).
  */
 #include "_compiled.h"
 #include <structmember.h>
