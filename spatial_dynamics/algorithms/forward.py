@@ -72,11 +72,12 @@ def forward_kernel(rows, H, qdd, lam, run, info, m) -> None:
             return
         Lkk = m.sqrt(d)
         H[k * n + k] = Lkk
+        inv = 1.0 / Lkk         # (a product each, not a division)
         top = int(lam[k])
         while top != -1:        # M_ki /= L_kk  (i = λ(k), λ(λ(k)), …)
             low = int(run[top])
             for i in range(low, top + 1):
-                H[k * n + i] = H[k * n + i] / Lkk
+                H[k * n + i] = H[k * n + i] * inv
             top = int(lam[low])
         top = int(lam[k])
         while top != -1:        # M_ij -= M_ki M_kj  (i = λ(k), …;  j = i, λ(i), …)
