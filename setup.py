@@ -37,7 +37,8 @@ KERNELS = Extension(
     depends=[package_name + '/backends/_compiled.h'] + sorted(
         glob(package_name + '/algorithms/*.py')) + [
         package_name + '/' + f for f in ('backends/codegen.py', 'backends/c_printer.py',
-                                         'backends/layout.py', 'joints.py', 'spatial.py')],
+                                         'backends/c_lanes.py', 'backends/layout.py',
+                                         'joints.py', 'spatial.py')],
     extra_compile_args=[] if os.name == 'nt' else ['-ffp-contract=off', '-fvisibility=hidden',
                                                    '-pthread'],
     extra_link_args=[] if os.name == 'nt' else ['-pthread'],

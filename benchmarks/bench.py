@@ -57,7 +57,7 @@ from spatial_dynamics.tools.driving import demo_urdf
 from benchmarks.generate import chain_urdf, tree_urdf
 from spatial_dynamics.joints import PR, RA
 from spatial_dynamics.backends import layout, python as python_backend
-from spatial_dynamics.sim.robot import dynamics_only, mujoco_model
+from spatial_dynamics.sim.mujoco_model import dynamics_only, mujoco_model
 
 GRAVITY = (0.0, 0.0, -9.81)
 SIZES = (1, 100, 10_000)

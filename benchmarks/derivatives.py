@@ -11,7 +11,7 @@ reference: ``max |D - D_ref| / max |D_ref|`` over both matrices ``D = [∂τ/∂
   :mod:`spatial_dynamics.algorithms.rnea`) evaluated in mpmath at 50 digits, step 1e-15
   (truncation ~1e-30, rounding ~1e-35; in q̇ the RNEA is quadratic, so its central
   difference is exact);
-* ``sd.rnea_derivatives`` (the analytic derivatives), when the library has it;
+* ``sd.rnea_derivatives`` (the analytic derivatives);
 * central finite differences of ``sd.rnea`` with steps 1e-3 to 1e-8, the ``4 nv`` perturbed
   states of one state in one batched call;
 * Pinocchio's ``computeRNEADerivatives`` (its free-flyer rows and columns ``[v; ω]`` mapped to
@@ -186,13 +186,9 @@ def _finite_differences(step: float) -> Callable:
 
 
 def _analytic(model: sd.Model) -> Callable:
-    """``sd.rnea_derivatives`` (its ∂τ/∂q and ∂τ/∂q̇); ``LookupError`` when it is missing."""
-    derivatives = getattr(sd, 'rnea_derivatives', None)
-    if derivatives is None:
-        raise LookupError('sd.rnea_derivatives is not in this version of the library')
-
+    """``sd.rnea_derivatives`` (its ∂τ/∂q and ∂τ/∂q̇)."""
     def run(q, qd, qdd):
-        dq, dv = derivatives(model, q, qd, qdd)[:2]
+        dq, dv = sd.rnea_derivatives(model, q, qd, qdd)[:2]
         return np.hstack([dq, dv])
     return run
 
@@ -263,13 +259,9 @@ def bench_robot(name: str, model: sd.Model, xml: str, settings: Settings, log: C
     Q, QD, QDD = random_states(model, rng, settings.states)
     log(f'{name}: the 50-digit reference on {settings.ref_states} states')
     refs = [reference(model, Q[k], QD[k], QDD[k]) for k in range(settings.ref_states)]
-    entries, errors, notes = {}, {}, []
+    errors, notes = {}, []
     states = list(zip(Q, QD, QDD))
-    try:
-        run = _analytic(model)
-        entries['sd.rnea_derivatives'] = (run, states)
-    except LookupError as err:
-        notes.append(f'{name}: sd.rnea_derivatives skipped: {err}')
+    entries = {'sd.rnea_derivatives': (_analytic(model), states)}
     for step in STEPS:
         entries[f'central differences of sd.rnea, h={step:g}'] = (
             _finite_differences(step)(model), states)

@@ -48,7 +48,7 @@ import weakref
 
 import numpy as np
 
-from .algorithms.arguments import as_real_array
+from .algorithms.arguments import as_joint_arrays, as_real_array
 from .joints import (check_quaternion, check_rotation, FIXED, FREE_FLYER,
                      quaternion_matrix)
 from .model import Frame, Model
@@ -351,7 +351,6 @@ def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=Non
     becomes zero when the base's ``a`` includes it.
     """
     check_base_motion(base, model)
-    from .algorithms.arguments import as_joint_arrays
     zero = np.zeros(model.nv)
     q, qd, qdd = as_joint_arrays(model, q, zero if qd is None else qd,
                                  zero if qdd is None else qdd)

@@ -52,6 +52,9 @@ from .backends import regressor, rnea
 from .identification import base_parameters, BaseParameters
 from .model import Model
 
+# scipy is imported inside rest_basis and excitation, the two functions that use it: it takes
+# seconds to import, and the commands importing this module (replay) need it only to design.
+
 #: Velocity limit (rad/s, m/s) assumed for a joint whose URDF gives none.
 DEFAULT_VELOCITY = {'revolute': 1.0, 'prismatic': 0.25}
 #: Half range (rad) of a joint without position limits (continuous), about 0.

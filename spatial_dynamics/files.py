@@ -18,6 +18,10 @@ import os
 import stat
 from typing import Any, Callable, Iterator, Optional, Sequence, Tuple, Union
 
+# yaml (load_yaml and its checks) and tempfile (write_atomic) are imported inside the functions
+# that use them: the core imports this module to read a URDF, and they would add some 20 ms
+# each to `import spatial_dynamics` (python -X importtime -c 'import spatial_dynamics').
+
 #: What a path is when it is not a regular file, by the test of its mode.
 _KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
           (stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),

@@ -6,23 +6,22 @@ A :class:`Model` is immutable and holds flat arrays indexed by body. Body 0 is t
 base (the URDF root link and everything fixed to it); bodies ``1..NB`` each hang on one
 movable joint, numbered so that ``parent[i] < i``. Links attached by ``fixed`` joints are
 lumped into the body they are fixed to; their frames stay reachable through ``frames``.
-Models are built from a URDF by :mod:`spatial_dynamics.urdf` (``Model.from_urdf``).
+Models are built from a URDF by :mod:`spatial_dynamics.urdf`, whose
+:func:`~spatial_dynamics.urdf.model_from_urdf` is also ``Model.from_urdf``: the parser installs
+it on the class, so that this module never imports the parser.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
-import os
 from types import MappingProxyType
-from typing import Callable, Mapping, Optional, Sequence, Union
+from typing import Callable, ClassVar, Mapping, Optional
 
 import numpy as np
 
 from .joints import FREE_FLYER, NQ, NV
 from .spatial import mcI
-
-Source = Union[str, bytes, os.PathLike]
 
 #: Rounding noise allowed in the inertia checks (positive semi-definite, triangle inequality,
 #: inertia without mass): a principal moment may miss by INERTIA_RTOL of the largest one, or by
@@ -117,6 +116,9 @@ class Model:
     joint_types: Mapping[str, str] = field(default_factory=dict)
     mimics: Mapping[str, tuple] = field(default_factory=dict)
     vidx: Optional[np.ndarray] = None
+    #: ``Model.from_urdf(source, joints=None, locked=None, strict=False, base='fixed')``: the
+    #: parser's :func:`spatial_dynamics.urdf.model_from_urdf`, installed on the class by it.
+    from_urdf: ClassVar[Callable[..., Model]]
 
     def __post_init__(self) -> None:
         if self.vidx is None:
@@ -156,42 +158,6 @@ class Model:
     def floating(self) -> bool:
         """Whether the base moves: the root link hangs on a free-flyer joint."""
         return bool(self.NB) and int(self.jtype[1]) == FREE_FLYER
-
-    @classmethod
-    def from_urdf(cls, source: Source, joints: Optional[Sequence[str]] = None,
-                  locked: Optional[Mapping[str, float]] = None, strict: bool = False,
-                  base: str = 'fixed') -> 'Model':
-        """Build a model from a URDF file path, an XML string or XML bytes (no meshes loaded).
-
-        A ``str`` starting with ``<`` is XML, any other ``str`` (or ``os.PathLike``) a path of
-        a regular file; ``bytes`` are always XML, never a path.
-
-        Model reduction: with ``joints``, only those joints stay movable (in that order as
-        ``joint_names``); every other movable joint is locked at ``locked[name]`` (rad or m,
-        default 0) and its child lumped into its parent. Links that end up fixed to the base
-        cannot change any kept joint's torque and are pruned. Mimic joints follow their
-        source: locked with it, or kept with it.
-
-        What cannot be computed raises ``ValueError`` naming the element: malformed XML,
-        entities or a DTD, unknown links, cycles, several roots, a non-finite or absurd
-        (> ``MAX_ABS_VALUE``) number the dynamics uses, negative mass, a zero-length axis, a
-        mimic of a missing joint, unsupported joint types, a bad ``joints``/``locked`` entry.
-        What is physically inconsistent but computable (an inertia that is not positive
-        semi-definite or breaks the triangle inequality, inertia without mass, negative
-        damping or friction, no robot name) loads exactly as written, with a ``URDFWarning``
-        per problem, also kept in ``model.warnings``; ``strict=True`` raises ``ValueError``
-        for the first of them instead. Rounding noise (see ``INERTIA_ATOL``) is neither.
-
-        ``base='fixed'`` (default): the root link is fixed to the world. ``base='floating'``:
-        the root link moves on a free-flyer joint named ``'root_joint'`` (first in
-        ``joint_names``; ``q`` starts with the root link's position and unit quaternion x y z
-        w in the world, ``q̇`` with its twist ``[ω; v]`` in its own frame: see
-        :mod:`spatial_dynamics.joints` and doc/floating_base.md), so ``nq = 7 + n``,
-        ``nv = 6 + n`` and every algorithm returns the base's six rows too (the base wrench
-        in the root link's frame); gravity is then given in world coordinates.
-        """
-        from .urdf import model_from_urdf   # the parser builds on this module
-        return model_from_urdf(source, joints, locked, strict, base)
 
     def summary(self) -> str:
         """One line for logs: dof, bodies kept, links lumped and pruned, locked joints."""

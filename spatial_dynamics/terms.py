@@ -96,6 +96,25 @@ def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:
     return tau_body @ fold
 
 
+def friction_derivative(model: Model, qd, threshold: float) -> np.ndarray:
+    """Return ``∂/∂q̇`` of :func:`friction_torque`: (..., nv, nv), diagonal but for mimics.
+
+    Each body's ``mult² (damping + friction (1 − tanh²(mult q̇ / threshold)) / threshold)``
+    at its source joint's row and column (the torque folded as :func:`friction_torque`).
+    """
+    if not threshold > 0.0 or not np.isfinite(threshold):
+        raise ValueError(f'friction velocity threshold must be > 0, got {threshold}')
+    (qd,) = as_joint_arrays(model, qd, names=('qd',))
+    qd = qd.astype(float)
+    vidx, qmul = model.vidx[1:], model.qmul[1:]
+    t = np.tanh(qmul * qd[..., vidx] / threshold)
+    slope = qmul * qmul * (model.body_damping[1:]
+                           + model.body_friction[1:] * (1.0 - t * t) / threshold)
+    fold = np.zeros((model.NB, model.nv))
+    fold[np.arange(model.NB), vidx] = 1.0
+    return np.einsum('bi,...b,bj->...ij', fold, slope, fold)
+
+
 def clamp_to_effort_limits(model: Model, tau) -> tuple[np.ndarray, np.ndarray]:
     """Clamp τ to the URDF ``<limit effort>``; returns ``(clamped, saturated)``.
 

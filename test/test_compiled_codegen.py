@@ -37,7 +37,7 @@ def test_the_generation_is_a_function_of_the_source_alone(tmp_path):
 def test_every_arithmetic_statement_of_the_source_is_in_the_generated_kernels():
     """Statement for statement: what touches no storage is copied unchanged."""
     generated = codegen.generate()
-    storage = set(codegen.STORES) | {'rows', 'f_body', 'm', 'nonzero', 'fp', 'cp'}
+    storage = set(codegen.WIDTHS) | {'rows', 'f_body', 'm', 'nonzero', 'fp', 'cp'}
     checked = 0
     for fn in codegen.SOURCES:
         tree = ast.parse(inspect.getsource(fn))
@@ -79,7 +79,7 @@ def test_a_store_read_whole_into_a_call_and_a_product_stored_whole():
 def test_every_arithmetic_assignment_is_a_c_statement_as_written():
     """``x = expression`` of the source is ``x = expression;`` in C, character for character."""
     generated = codegen.generate_c()
-    storage = set(codegen.STORES) | {'rows', 'f_body', 'm', 'nonzero', 'fp', 'cp'}
+    storage = set(codegen.WIDTHS) | {'rows', 'f_body', 'm', 'nonzero', 'fp', 'cp'}
     checked = 0
     for fn in codegen.SOURCES:
         tree = ast.parse(inspect.getsource(fn))

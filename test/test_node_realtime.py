@@ -135,7 +135,7 @@ def test_group_executor_runs_only_its_group_in_its_thread():
         node.create_subscription(String, 'other', lambda _: threads['other'].add(
             threading.get_ident()), 10)
         publishers = [node.create_publisher(String, topic, 10) for topic in ('inputs', 'other')]
-        answering = realtime.GroupExecutor(node, group)
+        answering = realtime.AnsweringLoop(node, group)
         others = realtime.OthersExecutor(group, 2, context)
         others.add_node(node)
         done = threading.Event()
@@ -161,7 +161,7 @@ def test_group_executor_runs_only_its_group_in_its_thread():
 
 @pytest.mark.ros
 def test_executors_never_run_each_others_guard_conditions():
-    """A guard condition left marked triggered by one executor's wait runs in that one only.
+    """A guard condition runs in the loop or executor that serves its group, only there.
 
     rclpy marks a ready guard condition on the entity and then runs whatever of the node's
     guards is marked: the answering executor ran the description's guard condition (rclpy's
@@ -181,19 +181,21 @@ def test_executors_never_run_each_others_guard_conditions():
                                              callback_group=group)
         outside = node.create_guard_condition(lambda: ran.append(('outside',
                                                                   threading.get_ident())))
-        answering = realtime.GroupExecutor(node, group)
+        answering = realtime.AnsweringLoop(node, group)
         others = realtime.OthersExecutor(group, 2, context)
         others.add_node(node)
-        outside._executor_triggered = True   # what the other executor's wait leaves on it
-        answering.spin_once(0.0)
-        assert ran == [], 'the answering executor ran a guard condition of another group'
+        # the marks an executor's wait leaves on the guard conditions it saw ready
+        outside._executor_triggered = True
         inside._executor_triggered = True
+        answering.spin_once(0.0)
+        assert ran == [], 'the answering loop ran a guard condition of another group'
         deadline = time.monotonic() + TIMEOUT
         while not ran and time.monotonic() < deadline:
             others.spin_once(0.01)
         assert [name for name, _ in ran] == ['outside'], ran
         assert ran[0][1] != threading.get_ident()   # in the others' pool
-        answering.spin_once(0.0)
+        inside.trigger()
+        answering.spin_once(TIMEOUT)
         assert [name for name, _ in ran] == ['outside', 'inside'], ran
         assert ran[1][1] == threading.get_ident()
         others.shutdown()

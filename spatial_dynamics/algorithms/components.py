@@ -116,3 +116,72 @@ def XT_I_X_plus(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
         mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz)
     return (c0 + d0, c1 + d1, c2 + d2, c3 + d3, c4 + d4, c5 + d5, c6 + d6, c7 + d7, c8 + d8,
             c9 + d9)
+
+
+def X_compose(a00, a01, a02, a10, a11, a12, a20, a21, a22, ar0, ar1, ar2,
+              b00, b01, b02, b10, b11, b12, b20, b21, b22, br0, br1, br2):
+    """Return the product ``A B`` of two transforms ``(E, r)`` (RBDA eq. 2.27).
+
+    ``(E_A, r_A)(E_B, r_B) = (E_A E_B, r_B + E_Bᵀ r_A)``.
+    """
+    return (a00 * b00 + a01 * b10 + a02 * b20, a00 * b01 + a01 * b11 + a02 * b21,
+            a00 * b02 + a01 * b12 + a02 * b22, a10 * b00 + a11 * b10 + a12 * b20,
+            a10 * b01 + a11 * b11 + a12 * b21, a10 * b02 + a11 * b12 + a12 * b22,
+            a20 * b00 + a21 * b10 + a22 * b20, a20 * b01 + a21 * b11 + a22 * b21,
+            a20 * b02 + a21 * b12 + a22 * b22,
+            br0 + (b00 * ar0 + b10 * ar1 + b20 * ar2),
+            br1 + (b01 * ar0 + b11 * ar1 + b21 * ar2),
+            br2 + (b02 * ar0 + b12 * ar1 + b22 * ar2))
+
+
+def Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, m0, m1, m2, m3, m4,
+                m5):
+    """Apply ``X⁻¹`` of ``X = (E, r)`` to a motion vector: ``[Eᵀ ω; Eᵀ v + r × Eᵀ ω]``."""
+    w0 = e00 * m0 + e10 * m1 + e20 * m2
+    w1 = e01 * m0 + e11 * m1 + e21 * m2
+    w2 = e02 * m0 + e12 * m1 + e22 * m2
+    return (w0, w1, w2,
+            e00 * m3 + e10 * m4 + e20 * m5 + (ry * w2 - rz * w1),
+            e01 * m3 + e11 * m4 + e21 * m5 + (rz * w0 - rx * w2),
+            e02 * m3 + e12 * m4 + e22 * m5 + (rx * w1 - ry * w0))
+
+
+def crm_motion(a0, a1, a2, a3, a4, a5, b0, b1, b2, b3, b4, b5):
+    """Return ``a × b`` of two motion vectors (``crm(a) b``, RBDA eq. 2.31).
+
+    ``[ω; v] × [ω'; v'] = [ω × ω'; ω × v' + v × ω']``.
+    """
+    return (a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0,
+            (a1 * b5 - a2 * b4) + (a4 * b2 - a5 * b1),
+            (a2 * b3 - a0 * b5) + (a5 * b0 - a3 * b2),
+            (a0 * b4 - a1 * b3) + (a3 * b1 - a4 * b0))
+
+
+def crf_force(a0, a1, a2, a3, a4, a5, n0, n1, n2, f0, f1, f2):
+    """Return ``a ×* f`` of a motion vector and a force (``crf(a) f``, RBDA eq. 2.32).
+
+    ``[ω; v] ×* [n; f] = [ω × n + v × f; ω × f]``.
+    """
+    return ((a1 * n2 - a2 * n1) + (a4 * f2 - a5 * f1),
+            (a2 * n0 - a0 * n2) + (a5 * f0 - a3 * f2),
+            (a0 * n1 - a1 * n0) + (a3 * f1 - a4 * f0),
+            a1 * f2 - a2 * f1, a2 * f0 - a0 * f2, a0 * f1 - a1 * f0)
+
+
+def I_rate(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, w0, w1, w2, u0, u1, u2):
+    """Return the rate ``İ = v ×* I − I v×`` of an inertia moving with ``v = [ω; u]``.
+
+    9 scalars: ``İ = [[Ī', g×], [g×ᵀ, 0]]`` (symmetric, a spatial inertia of no mass), with
+    ``g = ω × h + m u`` and ``Ī' = ω×Ī − Īω× − (u hᵀ + h uᵀ) + 2 (u·h) 1``; returns
+    ``(g, Ī')`` as ``I_motion`` takes them after a zero mass.
+    """
+    # P = Ī ω× column by column (Ī (ω × e_c)); ω×Ī − Īω× = −(P + Pᵀ)
+    p00, p01, p02 = Ixy * w2 - Ixz * w1, Ixz * w0 - Ixx * w2, Ixx * w1 - Ixy * w0
+    p10, p11, p12 = Iyy * w2 - Iyz * w1, Iyz * w0 - Ixy * w2, Ixy * w1 - Iyy * w0
+    p20, p21, p22 = Iyz * w2 - Izz * w1, Izz * w0 - Ixz * w2, Ixz * w1 - Iyz * w0
+    d = 2.0 * (u0 * hx + u1 * hy + u2 * hz)
+    return (w1 * hz - w2 * hy + mass * u0, w2 * hx - w0 * hz + mass * u1,
+            w0 * hy - w1 * hx + mass * u2,
+            -2.0 * p00 - 2.0 * u0 * hx + d, -(p01 + p10) - (u0 * hy + hx * u1),
+            -(p02 + p20) - (u0 * hz + hx * u2), -2.0 * p11 - 2.0 * u1 * hy + d,
+            -(p12 + p21) - (u1 * hz + hy * u2), -2.0 * p22 - 2.0 * u2 * hz + d)

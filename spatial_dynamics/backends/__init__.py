@@ -25,6 +25,7 @@ table is prepared once per model (:mod:`.layout`).
 
 from __future__ import annotations
 
+import functools
 from typing import Mapping, Optional, Sequence
 
 import numpy as np
@@ -35,7 +36,7 @@ from ..algorithms.arguments import (as_joint_arrays, as_real_array, as_vector,
                                     check_configuration, f_ext_in_bodies)
 from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
-from ..terms import per_joint
+from ..terms import friction_derivative, per_joint
 
 BACKENDS = ('auto', 'numpy', 'compiled')
 #: Default gravity (m/s², root-link coordinates).
@@ -53,6 +54,7 @@ _c_bias_torque = _ext.bias_torque if _ext else None
 _c_mass_matrix = _ext.mass_matrix if _ext else None
 _c_momentum = _ext.generalized_momentum if _ext else None
 _c_regressor = _ext.regressor if _ext else None
+_c_derivatives = getattr(_ext, 'rnea_derivatives', None)     # None: a build before it
 _c_forward = _ext.forward_dynamics if _ext else None
 
 
@@ -381,6 +383,74 @@ def _forward(model: Model, q, qd, tau, gravity, f_ext, backend: str,
                      'from tau; give it armature')
 
 
+def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
+                     f_ext: Optional[Mapping[str, np.ndarray]] = None, backend: str = 'auto',
+                     *, base: Optional[BaseMotion] = None, armature=None,
+                     friction_threshold: Optional[float] = None) -> tuple:
+    """Return ``(∂τ/∂q, ∂τ/∂q̇, M)`` of :func:`rnea`, analytically (Carpentier & Mansard 2018).
+
+    Each of shape (..., nv, nv), row ``r`` the derivative of ``τ[r]``, column ``c`` that with
+    respect to coordinate ``c``: ``τ(q ⊕ δ, q̇ + ε, q̈ + η) ≈ τ + ∂τ/∂q δ + ∂τ/∂q̇ ε + M η``.
+    ``∂τ/∂q̈ = M`` is :func:`mass_matrix`. On a floating base the configuration is moved on
+    its tangent space: ``q ⊕ δ`` is ``integrate(model, q, δ, 1)`` (the free-flyer's twist
+    ``[ω; v]`` in its own frame, then the joints), so ``∂τ/∂q`` is ``nv × nv``, as
+    Pinocchio's ``computeRNEADerivatives`` (its base rows and columns linear first: see
+    doc/floating_base.md). See :mod:`spatial_dynamics.algorithms.derivatives`.
+
+    Arguments as for :func:`rnea` (and refused as it refuses them), with the drive terms of
+    :mod:`spatial_dynamics.terms` that depend on the state: ``armature`` (a
+    :func:`~spatial_dynamics.terms.per_joint` value, kg m² or kg) adds ``diag(armature)``
+    to ``M``; ``friction_threshold`` (rad/s or m/s) adds the derivative of
+    :func:`~spatial_dynamics.terms.friction_torque` (the URDF's ``<dynamics>``) to
+    ``∂τ/∂q̇``. On a moving ``base`` the derivatives with respect to the joints of the joint
+    rows (the base's motion is given, not a coordinate).
+    """
+    if (base is None and armature is None and friction_threshold is None
+            and (f_ext is None or (type(f_ext) is dict and not f_ext))):
+        # one state that the extension reads as it is: answered in C
+        lay, kern, D = _entered(model, backend, _c_derivatives, q, qd, qdd, gravity)
+        if D is not None:
+            return D
+    if base is not None:
+        check_base_motion(base, model)
+        twin = floating_twin(model)
+        tq, tqd, tqdd, tg = twin_state(model, base, q, qd, qdd, gravity)
+        twin_f = None if f_ext is None else f_ext
+        out = rnea_derivatives(twin, tq, tqd, tqdd, tg, twin_f, backend)
+        out = tuple(x[..., 6:, 6:] for x in out)
+        return _drive_terms(model, out, qd, armature, friction_threshold)
+    lay = _layout_of(id(model)) or layout.of(model)
+    kern = lay.kernels if backend == 'auto' else _select(backend, lay)
+    q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
+    g = tuple(as_vector('gravity', gravity, 3).tolist())
+    fb = f_ext_in_bodies(model, f_ext)
+    if fb:  # batched wrenches broadcast against the batch of states
+        batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
+        q, qd, qdd = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, qdd))
+    if kern is not None and _c_derivatives is not None and q.dtype in _KERNEL_DTYPES:
+        if q.size == q.shape[-1] > 0:
+            # One state (maybe with batch dimensions of 1): the single-state entry.
+            fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
+                    if fb else None)
+            D = _c_derivatives(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g, fext)
+            out = tuple(x.reshape(qd.shape + (lay.nv,)) for x in D)
+        else:
+            out = compiled.derivatives(lay, q, qd, qdd, g, fb)
+    else:
+        out = python.derivatives(lay.rows, q, qd, qdd, g, fb)
+    return _drive_terms(model, out, qd, armature, friction_threshold)
+
+
+def _drive_terms(model: Model, out: tuple, qd, armature, friction_threshold) -> tuple:
+    """Add the drive terms' derivatives to ``(∂τ/∂q, ∂τ/∂q̇, M)`` (:func:`rnea_derivatives`)."""
+    dq, dv, M = out
+    if armature is not None:
+        M = M + np.diag(per_joint(model, 'armature', armature, nonnegative=True))
+    if friction_threshold is not None:
+        dv = dv + friction_derivative(model, qd, friction_threshold)
+    return dq, dv, M
+
+
 def _on_base(algorithm, model: Model, base: BaseMotion, q, qd, qdd, gravity, **options):
     """Run ``algorithm`` for a fixed-base ``model`` on a moving ``base`` (all ``nv + 6`` rows).
 
@@ -432,7 +502,7 @@ def _rnea(model: Model, lay: layout.Layout, q, qd, qdd, gravity, f_ext,
     if fb:  # batched wrenches broadcast against the batch of states
         batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
         q, qd, qdd = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, qdd))
-    if kern is not None and q.dtype in _KERNEL_DTYPES:
+    if kern is not None and _c_derivatives is not None and q.dtype in _KERNEL_DTYPES:
         if q.size == q.shape[-1] > 0:
             # One state (maybe with batch dimensions of 1): the single-state entry.
             fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
@@ -472,7 +542,6 @@ def _doors() -> None:
     name, docstring and signature (``__wrapped__``). The extension names the functions it
     has an entry for (``ALGORITHMS``, in the order of the doors' kinds).
     """
-    import functools
     g = globals()
     for kind, name in enumerate(_ext.ALGORITHMS):
         function = g.get(name)

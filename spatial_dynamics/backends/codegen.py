@@ -30,13 +30,13 @@ source (Python backends)                        generated (flat arrays)
 ``f(…, m)``, ``def f(…, m)`` (the sin/cos kind)  ``f(…)``, ``def f(…)``
 ==============================================  ==============================================
 
-The C is the flat text typed (:class:`_ToC`): integer names ``long``, the rest ``double``;
-``K[i, j]`` is ``K[i * WIDTH + j]``, a tuple assignment evaluates every value before it
-stores one, a component product returns its values through an output array.
+The C is the flat text typed (:class:`.c_printer._ToC`): integer names ``long``, the rest
+``double``; ``K[i, j]`` is ``K[i * WIDTH + j]``, a tuple assignment evaluates every value
+before it stores one, a component product returns its values through an output array.
 
 The RNEA kernels (with the components they call) are printed again on vectors of 2, 4 and
-8 states (:class:`_ToCLanes`: SIMD across the states of a batch, GCC and Clang vector
-extensions), each lane doing the scalar kernel's operations in its order.
+8 states (:class:`.c_lanes._ToCLanes`: SIMD across the states of a batch, GCC and Clang
+vector extensions), each lane doing the scalar kernel's operations in its order.
 
 Both are build products, not sources: a change to an algorithm is a change to its source
 here, and the next build compiles it (``setup.py`` lists the sources the extension depends
@@ -52,30 +52,44 @@ import inspect
 import os
 import sys
 import textwrap
+import types
 from typing import Optional, Sequence
 
 from . import layout
-from .c_printer import _ToC, lanes_c
+from .c_lanes import lanes_c
+from .c_printer import _ToC
 from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_torque,
                       joint_transform, joint_velocity, rotation_product)
-from ..algorithms import (components, crba, forward, jacobian, momentum, regressor, rnea,
-                          split)
+from ..algorithms import (components, crba, derivatives, forward, jacobian, momentum,
+                          regressor, rnea, split)
 
 #: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
 #: (m, h, Ibar) (10) per body, flat.
 STORES = {'Xup': ('XUP', 0, 12), 'vel': ('VEL', 12, 6), 'acc': ('ACC', 18, 6),
           'frc': ('FRC', 24, 6), 'IC': ('ICS', 30, 10)}
 WORK = 40
+#: The derivatives' scratch after the per-body rows (``rows * WORK`` doubles in): per body
+#: its world transform ``oX`` (12), ``İC`` (9) and ``hC`` (6) in ``DWORK`` doubles, then six
+#: columns a body of ``(s, α, β, α')`` (24 each); name -> (constant, offset, values, start,
+#: stride), a slot ``work[start + index * stride + offset + j]``.
+DWORK, CWORK = 27, 24
+MORE_STORES = {'oX': ('OXS', 0, 12, 'K.shape[0] * WORK', 'DWORK'),
+               'dIC': ('DIC', 12, 9, 'K.shape[0] * WORK', 'DWORK'),
+               'hC': ('HCS', 21, 6, 'K.shape[0] * WORK', 'DWORK'),
+               'dcol': ('DCOL', 0, 24, 'K.shape[0] * (WORK + DWORK)', 'CWORK')}
+#: Every store's number of values.
+WIDTHS = {**{k: v[2] for k, v in STORES.items()}, **{k: v[2] for k, v in MORE_STORES.items()}}
 #: The functions translated, in order (a function is generated after those it calls).
 #: The joints' operations (:mod:`spatial_dynamics.joints`) come first: the kernels call them,
 #: and the C compiler inlines them (``static inline``), as it does the components.
 SOURCES = (components.cross, components.X_motion, components.XT_force, components.XT_force_plus,
            components.I_motion, components.XT_I_X, components.XT_I_X_plus, rotation_product,
            joint_transform, joint_motion, joint_velocity, joint_torque, joint_ctq, joint_axis,
-           joint_crba,
+           joint_crba, components.X_compose, components.Xinv_motion, components.crm_motion,
+           components.crf_force, components.I_rate,
            rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
            regressor.regressor_kernel, jacobian.bodies_kernel, split.split_kernel,
-           forward.forward_kernel)
+           derivatives.derivatives_kernel, forward.forward_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
               'rnea_kernel': 'K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work',
@@ -84,6 +98,7 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'regressor_kernel': 'K, qd, qdd, gx, gy, gz, Y, axes, work',
               'bodies_kernel': 'K, work, J',
               'split_kernel': 'QR, k, n, nb, wts, res, scr, tol',
+              'derivatives_kernel': 'K, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, work',
               'forward_kernel': 'K, H, qdd, lam, run, info'}
 #: The generated files' names. Build products, not sources: ``setup.py`` writes the header
 #: into its build directory when it compiles the extension; ``python -m
@@ -101,6 +116,12 @@ class _ToFlat(ast.NodeTransformer):
     # -- helpers -----------------------------------------------------------------------------
     @staticmethod
     def _slot(store: str, index: ast.expr, j: int) -> ast.Subscript:
+        if store in MORE_STORES:
+            const, _, _, start, stride = MORE_STORES[store]
+            where = ast.parse(f'{start} + ({ast.unparse(index)}) * {stride} + {const} + {j}',
+                              mode='eval').body
+            return ast.Subscript(value=ast.Name('work', ast.Load()), slice=where,
+                                 ctx=ast.Load())
         const, _, _ = STORES[store]
         return ast.Subscript(
             value=ast.Name('work', ast.Load()),
@@ -112,7 +133,7 @@ class _ToFlat(ast.NodeTransformer):
     @staticmethod
     def _store_of(node) -> str:
         if (isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name)
-                and node.value.id in STORES):
+                and node.value.id in WIDTHS):
             return node.value.id
         return ''
 
@@ -144,8 +165,8 @@ class _ToFlat(ast.NodeTransformer):
         store = self._store_of(value)
         if store and isinstance(target, ast.Tuple):              # x0, … = vel[p]
             names = self._names(target)
-            if len(names) != STORES[store][2]:
-                raise SyntaxError(f'line {node.lineno}: {store} holds {STORES[store][2]} values')
+            if len(names) != WIDTHS[store]:
+                raise SyntaxError(f'line {node.lineno}: {store} holds {WIDTHS[store]} values')
             return [self._assign(n, self._slot(store, value.slice, j), node)
                     for j, n in enumerate(names) if n != '_']
         if store and isinstance(target, ast.Name):               # fp = frc[p]
@@ -154,7 +175,7 @@ class _ToFlat(ast.NodeTransformer):
         if self._store_of(target) and isinstance(value, ast.Call):   # frc[p] = XT_…(…)
             store = target.value.id
             self.fresh += 1
-            names = [f'stored{self.fresh}_{j}' for j in range(STORES[store][2])]
+            names = [f'stored{self.fresh}_{j}' for j in range(WIDTHS[store])]
             call = ast.copy_location(ast.Assign(
                 [ast.Tuple([ast.Name(n, ast.Store()) for n in names], ast.Store())], value),
                 node)
@@ -165,8 +186,8 @@ class _ToFlat(ast.NodeTransformer):
             if not isinstance(value, (ast.Tuple, ast.List)):
                 raise SyntaxError(f'line {node.lineno}: store a whole tuple')
             store = target.value.id
-            if len(value.elts) != STORES[store][2]:
-                raise SyntaxError(f'line {node.lineno}: {store} holds {STORES[store][2]} values')
+            if len(value.elts) != WIDTHS[store]:
+                raise SyntaxError(f'line {node.lineno}: {store} holds {WIDTHS[store]} values')
             return [ast.copy_location(ast.Assign(
                 [self._slot(store, target.slice, j)], elt), node)
                 for j, elt in enumerate(value.elts)]
@@ -223,7 +244,7 @@ class _ToFlat(ast.NodeTransformer):
                 if not store:
                     raise SyntaxError(f'line {node.lineno}: * only on a store read whole')
                 index = self.visit(arg.value.slice)
-                args += [self._slot(store, index, j) for j in range(STORES[store][2])]
+                args += [self._slot(store, index, j) for j in range(WIDTHS[store])]
             else:
                 args.append(self.visit(arg))
         node.func, node.args = self.visit(node.func), args
@@ -238,7 +259,7 @@ class _ToFlat(ast.NodeTransformer):
         return self.generic_visit(node)
 
     def visit_Name(self, node: ast.Name):
-        if node.id in STORES or node.id in ('rows', 'm') or node.id in self.aliases:
+        if node.id in WIDTHS or node.id in ('rows', 'm') or node.id in self.aliases:
             raise SyntaxError(f'line {node.lineno}: {node.id!r} used outside the rules')
         return node
 
@@ -274,6 +295,8 @@ def _constants() -> dict:
     consts = dict(CODES)
     consts['WORK'] = WORK
     consts.update((const, offset) for const, offset, _ in STORES.values())
+    consts.update(DWORK=DWORK, CWORK=CWORK)
+    consts.update((v[0], v[1]) for v in MORE_STORES.values())
     return consts
 
 
@@ -329,7 +352,6 @@ def generate_c() -> str:
 
 def flat_module():
     """Return the flat-array listing (:func:`generate`) as a module, to run it on floats."""
-    import types
     module = types.ModuleType('spatial_dynamics.backends.' + LISTING[:-3])
     exec(compile(generate(), LISTING, 'exec'), module.__dict__)
     return module

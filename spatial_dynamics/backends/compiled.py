@@ -157,6 +157,15 @@ def regressor(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tupl
     return _batch(ext.regressor_batch, lay, (q, qd, qdd), (gravity,), shape)[0]
 
 
+def derivatives(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
+                f_body: dict) -> tuple:
+    """``(∂τ/∂q, ∂τ/∂q̇, M)``, each (..., nv, nv), from validated arrays (as :func:`rnea`)."""
+    nv = lay.nv
+    D = _batch(ext.derivatives_batch, lay, (q, qd, qdd), (gravity, _fext(lay, q, f_body)),
+               (3, nv, nv))[0]
+    return D[..., 0, :, :], D[..., 1, :, :], D[..., 2, :, :]
+
+
 def describe() -> str:
     """``'compiled (C extension, 2 threads)'``, or why there is no extension."""
     if ext is None:

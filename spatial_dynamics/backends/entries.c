@@ -57,6 +57,13 @@ const Algorithm ALGORITHMS[] = {
      "axes.",
      "bodies_batch(kernels, N, q, J, threads) -> None: the rows of bodies() of N states into\n"
      "J (N x (NB + 1) x (16 + 6 n))."},
+    {"rnea_derivatives", "derivatives_batch", 3, 1, 1, DERIVATIVES, {"D"},
+     "rnea_derivatives(kernels, q, qd, qdd, gravity, f_body=None) -> (dq, dqd, M), or None\n\n"
+     "The analytical derivatives of rnea (algorithms/derivatives.py) of one state: dtau/dq\n"
+     "(tangent space), dtau/dqd and M = dtau/dqdd, each (n, n), views of one array;\n"
+     "arguments as for rnea.",
+     "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, D, threads) -> None: the\n"
+     "derivatives of N states into D (N x 3 n x n); fext as for rnea_batch."},
     {"forward_dynamics", "forward_dynamics_batch", 3, 1, 1, FORWARD, {"qdd"},
      "forward_dynamics(kernels, q, qd, tau, gravity, f_body=None) -> qdd (n,), or None\n\n"
      "One state: qdd = M(q)^-1 (tau - h(q, qd)), h the rnea at qdd = 0 (arguments as for\n"
@@ -186,7 +193,14 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         for (Py_ssize_t i = 0; i < size; i++)
             out32[i] = (float)data[k][i];
     }
-    if (count == 1) {
+    if (a->kernel == DERIVATIVES) {
+        /* the three matrices stacked (3 nv, nv): a tuple of their (nv, nv) views */
+        npy_intp three[3] = {3, nv, nv};
+        PyArray_Dims shape = {three, 3};
+        PyObject *stacked = PyArray_Newshape((PyArrayObject *)results[0], &shape, NPY_CORDER);
+        out = stacked ? PySequence_Tuple(stacked) : NULL;
+        Py_XDECREF(stacked);
+    } else if (count == 1) {
         out = results[0];       /* its reference */
         results[0] = NULL;
     } else {

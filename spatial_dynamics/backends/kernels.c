@@ -91,7 +91,9 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     /* The sizes of one state (result_shape, work_size) fit MAX_DOUBLES each, so that no
      * entry's sum of them overflows. */
     Py_ssize_t size;
-    if (checked_mul(rows, 6 * (Py_ssize_t)rows + WORK, MAX_DOUBLES, &size) < 0
+    if (checked_mul(rows, 6 * (Py_ssize_t)rows + WORK + DWORK + 6 * CWORK, MAX_DOUBLES,
+                    &size) < 0
+            || checked_mul(3 * (Py_ssize_t)n, (Py_ssize_t)n, MAX_DOUBLES, &size) < 0
             || checked_mul((Py_ssize_t)n, 10 * (Py_ssize_t)rows, MAX_DOUBLES, &size) < 0
             || checked_mul((Py_ssize_t)K[VIDX] + 2, (Py_ssize_t)K[VIDX] + 2, MAX_DOUBLES,
                            &size) < 0) {
@@ -153,18 +155,25 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
         dims[1] = 16 + 6 * (npy_intp)h->nv;
         return 2;
     }
+    if (kernel == DERIVATIVES) {    /* dtau/dq, dtau/dqd, M stacked: (3 nv, nv) */
+        dims[0] = 3 * (npy_intp)h->nv;
+        dims[1] = h->nv;
+        return 2;
+    }
     dims[0] = h->nv;
     dims[1] = kernel == CRBA ? h->nv : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
     return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
 }
 
-/* Scratch doubles of one state: the per-body rows, the regressor's carried axes, forward
- * dynamics' M (nv x nv), the coordinates' parents and chains (nv each) and its status (1). */
+/* Scratch doubles of one state: the per-body rows, the regressor's carried axes, the
+ * derivatives' per-body rows and columns (codegen.MORE_STORES), forward dynamics' M
+ * (nv x nv), the coordinates' parents and chains (nv each) and its status (1). */
 Py_ssize_t
 work_size(int kernel, long rows, long nv)
 {
     return (Py_ssize_t)rows * WORK
         + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * ((Py_ssize_t)rows + 5) : 0)
+        + (kernel == DERIVATIVES ? (Py_ssize_t)rows * (DWORK + 6 * CWORK) : 0)
         + (kernel == FORWARD ? (Py_ssize_t)nv * ((Py_ssize_t)nv + 2) + 1 : 0);
 }
 
@@ -191,6 +200,12 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
     case BODIES:
         bodies_kernel(K, rows, work, out1);
         break;
+    case DERIVATIVES: {
+        const Py_ssize_t nv2 = (Py_ssize_t)K[VIDX] * (Py_ssize_t)K[VIDX];
+        derivatives_kernel(K, rows, qd, qdd, g[0], g[1], g[2], f, f != NULL, out1, out1 + nv2,
+                           out1 + 2 * nv2, work);
+        break;
+    }
     case FORWARD: {
         const long nv = (long)K[VIDX];
         double *H = work + (Py_ssize_t)rows * WORK, *lam = H + (Py_ssize_t)nv * nv;

@@ -15,6 +15,7 @@ from typing import Sequence
 import numpy as np
 
 from ..algorithms.crba import crba_kernel
+from ..algorithms.derivatives import derivatives_kernel
 from ..algorithms.forward import forward_kernel
 from ..algorithms.momentum import momentum_kernel
 from ..algorithms.regressor import regressor_kernel
@@ -190,3 +191,44 @@ def forward_solve(rows, H: np.ndarray, b: np.ndarray) -> tuple:
             return None, (s, int(info[0]))
         out[s] = x
     return out.reshape(batch + (n,)), None
+
+
+def derivatives_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> tuple:
+    """``(∂τ/∂q, ∂τ/∂q̇, M)`` as three lists of ``nv * nv`` scalars (row-major) from ``rows``.
+
+    Arguments as for :func:`rnea_rows`; see :mod:`spatial_dynamics.algorithms.derivatives`.
+    """
+    gx, gy, gz = gravity
+    slots = len(rows)
+    Xup = [None] * slots
+    xup_kernel(rows, q, m, Xup)
+    zero = 0.0 * gx
+    n = rows[0][3]
+    dq, dv, H = [zero] * (n * n), [zero] * (n * n), [zero] * (n * n)
+    fb = None
+    if f_body:
+        fb = [(zero,) * 6] * slots
+        for b, f in f_body.items():
+            fb[b] = f
+    derivatives_kernel(rows, qd, qdd, gx, gy, gz, fb, fb is not None, dq, dv, H, Xup,
+                       *([None] * slots for _ in range(7)), [None] * (6 * slots))
+    return dq, dv, H
+
+
+def derivatives(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: Sequence[float],
+                f_body: dict) -> tuple:
+    """``(∂τ/∂q, ∂τ/∂q̇, M)``, each (..., nv, nv), from validated arrays of one float dtype."""
+    n = rows[0][3]
+    shape = qd.shape + (n,)
+    if q.dtype == np.float64 and q.size == q.shape[-1] > 0:
+        fl = {b: np.reshape(f, -1)[-6:].tolist() for b, f in f_body.items()}
+        out = derivatives_rows(rows, *(x.reshape(-1).tolist() for x in (q, qd, qdd)),
+                               [float(x) for x in gravity], fl)
+        return tuple(np.array(x).reshape(shape) for x in out)
+    batch = q.shape[:-1]
+    N = int(np.prod(batch, dtype=np.intp))
+    fl = {b: list(np.broadcast_to(f, batch + (6,)).reshape(N, 6).T.astype(q.dtype))
+          for b, f in f_body.items()}
+    out = derivatives_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
+                           [q.dtype.type(x) for x in gravity], fl, np)
+    return tuple(_stacked(x, N, q.dtype, shape) for x in out)

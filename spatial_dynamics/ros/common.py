@@ -30,7 +30,7 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from spatial_dynamics.files import read_regular
 from spatial_dynamics.ros.parameters import ConfigError, ParameterError
-from spatial_dynamics.ros.realtime import GroupExecutor, OthersExecutor
+from spatial_dynamics.ros.realtime import AnsweringLoop, OthersExecutor
 from spatial_dynamics.ros.arguments import params_files
 
 #: The largest ``--params-file`` read (rcl parses it whole at ``rclpy.init``).
@@ -113,8 +113,8 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
     """Make a node and spin it until SIGINT/SIGTERM; 0 on a clean exit, 1 on a bad start-up.
 
     The node's and the latency baseline's (``relay.py``) process around them, one routine.
-    A node with an ``answering_group`` has it spun in a thread of its own by an executor that
-    waits on that group only (:class:`~.realtime.GroupExecutor`), and everything else by a
+    A node with an ``answering_group`` has it spun in a thread of its own by a loop that
+    waits on that group only (:class:`~.realtime.AnsweringLoop`), and everything else by a
     MultiThreadedExecutor of ``threads`` - 1 threads that never waits on it (the node answers
     while a parameter change parses a description in rclpy's default group). Otherwise, with
     ``threads`` > 1 the executor is rclpy's MultiThreadedExecutor; 1 gives the
@@ -187,7 +187,7 @@ def _spin_answering(node: Node, group, threads: int, failed: list) -> None:
     ``failed`` and shuts the context down, so the process ends instead of running without
     answers; one raised by the requested shutdown is not.
     """
-    answering = GroupExecutor(node, group)
+    answering = AnsweringLoop(node, group)
     others = OthersExecutor(group, max(threads, 1), node.context)
     others.add_node(node)
 

@@ -5,7 +5,7 @@
 ``python -m spatial_dynamics.sim`` or ``ros2 run spatial_dynamics sim``. The robot is a
 :class:`~spatial_dynamics.sim.robot.SimulatedRobot`: the URDF's rigid-body robot exactly (no
 joint limits, contacts, damping or friction; mimic joints follow their source). With
-``floating``, a :class:`~spatial_dynamics.sim.robot.FloatingRobot`: the root link on a free
+``floating``, a :class:`~spatial_dynamics.sim.floating.FloatingRobot`: the root link on a free
 joint, standing on a floor on its ``feet`` (contacts, friction ``friction``).
 
 Topics (relative, so they follow the namespace and can be remapped):
@@ -65,6 +65,7 @@ from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, QoSReliabilityPolicy
+from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from spatial_dynamics.bounds import MAX_EFFORT, MAX_POSITION, MAX_WRENCH
 from spatial_dynamics.ros.descriptions import read_description
@@ -73,8 +74,9 @@ from spatial_dynamics.ros.parameters import ConfigError, Param, ParameterError, 
 from spatial_dynamics.ros.common import advertise, spin
 from spatial_dynamics.ros.usage import launch
 from spatial_dynamics import Contact
-from spatial_dynamics.sim.robot import (FloatingRobot, Foot, import_mujoco, INTEGRATORS,
-                                        MujocoMissing, SimulatedRobot)
+from spatial_dynamics.sim.floating import FloatingRobot
+from spatial_dynamics.sim.mujoco_model import Foot, import_mujoco, MujocoMissing
+from spatial_dynamics.sim.robot import INTEGRATORS, SimulatedRobot
 from std_msgs.msg import Float64MultiArray
 
 NODE_NAME = 'sim'
@@ -231,7 +233,6 @@ class SimNode(Node):
             self.twist_pub = advertise(self, TwistStamped, 'base_twist')
         self.clock_pub = None
         if p['publish_clock']:
-            from rosgraph_msgs.msg import Clock
             self.clock_pub = self.create_publisher(Clock, '/clock', 10)
             self._clock_msg = Clock
         self.create_subscription(Float64MultiArray, p['command_topic'], self._on_command,

@@ -27,6 +27,9 @@ from typing import List, Optional, Sequence, Tuple
 
 from .driving import node_command, pyplot, redraw, robot_model, save_figure, Sinusoids, start, stop
 
+# rclpy and the ROS messages are imported inside the functions that run a node: the options
+# are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
+
 NAMESPACE = '/spatial_dynamics_demo'
 #: s of wall time the node has to answer first (a cold start on a busy machine takes a few).
 STARTUP_LIMIT = 60.0

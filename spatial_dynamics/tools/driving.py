@@ -7,6 +7,7 @@ No rclpy import at module level: :func:`node_command` and :class:`Sinusoids` wor
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import subprocess
@@ -14,6 +15,11 @@ import sys
 from typing import Dict, List, Optional, Sequence
 
 import numpy as np
+
+import spatial_dynamics as sd
+
+# Imported inside the functions that use them: ament_index_python (present only where ROS
+# is sourced) and matplotlib (optional; seconds to import, for the plots only).
 
 PACKAGE = 'spatial_dynamics'
 #: The source tree (or the package's parent directory when installed): tools/ -> package -> root.
@@ -84,7 +90,6 @@ def start(command: Sequence[str], namespace: str, parameters: Dict[str, str],
 def die_with_parent() -> None:
     """In a child before exec: get SIGTERM when the parent dies (Linux), so none is orphaned."""
     try:
-        import ctypes
         PR_SET_PDEATHSIG = 1
         ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
     except (OSError, AttributeError):
@@ -173,7 +178,6 @@ def redraw(lines: Sequence[str], shown: int) -> int:
 
 def robot_model(urdf: Optional[str]):
     """Return the absolute path of ``urdf`` (the demo arm when None) and its ``Model``."""
-    import spatial_dynamics as sd
     path = os.path.abspath(urdf or demo_urdf())
     return path, sd.Model.from_urdf(path)
 

@@ -43,12 +43,14 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 import spatial_dynamics as sd
-from spatial_dynamics import identification
+from spatial_dynamics import identification, trajectory
 from spatial_dynamics.model import rigid_body_inertia
-from spatial_dynamics.replay import bags
-from spatial_dynamics.replay.__main__ import main as replay
+from spatial_dynamics.replay import bags, splines
+from spatial_dynamics.replay.__main__ import main as replay, parser
+from spatial_dynamics.replay.recording import recording, Stages
 from spatial_dynamics.replay.urdf_writer import corrected_urdf
 from spatial_dynamics.ros import control
+from spatial_dynamics.sim.robot import SimulatedRobot
 from .startup import example_robot
 
 #: name -> (example-robot-data file, payload link, joints kept (None: all))
@@ -121,8 +123,6 @@ class PlanMotion:
 
     def __init__(self, path: str, names: Sequence[str]) -> None:
         """Read ``path`` (``replay excite``'s plan) for the joints ``names``."""
-        from spatial_dynamics import trajectory
-        from spatial_dynamics.replay import splines
         self.traj = splines.from_yaml(path)
         self.cols = [self.traj.joint_names.index(n) for n in names]
         self.c = trajectory.coefficients(self.traj)
@@ -150,7 +150,6 @@ def record(true_text: str, joints, model: sd.Model, motion: Motion, seconds: flo
     the Coulomb ``friction`` per joint, stepped ``substeps`` times per recorded sample. Returns
     ``t`` (s), ``q``, ``qd`` and ``effort`` (the drive torque) at RATE.
     """
-    from spatial_dynamics.sim.robot import SimulatedRobot
     damping, _, armature = drives(model.nq)
     robot = SimulatedRobot(true_text, joints=joints, timestep=1.0 / (RATE * substeps),
                            damping=damping, armature=armature)
@@ -221,8 +220,6 @@ def floor(true_text: bytes, joints, urdf: str, bag: str) -> np.ndarray:
     misses: each drive's friction flips within milliseconds at a reversal, faster than a
     50 ms smoothing window follows).
     """
-    from spatial_dynamics.replay.__main__ import parser
-    from spatial_dynamics.replay.recording import recording, Stages
     true = sd.Model.from_urdf(true_text.decode(), joints=joints)
     args = parser().parse_args(['residual', bag, '--urdf', urdf])
     data = recording(args, bag, true, Stages())
@@ -236,7 +233,6 @@ def floor(true_text: bytes, joints, urdf: str, bag: str) -> np.ndarray:
 def track(true_text: bytes, joints, model: sd.Model, dynamics: control.Dynamics,
           mode: str, motion: Motion, seconds: float, frequency: float) -> np.ndarray:
     """Return the RMS tracking error per joint of a control law at 1 kHz on the true robot."""
-    from spatial_dynamics.sim.robot import SimulatedRobot
     damping, friction, armature = drives(model.nq)
     robot = SimulatedRobot(true_text.decode(), joints=joints, timestep=1e-3, damping=damping,
                            armature=armature)

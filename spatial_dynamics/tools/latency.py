@@ -47,8 +47,23 @@ from .driving import (
     cpu_seconds, die_with_parent, node_command, pyplot, robot_model, save_figure, Sinusoids,
     start, stop)
 
+# rclpy and the ROS messages are imported inside the functions that run a node: the options
+# are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
+
 #: Robots ``--robot`` names: the embedded demo arm, or example-robot-data's (a test dependency).
-ROBOTS = {'demo_arm': None, 'ur5': 'ur_description/urdf/ur5_robot.urdf'}
+ROBOTS = {'demo_arm': None, 'ur5': 'ur_description/urdf/ur5_robot.urdf',
+          'solo12': 'solo_description/robots/solo12.urdf'}
+#: Robots run on a floating base: the node's parameters, and the root link the odometry is of.
+FLOATING = {'solo12': ({'base': 'floating',
+                        'contacts.links': '[FL_FOOT, FR_FOOT, HL_FOOT, HR_FOOT]'}, 'base_link')}
+#: A floating robot's legs move ±0.05 rad around its standing posture: every foot keeps
+#: pushing on the floor (larger motions make a foot pull, and the node rightly refuses them).
+STANDING = {'solo12': {f'{leg}_{joint}': angle * (1.0 if leg[0] == 'F' else -1.0)
+                       for leg in ('FL', 'FR', 'HL', 'HR')
+                       for joint, angle in (('HFE', 0.8), ('KFE', -1.6))}}
+STANDING_SWAY = 0.05   # rad
+#: Base odometry beside the desired states of a floating robot, Hz (a state estimator's rate).
+ODOMETRY_RATE = 200.0
 QUANTILES = (('p50', 50.0), ('p99', 99.0), ('p99.9', 99.9))
 
 
@@ -226,6 +241,26 @@ class Compute:
                 'us')
 
 
+def publish_odometry(bench, topic: str, root: str) -> None:
+    """Publish a standing base's odometry on ``topic`` at :data:`ODOMETRY_RATE` (a timer).
+
+    The floating node holds the base's pose and twist from it (they go stale without it);
+    the base stands still 0.3 m up, upright: the desired joint states move the legs.
+    """
+    from nav_msgs.msg import Odometry
+    publisher = bench.create_publisher(Odometry, topic, 10)
+    msg = Odometry()
+    msg.header.frame_id = 'odom'
+    msg.child_frame_id = root
+    msg.pose.pose.position.z = 0.3
+    msg.pose.pose.orientation.w = 1.0
+
+    def tick() -> None:
+        msg.header.stamp = bench.get_clock().now().to_msg()
+        publisher.publish(msg)
+    bench.create_timer(1.0 / ODOMETRY_RATE, tick)
+
+
 def busy_loops(count: int) -> List[subprocess.Popen]:
     """Start ``count`` processes that spin a core each (the load of a busy machine)."""
     return [subprocess.Popen([sys.executable, '-c', 'while True: pass'],
@@ -299,8 +334,11 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser.add_argument('--warmup', type=in_range(float, 0.0, float('inf')), default=1.0,
                         help='unmeasured seconds at full rate per target first (default 1)')
     parser.add_argument('--robot', choices=sorted(ROBOTS), default='demo_arm',
-                        help='robot (default demo_arm; ur5 from example-robot-data)')
-    parser.add_argument('--urdf', default=None, help='any other robot (overrides --robot)')
+                        help='robot (default demo_arm; ur5 and solo12 from example-robot-data; '
+                             'solo12 on a floating base, standing on its four feet, its base '
+                             f'odometry published at {ODOMETRY_RATE:g} Hz beside the inputs)')
+    parser.add_argument('--urdf', default=None,
+                        help='any other robot, on a fixed base (overrides --robot)')
     cpus = os.cpu_count() or 1
     parser.add_argument('--busy', type=in_range(int, 0, 4 * cpus), default=0,
                         help=f'busy loops beside the run, one process each, 0 .. {4 * cpus} '
@@ -333,18 +371,23 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
     urdf, model = robot_model(args.urdf or robot_path(args.robot))
     trajectory = Sinusoids.for_model(model)
+    if args.urdf is None and args.robot in STANDING:
+        posture = np.array([STANDING[args.robot].get(name, 0.0) for name in model.joint_names])
+        trajectory = Sinusoids(model.joint_names, posture - 2.0 * STANDING_SWAY,
+                               posture + 2.0 * STANDING_SWAY)
     namespace = f'/sd_latency_{os.getpid()}'
     logs = args.log_dir
     if logs:
         os.makedirs(logs, exist_ok=True)
     priority = {'thread_priority': str(args.priority)}
+    floating, root = FLOATING.get(args.robot, ({}, None)) if args.urdf is None else ({}, None)
     procs = {
         'relay': start(node_command('relay', 'spatial_dynamics.tools.relay'), f'{namespace}/relay',
                        {**priority, **input_depth(f'{namespace}/relay', args.input_depth)},
                        logs and os.path.join(logs, 'relay.log')),
         'inverse_dynamics': start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'),
                                   f'{namespace}/node',
-                                  {'robot_description_file': urdf, **priority,
+                                  {'robot_description_file': urdf, **priority, **floating,
                                    **input_depth(f'{namespace}/node', args.input_depth)},
                                   logs and os.path.join(logs, 'inverse_dynamics.log')),
     }
@@ -357,6 +400,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     targets = [Target(bench, 'relay', f'{namespace}/relay'),
                Target(bench, 'inverse_dynamics', f'{namespace}/node')]
     compute = Compute(bench, f'{namespace}/node')
+    if root is not None:
+        publish_odometry(bench, f'{namespace}/node/base/odometry', root)
     scheduling = prioritize(args.priority)
     msg = joint_state_for(model.joint_names)
     status = 0
@@ -392,9 +437,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                    1.0)
         rows = [t.summary() for t in targets]
         depth = 'keep last 1' if args.input_depth is None else f'depth {args.input_depth}'
-        title = (f'latency: {model.name} ({len(model.joint_names)} joints), {args.rate:g} Hz, '
-                 f'{args.seconds:g} s per target in {args.block:g} s blocks, same run, input '
-                 f'{depth}; {args.busy} busy loops; {scheduling}; load '
+        base = ', floating base' if root is not None else ''
+        title = (f'latency: {model.name} ({len(model.joint_names)} joints{base}), '
+                 f'{args.rate:g} Hz, {args.seconds:g} s per target in {args.block:g} s blocks, '
+                 f'same run, input {depth}; {args.busy} busy loops; {scheduling}; load '
                  f'{os.getloadavg()[0]:.2f}')
         print(title)
         print(format_table(rows))

@@ -5,10 +5,10 @@
     python -m spatial_dynamics.tools.legged --robot solo12 [--seconds 3] [--json out.json]
     python -m spatial_dynamics.tools.legged --robot talos
 
-MuJoCo (:class:`~spatial_dynamics.sim.robot.FloatingRobot`: free base, floor, stiff soft
+MuJoCo (:class:`~spatial_dynamics.sim.floating.FloatingRobot`: free base, floor, stiff soft
 contacts with elliptic friction cones and a no-slip pass, μ = 0.8, semi-implicit Euler at
-1 ms; :data:`~spatial_dynamics.sim.robot.CONTACT`) simulates, from example-robot-data, Solo12
-on four point feet (spheres of 2 mm radius at its foot frames) or Talos (``talos_reduced``,
+1 ms; :data:`~spatial_dynamics.sim.mujoco_model.CONTACT`) simulates, from example-robot-data,
+Solo12 on four point feet (spheres of 2 mm radius at its foot frames) or Talos (``talos_reduced``,
 its gripper joints fixed) on two soles (20 × 10 cm boxes). After 0.5 s standing still (not
 counted) the trunk sways: its position follows ``p_d(t) = p_0 + A (1 - cos ωt)`` (Solo12:
 down 3 cm and sideways 3 cm, periods 1.2 s and 1.6 s; Talos: down 3 cm and sideways 2 cm,
@@ -47,7 +47,8 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.files import check_output, write_atomic
 from spatial_dynamics.joints import quaternion_matrix
-from spatial_dynamics.sim.robot import FloatingRobot, Foot, urdf_text, without_mimic
+from spatial_dynamics.sim.floating import FloatingRobot
+from spatial_dynamics.sim.mujoco_model import Foot, urdf_text, without_mimic
 
 LAWS = ('PD alone', 'PD + contact feed-forward')
 MU = 0.8

@@ -27,14 +27,16 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+import sysconfig
 import time
 
 import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics.files import check_output, write_atomic
-from spatial_dynamics.sim.robot import import_mujoco, mujoco_model, urdf_text
+from spatial_dynamics.sim.mujoco_model import import_mujoco, mujoco_model, urdf_text
 
 LAWS = ('PD alone', 'PD + feed-forward, fixed base', 'PD + feed-forward, IMU base')
 KP, KD = 200.0, 20.0
@@ -44,8 +46,6 @@ IMU_ORIENTATION = np.array([0.1, -0.2, 0.05, 0.97]) / np.linalg.norm([0.1, -0.2,
 
 def ur5_urdf() -> str:
     """Return the path of example-robot-data's UR5 URDF."""
-    import os
-    import sysconfig
     return os.path.join(sysconfig.get_paths()['purelib'], 'cmeel.prefix', 'share',
                         'example-robot-data', 'robots', 'ur_description', 'urdf',
                         'ur5_robot.urdf')
@@ -136,7 +136,6 @@ def main(argv=None) -> dict:
     args = parser.parse_args(argv)
     if args.json:
         check_output(args.json, 'the JSON of the errors')
-    import os
     if not os.path.isfile(ur5_urdf()):
         parser.error(f'the UR5 of example-robot-data is not at {ur5_urdf()}: '
                      'pip install example-robot-data')

@@ -1,0 +1,227 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""Analytical derivatives of inverse dynamics: ``∂τ/∂q``, ``∂τ/∂q̇``, ``∂τ/∂q̈ = M``; one source.
+
+Carpentier and Mansard, "Analytical derivatives of rigid body dynamics algorithms" (RSS
+2018): the RNEA is written in world coordinates (every quantity below in the frame of body 0,
+``ᵒ`` dropped), where a joint's motion moves the bodies beyond it rigidly, so each derivative
+is a product of quantities every body already has. Forward pass, body ``i`` with columns
+``s = mul_i ᵒX_i⁻¹ S_i[:, c]`` (world)::
+
+    v_i = v_λ + Σ s q̇,   a_i = a_λ + Σ s q̈ + v_i × Σ s q̇   (a_0 = -a_grav)
+    h_i = I_i v_i,  f_i = I_i a_i + v_i ×* h_i - f_ext_i,  İ_i = v_i ×* I_i - I_i v_i×
+
+and per column ``s`` of body ``j``, with ``ψ = s × v_λ(j)``::
+
+    ∂/∂q:  α = -(s × a_λ(j) + v_λ(j) × ψ),  β = -ψ
+    ∂/∂q̇:  α' = (v_λ(j) + v_j) × s,        β' = s
+
+Backward pass: the subtree sums ``IC``, ``İC``, ``hC`` and ``F`` (world coordinates need no
+transform to add). A body ``i`` in the subtree of ``j`` (``i = j`` too) then has, for each
+derivative ``(α, β)`` of a column of ``j``::
+
+    ∂F_i = IC_i α + (İC_i - H(hC_i)) β,   H(h) a = -(a ×* h)
+
+(the change of ``S_i`` itself, ``s_j × S_i``, cancels against ``s_j ×* F_i``), so
+``∂τ_i = S_iᵀ ∂F_i = A_i·α + B_i·β`` with ``A_i = IC_i S_i``, ``B_i = (İC_i + H(hC_i)) S_i``.
+An ancestor ``i`` of ``j`` sees the whole subtree of ``j`` move: ``∂τ_i = S_iᵀ (IC_j α +
+(İC_j - H(hC_j)) β + s_j ×* F_j)`` (the last term for ``q`` only). ``M`` is the same walk with
+``(α, β) = (s, 0)``. A free-flyer's six columns are its tangent directions ``q ⊕ δ``
+(:func:`~spatial_dynamics.algorithms.configuration.integrate`): a twist in its own frame.
+
+:func:`derivatives_kernel` is written on scalar components in the subset of
+:mod:`~.rnea` (per-body rows unpacked whole, whole-tuple stores, the products of
+:mod:`.components`); per column it keeps ``(s, α, β, α')`` in ``dcol[6 i + c]``.
+"""
+
+from __future__ import annotations
+
+from .components import (crf_force, crm_motion, I_motion, I_rate, X_compose, Xinv_motion,
+                         XT_force, XT_I_X)
+from ..joints import joint_axis
+
+
+def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, Xup, oX, vel,
+                       acc, frc, IC, dIC, hC, dcol) -> None:
+    """``∂τ/∂q`` into ``dq``, ``∂τ/∂q̇`` into ``dv`` and ``M`` into ``H`` (``nv * nv``, row-major).
+
+    ``rows`` are the layout's per-body rows (row 0 the base), ``Xup`` the transforms of
+    :func:`~.rnea.xup_kernel` for ``q``; ``oX``, ``vel``, ``acc``, ``frc``, ``IC``, ``dIC``,
+    ``hC`` are scratch with a slot per body, ``dcol`` with six per body. ``f_body`` as for
+    :func:`~.rnea.rnea_kernel` (body coordinates). The outputs are zeroed first.
+    """
+    NB = len(rows) - 1
+    zero = 0.0 * gx
+    (_, _, _, n, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
+     _, _, _, _, _, _, _, _, _, _, _, _) = rows[0]
+    for k in range(len(H)):
+        dq[k] = zero
+        dv[k] = zero
+        H[k] = zero
+    one = zero + 1.0
+    oX[0] = (one, zero, zero, zero, one, zero, zero, zero, one, zero, zero, zero)
+    vel[0] = (zero, zero, zero, zero, zero, zero)
+    acc[0] = (zero, zero, zero, -gx, -gy, -gz)      # a_0 = -a_grav
+
+    # Forward pass, world coordinates
+    for i in range(1, NB + 1):
+        (p, code, _, kv, dof, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
+         mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, mul, _) = rows[i]
+        oX[i] = X_compose(*Xup[i], *oX[p])                 # ᵢX_0 = Xup_i λX_0
+        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = oX[i]
+        pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
+        pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
+        w0, w1, w2, v0, v1, v2 = pw0, pw1, pw2, pv0, pv1, pv2
+        j0 = j1 = j2 = j3 = j4 = j5 = zero                  # vJ = Σ s q̇
+        a0, a1, a2, l0, l1, l2 = pa0, pa1, pa2, pl0, pl1, pl2
+        for c in range(dof):
+            # vJ = Σ s q̇ and a_λ + Σ s q̈
+            s0, s1, s2, s3, s4, s5 = joint_axis(code, c, ax, ay, az)
+            s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                                 rx, ry, rz, s0, s1, s2, s3, s4, s5)
+            s0, s1, s2, s3, s4, s5 = mul * s0, mul * s1, mul * s2, mul * s3, mul * s4, mul * s5
+            qdi, qddi = qd[kv + c], qdd[kv + c]
+            j0, j1, j2, j3, j4, j5 = (j0 + s0 * qdi, j1 + s1 * qdi, j2 + s2 * qdi,
+                                      j3 + s3 * qdi, j4 + s4 * qdi, j5 + s5 * qdi)
+            a0, a1, a2, l0, l1, l2 = (a0 + s0 * qddi, a1 + s1 * qddi, a2 + s2 * qddi,
+                                      l0 + s3 * qddi, l1 + s4 * qddi, l2 + s5 * qddi)
+        w0, w1, w2, v0, v1, v2 = w0 + j0, w1 + j1, w2 + j2, v0 + j3, v1 + j4, v2 + j5
+        c0, c1, c2, c3, c4, c5 = crm_motion(w0, w1, w2, v0, v1, v2, j0, j1, j2, j3, j4, j5)
+        a0, a1, a2, l0, l1, l2 = a0 + c0, a1 + c1, a2 + c2, l0 + c3, l1 + c4, l2 + c5
+        for c in range(dof):
+            # per column: ψ = s × v_λ;  α = -(s × a_λ + v_λ × ψ),  β = -ψ;  α' = (v_λ + v_i) × s
+            s0, s1, s2, s3, s4, s5 = joint_axis(code, c, ax, ay, az)
+            s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                                 rx, ry, rz, s0, s1, s2, s3, s4, s5)
+            s0, s1, s2, s3, s4, s5 = mul * s0, mul * s1, mul * s2, mul * s3, mul * s4, mul * s5
+            y0, y1, y2, y3, y4, y5 = crm_motion(s0, s1, s2, s3, s4, s5,
+                                                pw0, pw1, pw2, pv0, pv1, pv2)
+            b0, b1, b2, b3, b4, b5 = crm_motion(s0, s1, s2, s3, s4, s5,
+                                                pa0, pa1, pa2, pl0, pl1, pl2)
+            d0, d1, d2, d3, d4, d5 = crm_motion(pw0, pw1, pw2, pv0, pv1, pv2,
+                                                y0, y1, y2, y3, y4, y5)
+            x0, x1, x2, x3, x4, x5 = crm_motion(pw0 + w0, pw1 + w1, pw2 + w2,
+                                                pv0 + v0, pv1 + v1, pv2 + v2,
+                                                s0, s1, s2, s3, s4, s5)
+            dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5, -(b0 + d0), -(b1 + d1), -(b2 + d2),
+                               -(b3 + d3), -(b4 + d4), -(b5 + d5), -y0, -y1, -y2, -y3, -y4,
+                               -y5, x0, x1, x2, x3, x4, x5)
+        vel[i] = (w0, w1, w2, v0, v1, v2)
+        acc[i] = (a0, a1, a2, l0, l1, l2)
+        # I_i in world coordinates, h_i = I_i v_i, f_i = I_i a_i + v_i ×* h_i - f_ext_i
+        om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz = XT_I_X(
+            e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
+            mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz)
+        IC[i] = (om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz)
+        m0, m1, m2, k0, k1, k2 = I_motion(om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz,
+                                          w0, w1, w2, v0, v1, v2)
+        hC[i] = (m0, m1, m2, k0, k1, k2)
+        n0, n1, n2, f0, f1, f2 = I_motion(om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz,
+                                          a0, a1, a2, l0, l1, l2)
+        x0, x1, x2, x3, x4, x5 = crf_force(w0, w1, w2, v0, v1, v2, m0, m1, m2, k0, k1, k2)
+        n0, n1, n2, f0, f1, f2 = n0 + x0, n1 + x1, n2 + x2, f0 + x3, f1 + x4, f2 + x5
+        if has_fext:
+            fe0, fe1, fe2, fe3, fe4, fe5 = f_body[i]
+            x0, x1, x2, x3, x4, x5 = XT_force(e00, e01, e02, e10, e11, e12, e20, e21, e22,
+                                              rx, ry, rz, fe0, fe1, fe2, fe3, fe4, fe5)
+            n0, n1, n2, f0, f1, f2 = n0 - x0, n1 - x1, n2 - x2, f0 - x3, f1 - x4, f2 - x5
+        frc[i] = (n0, n1, n2, f0, f1, f2)
+        dIC[i] = I_rate(om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz, w0, w1, w2, v0, v1, v2)
+
+    # Backward pass: subtree sums IC, İC, hC, F (all in world coordinates)
+    for i in range(NB, 0, -1):
+        (p, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
+         _, _, _, _, _, _, _, _, _, _, _, _) = rows[i]
+        if p != 0:
+            cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz = IC[i]
+            pm, phx, phy, phz, pxx, pxy, pxz, pyy, pyz, pzz = IC[p]
+            IC[p] = (pm + cm, phx + chx, phy + chy, phz + chz, pxx + cxx, pxy + cxy,
+                     pxz + cxz, pyy + cyy, pyz + cyz, pzz + czz)
+            g0, g1, g2, g3, g4, g5, g6, g7, g8 = dIC[i]
+            r0, r1, r2, r3, r4, r5, r6, r7, r8 = dIC[p]
+            dIC[p] = (r0 + g0, r1 + g1, r2 + g2, r3 + g3, r4 + g4, r5 + g5, r6 + g6, r7 + g7,
+                      r8 + g8)
+            x0, x1, x2, x3, x4, x5 = hC[i]
+            y0, y1, y2, y3, y4, y5 = hC[p]
+            hC[p] = (y0 + x0, y1 + x1, y2 + x2, y3 + x3, y4 + x4, y5 + x5)
+            x0, x1, x2, x3, x4, x5 = frc[i]
+            y0, y1, y2, y3, y4, y5 = frc[p]
+            frc[p] = (y0 + x0, y1 + x1, y2 + x2, y3 + x3, y4 + x4, y5 + x5)
+
+    # Each column of body i against itself and its ancestors j
+    for i in range(1, NB + 1):
+        (p, _, _, kv, dof, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
+         _, _, _, _, _, _, _, _, _, _, _, _) = rows[i]
+        cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz = IC[i]
+        g0, g1, g2, g3, g4, g5, g6, g7, g8 = dIC[i]
+        hn0, hn1, hn2, hf0, hf1, hf2 = hC[i]
+        Fn0, Fn1, Fn2, Ff0, Ff1, Ff2 = frc[i]
+        for c in range(dof):
+            k = kv + c
+            (s0, s1, s2, s3, s4, s5, al0, al1, al2, al3, al4, al5, be0, be1, be2, be3, be4, be5,
+             ad0, ad1, ad2, ad3, ad4, ad5) = dcol[6 * i + c]
+            # rows of body i: A = IC s, B = İC s - s ×* hC
+            A0, A1, A2, A3, A4, A5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
+                                              s0, s1, s2, s3, s4, s5)
+            B0, B1, B2, B3, B4, B5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
+                                              s0, s1, s2, s3, s4, s5)
+            x0, x1, x2, x3, x4, x5 = crf_force(s0, s1, s2, s3, s4, s5,
+                                               hn0, hn1, hn2, hf0, hf1, hf2)
+            B0, B1, B2, B3, B4, B5 = B0 - x0, B1 - x1, B2 - x2, B3 - x3, B4 - x4, B5 - x5
+            # columns of body i for its ancestors: IC α + İC β + β ×* hC + s ×* F, and q̇'s
+            Q0, Q1, Q2, Q3, Q4, Q5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
+                                              al0, al1, al2, al3, al4, al5)
+            x0, x1, x2, x3, x4, x5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
+                                              be0, be1, be2, be3, be4, be5)
+            y0, y1, y2, y3, y4, y5 = crf_force(be0, be1, be2, be3, be4, be5,
+                                               hn0, hn1, hn2, hf0, hf1, hf2)
+            z0, z1, z2, z3, z4, z5 = crf_force(s0, s1, s2, s3, s4, s5,
+                                               Fn0, Fn1, Fn2, Ff0, Ff1, Ff2)
+            Q0, Q1, Q2 = Q0 + x0 + y0 + z0, Q1 + x1 + y1 + z1, Q2 + x2 + y2 + z2
+            Q3, Q4, Q5 = Q3 + x3 + y3 + z3, Q4 + x4 + y4 + z4, Q5 + x5 + y5 + z5
+            V0, V1, V2, V3, V4, V5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
+                                              ad0, ad1, ad2, ad3, ad4, ad5)
+            x0, x1, x2, x3, x4, x5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
+                                              s0, s1, s2, s3, s4, s5)
+            y0, y1, y2, y3, y4, y5 = crf_force(s0, s1, s2, s3, s4, s5,
+                                               hn0, hn1, hn2, hf0, hf1, hf2)
+            V0, V1, V2 = V0 + x0 + y0, V1 + x1 + y1, V2 + x2 + y2
+            V3, V4, V5 = V3 + x3 + y3, V4 + x4 + y4, V5 + x5 + y5
+            # body i's own columns: the subtree formula
+            for d in range(dof):
+                r = kv + d
+                (t0, t1, t2, t3, t4, t5, bl0, bl1, bl2, bl3, bl4, bl5, bb0, bb1, bb2, bb3, bb4,
+                 bb5, bd0, bd1, bd2, bd3, bd4, bd5) = dcol[6 * i + d]
+                dq[k * n + r] = dq[k * n + r] + (
+                    (A0 * bl0 + A1 * bl1 + A2 * bl2 + A3 * bl3 + A4 * bl4 + A5 * bl5)
+                    + (B0 * bb0 + B1 * bb1 + B2 * bb2 + B3 * bb3 + B4 * bb4 + B5 * bb5))
+                dv[k * n + r] = dv[k * n + r] + (
+                    (A0 * bd0 + A1 * bd1 + A2 * bd2 + A3 * bd3 + A4 * bd4 + A5 * bd5)
+                    + (B0 * t0 + B1 * t1 + B2 * t2 + B3 * t3 + B4 * t4 + B5 * t5))
+                H[k * n + r] = H[k * n + r] + (
+                    A0 * t0 + A1 * t1 + A2 * t2 + A3 * t3 + A4 * t4 + A5 * t5)
+            # the ancestors j of body i
+            j = p
+            while j != 0:
+                (pj, _, _, kj, dj, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
+                 _, _, _, _, _, _, _, _, _, _, _, _) = rows[j]
+                for d in range(dj):
+                    r = kj + d
+                    (t0, t1, t2, t3, t4, t5, bl0, bl1, bl2, bl3, bl4, bl5, bb0, bb1, bb2, bb3,
+                     bb4, bb5, bd0, bd1, bd2, bd3, bd4, bd5) = dcol[6 * j + d]
+                    # row k (body i, in the subtree of j), column r (joint j)
+                    dq[k * n + r] = dq[k * n + r] + (
+                        (A0 * bl0 + A1 * bl1 + A2 * bl2 + A3 * bl3 + A4 * bl4 + A5 * bl5)
+                        + (B0 * bb0 + B1 * bb1 + B2 * bb2 + B3 * bb3 + B4 * bb4 + B5 * bb5))
+                    dv[k * n + r] = dv[k * n + r] + (
+                        (A0 * bd0 + A1 * bd1 + A2 * bd2 + A3 * bd3 + A4 * bd4 + A5 * bd5)
+                        + (B0 * t0 + B1 * t1 + B2 * t2 + B3 * t3 + B4 * t4 + B5 * t5))
+                    Mt = A0 * t0 + A1 * t1 + A2 * t2 + A3 * t3 + A4 * t4 + A5 * t5
+                    H[k * n + r] = H[k * n + r] + Mt
+                    # row r (ancestor j), column k (body i)
+                    dq[r * n + k] = dq[r * n + k] + (
+                        t0 * Q0 + t1 * Q1 + t2 * Q2 + t3 * Q3 + t4 * Q4 + t5 * Q5)
+                    dv[r * n + k] = dv[r * n + k] + (
+                        t0 * V0 + t1 * V1 + t2 * V2 + t3 * V3 + t4 * V4 + t5 * V5)
+                    H[r * n + k] = H[r * n + k] + Mt
+                j = pj
