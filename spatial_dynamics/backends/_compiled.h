@@ -73,7 +73,8 @@ typedef struct {
 
 extern PyTypeObject KernelsType;
 
-enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3, BODIES = 4, DERIVATIVES = 5 };
+enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3, BODIES = 4, DERIVATIVES = 5,
+       FORWARD = 6 };  /* the kernels */
 
 /* One batch's job: N states, each through `kernel`; threads.c shares it out in slices of
  * states [lo, hi), kernels.c runs them. */
@@ -85,12 +86,12 @@ typedef struct {
     const double *q, *qd, *qdd, *fext;  /* (N, n) each or NULL; fext (1 or N, rows, 6) or NULL */
     int fext_per_state;
     double g[3];
-    double *out1, *out2;                 /* tau | H | mom, ctq | Y | J | dq, dv, M */
+    double *out1, *out2;                 /* tau | H | mom, ctq | Y | J | dq, dv, M | qdd */
 } Slice;
 
 int result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count);
-Py_ssize_t work_size(int kernel, long rows);
-void run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
+Py_ssize_t work_size(int kernel, long rows, long nv);
+int run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
                const double *qdd, const double *g, const double *f, double *out1,
                double *out2, double *work);
 int run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi);
@@ -116,7 +117,9 @@ typedef struct {
     int gravity;            /* 3 numbers after them */
     int fext;               /* then, optionally, the external forces (rnea's f_body) */
     int kernel;             /* results: RNEA tau (n,), CRBA H (n, n), MOMENTUM two (n,), */
-                            /* REGRESSOR Y (n, 10 NB), BODIES (NB + 1, 16 + 6 n) */
+                            /* REGRESSOR Y (n, 10 NB), BODIES (NB + 1, 16 + 6 n), */
+                            /* DERIVATIVES dq, dv, M stacked (3 n, n), */
+                            /* FORWARD qdd (n,), reading tau as its third vector */
     const char *outputs[2]; /* the batch entry's result arguments, as its errors name them */
     const char *doc, *batch_doc;
 } Algorithm;

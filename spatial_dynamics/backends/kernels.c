@@ -13,6 +13,7 @@
 #include "_compiled.h"
 #include <structmember.h>
 
+#include <math.h>
 #include <stddef.h>
 #include <string.h>
 
@@ -95,7 +96,9 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     if (checked_mul(rows, 6 * (Py_ssize_t)rows + WORK + DWORK + 6 * CWORK, MAX_DOUBLES,
                     &size) < 0
             || checked_mul(3 * (Py_ssize_t)n, (Py_ssize_t)n, MAX_DOUBLES, &size) < 0
-            || checked_mul((Py_ssize_t)n, 10 * (Py_ssize_t)rows, MAX_DOUBLES, &size) < 0) {
+            || checked_mul((Py_ssize_t)n, 10 * (Py_ssize_t)rows, MAX_DOUBLES, &size) < 0
+            || checked_mul((Py_ssize_t)K[VIDX] + 2, (Py_ssize_t)K[VIDX] + 2, MAX_DOUBLES,
+                           &size) < 0) {
         PyBuffer_Release(&v);
         PyErr_SetString(PyExc_ValueError, "Kernels: table too large");
         return NULL;
@@ -164,18 +167,23 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
     return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
 }
 
-/* Scratch doubles of one state: the per-body rows, and the regressor's carried axes. */
+/* Scratch doubles of one state: the per-body rows, the regressor's carried axes, the
+ * derivatives' per-body rows and columns (codegen.MORE_STORES), forward dynamics' M
+ * (nv x nv), the coordinates' parents and chains (nv each) and its status (1). */
 Py_ssize_t
-work_size(int kernel, long rows)
+work_size(int kernel, long rows, long nv)
 {
     return (Py_ssize_t)rows * WORK
         + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * ((Py_ssize_t)rows + 5) : 0)
-        + (kernel == DERIVATIVES ? (Py_ssize_t)rows * (DWORK + 6 * CWORK) : 0);
+        + (kernel == DERIVATIVES ? (Py_ssize_t)rows * (DWORK + 6 * CWORK) : 0)
+        + (kernel == FORWARD ? (Py_ssize_t)nv * ((Py_ssize_t)nv + 2) + 1 : 0);
 }
 
 /* One state through the generated kernels: the body transforms, then `kernel`'s passes.
- * g: 3 numbers; f: rows x 6 external forces or NULL; out2: momentum's second result. */
-void
+ * g: 3 numbers; f: rows x 6 external forces or NULL; out2: momentum's second result.
+ * FORWARD reads tau in place of qdd: q̈ = M⁻¹ (τ - h) (algorithms/forward.py), with h the
+ * RNEA at q̈ = 0; 0, or -1 (q̈ all NaN) when M has a pivot that is not positive. */
+int
 run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
           const double *qdd, const double *g, const double *f, double *out1, double *out2,
           double *work)
@@ -200,10 +208,29 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
                            out1 + 2 * nv2, work);
         break;
     }
+    case FORWARD: {
+        const long nv = (long)K[VIDX];
+        double *H = work + (Py_ssize_t)rows * WORK, *lam = H + (Py_ssize_t)nv * nv;
+        double *run = lam + nv, *info = run + nv;
+        for (long k = 0; k < nv; k++)
+            lam[k] = 0.0;       /* q̈ = 0: the bias h into out1 */
+        rnea_kernel(K, rows, q, qd, lam, g[0], g[1], g[2], f, f != NULL, out1, work);
+        for (long k = 0; k < nv; k++)
+            out1[k] = qdd[k] - out1[k];
+        crba_kernel(K, rows, work, H);
+        forward_kernel(K, rows, H, out1, lam, run, info);
+        if (info[0] >= 0.0) {
+            for (long k = 0; k < nv; k++)
+                out1[k] = NAN;
+            return -1;
+        }
+        break;
+    }
     default:
         regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1,
                          work + (Py_ssize_t)rows * WORK, work);
     }
+    return 0;
 }
 
 /* The states [lo, hi) of job s with the scratch `work`: 0, or -1 without memory. */
