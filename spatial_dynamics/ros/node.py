@@ -5,7 +5,8 @@
 A thin shell, like robot_state_publisher: it declares the parameters of the table in
 :mod:`spatial_dynamics.ros.config` (documented in ``config/inverse_dynamics.yaml`` and the
 README, generated from it), validates a change into a whole new
-:class:`~spatial_dynamics.ros.records.Config` in the on-set callback and swaps it in (one
+:class:`~spatial_dynamics.ros.records.Config` in the on-set callback
+(:func:`~spatial_dynamics.ros.configure.prepare`) and swaps it in (one
 reference) in the post-set callback, and hands each input message with the current ``Config``
 to :class:`~spatial_dynamics.ros.answering.Answering`, which computes the answer
 (:mod:`spatial_dynamics.ros.control`) and returns what to publish; the node only publishes
