@@ -185,8 +185,8 @@ def test_a_bag_of_nan_efforts_is_refused_saying_so(robot_bags, tmp_path, capsys)
     bag = str(tmp_path / 'nan')
     bags.write_bag(bag, 'sqlite3', [('/joint_states', bags.JOINT_STATE, t_ns,
                                      [r.tobytes() for r in block])])
-    assert main([bag, '--urdf', robot_urdf_path('ur5'), '--out', str(tmp_path / 'o'),
-                 '--no-plots']) == 1
+    assert main(['residual', bag, '--urdf', robot_urdf_path('ur5'), '--out',
+                 str(tmp_path / 'o'), '--no-plots']) == 1
     err = capsys.readouterr().err
     assert 'JointState.effort is empty or NaN in every message' in err, err
 

@@ -10,6 +10,5 @@ joint_trajectory_controller, ``excite`` plans a motion for identification, ``fle
 fleet's bags on a Dask cluster (:mod:`spatial_dynamics.fleet`). Modules: :mod:`.bags`
 (rosbag2 without ROS), :mod:`.cdr`, :mod:`.recording`, :mod:`.differentiate`,
 :mod:`.identify`, :mod:`.correction`, :mod:`.urdf_writer`, :mod:`.splines`, :mod:`.report`;
-the command in :mod:`.__main__`, the old spellings in :mod:`.legacy`. Nothing here imports
-rclpy.
+the command in :mod:`.__main__`. Nothing here imports rclpy.
 """

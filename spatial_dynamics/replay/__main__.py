@@ -39,9 +39,6 @@ A trajectory (``trajectory`` of a YAML file, or of a bag's ``--topic``) is sampl
 joint_trajectory_controller's splines at ``--rate`` and τ compared with the URDF effort limits;
 ``annotate`` writes a plan with the effort for joint_trajectory_controller (:mod:`.annotate`).
 
-The old spellings (``replay BAG --identify``, ``replay --trajectory F``, ...: no subcommand)
-run their new one for one more release, with a deprecation line (:mod:`.legacy`).
-
 Exit status: 0 done (samples skipped are listed with the reason), 1 refused (no such bag,
 topic or joint, nothing usable, rosbags missing; a trajectory exceeding an effort limit),
 2 bad usage, 130 interrupted (Ctrl-C: each file is whole or not there). Every input and
@@ -723,17 +720,9 @@ def parser_and_commands() -> Tuple[argparse.ArgumentParser, Dict[str, argparse.A
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Run the command; return the exit status (0, 1, 2 or 130).
-
-    An old spelling (no subcommand: ``replay BAG --identify ...``) runs its new one, said in
-    a deprecation line (:mod:`.legacy`).
-    """
+    """Run the command; return the exit status (0, 1, 2 or 130)."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    p, commands = parser_and_commands()
-    if argv and argv[0] not in commands and argv[0] not in ('-h', '--help'):
-        from . import legacy
-        argv = legacy.new_spelling(argv, commands)
-    args = p.parse_args(argv)
+    args = parser().parse_args(argv)
     try:
         return args.run(args)
     except ImportError as err:        # an optional dependency: say which extra brings it
