@@ -162,7 +162,7 @@ def test_replay_annotate_round_trips_through_the_reader(tmp_path, capsys):
 
 def test_a_gravity_compensated_bag_gives_the_residual_of_the_full_one(tmp_path):
     pytest.importorskip('rosbags')
-    from spatial_dynamics.replay import bags
+    from spatial_dynamics.recordings import bags
     urdf, model = ur5()
     rate, n = 500.0, 2000
     t = np.arange(n) / rate

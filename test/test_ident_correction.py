@@ -27,7 +27,7 @@ from spatial_dynamics.replay.urdf_writer import corrected_urdf  # noqa: E402
 
 pytest.importorskip('rosbags')
 pytest.importorskip('scipy')
-from spatial_dynamics.replay import bags  # noqa: E402
+from spatial_dynamics.recordings import bags  # noqa: E402
 
 NOISE = 0.05
 EPS = 0.01

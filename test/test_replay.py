@@ -20,7 +20,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from conftest import robot_urdf_path  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.replay import bags  # noqa: E402
+from spatial_dynamics.recordings import bags  # noqa: E402
 from spatial_dynamics.replay.__main__ import main  # noqa: E402
 
 pytest.importorskip('rosbags')

@@ -19,7 +19,7 @@ from conftest import robot_urdf_path  # noqa: E402
 from test_replay_outputs import motion_bag  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.replay import bags  # noqa: E402
+from spatial_dynamics.recordings import bags  # noqa: E402
 from spatial_dynamics.replay.__main__ import main  # noqa: E402
 
 pytest.importorskip('rosbags')

@@ -43,9 +43,11 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 import spatial_dynamics as sd
-from spatial_dynamics import identification
+from spatial_dynamics import identification, trajectory
 from spatial_dynamics.model import rigid_body_inertia
-from spatial_dynamics.replay import bags
+from spatial_dynamics.recordings import bags
+from spatial_dynamics.recordings.recording import Reading, recording, Stages
+from spatial_dynamics.replay import splines
 from spatial_dynamics.replay.__main__ import main as replay
 from spatial_dynamics.replay.urdf_writer import corrected_urdf
 from spatial_dynamics.ros import control
@@ -121,8 +123,6 @@ class PlanMotion:
 
     def __init__(self, path: str, names: Sequence[str]) -> None:
         """Read ``path`` (``replay excite``'s plan) for the joints ``names``."""
-        from spatial_dynamics import trajectory
-        from spatial_dynamics.replay import splines
         self.traj = splines.from_yaml(path)
         self.cols = [self.traj.joint_names.index(n) for n in names]
         self.c = trajectory.coefficients(self.traj)
@@ -221,11 +221,8 @@ def floor(true_text: bytes, joints, urdf: str, bag: str) -> np.ndarray:
     misses: each drive's friction flips within milliseconds at a reversal, faster than a
     50 ms smoothing window follows).
     """
-    from spatial_dynamics.replay.__main__ import parser
-    from spatial_dynamics.replay.recording import recording, Stages
     true = sd.Model.from_urdf(true_text.decode(), joints=joints)
-    args = parser().parse_args(['residual', bag, '--urdf', urdf])
-    data = recording(args, bag, true, Stages())
+    data = recording(Reading(), bag, true, Stages())       # replay residual's defaults
     damping, friction, armature = drives(true.nq)
     q, qd, qdd = data['q'], data['qd'], data['qdd']
     tau = (sd.rnea(true, q, qd, qdd) + damping * qd + friction * np.tanh(qd / EPS)
