@@ -7,7 +7,7 @@
 method, on a standing Solo12 (example-robot-data); and, in the same run, Pinocchio's ``rnea``
 and its four feet's Jacobians (``computeJointJacobians`` + ``getFrameJacobian``) of the same
 state, with each of ours as a multiple of them: the ratios hold on a busy machine, where the
-microseconds do not.
+microseconds do not. The load average (``uptime``'s) is printed with them.
 """
 
 import os
@@ -64,6 +64,7 @@ def main() -> None:
     pin_rnea = per_call(lambda: pin.rnea(pm, pd, q, vp, ap))
     pin_jac = per_call(jacobians)
     print(f'Pinocchio rnea:         {pin_rnea:8.1f} µs; the feet\'s Jacobians {pin_jac:8.1f} µs')
+    print('load average (1, 5, 15 min): ' + ', '.join(f'{x:.2f}' for x in os.getloadavg()))
     print(f'ratios, same run: contact_jacobian {ours["jacobian"] / pin_jac:.1f}x Pinocchio\'s '
           f'Jacobians; contact_inverse_dynamics torques {ours["torques"] / pin_rnea:.1f}x, '
           f'forces {ours["forces"] / pin_rnea:.1f}x, qp {ours["qp"] / pin_rnea:.0f}x '

@@ -60,7 +60,7 @@ def synthetic_bag(path: str, urdf: str, seconds: float, rate: float, t0_ns: int,
     time of the measurement, the bag's the time it was recorded).
     """
     import spatial_dynamics as sd
-    from spatial_dynamics.replay import bags
+    from spatial_dynamics.recordings import bags
     model = sd.Model.from_urdf(urdf)
     rng = np.random.default_rng(seed)
     n = model.nq

@@ -15,7 +15,7 @@ import time
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped, TwistStamped
 from sensor_msgs.msg import Imu, JointState
-from spatial_dynamics.ros import config
+from spatial_dynamics.ros import config, configure
 from spatial_dynamics.ros.answering import Answering
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -49,7 +49,7 @@ def main() -> None:
     params = {spec.name: spec.default for spec in config.PARAMETERS}
     params['base_input.timeout'] = 3600.0    # a slow run must not make the inputs stale
     demo = dict(params, robot_description_file=os.path.join(ROOT, 'config', 'demo_arm.urdf'))
-    fixed = config.prepare({}, demo, None)
+    fixed = configure.prepare({}, demo, None)
     joints = fixed.robot.joints
     n = len(joints)
     msg = JointState(name=list(joints), position=[0.3] * n, velocity=[0.2] * n,
@@ -58,8 +58,8 @@ def main() -> None:
     imu = Imu()
     imu.header.frame_id = 'base_link'
     imu.linear_acceleration.z, imu.angular_velocity.x = 9.81, 0.2
-    moving = config.prepare({}, dict(demo, base='moving',
-                                     **{'base_input.imu_link': 'base_link'}), None)
+    moving = configure.prepare({}, dict(demo, base='moving',
+                                        **{'base_input.imu_link': 'base_link'}), None)
     print(f'demo arm ({n} joints), fixed base:  {per_answer(fixed, msg):8.1f} µs')
     print(f'demo arm, moving base (IMU):     '
           f'{per_answer(moving, msg, [("base/imu", imu)]):8.1f} µs')
@@ -69,7 +69,7 @@ def main() -> None:
     pose, twist = PoseStamped(), TwistStamped()
     pose.pose.position.z, pose.pose.orientation.w = 0.25, 1.0
     for method in ('torques', 'forces', 'qp'):
-        cfg = config.prepare({}, dict(params, robot_description_file=solo, base='floating', **{
+        cfg = configure.prepare({}, dict(params, robot_description_file=solo, base='floating', **{
             'contacts.links': ['FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT'],
             'contacts.method': method, 'base_input.acceleration': 'zero'}), None)
         joints = cfg.robot.joints

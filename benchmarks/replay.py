@@ -29,7 +29,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from spatial_dynamics import Model, rnea
-from spatial_dynamics.replay import bags
+from spatial_dynamics.recordings import bags
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 URDF = os.path.join(ROOT, 'config', 'demo_arm.urdf')

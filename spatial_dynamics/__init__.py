@@ -18,8 +18,8 @@ from .base import (base_from_imu, base_from_odometry, BaseMotion, floating_twin,
 from .algorithms.configuration import integrate
 from .algorithms.jacobian import jacobian
 from .algorithms.rnea import rnea_spatial
-from .backends import (bias_torque, generalized_momentum, GRAVITY, gravity_torque,
-                       mass_matrix, regressor, rnea, rnea_derivatives)
+from .backends import (bias_torque, forward_dynamics, generalized_momentum, GRAVITY,
+                       gravity_torque, mass_matrix, regressor, rnea, rnea_derivatives)
 from .contacts import Contact, contact_inverse_dynamics, contact_jacobian, ContactResult
 from .terms import (armature_torque, clamp_to_effort_limits, friction_derivative,
                     friction_torque, per_joint)
@@ -28,8 +28,8 @@ from .urdf import URDFWarning
 __all__ = ['BaseMotion', 'Frame', 'GRAVITY', 'Model', 'armature_torque', 'base_from_imu',
            'base_from_odometry', 'bias_torque', 'floating_twin', 'spatial_acceleration',
            'clamp_to_effort_limits', 'Contact', 'contact_inverse_dynamics',
-           'contact_jacobian', 'ContactResult', 'friction_derivative', 'friction_torque',
-           'generalized_momentum',
+           'contact_jacobian', 'ContactResult', 'forward_dynamics', 'friction_derivative',
+           'friction_torque', 'generalized_momentum',
            'gravity_torque', 'integrate', 'jacobian', 'mass_matrix',
            'per_joint', 'regressor', 'rnea', 'rnea_derivatives', 'rnea_spatial',
            'URDFWarning', 'with_payload']

@@ -20,21 +20,17 @@ import math
 import os
 import sys
 import textwrap
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence
 import warnings
 
 import numpy as np
 
-from . import mass_matrix, Model, urdf, URDFWarning
-from .bounds import MAX_POSITION
+from . import mass_matrix, Model, URDFWarning
 from .joints import FREE_FLYER, KIND_NAMES
+from .recordings.loading import read_description
+from .recordings.ranges import locked_item
 
 WIDTH = 99
-
-
-def read_description(path: str) -> bytes:
-    """Return the URDF XML of a file, read as the node reads it (its size limit too)."""
-    return urdf.read_description(path, urdf.MAX_DESCRIPTION_BYTES, path).encode('utf-8')
 
 
 def num(x: float) -> str:
@@ -265,21 +261,6 @@ def report(model: Model, types: Dict[str, str], said: Optional[List[str]] = None
     else:
         lines.append('no warnings')
     return '\n'.join(lines)
-
-
-def locked_item(item: str) -> Tuple[str, float]:
-    """Parse ``'name=value'`` to ``(name, value)``; ``ArgumentTypeError`` (usage) if not.
-
-    The value is a joint position: finite, within ±MAX_POSITION (rad or m).
-    """
-    name, sep, value = item.partition('=')
-    try:
-        if sep and name and abs(float(value)) <= MAX_POSITION:
-            return name, float(value)
-    except ValueError:
-        pass
-    raise argparse.ArgumentTypeError(f'{item!r}: expected NAME=VALUE, the value in rad or m '
-                                     f'within ±{MAX_POSITION:g}')
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

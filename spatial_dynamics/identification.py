@@ -20,15 +20,19 @@ state is a parameter no torque depends on at all.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .algorithms.regressor import parameters, PARAMETERS
-from .backends import regressor, rnea
+from .backends import compiled, regressor, rnea
 from .base import BaseMotion, check_base_motion
 from .model import Model
+
+# SciPy (seconds to import) and threadpoolctl (the identify extra) are imported inside the fits
+# that use them: the package, and commands that never fit, start without them.
 
 #: A pivot of ``R`` below ``RTOL`` times the largest counts as zero (the rank's threshold).
 RTOL = 1e-9
@@ -473,9 +477,7 @@ def _square_root(model: Model, states, tau: np.ndarray, gravity, cols: np.ndarra
     fixed order: the result does not depend on the timing. Call it with the BLAS on one
     thread (:func:`identify_inertias` does): these threads are the parallelism.
     """
-    from concurrent.futures import ThreadPoolExecutor
     from scipy.linalg.blas import dsyrk
-    from .backends import compiled
     q, qd, qdd = states
     n = q.shape[-1]
     fixed = np.setdiff1d(np.arange(10 * model.NB), cols)

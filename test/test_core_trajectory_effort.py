@@ -138,8 +138,8 @@ def test_replay_annotate_round_trips_through_the_reader(tmp_path, capsys):
                                                   'nanosec': int(round(t % 1 * 1e9))}})
     src.write_text(yaml.safe_dump(doc))
     out = tmp_path / 'out.yaml'
-    assert main(['--urdf', urdf, '--trajectory', str(src), '--annotate', str(out),
-                 '--tolerance', '0.05', '--out', str(tmp_path / 'o')]) == 0
+    assert main(['annotate', str(src), '--urdf', urdf, '--out', str(out),
+                 '--tolerance', '0.05']) == 0
     text = capsys.readouterr().out
     assert 'points with effort (full)' in text
     back = splines.from_yaml(str(out))                 # the same reader reads it back
@@ -152,17 +152,17 @@ def test_replay_annotate_round_trips_through_the_reader(tmp_path, capsys):
     assert np.allclose(E, sd.rnea(model, back.positions, back.velocities, back.accelerations),
                        rtol=0, atol=1e-9)
     # the annotated file is a valid plan: checking it again passes
-    assert main(['--urdf', urdf, '--trajectory', str(out), '--no-plots',
+    assert main(['trajectory', str(out), '--urdf', urdf, '--no-plots',
                  '--out', str(tmp_path / 'o')]) == 0
-    # --annotate without --trajectory is a usage error
+    # annotate without its plan is a usage error
     with pytest.raises(SystemExit) as exit_:
-        main(['bag', '--urdf', urdf, '--annotate', str(out)])
+        main(['annotate', '--urdf', urdf, '--out', str(out)])
     assert exit_.value.code == 2
 
 
 def test_a_gravity_compensated_bag_gives_the_residual_of_the_full_one(tmp_path):
     pytest.importorskip('rosbags')
-    from spatial_dynamics.replay import bags
+    from spatial_dynamics.recordings import bags
     urdf, model = ur5()
     rate, n = 500.0, 2000
     t = np.arange(n) / rate
@@ -180,7 +180,7 @@ def test_a_gravity_compensated_bag_gives_the_residual_of_the_full_one(tmp_path):
         bags.write_bag(bag, 'sqlite3', [('/joint_states', bags.JOINT_STATE, t_ns,
                                          [r.tobytes() for r in block])])
         out = str(tmp_path / f'out_{label}')
-        assert main([bag, '--urdf', urdf, '--out', out, '--no-plots',
+        assert main(['residual', bag, '--urdf', urdf, '--out', out, '--no-plots',
                      '--measured-effort', label]) == 0
         with open(os.path.join(out, 'residual.csv')) as f:
             residuals[label] = np.array([[float(x) for x in row[1:]]
@@ -190,7 +190,7 @@ def test_a_gravity_compensated_bag_gives_the_residual_of_the_full_one(tmp_path):
     assert np.abs(full - comp).max() <= 2e-4          # equal to the 4 decimals written
     # read as full, the gravity-compensated bag misses g(q) (the old behaviour)
     out = str(tmp_path / 'wrong')
-    assert main([str(tmp_path / 'gravity_compensated'), '--urdf', urdf, '--out', out,
+    assert main(['residual', str(tmp_path / 'gravity_compensated'), '--urdf', urdf, '--out', out,
                  '--no-plots']) == 0
     with open(os.path.join(out, 'residual.csv')) as f:
         wrong = np.array([[float(x) for x in row[1:]] for row in list(csv.reader(f))[1:]])

@@ -27,7 +27,7 @@ from spatial_dynamics.replay.urdf_writer import corrected_urdf  # noqa: E402
 
 pytest.importorskip('rosbags')
 pytest.importorskip('scipy')
-from spatial_dynamics.replay import bags  # noqa: E402
+from spatial_dynamics.recordings import bags  # noqa: E402
 
 NOISE = 0.05
 EPS = 0.01
@@ -102,9 +102,9 @@ def test_a_corrected_urdf_predicts_held_out_motion(robot_bags, tmp_path, capsys)
     """
     model, true, train, held, (t, q, qd, qdd) = robot_bags
     out, urdf = str(tmp_path / 'out'), str(tmp_path / 'corrected.urdf')
-    assert main([train, '--urdf', robot_urdf_path('ur5'), '--out', out, '--inertias',
-                 '--identify', '--threshold', str(EPS), '--validate', held, '--write-urdf',
-                 urdf, '--no-plots']) == 0
+    assert main(['identify', train, '--urdf', robot_urdf_path('ur5'), '--out', out,
+                 '--inertias', '--drives', '--threshold', str(EPS), '--validate', held,
+                 '--write-urdf', urdf, '--no-plots']) == 0
     text, err = capsys.readouterr()
     assert 'warning' not in err, err
     v = read_csv(os.path.join(out, 'validation.csv'))
@@ -138,14 +138,14 @@ def test_two_recordings_fit_together(robot_bags, tmp_path, capsys):
                     seed=15)
     urdf = robot_urdf_path('ur5')
     out = str(tmp_path / 'alone')
-    assert main([first, '--urdf', urdf, '--out', out, '--inertias', '--identify',
+    assert main(['identify', first, '--urdf', urdf, '--out', out, '--inertias', '--drives',
                  '--threshold', str(EPS), '--validate', held, '--no-plots']) == 0
     assert 'warning: the recording does not determine' in capsys.readouterr().err
     alone = read_csv(os.path.join(out, 'validation.csv'))
     assert max(r['held_out_corrected'] for r in alone.values()) > 10 * NOISE
     out = str(tmp_path / 'both')
-    assert main([first, '--also', second, '--urdf', urdf, '--out', out, '--inertias',
-                 '--identify', '--threshold', str(EPS), '--validate', held,
+    assert main(['identify', first, '--also', second, '--urdf', urdf, '--out', out,
+                 '--inertias', '--drives', '--threshold', str(EPS), '--validate', held,
                  '--no-plots']) == 0
     text, err = capsys.readouterr()
     assert 'fitted on' in text and 'warning' not in err, err
@@ -163,7 +163,7 @@ def test_a_poorly_exciting_recording_is_named_not_trusted(robot_bags, tmp_path, 
     model, true, train, held, _ = robot_bags
     poor = record(tmp_path / 'poor', true, *motion(model.nq, 3, only=0), seed=13)
     out = str(tmp_path / 'out')
-    assert main([poor, '--urdf', robot_urdf_path('ur5'), '--out', out, '--inertias',
+    assert main(['identify', poor, '--urdf', robot_urdf_path('ur5'), '--out', out, '--inertias',
                  '--validate', held, '--no-plots']) == 0
     text, err = capsys.readouterr()
     assert 'warning: the recording does not determine' in err
@@ -185,8 +185,9 @@ def test_a_payload_goes_into_the_urdf(tmp_path, capsys):
     bags.write_bag(bag, 'sqlite3', [('/joint_states', bags.JOINT_STATE, t_ns,
                                      [r.tobytes() for r in block])])
     urdf = str(tmp_path / 'with_payload.urdf')
-    assert main([bag, '--urdf', robot_urdf_path('ur5'), '--out', str(tmp_path / 'out'),
-                 '--payload', 'tool0', '--write-urdf', urdf, '--no-plots']) == 0
+    assert main(['identify', bag, '--urdf', robot_urdf_path('ur5'), '--out',
+                 str(tmp_path / 'out'), '--payload', 'tool0', '--write-urdf', urdf,
+                 '--no-plots']) == 0
     corrected = sd.Model.from_urdf(urdf)
     b = model.frames['tool0'].body
     np.testing.assert_allclose(corrected.inertia[b], heavy.inertia[b], rtol=0, atol=0.02)
@@ -274,12 +275,15 @@ def test_usage_errors_are_one_line(robot_bags, tmp_path, capsys):
     urdf = robot_urdf_path('ur5')
     out = str(tmp_path / 'o')
     for argv, status, words in (
-            ([train, '--validate', held], 2, 'need something identified'),
-            ([train, '--also', held], 2, 'need something identified'),
-            ([train, '--write-urdf', str(tmp_path / 'x.urdf')], 2, 'need something'),
-            ([train, '--inertias', '--payload', 'tool0'], 2, 'exclude each other'),
-            ([train, '--inertias', 'no_such_link'], 1, "'no_such_link' is not a link"),
-            ([train, '--inertias', '--validate', str(tmp_path / 'nothing')], 1, 'nothing')):
+            (['residual', train, '--validate', held], 2, 'unrecognized arguments'),
+            (['residual', train, '--also', held], 2, 'unrecognized arguments'),
+            (['residual', train, '--write-urdf', str(tmp_path / 'x.urdf')], 2,
+             'unrecognized arguments'),
+            (['identify', train, '--inertias', '--payload', 'tool0'], 2, 'not allowed with'),
+            (['identify', train, '--inertias', 'no_such_link'], 1,
+             "'no_such_link' is not a link"),
+            (['identify', train, '--inertias', '--validate', str(tmp_path / 'nothing')], 1,
+             'nothing')):
         with pytest.raises(SystemExit) if status == 2 else _no_exit() as caught:
             assert main(argv + ['--urdf', urdf, '--out', out, '--no-plots']) == status
         if status == 2:

@@ -31,7 +31,8 @@ from spatial_dynamics.algorithms.regressor import parameters  # noqa: E402
 from spatial_dynamics.identification import identify_inertias, random_states  # noqa: E402
 from spatial_dynamics.replay import correction as correction_of  # noqa: E402
 from spatial_dynamics.replay.__main__ import main, parser  # noqa: E402
-from spatial_dynamics.replay.recording import recording, Stages  # noqa: E402
+from spatial_dynamics.recordings.recording import Stages  # noqa: E402
+from spatial_dynamics.replay.residual import recording  # noqa: E402
 
 pytest.importorskip('scipy')
 pytest.importorskip('rosbags')
@@ -177,7 +178,7 @@ def test_a_fit_stopped_at_its_limit_says_so(monkeypatch):
 
 def test_a_bag_of_nan_efforts_is_refused_saying_so(robot_bags, tmp_path, capsys):
     """Efforts all NaN: the refusal says NaN, not only 'empty'."""
-    from spatial_dynamics.replay import bags
+    from spatial_dynamics.recordings import bags
     model = robot_bags[0]
     t, q, qd, qdd = motion(model.nq, 8, seconds=1.0)
     t_ns = (1_700_000_000 * 10 ** 9 + np.arange(len(t)) * 2_000_000).astype(np.int64)
@@ -185,15 +186,15 @@ def test_a_bag_of_nan_efforts_is_refused_saying_so(robot_bags, tmp_path, capsys)
     bag = str(tmp_path / 'nan')
     bags.write_bag(bag, 'sqlite3', [('/joint_states', bags.JOINT_STATE, t_ns,
                                      [r.tobytes() for r in block])])
-    assert main([bag, '--urdf', robot_urdf_path('ur5'), '--out', str(tmp_path / 'o'),
-                 '--no-plots']) == 1
+    assert main(['residual', bag, '--urdf', robot_urdf_path('ur5'), '--out',
+                 str(tmp_path / 'o'), '--no-plots']) == 1
     err = capsys.readouterr().err
     assert 'JointState.effort is empty or NaN in every message' in err, err
 
 
 def test_a_value_is_printed_with_the_digits_its_sigma_allows():
     """The payload's mass line: to σ's second significant digit, never more."""
-    from spatial_dynamics.replay.__main__ import to_sigma
+    from spatial_dynamics.replay.identify import to_sigma
     assert to_sigma(1.498765, 0.0123) == '1.499'
     assert to_sigma(1.498765, 2.3) == '1.5'
     assert to_sigma(1234.5, 45.0) == '1234'

@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Imports run one way, checked on the source of every module (inside functions too).
 
-spatial <- joints <- model <- urdf, algorithms <- backends <- the API <- ros <- sim <- tools.
+spatial <- joints <- model <- urdf, algorithms <- backends <- the API <- recordings <- the
+commands (check, replay, fleet: side by side) <- ros <- sim <- tools.
 """
 
 import ast
@@ -17,21 +18,28 @@ PACKAGE = os.path.join(ROOT, 'spatial_dynamics')
 RANKS = {
     'spatial': 0, 'files': 0, 'bounds': 0, 'extras': 0, 'joints': 1, 'model': 2,
     'urdf': 3, 'base': 3, 'terms': 3, 'algorithms': 3, 'trajectory': 3, 'wrench': 3, 'effort': 5,
-    'identification': 5, 'excitation': 5, 'contacts': 5,
+    'identification': 5, 'drives': 5, 'excitation': 5, 'contacts': 5, 'contact_kinematics': 5,
+    'contact_qp': 5,
     'backends': 4,
     '': 5,                  # the package itself: the public API (spatial_dynamics/__init__.py)
-    'check': 6,             # a command on the library
-    'replay': 6,            # recorded data and trajectories against the model (no rclpy)
-    'fleet': 6,             # a fleet's bags on a Dask cluster: replay's reading, summed fits
-    'ros': 7,               # the node and its pure configuration
-    'sim': 8,               # the simulated robot: robot.py pure (MuJoCo), node.py on ros/;
+    'recordings': 6,        # bags read, cleaned, differentiated: the floor of the commands
+    'check': 7,             # a command on the library
+    'replay': 7,            # recorded data and trajectories against the model (no rclpy)
+    'fleet': 7,             # a fleet's bags on a Dask cluster: the recordings, summed fits
+    'ros': 8,               # the node and its pure configuration
+    'sim': 9,               # the simulated robot: robot.py pure (MuJoCo), node.py on ros/;
     #                         above ros (it reuses the node's readers and spin), below tools
-    'tools': 9,             # demo, closed_loop, latency, soak, ...: use everything, used by none
+    'tools': 10,            # demo, closed_loop, latency, soak, ...: use everything, used by none
     #                         (the benchmarks live outside the package: benchmarks/)
 }
-# The one import against the direction: Model.from_urdf, the public entry point, hands the
-# work to the parser (inside the method, so importing model never imports urdf).
-ALLOWED_UPWARD = {('model', 'urdf')}
+# The commands: side by side on one rank, none imports another's modules. One command may
+# run another through that one's entry point, its package alone (``replay fleet`` runs
+# ``spatial_dynamics.fleet``: add_arguments, run), never a module inside it. Below the tools
+# (which demonstrate the commands), nothing outside a command imports it.
+COMMANDS = ('check', 'replay', 'fleet')
+# Imports against the direction: none (model.py knows no parser: urdf/ installs
+# Model.from_urdf, so the record stays below its reader).
+ALLOWED_UPWARD: set = set()
 ROS = ('rclpy', 'rcl_interfaces', 'sensor_msgs', 'std_msgs', 'trajectory_msgs', 'geometry_msgs',
        'diagnostic_msgs', 'builtin_interfaces', 'ament_index_python')
 
@@ -194,3 +202,39 @@ def test_no_module_imports_one_that_imports_it_back():
     for low_module, high_module in ALLOWED_UPWARD:
         graph[low_module].discard(high_module)
     assert cycles(graph) == []
+
+
+def command_imports(name: str, path: str):
+    """Yield the modules of other commands that ``name`` imports, and the way it names them.
+
+    ``(target, entry)``: ``entry`` when ``target`` is another command's package itself.
+    """
+    known = {n for n, _ in modules()}
+    for module in imports(name, path):
+        target = inside(module)
+        if target is None or layer(target) not in COMMANDS or layer(target) == layer(name):
+            continue
+        target = module_of(target, known)
+        yield target, target == layer(target)
+
+
+@pytest.mark.parametrize('name,path', LAYERS, ids=[n or '__init__' for n, _ in LAYERS])
+def test_no_command_imports_another_commands_modules(name, path):
+    """A command uses another only through its entry point; below the tools, none at all."""
+    here = layer(name)
+    wrong = []
+    for target, entry in command_imports(name, path):
+        if here in COMMANDS and not entry:
+            wrong.append(f'{target} (a module of the command {layer(target)!r})')
+        elif here not in COMMANDS and RANKS[here] < RANKS['tools']:
+            wrong.append(f'{target} (the command {layer(target)!r}, from outside the commands)')
+    assert not wrong, f'{name or "spatial_dynamics"} imports: {wrong}'
+
+
+def test_the_command_rule_finds_a_reach_into_another_command(tmp_path):
+    """The rule reads ``from ..fleet import command``, not only ``from .. import fleet``."""
+    path = tmp_path / 'x.py'
+    path.write_text('from ..fleet import command\nfrom .. import fleet\n'
+                    'from ..recordings import bags\n')
+    found = sorted(set(command_imports('replay.x', str(path))))
+    assert found == [('fleet', True), ('fleet.command', False)], found

@@ -22,7 +22,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import DEMO_URDF, Log  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.ros import config  # noqa: E402
+from spatial_dynamics.ros import config, configure  # noqa: E402
 from spatial_dynamics.ros.answering import Answer, Answering, NOTHING, Out  # noqa: E402
 from spatial_dynamics.ros.plans import Job, prepare_plan  # noqa: E402
 
@@ -36,7 +36,7 @@ def demo_text():
 def configured(demo_text, **changes):
     params = {spec.name: spec.default for spec in config.PARAMETERS}
     params.update(robot_description=demo_text, **changes)
-    return config.prepare({}, params, None)
+    return configure.prepare({}, params, None)
 
 
 def header(t: float) -> Header:
@@ -80,7 +80,7 @@ def test_feedback_answer_estimate_and_wrench_are_returned(demo_text):
                      acceleration_source='none', observer_gain=20.0)
     robot = cfg.robot
     link = robot.model.body_names[-1]
-    cfg = config.prepare(cfg.params, {'wrench_estimate.link': link}, robot)
+    cfg = configure.prepare(cfg.params, {'wrench_estimate.link': link}, robot)
     robot = cfg.robot
     n = len(robot.joints)
     answering = Answering(Log())

@@ -24,9 +24,10 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from conftest import least_torque_split, robot_urdf_path, to_pin  # noqa: E402
 from node_harness import DEMO_URDF, Log  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.ros import config  # noqa: E402
+from spatial_dynamics.ros import config, configure  # noqa: E402
 from spatial_dynamics.ros.answering import Answering  # noqa: E402
-from spatial_dynamics.ros.bases import base_status, qp_missing_warning  # noqa: E402
+from spatial_dynamics.ros.diagnostics import base_status  # noqa: E402
+from spatial_dynamics.ros.floating import qp_missing_warning  # noqa: E402
 from spatial_dynamics.ros.parameters import ConfigError  # noqa: E402
 
 FEET = ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')
@@ -35,7 +36,7 @@ FEET = ('FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT')
 def configured(**changes):
     params = {spec.name: spec.default for spec in config.PARAMETERS}
     params.update(changes)
-    return config.prepare({}, params, None)
+    return configure.prepare({}, params, None)
 
 
 def header(t: float, frame: str = '') -> Header:
@@ -834,12 +835,12 @@ def test_the_qp_solver_is_ready_before_the_first_answer(solo_path, method):
     """
     code = (
         'import sys\n'
-        'from spatial_dynamics.ros import config\n'
+        'from spatial_dynamics.ros import config, configure\n'
         "assert 'clarabel' not in sys.modules\n"
         'params = {spec.name: spec.default for spec in config.PARAMETERS}\n'
         f'params.update(robot_description_file={solo_path!r}, base="floating")\n'
         f"params.update({{'contacts.links': ['FL_FOOT'], 'contacts.method': {method!r}}})\n"
-        'config.prepare({}, params, None)\n'
+        'configure.prepare({}, params, None)\n'
         'from spatial_dynamics import contacts\n'
         "assert 'clarabel' in sys.modules and contacts._solver.get('warm'), contacts._solver\n")
     import subprocess

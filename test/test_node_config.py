@@ -23,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import DEMO_URDF, PENDULUM_URDF  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.ros import config, descriptions, diagnostics  # noqa: E402
+from spatial_dynamics.ros import config, configure, descriptions, diagnostics  # noqa: E402
 from spatial_dynamics.ros.config import ConfigError  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -53,9 +53,9 @@ def checked(**changes):
 def test_config_never_imports_rclpy():
     script = textwrap.dedent('''\
         import sys
-        from spatial_dynamics.ros import config
+        from spatial_dynamics.ros import config, configure
         params = {s.name: s.default for s in config.PARAMETERS}
-        out = config.prepare({}, params, None)
+        out = configure.prepare({}, params, None)
         assert out.robot is None and out.params.gravity == (0.0, 0.0, -9.81)
         print('ROS:', sorted(m for m in sys.modules if m.split('.')[0] in
                              ('rclpy', 'rcl_interfaces', 'sensor_msgs', 'std_msgs',
@@ -254,11 +254,11 @@ def test_absurd_armature_refused_with_the_bound():
         values = [0.1] * n
         values[2] = bad
         with pytest.raises(ConfigError) as info:
-            config.check_armature(model, values)
+            configure.check_armature(model, values)
         message = str(info.value)
         assert 'parameter armature' in message and repr(model.joint_names[2]) in message
         assert f'{config.MAX_ARMATURE:g}' in message
-    assert config.check_armature(model, [config.MAX_ARMATURE] * n).max() == config.MAX_ARMATURE
+    assert configure.check_armature(model, [config.MAX_ARMATURE] * n).max() == config.MAX_ARMATURE
 
 
 @pytest.mark.parametrize('field, value, bound', [
@@ -284,16 +284,16 @@ def test_absurd_locked_position_refused_with_the_bound():
         checked(locked_joints=['joint2'], locked_positions=[1e300])
     message = str(info.value)
     assert 'parameter locked_positions' in message and f'{config.MAX_LOCKED_POSITION:g}' in message
-    assert config.locked_positions(checked(locked_joints=['joint2'],
-                                           locked_positions=[-math.pi])) == {'joint2': -math.pi}
+    assert configure.locked_positions(checked(locked_joints=['joint2'],
+                                              locked_positions=[-math.pi])) == {'joint2': -math.pi}
 
 
 def test_locked_joints_need_the_same_number_of_positions_and_distinct_names():
     with pytest.raises(ConfigError, match='1 values for 2 locked_joints'):
-        config.locked_positions(checked(locked_joints=['a', 'b'], locked_positions=[0.1]))
+        configure.locked_positions(checked(locked_joints=['a', 'b'], locked_positions=[0.1]))
     with pytest.raises(ConfigError, match='names repeated'):
         checked(locked_joints=['a', 'a'], locked_positions=[])
-    assert config.locked_positions(checked(locked_joints=['a', 'b'], locked_positions=[])) == \
+    assert configure.locked_positions(checked(locked_joints=['a', 'b'], locked_positions=[])) == \
         {'a': 0.0, 'b': 0.0}
 
 
@@ -302,13 +302,13 @@ def test_locked_joints_need_the_same_number_of_positions_and_distinct_names():
 
 def test_prepare_validates_without_changing_its_inputs(demo_text):
     previous = defaults()
-    first = config.prepare({}, defaults(robot_description=demo_text), None)
+    first = configure.prepare({}, defaults(robot_description=demo_text), None)
     assert first.new_description and first.robot.model.name == 'demo_arm'
     assert previous == defaults()    # the dict passed in is not touched
     # a payload change reuses the parsed model, applies the payload to a copy
     hand = first.robot.model.body_names[-1]
     change = {'payload.link': hand, 'payload.mass': 2.0}
-    second = config.prepare(first.params, change, first.robot)
+    second = configure.prepare(first.params, change, first.robot)
     assert second.robot.base is first.robot.base and not second.new_description
     assert second.robot.model is not first.robot.model
     assert first.params.payload_link == ''   # the accepted parameters stay as they were
@@ -318,26 +318,26 @@ def test_prepare_validates_without_changing_its_inputs(demo_text):
                                sd.rnea(with_payload, q, q, q), rtol=0, atol=1e-12)
     # a bad value is refused with its name, and nothing is produced
     with pytest.raises(ConfigError, match='parameter gravity'):
-        config.prepare(second.params, {'gravity': [0.0, 0.0, float('nan')]}, second.robot)
+        configure.prepare(second.params, {'gravity': [0.0, 0.0, float('nan')]}, second.robot)
 
 
 def test_without_a_model_what_needs_none_is_checked():
     with pytest.raises(ConfigError, match='parameter payload.mass'):
-        config.prepare({}, defaults(**{'payload.mass': -1.0}), None)
+        configure.prepare({}, defaults(**{'payload.mass': -1.0}), None)
     with pytest.raises(ConfigError, match='parameter friction_model'):
-        config.prepare({}, defaults(friction_model='coulomb'), None)
+        configure.prepare({}, defaults(friction_model='coulomb'), None)
     with pytest.raises(ConfigError, match='parameter backend'):
-        config.prepare({}, defaults(backend='cuda'), None)
-    assert config.prepare({}, defaults(), None).robot is None
+        configure.prepare({}, defaults(backend='cuda'), None)
+    assert configure.prepare({}, defaults(), None).robot is None
 
 
 def test_reduction_and_strict_are_reparse_triggers(demo_text):
     params = checked(robot_description=demo_text)
     changed = config.PARAMETERS.changed
-    assert not config.reparse_needed(params, changed(params, {'gravity': [0.0, 0.0, -1.0]}))
+    assert not configure.reparse_needed(params, changed(params, {'gravity': [0.0, 0.0, -1.0]}))
     for name, value in (('joints', ['joint1']), ('locked_joints', ['joint2']),
                         ('locked_positions', [0.5]), ('strict_urdf', True)):
-        assert config.reparse_needed(params, changed(params, {name: value})), name
+        assert configure.reparse_needed(params, changed(params, {name: value})), name
 
 
 # --------------------------------------------------------------------------------------------
@@ -345,14 +345,14 @@ def test_reduction_and_strict_are_reparse_triggers(demo_text):
 
 def test_auto_and_compiled_run_the_compiled_kernels_numpy_never(monkeypatch):
     assert sd.backends.compiled.ext is not None, sd.backends.compiled.FAILURE
-    assert config.resolve_backend('auto') == 'compiled'
-    assert config.resolve_backend('compiled') == 'compiled'
-    assert config.resolve_backend('numpy') == 'numpy'
+    assert configure.resolve_backend('auto') == 'compiled'
+    assert configure.resolve_backend('compiled') == 'compiled'
+    assert configure.resolve_backend('numpy') == 'numpy'
     with pytest.raises(ConfigError, match="parameter backend: 'fast'"):
-        config.resolve_backend('fast')
+        configure.resolve_backend('fast')
     monkeypatch.setattr(sd.backends.compiled, 'ext', None)     # a build without a compiler
     for setting in ('auto', 'compiled', 'numpy'):
-        assert config.resolve_backend(setting) == 'numpy'
+        assert configure.resolve_backend(setting) == 'numpy'
 
 
 def test_a_model_load_computes_once_and_times_nothing(demo_text, monkeypatch):
@@ -364,7 +364,7 @@ def test_a_model_load_computes_once_and_times_nothing(demo_text, monkeypatch):
     calls = []
     rnea = sd.rnea
     monkeypatch.setattr(sd, 'rnea', lambda *a, **k: calls.append(a) or rnea(*a, **k))
-    robot = config.prepare({}, defaults(robot_description=demo_text), None).robot
+    robot = configure.prepare({}, defaults(robot_description=demo_text), None).robot
     assert len(calls) == 1
     np.testing.assert_array_equal(calls[0][1], np.zeros(len(robot.joints)))   # at rest
     assert not hasattr(config, 'plain_call_seconds')
@@ -373,8 +373,8 @@ def test_a_model_load_computes_once_and_times_nothing(demo_text, monkeypatch):
 @pytest.mark.parametrize('setting', ['auto', 'compiled'])
 def test_the_first_output_runs_compiled(demo_text, setting):
     """No preparation, no switch: the output the node starts with is on the compiled kernels."""
-    robot = config.prepare({}, defaults(robot_description=demo_text, backend=setting),
-                           None).robot
+    robot = configure.prepare({}, defaults(robot_description=demo_text, backend=setting),
+                              None).robot
     assert (robot.backend, robot.setting) == ('compiled', setting)
     assert diagnostics.backend_text(robot).startswith('compiled (C extension, ')
     q = np.linspace(-1.0, 1.0, len(robot.joints))
@@ -384,8 +384,8 @@ def test_the_first_output_runs_compiled(demo_text, setting):
 
 
 def test_numpy_runs_numpy(demo_text):
-    robot = config.prepare({}, defaults(robot_description=demo_text, backend='numpy'),
-                           None).robot
+    robot = configure.prepare({}, defaults(robot_description=demo_text, backend='numpy'),
+                              None).robot
     assert (robot.backend, robot.setting) == ('numpy', 'numpy')
     assert diagnostics.backend_text(robot) == 'numpy'
 
@@ -393,8 +393,8 @@ def test_numpy_runs_numpy(demo_text):
 def test_without_the_kernels_the_text_says_why(demo_text, monkeypatch):
     monkeypatch.setattr(sd.backends.compiled, 'ext', None)
     monkeypatch.setattr(sd.backends.compiled, 'FAILURE', 'no module (test)')
-    robot = config.prepare({}, defaults(robot_description=demo_text, backend='auto'),
-                           None).robot
+    robot = configure.prepare({}, defaults(robot_description=demo_text, backend='auto'),
+                              None).robot
     assert robot.backend == 'numpy'
     assert diagnostics.backend_text(robot) == \
         'numpy (compiled kernels unavailable: no module (test))'
@@ -444,8 +444,8 @@ def test_model_status_levels_and_the_backend(demo_text):
     level, message, values = diagnostics.model_status(None, totals, False, '')
     assert (level, message) == ('ERROR', 'waiting for robot_description')
     totals.description_rejected('bad XML')
-    robot = config.prepare({}, defaults(robot_description=demo_text, backend='numpy'),
-                           None).robot
+    robot = configure.prepare({}, defaults(robot_description=demo_text, backend='numpy'),
+                              None).robot
     level, message, values = diagnostics.model_status(robot, totals, False, 'numpy')
     kv = dict(values)
     assert level == 'OK' and message == "robot 'demo_arm' loaded, 8 DOF"
@@ -465,7 +465,7 @@ def test_model_status_of_a_floating_robot_counts_its_joints_and_the_free_flyer()
     joints = oracle.njoints - 2               # the universe and the free-flyer aside
     with open(path, encoding='utf-8') as f:
         text = f.read()
-    robot = config.prepare({}, defaults(robot_description=text, base='floating', **{
+    robot = configure.prepare({}, defaults(robot_description=text, base='floating', **{
         'contacts.links': ['FL_FOOT', 'FR_FOOT', 'HL_FOOT', 'HR_FOOT']}), None).robot
     level, message, values = diagnostics.model_status(robot, diagnostics.Totals(), False,
                                                       'numpy')
@@ -475,7 +475,7 @@ def test_model_status_of_a_floating_robot_counts_its_joints_and_the_free_flyer()
 
 
 def test_feedforward_status_rates_staleness_and_rejections(demo_text):
-    robot = config.prepare({}, defaults(robot_description=demo_text), None).robot
+    robot = configure.prepare({}, defaults(robot_description=demo_text), None).robot
     totals, window = diagnostics.Totals(), diagnostics.Window()
     settings = config.PARAMETERS.defaults()
     now = window.start_ns + 2_000_000_000                 # a 2 s period

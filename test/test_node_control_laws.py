@@ -21,7 +21,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import DEMO_URDF  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.ros import config, control, diagnostics  # noqa: E402
+from spatial_dynamics.ros import config, configure, control, diagnostics  # noqa: E402
 from spatial_dynamics.ros.config import ConfigError  # noqa: E402
 from spatial_dynamics.ros.control import (  # noqa: E402
     answer, ControlError, Dynamics, Gains, InputError)
@@ -109,27 +109,27 @@ def test_output_none_refused_in_feedforward_only():
 def test_prepare_checks_modes_and_gains(model):
     text = open(DEMO_URDF).read()
     params = defaults(robot_description=text)
-    cfg = config.prepare({}, params, None)
+    cfg = configure.prepare({}, params, None)
     assert (cfg.params.control_mode, cfg.params.output) == ('feedforward', 'full')
     np.testing.assert_array_equal(cfg.robot.gains.kp, np.zeros(len(model.joint_names)))
-    cfg = config.prepare(cfg.params, {'control_mode': 'pd_feedforward', 'output': 'none',
-                                      'kp': [100.0], 'measured_timeout': 0.2}, cfg.robot)
+    cfg = configure.prepare(cfg.params, {'control_mode': 'pd_feedforward', 'output': 'none',
+                                         'kp': [100.0], 'measured_timeout': 0.2}, cfg.robot)
     assert (cfg.params.control_mode, cfg.params.output, cfg.params.measured_timeout) == \
         ('pd_feedforward', 'none', 0.2)
     np.testing.assert_array_equal(cfg.robot.gains.kp, np.full(len(model.joint_names), 100.0))
     # then back to feedforward while output is none: refused, naming both
     with pytest.raises(ConfigError, match="output 'none' and control_mode 'feedforward'"):
-        config.prepare(cfg.params, {'control_mode': 'feedforward'}, cfg.robot)
+        configure.prepare(cfg.params, {'control_mode': 'feedforward'}, cfg.robot)
     with pytest.raises(ConfigError, match='parameter kp: 3 values'):
-        config.prepare(cfg.params, {'kp': [1.0, 2.0, 3.0]}, cfg.robot)
+        configure.prepare(cfg.params, {'kp': [1.0, 2.0, 3.0]}, cfg.robot)
     # a description with another joint count is refused while kp has one value per joint
-    per_joint = config.prepare(cfg.params, {'kp': [1.0] * 8}, cfg.robot)
+    per_joint = configure.prepare(cfg.params, {'kp': [1.0] * 8}, cfg.robot)
     with pytest.raises(ConfigError, match='parameter kp: 8 values for the 1 joints'):
-        config.prepare(per_joint.params, {'robot_description': open(
+        configure.prepare(per_joint.params, {'robot_description': open(
             os.path.join(ROOT, 'config', 'pendulum.urdf')).read()}, per_joint.robot)
     # without a model, what needs none is checked
     with pytest.raises(ConfigError, match='parameter kd'):
-        config.prepare({}, defaults(kd=[-1.0]), None)
+        configure.prepare({}, defaults(kd=[-1.0]), None)
 
 
 def test_continuous_joints_are_revolute_without_limits(model):
@@ -299,7 +299,7 @@ def test_each_term_is_its_part_of_the_dynamics(model):
 
 def test_feedback_status_names_the_stale_measured_state(model):
     text = open(DEMO_URDF).read()
-    robot = config.prepare({}, defaults(robot_description=text), None).robot
+    robot = configure.prepare({}, defaults(robot_description=text), None).robot
     totals, window = diagnostics.Totals(), diagnostics.Window()
     now = window.start_ns + 2_000_000_000
     table = config.PARAMETERS

@@ -15,7 +15,7 @@ from types import SimpleNamespace
 from conftest import robot_urdf_path
 import numpy as np
 import spatial_dynamics as sd
-from spatial_dynamics.ros import config
+from spatial_dynamics.ros import config, configure
 from spatial_dynamics.ros.answering import Answering
 from spatial_dynamics.ros.diagnostics import observer_status
 from spatial_dynamics.wrench import EPSILON
@@ -54,7 +54,7 @@ def status_after(q, effort, changes=()):
     params = {spec.name: spec.default for spec in config.PARAMETERS}
     params.update({'robot_description': text, 'observer_gain': GAIN,
                    'wrench_estimate.link': LINK, **dict(changes)})
-    cfg = config.prepare({}, params, None)
+    cfg = configure.prepare({}, params, None)
     robot = cfg.robot
     assert tuple(robot.joints) == tuple(robot.model.joint_names)
     log = Log()

@@ -20,7 +20,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from conftest import robot_urdf_path  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.replay import bags  # noqa: E402
+from spatial_dynamics.recordings import bags  # noqa: E402
 from spatial_dynamics.replay.__main__ import main  # noqa: E402
 
 pytest.importorskip('rosbags')
@@ -105,7 +105,7 @@ def test_identification_recovers_the_simulated_drive(recording, tmp_path, storag
     out = str(tmp_path / 'out')
     # A 0.1 s window (cut-off ~12 Hz; the motion is below 4 Hz): the velocity noise, through
     # the derivative and the inertia, then adds little to the effort noise.
-    assert main([bag, '--urdf', urdf, '--out', out, '--identify', '--no-plots',
+    assert main(['identify', bag, '--urdf', urdf, '--out', out, '--no-plots',
                  '--window', '0.1']) == 0
     text = capsys.readouterr().out
     s = summary(out)
@@ -190,7 +190,7 @@ def test_a_damaged_bag_is_reported_not_a_crash(recording, tmp_path, capsys):
     bag = str(tmp_path / 'bag')
     bags.write_bag(bag, 'mcap', [('/joint_states', bags.JOINT_STATE, t_ns, raw)])
     out = str(tmp_path / 'out')
-    assert main([bag, '--urdf', urdf, '--out', out, '--no-plots']) == 0
+    assert main(['residual', bag, '--urdf', urdf, '--out', out, '--no-plots']) == 0
     text = capsys.readouterr().out
     assert f'1 sample(s): {names[2]}: no finite position' in text
     assert f'3 sample(s): {names[4]}: no finite effort' in text
@@ -204,23 +204,23 @@ def test_refusals_exit_1_with_the_reason(recording, tmp_path, capsys):
     m = 500
     bag = write(tmp_path / 'bag', names, t_ns[:m], q[:m], qd[:m], effort[:m])
     out = str(tmp_path / 'out')
-    assert main([bag, '--urdf', urdf, '--topic', '/nope', '--out', out]) == 1
+    assert main(['residual', bag, '--urdf', urdf, '--topic', '/nope', '--out', out]) == 1
     err = capsys.readouterr().err
     assert "topic '/nope' is not in the bag" in err and '/joint_states' in err
-    assert main([str(tmp_path / 'missing'), '--urdf', urdf, '--out', out]) == 1
+    assert main(['residual', str(tmp_path / 'missing'), '--urdf', urdf, '--out', out]) == 1
     assert 'no such bag' in capsys.readouterr().err
     no_effort = str(tmp_path / 'no_effort')
     blk = bags.encode_joint_states(names, t_ns[:m], q[:m], qd[:m], None)
     bags.write_bag(no_effort, 'sqlite3', [('/joint_states', bags.JOINT_STATE, t_ns[:m],
                                            [r.tobytes() for r in blk])])
-    assert main([no_effort, '--urdf', urdf, '--out', out]) == 1
+    assert main(['residual', no_effort, '--urdf', urdf, '--out', out]) == 1
     assert 'no measured effort' in capsys.readouterr().err
     # a joint the bag never has
     demo = os.path.join(ROOT, 'config', 'demo_arm.urdf')
-    assert main([bag, '--urdf', demo, '--out', out]) == 1
+    assert main(['residual', bag, '--urdf', demo, '--out', out]) == 1
     assert 'never have a position' in capsys.readouterr().err
     with pytest.raises(SystemExit) as usage:
-        main(['--urdf', urdf])
+        main(['residual', '--urdf', urdf])
     assert usage.value.code == 2
 
 
@@ -258,7 +258,7 @@ def test_plots_and_residual_file_are_written(recording, tmp_path):
     m = 2000
     bag = write(tmp_path / 'bag', names, t_ns[:m], q[:m], qd[:m], effort[:m], 'mcap')
     out = str(tmp_path / 'out')
-    assert main([bag, '--urdf', urdf, '--out', out]) == 0
+    assert main(['residual', bag, '--urdf', urdf, '--out', out]) == 0
     for name in ('measured_vs_model.png', 'residual.png'):
         with open(os.path.join(out, name), 'rb') as f:
             assert f.read(8) == b'\x89PNG\r\n\x1a\n', name
@@ -296,8 +296,8 @@ def test_a_payload_is_identified_from_a_bag_with_the_drives(tmp_path, capsys):
     t_ns = (1_700_000_000 * 10 ** 9 + np.arange(len(t)) * int(1e9 / rate)).astype(np.int64)
     bag = write(tmp_path / 'bag', model.joint_names, t_ns, q, qd, effort)
     out = str(tmp_path / 'out')
-    assert main([bag, '--urdf', robot_urdf_path('ur5'), '--out', out, '--payload', 'tool0',
-                 '--identify', '--threshold', str(EPS), '--no-plots']) == 0
+    assert main(['identify', bag, '--urdf', robot_urdf_path('ur5'), '--out', out, '--payload',
+                 'tool0', '--drives', '--threshold', str(EPS), '--no-plots']) == 0
     text = capsys.readouterr().out
     mass = float(text.split('payload.mass: ')[1].split()[0])
     com = [float(x) for x in text.split('payload.com: [')[1].split(']')[0].split(',')]

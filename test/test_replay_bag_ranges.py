@@ -5,7 +5,7 @@
 import numpy as np
 import pytest
 
-from spatial_dynamics.replay import bags
+from spatial_dynamics.recordings import bags
 
 NAMES = ('a', 'b')
 T0 = 1_790_000_000 * 10 ** 9        # bag times, ns

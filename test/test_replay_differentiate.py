@@ -10,9 +10,9 @@ per call), and scipy's ``savgol_filter(mode='interp')`` is the independent oracl
 import numpy as np
 import pytest
 
-from spatial_dynamics.replay import differentiate
-from spatial_dynamics.replay.differentiate import (derivatives, savgol, savgol_many,
-                                                   savgol_weights)
+from spatial_dynamics.recordings import differentiate
+from spatial_dynamics.recordings.differentiate import (derivatives, savgol, savgol_many,
+                                                       savgol_weights)
 
 RNG = np.random.default_rng(5)
 
@@ -111,7 +111,7 @@ def test_derivatives_equal_one_derivative_per_call():
 # What divides by a difference of stamps is bounded by what the thing can do (issue 34)
 
 def joint_states(t, q):
-    from spatial_dynamics.replay.cdr import JointStates
+    from spatial_dynamics.recordings.cdr import JointStates
     n = q.shape[1]
     return JointStates(tuple(f'j{k}' for k in range(n)), t, q, np.full(q.shape, np.nan),
                        np.ones(q.shape))
@@ -119,8 +119,8 @@ def joint_states(t, q):
 
 @pytest.mark.parametrize('period', [1e-6, 1e-9])
 def test_joint_states_stamped_closer_than_any_sensor_are_refused(period):
-    from spatial_dynamics.replay.arguments import Refused
-    from spatial_dynamics.replay.recording import clean
+    from spatial_dynamics.recordings.errors import Refused
+    from spatial_dynamics.recordings.recording import clean
     t = 100.0 + period * np.arange(200)
     q = 1e-3 * np.sin(np.arange(200))[:, None] * np.ones((1, 2))   # within every bound
     with pytest.raises(Refused, match='stamped .* apart .*less than 1e-05 s'):
@@ -129,8 +129,8 @@ def test_joint_states_stamped_closer_than_any_sensor_are_refused(period):
 
 def test_differentiated_accelerations_no_joint_reaches_are_refused():
     """A 1 kHz recording whose positions jump by 1 rad: q̈ ~1e6 rad/s², refused, named."""
-    from spatial_dynamics.replay.arguments import Refused
-    from spatial_dynamics.replay.recording import clean, rates
+    from spatial_dynamics.recordings.errors import Refused
+    from spatial_dynamics.recordings.recording import clean, rates
     t = 1e-3 * np.arange(400)
     q = np.zeros((400, 1))
     q[200:] = 10.0
@@ -145,9 +145,9 @@ def test_differentiated_accelerations_no_joint_reaches_are_refused():
 
 
 def test_a_base_topic_stamped_closer_than_any_sensor_or_accelerating_beyond_a_base_is_refused():
-    from spatial_dynamics.replay import base_topics
-    from spatial_dynamics.replay.arguments import Refused
-    from spatial_dynamics.replay.cdr import IMU, Stamped
+    from spatial_dynamics.recordings import base_topics
+    from spatial_dynamics.recordings.errors import Refused
+    from spatial_dynamics.recordings.cdr import IMU, Stamped
     t = 1e-6 * np.arange(20)
     found = Stamped(IMU, t, np.zeros((20, 10)), ('imu',))
     with pytest.raises(Refused, match='--base-imu /imu: .*stamped 1e-06 s apart'):

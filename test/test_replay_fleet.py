@@ -15,7 +15,7 @@ import pytest
 from spatial_dynamics.fleet import command, main
 from spatial_dynamics.fleet.engine import Cache, run_tasks
 from spatial_dynamics.fleet.sums import normal_sums, solve, total
-from spatial_dynamics.replay.identify import identify
+from spatial_dynamics.drives import identify
 
 ONSET = 6           # the first day of wear (1-based): r02's elbow_joint
 

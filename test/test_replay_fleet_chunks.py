@@ -13,7 +13,7 @@ from spatial_dynamics.fleet.chunks import merge, split
 from spatial_dynamics.fleet.engine import Cache, run_tasks
 from spatial_dynamics.fleet.sums import solve, Sums
 from spatial_dynamics.fleet.task import process, Task
-from spatial_dynamics.replay.identify import PARAMETERS
+from spatial_dynamics.drives import PARAMETERS
 
 RATE = 500.0
 
@@ -126,7 +126,7 @@ def test_a_task_runs_the_kernels_and_filters_on_one_thread_of_its_own(robot, mon
     # would oversubscribe it (BLAS is held to one thread apart); the limit ends with the task
     import spatial_dynamics
     from spatial_dynamics.backends import compiled
-    from spatial_dynamics.replay import differentiate
+    from spatial_dynamics.recordings import differentiate
     monkeypatch.setattr(compiled, 'THREADS', 4)
     seen = {}
     rnea, savgol_many = spatial_dynamics.rnea, differentiate.savgol_many

@@ -374,7 +374,7 @@ def test_a_local_cluster_leaves_no_scratch_folder(small, tmp_path):
 #: Where the child is stopped: in staging a bag (its metadata read), in writing a plot, in a
 #: task (SIGTERM sent to itself).
 STOPS = {
-    'staging': ('from spatial_dynamics.replay import bags\n'
+    'staging': ('from spatial_dynamics.recordings import bags\n'
                 'def stop(*args, **kwargs):\n'
                 '    raise KeyboardInterrupt\n'
                 'bags.load_yaml = stop\n'),
@@ -436,7 +436,7 @@ def test_ctrl_c_on_a_local_cluster_is_one_line_not_a_traceback_per_worker(small,
 def test_a_cached_rerun_reads_no_bag_starts_no_cluster_and_draws_no_plot(small, tmp_path,
                                                                          capsys, monkeypatch):
     from spatial_dynamics.fleet import command, task
-    from spatial_dynamics.replay import bags
+    from spatial_dynamics.recordings import bags
     out = tmp_path / 'o'
     assert main([small, '--out', str(out), '--serial']) == command.NOT_JUDGED
     first = capsys.readouterr().out

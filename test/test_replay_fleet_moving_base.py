@@ -28,7 +28,7 @@ from spatial_dynamics.fleet.chunks import merge  # noqa: E402
 from spatial_dynamics.fleet.manifest import ManifestError, read_manifest  # noqa: E402
 from spatial_dynamics.fleet.sums import solve, Sums  # noqa: E402
 from spatial_dynamics.fleet.task import process, Task  # noqa: E402
-from spatial_dynamics.replay.identify import PARAMETERS  # noqa: E402
+from spatial_dynamics.drives import PARAMETERS  # noqa: E402
 
 
 @pytest.fixture(scope='module')

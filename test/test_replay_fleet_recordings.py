@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from spatial_dynamics.fleet import command, main
-from spatial_dynamics.replay import bags
+from spatial_dynamics.recordings import bags
 
 ONSET = 6           # the first day of wear (1-based): r01's elbow_joint
 

@@ -23,7 +23,8 @@ from conftest import robot_urdf_path  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.files import load_yaml, read_regular  # noqa: E402
-from spatial_dynamics.replay import bags, report, splines  # noqa: E402
+from spatial_dynamics.recordings import bags  # noqa: E402
+from spatial_dynamics.replay import report, splines  # noqa: E402
 
 pytest.importorskip('rosbags')
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -273,12 +274,13 @@ def test_gravity_that_is_not_finite_or_absurd_is_usage(tmp_path):
 def test_non_finite_torque_fails_the_check(tmp_path, monkeypatch, capsys):
     """Should a torque come out non-finite anyway, the check fails and names the joint."""
     from spatial_dynamics.replay import __main__ as cli
+    from spatial_dynamics.replay import trajectory
 
     def poisoned(model, q, qd, qdd, gravity):
         tau = sd.rnea(model, q, qd, qdd, gravity=gravity)
         tau[5, 1] = np.nan
         return tau
-    monkeypatch.setattr(cli, 'rnea', poisoned)
+    monkeypatch.setattr(trajectory, 'rnea', poisoned)
     status = cli.main(['trajectory', str(_plan(tmp_path, PLAN)), '--urdf',
                        robot_urdf_path('ur5'), '--no-plots', '--out', str(tmp_path / 'o')])
     out, err = capsys.readouterr()

@@ -23,7 +23,7 @@ from conftest import robot_urdf_path  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics.base import quaternion_of  # noqa: E402
-from spatial_dynamics.replay import bags, cdr  # noqa: E402
+from spatial_dynamics.recordings import bags, cdr  # noqa: E402
 from spatial_dynamics.replay.__main__ import main  # noqa: E402
 
 pytest.importorskip('rosbags')
@@ -300,7 +300,7 @@ def test_odometry_and_imu_decoding_equals_rosbags_deserialiser(tmp_path, storage
 def test_odometry_whose_quaternion_is_no_orientation_is_dropped_as_unusable():
     # a zero, half or doubled quaternion is a broken message, as a NaN is: not a tilt of
     # gravity; drift within 1e-2 of unit is kept (and normalised)
-    from spatial_dynamics.replay.base_topics import covering
+    from spatial_dynamics.recordings.base_topics import covering
     t = np.arange(100) / ODOMETRY_RATE
     quat = np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1))
     quat[10], quat[20], quat[30], quat[40] = 0.0, (0, 0, 0, 0.5), (0, 0, 0, 2), (0, 0, 0, 1.005)

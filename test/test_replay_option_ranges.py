@@ -18,7 +18,6 @@ from conftest import robot_urdf_path  # noqa: E402
 
 from spatial_dynamics.fleet.command import parser as fleet_parser  # noqa: E402
 from spatial_dynamics.replay.__main__ import main, parser  # noqa: E402
-from spatial_dynamics.replay.legacy import parser as legacy_parser  # noqa: E402
 
 UR5 = robot_urdf_path('ur5')
 #: Each subcommand's positional arguments and required options but the model's.
@@ -80,14 +79,6 @@ def test_a_locked_value_out_of_range_is_a_usage_error(value, capsys):
     argv = ['residual', 'b', '--urdf', UR5, '--joints', 'elbow_joint', '--locked',
             f'wrist_1_joint={value}']
     assert '--locked' in refused(parser(), argv, capsys)
-
-
-@pytest.mark.parametrize('option, value', [('--window', '1e308'), ('--threshold', '1e308'),
-                                           ('--rate', 'inf'), ('--tolerance', '1e308'),
-                                           ('--window', '0')])
-def test_the_old_spellings_have_the_same_ranges(option, value, capsys):
-    line = refused(legacy_parser(), ['b', '--urdf', UR5, option, value], capsys)
-    assert option in line, line
 
 
 @pytest.mark.parametrize('option, value', [('--chunk', '1e300'), ('--baseline-days', 'nan')])

@@ -25,7 +25,9 @@ from conftest import robot_urdf_path  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics import identification  # noqa: E402
-from spatial_dynamics.replay import bags, identify, report  # noqa: E402
+from spatial_dynamics.recordings import bags  # noqa: E402
+from spatial_dynamics import drives as identify  # noqa: E402
+from spatial_dynamics.replay import report  # noqa: E402
 from spatial_dynamics.replay.__main__ import main  # noqa: E402
 
 pytest.importorskip('rosbags')

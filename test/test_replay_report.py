@@ -140,7 +140,7 @@ def test_no_child_runs_the_job_here(tmp_path):
 
 def test_small_pages_within_the_command_only():
     """The bag command turns numpy's huge-page advice off while it runs, then back."""
-    from spatial_dynamics.replay.__main__ import small_pages
+    from spatial_dynamics.replay.residual import small_pages
     core = getattr(np, '_core', None) or np.core             # numpy 2.x or 1.x
     setter = getattr(core.multiarray, '_set_madvise_hugepage', None)
     if setter is None:

@@ -3,13 +3,11 @@
 """``replay`` as subcommands: residual, identify, trajectory, annotate, excite.
 
 Each has its own ``--help``, ``replay --help`` lists them one line each, the options of one
-job are refused by another (usage, exit 2), and every old spelling still runs for one release:
-the same files and exit status as its new spelling, with one deprecation line on stderr
-naming the new one.
+job are refused by another (usage, exit 2), and a command line without a subcommand is a usage
+error.
 """
 
 import os
-import shlex
 import sys
 
 import numpy as np
@@ -21,8 +19,8 @@ from conftest import robot_urdf_path  # noqa: E402
 from test_replay_outputs import motion_bag  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.replay import bags  # noqa: E402
-from spatial_dynamics.replay.__main__ import main, parser  # noqa: E402
+from spatial_dynamics.recordings import bags  # noqa: E402
+from spatial_dynamics.replay.__main__ import main  # noqa: E402
 
 pytest.importorskip('rosbags')
 COMMANDS = ['residual', 'identify', 'trajectory', 'annotate', 'excite']
@@ -70,7 +68,7 @@ def test_usage_errors_of_the_subcommands(argv, words, capsys):
 
 
 # --------------------------------------------------------------------------------------------
-# The old spellings: the same run as the new one, plus a deprecation line
+# The inputs of the subcommands
 
 def trajectory_bag(path):
     """Write a bag of two JointTrajectory messages on /traj, the second beyond the limits."""
@@ -113,73 +111,18 @@ def inputs(tmp_path_factory):
             'URDF': UR5}
 
 
-#: (old spelling, new spelling, exit status); OUT is the output (directory or file).
-SPELLINGS = [
-    ('BAG --urdf URDF --out OUT --no-plots', 'residual BAG --urdf URDF --out OUT --no-plots', 0),
-    ('BAG --urdf URDF --out OUT --identify --no-plots --threshold 0.02',
-     'identify BAG --urdf URDF --out OUT --no-plots --threshold 0.02', 0),
-    ('BAG --urdf URDF --out OUT --payload tool0 --no-plots',
-     'identify BAG --payload tool0 --urdf URDF --out OUT --no-plots', 0),
-    ('BAG --urdf URDF --out OUT --payload tool0 --identify --no-plots --residual npy',
-     'identify BAG --urdf URDF --payload tool0 --drives --out OUT --no-plots --residual npy', 0),
-    ('BAG --urdf URDF --out OUT --inertias wrist_3_link --no-plots --residual none',
-     'identify BAG --urdf URDF --inertias wrist_3_link --out OUT --no-plots --residual none',
-     0),
-    ('--urdf URDF --trajectory PLAN --out OUT --no-plots --rate 200',
-     'trajectory PLAN --urdf URDF --out OUT --no-plots --rate 200', 0),
-    ('--urdf URDF --trajectory FAST --out OUT --no-plots',
-     'trajectory FAST --urdf URDF --out OUT --no-plots', 1),
-    ('--urdf URDF --trajectory PLAN --annotate OUT --tolerance 0.5',
-     'annotate PLAN --urdf URDF --out OUT --tolerance 0.5', 0),
-    ('TRAJ_BAG --urdf URDF --trajectory-topic /traj --out OUT --no-plots',
-     'trajectory TRAJ_BAG --topic /traj --urdf URDF --out OUT --no-plots', 1),
-    ('--urdf URDF --trajectory FAST --annotate OUT', 'annotate FAST --urdf URDF --out OUT', 1),
-]
-
-
-def spelled(line, inputs, out):
-    """Return the argv of a spelling with its placeholders filled."""
-    return [inputs.get(w, out if w == 'OUT' else w) for w in line.split()]
-
-
-def outputs(path):
-    """Return {name: bytes} of the output file, or of every file in the output directory."""
-    if os.path.isfile(path):
-        return {'': open(path, 'rb').read()}
-    return {n: open(os.path.join(path, n), 'rb').read() for n in sorted(os.listdir(path))}
-
-
-def comparable(argv):
-    """Return the parsed arguments of ``argv``, without the callables of the subcommand."""
-    return {k: v for k, v in vars(parser().parse_args(argv)).items() if not callable(v)}
-
-
-@pytest.mark.parametrize('old, new, status', SPELLINGS)
-def test_the_old_spelling_runs_the_new_one_and_says_so(old, new, status, inputs, tmp_path,
-                                                       capsys):
-    is_file = '--annotate' in old
-    out_old, out_new = (str(tmp_path / n) + ('.yaml' if is_file else '') for n in ('a', 'b'))
-    assert main(spelled(new, inputs, out_new)) == status
-    new_out, new_err = capsys.readouterr()
-    assert main(spelled(old, inputs, out_old)) == status
-    old_out, old_err = capsys.readouterr()
-    assert outputs(out_old) == outputs(out_new) and outputs(out_new)
-    assert old_out.replace(out_old, out_new) == new_out
-    assert 'deprecated' not in new_err
-    said = [line for line in old_err.splitlines() if 'deprecated' in line]
-    assert len(said) == 1 and old_err.replace(said[0] + '\n', '', 1) == new_err
-    # the line names the new spelling, whole: it parses as the new one
-    assert said[0].startswith('replay: deprecated spelling'), said
-    suggested = shlex.split(said[0].split('; use: replay ', 1)[1])
-    assert suggested[0] == new.split()[0]
-    assert comparable(suggested) == comparable(spelled(new, inputs, out_old))
-
-
-def test_an_old_spelling_refused_as_before(inputs, capsys):
-    """The old checks and their texts stay on the old spelling (exit 2, no deprecation)."""
-    argv = [inputs['BAG'], '--urdf', UR5, '--inertias', '--payload', 'tool0']
-    status, _, err = usage(argv, capsys)
-    assert status == 2 and 'exclude each other' in err
+@pytest.mark.parametrize('argv', [
+    'BAG --urdf URDF --out OUT --identify --no-plots',
+    '--urdf URDF --trajectory PLAN --out OUT --no-plots',
+    'BAG --urdf URDF --out OUT --no-plots'])
+def test_a_command_line_without_a_subcommand_is_a_usage_error(argv, inputs, tmp_path, capsys):
+    """The one-command spellings of before the subcommands were never released: none runs."""
+    out = tmp_path / 'out'
+    status, stdout, err = usage([inputs.get(w, str(out) if w == 'OUT' else w)
+                                 for w in argv.split()], capsys)
+    assert status == 2 and err.startswith('usage: replay ') and not stdout
+    assert 'invalid choice' in err.splitlines()[-1] or 'required' in err.splitlines()[-1], err
+    assert not out.exists()
 
 
 def test_each_job_writes_only_its_files(inputs, tmp_path, monkeypatch):

@@ -136,7 +136,7 @@ def test_trajectory_topic_of_a_bag(tmp_path, capsys):
     pytest.importorskip('rosbags')
     from test_replay_subcommands import trajectory_bag
     bag = trajectory_bag(tmp_path / 'bag')
-    assert main([bag, '--urdf', robot_urdf_path('ur5'), '--trajectory-topic', '/traj',
+    assert main(['trajectory', bag, '--topic', '/traj', '--urdf', robot_urdf_path('ur5'),
                  '--out', str(tmp_path / 'o'), '--no-plots']) == 1
     text = capsys.readouterr().out
     first, second = text.split('/traj #1')

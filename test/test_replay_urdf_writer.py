@@ -21,7 +21,8 @@ from conftest import robot_urdf_path  # noqa: E402
 
 import spatial_dynamics as sd  # noqa: E402
 from spatial_dynamics import identification  # noqa: E402
-from spatial_dynamics.replay import identify, urdf_writer  # noqa: E402
+from spatial_dynamics import drives as identify  # noqa: E402
+from spatial_dynamics.replay import urdf_writer  # noqa: E402
 from spatial_dynamics.replay.__main__ import main  # noqa: E402
 from spatial_dynamics.replay.urdf_writer import corrected_urdf  # noqa: E402
 from spatial_dynamics.urdf import read_description  # noqa: E402

@@ -21,11 +21,14 @@ one) carry none (``λ`` of those rows 0), which keeps ``J_cᵀ λ`` exact. Unpiv
 dependent row in the middle of ``J_c`` leaves a zero inside ``R``'s diagonal and the first
 ``r`` columns of ``Q`` are not the range of ``J_cᵀ``.
 
-The equations of :func:`spatial_dynamics.contacts.contact_inverse_dynamics`'s numpy split,
-written on scalars (the compiled backend is generated from it; ``m`` provides ``sqrt``).
+:func:`split_numpy` is the split in numpy (``'torques'`` with ``backend='numpy'``, and the
+cases the kernel leaves to it); :func:`split_kernel` its equations on scalars (the compiled
+backend is generated from it; ``m`` provides ``sqrt``).
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 #: Rank tolerance of ``J_c``, relative to its largest row norm (see the module doc). On a
 #: robot of metre scale (rows of norm ~1 to 3) two points of one body closer than a few µm
@@ -59,17 +62,21 @@ def split_kernel(QR, k, n, nb, wts, res, scr, tol, m) -> None:
             big = s
     floor = tol * m.sqrt(big)
     # J_cᵀ P = Q [R; 0]: step j swaps in the column of the largest norm below row j (pivot
-    # scr[j]), then reflector j, H = 1 - 2 v vᵀ / vᵀv, v = x - α e_j, applied to the right
+    # scr[j]), then reflector j, H = 1 - 2 v vᵀ / vᵀv, v = x - α e_j, applied to the right.
+    # Each column's sum runs down its rows in order, the columns side by side (scr[k + c],
+    # free until the Cholesky factor): independent sums, not one chain after another
     r = 0
     for j in range(k):
+        for c in range(j, k):
+            scr[k + c] = 0.0
+        for i in range(j, nv):
+            for c in range(j, k):
+                scr[k + c] = scr[k + c] + QR[i + c * nv] * QR[i + c * nv]
         best = -1.0
         piv = j
         for c in range(j, k):
-            s = 0.0
-            for i in range(j, nv):
-                s = s + QR[i + c * nv] * QR[i + c * nv]
-            if s > best:
-                best = s
+            if scr[k + c] > best:
+                best = scr[k + c]
                 piv = c
         if not m.sqrt(best) > floor:
             break
@@ -86,10 +93,13 @@ def split_kernel(QR, k, n, nb, wts, res, scr, tol, m) -> None:
         QR[j + j * nv] = alpha
         if vv > 0.0:
             for c in range(j + 1, cols):
-                t = v0 * QR[j + c * nv]
-                for i in range(j + 1, nv):
-                    t = t + QR[i + j * nv] * QR[i + c * nv]
-                t = 2.0 * t / vv
+                scr[k + c] = v0 * QR[j + c * nv]
+            for i in range(j + 1, nv):
+                vi = QR[i + j * nv]
+                for c in range(j + 1, cols):
+                    scr[k + c] = scr[k + c] + vi * QR[i + c * nv]
+            for c in range(j + 1, cols):
+                t = 2.0 * scr[k + c] / vv
                 QR[j + c * nv] = QR[j + c * nv] - t * v0
                 for i in range(j + 1, nv):
                     QR[i + c * nv] = QR[i + c * nv] - t * QR[i + j * nv]
@@ -224,3 +234,75 @@ def split_kernel(QR, k, n, nb, wts, res, scr, tol, m) -> None:
         res[n + j] = res[n + piv]
         res[n + piv] = t
     res[n + k] = 0.0
+
+
+def split_numpy(Jc: np.ndarray, b: np.ndarray, n: int, w: np.ndarray) -> tuple:
+    """Return the contact-consistent ``(τ, λ, r)`` of ``J_c`` (k, nv) and ``b`` (nv,), in numpy.
+
+    The module's equations: the pivoted QR is :func:`pivoted_qr` (:func:`split_kernel`'s
+    steps, the same rank); ``τ`` the least solution by ``A Aᵀ`` when the contacts carry the
+    base rows, else numpy's least squares (``A τ ≈ y``: the base residual says what is left);
+    ``λ`` the least solution of ``[R11 R12] Pᵀ λ = Q1ᵀ (b - Sᵀ τ)`` when the rows left out
+    are dependent to rounding (:data:`DEPENDENT`), else ``R11 z1 = …`` with those rows' ``λ``
+    zero. ``w`` the square roots of the joints' weights (n,).
+    """
+    k, nv = Jc.shape
+    M = np.zeros((nv, k + 1 + n))                   # [J_cᵀ, b, Sᵀ], Sᵀ = [0; 1]
+    M[:, :k], M[:, k] = Jc.T, b
+    M[nv - n:, k + 1:] = np.eye(n)
+    r, perm, scale = pivoted_qr(M, k)
+    A, y = M[r:, k + 1:] / w, M[r:, k]               # Q2ᵀ Sᵀ (τ / w) ... = Q2ᵀ b
+    try:        # the least-norm solution Aᵀ (A Aᵀ)⁻¹ y, A of full row rank (feasible base rows)
+        tau = A.T @ np.linalg.solve(A @ A.T, y) / w
+        if not np.allclose(A @ (tau * w), y, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(y).max(
+                initial=0.0))):
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:   # too few contacts to carry the base rows: least squares
+        tau = np.linalg.lstsq(A, y, rcond=None)[0] / w
+    c = M[:r, k] - M[:r, k + 1:] @ tau              # Q1ᵀ (b - Sᵀ τ)
+    z = np.zeros(k)
+    if r < k and np.abs(M[r:, r:k]).max(initial=0.0) <= DEPENDENT * scale:
+        z = np.linalg.lstsq(M[:r, :k], c, rcond=None)[0]    # the least z of [R11 R12] z = c
+    elif r:                                                 # R11 z1 = c, z2 = 0
+        z[:r] = np.linalg.solve(M[:r, :r], c)
+    lam = np.empty(k)
+    lam[perm] = z
+    return tau, lam, r
+
+
+def pivoted_qr(M: np.ndarray, k: int) -> tuple:
+    """Reduce ``M = [J_cᵀ, …]`` (nv, ≥ k) to ``Qᵀ M P`` in place; return ``(r, P, scale)``.
+
+    ``P`` is the columns' order, ``scale`` the largest norm of the first ``k`` columns.
+
+    The steps of :func:`split_kernel`: step ``j`` swaps in the column of
+    the first ``k`` whose norm below row ``j`` is largest and stops when that norm is not
+    above :data:`RANK_TOLERANCE` times ``J_c``'s largest row norm (``r``
+    steps made); a Householder reflector then zeroes it below row ``j`` in every column.
+    """
+    nv = len(M)
+    perm = np.arange(k)
+    scale = np.sqrt(np.einsum('ij,ij->j', M[:, :k], M[:, :k]).max(initial=0.0))
+    floor = RANK_TOLERANCE * scale
+    r = 0
+    for j in range(min(k, nv)):
+        below = np.einsum('ij,ij->j', M[j:, j:k], M[j:, j:k])
+        p = j + int(np.argmax(below))
+        if not np.sqrt(below[p - j]) > floor:
+            break
+        M[:, [j, p]], perm[[j, p]] = M[:, [p, j]], perm[[p, j]]
+        x = M[j:, j]
+        alpha = -np.sqrt(below[p - j]) if x[0] >= 0.0 else np.sqrt(below[p - j])
+        v = x.copy()
+        v[0] -= alpha
+        vv = v @ v
+        if vv > 0.0:
+            M[j:, j + 1:] -= np.outer(v, (2.0 / vv) * (v @ M[j:, j + 1:]))
+        M[j, j], M[j + 1:, j] = alpha, 0.0
+        r = j + 1
+    return r, perm, scale
+
+
+def contact_rank(Jc: np.ndarray) -> int:
+    """Return the rank of ``J_c`` (k, nv) that the split finds (:func:`pivoted_qr`)."""
+    return pivoted_qr(Jc.T.copy(), len(Jc))[0]

@@ -55,6 +55,7 @@ _c_mass_matrix = _ext.mass_matrix if _ext else None
 _c_momentum = _ext.generalized_momentum if _ext else None
 _c_regressor = _ext.regressor if _ext else None
 _c_derivatives = getattr(_ext, 'rnea_derivatives', None)     # None: a build before it
+_c_forward = _ext.forward_dynamics if _ext else None
 
 
 class CompiledBackendUnavailable(ImportError):
@@ -299,6 +300,87 @@ def regressor(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
             return Y.reshape(q.shape[:-1] + Y.shape)
         return compiled.regressor(lay, q, qd, qdd, g)
     return python.regressor(lay.rows, q, qd, qdd, g)
+
+
+def forward_dynamics(model: Model, q, qd, tau, gravity: Sequence[float] = GRAVITY,
+                     f_ext: Optional[Mapping[str, np.ndarray]] = None, backend: str = 'auto',
+                     *, base: Optional[BaseMotion] = None, armature=None) -> np.ndarray:
+    """Joint accelerations ``q̈ = (M + diag(armature))⁻¹ (τ - C(q, q̇) q̇ - g(q) + Σ Jᵀ f_ext)``.
+
+    The exact inverse of :func:`rnea`: ``rnea(model, q, qd, forward_dynamics(model, q, qd,
+    tau, ...), ...) == tau`` to rounding, with the same arguments (``q``, ``qd``, ``gravity``,
+    ``f_ext``, ``backend``, ``base``; ``tau`` (..., nv) in place of ``qdd``), checked and
+    refused as :func:`rnea` checks them. ``M`` from CRBA (RBDA table 6.2), the bias ``h`` from
+    RNEA at ``q̈ = 0``, then ``M q̈ = τ - h`` by the sparse ``LᵀL`` factorization of RBDA
+    §6.5 (:mod:`spatial_dynamics.algorithms.forward`), one C call a state on the compiled
+    backend, batches on threads.
+
+    A floating-base model's ``tau`` has the base's six rows first: the wrench ``[n; f]`` on
+    the base (base frame), zero for a robot in free flight, as :func:`rnea` returns it; ``q̈``
+    then has the base's spatial acceleration first. On a moving ``base`` the base's motion is
+    given, and ``q̈`` are the joints' accelerations.
+
+    Drive terms: ``armature`` (per joint: what :func:`~spatial_dynamics.per_joint` takes,
+    kg m² or kg) multiplies ``q̈`` and is added to ``M``'s diagonal, so ``τ = rnea(q, q̇, q̈)
+    + armature_torque(armature, q̈)``. Terms of ``q̇`` only (``friction_torque``) are known
+    before ``q̈``: subtract them from ``tau``. ``ValueError`` when ``M`` (with the armature)
+    is not positive definite, naming the joint: a joint that moves no mass and has no
+    armature has no acceleration that ``τ`` decides.
+
+    Returns:
+        q̈ (rad/s², m/s²), shape (..., nv): the broadcast batch shape; float64, or the inputs'
+        floating dtype.
+    """
+    if base is None and armature is None and (f_ext is None or (type(f_ext) is dict
+                                                                and not f_ext)):
+        lay, kern, qdd = _entered(model, backend, _c_forward, q, qd, tau, gravity)
+        if qdd is not None:
+            return qdd
+    return _forward(model, q, qd, tau, gravity, f_ext, backend, base, armature)
+
+
+def _forward(model: Model, q, qd, tau, gravity, f_ext, backend: str,
+             base: Optional[BaseMotion], armature) -> np.ndarray:
+    """Run :func:`forward_dynamics` beyond its single-state entry: checks, terms, batches."""
+    lay, kern, _ = _entered(model, backend, None)
+    if base is None and armature is None:
+        q, qd, tau = as_joint_arrays(model, q, qd, tau, names=('q', 'qd', 'tau'))
+        g = tuple(as_vector('gravity', gravity, 3).tolist())
+        fb = f_ext_in_bodies(model, f_ext)
+        if fb:  # batched wrenches broadcast against the batch of states
+            batch = np.broadcast_shapes(q.shape[:-1],
+                                        *(np.shape(f)[:-1] for f in fb.values()))
+            q, qd, tau = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, tau))
+        if kern is not None and q.dtype in _KERNEL_DTYPES:
+            if q.size == q.shape[-1] > 0:
+                fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
+                        if fb else None)
+                qdd = _c_forward(kern, *(x.reshape(-1) for x in (q, qd, tau)), g, fext)
+                if qdd is not None:
+                    return qdd.reshape(tau.shape)
+            else:
+                qdd = compiled.forward_dynamics(lay, q, qd, tau, g, fb)
+                if not np.isnan(qdd).any():
+                    return qdd
+    # M, and the bias h: rnea at q̈ = 0 with every term rnea takes (and checks)
+    zero = np.zeros(lay.nv, dtype=np.float32)      # promoted by q and q̇ as rnea promotes
+    h = rnea(model, q, qd, zero, gravity, f_ext, backend, base=base)
+    H = mass_matrix(model, q, backend)
+    (tau,) = as_joint_arrays(model, tau, names=('tau',))
+    if armature is not None:
+        H = H + np.diag(per_joint(model, 'armature', armature, nonnegative=True))
+    b = tau - h
+    qdd, failed = python.forward_solve(lay.rows, H.astype(b.dtype, copy=False), b)
+    if failed is None:
+        return qdd
+    state, k = failed
+    names = model.joint_names
+    joint = names[0] if model.floating and k < 6 else names[k - 5 if model.floating else k]
+    where = f' (state {np.unravel_index(state, b.shape[:-1])})' if b.ndim > 1 else ''
+    raise ValueError(f'forward_dynamics: M(q){" + armature" if armature is not None else ""} '
+                     f'is not positive definite at velocity coordinate {k}, joint {joint!r}'
+                     f'{where}: the joint moves no mass, so no acceleration of it follows '
+                     'from tau; give it armature')
 
 
 def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,

@@ -6,7 +6,8 @@
  *
  *   _compiled.c   the module: its interface version, and each file's part of it
  *   kernels.c     Kernels, a model's table; one state, or a run of states, through the
- *                 generated kernels (the only file that includes _kernels_generated.h)
+ *                 generated kernels (the only file that includes _kernels_generated.h);
+ *                 the split, and the contact entry (one state's contact inverse dynamics)
  *   arguments.c   the argument reader: a joint vector or gravity as C doubles (13 item
  *                 types, numpy arrays, buffers, lists, tuples), a C-contiguous float64 table
  *   entries.c     ALGORITHMS, one row per algorithm, and the two generic entries that serve
@@ -72,7 +73,8 @@ typedef struct {
 
 extern PyTypeObject KernelsType;
 
-enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3, BODIES = 4, DERIVATIVES = 5 };
+enum { RNEA = 0, CRBA = 1, MOMENTUM = 2, REGRESSOR = 3, BODIES = 4, DERIVATIVES = 5,
+       FORWARD = 6 };  /* the kernels */
 
 /* One batch's job: N states, each through `kernel`; threads.c shares it out in slices of
  * states [lo, hi), kernels.c runs them. */
@@ -84,14 +86,14 @@ typedef struct {
     const double *q, *qd, *qdd, *fext;  /* (N, n) each or NULL; fext (1 or N, rows, 6) or NULL */
     int fext_per_state;
     double g[3];
-    double *out1, *out2;                 /* tau | H | mom, ctq | Y | J | dq, dv, M */
+    double *out1, *out2;                 /* tau | H | mom, ctq | Y | J | dq, dv, M | qdd */
 } Slice;
 
 int result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count);
-Py_ssize_t work_size(int kernel, long rows);
-void run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
-               const double *qdd, const double *g, const double *f, double *out1,
-               double *out2, double *out3, double *work);
+Py_ssize_t work_size(int kernel, long rows, long nv);
+int run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
+              const double *qdd, const double *g, const double *f, double *out1,
+              double *out2, double *out3, double *work);
 int run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi);
 int kernels_add(PyObject *m);
 
@@ -115,7 +117,9 @@ typedef struct {
     int gravity;            /* 3 numbers after them */
     int fext;               /* then, optionally, the external forces (rnea's f_body) */
     int kernel;             /* results: RNEA tau (n,), CRBA H (n, n), MOMENTUM two (n,), */
-                            /* REGRESSOR Y (n, 10 NB), BODIES (NB + 1, 16 + 6 n) */
+                            /* REGRESSOR Y (n, 10 NB), BODIES (NB + 1, 16 + 6 n), */
+                            /* DERIVATIVES dq, dv, M stacked (3 n, n), */
+                            /* FORWARD qdd (n,), reading tau as its third vector */
     const char *outputs[2]; /* the batch entry's result arguments, as its errors name them */
     const char *doc, *batch_doc;
 } Algorithm;

@@ -60,8 +60,8 @@ from .c_lanes import lanes_c
 from .c_printer import _ToC
 from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_torque,
                       joint_transform, joint_velocity, rotation_product)
-from ..algorithms import (components, crba, derivatives, jacobian, momentum, regressor,
-                          rnea, split)
+from ..algorithms import (components, crba, derivatives, forward, jacobian, momentum,
+                          regressor, rnea, split)
 
 #: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
 #: (m, h, Ibar) (10) per body, flat.
@@ -89,7 +89,7 @@ SOURCES = (components.cross, components.X_motion, components.XT_force, component
            components.crf_force, components.I_rate,
            rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
            regressor.regressor_kernel, jacobian.bodies_kernel, split.split_kernel,
-           derivatives.derivatives_kernel)
+           derivatives.derivatives_kernel, forward.forward_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
               'rnea_kernel': 'K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work',
@@ -98,7 +98,8 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'regressor_kernel': 'K, qd, qdd, gx, gy, gz, Y, axes, work',
               'bodies_kernel': 'K, work, J',
               'split_kernel': 'QR, k, n, nb, wts, res, scr, tol',
-              'derivatives_kernel': 'K, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, work'}
+              'derivatives_kernel': 'K, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, work',
+              'forward_kernel': 'K, H, qdd, lam, run, info'}
 #: The generated files' names. Build products, not sources: ``setup.py`` writes the header
 #: into its build directory when it compiles the extension; ``python -m
 #: spatial_dynamics.backends.codegen DIR`` writes both for reading.

@@ -28,7 +28,7 @@ import warnings
 import numpy as np
 
 #: The interface of ``_compiled.c`` this module speaks (its ``API``).
-API = 7
+API = 9
 
 try:
     ext = importlib.import_module(__package__ + '._compiled')
@@ -108,13 +108,29 @@ def rnea(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
     its external force ``[n; f]`` in body coordinates, shape (6,) or broadcastable to
     (..., 6). Returns τ of shape (..., n) in ``q``'s dtype.
     """
-    fext = None
-    if f_body:
-        shared = all(np.ndim(f) <= 1 for f in f_body.values())
-        fext = np.zeros(((1,) if shared else q.shape[:-1]) + (lay.table.shape[0], 6))
-        for b, f in f_body.items():
-            fext[..., b, :] = f
-    return _batch(ext.rnea_batch, lay, (q, qd, qdd), (gravity, fext), (lay.nv,))[0]
+    return _batch(ext.rnea_batch, lay, (q, qd, qdd), (gravity, _fext(lay, q, f_body)),
+                  (lay.nv,))[0]
+
+
+def forward_dynamics(lay, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, gravity: tuple,
+                     f_body: dict) -> np.ndarray:
+    """q̈ (..., nv) from validated q (..., nq), qd, tau (..., nv); arguments as :func:`rnea`.
+
+    A state whose ``M`` has a pivot that is not positive comes back as NaN.
+    """
+    return _batch(ext.forward_dynamics_batch, lay, (q, qd, tau),
+                  (gravity, _fext(lay, q, f_body)), (lay.nv,))[0]
+
+
+def _fext(lay, q: np.ndarray, f_body: dict):
+    """Return the batch entries' external forces: None, (1, rows, 6) shared or (..., rows, 6)."""
+    if not f_body:
+        return None
+    shared = all(np.ndim(f) <= 1 for f in f_body.values())
+    fext = np.zeros(((1,) if shared else q.shape[:-1]) + (lay.table.shape[0], 6))
+    for b, f in f_body.items():
+        fext[..., b, :] = f
+    return fext
 
 
 def f_body_table(lay, f_body: dict) -> np.ndarray:
@@ -144,14 +160,9 @@ def regressor(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tupl
 def derivatives(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
                 f_body: dict) -> tuple:
     """``(∂τ/∂q, ∂τ/∂q̇, M)``, each (..., nv, nv), from validated arrays (as :func:`rnea`)."""
-    fext = None
-    if f_body:
-        shared = all(np.ndim(f) <= 1 for f in f_body.values())
-        fext = np.zeros(((1,) if shared else q.shape[:-1]) + (lay.table.shape[0], 6))
-        for b, f in f_body.items():
-            fext[..., b, :] = f
     nv = lay.nv
-    D = _batch(ext.derivatives_batch, lay, (q, qd, qdd), (gravity, fext), (3, nv, nv))[0]
+    D = _batch(ext.derivatives_batch, lay, (q, qd, qdd), (gravity, _fext(lay, q, f_body)),
+               (3, nv, nv))[0]
     return D[..., 0, :, :], D[..., 1, :, :], D[..., 2, :, :]
 
 

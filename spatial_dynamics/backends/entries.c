@@ -64,6 +64,14 @@ const Algorithm ALGORITHMS[] = {
      "for rnea.",
      "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, D, threads) -> None: the\n"
      "derivatives of N states into D (N x 3 n x n); fext as for rnea_batch."},
+    {"forward_dynamics", "forward_dynamics_batch", 3, 1, 1, FORWARD, {"qdd"},
+     "forward_dynamics(kernels, q, qd, tau, gravity, f_body=None) -> qdd (n,), or None\n\n"
+     "One state: qdd = M(q)^-1 (tau - h(q, qd)), h the rnea at qdd = 0 (arguments as for\n"
+     "rnea, tau in place of qdd). None when an argument is not such a state, or M has a\n"
+     "pivot that is not positive (the caller's general path names the joint).",
+     "forward_dynamics_batch(kernels, N, q, qd, tau, gravity, fext, qdd, threads) -> None\n\n"
+     "N states as rnea_batch, tau in place of qdd; writes qdd (N x n), NaN in a state whose M\n"
+     "has a pivot that is not positive."},
 };
 #define ROWS (sizeof ALGORITHMS / sizeof ALGORITHMS[0])
 const int ALGORITHM_COUNT = (int)ROWS;
@@ -139,7 +147,7 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     double stack[STACK_DOUBLES];
     const Py_ssize_t nv = h->nv;
     double *buf = scratch(stack, n + 2 * nv + 3 + (may_float ? count * size : 0)
-                                 + work_size(a->kernel, rows));
+                                 + work_size(a->kernel, rows, h->nv));
     if (buf == NULL)
         return NULL;
     double *x[3] = {buf, buf + n, buf + n + nv}, *g = buf + n + 2 * nv, *res = g + 3;
@@ -183,7 +191,9 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         data[k] = single_precision ? res + k * size
                                    : (double *)PyArray_DATA((PyArrayObject *)results[k]);
     }
-    run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, data[0], data[1], data[2], work);
+    if (run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, data[0], data[1], data[2],
+                  work) < 0)
+        goto declined;      /* M not positive definite: the general path names the joint */
     for (int k = 0; single_precision && k < count; k++) {
         float *out32 = (float *)PyArray_DATA((PyArrayObject *)results[k]);
         for (Py_ssize_t i = 0; i < size; i++)

@@ -7,11 +7,14 @@
  * state through the kernels of _kernels_generated.h, run_states a slice of a batch (the RNEA
  * and its derivatives several states at once in SIMD lanes). The only file of the extension
  * that includes the generated header: the others know its kernels by RNEA, CRBA, MOMENTUM,
- * REGRESSOR.
+ * REGRESSOR. Its two entries of their own: split (split_kernel on arrays the caller
+ * prepares) and contact (one state's contact inverse dynamics, M q̈ + h to the base
+ * residual, in one call).
  */
 #include "_compiled.h"
 #include <structmember.h>
 
+#include <math.h>
 #include <stddef.h>
 #include <string.h>
 
@@ -94,7 +97,9 @@ kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     if (checked_mul(rows, 6 * (Py_ssize_t)rows + WORK + DWORK + 6 * CWORK, MAX_DOUBLES,
                     &size) < 0
             || checked_mul(3 * (Py_ssize_t)n, (Py_ssize_t)n, MAX_DOUBLES, &size) < 0
-            || checked_mul((Py_ssize_t)n, 10 * (Py_ssize_t)rows, MAX_DOUBLES, &size) < 0) {
+            || checked_mul((Py_ssize_t)n, 10 * (Py_ssize_t)rows, MAX_DOUBLES, &size) < 0
+            || checked_mul((Py_ssize_t)K[VIDX] + 2, (Py_ssize_t)K[VIDX] + 2, MAX_DOUBLES,
+                           &size) < 0) {
         PyBuffer_Release(&v);
         PyErr_SetString(PyExc_ValueError, "Kernels: table too large");
         return NULL;
@@ -163,19 +168,24 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
     return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
 }
 
-/* Scratch doubles of one state: the per-body rows, and the regressor's carried axes. */
+/* Scratch doubles of one state: the per-body rows, the regressor's carried axes, the
+ * derivatives' per-body rows and columns (codegen.MORE_STORES), forward dynamics' M
+ * (nv x nv), the coordinates' parents and chains (nv each) and its status (1). */
 Py_ssize_t
-work_size(int kernel, long rows)
+work_size(int kernel, long rows, long nv)
 {
     return (Py_ssize_t)rows * WORK
         + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * ((Py_ssize_t)rows + 5) : 0)
-        + (kernel == DERIVATIVES ? (Py_ssize_t)rows * (DWORK + 6 * CWORK) : 0);
+        + (kernel == DERIVATIVES ? (Py_ssize_t)rows * (DWORK + 6 * CWORK) : 0)
+        + (kernel == FORWARD ? (Py_ssize_t)nv * ((Py_ssize_t)nv + 2) + 1 : 0);
 }
 
 /* One state through the generated kernels: the body transforms, then `kernel`'s passes.
  * g: 3 numbers; f: rows x 6 external forces or NULL; out2: momentum's second result, out2
- * and out3 the derivatives' second and third (dtau/dqd, M). */
-void
+ * and out3 the derivatives' second and third (dtau/dqd, M). FORWARD reads tau in place of
+ * qdd: q̈ = M⁻¹ (τ - h) (algorithms/forward.py), with h the RNEA at q̈ = 0; 0, or -1 (q̈ all
+ * NaN) when M has a pivot that is not positive. */
+int
 run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
           const double *qdd, const double *g, const double *f, double *out1, double *out2,
           double *out3, double *work)
@@ -198,10 +208,29 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
         derivatives_kernel(K, rows, qd, qdd, g[0], g[1], g[2], f, f != NULL, out1, out2, out3,
                            work);
         break;
+    case FORWARD: {
+        const long nv = (long)K[VIDX];
+        double *H = work + (Py_ssize_t)rows * WORK, *lam = H + (Py_ssize_t)nv * nv;
+        double *run = lam + nv, *info = run + nv;
+        for (long k = 0; k < nv; k++)
+            lam[k] = 0.0;       /* q̈ = 0: the bias h into out1 */
+        rnea_kernel(K, rows, q, qd, lam, g[0], g[1], g[2], f, f != NULL, out1, work);
+        for (long k = 0; k < nv; k++)
+            out1[k] = qdd[k] - out1[k];
+        crba_kernel(K, rows, work, H);
+        forward_kernel(K, rows, H, out1, lam, run, info);
+        if (info[0] >= 0.0) {
+            for (long k = 0; k < nv; k++)
+                out1[k] = NAN;
+            return -1;
+        }
+        break;
+    }
     default:
         regressor_kernel(K, rows, qd, qdd, g[0], g[1], g[2], out1,
                          work + (Py_ssize_t)rows * WORK, work);
     }
+    return 0;
 }
 
 /* The states [lo, hi) of job s with the scratch `work`: 0, or -1 without memory. */
@@ -290,6 +319,167 @@ fail:
     return NULL;
 }
 
+/* ------------------------------------------------------------------------------------------
+ * Contact inverse dynamics of one state, whole: M q̈ + h, J_c, the split, the base residual */
+
+/* contact(kernels, q, qd, qdd, gravity, points, wts, tol, residual) -> (τ, λ, r), or None.
+ *
+ * points: C-contiguous float64, a row of five a contact: its body, its rows (3, a point's
+ * force; 6, a surface's wrench) and r_c (3, the contact point in body coordinates). The
+ * steps of contacts.py's general path on one float64 state: b = M q̈ + h (rnea_kernel);
+ * every body's placement and Jacobian J_b (bodies_kernel); each contact's rows of J_c,
+ * [1 0; -d× 1] J_b with d = R_b r_c (contact_jacobian's _contact_rows: ω, then v + ω × d,
+ * a point keeps the v rows); the split of split_kernel on [J_cᵀ, b, Sᵀ]; the base rows'
+ * residual b_base - J_c,baseᵀ λ, written into `residual` (6 float64). τ (n,) and λ (k,)
+ * new arrays, r the rank found. None (the caller's general path then answers, or names what
+ * is wrong) when q, qd, qdd or gravity is not one float64 state, when b or J_c is not finite
+ * (or their squares overflow), for fewer than six contact rows, and for split_kernel's 1
+ * (the numpy split's case). */
+static PyObject *
+c_contact(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 9) {
+        PyErr_SetString(PyExc_TypeError, "contact takes 9 arguments");
+        return NULL;
+    }
+    if (!PyObject_TypeCheck(args[0], &KernelsType)) {
+        PyErr_Format(PyExc_TypeError, "expected Kernels, got %.100s",
+                     Py_TYPE(args[0])->tp_name);
+        return NULL;
+    }
+    const KernelsObject *h = (const KernelsObject *)args[0];
+    const double tol = PyFloat_AsDouble(args[7]);
+    if (tol == -1.0 && PyErr_Occurred())
+        return NULL;
+    const long rows = h->rows, nq = h->n, nv = h->nv, n = nv - 6;
+    Py_buffer pv, wv, rv;
+    if (get_table(args[5], &pv, 0, "points") < 0)
+        return NULL;
+    if (get_table(args[6], &wv, 0, "wts") < 0) {
+        PyBuffer_Release(&pv);
+        return NULL;
+    }
+    if (get_table(args[8], &rv, 1, "residual") < 0) {
+        PyBuffer_Release(&pv);
+        PyBuffer_Release(&wv);
+        return NULL;
+    }
+    const Py_ssize_t d = (Py_ssize_t)sizeof(double), nc = pv.len / d / 5;
+    const double *P = pv.buf, *wts = wv.buf;
+    long k = 0;
+    int ok = h->quaternion >= 0 && n >= 1 && pv.len == nc * 5 * d && wv.len == n * d
+             && rv.len == 6 * d && tol >= 0.0;
+    for (Py_ssize_t c = 0; ok && c < nc; c++) {
+        const double body = P[5 * c], m = P[5 * c + 1];
+        ok = body >= 0.0 && body < (double)rows && body == (double)(long)body
+             && (m == 3.0 || m == 6.0);
+        k += (long)m;
+    }
+    PyObject *out = NULL;
+    if (!ok) {
+        PyErr_SetString(PyExc_ValueError, "contact: a floating-base model's kernels, points "
+                        "of rows (body, 3 or 6, r_c), wts of nv - 6 numbers, tol >= 0, "
+                        "residual of 6");
+        goto release;
+    }
+    const long width = 16 + 6 * nv, cols = k + 1 + n;
+    /* q, qd, qdd, gravity | work | the bodies' rows | b | QR | J_c,base | scr | res */
+    const Py_ssize_t size = nq + 2 * nv + 3 + rows * WORK + rows * width + nv + cols * nv
+                            + 6 * k + k + (nv + k + 2) * nv + n + k + 2;
+    double *buf = PyMem_Malloc(sizeof(double) * size);
+    if (buf == NULL) {
+        PyErr_NoMemory();
+        goto release;
+    }
+    double *x[3] = {buf, buf + nq, buf + nq + nv}, *g = buf + nq + 2 * nv, *work = g + 3;
+    double *B = work + rows * WORK, *b = B + rows * width, *QR = b + nv, *base = QR + cols * nv;
+    double *scr = base + 6 * k, *res = scr + k + (nv + k + 2) * nv;
+    for (int i = 0; i < 3; i++)
+        if (as_doubles(args[1 + i], i == 0 ? nq : nv, x[i]) != AS_DOUBLE)
+            goto declined;
+    {
+        /* a quaternion off unit (or not finite) is the general path's named ValueError */
+        const double *u = x[0] + h->quaternion;
+        const double n2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + u[3] * u[3];
+        if (!(n2 >= UNIT_SQUARED_LOW && n2 <= UNIT_SQUARED_HIGH))
+            goto declined;
+    }
+    if (!as_doubles(args[4], 3, g) || k < 6)
+        goto declined;
+    xup_kernel(h->K, rows, x[0], work);
+    bodies_kernel(h->K, rows, work, B);
+    rnea_kernel(h->K, rows, x[0], x[1], x[2], g[0], g[1], g[2], NULL, 0, b, work);
+    /* [J_cᵀ, b, Sᵀ] by columns: column r is row r of J_c */
+    double squares = 0.0;
+    long r = 0;
+    for (Py_ssize_t c = 0; c < nc; c++) {
+        const double *H = B + (long)P[5 * c] * width, *J = H + 16, *rc = P + 5 * c + 2;
+        const double d0 = H[0] * rc[0] + H[1] * rc[1] + H[2] * rc[2];
+        const double d1 = H[4] * rc[0] + H[5] * rc[1] + H[6] * rc[2];
+        const double d2 = H[8] * rc[0] + H[9] * rc[1] + H[10] * rc[2];
+        if (P[5 * c + 1] == 6.0)
+            for (long a = 0; a < 3; a++, r++)
+                for (long i = 0; i < nv; i++)
+                    QR[r * nv + i] = J[a * nv + i];
+        for (long i = 0; i < nv; i++) {
+            const double w0 = J[i], w1 = J[nv + i], w2 = J[2 * nv + i];
+            QR[r * nv + i] = J[3 * nv + i] + (d2 * w1 - d1 * w2);
+            QR[(r + 1) * nv + i] = J[4 * nv + i] + (d0 * w2 - d2 * w0);
+            QR[(r + 2) * nv + i] = J[5 * nv + i] + (d1 * w0 - d0 * w1);
+        }
+        r += 3;
+    }
+    for (long i = 0; i < k * nv; i++)
+        squares += QR[i] * QR[i];
+    for (long i = 0; i < nv; i++) {
+        QR[k * nv + i] = b[i];
+        squares += b[i] * b[i];
+    }
+    for (long i = 0; i < n * nv; i++)
+        QR[(k + 1) * nv + i] = 0.0;
+    for (long c = 0; c < n; c++)
+        QR[(k + 1 + c) * nv + 6 + c] = 1.0;
+    for (long r2 = 0; r2 < k; r2++)
+        for (long a = 0; a < 6; a++)
+            base[r2 * 6 + a] = QR[r2 * nv + a];
+    if (!isfinite(squares))
+        goto declined;
+    split_kernel(QR, k, n, nv - n, wts, res, scr, tol);
+    if (res[n + k] != 0.0)
+        goto declined;
+    double *residual = rv.buf;
+    for (long a = 0; a < 6; a++) {
+        double t = 0.0;
+        for (long r2 = 0; r2 < k; r2++)
+            t += base[r2 * 6 + a] * res[n + r2];
+        residual[a] = b[a] - t;
+    }
+    npy_intp dims[1] = {n};
+    PyObject *tau = PyArray_SimpleNew(1, dims, NPY_DOUBLE);
+    dims[0] = k;
+    PyObject *lam = PyArray_SimpleNew(1, dims, NPY_DOUBLE);
+    if (tau != NULL && lam != NULL) {
+        memcpy(PyArray_DATA((PyArrayObject *)tau), res, sizeof(double) * n);
+        memcpy(PyArray_DATA((PyArrayObject *)lam), res + n, sizeof(double) * k);
+        out = Py_BuildValue("(NNl)", tau, lam, (long)res[n + k + 1]);
+    } else {
+        Py_XDECREF(tau);
+        Py_XDECREF(lam);
+    }
+    goto done;
+declined:
+    out = Py_None;
+    Py_INCREF(out);
+done:
+    PyMem_Free(buf);
+release:
+    PyBuffer_Release(&pv);
+    PyBuffer_Release(&wv);
+    PyBuffer_Release(&rv);
+    return out;
+}
+
 static PyMethodDef split_methods[] = {
     {"split", (PyCFunction)(void (*)(void))c_split, METH_FASTCALL,
      "split(QR, k, wts, res, scr, tol) -> None\n\n"
@@ -298,6 +488,12 @@ static PyMethodDef split_methods[] = {
      "weights, tol the rank tolerance relative to J_c's largest row norm; writes tau (n),\n"
      "lambda (k), the status (0 solved, 1 the numpy split's case) and the rank into res;\n"
      "scr is scratch."},
+    {"contact", (PyCFunction)(void (*)(void))c_contact, METH_FASTCALL,
+     "contact(kernels, q, qd, qdd, gravity, points, wts, tol, residual) -> (tau, lambda, r)\n\n"
+     "Contact inverse dynamics of one float64 state of a floating base: M q̈ + h, the contact\n"
+     "rows of J_c (points: a row (body, 3 or 6, r_c) a contact), the split of split(), the\n"
+     "base residual written into residual (6). None when an argument is not one state, b or\n"
+     "J_c is not finite, k < 6, or the split leaves the answer to the numpy split."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..algorithms.crba import crba_kernel
 from ..algorithms.derivatives import derivatives_kernel
+from ..algorithms.forward import forward_kernel
 from ..algorithms.momentum import momentum_kernel
 from ..algorithms.regressor import regressor_kernel
 from ..algorithms.rnea import rnea_kernel, xup_kernel
@@ -154,6 +155,42 @@ def regressor(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
     Y = regressor_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
                        [q.dtype.type(x) for x in gravity], np)
     return _stacked(Y, N, q.dtype, shape)
+
+
+def forward_solve(rows, H: np.ndarray, b: np.ndarray) -> tuple:
+    """Solve ``H q̈ = b`` per state: ``(q̈, None)``, or ``(None, (state, k))`` if a pivot fails.
+
+    ``H`` (..., nv, nv) and ``b`` (..., nv) broadcast; ``(state, k)`` is the first state (flat
+    index) whose ``H`` has a pivot ``k`` that is not positive.
+
+    :func:`~spatial_dynamics.algorithms.forward.forward_kernel` on the floats of each state (a
+    float64 state on Python floats, other dtypes on numpy scalars); a batch of float32 or
+    float64 states on numpy's Cholesky (LAPACK), which gives the same ``q̈`` to rounding.
+    """
+    n = b.shape[-1]
+    batch = np.broadcast_shapes(H.shape[:-2], b.shape[:-1])
+    N = math.prod(batch)
+    H = np.broadcast_to(H, batch + (n, n)).reshape(N, n, n)
+    b = np.broadcast_to(b, batch + (n,)).reshape(N, n)
+    if N > 1 and b.dtype in (np.float32, np.float64):
+        try:
+            L = np.linalg.cholesky(H)
+        except np.linalg.LinAlgError:
+            pass        # the loop below finds the state and the coordinate
+        else:
+            y = np.linalg.solve(L, b[..., None])
+            return np.linalg.solve(np.swapaxes(L, -1, -2), y)[..., 0].reshape(batch + (n,)), None
+    out = np.empty((N, n), dtype=b.dtype)
+    m = math if b.dtype == np.float64 else np
+    for s in range(N):
+        Hs, x = ((H[s].ravel().tolist(), b[s].tolist()) if m is math
+                 else (list(H[s].ravel()), list(b[s])))
+        info = [0]
+        forward_kernel(rows, Hs, x, [0] * n, [0] * n, info, m)
+        if info[0] >= 0:
+            return None, (s, int(info[0]))
+        out[s] = x
+    return out.reshape(batch + (n,)), None
 
 
 def derivatives_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> tuple:

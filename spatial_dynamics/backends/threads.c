@@ -53,7 +53,7 @@ run_chunks(Batch *b)
 {
     const Slice *s = &b->job;
     const long rows = s->rows;
-    double *work = malloc(sizeof(double) * work_size(s->kernel, rows));
+    double *work = malloc(sizeof(double) * work_size(s->kernel, rows, s->nv));
     for (;;) {
         Py_ssize_t lo = ATOMIC_ADD(&b->next, b->chunk) - b->chunk;
         if (lo >= b->N)

@@ -3,9 +3,11 @@
 """A fleet's recordings on a Dask cluster: per-bag drive fits, trends and drift (no rclpy).
 
 ``python -m spatial_dynamics.fleet``: :mod:`.command`. Dask is imported only when a cluster
-is used.
+is used. The command's entry point, what ``replay fleet`` dispatches to: ``add_arguments``
+(its options on a parser), ``run`` (parsed arguments -> exit status), ``main``, ``SUMMARY``
+and ``EXIT_STATUS`` (its --help's first and last lines).
 """
 
-from .command import add_arguments, main, run
+from .command import add_arguments, EXIT_STATUS, main, run, SUMMARY
 
-__all__ = ['add_arguments', 'main', 'run']
+__all__ = ['add_arguments', 'EXIT_STATUS', 'main', 'run', 'SUMMARY']

@@ -18,6 +18,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from ..recordings import bags
 from .sums import Sums, total
 from .task import Task
 
@@ -37,7 +38,6 @@ def split(tasks: Sequence[Task], chunk: float,
     -> its first and last bag time (ns), known already (a bag in it is not opened); the
     ranges read are added to it.
     """
-    from ..replay import bags
     ranges = {} if ranges is None else ranges
     parts: List[Task] = []
     owner: List[int] = []
@@ -63,7 +63,6 @@ def split(tasks: Sequence[Task], chunk: float,
 def _time_range(task: Task, ranges: Dict[Tuple[str, str], Tuple[int, int]]
                 ) -> Tuple[int, int]:
     """Return the task's bag time range from ``ranges``, or read it and add it there."""
-    from ..replay import bags
     key = (task.bag, task.option('topic'))
     if key not in ranges:
         ranges[key] = bags.time_range(*key)

@@ -37,38 +37,42 @@ from __future__ import annotations
 
 import argparse
 import csv
+from datetime import datetime, timezone
+import hashlib
 import io
-import ipaddress
+import json
 import os
-import re
 import shutil
-import socket
+import signal
 import sys
 import tempfile
+import threading
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..files import (check_output, check_outside_recordings, read_regular, regular_file,
-                     write_atomic)
-from ..replay.arguments import one_line
+from ..drives import PARAMETERS
+from ..files import check_output, check_outside_recordings, read_regular, write_atomic
+from ..recordings.errors import one_line
 from . import drift as drift_of
+from .arguments import add_arguments
+from .chunks import merge, split
 from .drift import count
-from .chunks import CHUNK, merge, MIN_CHUNK, split
 from .engine import (bag_bytes, Cache, cluster_size, local_cluster, pending_bags, Progress,
-                     run_tasks, SERIAL_BYTES, warm, WORKERS_PER_CORE)
+                     run_tasks, SERIAL_BYTES, warm)
 from .manifest import ManifestError, once, read_manifest, scan_folder
 from .sums import Sums, solve, total
 from .task import Task
-from ..replay.identify import PARAMETERS
-from ..urdf import MAX_FILE_BYTES
+
+# matplotlib (the plots) and distributed (a cluster) are imported where they are used: start-up
+# time, and optional (the fleet extra): the command starts and says what to install without them
 
 #: Exit status when something drifted.
 DRIFTED = 3
 #: Exit status when nothing drifted among the series judged, but not every one was judged.
 NOT_JUDGED = 4
-#: The longest --chunk, s (a year of bag time; 0 already means never cut).
-MAX_CHUNK = 366 * 86400.0
+#: The command in one sentence (its --help's first line, as ``fleet`` and as ``replay fleet``).
+SUMMARY = __doc__.split('\n\n')[0]
 #: What each exit status says, in every --help.
 EXIT_STATUS = ('Exit status: 0 every series judged, nothing drifted; 3 something drifted; '
                '4 nothing drifted but some series or robots not judged (drift.txt says why); '
@@ -77,182 +81,9 @@ COLUMNS = ['robot', 'bag', 'start', 'joint', 'parameter', 'value', 'sigma', 'rms
            'samples']
 
 
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Declare the command's options on ``p`` (its own parser, or a ``replay`` subparser)."""
-    p.add_argument('source', help='manifest (.csv, .yaml) or a folder ROBOT/.../BAG')
-    p.add_argument('--urdf', type=urdf_file,
-                   help='the URDF of every robot of a folder (default: each robot '
-                   "folder's robot.urdf)")
-    p.add_argument('--out', default='fleet_out', type=output_folder,
-                   help='output directory, created (default %(default)s)')
-    p.add_argument('--cache', type=output_folder,
-                   help='results by content hash (default: OUT/cache)')
-    where = p.add_mutually_exclusive_group()
-    where.add_argument('--workers', type=workers_count, metavar='N',
-                       help='local cluster of N worker processes (default: the cores, when '
-                       f'the work is large enough; at most {WORKERS_PER_CORE} a core; none when '
-                       'every bag is in the cache; see --serial)')
-    where.add_argument('--serial', action='store_true',
-                       help='no cluster: every bag in this process, one after the other '
-                       '(the default when the bags to process are less than '
-                       f'{SERIAL_BYTES >> 20} MB)')
-    where.add_argument('--scheduler', metavar='ADDRESS', type=scheduler_address,
-                       help='an existing Dask scheduler, tcp://host:port (tls:// is not '
-                       'supported; not contacted when every bag is in the cache)')
-    p.add_argument('--chunk', type=chunk_seconds, default=CHUNK, metavar='SECONDS',
-                   help='cut a bag longer than this into tasks of this much bag time, their '
-                   'sums added (default %(default)g; 0: one task per bag)')
-    p.add_argument('--baseline-days', type=baseline_days, default=5.0,
-                   help="each robot-joint's baseline: its first days, at least "
-                   f'{drift_of.MIN_BASELINE} bags (default %(default)g)')
-    p.add_argument('--no-plots', action='store_true', help='write no PNG files')
-
-
-def _number(text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        return float('nan')
-
-
-def output_folder(text: str) -> str:
-    """``--out``, ``--cache``: a folder, or a path where one can be created and written."""
-    if not text:
-        raise argparse.ArgumentTypeError('an empty value (a folder to write into)')
-    path = os.path.abspath(text)
-    there = path
-    while not os.path.lexists(there):
-        there = os.path.dirname(there)
-    if not os.path.isdir(there):
-        raise argparse.ArgumentTypeError(
-            f'{text!r} is not a folder' if there == path else
-            f'{text!r}: {there!r} is not a folder')
-    if not os.access(there, os.W_OK | os.X_OK):
-        raise argparse.ArgumentTypeError(f'{text!r}: cannot write in {there!r}')
-    return text
-
-
-def urdf_file(text: str) -> str:
-    """``--urdf``: a regular file (never a FIFO or a device: hashing it would never end)."""
-    if not text:
-        raise argparse.ArgumentTypeError('an empty value (a URDF file is needed)')
-    try:
-        regular_file(text, repr(text), MAX_FILE_BYTES)
-    except ValueError as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
-    return text
-
-
-def chunk_seconds(text: str) -> float:
-    """``--chunk``: 0 (one task per bag) or seconds from MIN_CHUNK to MAX_CHUNK."""
-    value = _number(text)
-    if not (value == 0 or MIN_CHUNK <= value <= MAX_CHUNK):
-        raise argparse.ArgumentTypeError(
-            f'{text!r}: 0 (one task per bag) or a number of seconds >= {MIN_CHUNK:g} and <= '
-            f'{MAX_CHUNK:.0f} (a year)')
-    return value
-
-
-def baseline_days(text: str) -> float:
-    """``--baseline-days``: a number of days > 0, at most ten years."""
-    value = _number(text)
-    if not 0.0 < value <= 3660.0:
-        raise argparse.ArgumentTypeError(f'{text!r}: a number of days > 0 and <= 3660')
-    return value
-
-
-def workers_count(text: str) -> int:
-    """``--workers``: a whole number from 1 to 4096."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= 4096:
-        raise argparse.ArgumentTypeError(f'{text!r}: a whole number of processes, 1 to 4096')
-    return value
-
-
-#: How long the name of a scheduler may take to resolve, s.
-RESOLVE_S = 10.0
-#: A host name's label (RFC 1123): letters, digits and inner hyphens, at most 63.
-_LABEL = re.compile(r'(?!-)[A-Za-z0-9-]{1,63}(?<!-)$')
-
-
-def scheduler_address(text: str) -> str:
-    """``--scheduler``: ``tcp://host:port``, the port 1 to 65535, the host one that resolves.
-
-    The host is a name (RFC 1123 labels) or an IP literal (IPv6 in brackets); no user, path
-    or space. A name that does not resolve within :data:`RESOLVE_S` is refused here, not
-    after Dask's 30 s of connection attempts. ``tls://`` is refused: it needs certificates
-    (a security context) this command does not take; ``ucx``, ``inproc`` and the rest are
-    not for a cluster of plain processes.
-    """
-    example = 'e.g. tcp://10.0.0.5:8786'
-    protocol, sep, rest = text.partition('://')
-    if not text:
-        raise argparse.ArgumentTypeError(
-            f'an empty value; a scheduler address is tcp://host:port ({example})')
-    if not sep:
-        raise argparse.ArgumentTypeError(
-            f'{text!r}: give the protocol, tcp://{text} ({example})')
-    if protocol == 'tls':
-        raise argparse.ArgumentTypeError(
-            f'{text!r}: tls:// needs certificates (a Dask security context), which this '
-            'command does not take; give tcp://host:port (a scheduler reached through an SSH '
-            'tunnel or a private network)')
-    if protocol != 'tcp':
-        raise argparse.ArgumentTypeError(
-            f'{text!r}: the protocol {protocol!r} is not supported here; give '
-            f'tcp://host:port ({example})')
-    host, _, port = rest.rpartition(':')
-    if not port.isdigit() or not 1 <= int(port) <= 65535:
-        raise argparse.ArgumentTypeError(
-            f'{text!r}: a scheduler address is tcp://host:port, the port 1 to 65535 '
-            f'({example})')
-    literal = host[1:-1] if host.startswith('[') and host.endswith(']') else host
-    try:
-        is_ip = (ipaddress.ip_address(literal).version == 6) == (literal != host)
-    except ValueError:
-        is_ip = False
-    name = host[:-1] if host.endswith('.') else host
-    if not is_ip and (literal != host or not name or len(name) > 253
-                      or not all(_LABEL.match(label) for label in name.split('.'))
-                      or name.replace('.', '').isdigit()):
-        raise argparse.ArgumentTypeError(
-            f'{text!r}: the host {host!r} is neither a host name (letters, digits, - and .) '
-            f'nor an IP address (IPv6 in brackets); no user@, path or space ({example})')
-    if not is_ip:
-        why = _resolve(name, int(port))
-        if why:
-            raise argparse.ArgumentTypeError(f'{text!r}: the host {host!r} {why}')
-    return f'tcp://{host}:{int(port)}'
-
-
-def _resolve(name: str, port: int) -> Optional[str]:
-    """Return why ``name`` does not resolve within :data:`RESOLVE_S` (None when it does).
-
-    The lookup runs in a daemon thread: a resolver that never answers keeps neither the
-    refusal nor the command's exit waiting.
-    """
-    import threading
-    answer: List[Optional[str]] = []
-
-    def look_up() -> None:
-        try:
-            socket.getaddrinfo(name, port, type=socket.SOCK_STREAM)
-            answer.append(None)
-        except (OSError, UnicodeError) as err:
-            answer.append(f'does not resolve ({getattr(err, "strerror", None) or err})')
-
-    thread = threading.Thread(target=look_up, daemon=True)
-    thread.start()
-    thread.join(RESOLVE_S)
-    return answer[0] if answer else f'did not resolve within {RESOLVE_S:g} s'
-
-
 def parser() -> argparse.ArgumentParser:
     """Return the command's own parser."""
-    p = argparse.ArgumentParser(prog='fleet', description=__doc__.split('\n\n')[0],
+    p = argparse.ArgumentParser(prog='fleet', description=SUMMARY,
                                 epilog=EXIT_STATUS)
     add_arguments(p)
     return p
@@ -326,7 +157,6 @@ def csv_text(header: Sequence[str], rows: List[Sequence]) -> str:
 
 def iso(t: float) -> str:
     """Return ``t`` (s since the epoch) as ISO 8601 UTC."""
-    from datetime import datetime, timezone
     return datetime.fromtimestamp(t, timezone.utc).isoformat(timespec='seconds')
 
 
@@ -336,8 +166,6 @@ def plot_trends(out: str, rows: List[Dict], drifts, keys: Optional[str] = None) 
     ``keys``: a folder keeping a hash of what each plot was drawn from; a plot whose
     inputs are the same is not drawn again.
     """
-    import hashlib
-    import json
     written = []
     flagged = {(d.robot, d.joint, d.parameter) for d in drifts}
     for robot in sorted({r['robot'] for r in rows}):
@@ -370,7 +198,6 @@ def _draw(out: str, name: str, robot: str, mine: List[Dict], flagged) -> None:
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    from datetime import datetime, timezone
     joints = list(dict.fromkeys(r['joint'] for r in mine))
     fig, axes = plt.subplots(len(joints), 3, figsize=(12, 1.8 * len(joints) + 1),
                              sharex=True, squeeze=False)
@@ -416,8 +243,6 @@ def run(args) -> int:
     unwinds the work (the cluster is closed, the bags' staging folders and the temporaries
     of the files being written are removed; each output is whole or as it was).
     """
-    import signal
-    import threading
     main_thread = threading.current_thread() is threading.main_thread()
     if main_thread:
         before = signal.signal(signal.SIGTERM, _terminate)

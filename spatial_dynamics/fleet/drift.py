@@ -172,7 +172,8 @@ def cusum(start: Sequence[float], x: Sequence[float], sigma: Sequence[float],
                       'least')
     w = 1.0 / s[:nb] ** 2
     mu0 = float(np.sum(w * x[:nb]) / np.sum(w))
-    from scipy.special import chdtri        # chi2.isf: scipy.stats takes seconds to import
+    # chi2.isf, imported here: start-up time (scipy.stats takes seconds), and optional
+    from scipy.special import chdtri
     if np.sum(w * (x[:nb] - mu0) ** 2) / phi > chdtri(nb - 1, P_BASELINE):
         z = (x - x[0]) / np.sqrt(phi * (s ** 2 + s[0] ** 2))
         onset = _crossing(z, 1)

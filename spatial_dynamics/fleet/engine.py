@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import importlib
 import json
 import os
 import signal
@@ -33,6 +34,9 @@ import numpy as np
 
 from ..files import read_regular, write_atomic
 from .task import bag_digest, content_key, process, Task, VERSION
+
+# dask and distributed are imported where a cluster is made or used: start-up time, and
+# optional (the fleet extra): a serial run needs neither
 
 #: How often a task is started again when its worker is lost or it fails unexpectedly.
 RETRIES = 3
@@ -495,12 +499,11 @@ def warm(client) -> None:
 
 
 #: The modules a task imports when it first runs.
-MODULES = ('threadpoolctl', 'spatial_dynamics.replay.arguments', 'spatial_dynamics.replay.bags',
-           'spatial_dynamics.replay.recording', 'spatial_dynamics.fleet.sums')
+MODULES = ('threadpoolctl', 'spatial_dynamics.recordings.bags',
+           'spatial_dynamics.recordings.recording', 'spatial_dynamics.fleet.task')
 
 
 def load_modules() -> None:
     """Import :data:`MODULES` (what :func:`warm` runs on each worker)."""
-    import importlib
     for name in MODULES:
         importlib.import_module(name)

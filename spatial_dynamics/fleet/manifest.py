@@ -29,8 +29,9 @@ import unicodedata
 import numpy as np
 
 from ..bounds import MAX_GRAVITY
+from ..effort import MEASURED_EFFORT
 from ..files import load_yaml, read_regular
-from ..replay.arguments import gravity_component, velocity_threshold, window_s
+from ..recordings.ranges import gravity_component, velocity_threshold, window_s
 from .task import BASE_TOPICS, DEFAULTS, Task
 
 #: Largest manifest read (a fleet of thousands of bags is a few MB).
@@ -104,7 +105,6 @@ def _option(name: str, value, where: str):
                                     f'm/s², |g| at most {MAX_GRAVITY:g} (100 g)')
             return g
         if name == 'measured_effort':
-            from ..effort import MEASURED_EFFORT
             if value not in MEASURED_EFFORT:
                 raise ValueError
         return str(value)

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """The drive fit as sums: normal equations that add over chunks, bags and days.
 
-Each joint's drive fit (:mod:`spatial_dynamics.replay.identify`) is the least-squares
+Each joint's drive fit (:mod:`spatial_dynamics.drives`) is the least-squares
 solution of ``A θ ≈ r`` with ``A = [q̇, tanh(q̇/ε), q̈]`` (N, 3) and ``r`` the torque residual
 (N,). The normal equations of ``[A r]``, ``[A r]ᵀ[A r]`` (4, 4), hold everything the
 solution, its σ and the residual RMS need, and those of two recordings are the sum of
@@ -29,7 +29,7 @@ from typing import Dict, Iterable, Sequence
 
 import numpy as np
 
-from ..replay.identify import Identified, missing_note, RCOND, regressor
+from ..drives import Identified, missing_note, RCOND, regressor
 
 
 @dataclass
@@ -101,7 +101,7 @@ def total(parts: Iterable[Sums]) -> Sums:
 def solve(s: Sums, names: Sequence[str]) -> Identified:
     """Fit each joint's damping, friction and armature from the sums; as ``identify`` does.
 
-    The same columns are dropped as :func:`spatial_dynamics.replay.identify.identify` drops
+    The same columns are dropped as :func:`spatial_dynamics.drives.identify` drops
     them (column RMS ``sqrt(G_kk/N)``; collinearity from the singular values of the scaled
     columns, the square roots of the eigenvalues of the scaled ``G``). The solution is the
     least squares of the triangular factor (``R[:, k] θ ≈ R[:, 3]`` over the columns ``k``

@@ -20,16 +20,25 @@ from dataclasses import dataclass, field
 import hashlib
 import json
 import os
-from typing import Dict, Optional, TYPE_CHECKING
+import resource
+from typing import Dict, Optional
 
 import numpy as np
 
-from ..files import read_blocks
-from ..replay.bags import MAX_STORAGE_BYTES
-from ..urdf import MAX_FILE_BYTES
+import spatial_dynamics as sd
 
-if TYPE_CHECKING:
-    from ..replay.bags import JointStates
+from .. import effort as effort_model
+from ..backends.compiled import threads_at_most
+from ..files import read_blocks
+from ..recordings import bags
+from ..recordings.bags import JointStates, MAX_STORAGE_BYTES
+from ..recordings.base_topics import base_motion, BaseTopic
+from ..recordings.differentiate import window_samples
+from ..recordings.errors import one_line, Refused
+from ..recordings.loading import load_model
+from ..recordings.recording import clean, rates
+from .sums import normal_sums
+from ..urdf import MAX_FILE_BYTES
 
 #: Changes when what a task computes changes (the cache's results are then stale).
 VERSION = 'fleet-3'
@@ -130,7 +139,6 @@ def prepare(task: Task, model) -> Dict:
     ``messages``: how many messages were read (held in memory at once); ``recorded``: the
     bag time (s since the epoch) of the first message of the bag or chunk, its date.
     """
-    from ..replay import bags
     if not task.chunked:
         js = bags.read_joint_states(task.bag, task.option('topic'), model.joint_names)
         return dict(_derive(task, model, js, (None, None)), owned=None,
@@ -150,18 +158,13 @@ def _derive(task: Task, model, js, between) -> Dict:
     ``base``: the base's motion at each sample (a base topic option), read from the bag
     in the bag-time range ``between`` (ns; ``(None, None)``: all of it), or None.
     """
-    from types import SimpleNamespace
-    from .. import effort as effort_model
-    from ..replay import base_topics
-    from ..replay.recording import clean, rates
     window, order = float(task.option('window')), int(task.option('order'))
     s = clean(js, window)
     t, q, spans = s['t'], s['q'], s['spans']
     qd, qdd, _ = rates(s, window, order)
-    options = SimpleNamespace(window=window, order=order, **{
-        name: task.option(name) for name in ('base_odometry', 'base_imu', 'odometry_link',
-                                             'imu_link')})
-    base = base_topics.base_motion(options, task.bag, model, t, spans, between)
+    topic = BaseTopic(task.option('base_odometry'), task.option('base_imu'),
+                      task.option('odometry_link'), task.option('imu_link'))
+    base = base_motion(topic, task.bag, model, t, spans, window, order, between)
     effort = effort_model.with_gravity(model, q, s['effort'], task.option('measured_effort'),
                                        task.option('gravity'))
     return {'t': t, 'q': q, 'qd': qd, 'qdd': qdd, 'effort': effort, 'skipped': s['skipped'],
@@ -177,10 +180,6 @@ def _prepare_chunk(task: Task, model, margin: Optional[int]) -> Optional[Dict]:
     differentiation windows of samples read on a side the margin cut: a wider margin is
     needed for it to see the whole bag's neighbours (stamps far from the bag times).
     """
-    from ..replay import bags
-    from ..replay.arguments import Refused
-    from ..replay.differentiate import window_samples
-
     def read(start, stop):
         return bags.read_joint_states_between(task.bag, task.option('topic'),
                                               model.joint_names, start, stop)
@@ -211,14 +210,13 @@ def _prepare_chunk(task: Task, model, margin: Optional[int]) -> Optional[Dict]:
     return dict(d, owned=owned, messages=messages, recorded=_first(own))
 
 
-def _first(js: 'JointStates') -> float:
+def _first(js: JointStates) -> float:
     """Return the bag time (s since the epoch) of the first message of ``js`` (NaN: none)."""
     return float(np.min(js.received)) if len(js.received) else float('nan')
 
 
-def _joined(parts) -> 'JointStates':
+def _joined(parts) -> JointStates:
     """Return the JointStates of ``parts`` one after the other (bag order)."""
-    from ..replay.bags import JointStates
     if len(parts) == 1:
         return parts[0]
     skipped: Dict[str, int] = {}
@@ -244,18 +242,15 @@ def process(task: Task) -> Dict:
     package's own threads (the kernels' batches, the derivatives' filter) run on one thread:
     the engine gives each worker one core.
     """
+    # optional (the replay and fleet extras): imported where it is used, so the command starts
+    # and says what to install without it
     from threadpoolctl import threadpool_limits
-    from .. import rnea
-    from ..backends.compiled import threads_at_most
-    from ..replay import bags
-    from ..replay.arguments import load_model, one_line, Refused
-    from .sums import normal_sums
     head = {'robot': task.robot, 'bag': task.bag}
     if task.chunked:
         head['chunk'] = [task.start, task.stop]
     try:
         with threadpool_limits(limits=1, user_api='blas'), threads_at_most(1):
-            model = load_model(_ModelArgs(task.urdf), task.option('joints'))
+            model = load_model(task.urdf, task.option('joints'))
             d = prepare(task, model)
             owned = d['owned']
             if owned is not None and not owned.any():
@@ -265,8 +260,8 @@ def process(task: Task) -> Dict:
                                              np.zeros((0, n)), 1.0).to_dict(),
                             messages=d['messages'], peak_rss_mb=peak_rss_mb(),
                             empty=one_line(d.get('empty') or 'no message in the range'))
-            residual = d['effort'] - rnea(model, d['q'], d['qd'], d['qdd'],
-                                          task.option('gravity'), base=d['base'])
+            residual = d['effort'] - sd.rnea(model, d['q'], d['qd'], d['qdd'],
+                                             task.option('gravity'), base=d['base'])
             t, qd, qdd = d['t'], d['qd'], d['qdd']
             if owned is not None:
                 t, residual, qd, qdd = t[owned], residual[owned], qd[owned], qdd[owned]
@@ -297,12 +292,4 @@ def peak_rss_mb() -> float:
                     return int(line.split()[1]) / 1024.0
     except (OSError, ValueError, IndexError):
         pass
-    import resource
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-
-
-class _ModelArgs:
-    """What :func:`spatial_dynamics.replay.arguments.load_model` reads of the arguments."""
-
-    def __init__(self, urdf: str) -> None:
-        self.urdf, self.joints, self.locked = urdf, None, []

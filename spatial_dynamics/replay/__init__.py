@@ -7,9 +7,11 @@ the model's torque over a whole recording, ``identify`` fits the drives (damping
 friction, armature), a payload or link inertias and writes a corrected URDF, ``trajectory``
 checks a ``JointTrajectory`` against the effort limits, ``annotate`` fills its effort for
 joint_trajectory_controller, ``excite`` plans a motion for identification, ``fleet`` runs a
-fleet's bags on a Dask cluster (:mod:`spatial_dynamics.fleet`). Modules: :mod:`.bags`
-(rosbag2 without ROS), :mod:`.cdr`, :mod:`.recording`, :mod:`.differentiate`,
-:mod:`.identify`, :mod:`.correction`, :mod:`.urdf_writer`, :mod:`.splines`, :mod:`.report`;
-the command in :mod:`.__main__`, the old spellings in :mod:`.legacy`. Nothing here imports
-rclpy.
+fleet's bags on a Dask cluster (:mod:`spatial_dynamics.fleet`, run through its entry point).
+One module a subcommand: :mod:`.residual`, :mod:`.identify`, :mod:`.trajectory`,
+:mod:`.annotate`, :mod:`.excite`, :mod:`.fleet`, dispatched by :mod:`.__main__`; what they
+share: :mod:`.arguments` (the command line), :mod:`.paths` (the checks before any work),
+:mod:`.correction`, :mod:`.urdf_writer`, :mod:`.splines`, :mod:`.report`. Reading a
+recording is :mod:`spatial_dynamics.recordings`', the drive fit
+:mod:`spatial_dynamics.drives`'. Nothing here imports rclpy.
 """

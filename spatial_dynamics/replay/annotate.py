@@ -9,29 +9,29 @@ the model torque (``--output`` part), and written in the message's YAML form, re
 against the URDF effort limits as ``replay trajectory`` checks its torques (``EXCEEDED``, exit 1);
 a tolerance the 1 ms steps cannot meet is said, exit 1. The output path is checked before
 any work (not an input, a writable regular file) and written atomically
-(:mod:`spatial_dynamics.files`); nothing else is written. PyYAML (the ``replay`` extra) is
-imported where the plan is written, so the replay command starts without it.
+(:mod:`spatial_dynamics.files`); nothing else is written.
 """
 
 from __future__ import annotations
 
 import sys
 
-from . import report, splines
 from .. import effort, files
+from ..recordings.ranges import effort_tolerance
+from . import report, splines
+from .arguments import add_command, model_of
 
 
-def run(args, load_model) -> int:
-    """Annotate ``args.plan`` into ``args.out``; print what was done.
+def run(args) -> int:
+    """``replay annotate``: annotate ``args.plan`` into ``args.out``; print what was done.
 
-    ``load_model(args, joints)`` builds the model (the command's own, reduction included).
     Returns 0, or 1 when an effort exceeds its URDF limit or the tolerance is not met (the
     file is written all the same, to be looked at). Errors are ``ValueError`` naming the file
     (exit 1 in the command), raised before anything is written.
     """
     files.check_output(args.out, '--out', (args.plan, args.urdf))
     traj = splines.from_yaml(args.plan)
-    model = load_model(args, args.joints or list(traj.joint_names))
+    model = model_of(args, args.joints or list(traj.joint_names))
     missing = [j for j in model.joint_names if j not in traj.joint_names]
     if missing:
         raise ValueError(f'{args.plan}: joint(s) {", ".join(missing)} not in the '
@@ -45,7 +45,7 @@ def run(args, load_model) -> int:
     except effort.AnnotationError as err:
         raise ValueError(f'{args.plan}: not annotated: {err}') from None
     doc = effort.message_dict(result.trajectory, result.effort)
-    import yaml
+    import yaml       # optional (the replay extra): the command starts without it
     files.write_atomic(args.out, lambda f: f.write(yaml.safe_dump(
         doc, default_flow_style=None, sort_keys=False, width=1 << 16).encode('utf-8')),
         '--out')
@@ -74,3 +74,20 @@ def run(args, load_model) -> int:
               f'({effort.MIN_STEP * 1e3:g} ms)', file=sys.stderr)
         status = 1
     return status
+
+
+def command(sub) -> None:
+    """``replay annotate PLAN.yaml --out OUT.yaml``: the plan with effort for JTC."""
+    p = add_command(sub, 'annotate', run, [],
+                    'fill a plan\'s effort for joint_trajectory_controller',
+                    'Write the plan with effort filled for joint_trajectory_controller, '
+                    'resampled so that its linear interpolation of effort stays within '
+                    '--tolerance of the model torque; the efforts checked against the URDF '
+                    'limits (exit 1). Only --out is written.')
+    p.add_argument('plan', metavar='PLAN.yaml', help='a trajectory_msgs/JointTrajectory (YAML)')
+    p.add_argument('--out', required=True, metavar='OUT.yaml', help='the annotated plan')
+    p.add_argument('--tolerance', type=effort_tolerance, default=0.1,
+                   help='|JTC\'s linear interpolation of effort - model torque|, N m (default '
+                   '%(default)g)')
+    p.add_argument('--output', choices=effort.OUTPUTS, default='full',
+                   help='the torque written (default %(default)s)')

@@ -1,23 +1,31 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""What the replay commands share on their command line: number types, the model, refusals."""
+"""What the replay subcommands share on their command line, and how each is run.
+
+The parser class, the options of the model (:func:`add_model_arguments`, built by
+:func:`model_of`) and of a recording (:func:`recording_parser`, its moving base), a
+subcommand's declaration (:func:`add_command`) and its run (:func:`run`: usage checks, then
+refusals as one line and an exit status). The number types and their ranges are
+:mod:`spatial_dynamics.recordings.ranges`' (the fleet's manifest shares them); below the
+command line, functions take typed arguments.
+"""
 
 from __future__ import annotations
 
 import argparse
-import math
-from typing import Callable, Optional, Sequence
-import warnings
+import functools
+import sys
+from typing import List, Optional, Sequence
 
 import numpy as np
 
-from .. import Model, URDFWarning
-from ..bounds import FRICTION_THRESHOLD_RANGE, MAX_EFFORT, MAX_GRAVITY
-from ..check import locked_item, read_description
-
-
-class Refused(Exception):
-    """The input cannot be used; the message says why (exit status 1)."""
+from .. import effort as effort_model
+from ..bounds import MAX_GRAVITY
+from ..model import Model
+from ..recordings import bags
+from ..recordings.errors import one_line, Refused
+from ..recordings.loading import load_model
+from ..recordings.ranges import gravity_component, locked_item, velocity_threshold, window_s
 
 
 class Parser(argparse.ArgumentParser):
@@ -38,54 +46,6 @@ class Parser(argparse.ArgumentParser):
         if not self.one_line:
             super().error(message)
         self.exit(2, f'{self.prog}: error: {" ".join(message.split())}\n')
-
-
-def checked(parse: Callable[[str], float], ok: Callable[[float], bool], need: str):
-    """Return an argparse type: ``parse(text)`` if ``ok`` of it, else an error saying ``need``.
-
-    Text that does not parse is refused the same way (as ``nan``, which no check accepts).
-    """
-    def convert(text: str) -> float:
-        try:
-            x = parse(text)
-        except ValueError:
-            x = math.nan
-        if not ok(x):
-            raise argparse.ArgumentTypeError(f'{text!r}: need {need}')
-        return x
-    return convert
-
-
-#: A finite number (argparse type).
-finite = checked(float, math.isfinite, 'a finite number')
-#: A finite number > 0 (argparse type).
-positive = checked(float, lambda x: x > 0.0 and math.isfinite(x), 'a finite number > 0')
-
-#: The longest differentiation window, s: a longer one smooths away the motion a fit needs
-#: (and in samples it overflowed: ``--window 1e308``).
-MAX_WINDOW = 10.0
-#: The highest rate a plan is sampled at, Hz (a sample a microsecond).
-MAX_RATE = 1e6
-_LOW, _HIGH = FRICTION_THRESHOLD_RANGE
-
-# Each number option of the replay commands and the fleet's manifest, with its range: a
-# value outside it (huge, NaN, inf, negative, zero where zero means nothing) is a usage error
-# naming the option, before any file is read.
-#: ``--window``, s (argparse type).
-window_s = checked(float, lambda x: 0.0 < x <= MAX_WINDOW,
-                   f'a number of seconds > 0, at most {MAX_WINDOW:g}')
-#: ``--threshold``, the friction velocity threshold (argparse type; the node's range).
-velocity_threshold = checked(float, lambda x: _LOW <= x <= _HIGH,
-                             f'a velocity from {_LOW:g} to {_HIGH:g} rad/s or m/s')
-#: ``--rate`` of a plan's sampling, Hz (argparse type).
-sampling_rate = checked(float, lambda x: 0.0 < x <= MAX_RATE,
-                        f'a rate > 0, at most {MAX_RATE:g} Hz')
-#: ``--tolerance`` of an annotated effort, N m or N (argparse type).
-effort_tolerance = checked(float, lambda x: 0.0 < x <= MAX_EFFORT,
-                           f'a torque > 0, at most {MAX_EFFORT:g} N m')
-#: A component of ``--gravity``, m/s² (argparse type; |g| is checked by check_gravity).
-gravity_component = checked(float, lambda x: abs(x) <= MAX_GRAVITY,
-                            f'a number of m/s^2 within ±{MAX_GRAVITY:g}')
 
 
 def add_model_arguments(p: argparse.ArgumentParser) -> None:
@@ -125,18 +85,122 @@ def check_gravity(p: argparse.ArgumentParser, gravity: Sequence[float]) -> None:
                 f'{MAX_GRAVITY:g} (100 g) cannot be a mounting')
 
 
-def load_model(args, joints: Optional[Sequence[str]] = None) -> Model:
-    """Build the model from ``--urdf`` with ``--joints``/``--locked``; :class:`Refused` if not."""
+def model_of(args, joints: Optional[Sequence[str]] = None) -> Model:
+    """Build the model of ``--urdf`` with ``--joints``/``--locked`` (``joints`` instead).
+
+    :class:`~spatial_dynamics.recordings.errors.Refused` when it cannot be built.
+    """
+    return load_model(args.urdf, joints or args.joints, dict(args.locked))
+
+
+#: The node's default ``friction_velocity_threshold`` (config/inverse_dynamics.yaml).
+NODE_THRESHOLD = 0.01
+
+#: What the exit status says, in every --help.
+EXIT_STATUS = ('Exit status: 0 done, 1 refused (or an effort limit exceeded), 2 bad usage, '
+               '130 interrupted.')
+
+#: The positional arguments as --help names them.
+POSITIONALS = {'bag': 'BAG', 'source': 'PLAN.yaml|BAG', 'plan': 'PLAN.yaml'}
+
+
+def add_command(sub, name: str, work, parents: List[argparse.ArgumentParser], summary: str,
+                description: str) -> argparse.ArgumentParser:
+    """Add the subcommand ``name`` that runs ``work(args)`` (:func:`run`); return its parser.
+
+    ``summary`` is its line in ``replay --help``; ``description`` heads its own ``--help``.
+    The model options come from one parent parser (:func:`model_parser`), then ``parents``.
+    """
+    p = sub.add_parser(name, parents=[model_parser()] + parents, help=summary,
+                       description=description, epilog=EXIT_STATUS)
+    p.set_defaults(run=functools.partial(run, work, p))
+    return p
+
+
+def run(work, p: argparse.ArgumentParser, args) -> int:
+    """Check what the parser cannot (usage errors by ``p``), run ``work(args)``.
+
+    Refusals, missing files and a lack of memory are one line on stderr, exit 1;
+    Ctrl-C is ``interrupted``, exit 130 (every file is whole or absent, the child ended).
+    """
+    check_model(p, args)
+    check_base_arguments(p, args)
+    for dest, value in vars(args).items():      # '' is no path, link, joint or topic
+        if value == '' or (isinstance(value, list) and '' in value):
+            p.error(POSITIONALS.get(dest, '--' + dest.replace('_', '-')) + ': an empty value')
     try:
-        xml = read_description(args.urdf)
-        with warnings.catch_warnings():
-            warnings.simplefilter('ignore', URDFWarning)
-            return Model.from_urdf(xml, joints=joints or args.joints,
-                                   locked=dict(args.locked) or None)
-    except ValueError as err:
-        raise Refused(str(err)) from None
+        return work(args)
+    except (Refused, bags.BagError, bags.MissingDependency, ValueError) as err:
+        print(f'error: {one_line(err)}', file=sys.stderr)
+    except OSError as err:
+        where = f'{err.filename}: ' if err.filename else ''
+        print(f'error: {where}{err.strerror or one_line(err)}', file=sys.stderr)
+    except MemoryError:
+        print('error: out of memory (a smaller --rate, a shorter bag or fewer joints?)',
+              file=sys.stderr)
+    except KeyboardInterrupt:     # Ctrl-C: every file is whole or absent, the child ended
+        print('interrupted', file=sys.stderr)
+        return 130
+    return 1
 
 
-def one_line(err: BaseException) -> str:
-    """Return an exception's message on one line."""
-    return ' '.join(str(err).split()) or type(err).__name__
+def recording_parser() -> argparse.ArgumentParser:
+    """Return a parent parser of what reads a recording and writes its residual (no help)."""
+    p = argparse.ArgumentParser(add_help=False)
+    p.add_argument('bag', metavar='BAG', help='rosbag2 directory, or a .db3 / .mcap file')
+    p.add_argument('--topic', default='/joint_states',
+                   help='sensor_msgs/JointState topic (default %(default)s)')
+    p.add_argument('--out', default='replay_out',
+                   help='output directory, created (default %(default)s)')
+    p.add_argument('--window', type=window_s, default=0.05,
+                   help='Savitzky-Golay window, s (default %(default)g)')
+    p.add_argument('--order', type=int, choices=range(2, 7), default=3,
+                   help='Savitzky-Golay polynomial order (default %(default)d)')
+    p.add_argument('--measured-effort', choices=effort_model.MEASURED_EFFORT, default='full',
+                   help='what the bag\'s effort is: link-side torque with gravity (full: '
+                   'Franka, KUKA) or gravity_compensated (UR); default %(default)s')
+    p.add_argument('--residual', choices=('csv', 'npy', 'none'), default='csv',
+                   help='per-sample residual file (default %(default)s)')
+    p.add_argument('--no-plots', action='store_true', help='write no PNG files')
+    p.add_argument('--generic', action='store_true',
+                   help='read every message through rosbags (no numpy fast path)')
+    p.add_argument('--timings', action='store_true', help='print stage times to stderr')
+    add_base_arguments(p)
+    return p
+
+
+def add_base_arguments(p) -> None:
+    """Declare ``--base-odometry``/``--base-imu`` (one of them) and their links."""
+    g = p.add_argument_group('moving base (a mobile manipulator: the base\'s motion from the '
+                             'same bag)')
+    g.add_argument('--base-odometry', metavar='TOPIC',
+                   help='nav_msgs/Odometry of the base: its twist (differentiated like the '
+                   'joints) and orientation (for gravity)')
+    g.add_argument('--base-imu', metavar='TOPIC',
+                   help='sensor_msgs/Imu on the base: gyro and accelerometer (gravity '
+                   'included); instead of --base-odometry')
+    g.add_argument('--odometry-link', metavar='LINK',
+                   help='the link the odometry\'s twist is of (default: its child_frame_id)')
+    g.add_argument('--imu-link', metavar='LINK',
+                   help='the link the IMU is at, with its axes (default: its frame_id)')
+
+
+def check_base_arguments(p, args) -> None:
+    """Exit with a usage error for both topics, or a link option without its topic.
+
+    One topic gives the whole motion: the IMU's (gravity in it, the linear velocity, which
+    no joint torque depends on, not needed) or the odometry's; both would be two answers.
+    """
+    if getattr(args, 'base_odometry', None) and getattr(args, 'base_imu', None):
+        p.error('--base-odometry and --base-imu: give one (each gives the whole motion of the '
+                'base)')
+    for link, topic in (('odometry_link', 'base_odometry'), ('imu_link', 'base_imu')):
+        if getattr(args, link, None) and not getattr(args, topic, None):
+            p.error(f'--{link.replace("_", "-")} needs --{topic.replace("_", "-")}')
+
+
+def add_threshold(p: argparse.ArgumentParser) -> None:
+    """Declare ``--threshold``, the friction velocity threshold (the node's by default)."""
+    p.add_argument('--threshold', type=velocity_threshold, default=NODE_THRESHOLD,
+                   help='friction velocity threshold, rad/s or m/s (default: the node\'s, '
+                   '%(default)g)')

@@ -18,12 +18,14 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from .. import identification
+from .. import drives, identification
 from ..algorithms.regressor import PARAMETERS
 from ..backends import rnea
 from ..files import write_atomic
 from ..model import Model
-from . import identify, report, urdf_writer
+from . import report, urdf_writer
+
+# matplotlib is imported where a plot is drawn (start-up time, and optional: the plot extra)
 
 #: How many undetermined combinations the warning names (the rest are counted).
 NAMED = 8
@@ -135,7 +137,7 @@ class Correction:
             sigma = self.drive_sigma or tuple(np.full(len(d), np.nan) for d in self.drives)
             shown = self.undetermined_drives()
             for j, joint in enumerate(self.model.joint_names):
-                for k, name in enumerate(identify.PARAMETERS):
+                for k, name in enumerate(drives.PARAMETERS):
                     unknown = bool(np.isnan(shown[k][j]))
                     rows.append([joint, name, prior[k][j], prior[k][j] if unknown else
                                  self.drives[k][j], np.inf if unknown else sigma[k][j],
@@ -184,7 +186,7 @@ def from_inertias(model: Model, found: identification.Inertias, threshold: float
                       drive_undetermined=found.drive_unexcited)
 
 
-def from_drives(model: Model, fit: identify.Identified, threshold: float) -> Correction:
+def from_drives(model: Model, fit: drives.Identified, threshold: float) -> Correction:
     """Return the correction of a drives-only fit: what it cannot tell keeps the URDF's."""
     values = (fit.damping, fit.friction, fit.armature)
     unknown = tuple(np.isnan(x) for x in values)

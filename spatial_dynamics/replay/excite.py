@@ -51,8 +51,9 @@ from ..excitation import (determined, Excitation, excitation, MAX_ITERATIONS,
                           MAX_SEED, min_rate, period_points, POINTS_PER_CYCLE)
 from ..files import check_output, load_yaml, write_atomic
 from ..trajectory import evaluate, sample, Trajectory, trajectory
-from .arguments import (check_model, checked, finite, load_model, model_parser, one_line, Parser,
-                        Refused)
+from ..recordings.errors import one_line, Refused
+from ..recordings.ranges import checked, finite
+from .arguments import check_model, model_of, model_parser, Parser
 from . import report
 
 #: Period (s) aimed at when ``--period`` is not given: the duration split into whole periods
@@ -446,7 +447,7 @@ def print_commands(path: str, plan: Excitation, controller: str, size: int) -> N
 
 def run(args, period: float, count: int) -> int:
     """Plan, judge, write; return the exit status (0 or 1)."""
-    model = load_model(args)
+    model = model_of(args)
     check_values(period, count, args.rate, len(model.joint_names))
     try:
         plan = excitation(model, period, args.harmonics, args.gravity, args.margin,

@@ -17,6 +17,7 @@ from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 import contextlib
 import math
+import multiprocessing
 import os
 import signal
 import sys
@@ -26,6 +27,8 @@ import numpy as np
 
 from ..backends import compiled     # compiled.THREADS: the threads this process may use
 from ..files import write_atomic
+
+# matplotlib is imported where a plot is drawn (start-up time, and optional: the plot extra)
 
 CHUNK = 1 << 18          # rows formatted at once
 
@@ -331,7 +334,6 @@ def start_child(prepare=prepare_plots):
     the parent, interrupted, ends it (:func:`stop_child`). Returns ``None`` where fork is
     missing (the job then runs in this process).
     """
-    import multiprocessing
     if 'fork' not in multiprocessing.get_all_start_methods():
         return None
     ctx = multiprocessing.get_context('fork')

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..identification import _ten, mass_com_inertia, pseudo_inertia
 from ..model import Model
+from ..urdf import _parse_urdf, _Report
 
 
 @dataclass
@@ -126,7 +127,6 @@ def prepare(text: bytes, model: Model, what: str = 'the URDF') -> Source:
     ``ValueError`` naming the file as ``what`` when the writer cannot find one of the model's
     links or joints in it, so that it is said before the fit, not after.
     """
-    from ..urdf import _parse_urdf, _Report
     try:
         found = _elements(text)
         # the bytes the loader was given: the reader drops a byte order mark

@@ -42,9 +42,10 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.bounds import check_bounded, MAX_WRENCH
 from spatial_dynamics.effort import with_gravity
-from spatial_dynamics.ros.bases import BaseInputs, contact_wrenches, observer_off
+from spatial_dynamics.ros.bases import BaseInputs, observer_off
 from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
 from spatial_dynamics.ros.diagnostics import Totals, Window
+from spatial_dynamics.ros.floating import contact_wrenches
 from spatial_dynamics.ros.inputs import (InputError, joint_state_arrays, stamp_ns,
                                          trajectory_arrays)
 from spatial_dynamics.ros.observer import (

@@ -1,9 +1,12 @@
 # Copyright 2026 spatial_dynamics contributors
 # SPDX-License-Identifier: Apache-2.0
-"""The node on a moving or floating base, without ROS: the base's inputs held, their answers.
+"""The node on a moving or floating base, without ROS: the base's parameters, its inputs held.
 
 Pure Python + numpy + the library (no rclpy import), tested in
-``test/test_node_base_inputs.py``. Parameter ``base`` (read-only):
+``test/test_node_base_inputs.py``. Each message is read by :mod:`.base_messages`, held here
+(:class:`BaseInputs`) until an answer takes the base's motion, or a floating base's
+:class:`~.floating.FloatingDynamics`, from it; the ``base`` status is
+:func:`~.diagnostics.base_status`'. Parameter ``base`` (read-only):
 
 ===========  ===================================================================================
 ``fixed``    today's node: the URDF's root link is fixed to the world (default).
@@ -17,9 +20,10 @@ Pure Python + numpy + the library (no rclpy import), tested in
              (or measured) joint state, and :func:`~spatial_dynamics.contact_inverse_dynamics`
              splits ``M q̈ + h`` between the joints' efforts and the contact wrenches of
              ``contacts.links``; a split that makes a contact pull (beyond
-             :func:`pull_tolerance`) is re-solved by the QP, or refused; one that leaves
-             the base unbalanced (:func:`residual_tolerance`: the contacts in contact cannot
-             carry it) or has no contact in force is refused (:class:`FloatingDynamics`).
+             :func:`~.floating.pull_tolerance`) is re-solved by the QP, or refused; one
+             that leaves the base unbalanced (:func:`~.floating.residual_tolerance`: the
+             contacts in contact cannot carry it) or has no contact in force is refused
+             (:class:`~.floating.FloatingDynamics`).
              ``contacts.links`` is required.
 ===========  ===================================================================================
 
@@ -35,19 +39,20 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
 * ``base/pose`` (``geometry_msgs/PoseStamped``): the pose in the world (``header.frame_id``,
   any) of the frame of ``base/twist`` (the root link; moving: or a link fixed to it), as
   ``nav_msgs/Odometry``'s pose of its ``child_frame_id``; a unit quaternion (x y z w) within
-  :data:`QUATERNION_TOLERANCE`.
+  :data:`~.base_messages.QUATERNION_TOLERANCE`.
 * ``base/odometry`` (``nav_msgs/Odometry``): its pose and the twist of its
   ``child_frame_id``, held as ``base/pose`` and ``base/twist`` (either input, or both).
 * ``base/twist`` (``geometry_msgs/TwistStamped``): the twist of the root link (or, moving, of a
   link fixed to it) in its own axes, ``header.frame_id`` that link or empty: what
   ``nav_msgs/Odometry`` carries in its child frame. A frame that is not a link of the URDF
   (``base_footprint``) must be exactly ``base_input.odometry_frame``, then taken as
-  ``base_input.odometry_link`` (:func:`twist_link`); any other is refused (``wrong_frame``).
+  ``base_input.odometry_link`` (:func:`~.base_messages.twist_link`); any other is refused
+  (``wrong_frame``).
   Its rate, the base's spatial acceleration, is the difference of successive samples over
   their stamps (``base_input.acceleration: difference``: no closer than
   ``base_input.min_interval``, low-pass filtered and bounded by what a base reaches,
-  :func:`twist_rate`; a refused twist keeps the last good one) or zero (``zero``: a base at
-  constant twist).
+  :func:`~.base_messages.twist_rate`; a refused twist keeps the last good one) or zero
+  (``zero``: a base at constant twist).
 * ``contact_states`` (``std_msgs/UInt8MultiArray``): one flag per ``contacts.links``, non-zero
   = in contact; until the first message every link of ``contacts.links`` is in contact.
 * ``measured_contact_wrenches`` (``geometry_msgs/WrenchStamped``, with ``contacts.measured``):
@@ -60,14 +65,14 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import List, Optional, Tuple
+from typing import Optional, Tuple
 
 import numpy as np
 import spatial_dynamics as sd
-from spatial_dynamics.bounds import (check_bounded, MAX_IMU_RATE, MAX_IMU_SPECIFIC_FORCE,
-                                     MAX_POSITION, MAX_VELOCITY, MAX_WRENCH)
-from spatial_dynamics.contacts import link_orientations
+from spatial_dynamics.ros.base_messages import (imu_arrays, pose_arrays, twist_array, twist_link,
+                                                twist_rate, wrench_array)
 from spatial_dynamics.ros.control import Dynamics
+from spatial_dynamics.ros.floating import FloatingDynamics
 from spatial_dynamics.ros.inputs import InputError, stamp_ns
 from spatial_dynamics.ros.parameters import ConfigError
 
@@ -80,8 +85,6 @@ BASE_ACCELERATIONS = ('difference', 'zero')
 #: Values of ``contacts.kind`` and ``contacts.method`` (the library's).
 CONTACT_KINDS = sd.contacts.KINDS
 CONTACT_METHODS = sd.contacts.METHODS
-#: ``|‖quaternion‖ − 1|`` accepted (then normalised): the library's, for every quaternion read.
-QUATERNION_TOLERANCE = sd.joints.QUATERNION_TOLERANCE
 #: Why an answer is refused on a moving or floating base (diagnostics counter keys).
 BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved',
                 'contacts_missing', 'contacts_pull', 'no_contact')
@@ -89,127 +92,6 @@ BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolv
 BASE_INPUT_REASONS = ('non_finite', 'out_of_bounds', 'not_unit', 'wrong_frame', 'unstamped',
                       'stamp_not_increasing', 'interval_too_short', 'length_mismatch',
                       'no_model', 'unknown_link')
-#: A contact pulls when its normal force ``n·f`` is below ``−PULL_TOLERANCE · m · 9.81`` N, ``m``
-#: the model's mass (:func:`pull_tolerance`): relative to the weight, because the split's
-#: rounding and the QP's convergence tolerance (relative, ~1e-8) scale with the forces, which
-#: scale with the weight; an absolute 1e-6 N would refuse a 100 kg robot's QP answers for
-#: their solver noise, and let a 0.1 kg one pull a tenth of a mN unseen.
-PULL_TOLERANCE = 1e-6
-#: A split leaves the base rows unbalanced when a component of its base residual
-#: ``(M q̈ + h)_base − J_c,baseᵀ λ`` (N m, N) exceeds ``RESIDUAL_TOLERANCE · m · 9.81``
-#: (:func:`residual_tolerance`), relative to the weight as :data:`PULL_TOLERANCE` and for the
-#: same reasons: the contacts in force cannot carry the base (one foot, none), the answer is
-#: refused (``contacts_unsolved``). A split that carries it leaves rounding (~1e-15 of the
-#: weight); the QP its convergence tolerance (~1e-8).
-RESIDUAL_TOLERANCE = 1e-6
-
-_XYZ = ('x', 'y', 'z')
-
-
-def _vector(what: str, values, bound: float, unit: str, names) -> np.ndarray:
-    """``values`` as an array, or InputError (non_finite, out_of_bounds) naming the field."""
-    x = np.array(values, dtype=float)
-    reason = check_bounded(what, x, bound, unit, names)
-    if reason:
-        raise InputError('non_finite' if 'not finite' in reason else 'out_of_bounds', reason)
-    return x
-
-
-def unit_quaternion(what: str, o) -> np.ndarray:
-    """``(x, y, z, w)`` of a ``geometry_msgs/Quaternion``, normalised; InputError if not unit."""
-    quat = _vector(what, (o.x, o.y, o.z, o.w), 2.0, '', ('x', 'y', 'z', 'w'))
-    norm = float(np.linalg.norm(quat))
-    if abs(norm - 1.0) > QUATERNION_TOLERANCE:
-        raise InputError('not_unit', f'{what} has norm {norm:g}, not a unit quaternion '
-                         f'(tolerance {QUATERNION_TOLERANCE:g})')
-    return quat / norm
-
-
-def twist_array(twist) -> np.ndarray:
-    """``[ω; v]`` (6,) of a ``geometry_msgs/Twist`` (rad/s, m/s), bounded."""
-    w, v = twist.angular, twist.linear
-    return _vector('twist', (w.x, w.y, w.z, v.x, v.y, v.z), MAX_VELOCITY, 'rad/s or m/s',
-                   [f'angular.{a}' for a in _XYZ] + [f'linear.{a}' for a in _XYZ])
-
-
-def pose_arrays(msg) -> Tuple[np.ndarray, np.ndarray]:
-    """``(position (3,), quaternion (4,) x y z w)`` of what has a ``pose``.
-
-    A ``geometry_msgs/PoseStamped``, or ``nav_msgs/Odometry``'s ``PoseWithCovariance``.
-    """
-    p = msg.pose.position
-    position = _vector('pose.position', (p.x, p.y, p.z), MAX_POSITION, 'm', _XYZ)
-    return position, unit_quaternion('pose.orientation', msg.pose.orientation)
-
-
-def imu_arrays(msg) -> Tuple[np.ndarray, np.ndarray]:
-    """``(specific force (3,) m/s², ω (3,) rad/s)`` of a ``sensor_msgs/Imu``.
-
-    Each axis bounded by what an IMU reports (:data:`~spatial_dynamics.bounds.MAX_IMU_RATE`,
-    :data:`~spatial_dynamics.bounds.MAX_IMU_SPECIFIC_FORCE`).
-    """
-    a, w = msg.linear_acceleration, msg.angular_velocity
-    return (_vector('linear_acceleration', (a.x, a.y, a.z), MAX_IMU_SPECIFIC_FORCE, 'm/s²',
-                    _XYZ),
-            _vector('angular_velocity', (w.x, w.y, w.z), MAX_IMU_RATE, 'rad/s', _XYZ))
-
-
-def twist_rate(before: Optional[np.ndarray], v_before: np.ndarray, v: np.ndarray, dt: float,
-               time_constant: float, max_linear: float, max_angular: float) -> np.ndarray:
-    """Return the base's acceleration ``[ω̇; v̇]`` (6,) from two twists ``dt`` s apart.
-
-    The difference ``(v − v_before) / dt`` low-pass filtered over the stamps,
-    ``a = before + (1 − exp(−dt / T)) (Δv / dt − before)`` (``before`` None: a first
-    difference, taken as it is; ``T`` 0: unfiltered), so a jump ``Δv`` moves ``a`` by at
-    most ``Δv / T``. InputError (out_of_bounds) when ``|ω̇|`` or ``|v̇|`` exceeds what a
-    real base reaches (``max_angular`` rad/s², ``max_linear`` m/s²): naming the norm.
-    """
-    raw = (v - v_before) / dt
-    if before is None or time_constant <= 0.0:
-        a = raw
-    else:
-        a = before + (-np.expm1(-dt / time_constant)) * (raw - before)
-    for part, bound, unit, param in ((a[:3], max_angular, 'rad/s²', 'angular'),
-                                     (a[3:], max_linear, 'm/s²', 'linear')):
-        norm = float(np.linalg.norm(part))
-        if not norm <= bound:
-            raise InputError('out_of_bounds', f'the twist differenced over {dt:.3g} s gives a '
-                             f'base {param} acceleration of {norm:.3g} {unit}, beyond '
-                             f'base_input.max_{param}_acceleration {bound:g} {unit}; the last '
-                             'good acceleration kept')
-    return a
-
-
-def twist_link(model: 'sd.Model', frame: str, field: str, odometry_link: str = '',
-               odometry_frame: str = '') -> str:
-    """Return the link of ``model`` a base twist in ``frame`` is of ('' = the root link).
-
-    ``frame`` is the message's ``field`` (``child_frame_id`` of ``nav_msgs/Odometry``,
-    ``header.frame_id`` of ``geometry_msgs/TwistStamped``): a link of the model, or exactly
-    ``odometry_frame`` (the frame a source writes that the URDF does not have, the
-    ``base_footprint`` of a typical /odom), which is ``odometry_link`` ('' = the root link);
-    empty is ``odometry_link`` too. Any other frame (a typo, another robot's odometry) is
-    InputError (wrong_frame) naming ``field``, as is a link other than the root link or (fixed
-    base) a link fixed to it.
-    """
-    aliased = not frame or (odometry_frame and frame == odometry_frame)
-    link = odometry_link if aliased else frame
-    root = model.body_names[1 if model.floating else 0]
-    if link and link not in model.frames:
-        known = (f', nor base_input.odometry_frame {odometry_frame!r}' if odometry_frame
-                 else '')
-        raise InputError('wrong_frame', f'{field} {frame!r} is not a link of the model{known}: '
-                         f"the twist must be the base's, in its frame {root!r}" + (
-                             '' if model.floating else ' or a link fixed to it') + (
-                             f'; if {frame!r} is the frame your odometry writes, set '
-                             f'base_input.odometry_frame to {frame!r} and '
-                             'base_input.odometry_link to the link of the URDF it is'))
-    if link and link != root and (model.floating or model.frames[link].body != 0):
-        where = 'a link that moves with a joint' if not model.floating else 'not the root link'
-        raise InputError('wrong_frame', f'{field} {frame!r} is {where}: the twist must be the '
-                         f"base's, in its frame {root!r}" + (
-                             '' if model.floating else ' or a link fixed to it'))
-    return link
 
 
 def check_base(params, model: 'sd.Model', source: str) -> None:
@@ -294,25 +176,6 @@ def source_hint(params, inputs: 'BaseInputs') -> str:
         return ("base/imu arrives but base_input.source is 'twist': set base_input.source "
                 "'imu' (and base_input.imu_link) to use it")
     return ''
-
-
-def pull_tolerance(model: 'sd.Model') -> float:
-    """Return the N by which a contact may pull: :data:`PULL_TOLERANCE` of ``m · 9.81``."""
-    return PULL_TOLERANCE * float(model.inertia[:, 3, 3].sum()) * 9.81
-
-
-def residual_tolerance(model: 'sd.Model') -> float:
-    """Return the base residual (N m, N) a split may leave: :data:`RESIDUAL_TOLERANCE` · m g."""
-    return RESIDUAL_TOLERANCE * float(model.inertia[:, 3, 3].sum()) * 9.81
-
-
-def qp_missing_warning(robot) -> str:
-    """Return the WARN, once at configuration, of a floating base without its QP ('': none)."""
-    if robot is None or not robot.qp_missing:
-        return ''
-    return ('contacts: the QP that re-solves a split making a contact pull cannot run '
-            f'({robot.qp_missing}); answering with contacts.method alone, and refusing '
-            'each answer whose split makes a contact pull (contacts_pull in /diagnostics)')
 
 
 def _same(a: Optional[tuple], b: tuple) -> bool:
@@ -411,7 +274,8 @@ class BaseInputs:
         """Check and hold the base's ``twist`` (a ``geometry_msgs/Twist``) in ``frame``.
 
         ``field`` names where the message carries ``frame``: a link of the model, or
-        ``base_input.odometry_frame``, taken as ``base_input.odometry_link`` (:func:`twist_link`).
+        ``base_input.odometry_frame``, taken as ``base_input.odometry_link``
+        (:func:`~.base_messages.twist_link`).
         """
         robot, params = config.robot, config.params
         frame = twist_link(robot.base, frame, field, params.base_input_odometry_link,
@@ -457,9 +321,7 @@ class BaseInputs:
         if link not in links:
             raise InputError('unknown_link', f'header.frame_id {link!r} is not one of '
                              f'contacts.links {list(links)}')
-        t, f = msg.wrench.torque, msg.wrench.force
-        wrench = _vector(f'wrench on {link!r}', (t.x, t.y, t.z, f.x, f.y, f.z), MAX_WRENCH,
-                         'N m or N', [f'torque.{a}' for a in _XYZ] + [f'force.{a}' for a in _XYZ])
+        wrench = wrench_array(f'wrench on {link!r}', msg.wrench)
         self.measured[link] = Held(wrench, stamp_ns(msg.header), now_ns)
 
     def _measured(self, params, contacts, now_ns: int) -> Optional[dict]:
@@ -578,8 +440,8 @@ class BaseInputs:
     def solved(self, result: 'sd.ContactResult', tolerance: float) -> None:
         """Count a contact solution's residual and violations for the period.
 
-        A normal force below zero by no more than ``tolerance`` (:func:`pull_tolerance`) is
-        rounding, not a pull.
+        A normal force below zero by no more than ``tolerance``
+        (:func:`~.floating.pull_tolerance`) is rounding, not a pull.
         """
         window = self.window
         window.solved += 1
@@ -619,251 +481,3 @@ class BaseInputs:
         window.unsolved += 1
         window.unsolved_residual = max(window.unsolved_residual, residual)
         window.unsolved_last = str(refused)
-
-
-@dataclass(frozen=True)
-class FloatingDynamics(Dynamics):
-    """A floating base's model part: contact-consistent joint efforts (one answer).
-
-    ``q, q̇, q̈`` of the methods are the joints'; the base's are ``base_q`` (position, x y z w),
-    ``base_v`` and ``base_a`` (``[ω; v]``, base frame). Each :meth:`full` solves
-    :func:`~spatial_dynamics.contact_inverse_dynamics` with ``contacts`` by ``method`` and
-    keeps its result in ``results`` (the contact wrenches to publish); with ``measured``
-    (link -> ``[n; f]`` in the link's frame) :meth:`full` takes those instead of solving
-    for them (their base residual is the check); the efforts never
-    include the base's rows. Armature and friction (``friction_threshold``) add to the
-    joints' (the rotors' torque; the drives' friction).
-
-    A split (``torques``, ``forces``) that makes a contact pull by more than
-    ``pull_tolerance`` N (:func:`pull_tolerance`) in :meth:`full` or :meth:`gravity_torque`
-    is re-solved by ``'qp'`` (friction cones of the contacts' ``μ``, ``n·f ≥ 0``), whose
-    answer is used; each such pull is kept in ``pulls``. InputError ``contacts_unsolved``
-    when the QP finds none, ``contacts_pull`` when ``qp_missing`` says why the QP cannot run
-    (or it pulls itself). :meth:`inertia_times` is not checked for pulls: its forces are the
-    increments of a linear split (no gravity), which have no sign of their own.
-
-    Every split (each method, :meth:`inertia_times` too) must carry the base: a base
-    residual above ``residual_tolerance`` (N m, N; :func:`residual_tolerance`) is
-    InputError ``contacts_unsolved``, its residual kept in ``unsolved``, and no contact in
-    force at all (in flight) InputError ``no_contact``, whatever the residual. The split's
-    residual is the least any ``λ`` leaves (``J_cᵀ``'s range), so the QP, bound by the same
-    rows, cannot carry what it could not: it is refused, not re-solved. Measured wrenches
-    are the sensors': their residual is reported, not refused.
-    """
-
-    base_q: np.ndarray = None
-    base_v: np.ndarray = None
-    base_a: np.ndarray = None
-    contacts: Tuple['sd.Contact', ...] = ()
-    method: str = 'torques'
-    results: List = None
-    measured: Optional[dict] = None
-    qp_missing: str = ''
-    pull_tolerance: float = 0.0
-    pulls: List = None
-    residual_tolerance: float = 0.0
-    unsolved: List = None
-
-    def _solve(self, q, qd, qdd, base_v, base_a, gravity, measured=None,
-               unilateral: bool = True) -> np.ndarray:
-        q_full = np.concatenate((self.base_q, q))
-        if measured is not None:   # world axes, as contact_inverse_dynamics takes them
-            rotations = link_orientations(self.model, q_full, list(measured))
-            measured = {c.name: _world(rotations[c.link], measured[c.link], c.rows)
-                        for c in self.contacts}
-        state = (self.model, q_full, np.concatenate((base_v, qd)),
-                 np.concatenate((base_a, qdd)), self.contacts)
-        result = sd.contact_inverse_dynamics(*state, measured=measured, method=self.method,
-                                             gravity=gravity)
-        if result.status != 'solved' and self.contacts:   # the QP: no forces in the cones
-            self.unsolved.append(float(np.abs(result.base_residual).max()))
-            raise InputError('contacts_unsolved', f'contacts {self.method}: the contacts in '
-                             f'contact {[c.link for c in self.contacts]} cannot carry the '
-                             f'base: {result.summary()}; not publishing')
-        if measured is None or not self.contacts:
-            self._carries(result)
-        if measured is not None or not unilateral:
-            return result
-        pull = _worst_pull(result, self.pull_tolerance)
-        if pull is None:      # the fast path: the violations _result found, usually none
-            return result
-        self.pulls.append(pull)
-        what = (f'contacts {self.method}: contact {pull.contact!r} would pull {pull.amount:.3g} '
-                f'N (n·f < 0; tolerance {self.pull_tolerance:.3g} N)')
-        if self.method == 'qp' or self.qp_missing:
-            raise InputError('contacts_pull', what + (
-                '; not publishing' if self.method == 'qp' else
-                f'; the QP that re-solves it cannot run ({self.qp_missing}); not publishing'))
-        result = sd.contact_inverse_dynamics(*state, method='qp', gravity=gravity)
-        if result.status != 'solved':
-            raise InputError('contacts_unsolved', f'{what}; re-solved by qp: '
-                             f'{result.summary()}; not publishing')
-        self._carries(result)
-        again = _worst_pull(result, self.pull_tolerance)
-        if again is not None:
-            raise InputError('contacts_pull', f'{what}; re-solved by qp, contact '
-                             f'{again.contact!r} still pulls {again.amount:.3g} N; '
-                             'not publishing')
-        return result
-
-    def _carries(self, result: 'sd.ContactResult') -> None:
-        """Refuse ``result`` unless it carries the base rows (InputError ``contacts_unsolved``).
-
-        ``no_contact`` whatever its residual when no contact is in force (in flight).
-        """
-        residual = float(np.abs(result.base_residual).max())
-        if not self.contacts:
-            self.unsolved.append(residual)
-            raise InputError('no_contact', 'no contact carries the base: no link of '
-                             'contacts.links is in contact (contact_states all 0: in flight), '
-                             f'base residual {residual:.3g} (N m, N); not publishing')
-        if residual > self.residual_tolerance:
-            self.unsolved.append(residual)
-            raise InputError('contacts_unsolved', f'contacts {result.method}: the contacts in '
-                             f'contact {[c.link for c in self.contacts]} cannot carry the '
-                             f'base: base residual {residual:.3g} (N m, N; tolerance '
-                             f'{self.residual_tolerance:.3g}, 1e-6 m g); not publishing')
-
-    def full(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-        """Return the joints' efforts of ``M q̈ + h = Sᵀ τ + J_cᵀ λ``, + armature, friction."""
-        result = self._solve(q, qd, qdd, self.base_v, self.base_a, self.gravity, self.measured)
-        self.results.append(result)
-        tau = np.array(result.tau)
-        if self.armature is not None:
-            tau += self.armature * qdd
-        if self.friction_threshold is not None:
-            tau += sd.friction_torque(self.model, np.concatenate((self.base_v, qd)),
-                                      self.friction_threshold)[6:]
-        return tau
-
-    def gravity_torque(self, q: np.ndarray) -> np.ndarray:
-        """Return the joints' efforts that hold the robot still on its contacts (q̇ = q̈ = 0)."""
-        zero, six = np.zeros(len(q)), np.zeros(6)
-        return np.array(self._solve(q, zero, zero, six, six, self.gravity).tau)
-
-    def inertia_times(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """Return the contact-consistent efforts of joint accelerations ``u`` (no gravity)."""
-        zero, six = np.zeros(len(q)), np.zeros(6)
-        tau = np.array(self._solve(q, zero, u, six, six, (0.0, 0.0, 0.0),
-                                   unilateral=False).tau)
-        if self.armature is not None:
-            tau += self.armature * u
-        return tau
-
-
-def _worst_pull(result: 'sd.ContactResult', tolerance: float
-                ) -> Optional['sd.contacts.Violation']:
-    """Return the contact of ``result`` that pulls most beyond ``tolerance`` N (None: none)."""
-    worst = None
-    for violation in result.violations:
-        if (violation.kind == 'unilateral' and violation.amount > tolerance
-                and (worst is None or violation.amount > worst.amount)):
-            worst = violation
-    return worst
-
-
-def _world(R: np.ndarray, wrench: np.ndarray, rows: int) -> np.ndarray:
-    """Return a link-frame ``[n; f]`` in world axes: a point contact's force (3), else both."""
-    if rows == 3:
-        return R @ wrench[3:]
-    return np.r_[R @ wrench[:3], R @ wrench[3:]]
-
-
-def contact_wrenches(model: 'sd.Model', base_q: np.ndarray, q: np.ndarray,
-                     result: 'sd.ContactResult') -> Tuple[Tuple[str, np.ndarray], ...]:
-    """Each contact's wrench ``[n; f]`` (6,) on the robot, in its link's frame, at its origin.
-
-    ``result.forces`` are in world axes at the contact point (the link's origin: contacts of
-    the node have no offset); a point contact's moment is zero.
-    """
-    links = tuple(result.forces)
-    rotations = link_orientations(model, np.concatenate((base_q, q)), links)
-    out = []
-    for link in links:
-        R = rotations[link]
-        force = np.asarray(result.forces[link], dtype=float)
-        wrench = np.zeros(6)
-        if len(force) == 3:
-            wrench[3:] = R.T @ force
-        else:
-            wrench[:3], wrench[3:] = R.T @ force[:3], R.T @ force[3:]
-        out.append((link, wrench))
-    return tuple(out)
-
-
-def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: int):
-    """Return the ``base`` status: what the base's inputs are, the contacts' figures.
-
-    ERROR while a needed input is missing or stale (nothing is published), WARN when a
-    contact solution of the period violated a friction cone or pulled on the ground, left
-    a base residual above :func:`residual_tolerance` (measured wrenches), when an answer
-    was refused because its split made a contact pull and the QP could not re-solve it, or
-    because its contacts could not carry the base. Answers re-solved by the QP
-    (a contact would have pulled) are counted, with the worst pull seen: that is the node
-    working as documented, not a warning.
-    """
-    values = [('base', params.base)]
-    needed = []
-    if params.base == 'moving':
-        values.append(('source', params.base_input_source))
-        needed = ([('base/imu', inputs.imu)] if params.base_input_source == 'imu'
-                  else [('base/pose', inputs.pose), ('base/twist', inputs.twist)])
-    elif params.base == 'floating':
-        needed = [('base/pose', inputs.pose), ('base/twist', inputs.twist)]
-    values += [('base acceleration', params.base_input_acceleration),
-               ('base timeout [s]', str(params.base_input_timeout))]
-    problems = []
-    for topic, held in needed:
-        age = None if held is None else (now_ns - held.receipt_ns) * 1e-9
-        values.append((f'{topic} age [s]', '' if age is None else f'{age:.3f}'))
-        if age is None:
-            problems.append(f'no {topic} yet')
-        elif age > params.base_input_timeout:
-            problems.append(f'{topic} stale ({age:.2f} s, base_input.timeout '
-                            f'{params.base_input_timeout} s)')
-    values += [(f'{topic} received', str(count)) for topic, count in inputs.received.items()]
-    values += [(f'rejected {key}', str(count)) for key, count in inputs.rejected.items()]
-    if params.base == 'floating':
-        values += [('contacts', ', '.join(params.contacts_links or ())),
-                   ('contacts method', params.contacts_method),
-                   ('contact solutions', str(window.solved)),
-                   ('base residual max', f'{window.residual_max:.3g}'),
-                   ('last solution', window.last)]
-        values += [(f'violation {key}', f'{count} (worst {window.worst[key]:.3g} N)')
-                   for key, count in window.violations.items()]
-        values += [('contact pull tolerance [N]', f'{robot.pull_tolerance:.3g}' if robot
-                    else ''),
-                   ('qp fallback', (robot.qp_missing or 'ready') if robot else ''),
-                   ('re-solved by qp (a contact would pull)', str(window.resolved)),
-                   ('worst pull [N]', f'{window.pull_max:.3g}' + (
-                       f' ({window.pull_contact})' if window.pull_contact else ''))]
-        values += [(f'refused {reason} (a contact would pull)', str(count))
-                   for reason, count in window.refused.items()]
-        values += [('refused: the contacts cannot carry the base (contacts_unsolved, '
-                    'no_contact)', str(window.unsolved)),
-                   ('worst refused base residual', f'{window.unsolved_residual:.3g}')]
-    if robot is None:
-        return 'ERROR', 'no robot model', values
-    hint = source_hint(params, inputs)
-    if problems and hint:
-        problems.append(hint)
-    if problems:
-        return 'ERROR', '; '.join(problems) + '; not publishing', values
-    warnings = []
-    if window.refused:
-        warnings.append(f'{sum(window.refused.values())} answer(s) refused, a contact would '
-                        f'pull: {window.refused_last}')
-    if window.violations:
-        warnings.append('contact violations: ' + ', '.join(
-            f'{key} ({count}x, worst {window.worst[key]:.3g} N)'
-            for key, count in window.violations.items()))
-    if window.unsolved:
-        warnings.append(f'{window.unsolved} answer(s) refused, the contacts cannot carry the '
-                        f'base (worst base residual {window.unsolved_residual:.3g}): '
-                        f'{window.unsolved_last}')
-    if window.residual_max > robot.residual_tolerance:
-        warnings.append(f'base residual {window.residual_max:.3g} (the measured contact '
-                        'wrenches do not carry the base rows)')
-    if warnings:
-        return 'WARN', '; '.join(warnings), values
-    return 'OK', f'base {params.base}: inputs fresh', values

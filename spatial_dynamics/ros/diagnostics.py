@@ -4,7 +4,7 @@
 
 Pure: the node fills :class:`Window` (one diagnostics period) and :class:`Totals` (since the
 start) as messages come, and once a second publishes what :func:`model_status`,
-:func:`feedforward_status` and :func:`observer_status` make of them.
+:func:`feedforward_status`, :func:`observer_status` and :func:`base_status` make of them.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 from spatial_dynamics import backends, Model
+from spatial_dynamics.ros.bases import BaseInputs, BaseWindow, source_hint
 from spatial_dynamics.ros.config import NODE_REASONS, URDF_WARNINGS_LISTED, WRENCH_REASONS
 from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
 from spatial_dynamics.ros.inputs import REASONS
@@ -327,3 +328,81 @@ def _wrench_text(wrench: Optional[dict], values: list) -> str:
             f"samples could not observe every direction (rank {wrench['rank']}, sigma_min "
             f"{wrench['sigma_min']:.3g}, {wrench['weak_loaded']} of them loaded past "
             f"external_torque_warn); missing or underestimated: {named}")
+
+
+def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: int):
+    """Return the ``base`` status: what the base's inputs are, the contacts' figures.
+
+    ERROR while a needed input is missing or stale (nothing is published), WARN when a
+    contact solution of the period violated a friction cone or pulled on the ground, left
+    a base residual above :func:`~.floating.residual_tolerance` (measured wrenches), when an answer
+    was refused because its split made a contact pull and the QP could not re-solve it, or
+    because its contacts could not carry the base. Answers re-solved by the QP
+    (a contact would have pulled) are counted, with the worst pull seen: that is the node
+    working as documented, not a warning.
+    """
+    values = [('base', params.base)]
+    needed = []
+    if params.base == 'moving':
+        values.append(('source', params.base_input_source))
+        needed = ([('base/imu', inputs.imu)] if params.base_input_source == 'imu'
+                  else [('base/pose', inputs.pose), ('base/twist', inputs.twist)])
+    elif params.base == 'floating':
+        needed = [('base/pose', inputs.pose), ('base/twist', inputs.twist)]
+    values += [('base acceleration', params.base_input_acceleration),
+               ('base timeout [s]', str(params.base_input_timeout))]
+    problems = []
+    for topic, held in needed:
+        age = None if held is None else (now_ns - held.receipt_ns) * 1e-9
+        values.append((f'{topic} age [s]', '' if age is None else f'{age:.3f}'))
+        if age is None:
+            problems.append(f'no {topic} yet')
+        elif age > params.base_input_timeout:
+            problems.append(f'{topic} stale ({age:.2f} s, base_input.timeout '
+                            f'{params.base_input_timeout} s)')
+    values += [(f'{topic} received', str(count)) for topic, count in inputs.received.items()]
+    values += [(f'rejected {key}', str(count)) for key, count in inputs.rejected.items()]
+    if params.base == 'floating':
+        values += [('contacts', ', '.join(params.contacts_links or ())),
+                   ('contacts method', params.contacts_method),
+                   ('contact solutions', str(window.solved)),
+                   ('base residual max', f'{window.residual_max:.3g}'),
+                   ('last solution', window.last)]
+        values += [(f'violation {key}', f'{count} (worst {window.worst[key]:.3g} N)')
+                   for key, count in window.violations.items()]
+        values += [('contact pull tolerance [N]', f'{robot.pull_tolerance:.3g}' if robot
+                    else ''),
+                   ('qp fallback', (robot.qp_missing or 'ready') if robot else ''),
+                   ('re-solved by qp (a contact would pull)', str(window.resolved)),
+                   ('worst pull [N]', f'{window.pull_max:.3g}' + (
+                       f' ({window.pull_contact})' if window.pull_contact else ''))]
+        values += [(f'refused {reason} (a contact would pull)', str(count))
+                   for reason, count in window.refused.items()]
+        values += [('refused: the contacts cannot carry the base (contacts_unsolved, '
+                    'no_contact)', str(window.unsolved)),
+                   ('worst refused base residual', f'{window.unsolved_residual:.3g}')]
+    if robot is None:
+        return 'ERROR', 'no robot model', values
+    hint = source_hint(params, inputs)
+    if problems and hint:
+        problems.append(hint)
+    if problems:
+        return 'ERROR', '; '.join(problems) + '; not publishing', values
+    warnings = []
+    if window.refused:
+        warnings.append(f'{sum(window.refused.values())} answer(s) refused, a contact would '
+                        f'pull: {window.refused_last}')
+    if window.violations:
+        warnings.append('contact violations: ' + ', '.join(
+            f'{key} ({count}x, worst {window.worst[key]:.3g} N)'
+            for key, count in window.violations.items()))
+    if window.unsolved:
+        warnings.append(f'{window.unsolved} answer(s) refused, the contacts cannot carry the '
+                        f'base (worst base residual {window.unsolved_residual:.3g}): '
+                        f'{window.unsolved_last}')
+    if window.residual_max > robot.residual_tolerance:
+        warnings.append(f'base residual {window.residual_max:.3g} (the measured contact '
+                        'wrenches do not carry the base rows)')
+    if warnings:
+        return 'WARN', '; '.join(warnings), values
+    return 'OK', f'base {params.base}: inputs fresh', values

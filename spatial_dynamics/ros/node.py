@@ -5,7 +5,8 @@
 A thin shell, like robot_state_publisher: it declares the parameters of the table in
 :mod:`spatial_dynamics.ros.config` (documented in ``config/inverse_dynamics.yaml`` and the
 README, generated from it), validates a change into a whole new
-:class:`~spatial_dynamics.ros.records.Config` in the on-set callback and swaps it in (one
+:class:`~spatial_dynamics.ros.records.Config` in the on-set callback
+(:func:`~spatial_dynamics.ros.configure.prepare`) and swaps it in (one
 reference) in the post-set callback, and hands each input message with the current ``Config``
 to :class:`~spatial_dynamics.ros.answering.Answering`, which computes the answer
 (:mod:`spatial_dynamics.ros.control`) and returns what to publish; the node only publishes
@@ -59,15 +60,16 @@ from sensor_msgs.msg import Imu, JointState
 import spatial_dynamics as sd
 from spatial_dynamics.ros import messages
 from spatial_dynamics.ros.answering import Answering, Out
-from spatial_dynamics.ros.bases import base_status, observer_off, qp_missing_warning
+from spatial_dynamics.ros.bases import observer_off
 from spatial_dynamics.ros.common import advertise, DESCRIPTION_QOS, plan_qos, spin, subscribe
 from spatial_dynamics.ros.config import (
-    build_robot, ConfigError, NODE_NAME, PARAMETER_NAMES, PARAMETERS, PAYLOAD_PARAMETERS,
-    prepare, reparse_needed)
+    ConfigError, NODE_NAME, PARAMETER_NAMES, PARAMETERS, PAYLOAD_PARAMETERS)
+from spatial_dynamics.ros.configure import build_robot, prepare, reparse_needed
 from spatial_dynamics.ros.control import terms_names
 from spatial_dynamics.ros.descriptions import description_source, DescriptionParser, ParseRequest
 from spatial_dynamics.ros.diagnostics import (
-    backend_text, dof_text, feedforward_status, model_status, observer_status)
+    backend_text, base_status, dof_text, feedforward_status, model_status, observer_status)
+from spatial_dynamics.ros.floating import qp_missing_warning
 from spatial_dynamics.ros.plans import Annotator, prepare_plan
 from spatial_dynamics.ros import realtime
 from spatial_dynamics.ros.records import Config, Robot
@@ -234,7 +236,7 @@ class InverseDynamicsNode(Node):
             self._apply(pending[1], pending[2])
 
     def _prepare(self, changes: dict) -> Config:
-        """Validate ``changes`` against the current state (:func:`~.config.prepare`)."""
+        """Validate ``changes`` against the current state (:func:`~.configure.prepare`)."""
         config = self.config
         if config is None:
             return prepare({}, changes, None)

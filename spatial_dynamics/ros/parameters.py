@@ -17,7 +17,8 @@ From the table come
 * the documentation: the node's ``config/<node>.yaml`` (:meth:`Table.yaml`) and the README's
   parameter table (:meth:`Table.markdown`), which a test compares with the files.
 
-Pure Python: rclpy is imported only by :meth:`Table.declare`.
+Pure Python: ROS is imported only inside :meth:`Table.descriptor` and :meth:`Table.declare`,
+so a table, its documents and a node's ``--help`` load without rclpy's start-up.
 """
 
 from __future__ import annotations

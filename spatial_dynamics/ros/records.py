@@ -57,11 +57,11 @@ class Robot:
     is in the order of ``joints`` (= ``model.joint_names``). ``armature`` is ``None`` or (n,),
     ``friction_threshold`` is ``None`` (friction_model none) or the smooth-sign velocity.
     ``backend`` is what the answers run on (``'numpy'`` or ``'compiled'``, see
-    :func:`~.config.resolve_backend`), ``setting`` the ``backend`` parameter. On a floating
+    :func:`~.configure.resolve_backend`), ``setting`` the ``backend`` parameter. On a floating
     base, ``qp_missing`` says why the contacts' QP cannot run (``''``: imported and warmed)
     ``pull_tolerance`` is the N by which a contact may pull
-    (:func:`~.bases.pull_tolerance`) and ``residual_tolerance`` the base residual (N m, N) a
-    split may leave (:func:`~.bases.residual_tolerance`). ``effort_limit`` (n,) is the URDF's
+    (:func:`~.floating.pull_tolerance`) and ``residual_tolerance`` the base residual (N m, N) a
+    split may leave (:func:`~.floating.residual_tolerance`). ``effort_limit`` (n,) is the URDF's
     ``<limit effort>`` of each of ``joints`` (the model's, in their order; ``inf`` where the
     URDF gives none): an answer above it is reported (clamped only with ``clamp``).
     """
@@ -89,7 +89,7 @@ class Robot:
 
 @dataclass(frozen=True)
 class Config:
-    """The checked parameters and the robot, swapped in as one (see :func:`~.config.prepare`).
+    """The checked parameters and the robot, swapped in as one (see :func:`~.configure.prepare`).
 
     ``params`` is the table's frozen ``Params`` (one field per parameter, under the
     parameter's name with ``.`` as ``_``): what the answers read. ``robot`` is None until a

@@ -56,6 +56,7 @@ import numpy as np
 
 import spatial_dynamics as sd
 from .driving import node_command, pyplot, redraw, robot_model, save_figure, start, stop
+from .latency import busy_loops, in_range
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -94,6 +95,13 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                              'time, instead of relaying a desired state per step')
     parser.add_argument('--timeout', type=float, default=120.0,
                         help='wall-clock seconds allowed per law before giving up (default 120)')
+    cpus = os.cpu_count() or 1
+    parser.add_argument('--busy', type=in_range(int, 0, 4 * cpus), default=0,
+                        help=f'busy loops beside the run, one process each, 0 .. {4 * cpus} '
+                             '(the load of a busy machine; default 0)')
+    parser.add_argument('--priority', type=in_range(int, 0, 99), default=0,
+                        help="the node's thread_priority (SCHED_FIFO of its answering thread), "
+                             '0 .. 99 (default 0: normal scheduling)')
     return parser.parse_args(argv)
 
 
@@ -386,7 +394,8 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
         'robot_description_file': urdf, 'control_mode': settings['control_mode'],
         'output': settings['output'],
         'kp': '[' + ','.join(repr(float(x)) for x in kp) + ']',
-        'kd': '[' + ','.join(repr(float(x)) for x in kd) + ']'},
+        'kd': '[' + ','.join(repr(float(x)) for x in kd) + ']',
+        'thread_priority': str(args.priority)},
         os.path.join(logs, f'{slug}_node.log'))
     run = Run(name, names)
     driver = rclpy.create_node('closed_loop_driver', namespace=namespace)
@@ -514,6 +523,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
           f'controller: {" ".join(node_command("inverse_dynamics", "spatial_dynamics.ros.node"))}'
           f'\n(their output in {args.log_dir}/)', flush=True)
     status = 0
+    loops = busy_loops(args.busy)
+    if args.busy or args.priority:
+        print(f'{args.busy} busy loops beside the run; node thread_priority {args.priority}; '
+              f'load {os.getloadavg()[0]:.2f}', flush=True)
     try:
         for k in picks:
             name, settings = LAWS[k]
@@ -529,6 +542,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         status = 1
     finally:
         rclpy.try_shutdown()
+        for loop in loops:
+            loop.kill()
+            loop.wait()
     summaries = [run.summary() for run in runs]
     for s in summaries:
         print(f'{s["law"]:<20} rms {s["rms"]:.3e}  max {s["max"]:.3e}  '
@@ -539,7 +555,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, 'w') as f:
             json.dump({'robot': model.name, 'urdf': urdf, 'robot_urdf': args.robot_urdf or urdf,
-                       'frequency_hz': args.frequency,
+                       'frequency_hz': args.frequency, 'busy': args.busy,
+                       'thread_priority': args.priority,
                        'timestep_s': TIMESTEP, 'laws': summaries}, f, indent=1)
     if args.plot and runs:
         print(plot(runs, args.plot, model.name, args.frequency))

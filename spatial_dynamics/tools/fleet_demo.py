@@ -26,7 +26,7 @@ import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics.model import rigid_body_inertia
-from spatial_dynamics.replay import bags
+from spatial_dynamics.recordings import bags
 from spatial_dynamics.replay.urdf_writer import corrected_urdf
 from .identify_demo import drives, Motion, NOISE_QD, NOISE_TAU, record, ROBOTS
 from .startup import example_robot

@@ -45,9 +45,10 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import identification, trajectory
 from spatial_dynamics.model import rigid_body_inertia
-from spatial_dynamics.replay import bags, splines
-from spatial_dynamics.replay.__main__ import main as replay, parser
-from spatial_dynamics.replay.recording import recording, Stages
+from spatial_dynamics.recordings import bags
+from spatial_dynamics.recordings.recording import Reading, recording, Stages
+from spatial_dynamics.replay import splines
+from spatial_dynamics.replay.__main__ import main as replay
 from spatial_dynamics.replay.urdf_writer import corrected_urdf
 from spatial_dynamics.ros import control
 from spatial_dynamics.sim.robot import SimulatedRobot
@@ -221,8 +222,7 @@ def floor(true_text: bytes, joints, urdf: str, bag: str) -> np.ndarray:
     50 ms smoothing window follows).
     """
     true = sd.Model.from_urdf(true_text.decode(), joints=joints)
-    args = parser().parse_args(['residual', bag, '--urdf', urdf])
-    data = recording(args, bag, true, Stages())
+    data = recording(Reading(), bag, true, Stages())       # replay residual's defaults
     damping, friction, armature = drives(true.nq)
     q, qd, qdd = data['q'], data['qd'], data['qdd']
     tau = (sd.rnea(true, q, qd, qdd) + damping * qd + friction * np.tanh(qd / EPS)

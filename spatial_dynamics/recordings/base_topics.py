@@ -17,13 +17,16 @@ acceleration and the joints' q̈ have the same delay (none) and the same cut-off
   (:func:`~spatial_dynamics.base.base_from_imu`), the IMU at the origin of ``--imu-link``
   (default its ``frame_id``) with that link's axes.
 
-The result is passed as ``base=`` to RNEA and the regressor. A topic that is missing, has
-too few usable samples, or does not cover the joint states' time span (within one of its
-own periods at each end; no gap of more than 5 of them inside) is refused, naming it.
+The topic is a :class:`BaseTopic` (the commands' ``--base-odometry``/``--base-imu`` and
+their links, the fleet's manifest columns). The result is passed as ``base=`` to RNEA and the
+regressor. A topic that is missing, has too few usable samples, or does not cover the joint
+states' time span (within one of its own periods at each end; no gap of more than 5 of them
+inside) is refused, naming it.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Optional, Sequence, Tuple
 
 import numpy as np
@@ -34,8 +37,8 @@ from ..bounds import (MAX_BASE_ANGULAR_ACCELERATION, MAX_BASE_LINEAR_ACCELERATIO
 from ..joints import unit_norms
 from ..model import Model
 from . import bags, differentiate
-from .arguments import Refused
 from .cdr import IMU, ODOMETRY, Stamped
+from .errors import Refused
 
 #: Fewest usable messages of a base topic (two interpolate; a few say its period).
 MIN_BASE_SAMPLES = 5
@@ -43,50 +46,34 @@ MIN_BASE_SAMPLES = 5
 GAP = 5.0
 
 
-def add_base_arguments(p) -> None:
-    """Declare ``--base-odometry``/``--base-imu`` (one of them) and their links."""
-    g = p.add_argument_group('moving base (a mobile manipulator: the base\'s motion from the '
-                             'same bag)')
-    g.add_argument('--base-odometry', metavar='TOPIC',
-                   help='nav_msgs/Odometry of the base: its twist (differentiated like the '
-                   'joints) and orientation (for gravity)')
-    g.add_argument('--base-imu', metavar='TOPIC',
-                   help='sensor_msgs/Imu on the base: gyro and accelerometer (gravity '
-                   'included); instead of --base-odometry')
-    g.add_argument('--odometry-link', metavar='LINK',
-                   help='the link the odometry\'s twist is of (default: its child_frame_id)')
-    g.add_argument('--imu-link', metavar='LINK',
-                   help='the link the IMU is at, with its axes (default: its frame_id)')
+@dataclass(frozen=True)
+class BaseTopic:
+    """The topic of the bag a moving base's motion is read from, and the link it is of.
 
-
-def check_base_arguments(p, args) -> None:
-    """Exit with a usage error for both topics, or a link option without its topic.
-
-    One topic gives the whole motion: the IMU's (gravity in it, the linear velocity, which
-    no joint torque depends on, not needed) or the odometry's; both would be two answers.
+    ``odometry`` (``nav_msgs/Odometry``) or ``imu`` (``sensor_msgs/Imu``), at most one (each
+    gives the whole motion); ``odometry_link``/``imu_link``: the link its vectors are in
+    (default the message's ``child_frame_id``/``frame_id``). Neither topic: a fixed base.
     """
-    if getattr(args, 'base_odometry', None) and getattr(args, 'base_imu', None):
-        p.error('--base-odometry and --base-imu: give one (each gives the whole motion of the '
-                'base)')
-    for link, topic in (('odometry_link', 'base_odometry'), ('imu_link', 'base_imu')):
-        if getattr(args, link, None) and not getattr(args, topic, None):
-            p.error(f'--{link.replace("_", "-")} needs --{topic.replace("_", "-")}')
+
+    odometry: Optional[str] = None
+    imu: Optional[str] = None
+    odometry_link: Optional[str] = None
+    imu_link: Optional[str] = None
 
 
-def base_motion(args, bag: str, model: Model, t: np.ndarray,
-                spans: Sequence[Tuple[int, int]],
+def base_motion(base: BaseTopic, bag: str, model: Model, t: np.ndarray,
+                spans: Sequence[Tuple[int, int]], window: float, order: int,
                 between: Tuple[Optional[int], Optional[int]] = (None, None)
                 ) -> Optional[BaseMotion]:
     """Return the base's motion at the joint stamps ``t`` (s), or None without a base topic.
 
     ``spans``: the stretches of ``t`` between gaps (:func:`.recording.clean`), each
     differentiated on its own as the joints are. ``between``: the bag-time range (ns) of
-    the topic read (a chunk of a long bag: its joint states' range and a margin). Reads
-    ``args.base_odometry`` or ``args.base_imu``, ``args.odometry_link``/``imu_link``,
-    ``window`` and ``order``. :class:`Refused` naming the option and the topic when the
-    topic cannot give the motion over ``t``.
+    the topic read (a chunk of a long bag: its joint states' range and a margin). ``window``
+    (s) and ``order``: the joints' Savitzky-Golay filter. :class:`Refused` naming the option
+    and the topic when the topic cannot give the motion over ``t``.
     """
-    odometry, imu = getattr(args, 'base_odometry', None), getattr(args, 'base_imu', None)
+    odometry, imu = base.odometry, base.imu
     if not odometry and not imu:
         return None
     option, topic, msgtype = (('--base-odometry', odometry, ODOMETRY) if odometry else
@@ -102,12 +89,11 @@ def base_motion(args, bag: str, model: Model, t: np.ndarray,
     tb = covering(found, values, t, where)
     at = [np.column_stack([np.interp(t, tb, x[:, j]) for j in range(x.shape[1])])
           for x in values]
-    window, order = args.window, args.order
     if odometry:
         quat, twist = at[0], np.concatenate(at[1:], axis=1)
         (v, a), _ = differentiate.derivatives(t, twist, window, order, (0, 1), spans)
         quat = quat / np.linalg.norm(quat, axis=1, keepdims=True)
-        link = link_of(model, args.odometry_link, found.frames[1:], where, 'child_frame_id',
+        link = link_of(model, base.odometry_link, found.frames[1:], where, 'child_frame_id',
                        '--odometry-link')
         check_base_acceleration(where, t, a)
         try:
@@ -117,7 +103,7 @@ def base_motion(args, bag: str, model: Model, t: np.ndarray,
     (w, wd), _ = differentiate.derivatives(t, at[0], window, order, (0, 1), spans)
     (f,), _ = differentiate.derivatives(t, at[1], window, order, (0,), spans)
     check_base_acceleration(where, t, np.concatenate((wd, np.zeros_like(wd)), axis=1))
-    link = link_of(model, args.imu_link, found.frames[:1], where, 'frame_id', '--imu-link')
+    link = link_of(model, base.imu_link, found.frames[:1], where, 'frame_id', '--imu-link')
     try:
         return base_from_imu(model, link, f, w, wd)
     except ValueError as err:

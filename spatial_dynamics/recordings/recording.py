@@ -5,15 +5,16 @@
 :func:`recording` is what every use of a bag starts with (the comparison, the fits, the
 held-out check): the messages of the topic by joint name, samples that cannot be used
 dropped with the reason (:func:`clean`), q̇ smoothed and q̈ derived with a zero-phase
-Savitzky-Golay filter per stretch between gaps, the effort as the model's torque is compared
-with (``--measured-effort``).
+Savitzky-Golay filter per stretch between gaps (:func:`rates`), the effort as the model's
+torque is compared with (``--measured-effort``). How it is read is a :class:`Reading`.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 import sys
 import time
-from typing import Dict, Tuple
+from typing import Dict, Sequence, Tuple
 
 import numpy as np
 
@@ -21,10 +22,30 @@ from .. import effort as effort_model
 from ..bounds import JOINT_BOUNDS, MIN_STAMP_INTERVAL
 from ..model import Model
 from . import bags, base_topics, differentiate
-from .arguments import Refused
+from .base_topics import BaseTopic
+from .errors import Refused
 
 #: Fewest samples a recording may have (the differentiation needs a few around each one).
 MIN_SAMPLES = 5
+
+
+@dataclass(frozen=True)
+class Reading:
+    """How a recording is read for the model (the replay commands' and the manifest's options).
+
+    ``topic``: the ``sensor_msgs/JointState`` topic; ``window`` (s) and ``order``: the
+    Savitzky-Golay filter; ``measured_effort``: what the bag's effort is
+    (:data:`spatial_dynamics.effort.MEASURED_EFFORT`); ``gravity`` (m/s², base frame);
+    ``base``: a moving base's topic; ``generic``: every message through ``rosbags``.
+    """
+
+    topic: str = '/joint_states'
+    window: float = 0.05
+    order: int = 3
+    measured_effort: str = 'full'
+    gravity: Sequence[float] = (0.0, 0.0, -9.81)
+    base: BaseTopic = field(default_factory=BaseTopic)
+    generic: bool = False
 
 
 class Progress:
@@ -191,20 +212,20 @@ def rates(s: Dict, window: float, order: int):
     return qd, qdd, resampled
 
 
-def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
+def recording(reading: Reading, bag: str, model: Model, stages: Stages) -> Dict:
     """Read, clean and differentiate ``bag``: ``{t, q, qd, qdd, effort, ...}`` for the model.
 
-    ``effort`` is what the model's torque is compared with (``--measured-effort``); ``base``
-    the base's motion at each sample (``--base-odometry``/``--base-imu``,
+    ``effort`` is what the model's torque is compared with (``reading.measured_effort``);
+    ``base`` the base's motion at each sample (``reading.base``,
     :func:`.base_topics.base_motion`) or None; the rest of the keys are :func:`clean`'s and
     ``js`` (the messages read), ``source`` and ``resampled`` (how q̈ was found).
     """
     bar = Progress('reading')
     try:
-        js = bags.read_joint_states(bag, args.topic, model.joint_names, fast=not args.generic,
-                                    progress=bar)
+        js = bags.read_joint_states(bag, reading.topic, model.joint_names,
+                                    fast=not reading.generic, progress=bar)
         stages.done('read+decode')
-        s = clean(js, args.window)
+        s = clean(js, reading.window)
     except (Refused, bags.BagError) as err:     # with --also and --validate: which bag
         text = str(err)
         raise Refused(text if bag in text else f'bag {bag}: {text}') from None
@@ -212,16 +233,17 @@ def recording(args, bag: str, model: Model, stages: 'Stages') -> Dict:
         bar.close()
     t, q, spans = s['t'], s['q'], s['spans']
     stages.done('clean+sort')
-    qd, qdd, resampled = rates(s, args.window, args.order)
+    qd, qdd, resampled = rates(s, reading.window, reading.order)
     source = 'velocity' if s['qd'] is not None else 'position (the bag has no velocities)'
     stages.done('differentiate')
     try:
-        base = base_topics.base_motion(args, bag, model, t, spans)
+        base = base_topics.base_motion(reading.base, bag, model, t, spans, reading.window,
+                                       reading.order)
     except Refused as err:
         raise Refused(f'bag {bag}: {err}') from None
     if base is not None:
         stages.done('base')
-    effort = effort_model.with_gravity(model, q, s['effort'], args.measured_effort,
-                                       args.gravity)
+    effort = effort_model.with_gravity(model, q, s['effort'], reading.measured_effort,
+                                       reading.gravity)
     return dict(s, qd=qd, qdd=qdd, effort=effort, js=js, source=source, resampled=resampled,
                 base=base)

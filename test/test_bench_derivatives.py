@@ -1,0 +1,46 @@
+# Copyright 2026 spatial_dynamics contributors
+# SPDX-License-Identifier: Apache-2.0
+"""The derivatives benchmark runs end to end, and its 50-digit reference is Pinocchio's.
+
+A tiny run (one reference state, two timed states, one round) on UR5 and Solo12 on a
+free-flyer: its rows and files are there, Pinocchio's ``computeRNEADerivatives`` agrees with
+the reference to 1e-12 (so the reference's tangent convention on the free-flyer is right),
+``sd.rnea_derivatives`` to 1e-13, central differences land where their step puts them,
+``sd.forward_dynamics`` agrees with ``pin.aba``. No timing is asserted.
+"""
+
+import csv
+
+from benchmarks import derivatives
+import pytest
+
+pytest.importorskip('pinocchio')
+pytest.importorskip('mpmath')
+
+TINY = derivatives.Settings(ref_states=1, states=2, rounds=1, block_s=0.0005)
+
+
+def test_a_tiny_run_prints_every_row_and_the_reference_is_pinocchios(
+        tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(derivatives, 'QUICK', TINY)
+    if derivatives._erd_dir() is None:
+        pytest.skip('example-robot-data is not installed')
+    assert derivatives.main(['--quick', '--robots', 'ur5', 'solo12', '--out',
+                             str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    with open(tmp_path / 'derivatives.csv', encoding='utf-8') as f:
+        rows = list(csv.DictReader(f))
+    by = {(r['robot'], r['implementation']): float(r['rel_err']) for r in rows}
+    for robot in ('ur5', 'solo12'):
+        assert by[(robot, 'pinocchio computeRNEADerivatives')] <= 1e-12
+        assert 1e-14 < by[(robot, 'central differences of sd.rnea, h=1e-05')] < 1e-8
+        assert 1e-9 < by[(robot, 'central differences of sd.rnea, h=0.001')] < 1e-4
+        assert by[(robot, 'sd.rnea_derivatives')] <= 1e-13     # rounding, as Pinocchio's
+    assert '| ur5 (6) |' in out and '| solo12 (18) |' in out
+    lines = out.splitlines()
+    head = next(k for k, line in enumerate(lines) if 'sd.forward_dynamics µs' in line)
+    forward = lines[head + 2:head + 4]          # forward_dynamics against pin.aba
+    assert [line.split('|')[1].strip() for line in forward] == ['ur5 (6)', 'solo12 (18)']
+    assert all(float(line.split('|')[5]) <= 1e-12 for line in forward)
+    assert 'Complex step: not measured' in out
+    assert (tmp_path / 'derivatives_vs_error.png').is_file() or 'no plot' in out
