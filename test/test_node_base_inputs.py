@@ -1122,3 +1122,30 @@ def test_an_answer_above_the_urdf_effort_limit_is_published_counted_and_said(dem
     out = answering.joint_state(clamped, msg)
     np.testing.assert_allclose(out.answer.tau, np.clip(expected, -limit, limit))
     assert answering.window.above_limit == 0 and answering.totals.saturated == 1
+
+
+def test_a_measured_state_refused_for_its_base_is_answered_when_sent_again(demo_text):
+    """A lockstep simulator republishes the state it waits on: refused once, answered later.
+
+    'One answer per measurement' marked the stamp answered before the answer was computed,
+    so a state refused for a missing base input was refused again as 'repeated' once the base
+    input came: the simulator waited for good.
+    """
+    cfg = configured(robot_description=demo_text, base='moving', control_mode='pd_feedforward',
+                     kp=[10.0], kd=[1.0], **{'base_input.imu_link': 'base_link'})
+    robot = cfg.robot
+    n = len(robot.joints)
+    answering = Answering(Log())
+    q = np.linspace(-0.5, 0.5, n)
+    answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, np.zeros(n), np.zeros(n)))
+    state = joint_state(robot.joints, 1.0, q, np.zeros(n), np.zeros(n))
+    assert answering.measured(cfg, state).answer is None
+    assert answering.totals.rejected['base_missing'] == 1
+    answering.base_input(cfg, 'base/imu', imu(1.0, [0, 0, 9.81], [0, 0, 0]))
+    answer = answering.measured(cfg, state).answer      # the same state, sent again
+    assert answer is not None and answering.totals.rejected['repeated'] == 0
+    expected = sd.rnea(robot.model, q, np.zeros(n), np.zeros(n), base=sd.base_from_imu(
+        robot.model, 'base_link', [0, 0, 9.81], [0, 0, 0]))
+    np.testing.assert_allclose(answer.tau, expected, rtol=1e-9, atol=1e-9)
+    assert answering.measured(cfg, state).answer is None    # answered once: not again
+    assert answering.totals.rejected['repeated'] == 1

@@ -378,9 +378,11 @@ class Answering:
                          f'{mode}: the measured state stamped {stamp * 1e-9:.9f} '
                          's was answered already (one answer per measurement)')
             return None
-        self._answered_stamp = stamp
-        return self._respond(config, msg.header, 'joint_states', desired, measured, t0,
-                             with_terms)
+        answer = self._respond(config, msg.header, 'joint_states', desired, measured, t0,
+                               with_terms)
+        if answer is not None:   # a refused state is not answered: sent again, it may be
+            self._answered_stamp = stamp
+        return answer
 
     def _observe(self, config: Config, msg, q: np.ndarray, qd: Optional[np.ndarray]
                  ) -> Optional[np.ndarray]:
