@@ -200,6 +200,62 @@ def test_M_is_mass_matrix_and_the_backends_agree(robot, rng):
     assert all(x.dtype == np.float64 for x in single)
 
 
+def _relative_change(value, reference):
+    return np.abs(value - reference).max() / np.abs(reference).max()
+
+
+def test_nothing_depends_on_how_far_the_free_flyer_is_from_the_world_origin(rng):
+    """Translating the whole robot changes no torque: the three matrices are those at 0.
+
+    Solo12 on a free-flyer at the world origin and 1 km, 5000 km (map coordinates), 1e9 m,
+    1e300 m from it: one state and a batch, both backends; ``M`` is ``mass_matrix`` there.
+    """
+    model = sd.Model.from_urdf(path_of('solo_description/robots/solo12.urdf'), base='floating')
+    q, qd, qdd = random_floating_state(rng, model)
+    q[0:3] = 0.0
+    far = (0.0, 1e3, 5e6, 1e9, 1e300)
+    qs = np.repeat(q[None], len(far), axis=0)
+    qs[:, 0:3] = np.array(far)[:, None] * [1.0, -1.0, 0.5]
+    for backend in ('numpy', 'compiled'):
+        at_origin = sd.rnea_derivatives(model, q, qd, qdd, backend=backend)
+        batch = sd.rnea_derivatives(model, qs, np.repeat(qd[None], len(far), 0),
+                                    np.repeat(qdd[None], len(far), 0), backend=backend)
+        for s, distance in enumerate(far):
+            one = sd.rnea_derivatives(model, qs[s], qd, qdd, backend=backend)
+            for what, o, b, ref in zip(('dq', 'dv', 'M'), one, batch, at_origin):
+                assert _relative_change(o, ref) <= RTOL, (backend, distance, what)
+                assert _relative_change(b[s], ref) <= RTOL, (backend, distance, what, 'batch')
+            ok, err = close(one[2], sd.mass_matrix(model, qs[s]))
+            assert ok, (backend, distance, err)
+
+
+def test_nothing_depends_on_how_far_a_fixed_base_is_mounted_from_the_urdf_root():
+    """Panda mounted 1 km ... 1e7 m from a root link: the matrices of the arm at the root."""
+    text = open(robot_urdf_path('panda'), encoding='utf-8').read()
+
+    def mounted(d):
+        mount = (f'<link name="far_root"/><joint name="far_mount" type="fixed"><parent '
+                 f'link="far_root"/><child link="panda_link0"/><origin xyz="{d!r} {d!r} 0" '
+                 'rpy="0 0 0.3"/></joint>')
+        return sd.Model.from_urdf(text.replace('<link name="panda_link0">',
+                                               mount + '<link name="panda_link0">', 1))
+
+    base = mounted(0.0)
+    rng = np.random.default_rng(7)
+    q, qd, qdd = random_state(rng, (3,), base.nq)
+    for backend in ('numpy', 'compiled'):
+        at_root = sd.rnea_derivatives(base, q, qd, qdd, backend=backend)
+        for d in (1e3, 5e6, 1e7):
+            model = mounted(d)
+            batch = sd.rnea_derivatives(model, q, qd, qdd, backend=backend)
+            one = sd.rnea_derivatives(model, q[1], qd[1], qdd[1], backend=backend)
+            for what, b, o, ref in zip(('dq', 'dv', 'M'), batch, one, at_root):
+                assert _relative_change(b, ref) <= RTOL, (backend, d, what)
+                assert _relative_change(o, ref[1]) <= RTOL, (backend, d, what, 'one')
+            ok, err = close(one[2], sd.mass_matrix(model, q[1]))
+            assert ok, (backend, d, err)
+
+
 def test_one_state_gives_three_arrays_of_their_own(rng):
     """One state's ``(∂τ/∂q, ∂τ/∂q̇, M)``: three arrays, none a view keeping the others alive.
 
