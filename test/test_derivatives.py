@@ -352,6 +352,65 @@ def test_the_drive_terms_add_armature_to_M_and_friction_to_the_velocity_derivati
     assert ok, err
 
 
+def test_the_drive_terms_keep_the_states_dtype(rng):
+    """float32 states: with ``armature`` and ``friction_threshold`` all three are float32.
+
+    As gravity and wrenches leave them (and ``forward_dynamics``): the float64 terms are
+    rounded once into the states' dtype, equal to the float64 call to float32's precision.
+    """
+    urdf = open(robot_urdf_path('ur5'), encoding='utf-8').read().replace(
+        '<dynamics damping="0.0" friction="0.0"/>', '<dynamics damping="0.5" friction="2.0"/>')
+    model = sd.Model.from_urdf(urdf)
+    state = random_state(rng, (), model.nq)
+    narrow = [x.astype(np.float32) for x in state]
+    wide = [x.astype(np.float64) for x in narrow]
+    for terms in ({'armature': 0.1}, {'armature': np.float32(0.1)},
+                  {'friction_threshold': 0.05}, {'friction_threshold': np.float32(0.05)},
+                  {'armature': np.linspace(0.1, 0.6, model.nv), 'friction_threshold': 0.05}):
+        for backend in ('numpy', 'compiled'):
+            out = sd.rnea_derivatives(model, *narrow, backend=backend, **terms)
+            ref = sd.rnea_derivatives(model, *wide, backend=backend, **terms)
+            for what, x, r in zip(('dq', 'dv', 'M'), out, ref):
+                assert x.dtype == np.float32, (terms, backend, what, x.dtype)
+                assert np.allclose(x, r, rtol=1e-5, atol=1e-5 * np.abs(r).max()), (terms, what)
+            if 'armature' in terms:
+                qdd = sd.forward_dynamics(model, *narrow, backend=backend,
+                                          armature=terms['armature'])
+                assert qdd.dtype == np.float32
+
+
+def test_bad_drive_term_arguments_are_named_wherever_they_are_taken():
+    """A string, a complex number or a vector where one real number belongs: the name, said.
+
+    ``armature`` in ``rnea_derivatives``, ``forward_dynamics`` and ``per_joint`` (scalar,
+    list, map), ``friction_threshold`` in ``rnea_derivatives``, and ``threshold`` in
+    ``friction_torque`` and ``friction_derivative``: ``TypeError`` or ``ValueError`` with the
+    argument's name, never a value made of text.
+    """
+    model = sd.Model.from_urdf(robot_urdf_path('ur5'))
+    n, joint = model.nv, model.joint_names[0]
+    z = np.full(n, 0.2)
+    for bad in ('0.1', 0.1 + 0j, np.complex128(0.1), ['0.1'] * n, [0.1 + 0j] * n,
+                {joint: '0.1'}, {joint: 0.1 + 0j}, {joint: [0.1, 0.2]}, object()):
+        calls = {'rnea_derivatives': lambda: sd.rnea_derivatives(model, z, z, z, armature=bad),
+                 'forward_dynamics': lambda: sd.forward_dynamics(model, z, z, z, armature=bad),
+                 'per_joint': lambda: sd.per_joint(model, 'armature', bad)}
+        for where, call in calls.items():
+            with pytest.raises((TypeError, ValueError), match='armature') as err:
+                call()
+            assert 'unexpected' not in str(err.value), (where, bad)
+    for bad in ('0.01', 0.01 + 0j, np.full(n, 0.01), [0.01], object()):
+        with pytest.raises((TypeError, ValueError), match='friction_threshold'):
+            sd.rnea_derivatives(model, z, z, z, friction_threshold=bad)
+        for term in (sd.friction_torque, sd.friction_derivative):
+            with pytest.raises((TypeError, ValueError), match='threshold'):
+                term(model, z, bad)
+    # good input is kept: numbers of any real dtype, a 0-d array
+    ok = sd.rnea_derivatives(model, z, z, z, armature={joint: np.float32(0.1)},
+                             friction_threshold=np.array(0.01))
+    assert ok[2][0, 0] == sd.rnea_derivatives(model, z, z, z)[2][0, 0] + np.float32(0.1)
+
+
 def _raised(call):
     try:
         call()

@@ -36,7 +36,7 @@ from ..algorithms.arguments import (as_joint_arrays, as_real_array, as_vector,
                                     check_configuration, f_ext_in_bodies)
 from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
-from ..terms import friction_derivative, per_joint
+from ..terms import check_threshold, friction_derivative, per_joint
 
 BACKENDS = ('auto', 'numpy', 'compiled')
 #: Default gravity (m/s², root-link coordinates).
@@ -481,10 +481,12 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
 def _drive_terms(model: Model, out: tuple, qd, armature, friction_threshold) -> tuple:
     """Add the drive terms' derivatives to ``(∂τ/∂q, ∂τ/∂q̇, M)`` (:func:`rnea_derivatives`)."""
     dq, dv, M = out
-    if armature is not None:
-        M = M + np.diag(per_joint(model, 'armature', armature, nonnegative=True))
+    if armature is not None:     # in the states' dtype, as the rest
+        M = M + np.diag(per_joint(model, 'armature', armature, nonnegative=True)).astype(
+            M.dtype, copy=False)
     if friction_threshold is not None:
-        dv = dv + friction_derivative(model, qd, friction_threshold)
+        threshold = check_threshold(friction_threshold, 'friction_threshold')
+        dv = dv + friction_derivative(model, qd, threshold).astype(dv.dtype, copy=False)
     return dq, dv, M
 
 
