@@ -34,7 +34,8 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
     ``nv`` numbers with the six base rows 0 (Pinocchio's ``model.armature``).
 
     ``ValueError`` names the joint of an unknown name or a non-finite (or, with
-    ``nonnegative``, negative) value, and the free-flyer given a value.
+    ``nonnegative``, negative) value, and the free-flyer given a value; ``TypeError`` names
+    ``what`` given anything but real numbers (a string, a complex number).
     """
     check_model(model)
     names = model.joint_names[1:] if model.floating else model.joint_names
@@ -48,9 +49,9 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
                                  'has no drive (its six rows, the wrench on the base, are 0)')
             if name not in names:
                 raise ValueError(f'{what}: unknown joint {name!r}')
-            out[names.index(name)] = float(v)
+            out[names.index(name)] = _number(f'{what} of joint {name!r}', v)
     else:
-        out = np.asarray(values, dtype=float)
+        out = as_real_array(what, values).astype(float)
         if out.ndim == 0:
             out = np.full(n, float(out))
         if base and out.shape == (model.nv,):
@@ -71,6 +72,27 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
     return np.concatenate([np.zeros(base), out])
 
 
+def _number(what: str, value) -> float:
+    """``value``, one real number, as a float; ``TypeError``/``ValueError`` naming ``what``."""
+    a = as_real_array(what, value)
+    if a.ndim != 0:
+        raise ValueError(f'{what} must be one number, got shape {a.shape}')
+    return float(a)
+
+
+def check_threshold(threshold, what: str = 'threshold') -> float:
+    """Return the friction velocity ``threshold`` (rad/s or m/s) as a float, checked.
+
+    One real number, finite and > 0; ``TypeError`` (a string, a complex number) or
+    ``ValueError`` (a vector, 0, negative, not finite) naming ``what``, the caller's name
+    for it (``friction_threshold`` in :func:`~spatial_dynamics.rnea_derivatives`).
+    """
+    t = _number(what, threshold)
+    if not t > 0.0 or not np.isfinite(t):
+        raise ValueError(f'{what}: friction velocity threshold must be > 0, got {t}')
+    return t
+
+
 def armature_torque(armature: np.ndarray, qdd) -> np.ndarray:
     """Rotor inertia reflected through the gear: ``τ = armature · q̈``."""
     return armature * as_real_array('qdd', qdd).astype(float)
@@ -83,8 +105,7 @@ def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:
     tanh(1) ≈ 76 % of its full value. A mimic joint's own friction, at its rate
     ``mult·q̇_src``, is folded back onto its source like its torque: ``τ_src += mult·τ_mimic``.
     """
-    if not threshold > 0.0 or not np.isfinite(threshold):
-        raise ValueError(f'friction velocity threshold must be > 0, got {threshold}')
+    threshold = check_threshold(threshold)
     (qd,) = as_joint_arrays(model, qd, names=('qd',))
     qd = qd.astype(float)
     vidx, qmul = model.vidx[1:], model.qmul[1:]
@@ -102,8 +123,7 @@ def friction_derivative(model: Model, qd, threshold: float) -> np.ndarray:
     Each body's ``mult² (damping + friction (1 − tanh²(mult q̇ / threshold)) / threshold)``
     at its source joint's row and column (the torque folded as :func:`friction_torque`).
     """
-    if not threshold > 0.0 or not np.isfinite(threshold):
-        raise ValueError(f'friction velocity threshold must be > 0, got {threshold}')
+    threshold = check_threshold(threshold)
     (qd,) = as_joint_arrays(model, qd, names=('qd',))
     qd = qd.astype(float)
     vidx, qmul = model.vidx[1:], model.qmul[1:]

@@ -200,6 +200,62 @@ def test_M_is_mass_matrix_and_the_backends_agree(robot, rng):
     assert all(x.dtype == np.float64 for x in single)
 
 
+def _relative_change(value, reference):
+    return np.abs(value - reference).max() / np.abs(reference).max()
+
+
+def test_nothing_depends_on_how_far_the_free_flyer_is_from_the_world_origin(rng):
+    """Translating the whole robot changes no torque: the three matrices are those at 0.
+
+    Solo12 on a free-flyer at the world origin and 1 km, 5000 km (map coordinates), 1e9 m,
+    1e300 m from it: one state and a batch, both backends; ``M`` is ``mass_matrix`` there.
+    """
+    model = sd.Model.from_urdf(path_of('solo_description/robots/solo12.urdf'), base='floating')
+    q, qd, qdd = random_floating_state(rng, model)
+    q[0:3] = 0.0
+    far = (0.0, 1e3, 5e6, 1e9, 1e300)
+    qs = np.repeat(q[None], len(far), axis=0)
+    qs[:, 0:3] = np.array(far)[:, None] * [1.0, -1.0, 0.5]
+    for backend in ('numpy', 'compiled'):
+        at_origin = sd.rnea_derivatives(model, q, qd, qdd, backend=backend)
+        batch = sd.rnea_derivatives(model, qs, np.repeat(qd[None], len(far), 0),
+                                    np.repeat(qdd[None], len(far), 0), backend=backend)
+        for s, distance in enumerate(far):
+            one = sd.rnea_derivatives(model, qs[s], qd, qdd, backend=backend)
+            for what, o, b, ref in zip(('dq', 'dv', 'M'), one, batch, at_origin):
+                assert _relative_change(o, ref) <= RTOL, (backend, distance, what)
+                assert _relative_change(b[s], ref) <= RTOL, (backend, distance, what, 'batch')
+            ok, err = close(one[2], sd.mass_matrix(model, qs[s]))
+            assert ok, (backend, distance, err)
+
+
+def test_nothing_depends_on_how_far_a_fixed_base_is_mounted_from_the_urdf_root():
+    """Panda mounted 1 km ... 1e7 m from a root link: the matrices of the arm at the root."""
+    text = open(robot_urdf_path('panda'), encoding='utf-8').read()
+
+    def mounted(d):
+        mount = (f'<link name="far_root"/><joint name="far_mount" type="fixed"><parent '
+                 f'link="far_root"/><child link="panda_link0"/><origin xyz="{d!r} {d!r} 0" '
+                 'rpy="0 0 0.3"/></joint>')
+        return sd.Model.from_urdf(text.replace('<link name="panda_link0">',
+                                               mount + '<link name="panda_link0">', 1))
+
+    base = mounted(0.0)
+    rng = np.random.default_rng(7)
+    q, qd, qdd = random_state(rng, (3,), base.nq)
+    for backend in ('numpy', 'compiled'):
+        at_root = sd.rnea_derivatives(base, q, qd, qdd, backend=backend)
+        for d in (1e3, 5e6, 1e7):
+            model = mounted(d)
+            batch = sd.rnea_derivatives(model, q, qd, qdd, backend=backend)
+            one = sd.rnea_derivatives(model, q[1], qd[1], qdd[1], backend=backend)
+            for what, b, o, ref in zip(('dq', 'dv', 'M'), batch, one, at_root):
+                assert _relative_change(b, ref) <= RTOL, (backend, d, what)
+                assert _relative_change(o, ref[1]) <= RTOL, (backend, d, what, 'one')
+            ok, err = close(one[2], sd.mass_matrix(model, q[1]))
+            assert ok, (backend, d, err)
+
+
 def test_one_state_gives_three_arrays_of_their_own(rng):
     """One state's ``(∂τ/∂q, ∂τ/∂q̇, M)``: three arrays, none a view keeping the others alive.
 
@@ -294,6 +350,65 @@ def test_the_drive_terms_add_armature_to_M_and_friction_to_the_velocity_derivati
                       for e in np.eye(model.nv)]).T
     ok, err = close(dv - dv0, slope, 1e-6)
     assert ok, err
+
+
+def test_the_drive_terms_keep_the_states_dtype(rng):
+    """float32 states: with ``armature`` and ``friction_threshold`` all three are float32.
+
+    As gravity and wrenches leave them (and ``forward_dynamics``): the float64 terms are
+    rounded once into the states' dtype, equal to the float64 call to float32's precision.
+    """
+    urdf = open(robot_urdf_path('ur5'), encoding='utf-8').read().replace(
+        '<dynamics damping="0.0" friction="0.0"/>', '<dynamics damping="0.5" friction="2.0"/>')
+    model = sd.Model.from_urdf(urdf)
+    state = random_state(rng, (), model.nq)
+    narrow = [x.astype(np.float32) for x in state]
+    wide = [x.astype(np.float64) for x in narrow]
+    for terms in ({'armature': 0.1}, {'armature': np.float32(0.1)},
+                  {'friction_threshold': 0.05}, {'friction_threshold': np.float32(0.05)},
+                  {'armature': np.linspace(0.1, 0.6, model.nv), 'friction_threshold': 0.05}):
+        for backend in ('numpy', 'compiled'):
+            out = sd.rnea_derivatives(model, *narrow, backend=backend, **terms)
+            ref = sd.rnea_derivatives(model, *wide, backend=backend, **terms)
+            for what, x, r in zip(('dq', 'dv', 'M'), out, ref):
+                assert x.dtype == np.float32, (terms, backend, what, x.dtype)
+                assert np.allclose(x, r, rtol=1e-5, atol=1e-5 * np.abs(r).max()), (terms, what)
+            if 'armature' in terms:
+                qdd = sd.forward_dynamics(model, *narrow, backend=backend,
+                                          armature=terms['armature'])
+                assert qdd.dtype == np.float32
+
+
+def test_bad_drive_term_arguments_are_named_wherever_they_are_taken():
+    """A string, a complex number or a vector where one real number belongs: the name, said.
+
+    ``armature`` in ``rnea_derivatives``, ``forward_dynamics`` and ``per_joint`` (scalar,
+    list, map), ``friction_threshold`` in ``rnea_derivatives``, and ``threshold`` in
+    ``friction_torque`` and ``friction_derivative``: ``TypeError`` or ``ValueError`` with the
+    argument's name, never a value made of text.
+    """
+    model = sd.Model.from_urdf(robot_urdf_path('ur5'))
+    n, joint = model.nv, model.joint_names[0]
+    z = np.full(n, 0.2)
+    for bad in ('0.1', 0.1 + 0j, np.complex128(0.1), ['0.1'] * n, [0.1 + 0j] * n,
+                {joint: '0.1'}, {joint: 0.1 + 0j}, {joint: [0.1, 0.2]}, object()):
+        calls = {'rnea_derivatives': lambda: sd.rnea_derivatives(model, z, z, z, armature=bad),
+                 'forward_dynamics': lambda: sd.forward_dynamics(model, z, z, z, armature=bad),
+                 'per_joint': lambda: sd.per_joint(model, 'armature', bad)}
+        for where, call in calls.items():
+            with pytest.raises((TypeError, ValueError), match='armature') as err:
+                call()
+            assert 'unexpected' not in str(err.value), (where, bad)
+    for bad in ('0.01', 0.01 + 0j, np.full(n, 0.01), [0.01], object()):
+        with pytest.raises((TypeError, ValueError), match='friction_threshold'):
+            sd.rnea_derivatives(model, z, z, z, friction_threshold=bad)
+        for term in (sd.friction_torque, sd.friction_derivative):
+            with pytest.raises((TypeError, ValueError), match='threshold'):
+                term(model, z, bad)
+    # good input is kept: numbers of any real dtype, a 0-d array
+    ok = sd.rnea_derivatives(model, z, z, z, armature={joint: np.float32(0.1)},
+                             friction_threshold=np.array(0.01))
+    assert ok[2][0, 0] == sd.rnea_derivatives(model, z, z, z)[2][0, 0] + np.float32(0.1)
 
 
 def _raised(call):

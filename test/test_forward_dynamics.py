@@ -301,6 +301,63 @@ def test_a_joint_that_moves_no_mass_is_named_and_armature_gives_it_one(backend, 
         sd.forward_dynamics(model, q, qd, tau, backend=backend, armature={'elbow': 1.0})
 
 
+MASSLESS_ROOT = '''<robot name="massless_root">
+  <link name="body"/>
+  <link name="rotor"><inertial><mass value="1"/><origin xyz="0 0 0"/>
+    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <joint name="spin" type="revolute"><parent link="body"/><child link="rotor"/>
+    <axis xyz="0 0 1"/><limit effort="10" velocity="1" lower="-3" upper="3"/></joint>
+</robot>'''
+REPEATED = MASSLESS.replace('<link name="arm"><inertial><mass value="2"/>',
+                            '<link name="arm"><inertial><mass value="0"/>').replace(
+    '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>',
+    '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>').replace(
+    '<link name="tip"/>', '<link name="tip"><inertial><mass value="1"/><origin xyz="0.2 0 0"/>'
+    '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>'
+).replace('<origin xyz="1 0 0"/><axis', '<origin xyz="0 0 0.1"/><axis')
+
+
+@pytest.mark.parametrize('backend', BACKENDS)
+def test_a_singular_M_is_explained_with_advice_the_library_takes(backend):
+    """The advice of the error, followed, gives ``q̈``; armature is never advised for the base.
+
+    A massless root link whose yaw the joint ``spin`` repeats: give ``spin`` armature (or the
+    root link mass). A massless free body: its link needs an <inertial>. A massless ``arm``
+    whose ``shoulder`` motion ``wrist`` repeats (one axis, the mass beyond ``wrist``).
+    """
+    model = load(MASSLESS_ROOT, base='floating')
+    q = np.zeros(model.nq)
+    q[6] = 1.0
+    v, tau = np.zeros(model.nv), np.ones(model.nv)
+    with pytest.raises(ValueError) as err:
+        sd.forward_dynamics(model, q, v, tau, backend=backend)
+    message = str(err.value)
+    assert "give 'spin' armature, or the root link an <inertial>" in message, message
+    assert "'body'" in message and 'give it armature' not in message, message
+    qdd = sd.forward_dynamics(model, q, v, tau, backend=backend, armature={'spin': 0.1})
+    A = sd.per_joint(model, 'armature', {'spin': 0.1})
+    ok, error = close(sd.rnea(model, q, v, qdd) + sd.armature_torque(A, qdd), tau)
+    assert ok, error
+
+    box = load('<robot name="b"><link name="b"/></robot>', base='floating')
+    with pytest.raises(ValueError, match=r"root link 'b' .*needs an <inertial>") as err:
+        sd.forward_dynamics(box, [0, 0, 0, 0, 0, 0, 1], np.zeros(6), np.zeros(6),
+                            backend=backend)
+    assert 'give it armature' not in str(err.value)
+
+    arm = load(REPEATED)
+    q, qd, tau = np.array([0.3, -0.2]), np.array([0.1, 0.2]), np.array([1.0, 0.5])
+    with pytest.raises(ValueError, match=r"joint 'shoulder': the joint moves no mass that the "
+                                         r"joint\(s\) 'wrist' do not move too.*give it or "
+                                         r"'wrist' armature"):
+        sd.forward_dynamics(arm, q, qd, tau, backend=backend)
+    for joint in ('shoulder', 'wrist'):
+        qdd = sd.forward_dynamics(arm, q, qd, tau, backend=backend, armature={joint: 0.1})
+        A = sd.per_joint(arm, 'armature', {joint: 0.1})
+        ok, error = close(sd.rnea(arm, q, qd, qdd) + sd.armature_torque(A, qdd), tau)
+        assert ok, (joint, error)
+
+
 def test_backends_dtypes_and_single_states_agree(rng):
     model = robot('talos', 'fixed')
     q, qd, tau = state(rng, model, (6,))

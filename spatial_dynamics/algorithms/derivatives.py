@@ -4,8 +4,10 @@
 
 Carpentier and Mansard, "Analytical derivatives of rigid body dynamics algorithms" (RSS
 2018): the RNEA is written in world coordinates (every quantity below in the frame of body 0,
-``ᵒ`` dropped), where a joint's motion moves the bodies beyond it rigidly, so each derivative
-is a product of quantities every body already has. Forward pass, body ``i`` with columns
+``ᵒ`` dropped; here body 0's axes with its origin moved to body 1's origin at ``q``, so
+nothing depends on how far the robot is from the world's origin), where a joint's motion
+moves the bodies beyond it rigidly, so each derivative is a product of quantities every body
+already has. Forward pass, body ``i`` with columns
 ``s = mul_i ᵒX_i⁻¹ S_i[:, c]`` (world)::
 
     v_i = v_λ + Σ s q̇,   a_i = a_λ + Σ s q̈ + v_i × Σ s q̇   (a_0 = -a_grav)
@@ -59,7 +61,13 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
         dv[k] = zero
         H[k] = zero
     one = zero + 1.0
-    oX[0] = (one, zero, zero, zero, one, zero, zero, zero, one, zero, zero, zero)
+    # "World" is the world frame translated to body 1's origin at this q: a translation
+    # changes no torque and no derivative, and keeps every r small (no digits lost to where
+    # the robot is: the free-flyer's position, a far mount), as rnea's body coordinates do
+    ox = oy = oz = zero
+    if NB > 0:
+        _, _, _, _, _, _, _, _, _, ox, oy, oz = Xup[1]
+    oX[0] = (one, zero, zero, zero, one, zero, zero, zero, one, -ox, -oy, -oz)
     vel[0] = (zero, zero, zero, zero, zero, zero)
     acc[0] = (zero, zero, zero, -gx, -gy, -gz)      # a_0 = -a_grav
 

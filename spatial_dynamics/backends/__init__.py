@@ -36,7 +36,7 @@ from ..algorithms.arguments import (as_joint_arrays, as_real_array, as_vector,
                                     check_configuration, f_ext_in_bodies)
 from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
-from ..terms import friction_derivative, per_joint
+from ..terms import check_threshold, friction_derivative, per_joint
 
 BACKENDS = ('auto', 'numpy', 'compiled')
 #: Default gravity (m/s², root-link coordinates).
@@ -325,7 +325,10 @@ def forward_dynamics(model: Model, q, qd, tau, gravity: Sequence[float] = GRAVIT
     + armature_torque(armature, q̈)``. Terms of ``q̇`` only (``friction_torque``) are known
     before ``q̈``: subtract them from ``tau``. ``ValueError`` when ``M`` (with the armature)
     is not positive definite, naming the joint: a joint that moves no mass and has no
-    armature has no acceleration that ``τ`` decides.
+    armature has no acceleration that ``τ`` decides. The message names the joints that
+    repeat its motion and what the library takes to remove it (armature on one of them; for
+    a floating base's massless root link, armature on the joint that repeats the base's
+    motion or an ``<inertial>`` on the link: the free-flyer has no drive).
 
     Returns:
         q̈ (rad/s², m/s²), shape (..., nv): the broadcast batch shape; float64, or the inputs'
@@ -374,13 +377,47 @@ def _forward(model: Model, q, qd, tau, gravity, f_ext, backend: str,
     if failed is None:
         return qdd
     state, k = failed
+    where = f' (state {np.unravel_index(state, b.shape[:-1])})' if b.ndim > 1 else ''
+    Hs = np.broadcast_to(H, b.shape[:-1] + H.shape[-2:]).reshape((-1,) + H.shape[-2:])[state]
     names = model.joint_names
     joint = names[0] if model.floating and k < 6 else names[k - 5 if model.floating else k]
-    where = f' (state {np.unravel_index(state, b.shape[:-1])})' if b.ndim > 1 else ''
     raise ValueError(f'forward_dynamics: M(q){" + armature" if armature is not None else ""} '
                      f'is not positive definite at velocity coordinate {k}, joint {joint!r}'
-                     f'{where}: the joint moves no mass, so no acceleration of it follows '
-                     'from tau; give it armature')
+                     f'{where}: ' + _singular_reason(model, Hs.astype(float), k))
+
+
+def _singular_reason(model: Model, H: np.ndarray, k: int) -> str:
+    """Say why ``H`` (nv, nv) has no positive pivot ``k`` and what removes it.
+
+    The factorization (:mod:`~spatial_dynamics.algorithms.forward`) runs from the last
+    coordinate back: ``H[k+1:, k+1:]`` is positive definite, and the motion ``δ`` with
+    ``δ_k = 1`` that moves no mass has its later coordinates from it. Its joints are those
+    that repeat coordinate ``k``'s motion; armature on any of them removes the singularity,
+    on the free-flyer none (it has no drive: its root link needs an ``<inertial>``).
+    """
+    names, base = model.joint_names, 6 if model.floating else 0
+    later = np.linalg.solve(H[k + 1:, k + 1:], -H[k + 1:, k]) if k + 1 < len(H) else H[:0, 0]
+    size = np.abs(later)
+    small = 1e-6 * max(1.0, size.max(initial=0.0))
+    # the joint of velocity coordinate c: one each, after the free-flyer's six
+    repeating = [names[c - base + (1 if base else 0)]
+                 for c in range(max(k + 1, base), len(H)) if size[c - k - 1] > small]
+    joints = ', '.join(repr(j) for j in dict.fromkeys(repeating))
+    if k < base:
+        root = repr(model.body_names[1])
+        if not repeating:
+            return (f'the floating base moves no mass along it: its root link {root} (with the '
+                    'links fixed to it) needs an <inertial> (the free-flyer has no drive to '
+                    'give armature)')
+        return (f'the floating base\'s motion along it is repeated by the joint(s) {joints} '
+                f'and its root link {root} has no mass of its own, so no acceleration of it '
+                f'follows from tau; give {joints} armature, or the root link an <inertial> '
+                '(the free-flyer has no drive to give armature)')
+    if not repeating:
+        return ('the joint moves no mass, so no acceleration of it follows from tau; give it '
+                'armature')
+    return (f'the joint moves no mass that the joint(s) {joints} do not move too, so no '
+            f'acceleration of it follows from tau; give it or {joints} armature')
 
 
 def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
@@ -444,10 +481,12 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
 def _drive_terms(model: Model, out: tuple, qd, armature, friction_threshold) -> tuple:
     """Add the drive terms' derivatives to ``(∂τ/∂q, ∂τ/∂q̇, M)`` (:func:`rnea_derivatives`)."""
     dq, dv, M = out
-    if armature is not None:
-        M = M + np.diag(per_joint(model, 'armature', armature, nonnegative=True))
+    if armature is not None:     # in the states' dtype, as the rest
+        M = M + np.diag(per_joint(model, 'armature', armature, nonnegative=True)).astype(
+            M.dtype, copy=False)
     if friction_threshold is not None:
-        dv = dv + friction_derivative(model, qd, friction_threshold)
+        threshold = check_threshold(friction_threshold, 'friction_threshold')
+        dv = dv + friction_derivative(model, qd, threshold).astype(dv.dtype, copy=False)
     return dq, dv, M
 
 
