@@ -188,6 +188,7 @@ class Io:
         self.arrivals: List[float] = []   # time.monotonic() at which each effort arrived
         self.commands: List = []
         self.diagnostics: List = []
+        self.diagnostic_arrivals: List[float] = []   # time.monotonic() of each of ours
         self.subscriptions = [
             node.create_subscription(JointState, 'feedforward_efforts', self._on_efforts,
                                      1000),
@@ -213,6 +214,7 @@ class Io:
     def _on_diagnostics(self, msg) -> None:
         if any(s.name.startswith(self.node_name + ':') for s in msg.status):
             self.diagnostics.append(msg)
+            self.diagnostic_arrivals.append(time.monotonic())
 
     def close(self) -> None:
         node = self.driver.node

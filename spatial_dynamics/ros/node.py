@@ -21,12 +21,12 @@ The robot description comes from, in this order of precedence: the ``robot_descr
 parameter (URDF XML), the ``robot_description_file`` parameter (a path, read by
 :mod:`spatial_dynamics.files`), the ``robot_description`` topic. A new one is parsed completely
 (:mod:`spatial_dynamics.ros.descriptions`) and swapped in between two messages only if it
-loads. Three callback groups run in three threads: the inputs and diagnostics in ``inputs``;
-the plans (``desired_trajectory``, sized, converted and checked: :mod:`.plans`) in
-``plans``; the parameter services, the description topic and the parser's notifications in
-rclpy's default group, which alone writes ``config``. A description set by parameter is
-parsed in its callback (the answer says whether it was accepted) while the answers go on in
-theirs.
+loads. Four callback groups run in four threads: the inputs in ``inputs``; the plans
+(``desired_trajectory``, sized, converted and checked: :mod:`.plans`) in ``plans``; the
+diagnostics timer in ``diagnosing``; the parameter services, the description topic and the
+parser's notifications in rclpy's default group, which alone writes ``config``. A
+description set by parameter is parsed in its callback (the answer says whether it was
+accepted) while the answers and the diagnostics go on in theirs.
 
 The ``inputs`` group is the answering group: :func:`~spatial_dynamics.ros.common.spin` runs it
 in a thread of its own with an executor that waits on it alone, and the rest (plans,
@@ -92,9 +92,9 @@ class InverseDynamicsNode(Node):
             self.declare_parameter(param.name, _UNSET[param.type] if param.default is None
                                    else param.default, PARAMETERS.descriptor(param))
         # Callback groups, each its thread: the answering one (inputs; spin gives it a thread
-        # and an executor of its own), the plans' one (below) and rclpy's default one
-        # (parameter services, the description topic, the parser's notifications, the
-        # diagnostics timer), which alone writes ``config``. A parameter change that parses a
+        # and a loop of its own), the plans' one (below), the diagnostics' one (below) and
+        # rclpy's default one (parameter services, the description topic, the parser's
+        # notifications), which alone writes ``config``. A parameter change that parses a
         # description waits in its callback for the parse while the answers go on in theirs;
         # the new ``Config`` is swapped in as one reference, and each answer reads
         # ``self.config`` once.
@@ -104,6 +104,11 @@ class InverseDynamicsNode(Node):
         # guard condition, and annotated for JTC by a worker thread: what a plan costs in
         # proportion to its size never runs where joint_states are answered.
         self.plans = MutuallyExclusiveCallbackGroup()
+        # The diagnostics timer in a group of its own: a description set by parameter is
+        # parsed in the parameter service's callback (default group), seconds for a big one,
+        # and /diagnostics went silent that long (21 s for 8000 links under load). It only
+        # reads ``config`` (one reference) and swaps the period's counters under the lock.
+        self.diagnosing = MutuallyExclusiveCallbackGroup()
         self._plan_queue: deque = deque()
         self.config: Optional[Config] = None
         self.answering = Answering(self.get_logger())
@@ -190,7 +195,7 @@ class InverseDynamicsNode(Node):
             subscribe(self, WrenchStamped, 'measured_contact_wrenches',
                       self._base_callback('measured_contact_wrenches'), WRENCH_DEPTH,
                       group=group)
-        self.create_timer(1.0, self._publish_diagnostics)   # default group: off the answers
+        self.create_timer(1.0, self._publish_diagnostics, callback_group=self.diagnosing)
 
     def _base_callback(self, topic: str):
         def take(msg) -> None:
@@ -507,7 +512,7 @@ def main(args: Optional[Sequence[str]] = None) -> int:
     # The node logs each URDF warning itself (once per description) and lists them in
     # /diagnostics: Python's own printing of them would repeat each one on stderr.
     warnings.filterwarnings('ignore', category=sd.URDFWarning)
-    return spin(InverseDynamicsNode, args, threads=3)
+    return spin(InverseDynamicsNode, args, threads=4)
 
 
 if __name__ == '__main__':
