@@ -96,12 +96,31 @@ def test_a_core_not_allowed_is_no_permission_problem():
     effect = in_thread(lambda: realtime.apply(0, [core], False))
     assert effect.refused == () and len(effect.invalid) == 1
     text = realtime.warning(effect)
-    assert f'cpu_affinity [{core}]' in text and 'EINVAL' in text
+    assert f'cpu_affinity [{core}]' in text and 'not among the cores' in text
     assert str(sorted(os.sched_getaffinity(0))) in text
     for advice in ('not permitted', 'limits.conf', 'rtprio', '--cap-add'):
         assert advice not in text, (advice, text)
     level, message, _ = realtime.status(effect)
     assert level == 'WARN' and 'not permitted' not in message and f'[{core}]' in message
+
+
+def test_a_list_partly_outside_the_allowed_cores_is_refused_whole():
+    """[0, 1023]: the kernel would pin to core 0 alone and say nothing; the docs say WARN."""
+    allowed = sorted(os.sched_getaffinity(0))
+    wanted = [allowed[0], max(allowed) + 1]
+    effect, affinity = in_thread(lambda: (realtime.apply(0, wanted, False),
+                                          os.sched_getaffinity(0)))
+    assert affinity == set(allowed) and effect.affinity == 'all cores'
+    assert len(effect.invalid) == 1 and f'[{max(allowed) + 1}]' in effect.invalid[0]
+    assert realtime.status(effect)[0] == 'WARN'
+
+
+def test_an_inherited_real_time_policy_is_reported_as_it_is(monkeypatch):
+    """Started under `chrt -f 50` with thread_priority 0: the status says FIFO 50, not normal."""
+    monkeypatch.setattr(realtime.os, 'sched_getscheduler', lambda tid: os.SCHED_FIFO)
+    monkeypatch.setattr(realtime.os, 'sched_getparam', lambda tid: os.sched_param(50))
+    effect = in_thread(lambda: realtime.apply(0, None, False))
+    assert effect.priority.startswith('SCHED_FIFO 50') and 'inherited' in effect.priority
 
 
 def test_garbage_collector_is_frozen_and_collected_off_the_answers():

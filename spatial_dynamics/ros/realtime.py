@@ -124,7 +124,7 @@ def apply(priority: int, cores: Optional[Sequence[int]], memory: bool) -> InEffe
     name_thread(ANSWERING_THREAD)
     refused = []
     invalid = []
-    in_effect = 'normal (SCHED_OTHER)'
+    in_effect = inherited_scheduling()
     if priority > 0:
         done = []
         try:
@@ -141,12 +141,16 @@ def apply(priority: int, cores: Optional[Sequence[int]], memory: bool) -> InEffe
                 set_priority(tid, 0)
             refused.append(f'thread_priority {priority} (SCHED_FIFO): {_reason(err)}')
     affinity = 'all cores'
-    if cores:
+    allowed = sorted(os.sched_getaffinity(0))
+    outside = sorted(set(cores or ()) - set(allowed))
+    if outside:   # the kernel would take the others alone, or widen a taskset's mask
+        invalid.append(f'cpu_affinity {list(cores)}: {outside} not among the cores this '
+                       f'process may use, {allowed}')
+    elif cores:
         try:
             os.sched_setaffinity(0, cores)
             affinity = 'cores ' + ', '.join(map(str, sorted(os.sched_getaffinity(0))))
         except OSError as err:
-            allowed = sorted(os.sched_getaffinity(0))
             if err.errno == errno.EINVAL:   # no core of the list is one this process may use
                 invalid.append(f'cpu_affinity {list(cores)}: none of these cores is among the '
                                f'cores this process may use, {allowed} ({_reason(err)})')
@@ -161,6 +165,20 @@ def apply(priority: int, cores: Optional[Sequence[int]], memory: bool) -> InEffe
         except OSError as err:
             refused.append(f'lock_memory: {_reason(err)}')
     return InEffect(in_effect, affinity, locked, tuple(refused), tuple(invalid))
+
+
+def inherited_scheduling() -> str:
+    """The calling thread's scheduling as it is: normal, or a real-time policy it inherited.
+
+    ``thread_priority`` 0 leaves the thread as the process was started (``chrt -f 50 ...``
+    makes every thread SCHED_FIFO 50): said as it is, never as normal scheduling.
+    """
+    policy = os.sched_getscheduler(0)
+    if policy in (os.SCHED_FIFO, os.SCHED_RR):
+        name = 'SCHED_FIFO' if policy == os.SCHED_FIFO else 'SCHED_RR'
+        return (f'{name} {os.sched_getparam(0).sched_priority}: inherited from the process '
+                '(thread_priority 0 leaves it)')
+    return 'normal (SCHED_OTHER)'
 
 
 def warning(in_effect: InEffect) -> Optional[str]:
