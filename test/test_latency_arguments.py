@@ -46,3 +46,42 @@ def test_an_output_that_cannot_be_written_is_refused_first(option, kind, tmp_pat
     assert exit.value.code == 2
     err = capsys.readouterr().err
     assert option in err and str(path) in err, err
+
+
+def test_a_plot_without_a_suffix_is_checked_as_the_file_written(tmp_path, capsys):
+    """matplotlib writes NAME.png for NAME: a folder NAME.png is refused before the run."""
+    (tmp_path / 'hist.png').mkdir()
+    with pytest.raises(SystemExit) as exit:
+        parse_args(['--plot', str(tmp_path / 'hist')])
+    assert exit.value.code == 2 and 'hist.png' in capsys.readouterr().err
+    assert parse_args(['--plot', str(tmp_path / 'other')]).plot == str(tmp_path / 'other.png')
+
+
+@pytest.mark.parametrize('inside', [False, True])
+def test_a_log_dir_that_is_a_file_is_refused_first(inside, tmp_path, capsys):
+    path = tmp_path / 'file'
+    path.write_text('x')
+    with pytest.raises(SystemExit) as exit:
+        parse_args(['--log-dir', str(path / 'sub' if inside else path)])
+    assert exit.value.code == 2 and 'not a folder' in capsys.readouterr().err
+    assert parse_args(['--log-dir', str(tmp_path / 'new' / 'logs')]).log_dir
+
+
+def test_a_run_that_sends_nothing_is_refused(capsys):
+    with pytest.raises(SystemExit) as exit:
+        parse_args(['--rate', '1e-3', '--seconds', '1'])
+    assert exit.value.code == 2 and 'sends no message' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('option, value', [
+    ('--seconds', '0'), ('--seconds', '-1'), ('--seconds', 'nan'), ('--frequency', 'nan'),
+    ('--frequency', '0'), ('--amplitude', '-0.1'), ('--timeout', '0'), ('--laws', 'bogus'),
+    ('--laws', 'pd,xx'), ('--busy', '-1'), ('--priority', '100'),
+])
+def test_closed_loop_refuses_numbers_out_of_range_first(option, value, capsys):
+    """`--seconds 0` printed perfect tracking and exit 0; -1, nan and a bad law a traceback."""
+    from spatial_dynamics.tools import closed_loop
+    with pytest.raises(SystemExit) as exit:
+        closed_loop.parse_args([option, value])
+    assert exit.value.code == 2 and option in capsys.readouterr().err
+    assert closed_loop.parse_args(['--laws', 'pd,ct', '--seconds', '0.5']).laws == 'pd,ct'

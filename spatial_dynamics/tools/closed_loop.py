@@ -69,6 +69,17 @@ TIMESTEP = 0.001
 SIM_COMMANDS = 'sim_effort_commands'
 
 
+def laws(text: str) -> str:
+    """Return ``--laws`` checked: 'all' or a comma-separated subset of pd, pd_ff, ct."""
+    if text == 'all':
+        return text
+    names = text.split(',')
+    unknown = [name for name in names if name not in ('pd', 'pd_ff', 'ct')]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(f'{unknown} not among pd, pd_ff, ct (or all)')
+    return text
+
+
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog='python -m spatial_dynamics.tools.closed_loop',
                                      description=__doc__.split('\n\n')[0])
@@ -77,13 +88,15 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         help='the simulated robot when it is not the one the node is given '
                              '(default: --urdf): e.g. the true robot, with the node on an '
                              'original or a corrected URDF (replay --write-urdf)')
-    parser.add_argument('--seconds', type=float, default=6.0,
-                        help='simulated seconds per control law (default 6)')
-    parser.add_argument('--frequency', type=float, default=5.0,
-                        help='natural frequency of the feedback loop, Hz (default 5)')
-    parser.add_argument('--amplitude', type=float, default=0.4,
-                        help='amplitude A of each joint (rad or m; default 0.4)')
-    parser.add_argument('--laws', default='all',
+    parser.add_argument('--seconds', type=in_range(float, 0.0, 3600.0, True), default=6.0,
+                        help='simulated seconds per control law, above 0, at most 3600 '
+                             '(default 6)')
+    parser.add_argument('--frequency', type=in_range(float, 0.0, 1000.0, True), default=5.0,
+                        help='natural frequency of the feedback loop, Hz, above 0, at most 1000 '
+                             '(default 5)')
+    parser.add_argument('--amplitude', type=in_range(float, 0.0, 10.0), default=0.4,
+                        help='amplitude A of each joint, rad or m, 0 .. 10 (default 0.4)')
+    parser.add_argument('--laws', type=laws, default='all',
                         help='comma-separated subset of: pd, pd_ff, ct (default all)')
     parser.add_argument('--plot', default=os.path.join('out', 'closed_loop.png'),
                         help="PNG of |e| over time (default out/closed_loop.png; '' for none)")
@@ -93,8 +106,9 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser.add_argument('--plan', action='store_true',
                         help='send the node whole plans (desired_trajectory), replaced at half '
                              'time, instead of relaying a desired state per step')
-    parser.add_argument('--timeout', type=float, default=120.0,
-                        help='wall-clock seconds allowed per law before giving up (default 120)')
+    parser.add_argument('--timeout', type=in_range(float, 0.0, 86400.0, True), default=120.0,
+                        help='wall-clock seconds allowed per law before giving up, above 0 '
+                             '(default 120)')
     cpus = os.cpu_count() or 1
     parser.add_argument('--busy', type=in_range(int, 0, 4 * cpus), default=0,
                         help=f'busy loops beside the run, one process each, 0 .. {4 * cpus} '

@@ -353,12 +353,25 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                              'relay (QoS override parameter; default: their keep last 1)')
     parser.add_argument('--log-dir', default=None, help='node and relay logs (default: none)')
     args = parser.parse_args(argv)
-    for option, path in (('--plot', args.plot), ('--json', args.json)):
+    outputs = [('--plot', args.plot), ('--json', args.json)]
+    if args.plot is not None and not os.path.splitext(args.plot)[1]:
+        args.plot += '.png'   # what matplotlib writes for a name without a suffix
+        outputs.append(('--plot', args.plot))
+    for option, path in outputs:
         if path is not None:
             try:
                 check_output(path, option)
             except ValueError as err:
                 parser.error(str(err))
+    if args.log_dir is not None:
+        # the first folder of the path that exists must be a folder (not a file inside one)
+        head = os.path.abspath(args.log_dir)
+        while not os.path.exists(head):
+            head = os.path.dirname(head)
+        if not os.path.isdir(head):
+            parser.error(f'--log-dir {args.log_dir!r}: {head!r} is not a folder')
+    if round(args.rate * args.seconds) < 1:
+        parser.error(f'--rate {args.rate:g} for --seconds {args.seconds:g} sends no message')
     return args
 
 
@@ -448,16 +461,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print('inverse_dynamics - relay: ' + ', '.join(
             f'{key} {rows[1][key + "_ms"] - rows[0][key + "_ms"]:+.3f} ms'
             for key, _ in QUANTILES))
-        if args.plot and plot(args.plot, targets, title) is None:
-            print('--plot: matplotlib is not installed, no histogram drawn')
-        if args.json:
-            os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-            with open(args.json, 'w') as f:
-                json.dump({'robot': model.name, 'rate_hz': args.rate, 'busy': args.busy,
-                           'scheduling': scheduling, 'seconds_per_target': args.seconds,
-                           'load': os.getloadavg()[0], 'compute_us_means': compute.means_us,
-                           'targets': rows}, f, indent=2)
         status = 0 if all(r['answered'] for r in rows) else 1
+        try:   # the results first: a plot that fails to be written loses nothing else
+            if args.json:
+                with open(args.json, 'w') as f:
+                    json.dump({'robot': model.name, 'rate_hz': args.rate, 'busy': args.busy,
+                               'scheduling': scheduling, 'seconds_per_target': args.seconds,
+                               'load': os.getloadavg()[0],
+                               'compute_us_means': compute.means_us, 'targets': rows},
+                              f, indent=2)
+            if args.plot and plot(args.plot, targets, title) is None:
+                print('--plot: matplotlib is not installed, no histogram drawn')
+        except OSError as err:
+            print(f'latency: cannot write {err.filename!r}: {err.strerror}', file=sys.stderr)
+            status = 1
     except KeyboardInterrupt:
         status = 130
     finally:
