@@ -458,12 +458,7 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
         return _drive_terms(model, out, qd, armature, friction_threshold)
     lay = _layout_of(id(model)) or layout.of(model)
     kern = lay.kernels if backend == 'auto' else _select(backend, lay)
-    q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
-    g = tuple(as_vector('gravity', gravity, 3).tolist())
-    fb = f_ext_in_bodies(model, f_ext)
-    if fb:  # batched wrenches broadcast against the batch of states
-        batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
-        q, qd, qdd = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, qdd))
+    q, qd, qdd, g, fb = _states(model, q, qd, qdd, gravity, f_ext)
     if kern is not None and _c_derivatives is not None and q.dtype in _KERNEL_DTYPES:
         if q.size == q.shape[-1] > 0:
             # One state (maybe with batch dimensions of 1): the single-state entry.
@@ -532,16 +527,22 @@ def _gravity(gravity):
     return _NO_GRAVITY
 
 
-def _rnea(model: Model, lay: layout.Layout, q, qd, qdd, gravity, f_ext,
-          kern) -> np.ndarray:
-    """Run :func:`rnea` for all its fast path leaves: validation, wrenches, batches."""
+def _states(model: Model, q, qd, qdd, gravity, f_ext) -> tuple:
+    """Return q, q̇, q̈ checked (broadcast against batched wrenches), gravity, body wrenches."""
     q, qd, qdd = as_joint_arrays(model, q, qd, qdd)
     g = tuple(as_vector('gravity', gravity, 3).tolist())
     fb = f_ext_in_bodies(model, f_ext)
     if fb:  # batched wrenches broadcast against the batch of states
         batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
         q, qd, qdd = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, qdd))
-    if kern is not None and _c_derivatives is not None and q.dtype in _KERNEL_DTYPES:
+    return q, qd, qdd, g, fb
+
+
+def _rnea(model: Model, lay: layout.Layout, q, qd, qdd, gravity, f_ext,
+          kern) -> np.ndarray:
+    """Run :func:`rnea` for all its fast path leaves: validation, wrenches, batches."""
+    q, qd, qdd, g, fb = _states(model, q, qd, qdd, gravity, f_ext)
+    if kern is not None and q.dtype in _KERNEL_DTYPES:
         if q.size == q.shape[-1] > 0:
             # One state (maybe with batch dimensions of 1): the single-state entry.
             fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
