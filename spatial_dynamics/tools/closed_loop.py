@@ -65,6 +65,11 @@ LAWS = (('PD alone', {'control_mode': 'pd_feedforward', 'output': 'none'}),
         ('PD + feed-forward', {'control_mode': 'pd_feedforward', 'output': 'full'}),
         ('computed torque', {'control_mode': 'computed_torque', 'output': 'full'}))
 TIMESTEP = 0.001
+#: Wall seconds the relay gives the desired state of a step to reach the node before it lets
+#: the simulator step (:class:`Lockstep`). DDS does not order two topics: once the node
+#: answered within ~100 µs of a sample (its own answering loop), the simulator's next state
+#: overtook the desired state of its step in a quarter of the steps with no pause here.
+DELIVERY = 0.002
 #: The simulator's command topic: the relay (:class:`Lockstep`) forwards the node's commands.
 SIM_COMMANDS = 'sim_effort_commands'
 
@@ -189,7 +194,8 @@ class Lockstep:
     desired state is on its way before the simulator can even step, so the controller holds
     it when the state of step k + 1 arrives, however slowly this process runs (publishing it
     when the state of step k arrives races the controller's answer: under load, hundreds of
-    answers per 1000 steps used an older setpoint). DDS does not order messages of two topics,
+    answers per 1000 steps used an older setpoint), and waits :data:`DELIVERY` for it to
+    arrive. DDS does not order messages of two topics,
     so on a loaded machine an answer may still, rarely, come from the setpoint before (seen: 1
     in 6000 with two CPU burners): :attr:`stale` counts them from the q_d the node echoes.
     An answer to a state answered already (the simulator republishes the state it waits on)
@@ -261,6 +267,7 @@ class Lockstep:
             self.stale += 1
         self.steps += 1
         self.publish_desired(self.steps * self.timestep)
+        time.sleep(DELIVERY)
         self.command.data = msg.effort
         self.relay.publish(self.command)
 
