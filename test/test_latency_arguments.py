@@ -49,7 +49,7 @@ def test_an_output_that_cannot_be_written_is_refused_first(option, kind, tmp_pat
 
 
 def test_a_plot_without_a_suffix_is_checked_as_the_file_written(tmp_path, capsys):
-    """matplotlib writes NAME.png for NAME: a folder NAME.png is refused before the run."""
+    """For NAME, matplotlib writes NAME.png: a folder NAME.png is refused before the run."""
     (tmp_path / 'hist.png').mkdir()
     with pytest.raises(SystemExit) as exit:
         parse_args(['--plot', str(tmp_path / 'hist')])

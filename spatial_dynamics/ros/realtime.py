@@ -168,7 +168,7 @@ def apply(priority: int, cores: Optional[Sequence[int]], memory: bool) -> InEffe
 
 
 def inherited_scheduling() -> str:
-    """The calling thread's scheduling as it is: normal, or a real-time policy it inherited.
+    """Return the calling thread's scheduling as it is: normal, or an inherited real-time one.
 
     ``thread_priority`` 0 leaves the thread as the process was started (``chrt -f 50 ...``
     makes every thread SCHED_FIFO 50): said as it is, never as normal scheduling.
