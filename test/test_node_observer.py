@@ -251,24 +251,29 @@ def test_measured_effort_gravity_compensated_adds_g_of_q(install, driver, tmp_pa
     measured = driver.node.create_publisher(JointState, 'joint_states', 10)
     k = [0]
 
-    def send(effort):
+    def send(effort, fresh=False):
         """Publish the next sample (5 ms of stamps on) again and again until its estimate came.
 
         Lockstep, so every sample is integrated however busy the machine: a best-effort input
         dropped by the transport is sent again (one the node got twice is skipped as
         ``repeated``), and a burst of drops never reads as a gap that restarts the observer.
+        ``fresh``: each try is a new sample (stamped 5 ms on), for the first one — its estimate
+        may leave the node before the node's publisher has matched our subscription, and the
+        same sample sent again would then be skipped as ``repeated`` for good.
         """
-        k[0] += 1
-        msg = joint_state(names, q, zero, effort, k[0])
-        stamp = divmod(k[0] * 5_000_000, 1_000_000_000)
-        msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+        deadline = time.monotonic() + TIMEOUT
+        stamp = None
 
         def estimated():
             return estimates and (estimates[-1].header.stamp.sec,
                                   estimates[-1].header.stamp.nanosec) == stamp
-        deadline = time.monotonic() + TIMEOUT
-        while not estimated():
+        while stamp is None or not estimated():
             assert time.monotonic() < deadline, f'no estimate of sample {k[0]}'
+            if stamp is None or fresh:
+                k[0] += 1
+                msg = joint_state(names, q, zero, effort, k[0])
+                stamp = divmod(k[0] * 5_000_000, 1_000_000_000)
+                msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
             measured.publish(msg)
             resend = time.monotonic() + 0.05
             while time.monotonic() < resend and not estimated():
@@ -282,7 +287,8 @@ def test_measured_effort_gravity_compensated_adds_g_of_q(install, driver, tmp_pa
     try:
         io.wait_connected()
         driver.spin_until(lambda: measured.get_subscription_count() >= 1, what='joint_states')
-        send(zero)    # sent until the node's subscription has matched this publisher
+        driver.spin_until(lambda: sub.get_publisher_count() >= 1, what='external_torque_estimate')
+        send(zero, fresh=True)   # until both ways of both topics have matched
         # UR-like zeros, read as gravity compensated: nothing external (1 s = 20 time constants)
         np.testing.assert_allclose(run(zero), zero, rtol=0, atol=1e-6 * np.abs(g).max())
         # Franka-like g(q), read as full: nothing external either
