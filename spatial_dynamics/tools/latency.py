@@ -8,21 +8,25 @@
 Starts the node (on the demo robot) and :mod:`spatial_dynamics.tools.relay` as two processes,
 each in its own namespace, and publishes the same smooth trajectory (sensor_msgs/JointState, model
 order) to each at ``--rate`` Hz, alternating between them in blocks of ``--block`` seconds until
-each got ``--seconds``. Latency is input publish -> ``feedforward_efforts`` received, in this
-process, matched by the header stamp (wall time at publish, unique per message). Reported per
-target: messages sent, fraction answered, p50 / p99 / max, and the CPU time (user + system) its
-process used per message while measured. The relay does everything the node does except the
-inverse dynamics and the second publication (``effort_commands``, published first), so node
-p50 - relay p50 is the node's own cost.
+each got ``--seconds``. The inputs are published by a process of their own that does nothing
+else (:class:`Pacer`), on a fixed grid. Latency is input publish -> ``feedforward_efforts``
+received by this process's middleware (its reception time stamp), matched by the header stamp
+(wall time at publish, unique per message). Reported per target: messages sent, fraction
+answered, p50 / p99 / max, the CPU time (user + system) its process used per message while
+measured, and how many inputs not answered were followed by the next within a quarter period
+(the publisher late: a keep-last-1 input keeps the newer). The relay does everything the node
+does except the inverse dynamics and the second publication (``effort_commands``, published
+first), so node p50 - relay p50 is the node's own cost.
 
 Each round trip is split at the answer's publication (its DDS source timestamp, the same
 clock on one machine): ``to answer`` is input publish -> answer published by the target (the
 way in, the executor, the answer), the rest is the way back to this process. The node's
 compute time per answer (mean and max of each diagnostics period) comes from its
 ``/diagnostics``. ``--busy N`` runs N busy loops (one process each) beside the run, the load
-of a busy machine; ``--priority P`` gives node, relay and this process's publishing thread and
-receive threads SCHED_FIFO P (0: normal scheduling for all; needs the rtprio limit, see the
-node's ``thread_priority``). ``--plot`` draws the histograms of the round trips (matplotlib).
+of a busy machine; ``--priority P`` gives node, relay and this process's receive threads
+SCHED_FIFO P, the publishing process P + 1 (a tick never waits for a target's thread); 0:
+normal scheduling for all; it needs the rtprio limit, see the node's ``thread_priority``.
+``--plot`` draws the histograms of the round trips (matplotlib).
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ import sys
 import sysconfig
 import textwrap
 import time
-from typing import Callable, Dict, List, Optional, Sequence, Set
+from typing import Callable, Dict, List, Optional, Sequence, Set, Tuple
 
 import numpy as np
 
@@ -78,23 +82,40 @@ class Target:
         self.sent: Set[int] = set()
         self.latency_ns: Dict[int, int] = {}
         self.to_answer_ns: Dict[int, int] = {}   # input publish -> answer published
+        self.early: Dict[int, Tuple[int, int]] = {}   # answers before their stamp was known
         self.measuring = False
         self.publisher = bench.create_publisher(
             JointState, f'{namespace}/desired_joint_states', 10)
         self.subscription = bench.create_subscription(
             JointState, f'{namespace}/feedforward_efforts', self._on_answer,
             QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+        self.period_ns = 0   # of the inputs while measured (set by the caller)
         self.answers = 0     # all answers, measured or not
         self.published = 0   # all messages, measured or not
         self.cpu_s = 0.0   # CPU time of the target's process while it was measured
 
     def _on_answer(self, msg, info) -> None:
-        now = time.time_ns()
+        # the middleware's reception time (same clock): what this process's own executor
+        # does before it runs the callback is not the target's latency
+        now = info['received_timestamp'] or time.time_ns()
         self.answers += 1
         key = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        if key in self.sent and key not in self.latency_ns:
-            self.latency_ns[key] = now - key
-            self.to_answer_ns[key] = info['source_timestamp'] - key
+        if key in self.sent:
+            if key not in self.latency_ns:
+                self.latency_ns[key] = now - key
+                self.to_answer_ns[key] = info['source_timestamp'] - key
+        elif self.measuring:   # published by the pacer, its stamp not reported yet
+            self.early.setdefault(key, (now, info['source_timestamp']))
+
+    def add_sent(self, stamps: Sequence[int]) -> None:
+        """Count ``stamps`` as sent while measured (the pacer's), matching early answers."""
+        for key in stamps:
+            self.sent.add(key)
+            if key in self.early and key not in self.latency_ns:
+                received, published = self.early[key]
+                self.latency_ns[key] = received - key
+                self.to_answer_ns[key] = published - key
+        self.early.clear()
 
     def publish(self, msg) -> None:
         """Stamp ``msg`` with the wall time now and publish it (counted when measuring)."""
@@ -118,6 +139,13 @@ class Target:
                                             else float('nan'))
             out[f'{prefix}max_ms'] = float(values.max()) if len(values) else float('nan')
         out['cpu_us_per_msg'] = 1e6 * self.cpu_s / sent if sent else float('nan')
+        # an input not answered whose next one was published within a quarter of the
+        # period: the publisher was late and a keep-last-1 input keeps the newer of the two
+        stamps = np.array(sorted(self.sent), dtype=np.int64)
+        lost = np.array([key not in self.latency_ns for key in stamps.tolist()], dtype=bool)
+        gaps = np.diff(stamps, append=np.iinfo(np.int64).max)
+        out['not_answered'] = int(lost.sum())
+        out['not_answered_superseded'] = int((lost & (gaps < self.period_ns // 4)).sum())
         out['mean_ms'] = float(ms.mean()) if len(ms) else float('nan')
         return out
 
@@ -143,6 +171,133 @@ def pace(executor, rate: float, seconds: float, publish: Callable[[int], None],
                 break
             executor.spin_once(timeout_sec=remaining)
     return count
+
+
+class Pacer:
+    """The inputs' publisher, in a process of its own that does nothing else.
+
+    Publishing from the process that also receives the answers made the inputs' period depend
+    on that process: a tick delayed by its receiving (or by the collector) was followed at
+    once by the next, and a keep-last-1 input kept only the second — measured, most inputs
+    the node did not answer had come less than 0.1 ms before the next. This process paces
+    the inputs on a fixed grid by sleeping (SCHED_FIFO with ``--priority``, collector off)
+    and reports the stamps it published; the benchmark's process only receives. Commands and
+    replies are JSON lines on the child's stdin and stdout (a plain subprocess: nothing of
+    the benchmark's own script is run again in it, as multiprocessing's spawn would).
+    """
+
+    def __init__(self, namespaces: Sequence[str], trajectory: Sinusoids, priority: int) -> None:
+        setup = {'namespaces': list(namespaces), 'joint_names': list(trajectory.joint_names),
+                 'lower': (trajectory.c - 2.0 * trajectory.a).tolist(),
+                 'upper': (trajectory.c + 2.0 * trajectory.a).tolist(), 'priority': priority}
+        self.process = subprocess.Popen(
+            [sys.executable, '-c', 'from spatial_dynamics.tools.latency import pace_inputs; '
+             'pace_inputs()'], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+            preexec_fn=die_with_parent)
+        self._send(setup)
+        self.scheduling = self._reply(None, 60.0)
+
+    def _send(self, command) -> None:
+        self.process.stdin.write(json.dumps(command) + '\n')
+        self.process.stdin.flush()
+
+    def _reply(self, executor, timeout: float):
+        """Wait for the pacer's reply, spinning ``executor`` (if any) meanwhile."""
+        import select
+        deadline = time.monotonic() + timeout
+        while not select.select([self.process.stdout], [], [], 0.0 if executor else 0.05)[0]:
+            if self.process.poll() is not None:
+                raise RuntimeError(f'the pacer process exited ({self.process.returncode})')
+            if time.monotonic() > deadline:
+                raise RuntimeError(f'the pacer did not answer within {timeout:.0f} s')
+            if executor is not None:
+                executor.spin_once(timeout_sec=0.01)
+        line = self.process.stdout.readline()
+        if not line:
+            raise RuntimeError(f'the pacer process exited ({self.process.wait()})')
+        return json.loads(line)
+
+    def prime(self, executor, index: int, target: Target, timeout: float) -> None:
+        """Publish to target ``index`` at 20 Hz until it answers (started and connected)."""
+        self._send(['prime', index])
+        if not spin_until(executor, lambda: target.answers > 0, timeout):
+            raise RuntimeError(f'{target.name} did not answer within {timeout:.0f} s')
+        self._send(['stop'])
+        self._reply(executor, 10.0)
+
+    def block(self, executor, index: int, rate: float, seconds: float, t0: float) -> List[int]:
+        """Publish ``rate * seconds`` inputs to target ``index``; their stamps (ns)."""
+        self._send(['block', index, rate, seconds, t0])
+        return self._reply(executor, seconds + 60.0)
+
+    def close(self) -> None:
+        """Stop the process (it also dies with this one)."""
+        try:
+            self._send(['exit'])
+            self.process.wait(5.0)
+        except (OSError, ValueError, subprocess.TimeoutExpired):
+            self.process.kill()
+            self.process.wait()
+
+
+def pace_inputs() -> None:
+    """Run the :class:`Pacer`'s process: JSON commands on stdin, replies on stdout."""
+    import gc
+    import select
+    signal.signal(signal.SIGINT, signal.SIG_IGN)   # the benchmark stops it
+    setup = json.loads(sys.stdin.readline())
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+    from sensor_msgs.msg import JointState
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    node = rclpy.create_node('latency_pacer')
+    publishers = [node.create_publisher(JointState, f'{ns}/desired_joint_states', 10)
+                  for ns in setup['namespaces']]
+    trajectory = Sinusoids(setup['joint_names'], setup['lower'], setup['upper'])
+    msg = joint_state_for(trajectory.joint_names)
+
+    def reply(value) -> None:
+        sys.stdout.write(json.dumps(value) + '\n')
+        sys.stdout.flush()
+    # one above the targets: a tick must not wait for a target's thread on its core
+    priority = setup['priority']
+    reply(prioritize(min(priority + 1, 99) if priority > 0 else 0))
+    gc.freeze()
+    gc.disable()
+    try:
+        for line in sys.stdin:
+            command = json.loads(line)
+            if command[0] == 'exit':
+                return
+            publisher = publishers[command[1]]
+            if command[0] == 'prime':
+                fill(msg, trajectory, 0.0)
+                while not select.select([sys.stdin], [], [], 0.05)[0]:
+                    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(
+                        time.time_ns(), 1_000_000_000)
+                    publisher.publish(msg)
+                sys.stdin.readline()   # stop
+                reply(None)
+                continue
+            _, _, rate, seconds, t0 = command
+            period = 1.0 / rate
+            stamps = []
+            start_time = time.monotonic()
+            for k in range(int(round(rate * seconds))):
+                fill(msg, trajectory, time.monotonic() - t0)
+                stamp = time.time_ns()
+                msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+                publisher.publish(msg)
+                stamps.append(stamp)
+                delay = start_time + (k + 1) * period - time.monotonic()
+                if delay > 0.0:   # a late tick is published at once, not skipped
+                    time.sleep(delay)
+            reply(stamps)
+    except BrokenPipeError:   # the benchmark is gone
+        return
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
 
 
 def spin_until(executor, predicate: Callable[[], bool], timeout: float) -> bool:
@@ -267,13 +422,16 @@ def busy_loops(count: int) -> List[subprocess.Popen]:
                              preexec_fn=die_with_parent) for _ in range(count)]
 
 
-def prioritize(priority: int) -> str:
-    """SCHED_FIFO ``priority`` for this thread and this process's receive threads (0: none)."""
+def prioritize(priority: int, this_thread: bool = True) -> str:
+    """SCHED_FIFO ``priority`` for this process's receive threads and this thread (0: none).
+
+    ``this_thread``: False where this thread only reads what the receive threads stamped.
+    """
     from spatial_dynamics.ros import realtime
     if priority <= 0:
         return 'normal scheduling'
     try:
-        for tid in [0] + realtime.receive_threads():
+        for tid in [0] * this_thread + realtime.receive_threads():
             realtime.set_priority(tid, priority)
     except OSError as err:
         return f'normal scheduling (SCHED_FIFO {priority} not permitted: {err})'
@@ -415,25 +573,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     compute = Compute(bench, f'{namespace}/node')
     if root is not None:
         publish_odometry(bench, f'{namespace}/node/base/odometry', root)
-    scheduling = prioritize(args.priority)
-    msg = joint_state_for(model.joint_names)
+    # this process's receive threads stamp the answers' reception; its Python thread that
+    # reads them stays under normal scheduling, off the node's and the pacer's cores' way
+    prioritize(args.priority, this_thread=False)
     status = 0
+    pacer = None
     try:
-        for target in targets:
-            prime(executor, target, msg, trajectory, timeout=60.0)
+        pacer = Pacer([t.namespace for t in targets], trajectory, args.priority)
+        scheduling = pacer.scheduling
+        for index, target in enumerate(targets):
+            pacer.prime(executor, index, target, timeout=60.0)
         t0 = time.monotonic()
-
-        def send(target: Target) -> Callable[[int], None]:
-            def publish(k: int) -> None:
-                fill(msg, trajectory, time.monotonic() - t0)
-                target.publish(msg)
-            return publish
-
-        for target in targets:
-            pace(executor, args.rate, args.warmup, send(target))
+        for index, target in enumerate(targets):
+            pacer.block(executor, index, args.rate, args.warmup, t0)
         measured = {t.name: 0.0 for t in targets}
+        for target in targets:
+            target.period_ns = int(1e9 / args.rate)
         while any(v < args.seconds for v in measured.values()):
-            for target in targets:
+            for index, target in enumerate(targets):
                 block = min(args.block, args.seconds - measured[target.name])
                 if block <= 0:
                     continue
@@ -441,9 +598,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 cpu = cpu_seconds(pid)
                 target.measuring = True
                 compute.measuring = target.name == 'inverse_dynamics'
-                pace(executor, args.rate, block, send(target))
+                target.add_sent(pacer.block(executor, index, args.rate, block, t0))
+                spin_until(executor, lambda: False, 0.05)  # let the last answers of a block land
                 target.measuring = compute.measuring = False
-                executor.spin_once(timeout_sec=0.05)  # let the last answers of a block land
                 target.cpu_s += cpu_seconds(pid) - cpu
                 measured[target.name] += block
         spin_until(executor, lambda: all(len(t.latency_ns) == len(t.sent) for t in targets),
@@ -457,6 +614,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                  f'{os.getloadavg()[0]:.2f}')
         print(title)
         print(format_table(rows))
+        for r in rows:
+            print(f'{r["target"]}: {r["not_answered"]} inputs not answered, '
+                  f'{r["not_answered_superseded"]} of them followed by the next within a quarter '
+                  'period (published late: a keep-last-1 input keeps the newer)')
         print(compute.text())
         print('inverse_dynamics - relay: ' + ', '.join(
             f'{key} {rows[1][key + "_ms"] - rows[0][key + "_ms"]:+.3f} ms'
@@ -478,6 +639,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except KeyboardInterrupt:
         status = 130
     finally:
+        if pacer is not None:
+            pacer.close()
         bench.destroy_node()
         rclpy.try_shutdown()
         for proc in procs.values():
