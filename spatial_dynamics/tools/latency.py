@@ -74,7 +74,7 @@ QUANTILES = (('p50', 50.0), ('p99', 99.0), ('p99.9', 99.9))
 class Target:
     """Publisher to one node: stamps ``sent`` while measuring, ``latency_ns[stamp]`` answers."""
 
-    def __init__(self, bench, name: str, namespace: str) -> None:
+    def __init__(self, bench, name: str, namespace: str, depth: int = 1000) -> None:
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import JointState
         self.name = name
@@ -88,7 +88,7 @@ class Target:
             JointState, f'{namespace}/desired_joint_states', 10)
         self.subscription = bench.create_subscription(
             JointState, f'{namespace}/feedforward_efforts', self._on_answer,
-            QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+            QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE))
         self.period_ns = 0   # of the inputs while measured (set by the caller)
         self.answers = 0     # all answers, measured or not
         self.published = 0   # all messages, measured or not
@@ -568,8 +568,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     bench = rclpy.create_node('latency_bench')
     executor = SingleThreadedExecutor()
     executor.add_node(bench)
-    targets = [Target(bench, 'relay', f'{namespace}/relay'),
-               Target(bench, 'inverse_dynamics', f'{namespace}/node')]
+    # the answers of a whole block (and a second more) wait in this process's middleware:
+    # its Python thread, under normal scheduling, may read them late but loses none
+    depth = min(int(args.rate * (min(args.block, args.seconds) + 1.0)) + 1000, 100_000)
+    targets = [Target(bench, 'relay', f'{namespace}/relay', depth),
+               Target(bench, 'inverse_dynamics', f'{namespace}/node', depth)]
     compute = Compute(bench, f'{namespace}/node')
     if root is not None:
         publish_odometry(bench, f'{namespace}/node/base/odometry', root)
@@ -603,8 +606,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 target.measuring = compute.measuring = False
                 target.cpu_s += cpu_seconds(pid) - cpu
                 measured[target.name] += block
-        spin_until(executor, lambda: all(len(t.latency_ns) == len(t.sent) for t in targets),
-                   1.0)
+        # the answers still waiting in this process's middleware: read until all came or
+        # none came for a second
+        last, quiet_since = -1, time.monotonic()
+        while (not all(len(t.latency_ns) == len(t.sent) for t in targets)
+               and time.monotonic() - quiet_since < 1.0):
+            executor.spin_once(timeout_sec=0.01)
+            answers = sum(t.answers for t in targets)
+            if answers != last:
+                last, quiet_since = answers, time.monotonic()
         rows = [t.summary() for t in targets]
         depth = 'keep last 1' if args.input_depth is None else f'depth {args.input_depth}'
         base = ', floating base' if root is not None else ''
