@@ -85,3 +85,38 @@ def test_closed_loop_refuses_numbers_out_of_range_first(option, value, capsys):
         closed_loop.parse_args([option, value])
     assert exit.value.code == 2 and option in capsys.readouterr().err
     assert closed_loop.parse_args(['--laws', 'pd,ct', '--seconds', '0.5']).laws == 'pd,ct'
+
+
+def test_answers_before_their_stamps_are_known_count_and_late_ticks_are_told_apart():
+    """The pacer reports a block's stamps after the block: answers read before are kept.
+
+    Five inputs 1 ms apart, of which the third came 0.05 ms before the fourth (the publisher
+    late) and was not answered, and the fifth not answered after a full period: two not
+    answered, one of them superseded; the early answers match once the stamps are known,
+    with their reception time as given.
+    """
+    from spatial_dynamics.tools.latency import Target
+    target = Target.__new__(Target)
+    target.name, target.sent, target.latency_ns, target.to_answer_ns = 'node', set(), {}, {}
+    target.early, target.measuring, target.answers, target.cpu_s = {}, True, 0, 0.0
+    target.period_ns = 1_000_000
+    stamps = [10_000_000, 11_000_000, 11_950_000, 12_000_000, 13_000_000]
+
+    class Stamp:
+        def __init__(self, key):
+            self.sec, self.nanosec = divmod(key, 1_000_000_000)
+
+    class Answer:
+        def __init__(self, key):
+            self.header = type('Header', (), {'stamp': Stamp(key)})()
+    for key in (stamps[0], stamps[1], stamps[3]):
+        target._on_answer(Answer(key), {'received_timestamp': key + 400_000,
+                                        'source_timestamp': key + 300_000})
+    assert target.latency_ns == {}   # the stamps are not known yet
+    target.add_sent(stamps)
+    assert target.latency_ns == {stamps[i]: 400_000 for i in (0, 1, 3)}
+    assert target.to_answer_ns == {stamps[i]: 300_000 for i in (0, 1, 3)}
+    summary = target.summary()
+    assert (summary['sent'], summary['answered']) == (5, 3)
+    assert (summary['not_answered'], summary['not_answered_superseded']) == (2, 1)
+    assert summary['p50_ms'] == pytest.approx(0.4)
