@@ -118,9 +118,11 @@ def _transposed_times(X: np.ndarray, f: np.ndarray) -> np.ndarray:
     """``Xᵀ f`` for ``f`` of shape (..., 6): ``Σ_k f_k X[k]``, the six terms added in order.
 
     One element-wise product and sum per term, so a batch's row rounds as the same state
-    alone (a matrix product would sum in an order that depends on the batch's shape).
+    alone (a matrix product would sum in an order that depends on the batch's shape). An
+    infinite ``f`` gives NaN (``inf · 0``) without a warning, as the kernels take it.
     """
-    out = f[..., 0:1] * X[0]
-    for k in range(1, 6):
-        out = out + f[..., k:k + 1] * X[k]
+    with np.errstate(invalid='ignore', over='ignore'):
+        out = f[..., 0:1] * X[0]
+        for k in range(1, 6):
+            out = out + f[..., k:k + 1] * X[k]
     return out
