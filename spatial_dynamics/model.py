@@ -182,9 +182,40 @@ class Model:
 # --------------------------------------------------------------------------------------------
 # Rigid bodies: validated inertias, payloads
 
+def real_numbers(what: str, values) -> np.ndarray:
+    """Return ``values`` (a number, or a list, tuple or array of them) as a float array.
+
+    ``TypeError`` naming ``what`` for anything but real numbers: text (``'0.1'``), ``None``,
+    complex numbers, objects, ragged lists, and booleans (``True`` is no mass, armature or
+    friction). Integers and floats of any width are numbers.
+    """
+    try:
+        a = np.asarray(values)
+    except (TypeError, ValueError) as err:
+        raise TypeError(f'{what} must be real numbers, got {type(values).__name__}: '
+                        f'{err}') from None
+    if a.dtype.kind not in 'iuf':
+        got = (f'{values!r}' if a.dtype.kind == 'b' and a.ndim == 0
+               else f'{type(values).__name__} of dtype {a.dtype}')
+        raise TypeError(f'{what} must be real numbers, got {got}')
+    if a.dtype.kind == 'f' and _holds_a_boolean(values):   # numpy read [True, 0.5] as floats
+        raise TypeError(f'{what} must be real numbers, got a boolean in {values!r}')
+    return a.astype(float)
+
+
+def _holds_a_boolean(values) -> bool:
+    """Whether the (nested) lists or tuples ``values`` hold a ``bool`` or ``np.bool_``."""
+    if isinstance(values, (bool, np.bool_)):
+        return True
+    return isinstance(values, (list, tuple)) and any(_holds_a_boolean(v) for v in values)
+
+
 def finite(what: str, values) -> np.ndarray:
-    """Return ``values`` as floats; ``ValueError`` naming ``what`` if non-finite or absurd."""
-    a = np.asarray(values, dtype=float)
+    """Return ``values`` as floats; ``ValueError`` naming ``what`` if non-finite or absurd.
+
+    ``TypeError`` naming ``what`` when they are not real numbers (:func:`real_numbers`).
+    """
+    a = real_numbers(what, values)
     if not np.all(np.isfinite(a)):
         raise ValueError(f'{what}: non-finite number in {a.tolist()}')
     if np.any(np.abs(a) > MAX_ABS_VALUE):
@@ -207,7 +238,7 @@ def rigid_body_inertia(what: str, mass, com, inertia, R: Optional[np.ndarray] = 
     if m < 0.0:
         raise ValueError(f'{what}: negative mass {m}')
     c = finite(f'{what} centre of mass', com)
-    Ii = finite(f'{what} inertia', np.asarray(inertia, dtype=float))
+    Ii = finite(f'{what} inertia', inertia)
     if c.shape != (3,) or Ii.shape != (3, 3):
         raise ValueError(f'{what}: centre of mass must be 3 numbers and inertia 3×3')
     if not np.allclose(Ii, Ii.T, rtol=0.0, atol=1e-12 * max(np.abs(Ii).max(), 1e-300)):

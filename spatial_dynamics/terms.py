@@ -17,7 +17,7 @@ from typing import Mapping, Sequence, Union
 import numpy as np
 
 from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
-from .model import Model
+from .model import Model, real_numbers
 
 PerJoint = Union[float, Sequence[float], Mapping[str, float], np.ndarray]
 
@@ -35,7 +35,8 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
 
     ``ValueError`` names the joint of an unknown name or a non-finite (or, with
     ``nonnegative``, negative) value, and the free-flyer given a value; ``TypeError`` names
-    ``what`` given anything but real numbers (a string, a complex number).
+    ``what`` given anything but real numbers (a string, a complex number, a boolean:
+    ``armature=True`` is no armature of 1).
     """
     check_model(model)
     names = model.joint_names[1:] if model.floating else model.joint_names
@@ -51,7 +52,7 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
                 raise ValueError(f'{what}: unknown joint {name!r}')
             out[names.index(name)] = _number(f'{what} of joint {name!r}', v)
     else:
-        out = as_real_array(what, values).astype(float)
+        out = real_numbers(what, values)
         if out.ndim == 0:
             out = np.full(n, float(out))
         if base and out.shape == (model.nv,):
@@ -74,7 +75,7 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
 
 def _number(what: str, value) -> float:
     """``value``, one real number, as a float; ``TypeError``/``ValueError`` naming ``what``."""
-    a = as_real_array(what, value)
+    a = real_numbers(what, value)
     if a.ndim != 0:
         raise ValueError(f'{what} must be one number, got shape {a.shape}')
     return float(a)
@@ -94,8 +95,11 @@ def check_threshold(threshold, what: str = 'threshold') -> float:
 
 
 def armature_torque(armature: np.ndarray, qdd) -> np.ndarray:
-    """Rotor inertia reflected through the gear: ``τ = armature · q̈``."""
-    return armature * as_real_array('qdd', qdd).astype(float)
+    """Rotor inertia reflected through the gear: ``τ = armature · q̈``.
+
+    ``armature`` as :func:`per_joint` returns it (real numbers: ``TypeError`` otherwise).
+    """
+    return real_numbers('armature', armature) * as_real_array('qdd', qdd).astype(float)
 
 
 def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:

@@ -110,5 +110,19 @@ def f_ext_in_bodies(model: Model, f_ext) -> dict:
             raise ValueError(f'f_ext[{link!r}] must have shape (..., 6), got {f.shape}')
         if frame.body == 0:
             continue  # acts on the fixed base: no joint feels it
-        fb[frame.body] = fb.get(frame.body, 0.0) + f @ frame.lXb
+        fb[frame.body] = fb.get(frame.body, 0.0) + _transposed_times(frame.lXb, f)
     return fb
+
+
+def _transposed_times(X: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """``Xᵀ f`` for ``f`` of shape (..., 6): ``Σ_k f_k X[k]``, the six terms added in order.
+
+    One element-wise product and sum per term, so a batch's row rounds as the same state
+    alone (a matrix product would sum in an order that depends on the batch's shape). An
+    infinite ``f`` gives NaN (``inf · 0``) without a warning, as the kernels take it.
+    """
+    with np.errstate(invalid='ignore', over='ignore'):
+        out = f[..., 0:1] * X[0]
+        for k in range(1, 6):
+            out = out + f[..., k:k + 1] * X[k]
+    return out

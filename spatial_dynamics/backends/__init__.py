@@ -13,9 +13,14 @@
   other float dtypes (``np.longdouble``, asked for its precision; float16) run on numpy;
 * ``'auto'``: compiled when the extension was built, else numpy.
 
-The result's dtype is that of q, qd, qdd promoted by numpy (float32 only when all are
-float32; integers, lists and tuples count as float64); gravity and ``f_ext`` do not change
-it. Nothing is compiled at run time. One state of any form (ndarray of float64, float32 or
+The result's dtype is that of q, qd, qdd (``tau`` in :func:`forward_dynamics`) promoted by
+numpy (float32 only when all are float32, float16 only when all are float16; integers, lists
+and tuples count as float64); gravity and ``f_ext`` do not change it. NaN or ±inf in any
+input is answered, not refused: NaN (or ±inf) where it reaches, alike on both backends and
+without a warning; what is not real numbers (text, ``None``, objects) is a ``TypeError``
+naming the argument, the same on every path.
+
+Nothing is compiled at run time. One state of any form (ndarray of float64, float32 or
 integers with any strides, list, tuple, Python floats and ints, gravity as a tuple, list or
 array) goes to the extension's single-state entry as it is, converted once in C; a batch is
 made one C-contiguous float64 array and split over threads; anything else (other dtypes,
@@ -32,8 +37,8 @@ import numpy as np
 
 from . import compiled, layout, python
 from .layout import LAYOUTS
-from ..algorithms.arguments import (as_joint_arrays, as_real_array, as_vector,
-                                    check_configuration, f_ext_in_bodies)
+from ..algorithms.arguments import (as_joint_arrays, as_vector, check_configuration,
+                                    f_ext_in_bodies)
 from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
 from ..terms import check_threshold, friction_derivative, per_joint
@@ -46,6 +51,7 @@ _F8 = np.dtype(np.float64)
 _KERNEL_DTYPES = compiled.DTYPES
 _ndarray = np.ndarray
 _NO_GRAVITY = (None, None, None)
+_REAL = (float, int, np.floating, np.integer, np.bool_)     # (bool is an int)
 _layout_of = LAYOUTS.get                 # bound once: the fast path is ~1 µs
 _ext = compiled.ext
 _c_rnea = _ext.rnea if _ext else None
@@ -159,9 +165,10 @@ def rnea(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
         else:
             # numpy: one float64 state on Python floats (lists and tuples converted once)
             if not (type(q) is type(qd) is type(qdd) is _ndarray):
-                q, qd, qdd = (_vector(q, lay.n), _vector(qd, lay.nv, 'qd'),
-                              _vector(qdd, lay.nv, 'qdd'))
-            if ((q.dtype is qd.dtype is qdd.dtype is _F8) and q.ndim == qd.ndim == qdd.ndim == 1
+                q, qd, qdd = _vector(q, lay.n), _vector(qd, lay.nv), _vector(qdd, lay.nv)
+            if (type(q) is type(qd) is type(qdd) is _ndarray
+                    and (q.dtype is qd.dtype is qdd.dtype is _F8)
+                    and q.ndim == qd.ndim == qdd.ndim == 1
                     and len(q) == lay.n and len(qd) == len(qdd) == lay.nv):
                 gx, gy, gz = GRAVITY if gravity is GRAVITY else _gravity(gravity)
                 if gx is not None:
@@ -210,7 +217,7 @@ def bias_torque(model: Model, q, qd, gravity: Sequence[float] = GRAVITY,
     if (kern is None and type(q) is type(qd) is _ndarray and q.dtype is qd.dtype is _F8
             and q.shape == (lay.n,) and qd.shape == lay.zeros.shape):
         return rnea(model, q, qd, lay.zeros, gravity, backend=backend)
-    q, qd = as_joint_arrays(model, _vector(q, lay.n), _vector(qd, lay.nv, 'qd'))
+    q, qd = as_joint_arrays(model, _vector(q, lay.n), _vector(qd, lay.nv))
     zero = np.zeros(qd.shape, dtype=qd.dtype)
     return rnea(model, q, qd, zero, gravity, backend=backend)
 
@@ -366,7 +373,7 @@ def _forward(model: Model, q, qd, tau, gravity, f_ext, backend: str,
                 if not np.isnan(qdd).any():
                     return qdd
     # M, and the bias h: rnea at q̈ = 0 with every term rnea takes (and checks)
-    zero = np.zeros(lay.nv, dtype=np.float32)      # promoted by q and q̇ as rnea promotes
+    zero = np.zeros(lay.nv, dtype=np.float16)      # the least float: q, q̇ decide the dtype
     h = rnea(model, q, qd, zero, gravity, f_ext, backend, base=base)
     H = mass_matrix(model, q, backend)
     (tau,) = as_joint_arrays(model, tau, names=('tau',))
@@ -497,31 +504,38 @@ def _on_base(algorithm, model: Model, base: BaseMotion, q, qd, qdd, gravity, **o
     return algorithm(twin, q, qd, qdd, gravity, **options)
 
 
-def _vector(x, n: int, what: str = 'q'):
-    """Return a list or tuple of ``n`` numbers as a float64 array, anything else as an array.
+def _vector(x, n: int):
+    """Return a list or tuple of ``n`` real numbers as a float64 array, anything else as it is.
 
-    ``TypeError`` naming ``what`` when ``x`` is no array of real numbers (:func:`as_real_array`).
+    Real numbers as numpy reads them (booleans, integers, floats: what
+    :func:`~spatial_dynamics.algorithms.arguments.as_real_array` takes); text (``'0.1'``),
+    ``None`` or ``Decimal`` is left as it is, for :func:`as_joint_arrays` to refuse naming the
+    argument as every other path does (float64 would read ``'0.1'`` as 0.1, ``None`` as NaN).
     """
-    if type(x) is _ndarray:
-        return x
     if (type(x) is list or type(x) is tuple) and len(x) == n:
         try:
-            return np.array(x, dtype=_F8)
+            a = np.array(x)
         except (TypeError, ValueError):
-            pass        # not numbers: as_real_array names the argument
-    return as_real_array(what, x)
+            return x    # ragged: refused where it is validated
+        if a.ndim == 1 and a.dtype.kind in 'biuf':
+            return a.astype(_F8, copy=False)
+    return x
 
 
 def _gravity(gravity):
-    """``gravity`` as three Python floats, or three Nones (the general path validates it)."""
+    """``gravity`` as three Python floats, or three Nones (the general path validates it).
+
+    Only real numbers are converted (Python's or numpy's booleans, integers and floats, what
+    :func:`~spatial_dynamics.algorithms.arguments.as_real_array` takes); text such as
+    ``'9.81'`` goes to the general path, which refuses it naming ``gravity``.
+    """
     if (type(gravity) is tuple or type(gravity) is list) and len(gravity) == 3:
         gx, gy, gz = gravity
         if type(gx) is float and type(gy) is float and type(gz) is float:
             return gravity
-        try:
+        if isinstance(gx, _REAL) and isinstance(gy, _REAL) and isinstance(gz, _REAL):
             return float(gx), float(gy), float(gz)
-        except (TypeError, ValueError):
-            return _NO_GRAVITY
+        return _NO_GRAVITY
     if type(gravity) is _ndarray and gravity.shape == (3,) and gravity.dtype.kind in 'fiu':
         return (gravity if gravity.dtype is _F8 else gravity.astype(_F8)).tolist()
     return _NO_GRAVITY

@@ -5,11 +5,17 @@
 One float64 state runs on plain floats (no per-term numpy call overhead); a batch runs on
 numpy arrays of shape (N,), one numpy operation per term for all N states (any float
 dtype); ``mpmath.mpf`` scalars give the high-precision reference of the benchmark.
+
+What cannot be computed comes out as the compiled kernels give it, without a word: NaN or an
+infinity in, NaN (or an infinity) out, and a product beyond float's range infinite. Python's
+``math.sin(inf)`` raises instead of returning NaN as C's does (:func:`transforms`), and numpy
+warns where C is silent (:data:`QUIET`, around each batch).
 """
 
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 from typing import Sequence
 
 import numpy as np
@@ -20,6 +26,39 @@ from ..algorithms.forward import forward_kernel
 from ..algorithms.momentum import momentum_kernel
 from ..algorithms.regressor import regressor_kernel
 from ..algorithms.rnea import rnea_kernel, xup_kernel
+
+#: numpy's error state around a batch's kernels: NaN, infinities and overflow pass silently,
+#: as on Python floats and in C.
+QUIET = {'over': 'ignore', 'invalid': 'ignore', 'divide': 'ignore'}
+
+
+def _sin(x: float) -> float:
+    """``math.sin``, NaN at ±inf as C's ``sin`` (``math.sin`` raises ``ValueError``)."""
+    return math.sin(x) if math.isfinite(x) else math.nan
+
+
+def _cos(x: float) -> float:
+    """``math.cos``, NaN at ±inf as C's ``cos`` (``math.cos`` raises ``ValueError``)."""
+    return math.cos(x) if math.isfinite(x) else math.nan
+
+
+#: ``math`` as C's libm answers ±inf (NaN), for a state :func:`transforms` found one in.
+_LIBM = SimpleNamespace(sin=_sin, cos=_cos, sqrt=math.sqrt)
+
+
+def transforms(rows, q, m, Xup) -> None:
+    """:func:`~spatial_dynamics.algorithms.rnea.xup_kernel` into ``Xup``, ±inf in ``q`` as NaN.
+
+    On Python floats (``m`` is ``math``) ``math.sin(±inf)`` raises ``ValueError``; that state
+    runs again with a ``sin`` and ``cos`` that give NaN there, as C and numpy do, so a
+    joint at ±inf gives the NaN it gives on the compiled backend (a NaN joint already does).
+    """
+    try:
+        xup_kernel(rows, q, m, Xup)
+    except ValueError:
+        if m is not math:
+            raise
+        xup_kernel(rows, q, _LIBM, Xup)
 
 
 def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
@@ -33,7 +72,7 @@ def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
     gx, gy, gz = gravity
     slots = len(rows)
     Xup, vel, acc, frc = [None] * slots, [None] * slots, [None] * slots, [None] * slots
-    xup_kernel(rows, q, m, Xup)
+    transforms(rows, q, m, Xup)
     zero = 0.0 * gx
     tau = [zero] * rows[0][3]
     fb = None
@@ -77,8 +116,9 @@ def rnea(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: np.ndarr
     N = int(np.prod(batch, dtype=np.intp))
     fl = {b: list(np.broadcast_to(f, batch + (6,)).reshape(N, 6).T.astype(q.dtype))
           for b, f in f_body.items()}
-    tau = rnea_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
-                    [q.dtype.type(x) for x in gravity], fl, np)
+    with np.errstate(**QUIET):
+        tau = rnea_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
+                        [q.dtype.type(x) for x in gravity], fl, np)
     return _stacked(tau, N, q.dtype, qd.shape)
 
 
@@ -90,7 +130,7 @@ def mass_matrix_rows(rows, q, m=math) -> list:
     """
     slots = len(rows)
     Xup, IC = [None] * slots, [None] * slots
-    xup_kernel(rows, q, m, Xup)
+    transforms(rows, q, m, Xup)
     H = [0.0] * (rows[0][3] ** 2)
     crba_kernel(rows, Xup, IC, H)
     return H
@@ -103,7 +143,8 @@ def mass_matrix(rows, q: np.ndarray) -> np.ndarray:
         return np.array(mass_matrix_rows(rows, q.reshape(-1).tolist())).reshape(
             q.shape[:-1] + (n, n))
     batch = q.shape[:-1]
-    H = mass_matrix_rows(rows, _columns(q), np)
+    with np.errstate(**QUIET):
+        H = mass_matrix_rows(rows, _columns(q), np)
     return _stacked(H, int(np.prod(batch, dtype=np.intp)), q.dtype, batch + (n, n))
 
 
@@ -111,7 +152,7 @@ def momentum_rows(rows, q, qd, m=math) -> tuple:
     """``(M(q) q̇, Cᵀ(q, q̇) q̇)`` as two lists of ``nv`` scalars from the per-body ``rows``."""
     slots = len(rows)
     Xup, vel, frc = [None] * slots, [None] * slots, [None] * slots
-    xup_kernel(rows, q, m, Xup)
+    transforms(rows, q, m, Xup)
     n = rows[0][3]
     mom, ctq = [0.0] * n, [0.0] * n
     momentum_kernel(rows, q, qd, mom, ctq, Xup, vel, frc)
@@ -124,8 +165,9 @@ def momentum(rows, q: np.ndarray, qd: np.ndarray) -> tuple:
         mom, ctq = momentum_rows(rows, q.reshape(-1).tolist(), qd.reshape(-1).tolist())
         return np.array(mom).reshape(qd.shape), np.array(ctq).reshape(qd.shape)
     N = int(np.prod(q.shape[:-1], dtype=np.intp))
-    return tuple(_stacked(part, N, q.dtype, qd.shape)
-                 for part in momentum_rows(rows, _columns(q), _columns(qd), np))
+    with np.errstate(**QUIET):
+        parts = momentum_rows(rows, _columns(q), _columns(qd), np)
+    return tuple(_stacked(part, N, q.dtype, qd.shape) for part in parts)
 
 
 def regressor_rows(rows, q, qd, qdd, gravity, m=math) -> list:
@@ -136,7 +178,7 @@ def regressor_rows(rows, q, qd, qdd, gravity, m=math) -> list:
     gx, gy, gz = gravity
     slots = len(rows)
     Xup, vel, acc = [None] * slots, [None] * slots, [None] * slots
-    xup_kernel(rows, q, m, Xup)
+    transforms(rows, q, m, Xup)
     Y = [None] * (rows[0][3] * 10 * (slots - 1))
     regressor_kernel(rows, qd, qdd, gx, gy, gz, Y, [None] * (6 * slots * (slots + 5)), Xup, vel,
                      acc)
@@ -152,8 +194,9 @@ def regressor(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
                            [float(x) for x in gravity])
         return np.array(Y).reshape(shape)
     N = int(np.prod(q.shape[:-1], dtype=np.intp))
-    Y = regressor_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
-                       [q.dtype.type(x) for x in gravity], np)
+    with np.errstate(**QUIET):
+        Y = regressor_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
+                           [q.dtype.type(x) for x in gravity], np)
     return _stacked(Y, N, q.dtype, shape)
 
 
@@ -167,6 +210,12 @@ def forward_solve(rows, H: np.ndarray, b: np.ndarray) -> tuple:
     float64 state on Python floats, other dtypes on numpy scalars); a batch of float32 or
     float64 states on numpy's Cholesky (LAPACK), which gives the same ``q̈`` to rounding.
     """
+    with np.errstate(**QUIET):
+        return _solve(rows, H, b)
+
+
+def _solve(rows, H: np.ndarray, b: np.ndarray) -> tuple:
+    """Run :func:`forward_solve`: its answer, from its arguments as they came."""
     n = b.shape[-1]
     batch = np.broadcast_shapes(H.shape[:-2], b.shape[:-1])
     N = math.prod(batch)
@@ -201,7 +250,7 @@ def derivatives_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> tuple:
     gx, gy, gz = gravity
     slots = len(rows)
     Xup = [None] * slots
-    xup_kernel(rows, q, m, Xup)
+    transforms(rows, q, m, Xup)
     zero = 0.0 * gx
     n = rows[0][3]
     dq, dv, H = [zero] * (n * n), [zero] * (n * n), [zero] * (n * n)
@@ -229,6 +278,7 @@ def derivatives(rows, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: S
     N = int(np.prod(batch, dtype=np.intp))
     fl = {b: list(np.broadcast_to(f, batch + (6,)).reshape(N, 6).T.astype(q.dtype))
           for b, f in f_body.items()}
-    out = derivatives_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
-                           [q.dtype.type(x) for x in gravity], fl, np)
+    with np.errstate(**QUIET):
+        out = derivatives_rows(rows, *(_columns(x) for x in (q, qd, qdd)),
+                               [q.dtype.type(x) for x in gravity], fl, np)
     return tuple(_stacked(x, N, q.dtype, shape) for x in out)

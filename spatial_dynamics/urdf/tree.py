@@ -250,11 +250,11 @@ def _locked_values(joint_by_name: dict, keep, locked, mimics: dict) -> dict:
             why = 'is a mimic joint (lock its source)' if j in movable else \
                 'is not a movable joint of the URDF'
             raise ValueError(f'locked joint {j!r} {why}')
-        try:
-            value = float(v)
-        except (TypeError, ValueError) as err:
-            raise ValueError(f'locked joint {j!r} value: {err}') from None
-        locked[j] = float(finite(f'locked joint {j!r} value', value))
+        value = finite(f'locked joint {j!r} value', v)      # a number: '0.1', True refused
+        if value.ndim != 0:
+            raise ValueError(f'locked joint {j!r} value must be one number, got shape '
+                             f'{value.shape}')
+        locked[j] = float(value)
     if keep is None:
         if locked:
             raise ValueError(f'locked joints {sorted(locked)} need a list of kept joints')
