@@ -33,7 +33,7 @@ from spatial_dynamics.ros.control import (
 from spatial_dynamics.ros.descriptions import description_change, parse_description
 from spatial_dynamics.ros.floating import pull_tolerance, residual_tolerance
 from spatial_dynamics.ros.observer import check_warn, ObserverError
-from spatial_dynamics.ros.parameters import ConfigError, one_of
+from spatial_dynamics.ros.parameters import ConfigError, number_text, one_of
 from spatial_dynamics.ros.records import Config, Payload, Robot
 
 
@@ -81,8 +81,9 @@ def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
                           'when it is unset)')
     for name, value in zip(joints, armature):
         if value > MAX_ARMATURE:
-            raise ConfigError(f'parameter armature: joint {name!r} has {value:g}, more than '
-                              f'{MAX_ARMATURE:g} kg m^2 (or kg) cannot be a rotor inertia')
+            raise ConfigError(f'parameter armature: joint {name!r} has '
+                              f'{number_text(float(value))}, more than {MAX_ARMATURE:g} '
+                              'kg m^2 (or kg) cannot be a rotor inertia')
     armature.setflags(write=False)
     return None if not armature.any() else armature
 
