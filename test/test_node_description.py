@@ -325,6 +325,42 @@ def test_big_description_does_not_stall_answers(install, driver, tmp_path, via):
         assert node.stop() == 0, node.log()
 
 
+def test_superseded_topic_description_is_logged_and_counted(install, driver, tmp_path):
+    """A topic description replaced by a newer one while it parses: one line says so.
+
+    Before, it was dropped without a word: the user saw the newer one load (or nothing, had
+    it failed) and never learned the first one was not applied.
+    """
+    from std_msgs.msg import String
+    demo = sd.Model.from_urdf(DEMO_URDF)
+    names = demo.joint_names
+    node = NodeProcess(install, ['-p', f'joints:=[{", ".join(names)}]'], str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        node.wait_for_log('no robot model')
+        big = big_description(6000)
+        io.description.publish(String(data=big))
+        node.wait_for_log(f'description #1 ({len(big):,} characters) received')
+        heavy = heavier_hand(2.0)       # published while the big one parses (seconds)
+        io.description.publish(String(data=heavy))
+        node.wait_for_log("robot 'demo_arm' from topic robot_description")
+        log = node.wait_for_log('description #1 (')
+        dropped = [line for line in log.splitlines() if 'description #1 (' in line
+                   and 'dropped' in line]
+        assert len(dropped) == 1 and '[INFO]' in dropped[0] and 'newer' in dropped[0], log
+        assert "robot 'demo_arm_big'" not in log, log
+        model = sd.Model.from_urdf(heavy.encode())
+        state = random_states(5, 1, len(names))[0]
+        answer = Asker(driver, io)(names, state)
+        assert answer_is(answer, model, state), answer
+        kv = values(io.fresh_status('robot model'))
+        assert kv['descriptions superseded'] == '1' and kv['descriptions rejected'] == '0', kv
+    finally:
+        io.close()
+        assert node.stop() == 0, node.log()
+
+
 def inconsistent_arm() -> str:
     """Return the demo arm with link3's inertia breaking the triangle inequality."""
     text = demo_text()

@@ -46,6 +46,18 @@ def test_the_newest_waiting_item_replaces_the_others_and_cancels_the_current_one
     assert work.seen == [(1, True), (4, False)]   # 2 and 3 never started; 1 was superseded
 
 
+def test_submit_returns_the_item_it_drops_unstarted():
+    """The caller learns which waiting item a newer one replaced (to say so in its log)."""
+    work = Recorder()
+    worker = Newest(work, 'test worker')
+    assert worker.submit(1) is None
+    assert work.started.wait(WAIT)
+    assert worker.submit(2) is None       # 1 runs (cancelled), nothing was waiting
+    assert worker.submit(3) == 2          # 2 never started: dropped
+    work.release.set()
+    worker.stop()
+
+
 def test_stop_cancels_the_current_item_drops_the_waiting_one_and_ends_the_thread():
     work = Recorder()
     worker = Newest(work, 'test worker')

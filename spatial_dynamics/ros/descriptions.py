@@ -133,13 +133,19 @@ class ParseRequest:
 
     ``generation`` identifies the request: the node applies the result only if no other
     description came (or a parameter took precedence) since; ``params`` and ``current`` are
-    the node's parameters and robot when the message arrived.
+    the node's parameters and robot when the message arrived; ``number`` counts the
+    descriptions received on the topic (a request parsed again keeps its number).
     """
 
     generation: int
     urdf: str
     params: dict
     current: Optional[Robot]
+    number: int = 0     # the how-manieth description received on the topic (for the log)
+
+    def __str__(self) -> str:
+        """Name the description for a log line: its number on the topic and its size."""
+        return f'description #{self.number} ({len(self.urdf):,} characters)'
 
 
 class DescriptionParser:
@@ -160,9 +166,9 @@ class DescriptionParser:
         self._done: List[Tuple[ParseRequest, object]] = []
         self._worker: Newest[ParseRequest] = Newest(self._parse, 'robot_description parser')
 
-    def submit(self, request: ParseRequest) -> None:
-        """Parse ``request`` next (dropping a request that has not started yet)."""
-        self._worker.submit(request)
+    def submit(self, request: ParseRequest) -> Optional[ParseRequest]:
+        """Parse ``request`` next; return the request it drops (one not started yet), if any."""
+        return self._worker.submit(request)
 
     def finished(self) -> List[Tuple[ParseRequest, object]]:
         """Return (and forget) the finished requests with their results, oldest first."""

@@ -61,6 +61,7 @@ class Totals:
         self.wrenches_rejected: Counter = Counter({reason: 0 for reason in WRENCH_REASONS})
         self.descriptions_rejected = 0
         self.last_description_error = ''
+        self.descriptions_superseded = 0    # topic descriptions dropped for a newer one
 
     def description_rejected(self, reason: str) -> None:
         """Count a rejected description and remember why."""
@@ -96,7 +97,8 @@ def model_status(robot: Optional[Robot], totals: Totals, strict: bool,
                  backend: str) -> Status:
     """Return the ``robot model`` status: what is loaded, from where, backend, warnings."""
     rejections = [('descriptions rejected', str(totals.descriptions_rejected)),
-                  ('last rejection', totals.last_description_error)]
+                  ('last rejection', totals.last_description_error),
+                  ('descriptions superseded', str(totals.descriptions_superseded))]
     if robot is None:
         return 'ERROR', 'waiting for robot_description', rejections
     # WARN while the loaded description has URDF warnings: the torques are those of the

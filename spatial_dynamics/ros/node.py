@@ -122,6 +122,7 @@ class InverseDynamicsNode(Node):
         # Topic descriptions: parsed by a worker; the result is applied only if its
         # generation is still the newest (a parameter or a newer message supersedes).
         self._description_generation = 0
+        self._topic_descriptions = 0   # received on the topic: each one's number in the log
         self._description_sub = None
         self._pending = None      # (parameters, Config, changes) validated, not yet applied
         self._parsed = self.create_guard_condition(self._on_parsed)
@@ -303,13 +304,26 @@ class InverseDynamicsNode(Node):
                 'robot_description topic: message ignored, a description parameter is set '
                 'and takes precedence', throttle_duration_sec=5.0)
             return
-        self._submit_topic(msg.data)
+        self._topic_descriptions += 1
+        request = self._submit_topic(msg.data, self._topic_descriptions)
+        self.get_logger().info(f'robot_description topic: {request} received, parsing')
 
-    def _submit_topic(self, urdf: str) -> None:
+    def _submit_topic(self, urdf: str, number: int) -> ParseRequest:
+        """Hand a topic description to the parser; say which one waiting it drops."""
         self._description_generation += 1
         config = self.config
-        self._parser.submit(ParseRequest(self._description_generation, urdf, config.params,
-                                         config.robot))
+        request = ParseRequest(self._description_generation, urdf, config.params, config.robot,
+                               number)
+        dropped = self._parser.submit(request)
+        if dropped is not None and dropped.number != number:
+            self._superseded(dropped, f'{request} came before its parse started')
+        return request
+
+    def _superseded(self, request: ParseRequest, why: str) -> None:
+        """Log and count a topic description dropped for something newer."""
+        self.get_logger().info(f'robot_description topic: {request} dropped, not applied: '
+                               f'{why}')
+        self.answering.totals.descriptions_superseded += 1
 
     def _build_from_topic(self, request: ParseRequest) -> Robot:
         """Worker thread: the :class:`~.records.Robot` of a topic description (ConfigError)."""
@@ -319,9 +333,13 @@ class InverseDynamicsNode(Node):
     def _on_parsed(self) -> None:
         """Executor: swap in a parsed topic description, unless something newer came since."""
         for request, result in self._parser.finished():
-            if (request.generation != self._description_generation
-                    or description_source(self.config.params) != 'topic'):
-                continue   # superseded by a newer message or by a description parameter
+            if description_source(self.config.params) != 'topic':
+                self._superseded(request, 'a description parameter is set and takes '
+                                 'precedence')
+                continue
+            if request.generation != self._description_generation:
+                self._superseded(request, 'a newer description came while it parsed')
+                continue
             if request.params is not self.config.params:   # changed while it parsed
                 result = self._rebuilt(request, result)
                 if result is None:
@@ -337,7 +355,7 @@ class InverseDynamicsNode(Node):
         """Rebuild ``result`` for the current parameters; None when it is parsed again."""
         params = self.config.params
         if isinstance(result, ConfigError) or reparse_needed(request.params, params):
-            self._submit_topic(request.urdf)   # again, with the current parameters
+            self._submit_topic(request.urdf, request.number)   # again, with the current params
             return None
         try:   # the same model: only the cheap parts again
             return build_robot(params, result)

@@ -41,17 +41,21 @@ class Newest(Generic[Item]):
         """Whether :meth:`stop` was called."""
         return self._stopped
 
-    def submit(self, item: Item) -> None:
-        """Work on ``item`` next: an item not yet started is dropped, the current one cancelled."""
+    def submit(self, item: Item) -> Optional[Item]:
+        """Work on ``item`` next: an item not yet started is dropped, the current one cancelled.
+
+        Returns the item dropped (None: none was waiting), for the caller to say so.
+        """
         with self._wake:
             if self._stopped:
-                return
-            self._item = item
+                return None
+            dropped, self._item = self._item, item
             self._generation += 1
             if self._thread is None:
                 self._thread = threading.Thread(target=self._run, daemon=True, name=self._name)
                 self._thread.start()
             self._wake.notify()
+        return dropped
 
     def stop(self) -> None:
         """Let the worker end: the item waiting is dropped, the current one cancelled."""
