@@ -53,6 +53,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.event_handler import PublisherEventCallbacks
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.serialization import deserialize_message
@@ -73,6 +74,7 @@ from spatial_dynamics.ros.floating import qp_missing_warning
 from spatial_dynamics.ros.plans import Annotator, prepare_plan
 from spatial_dynamics.ros import realtime
 from spatial_dynamics.ros.records import Config, Robot
+from spatial_dynamics.ros.worker import Abandoned, abandonable
 from std_msgs.msg import Float64MultiArray, String, UInt8MultiArray
 from trajectory_msgs.msg import JointTrajectory
 
@@ -127,7 +129,10 @@ class InverseDynamicsNode(Node):
         self._pending = None      # (parameters, Config, changes) validated, not yet applied
         self._parsed = self.create_guard_condition(self._on_parsed)
         self._parser = DescriptionParser(self._build_from_topic, self._parsed.trigger)
-        self._configure({name: self._value(name) for name in PARAMETER_NAMES})
+        try:   # a big description parses for seconds: a signal meanwhile ends the wait
+            self._configure({name: self._value(name) for name in PARAMETER_NAMES})
+        except Abandoned:
+            raise ExternalShutdownException() from None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
         self._make_endpoints()
@@ -224,6 +229,8 @@ class InverseDynamicsNode(Node):
             return SetParametersResult(successful=True)
         try:   # may parse a description: the answers go on in their own thread meanwhile
             config = self._prepare(changes)
+        except Abandoned:   # the node is shutting down: nothing to apply, nothing to count
+            return SetParametersResult(successful=False, reason='the node is shutting down')
         except Exception as err:  # ConfigError; anything else must not take the node down
             if not isinstance(err, ConfigError):
                 err = ConfigError(f'{", ".join(changes)}: {err!r}')
@@ -242,11 +249,18 @@ class InverseDynamicsNode(Node):
             self._apply(pending[1], pending[2])
 
     def _prepare(self, changes: dict) -> Config:
-        """Validate ``changes`` against the current state (:func:`~.configure.prepare`)."""
+        """Validate ``changes`` against the current state (:func:`~.configure.prepare`).
+
+        On a thread of its own, waited for while the context is valid: a signal ends the wait
+        (:class:`~.worker.Abandoned`) instead of waiting out a long parse.
+        """
         config = self.config
         if config is None:
-            return prepare({}, changes, None)
-        return prepare(config.params, changes, config.robot)
+            previous, robot = {}, None
+        else:
+            previous, robot = config.params, config.robot
+        return abandonable(lambda: prepare(previous, changes, robot), self.context.ok,
+                           'parameter change')
 
     def _configure(self, changes: dict) -> None:
         """Validate ``changes`` against the current state, then apply all of them at once."""
