@@ -62,7 +62,7 @@ def test_feedforward_tracks_20x_better_than_pd_alone(install, tmp_path, robot):
 
 
 def _children(pid: int):
-    """The process ids of ``pid``'s children (Linux /proc)."""
+    """Return the process ids of ``pid``'s children (Linux /proc)."""
     with open(f'/proc/{pid}/task/{pid}/children') as f:
         return [int(x) for x in f.read().split()]
 

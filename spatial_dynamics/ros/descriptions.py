@@ -19,6 +19,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.ros.parameters import ConfigError
 from spatial_dynamics.ros.records import Robot
+from spatial_dynamics.ros.text import listed, shown
 from spatial_dynamics.ros.worker import Newest
 from spatial_dynamics.urdf import MAX_DESCRIPTION_BYTES
 from spatial_dynamics.urdf import read_description as read_urdf_description
@@ -63,14 +64,14 @@ def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = 
     if not text:
         raise ConfigError(f'{source}: empty robot description')
     if not text.startswith('<'):
-        raise ConfigError(f'{source}: not URDF XML (it starts with {text[:200]!r}): a robot '
+        raise ConfigError(f'{source}: not URDF XML (it starts with {shown(text)}): a robot '
                           'description is XML text, never a path; give a file in the '
                           'robot_description_file parameter')
     where = source
     if joints:
-        where = f'{source} reduced to joints {list(joints)}'
+        where = f'{source} reduced to joints [{listed(list(joints), count=30)}]'
         if locked:
-            where += f' (locked {locked})'
+            where += f' (locked [{listed(list(locked))}])'
     try:
         model = sd.Model.from_urdf(text.encode('utf-8'), joints=list(joints) if joints else None,
                                    locked=locked or None, strict=strict,

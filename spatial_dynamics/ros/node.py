@@ -74,6 +74,7 @@ from spatial_dynamics.ros.floating import qp_missing_warning
 from spatial_dynamics.ros.plans import Annotator, prepare_plan
 from spatial_dynamics.ros import realtime
 from spatial_dynamics.ros.records import Config, Robot
+from spatial_dynamics.ros.text import listed, shown
 from spatial_dynamics.ros.worker import Abandoned, abandonable
 from std_msgs.msg import Float64MultiArray, String, UInt8MultiArray
 from trajectory_msgs.msg import JointTrajectory
@@ -380,8 +381,8 @@ class InverseDynamicsNode(Node):
         """Log what was loaded; each URDF warning once per new description text."""
         model = robot.model
         self.get_logger().info(
-            f'robot {model.name!r} from {robot.source}: {dof_text(model)}; '
-            f'output joints {list(robot.joints)}')
+            f'robot {shown(model.name)} from {robot.source}: {dof_text(model)}; '
+            f'output joints [{listed(robot.joints, count=30)}]')
         self.get_logger().info(f'model: {robot.base.summary()}; backend: '
                                f'{backend_text(robot)}; payload: {robot.payload}')
         if robot.backend != 'compiled' and robot.setting != 'numpy' and previous is None:
@@ -396,7 +397,7 @@ class InverseDynamicsNode(Node):
     def _warn_waiting(self) -> None:
         self.get_logger().warn(
             'no robot model: set parameter robot_description or robot_description_file, or '
-            f'publish on {self.resolve_topic_name("robot_description")} '
+            f'publish on {shown(self.resolve_topic_name("robot_description"), quote=False)} '
             '(reliable, transient local); inputs are rejected until then',
             throttle_duration_sec=5.0)
 
