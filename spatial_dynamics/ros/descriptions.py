@@ -64,9 +64,9 @@ def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = 
     if not text:
         raise ConfigError(f'{source}: empty robot description')
     if not text.startswith('<'):
-        raise ConfigError(f'{source}: not URDF XML (it starts with {shown(text)}): a robot '
-                          'description is XML text, never a path; give a file in the '
-                          'robot_description_file parameter')
+        raise ConfigError(f'{source}: not URDF XML (it starts with {shown(text, limit=200)}): '
+                          'a robot description is XML text, never a path; give a file in '
+                          'the robot_description_file parameter')
     where = source
     if joints:
         where = f'{source} reduced to joints [{listed(list(joints), count=30)}]'
