@@ -325,6 +325,42 @@ def test_big_description_does_not_stall_answers(install, driver, tmp_path, via):
         assert node.stop() == 0, node.log()
 
 
+def test_superseded_topic_description_is_logged_and_counted(install, driver, tmp_path):
+    """A topic description replaced by a newer one while it parses: one line says so.
+
+    Before, it was dropped without a word: the user saw the newer one load (or nothing, had
+    it failed) and never learned the first one was not applied.
+    """
+    from std_msgs.msg import String
+    demo = sd.Model.from_urdf(DEMO_URDF)
+    names = demo.joint_names
+    node = NodeProcess(install, ['-p', f'joints:=[{", ".join(names)}]'], str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        node.wait_for_log('no robot model')
+        big = big_description(6000)
+        io.description.publish(String(data=big))
+        node.wait_for_log(f'description #1 ({len(big):,} characters) received')
+        heavy = heavier_hand(2.0)       # published while the big one parses (seconds)
+        io.description.publish(String(data=heavy))
+        node.wait_for_log("robot 'demo_arm' from topic robot_description")
+        log = node.wait_for_log('description #1 (')
+        dropped = [line for line in log.splitlines() if 'description #1 (' in line
+                   and 'dropped' in line]
+        assert len(dropped) == 1 and '[INFO]' in dropped[0] and 'newer' in dropped[0], log
+        assert "robot 'demo_arm_big'" not in log, log
+        model = sd.Model.from_urdf(heavy.encode())
+        state = random_states(5, 1, len(names))[0]
+        answer = Asker(driver, io)(names, state)
+        assert answer_is(answer, model, state), answer
+        kv = values(io.fresh_status('robot model'))
+        assert kv['descriptions superseded'] == '1' and kv['descriptions rejected'] == '0', kv
+    finally:
+        io.close()
+        assert node.stop() == 0, node.log()
+
+
 def inconsistent_arm() -> str:
     """Return the demo arm with link3's inertia breaking the triangle inequality."""
     text = demo_text()
@@ -417,6 +453,34 @@ def test_signal_while_parsing_a_big_description(install, driver, tmp_path):
         node.wait_for_log('no robot model')
         io.description.publish(String(data=big_description(2000)))
         driver.spin_for(0.3)
+        assert node.stop(signal.SIGINT, timeout=10.0) == 0, node.log()
+        assert 'Traceback' not in node.log()
+    finally:
+        io.close()
+        node.stop(signal.SIGKILL)
+
+
+def test_signal_while_a_parameter_description_parses(install, driver, tmp_path):
+    """SIGINT while robot_description (parameter) parses 15,000 links: exit 0, not after it.
+
+    Before, the parse ran in the parameter service's callback and the process waited for it
+    to end (about 30 s for these links on a 2-core machine under load; 3-8 s quiet); now the
+    wait for it is given up when the context shuts down. The limit, 10 s, is far above the
+    exit the node now makes (under 1 s) and below the parse: it fails only a node that waits.
+    The mechanism itself is tested without a clock in test_node_worker.py.
+    """
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}'], str(tmp_path))
+    io = Io(driver)
+    try:
+        io.wait_connected()
+        node.wait_for_log('real-time:')
+        driver.spin_until(io.parameters.service_is_ready, what='the parameter service')
+        future = io.parameters.call_async(SetParameters.Request(parameters=[
+            Parameter('robot_description', value=big_description(15000)).to_parameter_msg()]))
+        driver.spin_for(1.0)                  # delivered: the callback is parsing
+        assert not future.done() and node.proc.poll() is None, node.log()
         assert node.stop(signal.SIGINT, timeout=10.0) == 0, node.log()
         assert 'Traceback' not in node.log()
     finally:

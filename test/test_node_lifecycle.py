@@ -201,7 +201,9 @@ def test_bad_start_up_configuration_exits_1_with_reason(install, tmp_path):
                          ([good, 'armature:=[0.1]'], 'armature'),
                          ([good, 'gravity:=[0.0,0.0,-1.0e308]'], 'parameter gravity'),
                          ([good, 'payload.link:=hand', 'payload.mass:=1.0e300'],
-                          'payload.mass')]:
+                          'payload.mass'),
+                         ([good, 'thread_priority:=1000000000'],
+                          'thread_priority: need a value from 0 to 99, got 1000000000')]:
         command = [install.executable, '--ros-args']
         for arg in args:
             command += ['-p', arg]

@@ -61,6 +61,26 @@ def test_each_rule_refuses_naming_the_parameter(name, value, words):
         assert word in str(err.value), (word, str(err.value))
 
 
+def test_refusals_write_numbers_as_given():
+    """An integer is written in full (not 1e+09), a float as the number it is."""
+    from spatial_dynamics.ros.config import PARAMETERS
+    from spatial_dynamics.ros.usage import usage
+    cases = [(PARAMETERS.by_name['thread_priority'], 1_000_000_000,
+              'need a value from 0 to 99, got 1000000000'),
+             (PARAMETERS.by_name['trajectory_max_bytes'], 100,
+              'need a value from 1024 to 2147483648 bytes, got 100'),
+             (TABLE.by_name['rate'], 12345678.9,
+              'need a value from 0.1 to 100 Hz, got 12345678.9'),
+             (TABLE.by_name['rate'], 1e9, 'got 1e+09')]   # a float given as 1e9 is 1e9
+    for param, value, words in cases:
+        with pytest.raises(ParameterError) as err:
+            check(param, value)
+        assert words in str(err.value), str(err.value)
+    # the documents and --help say the same bounds
+    assert '1024 .. 2147483648' in PARAMETERS.markdown()
+    assert '1024 .. 2147483648' in usage(PARAMETERS, 'summary', 'page')
+
+
 def test_values_are_typed_frozen_and_checked():
     params = TABLE.defaults()
     assert params.payload_com == (0.0, 0.0, 0.0) and params.names is None

@@ -9,7 +9,9 @@ thread; no DDS here. The waits are events with generous limits, never a duration
 import threading
 
 from spatial_dynamics.ros import descriptions, plans
-from spatial_dynamics.ros.worker import Newest
+import pytest
+
+from spatial_dynamics.ros.worker import Abandoned, abandonable, Newest
 
 WAIT = 60.0   # a limit for a stuck thread, never reached when the code is right
 
@@ -44,6 +46,18 @@ def test_the_newest_waiting_item_replaces_the_others_and_cancels_the_current_one
         assert work.finished.wait(WAIT)
     worker.stop()
     assert work.seen == [(1, True), (4, False)]   # 2 and 3 never started; 1 was superseded
+
+
+def test_submit_returns_the_item_it_drops_unstarted():
+    """The caller learns which waiting item a newer one replaced (to say so in its log)."""
+    work = Recorder()
+    worker = Newest(work, 'test worker')
+    assert worker.submit(1) is None
+    assert work.started.wait(WAIT)
+    assert worker.submit(2) is None       # 1 runs (cancelled), nothing was waiting
+    assert worker.submit(3) == 2          # 2 never started: dropped
+    work.release.set()
+    worker.stop()
 
 
 def test_stop_cancels_the_current_item_drops_the_waiting_one_and_ends_the_thread():
@@ -98,3 +112,36 @@ def test_the_parser_delivers_nothing_after_stop():
     release.set()
     parser._worker._thread.join(WAIT)
     assert parser.finished() == [] and notified == []
+
+
+def test_abandonable_returns_raises_and_gives_up_a_wait_when_no_longer_alive():
+    """Work waited for on a daemon thread: its result, its error, or Abandoned on shutdown.
+
+    The node parses a description set by parameter this way: a signal during a long parse
+    ends the wait (the node exits) while the parse runs on, unheard, on a daemon thread.
+    """
+    assert abandonable(lambda: 42, lambda: True, 'test work') == 42
+    with pytest.raises(ValueError, match='bad description'):
+        abandonable(lambda: (_ for _ in ()).throw(ValueError('bad description')),
+                    lambda: True, 'test work')
+    release = threading.Event()
+    started = threading.Event()
+    threads = []
+
+    def work():
+        threads.append(threading.current_thread())
+        started.set()
+        assert release.wait(WAIT)
+        return 'parsed'
+
+    alive = threading.Event()
+    alive.set()
+    stopper = threading.Thread(target=lambda: (started.wait(WAIT), alive.clear()))
+    stopper.start()
+    with pytest.raises(Abandoned):
+        abandonable(work, alive.is_set, 'test work', poll=0.01)
+    assert not release.is_set()               # given up while the work still ran
+    assert threads[0].daemon and threads[0].is_alive()   # never holds the process's exit
+    release.set()
+    threads[0].join(WAIT)
+    stopper.join(WAIT)

@@ -11,6 +11,7 @@ computed torque, on two robots.
 
 import json
 import os
+import signal
 import subprocess
 import time
 import sys
@@ -58,6 +59,52 @@ def test_feedforward_tracks_20x_better_than_pd_alone(install, tmp_path, robot):
     lines = proc.stdout.splitlines()
     heads = [k for k, line in enumerate(lines) if line.startswith('law ') and 't [s]' in line]
     assert len(heads) == 1 and lines[heads[0] + 1].startswith('PD alone'), proc.stdout
+
+
+def _children(pid: int):
+    """Return the process ids of ``pid``'s children (Linux /proc)."""
+    with open(f'/proc/{pid}/task/{pid}/children') as f:
+        return [int(x) for x in f.read().split()]
+
+
+def _running(pid: int) -> bool:
+    try:
+        with open(f'/proc/{pid}/stat') as f:
+            return f.read().rsplit(')', 1)[1].split()[0] != 'Z'
+    except FileNotFoundError:
+        return False
+
+
+def test_ctrl_c_says_interrupted_exits_130_and_stops_the_children(install, tmp_path):
+    """Ctrl-C reaches the tool, the simulator and the node (one process group).
+
+    The children exit on it; before, the tool read their exit as a failure (status 1, and
+    "the node exited" when it saw them gone first). Now: one line saying it was interrupted,
+    status 130 as a shell gives for SIGINT, no traceback, both children ended.
+    """
+    proc = subprocess.Popen(
+        [sys.executable, '-m', 'spatial_dynamics.tools.closed_loop', '--laws', 'pd',
+         '--seconds', '600', '--timeout', '900', '--plot', '', '--log-dir', str(tmp_path)],
+        env=install.env(), cwd=str(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True, start_new_session=True)     # its own process group, as a terminal's job
+    try:
+        node_log = tmp_path / 'closed_loop_pd_feedforward_none_node.log'
+        deadline = time.monotonic() + 120
+        while not (node_log.exists() and 'real-time:' in node_log.read_text()):
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            time.sleep(0.1)
+        children = _children(proc.pid)
+        assert len(children) == 2, children         # the simulator and the node
+        os.killpg(proc.pid, signal.SIGINT)          # what Ctrl-C in a terminal does
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, out + err
+    assert 'closed loop: interrupted (SIGINT)' in err, out + err
+    assert 'exited' not in out + err and 'Traceback' not in out + err, out + err
+    assert not any(_running(pid) for pid in children), children
 
 
 def test_a_whole_plan_replaced_mid_way_is_followed_without_a_relay(install, tmp_path):

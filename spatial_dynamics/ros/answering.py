@@ -52,6 +52,7 @@ from spatial_dynamics.ros.observer import (
     EstimateWindow, make_observer, measured_effort, observer_key, sample_time)
 from spatial_dynamics.ros.plans import Job, prepare_plan, PlanItem
 from spatial_dynamics.ros.records import Config, Robot
+from spatial_dynamics.ros.text import shown
 from spatial_dynamics.trajectory import check_start, Follower, TrajectoryError
 from spatial_dynamics.wrench import wrench_from_torques
 
@@ -539,7 +540,7 @@ class Answering:
         self.totals.saturated_joints.update(names)
         self.log.warn(
             'clamped to the URDF effort limit: '
-            + ', '.join(f'{name!r} at {tau[robot.joints.index(name)]:+g}' for name in names),
+            + ', '.join(f'{shown(name)} at {tau[robot.joints.index(name)]:+g}' for name in names),
             throttle_duration_sec=1.0)
 
     def _count_above_limit(self, robot: Robot, tau: np.ndarray) -> None:
@@ -557,7 +558,7 @@ class Answering:
         if window.above_worst is None or ratio[i] > window.above_worst[0]:
             window.above_worst = (float(ratio[i]), joint, float(tau[i]), limit)
         self.log.warn(f'effort above the URDF limit, published (clamp_to_effort_limits is '
-                      f'off): {joint!r} {tau[i]:+.4g}, limit {limit:g} ({ratio[i]:.3g}x)',
+                      f'off): {shown(joint)} {tau[i]:+.4g}, limit {limit:g} ({ratio[i]:.3g}x)',
                       throttle_duration_sec=1.0)
 
     def _active_wrenches(self, robot: Robot, now_ns: int) -> Optional[dict]:
@@ -577,27 +578,27 @@ class Answering:
         link = msg.header.frame_id
         robot = config.robot
         if robot is None:
-            self._reject_wrench('no_model', f'{link!r}: no robot model loaded yet')
+            self._reject_wrench('no_model', f'{shown(link)}: no robot model loaded yet')
             return
         if robot.base.floating:
-            self._reject_wrench('floating_base', f'on {link!r}: not applied on a floating '
+            self._reject_wrench('floating_base', f'on {shown(link)}: not applied on a floating '
                                 'base (its contacts carry what acts on it: contacts.links, '
                                 'measured_contact_wrenches)')
             return
         if link not in robot.model.frames:
-            self._reject_wrench('unknown_link', f'header.frame_id {link!r} is not a link of '
-                                f'robot {robot.model.name!r}')
+            self._reject_wrench('unknown_link', f'header.frame_id {shown(link)} is not a link of '
+                                f'robot {shown(robot.model.name)}')
             return
         t, f = msg.wrench.torque, msg.wrench.force
         wrench = np.array([t.x, t.y, t.z, f.x, f.y, f.z])   # [n; f], angular first
         if not np.isfinite(wrench).all():
             bad = [name for name, ok in zip(_WRENCH_FIELDS, np.isfinite(wrench)) if not ok]
-            self._reject_wrench('non_finite', f'on {link!r}: wrench.{", wrench.".join(bad)} '
+            self._reject_wrench('non_finite', f'on {shown(link)}: wrench.{", wrench.".join(bad)} '
                                 'not finite')
             return
         reason = check_bounded('wrench', wrench, MAX_WRENCH, 'N m or N', _WRENCH_FIELDS)
         if reason:
-            self._reject_wrench('out_of_bounds', f'on {link!r}: {reason}')
+            self._reject_wrench('out_of_bounds', f'on {shown(link)}: {reason}')
             return
         if not wrench.any():
             self.wrenches.pop(link, None)

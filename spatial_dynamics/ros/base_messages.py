@@ -19,6 +19,7 @@ import spatial_dynamics as sd
 from spatial_dynamics.bounds import (check_bounded, MAX_IMU_RATE, MAX_IMU_SPECIFIC_FORCE,
                                      MAX_POSITION, MAX_VELOCITY, MAX_WRENCH)
 from spatial_dynamics.ros.inputs import InputError
+from spatial_dynamics.ros.text import shown
 
 #: ``|‖quaternion‖ − 1|`` accepted (then normalised): the library's, for every quaternion read.
 QUATERNION_TOLERANCE = sd.joints.QUATERNION_TOLERANCE
@@ -123,17 +124,17 @@ def twist_link(model: 'sd.Model', frame: str, field: str, odometry_link: str = '
     link = odometry_link if aliased else frame
     root = model.body_names[1 if model.floating else 0]
     if link and link not in model.frames:
-        known = (f', nor base_input.odometry_frame {odometry_frame!r}' if odometry_frame
+        known = (f', nor base_input.odometry_frame {shown(odometry_frame)}' if odometry_frame
                  else '')
-        raise InputError('wrong_frame', f'{field} {frame!r} is not a link of the model{known}: '
-                         f"the twist must be the base's, in its frame {root!r}" + (
+        raise InputError('wrong_frame', f'{field} {shown(frame)} is not a link of the model'
+                         f"{known}: the twist must be the base's, in its frame {shown(root)}" + (
                              '' if model.floating else ' or a link fixed to it') + (
-                             f'; if {frame!r} is the frame your odometry writes, set '
-                             f'base_input.odometry_frame to {frame!r} and '
+                             f'; if {shown(frame)} is the frame your odometry writes, set '
+                             f'base_input.odometry_frame to {shown(frame)} and '
                              'base_input.odometry_link to the link of the URDF it is'))
     if link and link != root and (model.floating or model.frames[link].body != 0):
         where = 'a link that moves with a joint' if not model.floating else 'not the root link'
-        raise InputError('wrong_frame', f'{field} {frame!r} is {where}: the twist must be the '
-                         f"base's, in its frame {root!r}" + (
+        raise InputError('wrong_frame', f'{field} {shown(frame)} is {where}: the twist must be '
+                         f"the base's, in its frame {shown(root)}" + (
                              '' if model.floating else ' or a link fixed to it'))
     return link

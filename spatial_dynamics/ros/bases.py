@@ -75,6 +75,7 @@ from spatial_dynamics.ros.control import Dynamics
 from spatial_dynamics.ros.floating import FloatingDynamics
 from spatial_dynamics.ros.inputs import InputError, stamp_ns
 from spatial_dynamics.ros.parameters import ConfigError
+from spatial_dynamics.ros.text import shown
 
 #: Values of the ``base`` parameter.
 BASES = ('fixed', 'moving', 'floating')
@@ -101,8 +102,8 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
     links = tuple(params.contacts_links or ())
     for link in links:
         if link not in model.frames:
-            raise ConfigError(f'parameter contacts.links: {link!r} is not a link of robot '
-                              f'{model.name!r} ({source})')
+            raise ConfigError(f'parameter contacts.links: {shown(link)} is not a link of robot '
+                              f'{shown(model.name)} ({source})')
     if params.base == 'moving':
         if params.base_input_source == 'imu':
             link = params.base_input_imu_link
@@ -120,22 +121,22 @@ def check_base(params, model: 'sd.Model', source: str) -> None:
                               "moving base's motion is given, nothing carries it)")
     elif not links:
         raise ConfigError('parameter contacts.links: a floating base needs contacts to carry '
-                          f'it: set the links of robot {model.name!r} that touch the ground '
+                          f'it: set the links of robot {shown(model.name)} that touch the ground '
                           '(feet, soles), e.g. contacts.links:=[FL_FOOT, FR_FOOT, HL_FOOT, '
                           f'HR_FOOT] ({source})')
     link, frame = params.base_input_odometry_link, params.base_input_odometry_frame
     if link:
         if link not in model.frames:
-            raise ConfigError(f'parameter base_input.odometry_link: {link!r} is not a link of '
-                              f'robot {model.name!r} ({source})')
+            raise ConfigError(f'parameter base_input.odometry_link: {shown(link)} is not a link '
+                              f'of robot {shown(model.name)} ({source})')
         try:
             twist_link(model, link, 'base_input.odometry_link')
         except InputError as err:
             raise ConfigError(f'parameter base_input.odometry_link: {err}') from None
     if frame in model.frames:
-        raise ConfigError(f'parameter base_input.odometry_frame: {frame!r} is a link of robot '
-                          f'{model.name!r} ({source}), taken as itself: odometry_frame names '
-                          'a frame the URDF does not have (e.g. base_footprint)')
+        raise ConfigError(f'parameter base_input.odometry_frame: {shown(frame)} is a link of '
+                          f'robot {shown(model.name)} ({source}), taken as itself: odometry_frame '
+                          'names a frame the URDF does not have (e.g. base_footprint)')
     off = observer_off(params)
     if params.wrench_estimate_link and off:
         raise ConfigError(f'parameter wrench_estimate.link: not supported with {off}')
@@ -248,9 +249,9 @@ class BaseInputs:
         params = config.params
         link, alias = params.base_input_imu_link, params.base_input_imu_frame
         if msg.header.frame_id not in ('', link, alias or link):
-            raise InputError('wrong_frame', f'header.frame_id {msg.header.frame_id!r} is not '
-                             f'base_input.imu_link {link!r}, the IMU frame of the model' + (
-                                 f', nor base_input.imu_frame {alias!r}' if alias else
+            raise InputError('wrong_frame', f'header.frame_id {shown(msg.header.frame_id)} is not '
+                             f'base_input.imu_link {shown(link)}, the IMU frame of the model' + (
+                                 f', nor base_input.imu_frame {shown(alias)}' if alias else
                                  ' (set base_input.imu_frame to the frame the IMU driver '
                                  'writes)'))
         self.imu = Held(imu_arrays(msg), stamp_ns(msg.header), now_ns)
@@ -319,9 +320,9 @@ class BaseInputs:
         link = msg.header.frame_id
         links = tuple(config.params.contacts_links or ())
         if link not in links:
-            raise InputError('unknown_link', f'header.frame_id {link!r} is not one of '
+            raise InputError('unknown_link', f'header.frame_id {shown(link)} is not one of '
                              f'contacts.links {list(links)}')
-        wrench = wrench_array(f'wrench on {link!r}', msg.wrench)
+        wrench = wrench_array(f'wrench on {shown(link)}', msg.wrench)
         self.measured[link] = Held(wrench, stamp_ns(msg.header), now_ns)
 
     def _measured(self, params, contacts, now_ns: int) -> Optional[dict]:
@@ -333,9 +334,9 @@ class BaseInputs:
             held = self.measured.get(contact.link)
             if held is None:
                 raise InputError('contacts_missing', f'contacts.measured: no measured wrench '
-                                 f'of {contact.link!r} yet; not publishing')
+                                 f'of {shown(contact.link)} yet; not publishing')
             result[contact.link] = self._fresh(params, held, 'measured_contact_wrenches of '
-                                               f'{contact.link!r}', now_ns)
+                                               f'{shown(contact.link)}', now_ns)
         return result
 
     # -- what an answer needs -------------------------------------------------------------------

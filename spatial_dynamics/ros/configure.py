@@ -33,8 +33,9 @@ from spatial_dynamics.ros.control import (
 from spatial_dynamics.ros.descriptions import description_change, parse_description
 from spatial_dynamics.ros.floating import pull_tolerance, residual_tolerance
 from spatial_dynamics.ros.observer import check_warn, ObserverError
-from spatial_dynamics.ros.parameters import ConfigError, one_of
+from spatial_dynamics.ros.parameters import ConfigError, number_text, one_of
 from spatial_dynamics.ros.records import Config, Payload, Robot
+from spatial_dynamics.ros.text import shown
 
 
 # --------------------------------------------------------------------------------------------
@@ -71,7 +72,7 @@ def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
                                  f'actuated joints {list(joints)}, got {len(armature)}')
             for name, value in zip(joints, armature):
                 if not value >= 0.0:
-                    raise ValueError(f'parameter armature: joint {name!r} has the value '
+                    raise ValueError(f'parameter armature: joint {shown(name)} has the value '
                                      f'{value}, need a finite non-negative number')
         else:
             armature = sd.per_joint(model, 'parameter armature', list(values),
@@ -81,8 +82,9 @@ def check_armature(model: 'sd.Model', values: Optional[Sequence[float]]
                           'when it is unset)')
     for name, value in zip(joints, armature):
         if value > MAX_ARMATURE:
-            raise ConfigError(f'parameter armature: joint {name!r} has {value:g}, more than '
-                              f'{MAX_ARMATURE:g} kg m^2 (or kg) cannot be a rotor inertia')
+            raise ConfigError(f'parameter armature: joint {shown(name)} has '
+                              f'{number_text(float(value))}, more than {MAX_ARMATURE:g} '
+                              'kg m^2 (or kg) cannot be a rotor inertia')
     armature.setflags(write=False)
     return None if not armature.any() else armature
 
@@ -137,13 +139,13 @@ def build_robot(params, current: Optional[Robot], urdf: Optional[str] = None,
             f'(strict_urdf refuses them), the first: {base.warnings[0]}')
     if payload.link and payload.link not in base.frames:
         raise ConfigError(
-            f'parameter payload.link: {payload.link!r} is not a link of robot '
-            f'{base.name!r} ({source}); set payload.link to an existing link or \'\' '
+            f'parameter payload.link: {shown(payload.link)} is not a link of robot '
+            f'{shown(base.name)} ({source}); set payload.link to an existing link or \'\' '
             'first, or together with the new description')
     if params.wrench_estimate_link and params.wrench_estimate_link not in base.frames:
         raise ConfigError(
-            f'parameter wrench_estimate.link: {params.wrench_estimate_link!r} is not a link of '
-            f'robot {base.name!r} ({source})')
+            f'parameter wrench_estimate.link: {shown(params.wrench_estimate_link)} is not a '
+            f'link of robot {shown(base.name)} ({source})')
     check_base(params, base, source)
     qp_missing = _warm_qp(params.contacts_method) if params.base == 'floating' else ''
     setting = params.backend

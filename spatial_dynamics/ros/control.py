@@ -52,6 +52,7 @@ import spatial_dynamics as sd
 from spatial_dynamics.bounds import MAX_POSITION, MAX_VELOCITY
 from spatial_dynamics.ros.inputs import InputError, joint_state_arrays
 from spatial_dynamics.ros.parameters import one_of, ParameterError
+from spatial_dynamics.ros.text import shown
 
 #: Values of the ``output`` parameter: which model part is published.
 OUTPUTS = ('full', 'without_gravity', 'gravity_only', 'none')
@@ -147,7 +148,7 @@ def check_gains(model: 'sd.Model', name: str, values: Optional[Sequence[float]],
     for joint, value in zip(joints, gains):
         if not (math.isfinite(value) and 0.0 <= value <= bound):
             raise ControlError(
-                f'parameter {name}: joint {joint!r} has {value}, need a finite value from 0 '
+                f'parameter {name}: joint {shown(joint)} has {value}, need a finite value from 0 '
                 f'to {bound:g} ({GAIN_UNITS[name]})')
     gains.setflags(write=False)
     return gains

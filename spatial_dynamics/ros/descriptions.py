@@ -19,6 +19,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.ros.parameters import ConfigError
 from spatial_dynamics.ros.records import Robot
+from spatial_dynamics.ros.text import listed, shown
 from spatial_dynamics.ros.worker import Newest
 from spatial_dynamics.urdf import MAX_DESCRIPTION_BYTES
 from spatial_dynamics.urdf import read_description as read_urdf_description
@@ -63,14 +64,14 @@ def parse_description(urdf: str, source: str, joints: Optional[Sequence[str]] = 
     if not text:
         raise ConfigError(f'{source}: empty robot description')
     if not text.startswith('<'):
-        raise ConfigError(f'{source}: not URDF XML (it starts with {text[:200]!r}): a robot '
-                          'description is XML text, never a path; give a file in the '
-                          'robot_description_file parameter')
+        raise ConfigError(f'{source}: not URDF XML (it starts with {shown(text, limit=200)}): '
+                          'a robot description is XML text, never a path; give a file in '
+                          'the robot_description_file parameter')
     where = source
     if joints:
-        where = f'{source} reduced to joints {list(joints)}'
+        where = f'{source} reduced to joints [{listed(list(joints), count=30)}]'
         if locked:
-            where += f' (locked {locked})'
+            where += f' (locked [{listed(list(locked))}])'
     try:
         model = sd.Model.from_urdf(text.encode('utf-8'), joints=list(joints) if joints else None,
                                    locked=locked or None, strict=strict,
@@ -133,13 +134,19 @@ class ParseRequest:
 
     ``generation`` identifies the request: the node applies the result only if no other
     description came (or a parameter took precedence) since; ``params`` and ``current`` are
-    the node's parameters and robot when the message arrived.
+    the node's parameters and robot when the message arrived; ``number`` counts the
+    descriptions received on the topic (a request parsed again keeps its number).
     """
 
     generation: int
     urdf: str
     params: dict
     current: Optional[Robot]
+    number: int = 0     # the how-manieth description received on the topic (for the log)
+
+    def __str__(self) -> str:
+        """Name the description for a log line: its number on the topic and its size."""
+        return f'description #{self.number} ({len(self.urdf):,} characters)'
 
 
 class DescriptionParser:
@@ -160,9 +167,9 @@ class DescriptionParser:
         self._done: List[Tuple[ParseRequest, object]] = []
         self._worker: Newest[ParseRequest] = Newest(self._parse, 'robot_description parser')
 
-    def submit(self, request: ParseRequest) -> None:
-        """Parse ``request`` next (dropping a request that has not started yet)."""
-        self._worker.submit(request)
+    def submit(self, request: ParseRequest) -> Optional[ParseRequest]:
+        """Parse ``request`` next; return the request it drops (one not started yet), if any."""
+        return self._worker.submit(request)
 
     def finished(self) -> List[Tuple[ParseRequest, object]]:
         """Return (and forget) the finished requests with their results, oldest first."""

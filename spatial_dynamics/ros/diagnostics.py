@@ -21,6 +21,7 @@ from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
 from spatial_dynamics.ros.inputs import REASONS
 from spatial_dynamics.ros.observer import EstimateWindow, MomentumObserver
 from spatial_dynamics.ros.records import Robot
+from spatial_dynamics.ros.text import shown
 
 
 # --------------------------------------------------------------------------------------------
@@ -61,6 +62,7 @@ class Totals:
         self.wrenches_rejected: Counter = Counter({reason: 0 for reason in WRENCH_REASONS})
         self.descriptions_rejected = 0
         self.last_description_error = ''
+        self.descriptions_superseded = 0    # topic descriptions dropped for a newer one
 
     def description_rejected(self, reason: str) -> None:
         """Count a rejected description and remember why."""
@@ -96,20 +98,22 @@ def model_status(robot: Optional[Robot], totals: Totals, strict: bool,
                  backend: str) -> Status:
     """Return the ``robot model`` status: what is loaded, from where, backend, warnings."""
     rejections = [('descriptions rejected', str(totals.descriptions_rejected)),
-                  ('last rejection', totals.last_description_error)]
+                  ('last rejection', totals.last_description_error),
+                  ('descriptions superseded', str(totals.descriptions_superseded))]
     if robot is None:
         return 'ERROR', 'waiting for robot_description', rejections
     # WARN while the loaded description has URDF warnings: the torques are those of the
     # file as written, but the file is physically inconsistent somewhere.
     model, urdf_warnings = robot.model, robot.base.warnings
-    message = f'robot {model.name!r} loaded, {dof_text(model)}'
+    message = f'robot {shown(model.name)} loaded, {dof_text(model)}'
     if urdf_warnings:
         message += f', {len(urdf_warnings)} URDF warning(s)'
     # 'dof' stays the number of a fixed-base robot (what tools read); a floating one says it
-    values = [('robot name', model.name),
+    values = [('robot name', shown(model.name, quote=False)),
               ('dof', dof_text(model) if model.floating else str(model.nv)),
-              ('model joints', ', '.join(model.joint_names)),
-              ('output joints', ', '.join(robot.joints)), ('source', robot.source),
+              ('model joints', ', '.join(shown(name, quote=False) for name in model.joint_names)),
+              ('output joints', ', '.join(shown(name, quote=False) for name in robot.joints)),
+              ('source', robot.source),
               ('summary', robot.base.summary()), ('backend', backend),
               ('backend setting', robot.setting)]
     values += rejections + [('strict urdf', str(bool(strict))),
@@ -163,7 +167,7 @@ def _input_state(robot: Optional[Robot], window: Window, params, period: float,
     if window.above_limit:
         ratio, joint, value, limit = window.above_worst
         above = (f', {window.above_limit} answer(s) above the URDF effort limit (worst '
-                 f'{joint!r} {value:+.4g}, limit {limit:g}, {ratio:.3g}x)')
+                 f'{shown(joint)} {value:+.4g}, limit {limit:g}, {ratio:.3g}x)')
     if rejected_now:
         return 'WARN', f'{window.answered / period:.1f} Hz, {rejected_now} rejected{above}'
     return 'OK', f'{window.answered / period:.1f} Hz{above}'
@@ -324,7 +328,7 @@ def _wrench_text(wrench: Optional[dict], values: list) -> str:
         return ''
     directions = wrench['last_weak']
     named = '; '.join(_direction(directions[:, i]) for i in range(directions.shape[1]))
-    return (f"external wrench at {wrench['link']!r}: {wrench['weak']} of {wrench['count']} "
+    return (f"external wrench at {shown(wrench['link'])}: {wrench['weak']} of {wrench['count']} "
             f"samples could not observe every direction (rank {wrench['rank']}, sigma_min "
             f"{wrench['sigma_min']:.3g}, {wrench['weak_loaded']} of them loaded past "
             f"external_torque_warn); missing or underestimated: {named}")

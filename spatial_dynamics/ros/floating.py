@@ -20,6 +20,7 @@ import spatial_dynamics as sd
 from spatial_dynamics.contacts import link_orientations
 from spatial_dynamics.ros.control import Dynamics
 from spatial_dynamics.ros.inputs import InputError
+from spatial_dynamics.ros.text import shown
 
 #: A contact pulls when its normal force ``n·f`` is below ``−PULL_TOLERANCE · m · 9.81`` N, ``m``
 #: the model's mass (:func:`pull_tolerance`): relative to the weight, because the split's
@@ -122,8 +123,8 @@ class FloatingDynamics(Dynamics):
         if pull is None:      # the fast path: the violations _result found, usually none
             return result
         self.pulls.append(pull)
-        what = (f'contacts {self.method}: contact {pull.contact!r} would pull {pull.amount:.3g} '
-                f'N (n·f < 0; tolerance {self.pull_tolerance:.3g} N)')
+        what = (f'contacts {self.method}: contact {shown(pull.contact)} would pull '
+                f'{pull.amount:.3g} N (n·f < 0; tolerance {self.pull_tolerance:.3g} N)')
         if self.method == 'qp' or self.qp_missing:
             raise InputError('contacts_pull', what + (
                 '; not publishing' if self.method == 'qp' else
@@ -136,7 +137,7 @@ class FloatingDynamics(Dynamics):
         again = _worst_pull(result, self.pull_tolerance)
         if again is not None:
             raise InputError('contacts_pull', f'{what}; re-solved by qp, contact '
-                             f'{again.contact!r} still pulls {again.amount:.3g} N; '
+                             f'{shown(again.contact)} still pulls {again.amount:.3g} N; '
                              'not publishing')
         return result
 

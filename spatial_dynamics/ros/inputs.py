@@ -30,6 +30,7 @@ from typing import Dict, Optional, Sequence, Tuple
 import numpy as np
 
 from spatial_dynamics.bounds import JOINT_BOUNDS
+from spatial_dynamics.ros.text import listed, shown
 
 REASONS = (
     'empty',            # no joint names in the message
@@ -41,8 +42,6 @@ REASONS = (
     'out_of_bounds',    # a value beyond what a real robot reaches (spatial_dynamics.bounds)
 )
 """Reason codes of :class:`InputError`, in the order the checks run."""
-
-_MAX_LISTED = 5  # names listed in an error message before '...'
 
 
 class InputError(ValueError):
@@ -56,11 +55,6 @@ class InputError(ValueError):
 def stamp_ns(header) -> int:
     """Return a ``std_msgs/Header``'s stamp in integer nanoseconds."""
     return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
-
-
-def _listed(names: Sequence[str]) -> str:
-    shown = ', '.join(repr(name) for name in names[:_MAX_LISTED])
-    return shown + (', ...' if len(names) > _MAX_LISTED else '')
 
 
 NAME_CACHE_BYTES = 1024 * 1024
@@ -138,10 +132,10 @@ def _build_index(joint_names: Tuple[str, ...], names: Tuple[str, ...]) -> np.nda
     duplicated = [name for name in joint_names if name in repeated]
     if duplicated:
         raise InputError('duplicate_joint',
-                         f'joint(s) named more than once: {_listed(duplicated)}')
+                         f'joint(s) named more than once: {listed(duplicated)}')
     missing = [name for name in joint_names if name not in position]
     if missing:
-        raise InputError('missing_joint', f'missing joint(s) {_listed(missing)}')
+        raise InputError('missing_joint', f'missing joint(s) {listed(missing)}')
     idx = np.fromiter((position[name] for name in joint_names), dtype=np.intp,
                       count=len(joint_names))
     idx.setflags(write=False)
@@ -185,10 +179,10 @@ def _arrays(
             if not np.isfinite(mapped).all():
                 bad = [joint_names[i] for i in np.flatnonzero(~np.isfinite(mapped))]
                 raise InputError('non_finite',
-                                 f"field '{field}' is not finite for joint(s) {_listed(bad)}")
+                                 f"field '{field}' is not finite for joint(s) {listed(bad)}")
             huge = np.flatnonzero(np.abs(mapped) > bound)
             raise InputError('out_of_bounds', f"field '{field}' of joint "
-                             f'{joint_names[huge[0]]!r} is {mapped[huge[0]]:g}, beyond '
+                             f'{shown(joint_names[huge[0]])} is {mapped[huge[0]]:g}, beyond '
                              f'±{bound:g} {unit}')
         result.append(mapped)
     return tuple(result)

@@ -53,6 +53,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.event_handler import PublisherEventCallbacks
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.serialization import deserialize_message
@@ -73,6 +74,8 @@ from spatial_dynamics.ros.floating import qp_missing_warning
 from spatial_dynamics.ros.plans import Annotator, prepare_plan
 from spatial_dynamics.ros import realtime
 from spatial_dynamics.ros.records import Config, Robot
+from spatial_dynamics.ros.text import listed, shown
+from spatial_dynamics.ros.worker import Abandoned, abandonable
 from std_msgs.msg import Float64MultiArray, String, UInt8MultiArray
 from trajectory_msgs.msg import JointTrajectory
 
@@ -122,11 +125,15 @@ class InverseDynamicsNode(Node):
         # Topic descriptions: parsed by a worker; the result is applied only if its
         # generation is still the newest (a parameter or a newer message supersedes).
         self._description_generation = 0
+        self._topic_descriptions = 0   # received on the topic: each one's number in the log
         self._description_sub = None
         self._pending = None      # (parameters, Config, changes) validated, not yet applied
         self._parsed = self.create_guard_condition(self._on_parsed)
         self._parser = DescriptionParser(self._build_from_topic, self._parsed.trigger)
-        self._configure({name: self._value(name) for name in PARAMETER_NAMES})
+        try:   # a big description parses for seconds: a signal meanwhile ends the wait
+            self._configure({name: self._value(name) for name in PARAMETER_NAMES})
+        except Abandoned:
+            raise ExternalShutdownException() from None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
         self._make_endpoints()
@@ -223,6 +230,8 @@ class InverseDynamicsNode(Node):
             return SetParametersResult(successful=True)
         try:   # may parse a description: the answers go on in their own thread meanwhile
             config = self._prepare(changes)
+        except Abandoned:   # the node is shutting down: nothing to apply, nothing to count
+            return SetParametersResult(successful=False, reason='the node is shutting down')
         except Exception as err:  # ConfigError; anything else must not take the node down
             if not isinstance(err, ConfigError):
                 err = ConfigError(f'{", ".join(changes)}: {err!r}')
@@ -241,11 +250,18 @@ class InverseDynamicsNode(Node):
             self._apply(pending[1], pending[2])
 
     def _prepare(self, changes: dict) -> Config:
-        """Validate ``changes`` against the current state (:func:`~.configure.prepare`)."""
+        """Validate ``changes`` against the current state (:func:`~.configure.prepare`).
+
+        On a thread of its own, waited for while the context is valid: a signal ends the wait
+        (:class:`~.worker.Abandoned`) instead of waiting out a long parse.
+        """
         config = self.config
         if config is None:
-            return prepare({}, changes, None)
-        return prepare(config.params, changes, config.robot)
+            previous, robot = {}, None
+        else:
+            previous, robot = config.params, config.robot
+        return abandonable(lambda: prepare(previous, changes, robot), self.context.ok,
+                           'parameter change')
 
     def _configure(self, changes: dict) -> None:
         """Validate ``changes`` against the current state, then apply all of them at once."""
@@ -303,13 +319,26 @@ class InverseDynamicsNode(Node):
                 'robot_description topic: message ignored, a description parameter is set '
                 'and takes precedence', throttle_duration_sec=5.0)
             return
-        self._submit_topic(msg.data)
+        self._topic_descriptions += 1
+        request = self._submit_topic(msg.data, self._topic_descriptions)
+        self.get_logger().info(f'robot_description topic: {request} received, parsing')
 
-    def _submit_topic(self, urdf: str) -> None:
+    def _submit_topic(self, urdf: str, number: int) -> ParseRequest:
+        """Hand a topic description to the parser; say which one waiting it drops."""
         self._description_generation += 1
         config = self.config
-        self._parser.submit(ParseRequest(self._description_generation, urdf, config.params,
-                                         config.robot))
+        request = ParseRequest(self._description_generation, urdf, config.params, config.robot,
+                               number)
+        dropped = self._parser.submit(request)
+        if dropped is not None and dropped.number != number:
+            self._superseded(dropped, f'{request} came before its parse started')
+        return request
+
+    def _superseded(self, request: ParseRequest, why: str) -> None:
+        """Log and count a topic description dropped for something newer."""
+        self.get_logger().info(f'robot_description topic: {request} dropped, not applied: '
+                               f'{why}')
+        self.answering.totals.descriptions_superseded += 1
 
     def _build_from_topic(self, request: ParseRequest) -> Robot:
         """Worker thread: the :class:`~.records.Robot` of a topic description (ConfigError)."""
@@ -319,9 +348,13 @@ class InverseDynamicsNode(Node):
     def _on_parsed(self) -> None:
         """Executor: swap in a parsed topic description, unless something newer came since."""
         for request, result in self._parser.finished():
-            if (request.generation != self._description_generation
-                    or description_source(self.config.params) != 'topic'):
-                continue   # superseded by a newer message or by a description parameter
+            if description_source(self.config.params) != 'topic':
+                self._superseded(request, 'a description parameter is set and takes '
+                                 'precedence')
+                continue
+            if request.generation != self._description_generation:
+                self._superseded(request, 'a newer description came while it parsed')
+                continue
             if request.params is not self.config.params:   # changed while it parsed
                 result = self._rebuilt(request, result)
                 if result is None:
@@ -337,7 +370,7 @@ class InverseDynamicsNode(Node):
         """Rebuild ``result`` for the current parameters; None when it is parsed again."""
         params = self.config.params
         if isinstance(result, ConfigError) or reparse_needed(request.params, params):
-            self._submit_topic(request.urdf)   # again, with the current parameters
+            self._submit_topic(request.urdf, request.number)   # again, with the current params
             return None
         try:   # the same model: only the cheap parts again
             return build_robot(params, result)
@@ -348,8 +381,8 @@ class InverseDynamicsNode(Node):
         """Log what was loaded; each URDF warning once per new description text."""
         model = robot.model
         self.get_logger().info(
-            f'robot {model.name!r} from {robot.source}: {dof_text(model)}; '
-            f'output joints {list(robot.joints)}')
+            f'robot {shown(model.name)} from {robot.source}: {dof_text(model)}; '
+            f'output joints [{listed(robot.joints, count=30)}]')
         self.get_logger().info(f'model: {robot.base.summary()}; backend: '
                                f'{backend_text(robot)}; payload: {robot.payload}')
         if robot.backend != 'compiled' and robot.setting != 'numpy' and previous is None:
@@ -364,7 +397,7 @@ class InverseDynamicsNode(Node):
     def _warn_waiting(self) -> None:
         self.get_logger().warn(
             'no robot model: set parameter robot_description or robot_description_file, or '
-            f'publish on {self.resolve_topic_name("robot_description")} '
+            f'publish on {shown(self.resolve_topic_name("robot_description"), quote=False)} '
             '(reliable, transient local); inputs are rejected until then',
             throttle_duration_sec=5.0)
 

@@ -55,6 +55,7 @@ import spatial_dynamics as sd
 from spatial_dynamics.bounds import MAX_EFFORT, MIN_STAMP_INTERVAL
 from spatial_dynamics.ros.inputs import InputError, name_index
 from spatial_dynamics.ros.records import Robot
+from spatial_dynamics.ros.text import shown
 
 #: ``observer_gain`` K_O (1/s) at most (the bound of its entry in the node's parameter table,
 #: which checks it): a time constant of 1 ms, one sample at 1 kHz. Beyond
@@ -131,7 +132,7 @@ def measured_effort(joint_names: Tuple[str, ...], name: Sequence[str],
     huge = np.flatnonzero(np.abs(tau) > MAX_EFFORT)
     if huge.size:
         raise InputError('out_of_bounds', f"field 'effort' of joint "
-                         f'{joint_names[huge[0]]!r} is {tau[huge[0]]:g}, beyond '
+                         f'{shown(joint_names[huge[0]])} is {tau[huge[0]]:g}, beyond '
                          f'±{MAX_EFFORT:g} N m or N')
     return tau
 

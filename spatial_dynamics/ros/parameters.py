@@ -94,12 +94,26 @@ def _number(name: str, value: Any, kind: type) -> float:
     return kind(value)
 
 
+def number_text(value: float) -> str:
+    """Write a number as it was given: an integer in full, a float in its shortest form.
+
+    ``1000000000`` stays ``1000000000`` (``:g`` wrote ``1e+09``, as if a float had been given,
+    and ``2147483648`` as ``2.14748e+09``, another number); a float is written by ``:g`` when
+    that is the same number (``0.001``, ``3600``), else by ``repr`` (``12345678.9``).
+    """
+    if isinstance(value, int) and not isinstance(value, bool):
+        return str(value)
+    text = f'{value:g}'
+    return text if float(text) == value else repr(float(value))
+
+
 def within(name: str, value: float, bounds: Tuple[float, float], unit: str = '') -> float:
     """Return ``value`` if it lies in the closed interval ``bounds``."""
     lo, hi = bounds
     if not lo <= value <= hi:
-        raise ParameterError(f'parameter {name}: need a value from {lo:g} to {hi:g}'
-                             f'{" " + unit if unit else ""}, got {value:g}')
+        raise ParameterError(f'parameter {name}: need a value from {number_text(lo)} to '
+                             f'{number_text(hi)}{" " + unit if unit else ""}, got '
+                             f'{number_text(value)}')
     return value
 
 
@@ -335,8 +349,8 @@ def _constraints(p: Param) -> str:
     if p.choices:
         parts.append('one of ' + ', '.join(p.choices))
     if p.bounds is not None:
-        parts.append(f'{p.bounds[0]:g} .. {p.bounds[1]:g}' + (' each' if p.type.endswith('[]')
-                                                              else ''))
+        parts.append(f'{number_text(p.bounds[0])} .. {number_text(p.bounds[1])}'
+                     + (' each' if p.type.endswith('[]') else ''))
     if p.length is not None:
         parts.append(f'{p.length} values')
     if p.per_joint:

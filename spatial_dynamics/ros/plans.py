@@ -29,6 +29,7 @@ from spatial_dynamics.effort import annotate, AnnotationError
 from spatial_dynamics.ros.control import FEEDBACK_MODES
 from spatial_dynamics.ros.messages import joint_trajectory
 from spatial_dynamics.ros.records import Config
+from spatial_dynamics.ros.text import shown
 from spatial_dynamics.ros.worker import Newest
 from spatial_dynamics.trajectory import prepare, Prepared, TrajectoryError
 
@@ -139,7 +140,7 @@ class Annotator:
         if len(over):
             peaks = np.abs(done.effort).max(axis=0)
             names = robot.model.joint_names
-            text = ', '.join(f'{names[j]!r} {peaks[j]:.4g} > {limit[j]:g}' for j in over)
+            text = ', '.join(f'{shown(names[j])} {peaks[j]:.4g} > {limit[j]:g}' for j in over)
             if robot.clamp:
                 done.effort[:], _ = clamp_to_effort_limits(robot.model, done.effort)
                 self.saturated.extend(names[j] for j in over)

@@ -22,6 +22,7 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics.ros.control import Gains
 from spatial_dynamics.ros.parameters import ConfigError
+from spatial_dynamics.ros.text import shown
 
 
 @dataclass(frozen=True)
@@ -36,7 +37,7 @@ class Payload:
     def __str__(self) -> str:
         if not self.link:
             return 'none'
-        return (f'{self.mass:g} kg on {self.link!r}, com {list(self.com)} m, inertia '
+        return (f'{self.mass:g} kg on {shown(self.link)}, com {list(self.com)} m, inertia '
                 f'{list(self.inertia)} kg m^2')
 
     def apply(self, model: 'sd.Model') -> 'sd.Model':

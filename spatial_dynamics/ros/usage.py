@@ -19,7 +19,7 @@ from typing import Callable, Optional, Sequence
 
 from spatial_dynamics.ros.arguments import split_args
 from spatial_dynamics.ros.config import PARAMETERS
-from spatial_dynamics.ros.parameters import Table
+from spatial_dynamics.ros.parameters import number_text, Table
 
 HELP = ('-h', '--help')
 WIDTH = 99
@@ -45,7 +45,7 @@ def usage(table: Table, summary: str, page: str) -> str:
         notes = [p.type, f'default {default}{unit}']
         if p.bounds is not None:
             each = ' each' if '[]' in p.type else ''
-            notes.append(f'{p.bounds[0]:g} .. {p.bounds[1]:g}{each}')
+            notes.append(f'{number_text(p.bounds[0])} .. {number_text(p.bounds[1])}{each}')
         if p.choices:
             notes.append('one of ' + ', '.join(map(str, p.choices)))
         if p.read_only:

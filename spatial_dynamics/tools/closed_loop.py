@@ -391,9 +391,35 @@ class Plans:
         self.node.destroy_publisher(self.pub)
 
 
+class Interrupt:
+    """This tool's SIGINT (Ctrl-C) and SIGTERM handler: remembers the signal, then interrupts.
+
+    Ctrl-C reaches the simulator and the node too (one process group): they exit on it, and
+    without the signal remembered their exit read as a failure ("the node exited"), or the
+    KeyboardInterrupt, raised inside rclpy's message conversion, as a RuntimeError.
+    """
+
+    def __init__(self) -> None:
+        self.signal: Optional[int] = None
+
+    def __call__(self, signum: int, frame) -> None:
+        """Remember ``signum`` and raise KeyboardInterrupt where Python is."""
+        self.signal = signum
+        raise KeyboardInterrupt
+
+    @property
+    def status(self) -> int:
+        """The exit status of a process ended by the signal: 128 + its number (130: SIGINT)."""
+        return 128 + (self.signal or signal.SIGINT)
+
+
 def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_mods,
-            show) -> Run:
-    """Start the sim and the node for one law, drive the trajectory, return the errors."""
+            show, interrupt: Optional[Interrupt] = None) -> Run:
+    """Start the sim and the node for one law, drive the trajectory, return the errors.
+
+    Raises KeyboardInterrupt once ``interrupt`` caught a signal, RuntimeError when the
+    simulator or the node exits by itself or the run does not finish in time; both stop them.
+    """
     rclpy, JointState = rclpy_mods
     names = model.joint_names
     q0 = start_point(model)
@@ -445,6 +471,8 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
     next_show = wall0
     try:
         while not run.t or run.t[-1] < args.seconds:
+            if interrupt is not None and interrupt.signal is not None:
+                raise KeyboardInterrupt     # swallowed where it was raised: stop here
             if sim.poll() is not None or node.poll() is not None:
                 raise RuntimeError(f'{name}: the {"sim" if sim.poll() is not None else "node"} '
                                    f'exited (see {logs}/)')
@@ -526,7 +554,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     urdf, model = robot_model(args.urdf)
     chosen = {'pd': 0, 'pd_ff': 1, 'ct': 2}
     picks = range(3) if args.laws == 'all' else [chosen[x] for x in args.laws.split(',')]
-    signal.signal(signal.SIGTERM, signal.default_int_handler)
+    interrupt = Interrupt()
+    signal.signal(signal.SIGINT, interrupt)
+    signal.signal(signal.SIGTERM, interrupt)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     live = sys.stdout.isatty()
     runs: List[Run] = []
@@ -551,16 +581,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         for k in picks:
             name, settings = LAWS[k]
-            runs.append(run_law(name, settings, urdf, model, args, (rclpy, JointState), show))
+            runs.append(run_law(name, settings, urdf, model, args, (rclpy, JointState), show,
+                                interrupt))
             if not live:      # a log: the header with the first row, then each row
                 lines = table(runs, model.joint_names)
                 print('\n'.join(lines if len(runs) == 1 else lines[-1:]), flush=True)
-    except KeyboardInterrupt:
-        print('interrupted')
-        status = 1
-    except RuntimeError as err:
-        print(f'closed loop: {err}', file=sys.stderr)
-        status = 1
+    except (KeyboardInterrupt, RuntimeError) as err:
+        if interrupt.signal is None and isinstance(err, RuntimeError):
+            print(f'closed loop: {err}', file=sys.stderr)
+            status = 1
+        else:   # the children got the signal too: their exit is no failure
+            name = signal.Signals(interrupt.signal or signal.SIGINT).name
+            print(f'closed loop: interrupted ({name}); the simulator and the node stopped',
+                  file=sys.stderr)
+            status = interrupt.status
     finally:
         rclpy.try_shutdown()
         for loop in loops:
