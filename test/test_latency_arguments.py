@@ -120,3 +120,27 @@ def test_answers_before_their_stamps_are_known_count_and_late_ticks_are_told_apa
     assert (summary['sent'], summary['answered']) == (5, 3)
     assert (summary['not_answered'], summary['not_answered_superseded']) == (2, 1)
     assert summary['p50_ms'] == pytest.approx(0.4)
+
+
+def test_busy_loops_ignore_the_terminals_ctrl_c():
+    """Ctrl-C reaches the busy loops too: they go on (the benchmark kills them), silently."""
+    import signal
+    import subprocess
+    import time
+    from spatial_dynamics.tools.driving import cpu_seconds
+    from spatial_dynamics.tools.latency import busy_loops
+    (loop,) = busy_loops(1)
+    try:
+        deadline = time.monotonic() + 60.0
+        while cpu_seconds(loop.pid) < 0.1:    # its loop runs: Python has started
+            assert time.monotonic() < deadline and loop.poll() is None
+            time.sleep(0.01)
+        loop.send_signal(signal.SIGINT)
+        try:
+            loop.wait(1.0)
+        except subprocess.TimeoutExpired:
+            pass
+        assert loop.poll() is None, 'a busy loop ended on SIGINT (with a traceback)'
+    finally:
+        loop.kill()
+        loop.wait()

@@ -184,6 +184,34 @@ def test_exit_0_on_every_signal_under_flood(install, tmp_path):
     assert not failures, [(sig, status) for sig, status, _ in failures]
 
 
+def test_ctrl_c_while_the_node_imports_stops_it_without_a_traceback(install, tmp_path):
+    """SIGINT in the first second, while Python still imports rclpy, numpy and the package.
+
+    Before ``spin`` takes over SIGINT, Python's own handler turned it into a
+    ``KeyboardInterrupt`` traceback from whatever import was running; the launcher now
+    restores the default action first, so the process ends on the signal, silently.
+    The signal is sent once rclpy's extension is loaded: the imports after it take the
+    better part of a second, and a node already spinning exits 0 on SIGINT, also silently.
+    """
+    node = NodeProcess(install, ['-p', f'robot_description_file:={DEMO_URDF}'], str(tmp_path))
+    deadline = time.monotonic() + TIMEOUT
+    try:
+        while node.proc.poll() is None and time.monotonic() < deadline:
+            try:
+                with open(f'/proc/{node.proc.pid}/maps') as maps:
+                    if '_rclpy_pybind11' in maps.read():
+                        break
+            except OSError:
+                pass
+            time.sleep(0.002)
+        status = node.stop(signal.SIGINT)
+    finally:
+        node.stop(signal.SIGKILL)
+    log = node.log()
+    assert 'Traceback' not in log and 'KeyboardInterrupt' not in log, log[-2000:]
+    assert status in (0, -signal.SIGINT), (status, log[-2000:])
+
+
 @pytest.mark.ros
 def test_bad_start_up_configuration_exits_1_with_reason(install, tmp_path):
     bad = tmp_path / 'bad.urdf'

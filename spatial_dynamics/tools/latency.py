@@ -418,7 +418,9 @@ def publish_odometry(bench, topic: str, root: str) -> None:
 
 def busy_loops(count: int) -> List[subprocess.Popen]:
     """Start ``count`` processes that spin a core each (the load of a busy machine)."""
-    return [subprocess.Popen([sys.executable, '-c', 'while True: pass'],
+    # SIGINT ignored: a Ctrl-C at the terminal reaches them too, and they are killed
+    loop = 'import signal; signal.signal(signal.SIGINT, signal.SIG_IGN)\nwhile True: pass'
+    return [subprocess.Popen([sys.executable, '-c', loop],
                              preexec_fn=die_with_parent) for _ in range(count)]
 
 
