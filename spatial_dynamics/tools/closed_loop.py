@@ -359,17 +359,20 @@ class Plans:
         self._pair(key)
 
     def _on_answer(self, msg) -> None:
-        """Take an answer (reliable: every one arrives); send the replacement at half time.
+        """Take an answer (reliable: every one arrives); at the first, schedule the replacement.
 
-        The switch follows the answers' stamps, not the measured states this process
-        watches best effort (a busy machine drops some, which delayed the switch).
+        The replacement is sent once the first plan is followed, stamped to start just after
+        half time on the measured clock: the node keeps the first plan until then (JTC's
+        rule), so the switch is at that step whatever this process's lag. Sent when an
+        answer past half time was read, it started wherever the run was by then: on a busy
+        machine, tens of steps late and with a jump in q_d.
         """
         self.run.answers += 1
         key = msg.header.stamp.sec * 10 ** 9 + msg.header.stamp.nanosec
         self.desired[key] = np.array(msg.position)
         self._pair(key)
-        if self.replaced is None and key * 1e-9 >= self.switch_at:
-            self.replaced = key * 1e-9 + 0.01     # starts 10 ms ahead on the measured clock
+        if self.replaced is None:
+            self.replaced = self.switch_at + 0.01
             hold = np.zeros(len(self.names))
             self.pub.publish(plan_message(self.names, [(BACK_IN, self.q0, hold, hold)],
                                           self.replaced))
