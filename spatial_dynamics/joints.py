@@ -460,3 +460,35 @@ def joint_crba(code, H, n, row, kj, mm, both, ax, ay, az, F0, F1, F2, F3, F4, F5
     H[row * n + kj] = H[row * n + kj] + mm * t
     if both:
         H[kj * n + row] = H[kj * n + row] + mm * t
+
+
+def joint_pair(code, D, n, row, kj, mm, ax, ay, az, F0, F1, F2, F3, F4, F5, P0, P1, P2, P3, P4,
+               P5) -> None:
+    """``D[row, kj + d] += mm S[:, d]ᵀ F``, ``D[kj + d, row] += mm S[:, d]ᵀ P`` for each ``d``.
+
+    ``D`` is ``n × n`` row-major: a row and a column of a matrix that is not symmetric (the
+    derivatives' ``∂τ/∂q`` and ``∂τ/∂q̇``), each from its own force.
+    """
+    if code <= RA:          # revolute
+        t = ax * F0 + ay * F1 + az * F2
+        u = ax * P0 + ay * P1 + az * P2
+    elif code == PR:
+        t = ax * F3 + ay * F4 + az * F5
+        u = ax * P3 + ay * P4 + az * P5
+    else:       # free-flyer: S = 1, the six components of F and of P
+        r = row * n + kj
+        D[r] = D[r] + mm * F0
+        D[r + 1] = D[r + 1] + mm * F1
+        D[r + 2] = D[r + 2] + mm * F2
+        D[r + 3] = D[r + 3] + mm * F3
+        D[r + 4] = D[r + 4] + mm * F4
+        D[r + 5] = D[r + 5] + mm * F5
+        D[kj * n + row] = D[kj * n + row] + mm * P0
+        D[(kj + 1) * n + row] = D[(kj + 1) * n + row] + mm * P1
+        D[(kj + 2) * n + row] = D[(kj + 2) * n + row] + mm * P2
+        D[(kj + 3) * n + row] = D[(kj + 3) * n + row] + mm * P3
+        D[(kj + 4) * n + row] = D[(kj + 4) * n + row] + mm * P4
+        D[(kj + 5) * n + row] = D[(kj + 5) * n + row] + mm * P5
+        return
+    D[row * n + kj] = D[row * n + kj] + mm * t
+    D[kj * n + row] = D[kj * n + row] + mm * u

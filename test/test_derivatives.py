@@ -79,6 +79,51 @@ def test_free_flyer_equals_pinocchio_on_every_robot(name, rng):
             assert ok, (backend, what, err)
 
 
+#: Two chains on the world (two roots: body 1's columns are taken at once, the other root's
+#: one by one): one on a prismatic joint along no frame axis, the other on a revolute joint
+#: about no frame axis that mimics a joint of the first chain.
+_LINK = ('<link name="{0}"><inertial><origin xyz="{1}" rpy="{2}"/><mass value="{3}"/>'
+         '<inertia ixx="0.05" ixy="0.004" ixz="-0.003" iyy="0.07" iyz="0.002" izz="0.06"/>'
+         '</inertial></link>')
+_JOINT = ('<joint name="{0}" type="{1}"><parent link="{2}"/><child link="{3}"/>'
+          '<origin xyz="{4}" rpy="{5}"/><axis xyz="{6}"/>{7}'
+          '<limit lower="-3" upper="3" effort="50" velocity="5"/></joint>')
+TWO_ROOTS = ('<robot name="two_roots"><link name="world"/>'
+             + _LINK.format('cart', '0.1 0.02 -0.03', '0.1 0.2 0.3', 2.0)
+             + _LINK.format('pole', '0 0.05 0.3', '0 0 0', 0.7)
+             + _LINK.format('a1', '0.2 -0.1 0.05', '0.3 0 0.1', 1.3)
+             + _LINK.format('a2', '0.15 0 0', '0 0.2 0', 0.9)
+             + _JOINT.format('rail', 'prismatic', 'world', 'cart', '0.3 -0.2 0.5',
+                             '0.2 -0.1 0.4', '0.6 0 0.8', '')
+             + _JOINT.format('pole', 'revolute', 'cart', 'pole', '0 0.1 0.2', '0.3 0 0',
+                             '0 1 0', '')
+             + _JOINT.format('arm1', 'revolute', 'world', 'a1', '-0.4 0.3 0.1', '0 0.5 -0.2',
+                             '0.48 0.6 0.64',
+                             '<mimic joint="pole" multiplier="-0.5" offset="0.1"/>')
+             + _JOINT.format('arm2', 'revolute', 'a1', 'a2', '0.2 0 0.3', '0 0 0', '1 0 0', '')
+             + '</robot>')
+
+
+def test_two_roots_a_prismatic_root_and_a_mimic_root_equal_pinocchio(tmp_path, rng):
+    """Body 1's columns at once and another root's one by one: Pinocchio's, both backends."""
+    path = tmp_path / 'two_roots.urdf'
+    path.write_text(TWO_ROOTS, encoding='utf-8')
+    model, _ = load(str(path))
+    assert model.nv == 3 and sum(1 for p in model.parent[1:] if p == 0) == 2
+    oracle = PinOracle(TWO_ROOTS)
+    oracle.set_gravity((0.3, -1.2, -9.81))
+    for _ in range(3):
+        q, qd, qdd = random_state(rng, (), model.nq)
+        q_pin, P = oracle.velocity_map(model.joint_names, q)
+        _, v_pin, a_pin = oracle.expand(model.joint_names, q, qd, qdd)
+        expected = pinocchio_derivatives(oracle, q_pin, v_pin, a_pin, P)
+        for backend in ('numpy', 'compiled'):
+            ours = sd.rnea_derivatives(model, q, qd, qdd, (0.3, -1.2, -9.81), backend=backend)
+            for what, value, want in zip(('dq', 'dv', 'M'), ours, expected):
+                ok, err = close(value, want)
+                assert ok, (backend, what, err)
+
+
 def test_the_free_flyer_columns_are_the_tangent_of_integrate(rng):
     """``τ(q ⊕ δ) − τ(q ⊖ δ) ≈ 2 ∂τ/∂q δ`` with ``⊕`` as ``sd.integrate`` moves ``q``."""
     model, _ = load(path_of('solo_description/robots/solo12.urdf'), base='floating')

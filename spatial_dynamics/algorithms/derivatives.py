@@ -3,12 +3,11 @@
 """Analytical derivatives of inverse dynamics: ``∂τ/∂q``, ``∂τ/∂q̇``, ``∂τ/∂q̈ = M``; one source.
 
 Carpentier and Mansard, "Analytical derivatives of rigid body dynamics algorithms" (RSS
-2018): the RNEA is written in world coordinates (every quantity below in the frame of body 0,
-``ᵒ`` dropped; here body 0's axes with its origin moved to body 1's origin at ``q``, so
-nothing depends on how far the robot is from the world's origin), where a joint's motion
-moves the bodies beyond it rigidly, so each derivative is a product of quantities every body
-already has. Forward pass, body ``i`` with columns
-``s = mul_i ᵒX_i⁻¹ S_i[:, c]`` (world)::
+2018): the RNEA is written in world coordinates (every quantity below in one frame fixed
+to the ground, ``ᵒ`` dropped; here the frame body 1 has at ``q``, so nothing depends on how
+far the robot is from the world's origin), where a joint's motion moves the bodies beyond it
+rigidly, so each derivative is a product of quantities every body already has. Forward
+pass, body ``i`` with columns ``s = mul_i ᵒX_i⁻¹ S_i[:, c]`` (world)::
 
     v_i = v_λ + Σ s q̇,   a_i = a_λ + Σ s q̈ + v_i × Σ s q̇   (a_0 = -a_grav)
     h_i = I_i v_i,  f_i = I_i a_i + v_i ×* h_i - f_ext_i,  İ_i = v_i ×* I_i - I_i v_i×
@@ -31,6 +30,16 @@ An ancestor ``i`` of ``j`` sees the whole subtree of ``j`` move: ``∂τ_i = S_i
 ``(α, β) = (s, 0)``. A free-flyer's six columns are its tangent directions ``q ⊕ δ``
 (:func:`~spatial_dynamics.algorithms.configuration.integrate`): a twist in its own frame.
 
+Body 1's columns are taken at once: in its own frame ``s = mul S``, and ``v_0 = 0`` (so
+``β = 0``); with ``f·(m × s) = -(m ×* f)·s`` its entries in the row of a column ``k`` of a
+body below it (or of its own) are each one force against ``S``, as are those in the column
+``k`` (``Q_k·s``, ``V_k·s``: the forces the ancestors' rows take;
+:func:`~spatial_dynamics.joints.joint_pair`, ``joint_crba``)::
+
+    ∂τ_k/∂q = -(a_0 ×* A_k)·s,   ∂τ_k/∂q̇ = (B_k - v_1 ×* A_k)·s,   M_k = A_k·s
+
+instead of a product a column (a free-flyer's six, above every other body).
+
 :func:`derivatives_kernel` is written on scalar components in the subset of
 :mod:`~.rnea` (per-body rows unpacked whole, whole-tuple stores, the products of
 :mod:`.components`); per column it keeps ``(s, α, β, α')`` in ``dcol[6 i + c]``.
@@ -38,9 +47,9 @@ An ancestor ``i`` of ``j`` sees the whole subtree of ``j`` move: ``∂τ_i = S_i
 
 from __future__ import annotations
 
-from .components import (crf_force, crm_motion, I_motion, I_rate, X_compose, Xinv_motion,
-                         XT_force, XT_I_X)
-from ..joints import joint_axis
+from .components import (crf_force, crm_motion, I_motion, I_rate, X_compose, X_motion,
+                         Xinv_motion, XT_force, XT_I_X)
+from ..joints import joint_axis, joint_crba, joint_pair
 
 
 def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, Xup, oX, vel,
@@ -61,21 +70,30 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
         dv[k] = zero
         H[k] = zero
     one = zero + 1.0
-    # "World" is the world frame translated to body 1's origin at this q: a translation
-    # changes no torque and no derivative, and keeps every r small (no digits lost to where
-    # the robot is: the free-flyer's position, a far mount), as rnea's body coordinates do
-    ox = oy = oz = zero
-    if NB > 0:
-        _, _, _, _, _, _, _, _, _, ox, oy, oz = Xup[1]
-    oX[0] = (one, zero, zero, zero, one, zero, zero, zero, one, -ox, -oy, -oz)
+    # "World" is body 1's frame at this q: a change of frame changes no torque and no
+    # derivative; it keeps every r small (no digits lost to where the robot is: the
+    # free-flyer's position, a far mount), as rnea's body coordinates do, and makes body 1's
+    # columns S itself (ᵂX_1 = 1): the root's columns are then one force against S each
+    oX[0] = (one, zero, zero, zero, one, zero, zero, zero, one, zero, zero, zero)
     vel[0] = (zero, zero, zero, zero, zero, zero)
     acc[0] = (zero, zero, zero, -gx, -gy, -gz)      # a_0 = -a_grav
+    if NB > 0:
+        # ᵂX_0 = ¹X_0⁻¹ = (Eᵀ, -E r) of Xup_1 = (E, r); a_0 in body 1's coordinates
+        e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[1]
+        oX[0] = (e00, e10, e20, e01, e11, e21, e02, e12, e22,
+                 -(e00 * rx + e01 * ry + e02 * rz), -(e10 * rx + e11 * ry + e12 * rz),
+                 -(e20 * rx + e21 * ry + e22 * rz))
+        acc[0] = X_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
+                          zero, zero, zero, -gx, -gy, -gz)
 
     # Forward pass, world coordinates
     for i in range(1, NB + 1):
         (p, code, _, kv, dof, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
          mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, mul, _) = rows[i]
-        oX[i] = X_compose(*Xup[i], *oX[p])                 # ᵢX_0 = Xup_i λX_0
+        if i == 1:
+            oX[i] = (one, zero, zero, zero, one, zero, zero, zero, one, zero, zero, zero)
+        else:
+            oX[i] = X_compose(*Xup[i], *oX[p])             # ᵢX_W = Xup_i λX_W
         e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = oX[i]
         pw0, pw1, pw2, pv0, pv1, pv2 = vel[p]
         pa0, pa1, pa2, pl0, pl1, pl2 = acc[p]
@@ -102,18 +120,24 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                                  rx, ry, rz, s0, s1, s2, s3, s4, s5)
             s0, s1, s2, s3, s4, s5 = mul * s0, mul * s1, mul * s2, mul * s3, mul * s4, mul * s5
-            y0, y1, y2, y3, y4, y5 = crm_motion(s0, s1, s2, s3, s4, s5,
-                                                pw0, pw1, pw2, pv0, pv1, pv2)
-            b0, b1, b2, b3, b4, b5 = crm_motion(s0, s1, s2, s3, s4, s5,
-                                                pa0, pa1, pa2, pl0, pl1, pl2)
-            d0, d1, d2, d3, d4, d5 = crm_motion(pw0, pw1, pw2, pv0, pv1, pv2,
-                                                y0, y1, y2, y3, y4, y5)
-            x0, x1, x2, x3, x4, x5 = crm_motion(pw0 + w0, pw1 + w1, pw2 + w2,
-                                                pv0 + v0, pv1 + v1, pv2 + v2,
-                                                s0, s1, s2, s3, s4, s5)
-            dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5, -(b0 + d0), -(b1 + d1), -(b2 + d2),
-                               -(b3 + d3), -(b4 + d4), -(b5 + d5), -y0, -y1, -y2, -y3, -y4,
-                               -y5, x0, x1, x2, x3, x4, x5)
+            if i == 1:
+                # (α, β, α') of body 1's columns are not read: they are taken at once
+                dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5, zero, zero, zero, zero, zero, zero,
+                                   zero, zero, zero, zero, zero, zero, zero, zero, zero, zero,
+                                   zero, zero)
+            else:
+                y0, y1, y2, y3, y4, y5 = crm_motion(s0, s1, s2, s3, s4, s5,
+                                                    pw0, pw1, pw2, pv0, pv1, pv2)
+                b0, b1, b2, b3, b4, b5 = crm_motion(s0, s1, s2, s3, s4, s5,
+                                                    pa0, pa1, pa2, pl0, pl1, pl2)
+                d0, d1, d2, d3, d4, d5 = crm_motion(pw0, pw1, pw2, pv0, pv1, pv2,
+                                                    y0, y1, y2, y3, y4, y5)
+                x0, x1, x2, x3, x4, x5 = crm_motion(pw0 + w0, pw1 + w1, pw2 + w2,
+                                                    pv0 + v0, pv1 + v1, pv2 + v2,
+                                                    s0, s1, s2, s3, s4, s5)
+                dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5, -(b0 + d0), -(b1 + d1), -(b2 + d2),
+                                   -(b3 + d3), -(b4 + d4), -(b5 + d5), -y0, -y1, -y2, -y3, -y4,
+                                   -y5, x0, x1, x2, x3, x4, x5)
         vel[i] = (w0, w1, w2, v0, v1, v2)
         acc[i] = (a0, a1, a2, l0, l1, l2)
         # I_i in world coordinates, h_i = I_i v_i, f_i = I_i a_i + v_i ×* h_i - f_ext_i
@@ -176,23 +200,25 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             o0, o1, o2, o3, o4, o5 = crf_force(s0, s1, s2, s3, s4, s5,
                                                hn0, hn1, hn2, hf0, hf1, hf2)   # s ×* hC
             B0, B1, B2, B3, B4, B5 = u0 - o0, u1 - o1, u2 - o2, u3 - o3, u4 - o4, u5 - o5
-            # columns of body i for its ancestors: IC α + İC β + β ×* hC + s ×* F, and q̇'s
-            Q0, Q1, Q2, Q3, Q4, Q5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
-                                              al0, al1, al2, al3, al4, al5)
-            x0, x1, x2, x3, x4, x5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
-                                              be0, be1, be2, be3, be4, be5)
-            y0, y1, y2, y3, y4, y5 = crf_force(be0, be1, be2, be3, be4, be5,
-                                               hn0, hn1, hn2, hf0, hf1, hf2)
-            z0, z1, z2, z3, z4, z5 = crf_force(s0, s1, s2, s3, s4, s5,
-                                               Fn0, Fn1, Fn2, Ff0, Ff1, Ff2)
-            Q0, Q1, Q2 = Q0 + x0 + y0 + z0, Q1 + x1 + y1 + z1, Q2 + x2 + y2 + z2
-            Q3, Q4, Q5 = Q3 + x3 + y3 + z3, Q4 + x4 + y4 + z4, Q5 + x5 + y5 + z5
-            V0, V1, V2, V3, V4, V5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
-                                              ad0, ad1, ad2, ad3, ad4, ad5)
-            V0, V1, V2 = V0 + u0 + o0, V1 + u1 + o1, V2 + u2 + o2     # + İC s + s ×* hC
-            V3, V4, V5 = V3 + u3 + o3, V4 + u4 + o4, V5 + u5 + o5
-            # body i's own columns: the subtree formula
-            for d in range(dof):
+            if p != 0:
+                # columns of body i for its ancestors (a root has none):
+                # IC α + İC β + β ×* hC + s ×* F, and q̇'s
+                Q0, Q1, Q2, Q3, Q4, Q5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz,
+                                                  czz, al0, al1, al2, al3, al4, al5)
+                x0, x1, x2, x3, x4, x5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
+                                                  be0, be1, be2, be3, be4, be5)
+                y0, y1, y2, y3, y4, y5 = crf_force(be0, be1, be2, be3, be4, be5,
+                                                   hn0, hn1, hn2, hf0, hf1, hf2)
+                z0, z1, z2, z3, z4, z5 = crf_force(s0, s1, s2, s3, s4, s5,
+                                                   Fn0, Fn1, Fn2, Ff0, Ff1, Ff2)
+                Q0, Q1, Q2 = Q0 + x0 + y0 + z0, Q1 + x1 + y1 + z1, Q2 + x2 + y2 + z2
+                Q3, Q4, Q5 = Q3 + x3 + y3 + z3, Q4 + x4 + y4 + z4, Q5 + x5 + y5 + z5
+                V0, V1, V2, V3, V4, V5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz,
+                                                  czz, ad0, ad1, ad2, ad3, ad4, ad5)
+                V0, V1, V2 = V0 + u0 + o0, V1 + u1 + o1, V2 + u2 + o2   # + İC s + s ×* hC
+                V3, V4, V5 = V3 + u3 + o3, V4 + u4 + o4, V5 + u5 + o5
+            # body i's own columns: the subtree formula (body 1's below, at once)
+            for d in range(dof if i != 1 else 0):
                 r = kv + d
                 (t0, t1, t2, t3, t4, t5, bl0, bl1, bl2, bl3, bl4, bl5, bb0, bb1, bb2, bb3, bb4,
                  bb5, bd0, bd1, bd2, bd3, bd4, bd5) = dcol[6 * i + d]
@@ -204,9 +230,9 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                     + (B0 * t0 + B1 * t1 + B2 * t2 + B3 * t3 + B4 * t4 + B5 * t5))
                 H[k * n + r] = H[k * n + r] + (
                     A0 * t0 + A1 * t1 + A2 * t2 + A3 * t3 + A4 * t4 + A5 * t5)
-            # the ancestors j of body i
+            # the ancestors j of body i but body 1
             j = p
-            while j != 0:
+            while j > 1:
                 (pj, _, _, kj, dj, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
                  _, _, _, _, _, _, _, _, _, _, _, _) = rows[j]
                 for d in range(dj):
@@ -229,3 +255,24 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                         t0 * V0 + t1 * V1 + t2 * V2 + t3 * V3 + t4 * V4 + t5 * V5)
                     H[r * n + k] = H[r * n + k] + Mt
                 j = pj
+            if j == 1 or i == 1:
+                # body 1 (v_0 = 0, so β = 0; ᵂX_1 = 1, so s = mul S): its columns at once,
+                # A·α = -(a_0 ×* A)·s,  A·α' + B·s = (B - v_1 ×* A)·s,  and Q·s, V·s, A·s
+                (_, code1, _, kv1, _, bx, by, bz, _, _, _, _, _, _, _, _, _, _, _, _,
+                 _, _, _, _, _, _, _, _, _, _, mul1, _) = rows[1]
+                x0, x1, x2, x3, x4, x5 = crf_force(*acc[0], A0, A1, A2, A3, A4, A5)
+                y0, y1, y2, y3, y4, y5 = crf_force(*vel[1], A0, A1, A2, A3, A4, A5)
+                if i == 1:      # its own block: row k
+                    joint_crba(code1, dq, n, k, kv1, mul1, False, bx, by, bz,
+                               -x0, -x1, -x2, -x3, -x4, -x5)
+                    joint_crba(code1, dv, n, k, kv1, mul1, False, bx, by, bz, B0 - y0,
+                               B1 - y1, B2 - y2, B3 - y3, B4 - y4, B5 - y5)
+                    joint_crba(code1, H, n, k, kv1, mul1, False, bx, by, bz,
+                               A0, A1, A2, A3, A4, A5)
+                else:           # an ancestor's: row k and column k
+                    joint_pair(code1, dq, n, k, kv1, mul1, bx, by, bz,
+                               -x0, -x1, -x2, -x3, -x4, -x5, Q0, Q1, Q2, Q3, Q4, Q5)
+                    joint_pair(code1, dv, n, k, kv1, mul1, bx, by, bz, B0 - y0, B1 - y1,
+                               B2 - y2, B3 - y3, B4 - y4, B5 - y5, V0, V1, V2, V3, V4, V5)
+                    joint_crba(code1, H, n, k, kv1, mul1, True, bx, by, bz,
+                               A0, A1, A2, A3, A4, A5)

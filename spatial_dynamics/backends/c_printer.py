@@ -20,8 +20,8 @@ _C_RESERVED = {'auto', 'case', 'char', 'const', 'default', 'double', 'enum', 'ex
                'sizeof', 'static', 'struct', 'switch', 'typedef', 'union', 'unsigned', 'void',
                'volatile'}
 #: Parameters of the generated kernels that are arrays (the rest are doubles, or int flags).
-_C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'dq', 'dv', 'f_body', 'tau', 'work', 'H', 'mom', 'ctq',
-             'Y', 'axes', 'J', 'QR', 'wts', 'res', 'scr', 'lam', 'run', 'info'}
+_C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'dq', 'dv', 'f_body', 'tau', 'work', 'H', 'D', 'mom',
+             'ctq', 'Y', 'axes', 'J', 'QR', 'wts', 'res', 'scr', 'lam', 'run', 'info'}
 #: Parameters that are integers: flags, and the joints' code, indices and column.
 _C_FLAGS = {'has_fext', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row', 'nb'}
 #: Kernels whose written arrays never overlap (every caller passes distinct results and
