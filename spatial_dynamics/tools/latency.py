@@ -585,7 +585,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     pacer = None
     try:
         pacer = Pacer([t.namespace for t in targets], trajectory, args.priority)
-        scheduling = pacer.scheduling
+        scheduling = (f'node and relay SCHED_FIFO {args.priority}, publisher {pacer.scheduling}'
+                      if args.priority > 0 else pacer.scheduling)
         for index, target in enumerate(targets):
             pacer.prime(executor, index, target, timeout=60.0)
         t0 = time.monotonic()
