@@ -144,3 +144,176 @@ def test_busy_loops_ignore_the_terminals_ctrl_c():
     finally:
         loop.kill()
         loop.wait()
+
+
+def test_blocks_are_counted_in_messages_and_one_that_holds_none_is_refused(capsys):
+    """Blocks of 1 s at 0.5 Hz each rounded to 0 messages: 0 sent, a table of nan, exit 1."""
+    from spatial_dynamics.tools.latency import counts
+    with pytest.raises(SystemExit) as exit:
+        parse_args(['--rate', '0.5', '--seconds', '2', '--block', '1'])
+    assert exit.value.code == 2 and '--block' in capsys.readouterr().err
+    # rate * seconds messages in all, whatever the blocks round to on their own
+    assert counts(1.0, 3.0, 1.5) == [2, 1]
+    assert sum(counts(1000.0, 1.0, 0.3)) == 1000
+    assert counts(0.5, 2.0, 2.0) == [1]
+
+
+@pytest.mark.parametrize('plot, json_path', [('hist.json', 'hist.json'), ('hist.txt', None),
+                                             ('hist', 'hist.png')])
+def test_a_plot_matplotlib_cannot_write_or_that_overwrites_the_json_is_refused_first(
+        plot, json_path, tmp_path, capsys):
+    """`--plot x.json --json x.json` ran the whole benchmark, then matplotlib's traceback."""
+    argv = ['--plot', str(tmp_path / plot)]
+    if json_path:
+        argv += ['--json', str(tmp_path / json_path)]
+    with pytest.raises(SystemExit) as exit:
+        parse_args(argv)
+    assert exit.value.code == 2 and '--plot' in capsys.readouterr().err
+    assert parse_args(['--plot', str(tmp_path / 'h.svg'), '--json', str(tmp_path / 'h.json')])
+
+
+def test_busy_loops_ignore_a_ctrl_c_while_python_starts():
+    """SIGINT before the loop's own code ran ended it (killed, or a traceback from Python)."""
+    import signal
+    import subprocess
+    from spatial_dynamics.tools.latency import busy_loops
+    (loop,) = busy_loops(1)
+    try:
+        loop.send_signal(signal.SIGINT)    # at once: its Python is still starting
+        try:
+            loop.wait(1.0)
+        except subprocess.TimeoutExpired:
+            pass
+        assert loop.poll() is None, f'a busy loop ended on SIGINT ({loop.returncode})'
+    finally:
+        loop.kill()
+        loop.wait()
+
+
+class _Idle:
+    """An executor with nothing to run."""
+
+    def spin_once(self, timeout_sec):
+        import time
+        time.sleep(timeout_sec)
+
+
+def _gone_pacer():
+    """A Pacer whose process has exited."""
+    import subprocess
+    import sys
+    from spatial_dynamics.tools.latency import Pacer
+    pacer = Pacer.__new__(Pacer)
+    pacer.watch = lambda: None
+    pacer.process = subprocess.Popen([sys.executable, '-c', 'pass'], stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, text=True)
+    pacer.process.wait()
+    return pacer
+
+
+def test_a_pacer_that_exited_is_said_at_once_not_as_a_broken_pipe_or_a_timeout():
+    """Killed mid-run: a BrokenPipeError traceback; while priming: 60 s, then 'did not answer'."""
+    from spatial_dynamics.tools.latency import Target
+    target = Target.__new__(Target)
+    target.name, target.answers = 'relay', 0
+    for command in (lambda p: p.block(_Idle(), 0, 1000.0, 10, 0.0),
+                    lambda p: p.prime(_Idle(), 0, target, timeout=30.0)):
+        pacer = _gone_pacer()
+        with pytest.raises(RuntimeError, match='pacer process exited'):
+            command(pacer)
+
+
+def test_a_target_that_exits_while_primed_or_measured_ends_the_run():
+    """The node killed mid-run: the benchmark went on and printed its numbers, exit 0."""
+    import subprocess
+    import sys
+    from spatial_dynamics.tools.latency import exited, Pacer, Target
+    node = subprocess.Popen([sys.executable, '-c', 'pass'])
+    node.wait()
+    with pytest.raises(RuntimeError, match='inverse_dynamics exited'):
+        exited({'relay': subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(30)']),
+                'inverse_dynamics': node})
+    pacer = Pacer.__new__(Pacer)
+    pacer.process = subprocess.Popen([sys.executable, '-c', 'import sys; sys.stdin.read()'],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    pacer.watch = lambda: exited({'inverse_dynamics': node})
+    target = Target.__new__(Target)
+    target.name, target.answers = 'inverse_dynamics', 0
+    try:
+        with pytest.raises(RuntimeError, match='inverse_dynamics exited'):
+            pacer.prime(_Idle(), 0, target, timeout=30.0)
+    finally:
+        pacer.process.kill()
+        pacer.process.wait()
+
+
+@pytest.mark.parametrize('signum, status', [('SIGINT', 130), ('SIGTERM', 143)])
+def test_ctrl_c_or_sigterm_while_loading_is_one_line(signum, status, monkeypatch, capsys):
+    """Ctrl-C while the robot loaded (before the nodes start): a KeyboardInterrupt traceback."""
+    import signal
+    from spatial_dynamics.tools import latency
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+
+    def loading(urdf):
+        os.kill(os.getpid(), getattr(signal, signum))
+        raise AssertionError('the signal did not interrupt')
+    monkeypatch.setattr(latency, 'robot_model', loading)
+    try:
+        assert latency.main(['--seconds', '1']) == status
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and f'interrupted ({signum})' in err, err
+
+
+def test_a_urdf_that_cannot_be_loaded_is_one_line(tmp_path, capsys):
+    """A malformed --urdf: a ValueError traceback."""
+    import signal
+    from spatial_dynamics.tools import latency
+    bad = tmp_path / 'bad.urdf'
+    bad.write_text("<robot name='x'><link name='a'/>")
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        assert latency.main(['--urdf', str(bad)]) == 1
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and '--urdf' in err and 'malformed' in err, err
+
+
+@pytest.mark.parametrize('argv', [['--plot', 'x.txt'], ['--plot', 'x.json', '--json', 'x.json'],
+                                  ['--json', '.']])
+def test_closed_loop_refuses_outputs_it_cannot_write_first(argv, tmp_path, capsys, monkeypatch):
+    """Each ran every law, then a traceback (matplotlib's ValueError, IsADirectoryError)."""
+    from spatial_dynamics.tools import closed_loop
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit:
+        closed_loop.parse_args(argv)
+    assert exit.value.code == 2 and argv[-2] in capsys.readouterr().err
+
+
+def test_closed_loop_says_a_bad_urdf_and_a_ctrl_c_while_loading_in_one_line(
+        tmp_path, capsys, monkeypatch):
+    """Both were tracebacks: the handler was installed after the robot was loaded."""
+    import signal
+    from spatial_dynamics.tools import closed_loop
+    bad = tmp_path / 'bad.urdf'
+    bad.write_text("<robot name='x'><link name='a'/>")
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        assert closed_loop.main(['--urdf', str(bad), '--plot', '']) == 1
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and 'malformed' in err, err
+
+        def loading(urdf):
+            os.kill(os.getpid(), signal.SIGINT)
+            raise AssertionError('the signal did not interrupt')
+        monkeypatch.setattr(closed_loop, 'robot_model', loading)
+        assert closed_loop.main(['--plot', '']) == 130
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and 'interrupted (SIGINT)' in err, err
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)

@@ -55,7 +55,9 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 import spatial_dynamics as sd
-from .driving import node_command, pyplot, redraw, robot_model, save_figure, start, stop
+from .driving import (
+    Interrupt, node_command, plot_path_error, pyplot, redraw, robot_model, save_figure, start,
+    stop)
 from .latency import busy_loops, in_range
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
@@ -121,7 +123,14 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser.add_argument('--priority', type=in_range(int, 0, 99), default=0,
                         help="the node's thread_priority (SCHED_FIFO of its answering thread), "
                              '0 .. 99 (default 0: normal scheduling)')
-    return parser.parse_args(argv)
+    args = parser.parse_args(argv)
+    if args.plot:
+        error = plot_path_error(args.plot, args.json)
+        if error:
+            parser.error(error)
+    if args.json and os.path.isdir(args.json):
+        parser.error(f'--json {args.json!r} is a folder')
+    return args
 
 
 class Trajectory:
@@ -394,28 +403,6 @@ class Plans:
         self.node.destroy_publisher(self.pub)
 
 
-class Interrupt:
-    """This tool's SIGINT (Ctrl-C) and SIGTERM handler: remembers the signal, then interrupts.
-
-    Ctrl-C reaches the simulator and the node too (one process group): they exit on it, and
-    without the signal remembered their exit read as a failure ("the node exited"), or the
-    KeyboardInterrupt, raised inside rclpy's message conversion, as a RuntimeError.
-    """
-
-    def __init__(self) -> None:
-        self.signal: Optional[int] = None
-
-    def __call__(self, signum: int, frame) -> None:
-        """Remember ``signum`` and raise KeyboardInterrupt where Python is."""
-        self.signal = signum
-        raise KeyboardInterrupt
-
-    @property
-    def status(self) -> int:
-        """The exit status of a process ended by the signal: 128 + its number (130: SIGINT)."""
-        return 128 + (self.signal or signal.SIGINT)
-
-
 def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_mods,
             show, interrupt: Optional[Interrupt] = None) -> Run:
     """Start the sim and the node for one law, drive the trajectory, return the errors.
@@ -550,16 +537,20 @@ def plot(runs: List[Run], path: str, robot: str, frequency: float) -> str:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the laws one after the other; 0 when every run finished."""
     args = parse_args(argv)
-    import rclpy
-    from rclpy.signals import SignalHandlerOptions
-    from sensor_msgs.msg import JointState
-
-    urdf, model = robot_model(args.urdf)
+    interrupt = Interrupt().install()   # from here on: also while loading
+    try:
+        import rclpy
+        from rclpy.signals import SignalHandlerOptions
+        from sensor_msgs.msg import JointState
+        urdf, model = robot_model(args.urdf)
+    except KeyboardInterrupt:
+        print(f'closed loop: interrupted ({interrupt.name}) while loading', file=sys.stderr)
+        return interrupt.status
+    except ValueError as err:
+        print(f'closed loop: --urdf {args.urdf!r}: {err}', file=sys.stderr)
+        return 1
     chosen = {'pd': 0, 'pd_ff': 1, 'ct': 2}
     picks = range(3) if args.laws == 'all' else [chosen[x] for x in args.laws.split(',')]
-    interrupt = Interrupt()
-    signal.signal(signal.SIGINT, interrupt)
-    signal.signal(signal.SIGTERM, interrupt)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     live = sys.stdout.isatty()
     runs: List[Run] = []

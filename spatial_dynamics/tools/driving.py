@@ -96,6 +96,52 @@ def die_with_parent() -> None:
         pass
 
 
+def die_with_parent_ignoring_ctrl_c() -> None:
+    """In a child before exec: :func:`die_with_parent`, and SIGINT ignored from the start.
+
+    For the helpers a tool ends itself (busy loops, the latency benchmark's publisher): the
+    terminal's Ctrl-C reaches them too, and ignored before exec it cannot interrupt their
+    Python while it imports (a KeyboardInterrupt traceback from the import; Python keeps an
+    ignored SIGINT ignored).
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent()
+
+
+class Interrupt:
+    """A tool's SIGINT (Ctrl-C) and SIGTERM handler: remembers the signal, then interrupts.
+
+    Ctrl-C reaches the tool's nodes too (one process group): they exit on it, and without the
+    signal remembered their exit read as a failure ("the node exited"), or the
+    KeyboardInterrupt, raised inside rclpy's message conversion, as a RuntimeError. SIGTERM
+    takes the same way: the children are stopped, and the tool says it was interrupted.
+    """
+
+    def __init__(self) -> None:
+        self.signal: Optional[int] = None
+
+    def __call__(self, signum: int, frame) -> None:
+        """Remember ``signum`` and raise KeyboardInterrupt where Python is."""
+        self.signal = signum
+        raise KeyboardInterrupt
+
+    def install(self) -> 'Interrupt':
+        """Handle SIGINT (even if it was ignored when the tool started) and SIGTERM."""
+        signal.signal(signal.SIGINT, self)
+        signal.signal(signal.SIGTERM, self)
+        return self
+
+    @property
+    def name(self) -> str:
+        """The signal's name: ``SIGINT`` (also for a KeyboardInterrupt of its own)."""
+        return signal.Signals(self.signal or signal.SIGINT).name
+
+    @property
+    def status(self) -> int:
+        """The exit status of a process ended by the signal: 128 + its number (130: SIGINT)."""
+        return 128 + (self.signal or signal.SIGINT)
+
+
 def stop(proc: subprocess.Popen, timeout: float = 10.0) -> Optional[int]:
     """SIGINT, then wait; SIGKILL after ``timeout`` s. Returns the exit status."""
     if proc.poll() is None:
@@ -188,6 +234,27 @@ def save_figure(plt, fig, path: str) -> None:
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig.savefig(path)
     plt.close(fig)
+
+
+#: What matplotlib's Agg backend writes, by the file's suffix.
+PLOT_FORMATS = ('eps', 'jpeg', 'jpg', 'pdf', 'pgf', 'png', 'ps', 'raw', 'rgba', 'svg', 'svgz',
+                'tif', 'tiff', 'webp')
+
+
+def plot_path_error(plot: str, *others: Optional[str]) -> Optional[str]:
+    """Why ``--plot`` cannot be written after the run (None if it can), checked before it.
+
+    Its suffix must name a format matplotlib writes (matplotlib raised ValueError after the
+    run), and it must not be another output of the run (``others``: the plot overwrote it).
+    """
+    suffix = os.path.splitext(plot)[1].lstrip('.').lower()
+    if suffix not in PLOT_FORMATS:
+        return (f'--plot {plot!r}: .{suffix} is not a format matplotlib writes (one of '
+                f'{", ".join(PLOT_FORMATS)})')
+    for other in others:
+        if other and os.path.abspath(other) == os.path.abspath(plot):
+            return f'--plot {plot!r} is also another output of the run'
+    return None
 
 
 def pyplot():

@@ -35,7 +35,6 @@ import argparse
 import json
 import math
 import os
-import signal
 import subprocess
 import sys
 import sysconfig
@@ -48,8 +47,8 @@ import numpy as np
 from spatial_dynamics.files import check_output
 
 from .driving import (
-    cpu_seconds, die_with_parent, node_command, pyplot, robot_model, save_figure, Sinusoids,
-    start, stop)
+    cpu_seconds, die_with_parent_ignoring_ctrl_c, Interrupt, node_command, plot_path_error,
+    pyplot, robot_model, save_figure, Sinusoids, start, stop)
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -186,28 +185,38 @@ class Pacer:
     the benchmark's own script is run again in it, as multiprocessing's spawn would).
     """
 
-    def __init__(self, namespaces: Sequence[str], trajectory: Sinusoids, priority: int) -> None:
+    def __init__(self, namespaces: Sequence[str], trajectory: Sinusoids, priority: int,
+                 watch: Callable[[], None] = lambda: None) -> None:
+        self.watch = watch   # raises RuntimeError when a target has exited
         setup = {'namespaces': list(namespaces), 'joint_names': list(trajectory.joint_names),
                  'lower': (trajectory.c - 2.0 * trajectory.a).tolist(),
                  'upper': (trajectory.c + 2.0 * trajectory.a).tolist(), 'priority': priority}
         self.process = subprocess.Popen(
             [sys.executable, '-c', 'from spatial_dynamics.tools.latency import pace_inputs; '
              'pace_inputs()'], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-            preexec_fn=die_with_parent)
+            preexec_fn=die_with_parent_ignoring_ctrl_c)
         self._send(setup)
         self.scheduling = self._reply(None, 60.0)
 
     def _send(self, command) -> None:
-        self.process.stdin.write(json.dumps(command) + '\n')
-        self.process.stdin.flush()
+        try:
+            self.process.stdin.write(json.dumps(command) + '\n')
+            self.process.stdin.flush()
+        except OSError:   # a broken pipe: it is gone
+            raise RuntimeError(f'the pacer process exited ({self.process.wait()})') from None
+
+    def _check(self) -> None:
+        """Raise RuntimeError when the pacer or (``watch``) a target has exited."""
+        if self.process.poll() is not None:
+            raise RuntimeError(f'the pacer process exited ({self.process.returncode})')
+        self.watch()
 
     def _reply(self, executor, timeout: float):
         """Wait for the pacer's reply, spinning ``executor`` (if any) meanwhile."""
         import select
         deadline = time.monotonic() + timeout
         while not select.select([self.process.stdout], [], [], 0.0 if executor else 0.05)[0]:
-            if self.process.poll() is not None:
-                raise RuntimeError(f'the pacer process exited ({self.process.returncode})')
+            self._check()
             if time.monotonic() > deadline:
                 raise RuntimeError(f'the pacer did not answer within {timeout:.0f} s')
             if executor is not None:
@@ -220,31 +229,42 @@ class Pacer:
     def prime(self, executor, index: int, target: Target, timeout: float) -> None:
         """Publish to target ``index`` at 20 Hz until it answers (started and connected)."""
         self._send(['prime', index])
-        if not spin_until(executor, lambda: target.answers > 0, timeout):
+
+        def answered() -> bool:
+            self._check()
+            return target.answers > 0
+        if not spin_until(executor, answered, timeout):
             raise RuntimeError(f'{target.name} did not answer within {timeout:.0f} s')
         self._send(['stop'])
         self._reply(executor, 10.0)
 
-    def block(self, executor, index: int, rate: float, seconds: float, t0: float) -> List[int]:
-        """Publish ``rate * seconds`` inputs to target ``index``; their stamps (ns)."""
-        self._send(['block', index, rate, seconds, t0])
-        return self._reply(executor, seconds + 60.0)
+    def block(self, executor, index: int, rate: float, count: int, t0: float) -> List[int]:
+        """Publish ``count`` inputs at ``rate`` Hz to target ``index``; their stamps (ns)."""
+        self._send(['block', index, rate, count, t0])
+        return self._reply(executor, count / rate + 60.0)
 
-    def close(self) -> None:
-        """Stop the process (it also dies with this one)."""
-        try:
-            self._send(['exit'])
-            self.process.wait(5.0)
-        except (OSError, ValueError, subprocess.TimeoutExpired):
-            self.process.kill()
-            self.process.wait()
+    def close(self, interrupted: bool = False) -> None:
+        """Stop the process (it also dies with this one); ``interrupted``: at once.
+
+        Interrupted, it may be in the middle of a block (that reads no command) or priming
+        (that takes the next line for its stop): it is killed, not waited for.
+        """
+        if not interrupted:
+            try:
+                self._send(['exit'])
+                self.process.stdin.close()   # end of its commands, whatever it waits for
+                self.process.wait(5.0)
+                return
+            except (OSError, ValueError, RuntimeError, subprocess.TimeoutExpired):
+                pass
+        self.process.kill()
+        self.process.wait()
 
 
 def pace_inputs() -> None:
     """Run the :class:`Pacer`'s process: JSON commands on stdin, replies on stdout."""
     import gc
     import select
-    signal.signal(signal.SIGINT, signal.SIG_IGN)   # the benchmark stops it
     setup = json.loads(sys.stdin.readline())
     import rclpy
     from rclpy.signals import SignalHandlerOptions
@@ -279,11 +299,11 @@ def pace_inputs() -> None:
                 sys.stdin.readline()   # stop
                 reply(None)
                 continue
-            _, _, rate, seconds, t0 = command
+            _, _, rate, count, t0 = command
             period = 1.0 / rate
             stamps = []
             start_time = time.monotonic()
-            for k in range(int(round(rate * seconds))):
+            for k in range(count):
                 fill(msg, trajectory, time.monotonic() - t0)
                 stamp = time.time_ns()
                 msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
@@ -419,9 +439,8 @@ def publish_odometry(bench, topic: str, root: str) -> None:
 def busy_loops(count: int) -> List[subprocess.Popen]:
     """Start ``count`` processes that spin a core each (the load of a busy machine)."""
     # SIGINT ignored: a Ctrl-C at the terminal reaches them too, and they are killed
-    loop = 'import signal; signal.signal(signal.SIGINT, signal.SIG_IGN)\nwhile True: pass'
-    return [subprocess.Popen([sys.executable, '-c', loop],
-                             preexec_fn=die_with_parent) for _ in range(count)]
+    return [subprocess.Popen([sys.executable, '-c', 'while True: pass'],
+                             preexec_fn=die_with_parent_ignoring_ctrl_c) for _ in range(count)]
 
 
 def prioritize(priority: int, this_thread: bool = True) -> str:
@@ -523,6 +542,10 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                 check_output(path, option)
             except ValueError as err:
                 parser.error(str(err))
+    if args.plot is not None:
+        error = plot_path_error(args.plot, args.json)
+        if error:
+            parser.error(error)
     if args.log_dir is not None:
         # the first folder of the path that exists must be a folder (not a file inside one)
         head = os.path.abspath(args.log_dir)
@@ -532,17 +555,57 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
             parser.error(f'--log-dir {args.log_dir!r}: {head!r} is not a folder')
     if round(args.rate * args.seconds) < 1:
         parser.error(f'--rate {args.rate:g} for --seconds {args.seconds:g} sends no message')
+    if round(args.rate * args.block) < 1:
+        parser.error(f'--block {args.block:g} at --rate {args.rate:g} holds no message')
     return args
 
 
+def exited(procs: Dict[str, subprocess.Popen]) -> None:
+    """Raise RuntimeError naming the first of ``procs`` that has exited."""
+    for name, proc in procs.items():
+        if proc.poll() is not None:
+            raise RuntimeError(f'{name} exited ({proc.returncode}) during the run')
+
+
+def counts(rate: float, seconds: float, block: float) -> List[int]:
+    """Each block's messages: ``round(rate * block)``, ``round(rate * seconds)`` in all.
+
+    Counted in messages, not seconds: a block's ``rate * block`` rounded on its own summed to
+    other than ``rate * seconds`` (0 for each block of 1 s at 0.5 Hz: nothing sent).
+    """
+    total, size = int(round(rate * seconds)), max(int(round(rate * block)), 1)
+    return [min(size, total - start) for start in range(0, total, size)]
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Run the benchmark; print the table; 0 if both targets answered."""
+    """Run the benchmark; print the table; 0 if both targets answered.
+
+    1 with one line on stderr when a process of the run exited or the robot cannot be
+    loaded; 130 (SIGINT) or 143 (SIGTERM) with one line when interrupted, at any phase.
+    """
     args = parse_args(argv)
+    interrupt = Interrupt().install()   # from here on: also while loading and starting
+    try:
+        return run(args)
+    except KeyboardInterrupt:
+        print(f'latency: interrupted ({interrupt.name}); the node, the relay and the '
+              'publisher stopped', file=sys.stderr)
+        return interrupt.status
+    except RuntimeError as err:
+        print(f'latency: {err}', file=sys.stderr)
+        return 1
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the benchmark of ``args`` (see :func:`main`); raises on a process that exited."""
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    urdf, model = robot_model(args.urdf or robot_path(args.robot))
+    try:
+        urdf, model = robot_model(args.urdf or robot_path(args.robot))
+    except ValueError as err:
+        raise RuntimeError(f'--urdf {args.urdf!r}: {err}' if args.urdf else str(err)) from None
     trajectory = Sinusoids.for_model(model)
     if args.urdf is None and args.robot in STANDING:
         posture = np.array([STANDING[args.robot].get(name, 0.0) for name in model.joint_names])
@@ -554,52 +617,51 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         os.makedirs(logs, exist_ok=True)
     priority = {'thread_priority': str(args.priority)}
     floating, root = FLOATING.get(args.robot, ({}, None)) if args.urdf is None else ({}, None)
-    procs = {
-        'relay': start(node_command('relay', 'spatial_dynamics.tools.relay'), f'{namespace}/relay',
-                       {**priority, **input_depth(f'{namespace}/relay', args.input_depth)},
-                       logs and os.path.join(logs, 'relay.log')),
-        'inverse_dynamics': start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'),
-                                  f'{namespace}/node',
-                                  {'robot_description_file': urdf, **priority, **floating,
-                                   **input_depth(f'{namespace}/node', args.input_depth)},
-                                  logs and os.path.join(logs, 'inverse_dynamics.log')),
-    }
-    loops = busy_loops(args.busy)
-    signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C even if ignored at start
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    bench = rclpy.create_node('latency_bench')
-    executor = SingleThreadedExecutor()
-    executor.add_node(bench)
-    # the answers of a whole block (and a second more) wait in this process's middleware:
-    # its Python thread, under normal scheduling, may read them late but loses none
-    depth = min(int(args.rate * (min(args.block, args.seconds) + 1.0)) + 1000, 100_000)
-    targets = [Target(bench, 'relay', f'{namespace}/relay', depth),
-               Target(bench, 'inverse_dynamics', f'{namespace}/node', depth)]
-    compute = Compute(bench, f'{namespace}/node')
-    if root is not None:
-        publish_odometry(bench, f'{namespace}/node/base/odometry', root)
-    # this process's receive threads stamp the answers' reception; its Python thread that
-    # reads them stays under normal scheduling, off the node's and the pacer's cores' way
-    prioritize(args.priority, this_thread=False)
+    # every process is stopped in the end, whenever the run ends (Ctrl-C while starting too)
+    procs: Dict[str, subprocess.Popen] = {}
+    loops: List[subprocess.Popen] = []
+    bench = pacer = None
     status = 0
-    pacer = None
+    interrupted = True   # until the run ends by itself
     try:
-        pacer = Pacer([t.namespace for t in targets], trajectory, args.priority)
+        procs['relay'] = start(node_command('relay', 'spatial_dynamics.tools.relay'),
+                               f'{namespace}/relay',
+                               {**priority, **input_depth(f'{namespace}/relay', args.input_depth)},
+                               logs and os.path.join(logs, 'relay.log'))
+        procs['inverse_dynamics'] = start(
+            node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), f'{namespace}/node',
+            {'robot_description_file': urdf, **priority, **floating,
+             **input_depth(f'{namespace}/node', args.input_depth)},
+            logs and os.path.join(logs, 'inverse_dynamics.log'))
+        loops += busy_loops(args.busy)
+        rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+        bench = rclpy.create_node('latency_bench')
+        executor = SingleThreadedExecutor()
+        executor.add_node(bench)
+        # the answers of a whole block (and a second more) wait in this process's middleware:
+        # its Python thread, under normal scheduling, may read them late but loses none
+        depth = min(int(args.rate * (min(args.block, args.seconds) + 1.0)) + 1000, 100_000)
+        targets = [Target(bench, 'relay', f'{namespace}/relay', depth),
+                   Target(bench, 'inverse_dynamics', f'{namespace}/node', depth)]
+        compute = Compute(bench, f'{namespace}/node')
+        if root is not None:
+            publish_odometry(bench, f'{namespace}/node/base/odometry', root)
+        # this process's receive threads stamp the answers' reception; its Python thread that
+        # reads them stays under normal scheduling, off the node's and the pacer's cores' way
+        prioritize(args.priority, this_thread=False)
+        pacer = Pacer([t.namespace for t in targets], trajectory, args.priority,
+                      lambda: exited(procs))
         scheduling = (f'node and relay SCHED_FIFO {args.priority}, publisher {pacer.scheduling}'
                       if args.priority > 0 else pacer.scheduling)
         for index, target in enumerate(targets):
             pacer.prime(executor, index, target, timeout=60.0)
         t0 = time.monotonic()
         for index, target in enumerate(targets):
-            pacer.block(executor, index, args.rate, args.warmup, t0)
-        measured = {t.name: 0.0 for t in targets}
+            pacer.block(executor, index, args.rate, int(round(args.rate * args.warmup)), t0)
         for target in targets:
             target.period_ns = int(1e9 / args.rate)
-        while any(v < args.seconds for v in measured.values()):
+        for block in counts(args.rate, args.seconds, args.block):
             for index, target in enumerate(targets):
-                block = min(args.block, args.seconds - measured[target.name])
-                if block <= 0:
-                    continue
                 pid = procs[target.name].pid
                 cpu = cpu_seconds(pid)
                 target.measuring = True
@@ -607,8 +669,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 target.add_sent(pacer.block(executor, index, args.rate, block, t0))
                 spin_until(executor, lambda: False, 0.05)  # let the last answers of a block land
                 target.measuring = compute.measuring = False
+                exited(procs)   # a target gone during the block: its numbers mean nothing
                 target.cpu_s += cpu_seconds(pid) - cpu
-                measured[target.name] += block
         # the answers still waiting in this process's middleware: read until all came or
         # none came for a second
         last, quiet_since = -1, time.monotonic()
@@ -618,6 +680,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             answers = sum(t.answers for t in targets)
             if answers != last:
                 last, quiet_since = answers, time.monotonic()
+        exited(procs)
         rows = [t.summary() for t in targets]
         depth = 'keep last 1' if args.input_depth is None else f'depth {args.input_depth}'
         base = ', floating base' if root is not None else ''
@@ -649,12 +712,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         except OSError as err:
             print(f'latency: cannot write {err.filename!r}: {err.strerror}', file=sys.stderr)
             status = 1
-    except KeyboardInterrupt:
-        status = 130
+        interrupted = False
     finally:
         if pacer is not None:
-            pacer.close()
-        bench.destroy_node()
+            pacer.close(interrupted)
+        if bench is not None:
+            bench.destroy_node()
         rclpy.try_shutdown()
         for proc in procs.values():
             stop(proc)
