@@ -403,8 +403,9 @@ PARAMETERS = Table(NODE_NAME, [
     Param('thread_priority', 'int', DEFAULT_THREAD_PRIORITY, (
         'SCHED_FIFO priority of the thread that answers the inputs and of the middleware '
         "threads that receive them (controller_manager's parameter; it defaults to 50, "
-        'this node to 0 = normal scheduling: measured on 2 loaded cores, a real-time Python '
-        "thread holding the GIL starved the node's own diagnostics; ask for it, e.g. 50, "
+        'this node to 0 = normal scheduling: on 2 cores with three busy loops and other jobs '
+        '(load ~6), a node at 50 fed at 1 kHz gave no OK feedforward status in /diagnostics '
+        'for 60 s, its other threads being under normal scheduling; ask for it, e.g. 50, '
         'where the node has a core to itself). A real-time thread runs before every normal '
         'one on its core: the answers keep their period on a busy machine, and a busy loop '
         'in the node would starve the core (the node only waits or answers). Needs the '
