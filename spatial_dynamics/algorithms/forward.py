@@ -25,7 +25,7 @@ joint that moves no mass and carries no armature) leaves ``info`` at ``k``; othe
 from __future__ import annotations
 
 
-def forward_kernel(rows, H, qdd, lam, run, info, m) -> None:
+def forward_kernel(rows, H, qdd, lam, run, seg, info, m) -> None:
     """Solve ``H q̈ = τ - h`` in place: ``H`` (nv * nv, row-major) becomes ``L``.
 
     ``qdd`` holds ``τ - h`` on entry and ``q̈`` on return. ``rows`` are the layout's per-body
@@ -60,9 +60,15 @@ def forward_kernel(rows, H, qdd, lam, run, info, m) -> None:
     if dense == 1:
         for k in range(n):
             lam[k] = k - 1
+    # r: the root block, coordinates 0..r-1 that are ancestors of every other one (a
+    # free-flyer's six; all of a chain, n): a chain starting at s hangs from λ(s)
+    r = n
+    for k in range(1, n):
+        if int(lam[k]) != k - 1 and int(lam[k]) + 1 < r:
+            r = int(lam[k]) + 1
     for k in range(n):
         run[k] = k
-        if k > 0 and int(lam[k]) == k - 1:
+        if k > 0 and k != r and int(lam[k]) == k - 1:
             run[k] = run[k - 1]
     # M = Lᵀ L (RBDA table 6.3)
     for k in range(n - 1, -1, -1):
@@ -73,24 +79,36 @@ def forward_kernel(rows, H, qdd, lam, run, info, m) -> None:
         Lkk = m.sqrt(d)
         H[k * n + k] = Lkk
         inv = 1.0 / Lkk         # (a product each, not a division)
+        ns = 0
         top = int(lam[k])
-        while top != -1:        # M_ki /= L_kk  (i = λ(k), λ(λ(k)), …)
+        while top != -1:        # M_ki /= L_kk  (i = λ(k), λ(λ(k)), …), chain by chain
             low = int(run[top])
+            seg[2 * ns] = low
+            seg[2 * ns + 1] = top
+            ns += 1
             for i in range(low, top + 1):
                 H[k * n + i] = H[k * n + i] * inv
             top = int(lam[low])
-        top = int(lam[k])
-        while top != -1:        # M_ij -= M_ki M_kj  (i = λ(k), …;  j = i, λ(i), …)
-            low = int(run[top])
-            for i in range(low, top + 1):
-                Lki = H[k * n + i]
-                jt = i
-                while jt != -1:
-                    jl = int(run[jt])
-                    for j in range(jl, jt + 1):
+        stop = 0
+        if k >= r:
+            stop = r        # the root block's own updates wait: M_rr -= Wᵀ W below
+        for t in range(ns):     # M_ij -= M_ki M_kj  (i = λ(k), …;  j = i, λ(i), …)
+            low = int(seg[2 * t])
+            top = int(seg[2 * t + 1])
+            if low >= stop:
+                for i in range(low, top + 1):
+                    Lki = H[k * n + i]
+                    for j in range(low, i + 1):
                         H[i * n + j] = H[i * n + j] - Lki * H[k * n + j]
-                    jt = int(lam[jl])
-            top = int(lam[low])
+                    for u in range(t + 1, ns):
+                        for j in range(int(seg[2 * u]), int(seg[2 * u + 1]) + 1):
+                            H[i * n + j] = H[i * n + j] - Lki * H[k * n + j]
+        if k == r:      # every row below the root block is done: M_ij -= M_ci M_cj (i, j < r)
+            for c in range(n - 1, r - 1, -1):
+                for i in range(r):
+                    Lci = H[c * n + i]
+                    for j in range(i + 1):
+                        H[i * n + j] = H[i * n + j] - Lci * H[c * n + j]
     # Lᵀ y = τ - h (RBDA table 6.4): y_k = b_k / L_kk;  b_i -= L_ki y_k  (i = λ(k), …)
     for k in range(n - 1, -1, -1):
         yk = qdd[k] / H[k * n + k]
