@@ -99,7 +99,7 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'bodies_kernel': 'K, work, J',
               'split_kernel': 'QR, k, n, nb, wts, res, scr, tol',
               'derivatives_kernel': 'K, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, work',
-              'forward_kernel': 'K, H, qdd, lam, run, info'}
+              'forward_kernel': 'K, H, qdd, lam, run, seg, info'}
 #: The generated files' names. Build products, not sources: ``setup.py`` writes the header
 #: into its build directory when it compiles the extension; ``python -m
 #: spatial_dynamics.backends.codegen DIR`` writes both for reading.

@@ -14,8 +14,8 @@
  */
 #include "_compiled.h"
 
-/* Scratch of a single call on the C stack up to this many doubles (16 KiB), else the heap. */
-#define STACK_DOUBLES 2048
+/* Scratch of a single call on the C stack up to this many doubles (32 KiB), else the heap. */
+#define STACK_DOUBLES 4096
 
 /* ------------------------------------------------------------------------------------------
  * The algorithms: one row each, read by the generic entries below */

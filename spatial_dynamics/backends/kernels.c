@@ -170,14 +170,15 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 
 /* Scratch doubles of one state: the per-body rows, the regressor's carried axes, the
  * derivatives' per-body rows and columns (codegen.MORE_STORES), forward dynamics' M
- * (nv x nv), the coordinates' parents and chains (nv each) and its status (1). */
+ * (nv x nv), the coordinates' parents and chains (nv each), the chains of one coordinate's
+ * ancestors (2 nv) and its status (1). */
 Py_ssize_t
 work_size(int kernel, long rows, long nv)
 {
     return (Py_ssize_t)rows * WORK
         + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * ((Py_ssize_t)rows + 5) : 0)
         + (kernel == DERIVATIVES ? (Py_ssize_t)rows * (DWORK + 6 * CWORK) : 0)
-        + (kernel == FORWARD ? (Py_ssize_t)nv * ((Py_ssize_t)nv + 2) + 1 : 0);
+        + (kernel == FORWARD ? (Py_ssize_t)nv * ((Py_ssize_t)nv + 4) + 1 : 0);
 }
 
 /* One state through the generated kernels: the body transforms, then `kernel`'s passes.
@@ -211,14 +212,14 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
     case FORWARD: {
         const long nv = (long)K[VIDX];
         double *H = work + (Py_ssize_t)rows * WORK, *lam = H + (Py_ssize_t)nv * nv;
-        double *run = lam + nv, *info = run + nv;
+        double *run = lam + nv, *seg = run + nv, *info = seg + 2 * nv;
         for (long k = 0; k < nv; k++)
             lam[k] = 0.0;       /* q̈ = 0: the bias h into out1 */
         rnea_kernel(K, rows, q, qd, lam, g[0], g[1], g[2], f, f != NULL, out1, work);
         for (long k = 0; k < nv; k++)
             out1[k] = qdd[k] - out1[k];
         crba_kernel(K, rows, work, H);
-        forward_kernel(K, rows, H, out1, lam, run, info);
+        forward_kernel(K, rows, H, out1, lam, run, seg, info);
         if (info[0] >= 0.0) {
             for (long k = 0; k < nv; k++)
                 out1[k] = NAN;

@@ -235,7 +235,7 @@ def _solve(rows, H: np.ndarray, b: np.ndarray) -> tuple:
         Hs, x = ((H[s].ravel().tolist(), b[s].tolist()) if m is math
                  else (list(H[s].ravel()), list(b[s])))
         info = [0]
-        forward_kernel(rows, Hs, x, [0] * n, [0] * n, info, m)
+        forward_kernel(rows, Hs, x, [0] * n, [0] * n, [0] * (2 * n), info, m)
         if info[0] >= 0:
             return None, (s, int(info[0]))
         out[s] = x
