@@ -53,6 +53,7 @@ from .joints import (check_quaternion, check_rotation, FIXED, FREE_FLYER,
                      quaternion_matrix)
 from .model import Frame, Model
 from .spatial import plux_Er
+from .text import shown
 
 #: The free-flyer joint of :func:`floating_twin` (Pinocchio's name, as for ``base='floating'``).
 ROOT_JOINT = 'root_joint'
@@ -158,16 +159,16 @@ def _base_link(model: Model, link: str, what: str) -> Frame:
     if not isinstance(model, Model):
         raise TypeError(f'model must be a spatial_dynamics.Model, got {type(model).__name__}')
     if model.floating:
-        raise ValueError(f'{what}: {model.name!r} has a floating base, whose motion is its '
+        raise ValueError(f'{what}: {shown(model.name)} has a floating base, whose motion is its '
                          "free-flyer's q̇ and q̈: load it with base='fixed' to give a base "
                          'motion')
     frame = model.frames.get(link)
     if frame is None:
-        raise ValueError(f'{what}: {link!r} is not a link of {model.name!r}')
+        raise ValueError(f'{what}: {shown(link)} is not a link of {shown(model.name)}')
     if frame.body != 0:
-        raise ValueError(f'{what}: link {link!r} moves with joint '
-                         f'{model.body_joints[frame.body]!r}; the sensor must be on the base '
-                         f'({model.body_names[0]!r} or a link fixed to it)')
+        raise ValueError(f'{what}: link {shown(link)} moves with joint '
+                         f'{shown(model.body_joints[frame.body])}; the sensor must be on the base '
+                         f'({shown(model.body_names[0])} or a link fixed to it)')
     return frame
 
 
@@ -296,7 +297,7 @@ def floating_twin(model: Model) -> Model:
     if twin is not None:
         return twin
     if model.floating:
-        raise ValueError(f'{model.name!r} has a floating base already')
+        raise ValueError(f'{shown(model.name)} has a floating base already')
     NB = model.NB + 1
     shift = np.r_[-1, 0, model.parent[1:] + 1].astype(np.intp)
     six_nan, six_zero = np.full(6, np.nan), np.zeros(6)
@@ -339,7 +340,7 @@ def check_base_motion(base, model: Optional[Model] = None) -> None:
         raise TypeError("base must be a spatial_dynamics.BaseMotion (the base's v, a and "
                         f'orientation), got {type(base).__name__}')
     if model is not None and model.floating:
-        raise ValueError(f'base=: {model.name!r} has a floating base already, whose motion '
+        raise ValueError(f'base=: {shown(model.name)} has a floating base already, whose motion '
                          "is its free-flyer's q, q̇ and q̈: load it with base='fixed' to "
                          'give a base motion')
 

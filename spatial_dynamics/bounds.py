@@ -15,6 +15,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from .text import shown
+
 #: |q| of a joint, rad or m: 1e5 rad is 16,000 turns of a continuous joint.
 MAX_POSITION = 1e5
 #: |q̇| of a joint, rad/s or m/s: 1e4 rad/s is 95,000 rpm.
@@ -82,7 +84,7 @@ def check_bounded(what: str, values, bound: float, unit: str,
         return None
     i = int(bad[0])
     value = float(np.asarray(values, dtype=np.float64).ravel()[i])
-    where = f'{names[i]!r}' if names is not None and i < len(names) else f'index {i}'
+    where = f'{shown(names[i])}' if names is not None and i < len(names) else f'index {i}'
     if not np.isfinite(value):
         return f'{what} is not finite for {where} ({value})'
     return f'{what} of {where} is {value:g}, beyond ±{bound:g} {unit}'

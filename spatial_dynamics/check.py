@@ -29,6 +29,7 @@ from . import mass_matrix, Model, URDFWarning
 from .joints import FREE_FLYER, KIND_NAMES
 from .recordings.loading import read_description
 from .recordings.ranges import locked_item
+from .text import shown
 
 WIDTH = 99
 
@@ -226,13 +227,13 @@ def report(model: Model, types: Dict[str, str], said: Optional[List[str]] = None
 
     ``said``: the warnings (:func:`warnings_of`) when they were computed already.
     """
-    base = (f'floating base (link {model.body_names[1]!r} on the free-flyer joint '
-            f'{model.joint_names[0]!r}: q has {model.nq} numbers, position and quaternion x y z '
-            f'w first, q̇ {model.nv}, the base twist [ω; v] first), '
+    base = (f'floating base (link {shown(model.body_names[1])} on the free-flyer joint '
+            f'{shown(model.joint_names[0])}: q has {model.nq} numbers, position and quaternion '
+            f'x y z w first, q̇ {model.nv}, the base twist [ω; v] first), '
             if model.floating else '')
     dof = f'{model.nv} dof (the base 6, the joints {model.nv - 6})' if model.floating else \
         f'{model.nq} dof'
-    lines = [f'robot {model.name!r}: {base}{dof}, {model.NB} moving bodies, '
+    lines = [f'robot {shown(model.name)}: {base}{dof}, {model.NB} moving bodies, '
              f'{len(model.frames)} links', '',
              f'joints in q order ({len(model.joint_names)}); limits in rad or m, /s, N m or N, '
              "'-' when not given:"]
@@ -246,7 +247,7 @@ def report(model: Model, types: Dict[str, str], said: Optional[List[str]] = None
     lines += body_lines(model)
     mass = model.inertia[:, 3, 3]
     if model.floating:      # body 0 is the world: body 1 (the root link) moves on the base
-        share = (f'{num(float(mass[1]))} kg on the root link {model.body_names[1]!r} (on the '
+        share = (f'{num(float(mass[1]))} kg on the root link {shown(model.body_names[1])} (on the '
                  f'free-flyer), {num(float(np.sum(mass[2:])))} kg on the links beyond it')
     else:
         share = (f'{num(float(mass[0]))} kg on the fixed base, '

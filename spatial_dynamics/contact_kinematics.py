@@ -29,6 +29,7 @@ from .backends import compiled, kernels, layout
 from .bounds import beyond, MAX_POSITION
 from .joints import FREE_FLYER, REVOLUTE
 from .model import Model
+from .text import shown
 
 #: The kinds of contact: a point's force (3 rows), a surface's wrench (6 rows).
 KINDS = ('point', 'surface')
@@ -57,22 +58,22 @@ class Contact:
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
-            raise ValueError(f'contact {self.link!r}: kind must be one of {KINDS}, '
-                             f'got {self.kind!r}')
-        offset = as_real_array(f'contact {self.link!r} offset', self.offset).astype(float)
-        normal = as_real_array(f'contact {self.link!r} normal', self.normal).astype(float)
+            raise ValueError(f'contact {shown(self.link)}: kind must be one of {KINDS}, '
+                             f'got {shown(self.kind)}')
+        offset = as_real_array(f'contact {shown(self.link)} offset', self.offset).astype(float)
+        normal = as_real_array(f'contact {shown(self.link)} normal', self.normal).astype(float)
         if offset.shape != (3,) or beyond(offset, MAX_POSITION).size:
-            raise ValueError(f'contact {self.link!r}: offset must be 3 finite numbers within '
+            raise ValueError(f'contact {shown(self.link)}: offset must be 3 finite numbers within '
                              f'±{MAX_POSITION:g} m (bounds.MAX_POSITION), got {self.offset}')
         if normal.shape != (3,) or not (np.isfinite(normal).all()
                                         and np.abs(normal).max() > 0.0):
-            raise ValueError(f'contact {self.name or self.link!r}: normal must be a finite '
+            raise ValueError(f'contact {shown(self.name or self.link)}: normal must be a finite '
                              f'non-zero 3-vector, got {self.normal}')
         if isinstance(self.mu, (bool, np.bool_)) or not isinstance(self.mu, numbers.Real):
-            raise TypeError(f'contact {self.link!r}: mu must be a number (the friction '
-                            f'coefficient), got {type(self.mu).__name__} {self.mu!r}')
+            raise TypeError(f'contact {shown(self.link)}: mu must be a number (the friction '
+                            f'coefficient), got {type(self.mu).__name__} {shown(self.mu)}')
         if not (math.isfinite(self.mu) and self.mu >= 0.0):
-            raise ValueError(f'contact {self.link!r}: mu must be a finite number >= 0, '
+            raise ValueError(f'contact {shown(self.link)}: mu must be a finite number >= 0, '
                              f'got {self.mu}')
         normal = normal / np.abs(normal).max()          # scaled first: 1e200 and 1e-320
         normal = normal / np.linalg.norm(normal)        # have a length
@@ -351,9 +352,10 @@ def _contacts(model: Model, contacts) -> tuple:
         if not isinstance(c, Contact):
             raise TypeError(f'contacts must be spatial_dynamics.Contact, got {type(c).__name__}')
         if c.link not in model.frames:
-            raise ValueError(f'contact {c.name!r}: {c.link!r} is not a link of {model.name!r}')
+            raise ValueError(f'contact {shown(c.name)}: {shown(c.link)} is not a link of '
+                             f'{shown(model.name)}')
         if c.name in names:
-            raise ValueError(f'contact {c.name!r} is given twice (name contacts on one link)')
+            raise ValueError(f'contact {shown(c.name)} is given twice (name contacts on one link)')
         names.add(c.name)
     return contacts
 

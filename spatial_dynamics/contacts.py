@@ -62,6 +62,7 @@ from .contact_kinematics import (Contact, contact_jacobian, KINDS, Plan, placeme
                                  plan_contacts)
 from .contact_qp import qp
 from .model import Model
+from .text import shown
 
 __all__ = ['Contact', 'contact_inverse_dynamics', 'contact_jacobian', 'ContactResult', 'KINDS',
            'link_orientations', 'METHODS', 'Violation', 'warm_qp']
@@ -141,7 +142,7 @@ def link_orientations(model: Model, q, links: Sequence[str]) -> dict:
     for link in links:
         frame = model.frames.get(link)
         if frame is None:
-            raise ValueError(f'{link!r} is not a link of {model.name!r}')
+            raise ValueError(f'{shown(link)} is not a link of {shown(model.name)}')
         result[link] = R[frame.body] @ frame.lXb[:3, :3].T    # E_lb = lXb's top-left block
     return result
 
@@ -182,10 +183,10 @@ def contact_inverse_dynamics(model: Model, q, qd, qdd, contacts: Sequence[Contac
     plan = plan_contacts(model, contacts)
     contacts = plan.contacts
     if not plan.floating:
-        raise ValueError(f'{model.name!r} has a fixed base: contact inverse dynamics needs a '
+        raise ValueError(f'{shown(model.name)} has a fixed base: contact inverse dynamics needs a '
                          "floating base (Model.from_urdf(..., base='floating'))")
     if method not in METHODS:
-        raise ValueError(f'method must be one of {METHODS}, got {method!r}')
+        raise ValueError(f'method must be one of {METHODS}, got {shown(method)}')
     kern = kernels(model, backend)
     n = plan.n
     torques = method == 'torques' and measured is None
@@ -313,10 +314,10 @@ def _measured(contacts, measured) -> np.ndarray:
     out = []
     for c in contacts:
         if c.name not in measured:
-            raise ValueError(f'measured: no force for contact {c.name!r}')
-        f = as_real_array(f'measured[{c.name!r}]', measured[c.name]).astype(float)
+            raise ValueError(f'measured: no force for contact {shown(c.name)}')
+        f = as_real_array(f'measured[{shown(c.name)}]', measured[c.name]).astype(float)
         if f.shape != (c.rows,) or beyond(f, MAX_WRENCH).size:
-            raise ValueError(f'measured[{c.name!r}] must be {c.rows} finite numbers within '
+            raise ValueError(f'measured[{shown(c.name)}] must be {c.rows} finite numbers within '
                              f'±{MAX_WRENCH:g} N or N m (bounds.MAX_WRENCH) '
                              f'({"[f]" if c.rows == 3 else "[n; f]"}, world axes), got {f}')
         out.append(f)

@@ -33,6 +33,7 @@ import numpy as np
 from .backends import GRAVITY, gravity_torque, rnea
 from .bounds import MAX_TRAJECTORY_POINTS
 from .model import Model
+from .text import listed, shown
 from .trajectory import coefficients, evaluate, Trajectory
 
 #: What the effort of a point carries: τ, τ − g(q) (drives compensating gravity), g(q).
@@ -60,7 +61,7 @@ def model_effort(model: Model, q, qd, qdd, output: str = 'full',
     ``'gravity_only'``: ``g(q)``. Arguments as :func:`spatial_dynamics.rnea`.
     """
     if output not in OUTPUTS:
-        raise ValueError(f'output must be one of {list(OUTPUTS)}, got {output!r}')
+        raise ValueError(f'output must be one of {list(OUTPUTS)}, got {shown(output)}')
     if output == 'gravity_only':
         return gravity_torque(model, q, gravity)
     tau = rnea(model, q, qd, qdd, gravity)
@@ -75,7 +76,7 @@ def with_gravity(model: Model, q, effort, measured: str = 'full',
     """
     if measured not in MEASURED_EFFORT:
         raise ValueError(f'measured effort must be one of {list(MEASURED_EFFORT)}, got '
-                         f'{measured!r}')
+                         f'{shown(measured)}')
     effort = np.asarray(effort, dtype=float)
     if measured == 'full':
         return effort
@@ -142,8 +143,9 @@ def annotate(model: Model, traj: Trajectory, tol: float, output: str = 'full',
     if not tol > 0.0:
         raise ValueError(f'tolerance must be > 0 N m, got {tol}')
     if set(traj.joint_names) != set(model.joint_names):
-        raise ValueError(f'the trajectory joints {list(traj.joint_names)} are not the model '
-                         f'joints {list(model.joint_names)}')
+        ours, theirs = model.joint_names, traj.joint_names
+        raise ValueError(f'the trajectory joints [{listed(theirs, count=len(theirs))}] are not '
+                         f'the model joints [{listed(ours, count=len(ours))}]')
     traj = traj.reordered(model.joint_names)
     max_values = MAX_ANNOTATED_VALUES if max_values is None else max_values
     fields = {'linear': 1, 'cubic': 2, 'quintic': 3}[traj.kind]

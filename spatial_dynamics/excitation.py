@@ -51,6 +51,7 @@ import numpy as np
 from .backends import regressor, rnea
 from .identification import base_parameters, BaseParameters
 from .model import Model
+from .text import shown
 
 # scipy is imported inside rest_basis and excitation, the two functions that use it: it takes
 # seconds to import, and the commands importing this module (replay) need it only to design.
@@ -131,11 +132,12 @@ def check_ranges(model: Model) -> None:
             continue
         lo, hi = float(model.lower[j]), float(model.upper[j])
         if lo > hi:
-            raise ValueError(f'joint {name!r}: its lower limit ({lo:g}) is above its upper '
+            raise ValueError(f'joint {shown(name)}: its lower limit ({lo:g}) is above its upper '
                              f'limit ({hi:g}), so no position is within them')
         if lo == hi:
-            raise ValueError(f'joint {name!r}: its lower and upper limits are equal ({lo:g}), '
-                             'so it cannot move; lock it at that value instead of exciting it')
+            raise ValueError(f'joint {shown(name)}: its lower and upper limits are equal '
+                             f'({lo:g}), so it cannot move; lock it at that value instead of '
+                             'exciting it')
 
 
 def min_rate(period: float, harmonics: int) -> float:
@@ -437,20 +439,20 @@ def excitation(model: Model, period: float = 10.0, harmonics: int = 5,
     """
     from scipy.optimize import minimize
     if not (math.isfinite(period) and period > 0):
-        raise ValueError(f'the period must be a finite number > 0 s, got {period!r}')
+        raise ValueError(f'the period must be a finite number > 0 s, got {shown(period)}')
     if not (isinstance(harmonics, (int, np.integer)) and 1 <= harmonics <= 50):
-        raise ValueError(f'the number of harmonics must be 1 .. 50, got {harmonics!r}')
+        raise ValueError(f'the number of harmonics must be 1 .. 50, got {shown(harmonics)}')
     for name, f in (('velocity_fraction', velocity_fraction),
                     ('effort_fraction', effort_fraction)):
         if not 0.0 < f <= 1.0:
-            raise ValueError(f'{name} must be in (0, 1], got {f!r}')
+            raise ValueError(f'{name} must be in (0, 1], got {shown(f)}')
     if not (math.isfinite(margin) and margin >= 0):
-        raise ValueError(f'the margin must be a finite number ≥ 0, got {margin!r}')
+        raise ValueError(f'the margin must be a finite number ≥ 0, got {shown(margin)}')
     if not (isinstance(seed, (int, np.integer)) and 0 <= seed <= MAX_SEED):
-        raise ValueError(f'the seed must be a whole number 0 .. {MAX_SEED}, got {seed!r}')
+        raise ValueError(f'the seed must be a whole number 0 .. {MAX_SEED}, got {shown(seed)}')
     if not (isinstance(maxiter, (int, np.integer)) and 1 <= maxiter <= MAX_ITERATIONS):
         raise ValueError(f'the iterations must be a whole number 1 .. {MAX_ITERATIONS:,}, '
-                         f'got {maxiter!r}')
+                         f'got {shown(maxiter)}')
     L = int(harmonics)
     lim = limits(model, margin, velocity_fraction, effort_fraction)
     base = base_parameters(model, gravity=gravity, seed=seed) if base is None else base

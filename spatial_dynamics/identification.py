@@ -30,6 +30,7 @@ from .algorithms.regressor import parameters, PARAMETERS
 from .backends import compiled, regressor, rnea
 from .base import BaseMotion, check_base_motion
 from .model import Model
+from .text import shown
 
 # SciPy (seconds to import) and threadpoolctl (the identify extra) are imported inside the fits
 # that use them: the package, and commands that never fit, start without them.
@@ -218,12 +219,12 @@ def link_to_body(model: Model, link: str) -> Tuple[int, np.ndarray]:
     usable = (f'the links that move: {", ".join(model.body_names[1:])} (or a link fixed to '
               'one of them)')
     if frame is None:
-        raise ValueError(f'link {link!r} is not a link of {model.name!r}; {usable}')
+        raise ValueError(f'link {shown(link)} is not a link of {shown(model.name)}; {usable}')
     if frame.body == 0:
         where = ('is the fixed base' if link == model.body_names[0] else
-                 f'is fixed to the base {model.body_names[0]!r}')
-        raise ValueError(f'link {link!r} does not move with any joint (it {where}): no torque '
-                         f'depends on its inertia; {usable}')
+                 f'is fixed to the base {shown(model.body_names[0])}')
+        raise ValueError(f'link {shown(link)} does not move with any joint (it {where}): no '
+                         f'torque depends on its inertia; {usable}')
     X = frame.lXb
     T = np.column_stack([_ten(X.T @ _spatial_inertia(e) @ X) for e in np.eye(10)])
     return frame.body, T
@@ -301,14 +302,15 @@ def identify_payload(model: Model, link: str, q, qd, qdd, tau,
     if rank < A.shape[1]:
         what = ('10 payload parameters' if A.shape[1] == 10 else
                 f'{A.shape[1]} parameters (10 of the payload, 3 of each drive)')
-        raise ValueError(f'the recording determines only {rank} of the {what} on {link!r}: '
+        raise ValueError(f'the recording determines only {rank} of the {what} on {shown(link)}: '
                          'move the joints between the base and it more (rotate the payload '
                          'about several axes, with accelerations; reverse every joint)')
     fit = b - A @ x
     dof = max(len(b) - A.shape[1], 1)
     covariance = ((fit @ fit / dof) * np.linalg.inv(A.T @ A))[:10, :10]
     if not pi[0] > 0.0:
-        raise ValueError(f'identified payload mass {pi[0]:.3g} kg on {link!r} is not positive')
+        raise ValueError(f'identified payload mass {pi[0]:.3g} kg on {shown(link)} is not '
+                         'positive')
     m, c, Ic = mass_com_inertia(pi)
     inertia = np.array([Ic[0, 0], Ic[0, 1], Ic[0, 2], Ic[1, 1], Ic[1, 2], Ic[2, 2]])
     rms = np.sqrt(np.mean(fit.reshape(r.shape) ** 2, axis=0))

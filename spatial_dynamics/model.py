@@ -22,6 +22,7 @@ import numpy as np
 
 from .joints import FREE_FLYER, NQ, NV
 from .spatial import mcI
+from .text import shown
 
 #: Rounding noise allowed in the inertia checks (positive semi-definite, triangle inequality,
 #: inertia without mass): a principal moment may miss by INERTIA_RTOL of the largest one, or by
@@ -161,21 +162,22 @@ class Model:
 
     def summary(self) -> str:
         """One line for logs: dof, bodies kept, links lumped and pruned, locked joints."""
-        locked = ', '.join(f'{j}={v:g}' for j, v in self.locked.items())
+        locked = ', '.join(f'{shown(j, quote=False)}={v:g}' for j, v in self.locked.items())
         if self.floating:
-            return (f'{self.name}: floating base ({self.body_names[1]!r} on a free-flyer, '
-                    f'nq {self.nq}, nv {self.nv}), {self.nv - 6} joint dof, {self.NB} moving '
+            return (f'{shown(self.name, quote=False)}: floating base '
+                    f'({shown(self.body_names[1])} on a free-flyer, nq {self.nq}, nv {self.nv}), '
+                    f'{self.nv - 6} joint dof, {self.NB} moving '
                     f'bodies, {len(self.lumped)} links lumped by fixed joints'
                     + (f', locked: {locked}' if locked else ''))
-        return (f'{self.name}: {self.nq} dof, {self.NB} moving bodies, '
+        return (f'{shown(self.name, quote=False)}: {self.nq} dof, {self.NB} moving bodies, '
                 f'{len(self.lumped)} links lumped by fixed joints, {len(self.pruned)} links '
                 f'pruned (fixed to the base)' + (f', locked: {locked}' if locked else ''))
 
     def __repr__(self) -> str:
         if self.floating:
-            return (f'Model(name={self.name!r}, floating base, nq={self.nq}, nv={self.nv}, '
+            return (f'Model(name={shown(self.name)}, floating base, nq={self.nq}, nv={self.nv}, '
                     f'bodies={self.NB}, links={len(self.frames)})')
-        return (f'Model(name={self.name!r}, dof={self.nq}, bodies={self.NB}, '
+        return (f'Model(name={shown(self.name)}, dof={self.nq}, bodies={self.NB}, '
                 f'links={len(self.frames)})')
 
 
@@ -195,11 +197,11 @@ def real_numbers(what: str, values) -> np.ndarray:
         raise TypeError(f'{what} must be real numbers, got {type(values).__name__}: '
                         f'{err}') from None
     if a.dtype.kind not in 'iuf':
-        got = (f'{values!r}' if a.dtype.kind == 'b' and a.ndim == 0
+        got = (f'{shown(values)}' if a.dtype.kind == 'b' and a.ndim == 0
                else f'{type(values).__name__} of dtype {a.dtype}')
         raise TypeError(f'{what} must be real numbers, got {got}')
     if a.dtype.kind == 'f' and _holds_a_boolean(values):   # numpy read [True, 0.5] as floats
-        raise TypeError(f'{what} must be real numbers, got a boolean in {values!r}')
+        raise TypeError(f'{what} must be real numbers, got a boolean in {shown(values)}')
     return a.astype(float)
 
 
@@ -283,13 +285,13 @@ def with_payload(model: Model, link: str, mass: float, com=(0.0, 0.0, 0.0),
     """
     frame = model.frames.get(link)
     if frame is None:
-        raise ValueError(f'payload link {link!r} is not a link of {model.name!r}')
+        raise ValueError(f'payload link {shown(link)} is not a link of {shown(model.name)}')
     inertia = finite('payload inertia', inertia)
     if inertia.shape != (6,):
         raise ValueError('payload inertia must be 6 numbers (ixx ixy ixz iyy iyz izz), got '
                          f'{inertia.tolist()}')
     ixx, ixy, ixz, iyy, iyz, izz = inertia
-    Ip = rigid_body_inertia(f'payload on {link!r}', mass, com,
+    Ip = rigid_body_inertia(f'payload on {shown(link)}', mass, com,
                             [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
     inertia6 = np.array(model.inertia)
     inertia6[frame.body] += frame.lXb.T @ Ip @ frame.lXb

@@ -18,6 +18,7 @@ import numpy as np
 
 from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
 from .model import Model, real_numbers
+from .text import listed, shown
 
 PerJoint = Union[float, Sequence[float], Mapping[str, float], np.ndarray]
 
@@ -46,11 +47,12 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
         out = np.full(n, float(default))
         for name, v in values.items():
             if base and name == model.joint_names[0]:
-                raise ValueError(f'{what}: {name!r} is the floating base\'s free-flyer, which '
-                                 'has no drive (its six rows, the wrench on the base, are 0)')
+                raise ValueError(f'{what}: {shown(name)} is the floating base\'s free-flyer, '
+                                 'which has no drive (its six rows, the wrench on the base, are '
+                                 '0)')
             if name not in names:
-                raise ValueError(f'{what}: unknown joint {name!r}')
-            out[names.index(name)] = _number(f'{what} of joint {name!r}', v)
+                raise ValueError(f'{what}: unknown joint {shown(name)}')
+            out[names.index(name)] = _number(f'{what} of joint {shown(name)}', v)
     else:
         out = real_numbers(what, values)
         if out.ndim == 0:
@@ -58,17 +60,17 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
         if base and out.shape == (model.nv,):
             if np.any(out[:base] != 0.0):
                 raise ValueError(f'{what}: {model.nv} values whose first {base} (the '
-                                 f'free-flyer {model.joint_names[0]!r}: the base, which has '
+                                 f'free-flyer {shown(model.joint_names[0])}: the base, which has '
                                  f'no drive) are not 0: {out[:base]}; give the {n} of the '
                                  'actuated joints')
             out = out[base:]
         if out.shape != (n,):
-            raise ValueError(f'{what}: expected {n} values for {names}'
+            raise ValueError(f'{what}: expected {n} values for ({listed(names, count=n)})'
                              + (f' (or {model.nv} with the base\'s six 0 first)' if base else '')
                              + f', got {out.shape[0] if out.ndim == 1 else out.shape}')
     for name, v in zip(names, out):
         if not np.isfinite(v) or (nonnegative and v < 0.0):
-            raise ValueError(f'{what}: joint {name!r} has the value {v}, need a finite '
+            raise ValueError(f'{what}: joint {shown(name)} has the value {v}, need a finite '
                              + ('non-negative ' if nonnegative else '') + 'number')
     return np.concatenate([np.zeros(base), out])
 

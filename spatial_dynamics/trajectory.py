@@ -30,6 +30,7 @@ import numpy as np
 
 from .bounds import (check_bounded, JOINT_BOUNDS, MAX_SAMPLES, MAX_TRAJECTORY_POINTS,
                      MAX_TRAJECTORY_TIME)
+from .text import shown
 
 #: Why a trajectory is refused (:attr:`TrajectoryError.reason`, a diagnostics counter key).
 REASONS = ('malformed', 'empty_names', 'duplicate_joint', 'unknown_joint', 'missing_joint',
@@ -83,7 +84,7 @@ def _get(p, name: str):
 def _number(value, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating,
                                                          np.integer)):
-        raise TrajectoryError('malformed', f'{what}: need a number, got {value!r}')
+        raise TrajectoryError('malformed', f'{what}: need a number, got {shown(value)}')
     try:
         return float(value)
     except OverflowError:     # an integer beyond float64 (YAML reads 1e400 digits as one)
@@ -97,7 +98,7 @@ def _time_from_start(p, k: int, what: str) -> float:
         tfs = {}
     if not isinstance(tfs, dict) and not hasattr(tfs, 'sec'):
         raise TrajectoryError('malformed', f'{what}: point {k} time_from_start must be a '
-                              f'mapping of sec and nanosec, got {tfs!r}')
+                              f'mapping of sec and nanosec, got {shown(tfs)}')
     sec, nanosec = _get(tfs, 'sec'), _get(tfs, 'nanosec')
     t = (_number(0 if sec is None else sec, f'{what}: point {k} time_from_start.sec')
          + _number(0 if nanosec is None else nanosec,
@@ -115,7 +116,7 @@ def _values(p, f: str, n: int, k: int, what: str) -> Optional[np.ndarray]:
         return None
     if isinstance(raw, (str, bytes, dict)) or not hasattr(raw, '__len__'):
         raise TrajectoryError('malformed', f'{what}: point {k} {f} must be a list of numbers, '
-                              f'got {raw!r}')
+                              f'got {shown(raw)}')
     if isinstance(raw, np.ndarray) and raw.dtype.kind == 'f' or type(raw).__name__ == 'array':
         v = np.asarray(raw, dtype=float).ravel()      # a message's float64 array: no check
     else:
@@ -147,7 +148,7 @@ def trajectory(joint_names: Sequence[str], points: Sequence, what: str = 'trajec
     if (isinstance(joint_names, (str, bytes, dict)) or not hasattr(joint_names, '__len__')
             or not all(isinstance(x, str) for x in joint_names)):
         raise TrajectoryError('malformed', f'{what}: joint_names must be a list of names, got '
-                              f'{joint_names!r}')
+                              f'{shown(joint_names)}')
     names = tuple(joint_names)
     n = len(names)
     if not n:
@@ -158,7 +159,7 @@ def trajectory(joint_names: Sequence[str], points: Sequence, what: str = 'trajec
                               'than once')
     if isinstance(points, (str, bytes, dict)) or not hasattr(points, '__len__'):
         raise TrajectoryError('malformed', f'{what}: points must be a list of points, got '
-                              f'{points!r}')
+                              f'{shown(points)}')
     if not len(points):
         raise TrajectoryError('no_points', f'{what}: no points')
     if len(points) > MAX_TRAJECTORY_POINTS:
@@ -169,7 +170,7 @@ def trajectory(joint_names: Sequence[str], points: Sequence, what: str = 'trajec
         if not isinstance(p, dict) and not hasattr(p, 'positions'):
             raise TrajectoryError('malformed', f'{what}: point {k} must be a mapping '
                                   '(positions, velocities, accelerations, time_from_start), '
-                                  f'got {p!r}')
+                                  f'got {shown(p)}')
         time.append(_time_from_start(p, k, what))
         for f, values in fields.items():
             values.append(_values(p, f, n, k, what))
@@ -369,7 +370,7 @@ def _check_chunk(traj: Trajectory, first: int, what: str) -> None:
                 'non_finite' if not np.isfinite(peak[bad[0]]) else 'out_of_bounds',
                 f'{what}: between point {first + k} ({traj.time[k]:.9g} s) and point '
                 f'{first + k + 1} ({traj.time[k + 1]:.9g} s) the {traj.kind} spline of '
-                f'{traj.joint_names[j]!r} reaches a {name} of {peak[bad[0]]:.3g} {unit}, '
+                f'{shown(traj.joint_names[j])} reaches a {name} of {peak[bad[0]]:.3g} {unit}, '
                 f'beyond ±{bound:g} (points too close in time for their motion?)')
 
 

@@ -199,7 +199,7 @@ class _Idle:
 
 
 def _gone_pacer():
-    """A Pacer whose process has exited."""
+    """Return a Pacer whose process has exited."""
     import subprocess
     import sys
     from spatial_dynamics.tools.latency import Pacer
@@ -317,3 +317,76 @@ def test_closed_loop_says_a_bad_urdf_and_a_ctrl_c_while_loading_in_one_line(
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
+
+
+def measured_target(latencies_ms, late_stamps=()):
+    """Return a Target (no DDS) that sent one input per ms and got ``latencies_ms`` answers.
+
+    ``late_stamps``: extra inputs, not answered, each 0.05 ms before the next one (the
+    publisher late).
+    """
+    from spatial_dynamics.tools.latency import Target
+    target = Target.__new__(Target)
+    target.name, target.latency_ns, target.to_answer_ns = 'node', {}, {}
+    target.early, target.measuring, target.answers, target.cpu_s = {}, True, 0, 0.0
+    target.period_ns = 1_000_000
+    stamps = [10_000_000 + 1_000_000 * k for k in range(len(latencies_ms))]
+    target.sent = set(stamps) | {stamps[k] - 50_000 for k in late_stamps}
+    for key, ms in zip(stamps, latencies_ms):
+        target.latency_ns[key] = round(ms * 1e6)
+        target.to_answer_ns[key] = round(ms * 1e6) // 2
+    return target
+
+
+@pytest.mark.parametrize('count', [1, 99, 100, 999, 1000])
+def test_a_quantile_is_reported_only_from_enough_answers_to_tell_it_from_the_maximum(count):
+    """p99.9 of 100 answers is their maximum: it needs 1000 answers, p99 needs 100."""
+    import json
+
+    import numpy as np
+
+    from spatial_dynamics.tools.latency import format_table, legend
+    latencies = np.linspace(0.1, 2.0, count)
+    summary = measured_target(latencies).summary()
+    assert summary['max_ms'] == pytest.approx(latencies.max())
+    expected = {'p50': np.percentile(latencies, 50.0),
+                'p99': np.percentile(latencies, 99.0) if count >= 100 else None,
+                'p99.9': np.percentile(latencies, 99.9) if count >= 1000 else None}
+    for prefix, scale in (('', 1.0), ('to_answer_', 0.5)):
+        for key, value in expected.items():
+            got = summary[f'{prefix}{key}_ms']
+            assert got == (None if value is None else pytest.approx(scale * value, abs=1e-6))
+    again = json.loads(json.dumps(summary))     # not reported: null, not NaN, in the JSON
+    assert again['p99.9_ms'] is None if count < 1000 else again['p99.9_ms'] > 0
+    row = format_table([summary]).splitlines()[-1].split()
+    cells = row[3:7]                            # p50 p99 p99.9 max of the round trip
+    assert [c == '-' for c in cells] == [False, count < 100, count < 1000, False], row
+    label = legend('node', latencies, count)
+    shown = 'p99.9' if count >= 1000 else 'p99' if count >= 100 else 'p50'
+    assert f', {shown} ' in label and label.count(' ms') == 1, label
+
+
+def test_the_late_publication_note_is_printed_only_when_an_input_was_late():
+    from spatial_dynamics.tools.latency import difference_line, not_answered_line
+    on_time = measured_target([0.4] * 5).summary()
+    assert not_answered_line(on_time) == 'node: 0 inputs not answered'
+    late = measured_target([0.4] * 5, late_stamps=[2]).summary()
+    assert (late['not_answered'], late['not_answered_superseded']) == (1, 1)
+    assert 'published late' in not_answered_line(late)
+    line = difference_line(late, on_time)
+    assert 'p50 +0.000 ms' in line and 'p99 -' in line and 'p99.9 -' in line, line
+
+
+@pytest.mark.parametrize('tool', ['latency', 'closed_loop'])
+@pytest.mark.parametrize('option', ['--priority', '--busy'])
+def test_an_integer_option_given_a_fraction_says_it_is_not_an_integer(tool, option, capsys):
+    import importlib
+    parse = importlib.import_module(f'spatial_dynamics.tools.{tool}').parse_args
+    with pytest.raises(SystemExit) as exit:
+        parse([option, '1.5'])
+    err = capsys.readouterr().err
+    assert exit.value.code == 2 and option in err and "not an integer: '1.5'" in err, err
+    if tool == 'latency':
+        with pytest.raises(SystemExit):
+            parse(['--input-depth', '2.5'])
+        assert "not an integer: '2.5'" in capsys.readouterr().err

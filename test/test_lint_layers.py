@@ -16,7 +16,7 @@ PACKAGE = os.path.join(ROOT, 'spatial_dynamics')
 
 # Rank of each layer: a module may import modules of its own rank or below, never above.
 RANKS = {
-    'spatial': 0, 'files': 0, 'bounds': 0, 'extras': 0, 'joints': 1, 'model': 2,
+    'spatial': 0, 'text': 0, 'files': 0, 'bounds': 0, 'extras': 0, 'joints': 1, 'model': 2,
     'urdf': 3, 'base': 3, 'terms': 3, 'algorithms': 3, 'trajectory': 3, 'wrench': 3, 'effort': 5,
     'identification': 5, 'drives': 5, 'excitation': 5, 'contacts': 5, 'contact_kinematics': 5,
     'contact_qp': 5,

@@ -93,3 +93,15 @@ def test_a_hostile_robot_name_is_short_in_diagnostics(demo_text):
     level, message, values = model_status(robot, Totals(), False, 'numpy')
     kv = dict(values)
     assert safe(message) and safe(kv['robot name']), (message, kv['robot name'])
+
+
+def test_a_hostile_joints_parameter_is_refused_in_one_short_line(demo_text):
+    """The core's message, passed on by the node, shows the name as the node's own do."""
+    for joints in ([HOSTILE], ['joint1', HOSTILE]):
+        with pytest.raises(config.ConfigError) as err:
+            configured(demo_text, joints=joints)
+        assert safe(str(err.value)), str(err.value)[:SHORT]
+    with pytest.raises(config.ConfigError) as err:
+        configured(demo_text, joints=['joint1'], locked_joints=[HOSTILE],
+                   locked_positions=[0.1])
+    assert safe(str(err.value)), str(err.value)[:SHORT]

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..joints import check_quaternion, is_unit
 from ..model import Model
+from ..text import listed, shown
 
 
 def check_model(model) -> None:
@@ -56,8 +57,9 @@ def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) ->
         a = as_real_array(what, x)
         n = model.nq if what == 'q' else model.nv
         if a.ndim == 0 or a.shape[-1] != n:
+            names = model.joint_names
             raise ValueError(f'{what} must have shape (..., {n}) for the joints '
-                             f'{model.joint_names}, got shape {a.shape}')
+                             f'({listed(names, count=len(names))}), got shape {a.shape}')
         out.append(a)
     dtype = np.result_type(*out, np.float64) if not all(
         np.issubdtype(a.dtype, np.floating) for a in out) else np.result_type(*out)
@@ -76,8 +78,8 @@ def check_configuration(model: Model, q: np.ndarray) -> None:
     for name, k in model.free_flyers:
         if q.ndim == 1 and is_unit(*q[k + 3:k + 7].tolist()):
             continue        # one state: four Python floats
-        check_quaternion(f'q: the free-flyer quaternion of joint {name!r} at q[{k + 3}:{k + 7}]',
-                         q[..., k + 3:k + 7])
+        check_quaternion(f'q: the free-flyer quaternion of joint {shown(name)} '
+                         f'at q[{k + 3}:{k + 7}]', q[..., k + 3:k + 7])
 
 
 def as_vector(what: str, x, size: int) -> np.ndarray:
@@ -104,10 +106,10 @@ def f_ext_in_bodies(model: Model, f_ext) -> dict:
     for link, f in (f_ext or {}).items():
         frame = model.frames.get(link)
         if frame is None:
-            raise ValueError(f'f_ext: unknown link {link!r}')
-        f = as_real_array(f'f_ext[{link!r}]', f).astype(float)
+            raise ValueError(f'f_ext: unknown link {shown(link)}')
+        f = as_real_array(f'f_ext[{shown(link)}]', f).astype(float)
         if f.shape[-1:] != (6,):
-            raise ValueError(f'f_ext[{link!r}] must have shape (..., 6), got {f.shape}')
+            raise ValueError(f'f_ext[{shown(link)}] must have shape (..., 6), got {f.shape}')
         if frame.body == 0:
             continue  # acts on the fixed base: no joint feels it
         fb[frame.body] = fb.get(frame.body, 0.0) + _transposed_times(frame.lXb, f)

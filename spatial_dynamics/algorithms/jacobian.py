@@ -21,6 +21,7 @@ from .arguments import as_joint_arrays, check_model
 from ..base import check_base_motion
 from ..joints import jcalc, joint_axis, joint_coordinates, NV, quaternion_matrix
 from ..model import Model
+from ..text import shown
 
 #: Coordinates of :func:`jacobian`: the link's own frame, or the base (root link) axes with
 #: the origin at the link's origin.
@@ -60,7 +61,7 @@ def jacobian(model: Model, q, link: str, frame: str = 'local', *, base=None) -> 
     """
     check_model(model)
     if frame not in FRAMES:
-        raise ValueError(f'frame must be one of {list(FRAMES)}, got {frame!r}')
+        raise ValueError(f'frame must be one of {list(FRAMES)}, got {shown(frame)}')
     if base is not None:
         check_base_motion(base, model)      # a floating model's rows are the world's already
     J, lX0 = local_jacobian(model, q, link)
@@ -81,7 +82,7 @@ def local_jacobian(model: Model, q, link: str) -> tuple[np.ndarray, np.ndarray]:
     """
     at = model.frames.get(link)
     if at is None:
-        raise ValueError(f'link {link!r} is not a link of {model.name!r}')
+        raise ValueError(f'link {shown(link)} is not a link of {shown(model.name)}')
     (q,) = as_joint_arrays(model, q)
     batch = q.shape[:-1]
     J = np.zeros(batch + (6, model.nv), dtype=np.result_type(q, np.float64))

@@ -42,6 +42,7 @@ from ..algorithms.arguments import (as_joint_arrays, as_vector, check_configurat
 from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
 from ..terms import check_threshold, friction_derivative, per_joint
+from ..text import shown
 
 BACKENDS = ('auto', 'numpy', 'compiled')
 #: Default gravity (m/s², root-link coordinates).
@@ -100,7 +101,7 @@ def _select(backend: str, lay: layout.Layout):
 def _check(backend: str) -> None:
     """Refuse an unknown backend, and ``'compiled'`` in a package built without the kernels."""
     if backend not in BACKENDS:
-        raise ValueError(f'backend must be one of {BACKENDS}, got {backend!r}')
+        raise ValueError(f'backend must be one of {BACKENDS}, got {shown(backend)}')
     if compiled.ext is None and backend == 'compiled':
         raise CompiledBackendUnavailable(
             "backend='compiled' needs the compiled kernels, which this installation was built "
@@ -389,7 +390,7 @@ def _forward(model: Model, q, qd, tau, gravity, f_ext, backend: str,
     names = model.joint_names
     joint = names[0] if model.floating and k < 6 else names[k - 5 if model.floating else k]
     raise ValueError(f'forward_dynamics: M(q){" + armature" if armature is not None else ""} '
-                     f'is not positive definite at velocity coordinate {k}, joint {joint!r}'
+                     f'is not positive definite at velocity coordinate {k}, joint {shown(joint)}'
                      f'{where}: ' + _singular_reason(model, Hs.astype(float), k))
 
 
@@ -409,9 +410,9 @@ def _singular_reason(model: Model, H: np.ndarray, k: int) -> str:
     # the joint of velocity coordinate c: one each, after the free-flyer's six
     repeating = [names[c - base + (1 if base else 0)]
                  for c in range(max(k + 1, base), len(H)) if size[c - k - 1] > small]
-    joints = ', '.join(repr(j) for j in dict.fromkeys(repeating))
+    joints = ', '.join(shown(j) for j in dict.fromkeys(repeating))
     if k < base:
-        root = repr(model.body_names[1])
+        root = shown(model.body_names[1])
         if not repeating:
             return (f'the floating base moves no mass along it: its root link {root} (with the '
                     'links fixed to it) needs an <inertial> (the free-flyer has no drive to '

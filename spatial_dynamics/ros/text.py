@@ -8,36 +8,11 @@ diagnostics value through :func:`shown` (one name) or :func:`listed` (names): at
 :data:`LIMIT` characters of it, then how long it was, and every control character escaped,
 so a 10,000-character ``frame_id`` costs one short line and a newline in a name cannot forge
 a log line. A file path is shown whole (its end names the file), escaped by ``repr``.
+The functions live in the core (:mod:`spatial_dynamics.text`), whose own errors and warnings
+show names the same way, so a message the node passes on from the core is short as well.
 Pure Python: no rclpy.
 """
 
-from __future__ import annotations
+from spatial_dynamics.text import LIMIT, listed, LISTED, shown
 
-from typing import Sequence
-
-#: Characters of a user's string shown; the rest is counted.
-LIMIT = 60
-#: Names listed before the count of the rest.
-LISTED = 5
-
-
-def shown(value: object, quote: bool = True, limit: int = LIMIT) -> str:
-    """Return ``value`` (a string) quoted and escaped as ``repr`` writes it, cut to ``limit``.
-
-    ``'hand'`` stays ``'hand'``; a longer one is its first ``limit`` characters, ``…`` and
-    ``(N characters)``. ``quote=False`` leaves the quotes out (a diagnostics value that is
-    the name alone).
-    """
-    text = str(value)
-    head = repr(text[:limit])
-    mark, body = head[-1], head[1:-1]
-    more = f'… ({len(text):,} characters)' if len(text) > limit else ''
-    if not quote:
-        return body + more
-    return f'{mark}{body}{mark}{more}'
-
-
-def listed(names: Sequence[str], quote: bool = True, count: int = LISTED) -> str:
-    """Return the first ``count`` of ``names``, each :func:`shown`, then ``...`` if more."""
-    head = ', '.join(shown(name, quote) for name in names[:count])
-    return head + (', ...' if len(names) > count else '')
+__all__ = ['LIMIT', 'LISTED', 'listed', 'shown']

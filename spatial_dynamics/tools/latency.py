@@ -12,9 +12,11 @@ each got ``--seconds``. The inputs are published by a process of their own that 
 else (:class:`Pacer`), on a fixed grid. Latency is input publish -> ``feedforward_efforts``
 received by this process's middleware (its reception time stamp), matched by the header stamp
 (wall time at publish, unique per message). Reported per target: messages sent, fraction
-answered, p50 / p99 / max, the CPU time (user + system) its process used per message while
-measured, and how many inputs not answered were followed by the next within a quarter period
-(the publisher late: a keep-last-1 input keeps the newer). The relay does everything the node
+answered, p50 / p99 / p99.9 / max (a quantile only from enough answers to tell it from the
+maximum: p99 from 100, p99.9 from 1000; else '-', null in the JSON), the CPU time (user +
+system) its process used per message while measured, and how many inputs not answered were
+followed by the next within a quarter period (the publisher late: a keep-last-1 input keeps
+the newer). The relay does everything the node
 does except the inverse dynamics and the second publication (``effort_commands``, published
 first), so node p50 - relay p50 is the node's own cost.
 
@@ -67,7 +69,16 @@ STANDING = {'solo12': {f'{leg}_{joint}': angle * (1.0 if leg[0] == 'F' else -1.0
 STANDING_SWAY = 0.05   # rad
 #: Base odometry beside the desired states of a floating robot, Hz (a state estimator's rate).
 ODOMETRY_RATE = 200.0
-QUANTILES = (('p50', 50.0), ('p99', 99.0), ('p99.9', 99.9))
+#: The quantiles reported: name, percent, and the fewest answers that tell it from the maximum
+#: (p99 of fewer than 100 answers is the largest of them, p99.9 of fewer than 1000 too): with
+#: fewer it is not reported ('-' in the table, null in the JSON).
+QUANTILES = (('p50', 50.0, 1), ('p99', 99.0, 100), ('p99.9', 99.9, 1000))
+
+
+def quantile(values: np.ndarray, key: str) -> Optional[float]:
+    """Return the quantile ``key`` of :data:`QUANTILES` of ``values``; None if too few."""
+    percent, fewest = next((q, n) for k, q, n in QUANTILES if k == key)
+    return float(np.percentile(values, percent)) if len(values) >= fewest else None
 
 
 class Target:
@@ -133,9 +144,8 @@ class Target:
                'answered_fraction': len(ms) / sent if sent else float('nan')}
         to_answer = np.array(list(self.to_answer_ns.values()), dtype=float) * 1e-6
         for prefix, values in (('', ms), ('to_answer_', to_answer)):
-            for key, q in QUANTILES:
-                out[f'{prefix}{key}_ms'] = (float(np.percentile(values, q)) if len(values)
-                                            else float('nan'))
+            for key, _, _ in QUANTILES:
+                out[f'{prefix}{key}_ms'] = quantile(values, key)
             out[f'{prefix}max_ms'] = float(values.max()) if len(values) else float('nan')
         out['cpu_us_per_msg'] = 1e6 * self.cpu_s / sent if sent else float('nan')
         # an input not answered whose next one was published within a quarter of the
@@ -374,18 +384,48 @@ def robot_path(robot: str) -> Optional[str]:
     return path
 
 
+def cell(value: Optional[float]) -> str:
+    """Return a table cell of milliseconds: ``-`` for a value not reported (None or NaN)."""
+    return '-' if value is None or math.isnan(value) else f'{value:.3f}'
+
+
 def format_table(rows: List[Dict[str, float]]) -> str:
     """Format the results as a fixed-width text table: round trip, then to the answer."""
-    keys = [key for key, _ in QUANTILES] + ['max']
+    keys = [key for key, _, _ in QUANTILES] + ['max']
     lines = [f'{"":<18}{"":>7}{"":>11}{"round trip ms":^36}{"to answer ms":^36}',
              f'{"target":<18}{"sent":>7}{"answered":>11}'
              + ''.join(f'{k:>9}' for k in keys) * 2 + f'{"CPU us/msg":>12}']
     for r in rows:
         lines.append(f'{r["target"]:<18}{r["sent"]:>7}{100 * r["answered_fraction"]:>10.2f}%'
-                     + ''.join(f'{r[k + "_ms"]:>9.3f}' for k in keys)
-                     + ''.join(f'{r["to_answer_" + k + "_ms"]:>9.3f}' for k in keys)
+                     + ''.join(f'{cell(r[k + "_ms"]):>9}' for k in keys)
+                     + ''.join(f'{cell(r["to_answer_" + k + "_ms"]):>9}' for k in keys)
                      + f'{r["cpu_us_per_msg"]:>12.1f}')
     return '\n'.join(lines)
+
+
+def not_answered_line(r: Dict[str, float]) -> str:
+    """Return the line of a target's inputs not answered; why some were, if any were late."""
+    late = r['not_answered_superseded']
+    return (f'{r["target"]}: {r["not_answered"]} inputs not answered'
+            + (f', {late} of them followed by the next within a quarter period (published '
+               'late: a keep-last-1 input keeps the newer)' if late else ''))
+
+
+def difference_line(node: Dict[str, float], relay: Dict[str, float]) -> str:
+    """Return node - relay for each quantile both report (``-`` for the others)."""
+    def diff(key: str) -> str:
+        a, b = node[key + '_ms'], relay[key + '_ms']
+        return '-' if a is None or b is None else f'{a - b:+.3f} ms'
+    return 'inverse_dynamics - relay: ' + ', '.join(
+        f'{key} {diff(key)}' for key, _, _ in QUANTILES)
+
+
+def legend(name: str, values: np.ndarray, sent: int) -> str:
+    """Return a histogram's legend: answered, and the highest quantile the answers tell."""
+    told = [(key, quantile(values, key)) for key, _, _ in QUANTILES]
+    told = [(key, value) for key, value in told if value is not None]
+    top = f', {told[-1][0]} {told[-1][1]:.2f} ms' if told else ''
+    return f'{name}: {100 * len(values) / max(sent, 1):.1f} % answered{top}'
 
 
 class Compute:
@@ -466,13 +506,11 @@ def plot(path: str, targets: List[Target], title: str) -> Optional[str]:
         return None
     fig, ax = plt.subplots(figsize=(7.0, 3.6))
     values = [np.array(list(t.latency_ns.values()), dtype=float) * 1e-6 for t in targets]
-    top = max((np.percentile(v, 99.9) for v in values if len(v)), default=1.0)
+    top = max((np.percentile(v, 99.9) for v in values if len(v)), default=1.0)   # the range
     bins = np.linspace(0.0, max(top * 1.2, 0.5), 120)
     for target, v in zip(targets, values):
-        answered = len(v) / max(len(target.sent), 1)
         ax.hist(np.minimum(v, bins[-1]), bins=bins, histtype='step', log=True,
-                label=f'{target.name}: {100 * answered:.1f} % answered, p99.9 '
-                      f'{np.percentile(v, 99.9) if len(v) else float("nan"):.2f} ms')
+                label=legend(target.name, v, len(target.sent)))
     ax.set_xlabel('round trip, ms (the last bin holds everything beyond)')
     ax.set_ylabel('answers')
     ax.set_title('\n'.join(textwrap.wrap(title, 100)), fontsize=8)
@@ -491,7 +529,8 @@ def in_range(kind: Callable[[str], float], low: float, high: float, low_open: bo
         try:
             value = kind(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+            what = 'an integer' if kind is int else 'a number'
+            raise argparse.ArgumentTypeError(f'not {what}: {text!r}') from None
         above = value > low if low_open else value >= low
         if not (above and value <= high and math.isfinite(value)):
             where = f'above {low:g}' if low_open else f'at least {low:g}'
@@ -691,13 +730,9 @@ def run(args: argparse.Namespace) -> int:
         print(title)
         print(format_table(rows))
         for r in rows:
-            print(f'{r["target"]}: {r["not_answered"]} inputs not answered, '
-                  f'{r["not_answered_superseded"]} of them followed by the next within a quarter '
-                  'period (published late: a keep-last-1 input keeps the newer)')
+            print(not_answered_line(r))
         print(compute.text())
-        print('inverse_dynamics - relay: ' + ', '.join(
-            f'{key} {rows[1][key + "_ms"] - rows[0][key + "_ms"]:+.3f} ms'
-            for key, _ in QUANTILES))
+        print(difference_line(rows[1], rows[0]))
         status = 0 if all(r['answered'] for r in rows) else 1
         try:   # the results first: a plot that fails to be written loses nothing else
             if args.json:

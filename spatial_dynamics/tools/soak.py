@@ -31,7 +31,8 @@ import time
 from typing import List, Optional, Sequence, Tuple
 
 from .driving import node_command, robot_model, rss_bytes, Sinusoids, start, stop
-from .latency import fill, input_depth, joint_state_for, pace, prime, spin_until, Target
+from .latency import (cell, fill, input_depth, joint_state_for, pace, prime, spin_until,
+                      Target)
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -191,8 +192,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f'RSS after warm-up {baseline / MB:.2f} MB, max growth {growth:+.2f} MB, at the end '
               f'{end_growth:+.2f} MB (limit {args.max_growth_mb:g} MB)')
         print(f'this process received answers to {summary["answered"]} of the {summary["sent"]} '
-              f'inputs after warm-up; latency p50 {summary["p50_ms"]:.3f} ms, p99 '
-              f'{summary["p99_ms"]:.3f} ms, max {summary["max_ms"]:.3f} ms')
+              f'inputs after warm-up; latency p50 {cell(summary["p50_ms"])} ms, p99 '
+              f'{cell(summary["p99_ms"])} ms, max {cell(summary["max_ms"])} ms')
         if final is not None:
             answered, rejected = final
             print(f'whole run incl. warm-up: published {target.published}, the node received '

@@ -33,6 +33,7 @@ from typing import Mapping, Optional, Sequence
 import warnings
 
 from ..model import Model
+from ..text import shown
 from .reading import (_parse_urdf, _Report, MAX_DESCRIPTION_BYTES, MAX_FILE_BYTES,
                       read_description, read_urdf_file, Source)
 from .tree import _from_robot, ROOT_JOINT, URDF_WORLD, WORLD
@@ -88,7 +89,7 @@ def model_from_urdf(source: Source, joints: Optional[Sequence[str]] = None,
     in the root link's frame); gravity is then given in world coordinates.
     """
     if base not in BASES:
-        raise ValueError(f'base must be one of {list(BASES)}, got {base!r}')
+        raise ValueError(f'base must be one of {list(BASES)}, got {shown(base)}')
     report = _Report(strict)
     model = _from_robot(*_parse_urdf(source, report), joints, locked, report,
                         base == 'floating')

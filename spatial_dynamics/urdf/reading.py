@@ -23,6 +23,7 @@ import numpy as np
 from ..files import read_regular, size_text
 from ..model import finite, rigid_body_inertia
 from ..spatial import rpy_to_R
+from ..text import shown
 
 Source = Union[str, bytes, os.PathLike]
 
@@ -150,7 +151,7 @@ def _parse_urdf(source: Source, report: _Report) -> tuple:
         raise ValueError(f'malformed URDF XML: {err}') from None
     docinfo = root.getroottree().docinfo
     if docinfo.system_url or docinfo.public_id:
-        raise ValueError(f'URDF refers to an external DTD ({docinfo.system_url!r}): not '
+        raise ValueError(f'URDF refers to an external DTD ({shown(docinfo.system_url)}): not '
                          'supported')
     dtd = docinfo.internalDTD
     if dtd is not None and any(True for _ in dtd.iterentities()):
@@ -179,7 +180,7 @@ def _attribute(what: str, el, attr: str, default: Optional[str] = None) -> str:
     value = el.get(attr) if el is not None else None
     if value is None:
         if default is None:
-            raise ValueError(f'{what}: missing attribute {attr!r}')
+            raise ValueError(f'{what}: missing attribute {shown(attr)}')
         return default
     return value
 
@@ -188,11 +189,11 @@ def _vector(what: str, text: str, size: int = 3) -> np.ndarray:
     """Return ``size`` finite numbers written as one attribute (``"x y z"``)."""
     parts = text.split()
     if len(parts) != size:
-        raise ValueError(f'{what}: need {size} numbers, got {text!r}')
+        raise ValueError(f'{what}: need {size} numbers, got {shown(text)}')
     try:
         values = [float(x) for x in parts]
     except ValueError:
-        raise ValueError(f'{what}: not a number in {text!r}') from None
+        raise ValueError(f'{what}: not a number in {shown(text)}') from None
     return finite(what, values)
 
 
@@ -202,7 +203,7 @@ def _scalar(what: str, text: Optional[str], default: float) -> float:
     try:
         x = float(text)
     except ValueError:
-        raise ValueError(f'{what}: not a number: {text!r}') from None
+        raise ValueError(f'{what}: not a number: {shown(text)}') from None
     return float(finite(what, x))
 
 
@@ -221,7 +222,7 @@ def _parse_link(el, report: _Report) -> _Link:
     inertial = el.find('inertial')
     if inertial is None:
         return _Link(name, np.zeros((6, 6)))
-    what = f'link {name!r} <inertial>'
+    what = f'link {shown(name)} <inertial>'
     R, c = _origin(what, inertial.find('origin'))
     mass_el = inertial.find('mass')
     mass = _scalar(f'{what} mass', mass_el.get('value') if mass_el is not None else None, 0.0)
@@ -239,7 +240,7 @@ def _parse_link(el, report: _Report) -> _Link:
 def _parse_joint(el) -> _Joint:
     """Read a ``<joint>``: kind, links, origin, axis, limits, dynamics and mimic."""
     name = _name(el, 'joint')
-    what = f'joint {name!r}'
+    what = f'joint {shown(name)}'
     kind = _attribute(what, el, 'type')
     links = []
     for role in ('parent', 'child'):
@@ -275,18 +276,18 @@ def _limit(what: str, text: Optional[str]) -> float:
     try:
         x = float(text)
     except ValueError:
-        raise ValueError(f'{what}: not a number: {text!r}') from None
+        raise ValueError(f'{what}: not a number: {shown(text)}') from None
     if math.isnan(x):
-        raise ValueError(f'{what}: non-finite number {text!r} (a limit may be any size, '
+        raise ValueError(f'{what}: non-finite number {shown(text)} (a limit may be any size, '
                          'or ±inf for none, but not NaN)')
     return x
 
 
 def _joint_axis(joint: _Joint) -> np.ndarray:
     """Return the unit joint axis (normalised, as Pinocchio, KDL and MuJoCo do)."""
-    what = f'joint {joint.name!r} axis'
+    what = f'joint {shown(joint.name)} axis'
     axis = _vector(what, ' '.join(joint.axis))
     norm = float(np.linalg.norm(axis))
     if not norm > 1e-12:
-        raise ValueError(f'joint {joint.name!r}: zero-length axis {axis.tolist()}')
+        raise ValueError(f'joint {shown(joint.name)}: zero-length axis {axis.tolist()}')
     return axis / norm

@@ -18,6 +18,7 @@ import numpy as np
 from ..joints import FIXED, FREE_FLYER, PRISMATIC, URDF_KINDS
 from ..model import finite, Frame, Model
 from ..spatial import Eaxis, plux
+from ..text import listed, shown
 from .reading import _joint_axis, _Joint, _Report
 
 #: The name of the free-flyer joint of a floating base (Pinocchio's).
@@ -34,29 +35,29 @@ def _from_robot(robot_name: str, links: list, joints: list,
     link_by_name = {}
     for link in links:
         if link.name in link_by_name:
-            raise ValueError(f'duplicate link name {link.name!r}')
+            raise ValueError(f'duplicate link name {shown(link.name)}')
         link_by_name[link.name] = link
     joint_by_name, parent_joint, children = {}, {}, {name: [] for name in link_by_name}
     for joint in joints:
         if joint.name in joint_by_name:
-            raise ValueError(f'duplicate joint name {joint.name!r}')
+            raise ValueError(f'duplicate joint name {shown(joint.name)}')
         joint_by_name[joint.name] = joint
         if joint.type not in URDF_KINDS:
             if joint.type in ('floating', 'planar'):
-                raise ValueError(f'joint {joint.name!r}: {joint.type} joints are not '
+                raise ValueError(f'joint {shown(joint.name)}: {joint.type} joints are not '
                                  'supported (1-DOF joints only; a root link that moves is '
                                  "loaded with base='floating')")
-            raise ValueError(f'joint {joint.name!r}: unknown joint type {joint.type!r}')
+            raise ValueError(f'joint {shown(joint.name)}: unknown joint type {shown(joint.type)}')
         for role, link in (('parent', joint.parent), ('child', joint.child)):
             if link not in link_by_name:
-                raise ValueError(f'joint {joint.name!r}: unknown {role} link {link!r}')
+                raise ValueError(f'joint {shown(joint.name)}: unknown {role} link {shown(link)}')
         if joint.child in parent_joint:
-            raise ValueError(f'link {joint.child!r} is the child of two joints: '
-                             f'{parent_joint[joint.child].name!r} and {joint.name!r}')
+            raise ValueError(f'link {shown(joint.child)} is the child of two joints: '
+                             f'{shown(parent_joint[joint.child].name)} and {shown(joint.name)}')
         parent_joint[joint.child] = joint
         children[joint.parent].append(joint)
     if not link_by_name:
-        raise ValueError(f'robot {robot_name!r} has no links')
+        raise ValueError(f'robot {shown(robot_name)} has no links')
     roots = [name for name in link_by_name if name not in parent_joint]
     if len(roots) != 1:
         if not roots:
@@ -66,7 +67,7 @@ def _from_robot(robot_name: str, links: list, joints: list,
                 link = parent_joint[link].parent
             cycle = list(step)[step[link]:]
             raise ValueError('the joints form a cycle, so there is no root link: '
-                             + ' -> '.join(f'{parent_joint[c].name!r}' for c in cycle)
+                             + ' -> '.join(f'{shown(parent_joint[c].name)}' for c in cycle)
                              + f' (links {cycle})')
         raise ValueError(f'several root links (a URDF is one tree): {roots}')
 
@@ -76,7 +77,7 @@ def _from_robot(robot_name: str, links: list, joints: list,
     if floating and roots[0] == URDF_WORLD:
         fixed = [j.name for j in children[roots[0]] if j.type == 'fixed']
         through = (f' through fixed joint{"s" if len(fixed) > 1 else ""} '
-                   + ', '.join(repr(j) for j in fixed) if fixed else '')
+                   + ', '.join(shown(j) for j in fixed) if fixed else '')
         report(f'the free-flyer is attached to {URDF_WORLD!r}{through}; did you mean a fixed '
                "base? (the URDF's root link is the world it is fixed to: base='fixed')")
     if floating and keep is not None and not isinstance(keep, str):
@@ -126,7 +127,7 @@ def _from_robot(robot_name: str, links: list, joints: list,
     if len(order) != len(link_by_name):
         lost = sorted(set(link_by_name) - set(order))
         raise ValueError(f'the joints form a cycle: links {lost} are not reachable from the '
-                         f'root link {roots[0]!r}')
+                         f'root link {shown(roots[0])}')
     NB = len(body_names) - 1
 
     # Inertias of all links, lumped into their bodies: I_b += lXbᵀ I_l lXb (RBDA eq. 2.66).
@@ -163,13 +164,13 @@ def _from_robot(robot_name: str, links: list, joints: list,
         for attr in ('damping', 'friction'):
             value = getattr(joint_by_name[jname], attr)
             if value < 0.0:
-                report(f'joint {jname!r} <dynamics {attr}>: negative ({value:g}), so the '
+                report(f'joint {shown(jname)} <dynamics {attr}>: negative ({value:g}), so the '
                        'joint would gain energy')
 
     for joint in joints:
         lower, upper = joint.limit['lower'], joint.limit['upper']
         if joint.type in ('revolute', 'prismatic') and lower > upper:
-            report(f'joint {joint.name!r} <limit>: lower ({lower:g}) is above upper '
+            report(f'joint {shown(joint.name)} <limit>: lower ({lower:g}) is above upper '
                    f'({upper:g}), so no position is within its limits')
 
     def per_joint(get, names=joint_names, base=math.nan) -> np.ndarray:
@@ -216,13 +217,13 @@ def _resolve_mimic(jname: str, joint_by_name: dict, resolved: dict
     joint = joint_by_name[jname]
     while joint.mimic is not None and joint.name not in resolved:
         src, m, o = joint.mimic
-        what = f'joint {joint.name!r} <mimic>'
+        what = f'joint {shown(joint.name)} <mimic>'
         if src not in joint_by_name:
-            raise ValueError(f'{what}: mimics a missing joint {src!r}')
+            raise ValueError(f'{what}: mimics a missing joint {shown(src)}')
         if src in seen:
             raise ValueError(f'{what}: mimic joints form a loop {list(seen) + [src]}')
         if URDF_KINDS.get(joint_by_name[src].type, FIXED) == FIXED:
-            raise ValueError(f'{what}: mimics {src!r}, which is not movable')
+            raise ValueError(f'{what}: mimics {shown(src)}, which is not movable')
         path.append(joint)
         seen[src] = None
         joint = joint_by_name[src]
@@ -249,15 +250,16 @@ def _locked_values(joint_by_name: dict, keep, locked, mimics: dict) -> dict:
         if j not in independent:
             why = 'is a mimic joint (lock its source)' if j in movable else \
                 'is not a movable joint of the URDF'
-            raise ValueError(f'locked joint {j!r} {why}')
-        value = finite(f'locked joint {j!r} value', v)      # a number: '0.1', True refused
+            raise ValueError(f'locked joint {shown(j)} {why}')
+        value = finite(f'locked joint {shown(j)} value', v)      # a number: '0.1', True refused
         if value.ndim != 0:
-            raise ValueError(f'locked joint {j!r} value must be one number, got shape '
+            raise ValueError(f'locked joint {shown(j)} value must be one number, got shape '
                              f'{value.shape}')
         locked[j] = float(value)
     if keep is None:
         if locked:
-            raise ValueError(f'locked joints {sorted(locked)} need a list of kept joints')
+            raise ValueError(f'locked joints [{listed(sorted(locked))}] need a list of kept '
+                             'joints')
         return {}
     if isinstance(keep, str):
         raise ValueError('joints must be a list of joint names, not a string')
@@ -265,12 +267,12 @@ def _locked_values(joint_by_name: dict, keep, locked, mimics: dict) -> dict:
         if j not in independent:
             why = 'is a mimic joint (keep its source)' if j in movable else \
                 'is not a movable joint of the URDF'
-            raise ValueError(f'kept joint {j!r} {why}')
+            raise ValueError(f'kept joint {shown(j)} {why}')
         if j in locked:
-            raise ValueError(f'joint {j!r} is both kept and locked')
+            raise ValueError(f'joint {shown(j)} is both kept and locked')
     kept = set(keep)
     if len(kept) != len(keep):
-        raise ValueError(f'joints lists a joint twice: {list(keep)}')
+        raise ValueError(f'joints lists a joint twice: [{listed(list(keep))}]')
     lock = {j: locked.get(j, 0.0) for j in movable if j in independent and j not in kept}
     for j in movable:
         src, mult, off = _resolve_mimic(j, joint_by_name, mimics)
