@@ -390,3 +390,18 @@ def test_an_integer_option_given_a_fraction_says_it_is_not_an_integer(tool, opti
         with pytest.raises(SystemExit):
             parse(['--input-depth', '2.5'])
         assert "not an integer: '2.5'" in capsys.readouterr().err
+
+
+def test_the_json_has_null_where_a_target_had_no_answer():
+    """A target that answered nothing has no maximum or mean: null in the JSON, never NaN."""
+    import json
+    from spatial_dynamics.tools.latency import json_safe, Target
+    target = Target.__new__(Target)
+    target.name, target.sent, target.latency_ns, target.to_answer_ns = 'node', set(), {}, {}
+    target.early, target.measuring, target.answers, target.cpu_s = {}, True, 0, 0.0
+    target.period_ns = 1_000_000
+    target.add_sent([10_000_000, 11_000_000])
+    rows = json_safe([target.summary()])
+    text = json.dumps(rows, allow_nan=False)
+    assert json.loads(text)[0]['max_ms'] is None and json.loads(text)[0]['mean_ms'] is None
+    assert json.loads(text)[0]['sent'] == 2 and json.loads(text)[0]['answered'] == 0

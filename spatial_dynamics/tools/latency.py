@@ -384,6 +384,12 @@ def robot_path(robot: str) -> Optional[str]:
     return path
 
 
+def json_safe(rows: List[Dict[str, float]]) -> List[Dict[str, object]]:
+    """Return ``rows`` with NaN as None (null): JSON has no NaN, and strict readers refuse it."""
+    return [{key: None if isinstance(value, float) and math.isnan(value) else value
+             for key, value in row.items()} for row in rows]
+
+
 def cell(value: Optional[float]) -> str:
     """Return a table cell of milliseconds: ``-`` for a value not reported (None or NaN)."""
     return '-' if value is None or math.isnan(value) else f'{value:.3f}'
@@ -740,8 +746,8 @@ def run(args: argparse.Namespace) -> int:
                     json.dump({'robot': model.name, 'rate_hz': args.rate, 'busy': args.busy,
                                'scheduling': scheduling, 'seconds_per_target': args.seconds,
                                'load': os.getloadavg()[0],
-                               'compute_us_means': compute.means_us, 'targets': rows},
-                              f, indent=2)
+                               'compute_us_means': compute.means_us,
+                               'targets': json_safe(rows)}, f, indent=2, allow_nan=False)
             if args.plot and plot(args.plot, targets, title) is None:
                 print('--plot: matplotlib is not installed, no histogram drawn')
         except OSError as err:
