@@ -7,6 +7,7 @@ ran until killed). The launchers of bin/ run here as installed, from the source 
 """
 
 import os
+import re
 import subprocess
 import sys
 
@@ -136,8 +137,9 @@ def test_usage_gives_each_description_whole_with_its_range_values_and_read_only(
         assert ' '.join(p.description.split()) in flat, p.name   # whole, not to its first '. '
         head = next(line for line in text.splitlines() if line.startswith(f'  {p.name} ('))
         entry = ' '.join(text[text.index(head):].split('\n      ')[0].split())
-        if p.bounds is not None:
-            assert f'{p.bounds[0]:g} .. {p.bounds[1]:g}' in entry, entry
+        if p.bounds is not None:   # the range as written reads back as the bounds exactly
+            found = re.search(r'(\S+) \.\. ([^;)\s]+)', entry)
+            assert found and (float(found[1]), float(found[2])) == tuple(p.bounds), entry
         assert all(str(c) in entry for c in p.choices), entry
         assert ('read-only' in entry) == p.read_only, entry
 
