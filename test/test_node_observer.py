@@ -3,9 +3,9 @@
 """External-torque estimate over real DDS: the MuJoCo robot pushed, the node finds Jᵀw.
 
 The installed ``sim`` (lockstep, 1 ms) and ``inverse_dynamics`` (``computed_torque``, the
-closed-loop demo's 5 Hz gains) run as processes in a namespace of their own; this process drives
-the closed-loop demo's trajectory (fast, 0.4 rad) for 1.5 s of simulated time, then holds the
-pose it reached, and after the loop settled pushes on the demo arm's ``tcp`` through the
+closed-loop demo's 5 Hz gains) run as processes in a namespace of their own; this process sends
+the closed-loop demo's trajectory (fast, 0.4 rad, 1.5 s of simulated time) as a plan, which the
+node follows at the simulator's stamps and then holds its end, and after the loop settled pushes on the demo arm's ``tcp`` through the
 simulator's ``applied_wrench``. The node's ``external_torque_estimate`` (from the measured
 effort the simulator publishes: the command it applied) stays near zero while tracking,
 converges to Jᵀw at the measured q once pushed, and diagnostics WARN naming the joints
@@ -28,8 +28,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from node_harness import DEMO_URDF, NodeProcess, TIMEOUT, values  # noqa: E402
 import spatial_dynamics as sd  # noqa: E402
-from spatial_dynamics.tools.closed_loop import (gains, Lockstep, SIM_COMMANDS,  # noqa: E402
-                                                start_point, Trajectory)
+from spatial_dynamics.tools.closed_loop import (  # noqa: E402
+    gains, plan_message, PLAN_STEP, start_point, Trajectory)
 from test_sim_node import SimProcess  # noqa: E402
 
 pytestmark = pytest.mark.ros
@@ -66,6 +66,7 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     from geometry_msgs.msg import WrenchStamped
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
+    from trajectory_msgs.msg import JointTrajectory
 
     model = sd.Model.from_urdf(DEMO_URDF)
     names = list(model.joint_names)
@@ -77,7 +78,6 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     ns = ['-r', f'__ns:={NS}']
     sim = SimProcess(install, ns + ['-p', f'robot_description_file:={DEMO_URDF}',
                                     '-p', 'mode:=lockstep', '-p', f'timestep:={H}',
-                                    '-p', f'command_topic:={SIM_COMMANDS}',
                                     '-p', f'initial_positions:={as_list(q0)}'], str(tmp_path))
     node = NodeProcess(install, ns + [
         '-p', f'robot_description_file:={DEMO_URDF}', '-p', 'control_mode:=computed_torque',
@@ -91,12 +91,16 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     pushed_at = []      # the sim time at which the push was sent
     stopped_at = []     # how many statuses had come when the trajectory stopped (hold)
 
-    def desired_at(t):
-        return trajectory(t) if t <= TRACK_UNTIL else (hold, 0 * hold, 0 * hold)
+    # the closed-loop demo's trajectory as a plan, which the node samples at each measured
+    # state's stamp (sim time), then holds its end: every command comes from the desired state
+    # of its own step, whatever the load (a desired state streamed on its own topic can reach
+    # the node after the simulator's state of its step: two topics are not ordered)
+    times = np.arange(0.0, TRACK_UNTIL + PLAN_STEP / 2, PLAN_STEP)
+    plan = plan_message(names, [(t, *trajectory(t)) for t in times], 0.0)
+    plans = n.create_publisher(JointTrajectory, f'{NS}/desired_trajectory', reliable)
+    answers = []
+    sent = []           # wall times the plan was sent
 
-    # the closed-loop demo's relay: the desired state of each step reaches the node before
-    # the simulator's state of that step, however loaded the machine
-    lockstep = Lockstep(n, names, desired_at, H, prefix=f'{NS}/')
 
     def on_state(state):
         t = seconds(state.header.stamp)
@@ -117,6 +121,8 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
                         if s.name == f'{NS.strip("/")}/inverse_dynamics: external torque')
 
     subs = [n.create_subscription(JointState, f'{NS}/joint_states', on_state, 1000),
+            n.create_subscription(JointState, f'{NS}/feedforward_efforts', answers.append,
+                                  reliable),
             n.create_subscription(JointState, f'{NS}/external_torque_estimate',
                                   estimates.append, reliable),
             n.create_subscription(DiagnosticArray, '/diagnostics', on_diagnostics, 100),
@@ -124,14 +130,17 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
                                   wrenches.append, reliable)]
     try:
         driver.spin_until(lambda: (push.get_subscription_count() >= 1
-                                   and lockstep.desired_pub.get_subscription_count() >= 1
-                                   and lockstep.relay.get_subscription_count() >= 1
-                                   and subs[1].get_publisher_count() >= 1),
+                                   and plans.get_subscription_count() >= 1
+                                   and subs[0].get_publisher_count() >= 1
+                                   and subs[1].get_publisher_count() >= 1
+                                   and subs[2].get_publisher_count() >= 1),
                           what='the sim and the node to connect')
 
         def done():
             assert node.proc.poll() is None and sim.proc.poll() is None, 'a process exited'
-            lockstep.kick()     # the desired state of step 0, until the first command
+            if not answers and (not sent or time.monotonic() - sent[-1] > 1.0):
+                plans.publish(plan)     # until the node answers (its first state: sim time 0)
+                sent.append(time.monotonic())
             ended = states and seconds(states[-1].header.stamp) >= END
             warned = pushed_at and any(TORQUE_WARNING in s.message
                                        for s in statuses[pushed_at[0][1]:])
@@ -140,7 +149,7 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     finally:
         for sub in subs:
             n.destroy_subscription(sub)
-        lockstep.close()
+        n.destroy_publisher(plans)
         n.destroy_publisher(push)
         assert node.stop() == 0, node.log()
         assert sim.stop() == 0, sim.log()
@@ -154,10 +163,9 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     times = sorted(r)
     torque = max(np.abs(s.effort).max() for s in states
                  if seconds(s.header.stamp) <= TRACK_UNTIL)
-    # the commands were computed from the desired state of their own step, but for the rare
-    # one DDS delivers after the next state (two topics are not ordered; see Lockstep)
-    assert lockstep.answers > 1000 and lockstep.stale <= lockstep.answers // 100, (
-        lockstep.answers, lockstep.stale)
+    # one answer per measured state, each from the plan at its own stamp (its end held)
+    assert len(answers) > 1000, len(answers)
+    assert len({seconds(a.header.stamp) for a in answers}) == len(answers)
     # tracking the fast trajectory, untouched: near zero. The simulator's effort is the
     # command held over the step before the state, so the trapezoidal rule is off by half a
     # step of the command: |r| <= max |tau_k - tau_k-1| / 2 on every sample (a command from
@@ -235,6 +243,7 @@ def test_measured_effort_gravity_compensated_adds_g_of_q(install, driver, tmp_pa
     """
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
+    from trajectory_msgs.msg import JointTrajectory
     from node_harness import Io, joint_state
     model = sd.Model.from_urdf(DEMO_URDF)
     names = list(model.joint_names)
