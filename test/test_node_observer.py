@@ -5,11 +5,12 @@
 The installed ``sim`` (lockstep, 1 ms) and ``inverse_dynamics`` (``computed_torque``, the
 closed-loop demo's 5 Hz gains) run as processes in a namespace of their own; this process sends
 the closed-loop demo's trajectory (fast, 0.4 rad, 1.5 s of simulated time) as a plan, which the
-node follows at the simulator's stamps and then holds its end, and after the loop settled pushes on the demo arm's ``tcp`` through the
-simulator's ``applied_wrench``. The node's ``external_torque_estimate`` (from the measured
-effort the simulator publishes: the command it applied) stays near zero while tracking,
-converges to Jᵀw at the measured q once pushed, and diagnostics WARN naming the joints
-above ``external_torque_warn``. Waits are generous bounds, never timing assertions.
+node follows at the simulator's stamps and then holds its end, and after the loop settled pushes
+on the demo arm's ``tcp`` through the simulator's ``applied_wrench``. The node's
+``external_torque_estimate`` (from the measured effort the simulator publishes: the command it
+applied) stays near zero while tracking, converges to Jᵀw at the measured q once pushed, and
+diagnostics WARN naming the joints above ``external_torque_warn``. Waits are generous bounds,
+never timing assertions.
 
 Computed torque, not PD + feed-forward: its loop is decoupled and critically damped, so the
 pushed arm comes to rest. With the demo's diagonal PD gains a coupled mode of joint3 and
@@ -100,7 +101,6 @@ def test_push_on_the_simulated_arm_is_estimated_as_jt_w(install, driver, tmp_pat
     plans = n.create_publisher(JointTrajectory, f'{NS}/desired_trajectory', reliable)
     answers = []
     sent = []           # wall times the plan was sent
-
 
     def on_state(state):
         t = seconds(state.header.stamp)
@@ -243,7 +243,6 @@ def test_measured_effort_gravity_compensated_adds_g_of_q(install, driver, tmp_pa
     """
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
-    from trajectory_msgs.msg import JointTrajectory
     from node_harness import Io, joint_state
     model = sd.Model.from_urdf(DEMO_URDF)
     names = list(model.joint_names)
