@@ -25,8 +25,10 @@ On a floating base the derivative in ``q`` is taken on the tangent space, the co
 velocity order ``[ω; v; joints]``: ``d/dε τ(q ⊕ ε e_k)`` with ``q ⊕ δ`` the base moved along
 ``δ`` in its own frame (``sd.integrate``, Pinocchio's ``integrate``). Then forward dynamics:
 ``sd.forward_dynamics`` against ``pin.aba``, time per state and the largest relative
-difference. Writes ``DIR/derivatives.csv`` and ``DIR/derivatives_vs_error.png``; prints
-markdown tables on stdout, progress on stderr.
+difference; and a batch of 10,000 states in one ``sd.rnea_derivatives`` call against a
+Python loop of ``computeRNEADerivatives`` over the same states. Writes
+``DIR/derivatives.csv`` and ``DIR/derivatives_vs_error.png``; prints markdown tables on
+stdout, progress on stderr.
 """
 
 from __future__ import annotations
@@ -65,10 +67,12 @@ class Settings:
     states: int = 16
     rounds: int = 9
     block_s: float = 0.02
+    batch: int = 10_000
+    batch_rounds: int = 5
 
 
 FULL = Settings()
-QUICK = Settings(ref_states=2, states=8, rounds=5, block_s=0.005)
+QUICK = Settings(ref_states=2, states=8, rounds=5, block_s=0.005, batch_rounds=3)
 
 
 def load(name: str) -> sd.Model:
@@ -294,10 +298,45 @@ def bench_robot(name: str, model: sd.Model, xml: str, settings: Settings, log: C
     rows = [{'robot': name, 'nv': model.nv, 'implementation': label,
              'us_per_state': times[label] * 1e6, 'rel_err': errors[label]}
             for label in entries]
-    fd = {}
+    fd, batch = {}, {}
     if pin is not None:
         fd = forward_row(name, model, xml, states, settings)
-    return rows, fd, notes
+        log(f'{name}: a batch of {settings.batch} states against a loop of Pinocchio')
+        batch = batch_row(name, model, xml, settings, rng)
+    return rows, fd, batch, notes
+
+
+def batch_row(name: str, model: sd.Model, xml: str, settings: Settings,
+              rng: np.random.Generator) -> dict:
+    """Time one ``sd.rnea_derivatives`` call on a batch against Pinocchio looped over it.
+
+    Per state: the batch call's time over ``settings.batch`` states (the compiled backend's
+    threads on the cores there are), and a Python loop of ``computeRNEADerivatives`` over the
+    same states, in alternating rounds (median). The largest difference of the batch from
+    the one-state calls on its first states, relative to the largest entry, is in the row.
+    """
+    pin, pm, P, joints, _ = _pinocchio(model, xml)
+    data = pm.createData()
+    Q, QD, QDD = random_states(model, rng, settings.batch)
+    pstates = [to_pinocchio(model, pm, P, joints, *s) for s in zip(Q, QD, QDD)]
+    derivatives = pin.computeRNEADerivatives
+
+    def ours() -> None:
+        sd.rnea_derivatives(model, Q, QD, QDD)
+
+    def theirs() -> None:
+        for qp, vp, ap in pstates:
+            derivatives(pm, data, qp, vp, ap)
+    batched = sd.rnea_derivatives(model, Q, QD, QDD)
+    worst = 0.0
+    for k in range(8):
+        one = sd.rnea_derivatives(model, Q[k], QD[k], QDD[k])
+        worst = max(worst, max(_rel(b[k], o) for b, o in zip(batched, one)))
+    times = interleaved({'ours': (ours, [()]), 'pin': (theirs, [()])},
+                        settings.batch_rounds, 0.0, settings.batch)
+    return {'robot': name, 'nv': model.nv, 'states': settings.batch,
+            'batch_us': times['ours'] * 1e6, 'pin_loop_us': times['pin'] * 1e6,
+            'rel_diff': worst}
 
 
 def forward_row(name: str, model: sd.Model, xml: str, states: list, settings: Settings) -> dict:
@@ -325,7 +364,7 @@ def forward_row(name: str, model: sd.Model, xml: str, states: list, settings: Se
             'aba_us': times['pin'] * 1e6, 'rel_diff': worst}
 
 
-def markdown(rows: list, fds: list) -> str:
+def markdown(rows: list, fds: list, batches: list = ()) -> str:
     """Return the markdown tables of the run."""
     out = ['| robot (nv) | implementation | µs a state | ×pin '
            '| max rel. error of [∂τ/∂q, ∂τ/∂q̇] |',
@@ -342,6 +381,14 @@ def markdown(rows: list, fds: list) -> str:
         for f in fds:
             out.append(f"| {f['robot']} ({f['nv']}) | {f['fd_us']:.3g} | {f['aba_us']:.3g} | "
                        f"{f['fd_us'] / f['aba_us']:.2f}× | {f['rel_diff']:.1e} |")
+    if batches:
+        out += ['', '| robot (nv) | states | sd.rnea_derivatives batch µs a state | '
+                'computeRNEADerivatives loop µs a state | ratio | max rel. difference from '
+                'one state |', '|---|---|---|---|---|---|']
+        for b in batches:
+            out.append(f"| {b['robot']} ({b['nv']}) | {b['states']:,} | {b['batch_us']:.3g} | "
+                       f"{b['pin_loop_us']:.3g} | {b['batch_us'] / b['pin_loop_us']:.2f}× | "
+                       f"{b['rel_diff']:.1e} |")
     return '\n'.join(out)
 
 
@@ -399,7 +446,7 @@ def main(argv: Optional[list] = None) -> int:
     setup = versions()
     log(setup)
     rng = np.random.default_rng(0)
-    rows, fds, notes = [], [], []
+    rows, fds, batches, notes = [], [], [], []
     for name in args.robots or list(ROBOTS):
         try:
             model = load(name)
@@ -407,11 +454,13 @@ def main(argv: Optional[list] = None) -> int:
             notes.append(str(err))
             continue
         xml = (_erd_dir() / ROBOTS[name][0]).read_text(encoding='utf-8')
-        robot_rows, fd, robot_notes = bench_robot(name, model, xml, settings, log, rng)
+        robot_rows, fd, batch, robot_notes = bench_robot(name, model, xml, settings, log, rng)
         rows += robot_rows
         notes += robot_notes
         if fd:
             fds.append(fd)
+        if batch:
+            batches.append(batch)
     with open(args.out / 'derivatives.csv', 'w', newline='', encoding='utf-8') as f:
         writer = csv.DictWriter(f, ['robot', 'nv', 'implementation', 'us_per_state', 'rel_err'])
         writer.writeheader()
@@ -419,7 +468,7 @@ def main(argv: Optional[list] = None) -> int:
     path = plot(rows, args.out, log)
     print(f'Command: python -m benchmarks.derivatives {" ".join(argv or sys.argv[1:])}')
     print(f'Setup: {setup}\n')
-    print(markdown(rows, fds))
+    print(markdown(rows, fds, batches))
     print('\nComplex step: not measured (the library refuses complex arrays).')
     for note in notes:
         print(f'Note: {note}')

@@ -6,7 +6,8 @@ A tiny run (one reference state, two timed states, one round) on UR5 and Solo12 
 free-flyer: its rows and files are there, Pinocchio's ``computeRNEADerivatives`` agrees with
 the reference to 1e-12 (so the reference's tangent convention on the free-flyer is right),
 ``sd.rnea_derivatives`` to 1e-13, central differences land where their step puts them,
-``sd.forward_dynamics`` agrees with ``pin.aba``; the analytic rows time the bare calls. No
+``sd.forward_dynamics`` agrees with ``pin.aba``, a batch call with the one-state calls; the
+analytic rows time the bare calls. No
 timing is asserted.
 """
 
@@ -20,7 +21,8 @@ import spatial_dynamics as sd
 pin = pytest.importorskip('pinocchio')
 pytest.importorskip('mpmath')
 
-TINY = derivatives.Settings(ref_states=1, states=2, rounds=1, block_s=0.0005)
+TINY = derivatives.Settings(ref_states=1, states=2, rounds=1, block_s=0.0005, batch=16,
+                            batch_rounds=1)
 
 
 def test_a_tiny_run_prints_every_row_and_the_reference_is_pinocchios(
@@ -45,6 +47,13 @@ def test_a_tiny_run_prints_every_row_and_the_reference_is_pinocchios(
     forward = lines[head + 2:head + 4]          # forward_dynamics against pin.aba
     assert [line.split('|')[1].strip() for line in forward] == ['ur5 (6)', 'solo12 (18)']
     assert all(float(line.split('|')[5]) <= 1e-12 for line in forward)
+    # the batch against Pinocchio looped: one row per robot, the batch equal to one-state
+    # calls to rounding
+    head = next(k for k, line in enumerate(lines) if 'batch µs a state' in line)
+    batch = lines[head + 2:head + 4]
+    assert [line.split('|')[1].strip() for line in batch] == ['ur5 (6)', 'solo12 (18)']
+    assert all(line.split('|')[2].strip() == '16' for line in batch)
+    assert all(float(line.split('|')[6]) <= 1e-13 for line in batch)
     assert 'Complex step: not measured' in out
     assert (tmp_path / 'derivatives_vs_error.png').is_file() or 'no plot' in out
 
