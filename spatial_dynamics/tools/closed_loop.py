@@ -205,8 +205,12 @@ class Lockstep:
     when the state of step k arrives races the controller's answer: under load, hundreds of
     answers per 1000 steps used an older setpoint), and waits :data:`DELIVERY` for it to
     arrive. DDS does not order messages of two topics,
-    so on a loaded machine an answer may still, rarely, come from the setpoint before (seen: 1
-    in 6000 with two CPU burners): :attr:`stale` counts them from the q_d the node echoes.
+    so on a loaded machine an answer may still come from the setpoint before (three busy
+    loops: 0-2 in 3000; 9-49 in 3000 with builds sharing the cores; a wait for the node's
+    reader to acknowledge the desired state cannot replace the pause: a best-effort reader
+    acknowledges nothing, and a reliable one only at the writer's heartbeat, every few
+    seconds): :attr:`stale` counts them from the q_d the node echoes. Where none may
+    come from another step, send the trajectory as a plan (``--plan``).
     An answer to a state answered already (the simulator republishes the state it waits on)
     is not forwarded; :attr:`repeated` counts those to a stamped state (step 0 is stamped 0,
     which the node, as any ROS node, reads as unstamped and answers each time).
