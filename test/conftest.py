@@ -201,6 +201,15 @@ class PinOracle:
         return self.pin.computeKineticEnergy(self.model, self.data, q_pin, v_pin)
 
 
+def refusal(call):
+    """Return the exception ``call()`` raises as (type, message), or None when it answers."""
+    try:
+        call()
+    except Exception as err:        # the type and message are what is compared
+        return type(err), str(err)
+    return None
+
+
 def random_state(rng, shape, n, scale=(1.5, 2.0, 3.0)):
     """Return random (q, qd, qdd) of shape shape + (n,)."""
     size = tuple(shape) + (n,)

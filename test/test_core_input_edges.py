@@ -14,7 +14,7 @@ from decimal import Decimal
 import functools
 import warnings
 
-from conftest import PinOracle, random_state, robot_urdf_path
+from conftest import PinOracle, random_state, refusal, robot_urdf_path
 import numpy as np
 import pytest
 import spatial_dynamics as sd
@@ -107,15 +107,6 @@ def outcome(call):
         warnings.simplefilter('error')
         out = call()
     return tuple(np.asarray(x) for x in (out if isinstance(out, tuple) else (out,)))
-
-
-def refusal(call):
-    """Return the exception ``call()`` raises as (type, message), or None when it answers."""
-    try:
-        call()
-    except Exception as err:        # the type and message are what is compared
-        return type(err), str(err)
-    return None
 
 
 def ur5_state(rng, shape=()):

@@ -14,7 +14,7 @@ import glob
 import os
 import warnings
 
-from conftest import example_robot_data_dir, strip_mimic
+from conftest import example_robot_data_dir, refusal, strip_mimic
 import numpy as np
 import pytest
 import spatial_dynamics as sd
@@ -213,15 +213,6 @@ def test_armature_goes_into_the_mass_matrix(backend, rng):
         ok, err = close(sd.forward_dynamics(free, q1, qd1, tau1, backend=b, armature=arm),
                         expected)
         assert ok, (b, err)
-
-
-def refusal(call):
-    """Return the exception ``call()`` raises as (type, message), or None when it answers."""
-    try:
-        call()
-    except Exception as err:        # the type and message are what is compared
-        return type(err), str(err)
-    return None
 
 
 @pytest.mark.parametrize('backend', BACKENDS)
