@@ -139,3 +139,37 @@ def test_the_flat_python_kernels_compute_what_the_source_computes(rng):
                           work)
     assert Y.tolist() == python.regressor_rows(lay.rows, q.tolist(), qd.tolist(), qdd.tolist(),
                                                (0.5, 0.0, -9.8))
+
+
+def _c_function(text: str, name: str) -> str:
+    """Return the C function ``name`` of the header ``text``, from its comment to its end."""
+    start = text.rindex('/* Run ', 0, text.index(f'static inline void {name}('))
+    return text[start:text.index('\n}\n', start) + 3]
+
+
+def test_the_derivatives_kernel_has_an_avx_copy_of_the_same_statements():
+    """One state's derivatives run on an AVX copy of the kernel where the CPU has AVX.
+
+    The copy is the scalar kernel's text but for its name, compiled in a ``target("avx")``
+    region: the same operations in the same order, without fused multiply-adds, so the
+    same bits (the lane kernels, bit for bit the single call, are checked against it in
+    test_derivatives.py); the header defines it only for GCC and Clang on x86-64.
+    """
+    text = codegen.generate_c()
+    scalar = _c_function(text, 'derivatives_kernel')
+    copy = _c_function(text, 'derivatives_kernel_avx')
+    assert copy == scalar.replace(' derivatives_kernel(', ' derivatives_kernel_avx(').replace(
+        'generated from it.', 'generated from it (AVX encodings).')
+    before, after = text.split(copy)
+    assert before.endswith('#pragma GCC target("avx")\n#endif\n')
+    assert after.lstrip().startswith('#ifdef __clang__\n#pragma clang attribute pop')
+    assert before.rfind('#ifdef SD_VEX') > before.rfind('#endif  /* SD_VEX */')
+    assert '#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))\n' \
+        '#define SD_VEX 1' in text
+
+
+def test_each_column_of_the_derivatives_is_computed_once():
+    """The derivatives' forward pass takes a column ``s = mul ᵂX⁻¹ S`` once, not once a loop."""
+    from spatial_dynamics.algorithms import derivatives
+    source = inspect.getsource(derivatives.derivatives_kernel)
+    assert source.count('joint_axis(') == 1 and source.count('Xinv_motion(') == 1

@@ -42,7 +42,8 @@ instead of a product a column (a free-flyer's six, above every other body).
 
 :func:`derivatives_kernel` is written on scalar components in the subset of
 :mod:`~.rnea` (per-body rows unpacked whole, whole-tuple stores, the products of
-:mod:`.components`); per column it keeps ``(s, α, β, α')`` in ``dcol[6 i + c]``.
+:mod:`.components`); per column it keeps ``(s, α, β, α')`` in ``dcol[6 i + c]``, and ``s``
+(``mul ᵂX_i⁻¹ S``, computed once, where ``v_J`` is summed) in ``scol[6 i + c]``.
 """
 
 from __future__ import annotations
@@ -53,13 +54,14 @@ from ..joints import joint_axis, joint_crba, joint_pair
 
 
 def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, Xup, oX, vel,
-                       acc, frc, IC, dIC, hC, dcol) -> None:
+                       acc, frc, IC, dIC, hC, dcol, scol) -> None:
     """``∂τ/∂q`` into ``dq``, ``∂τ/∂q̇`` into ``dv`` and ``M`` into ``H`` (``nv * nv``, row-major).
 
     ``rows`` are the layout's per-body rows (row 0 the base), ``Xup`` the transforms of
     :func:`~.rnea.xup_kernel` for ``q``; ``oX``, ``vel``, ``acc``, ``frc``, ``IC``, ``dIC``,
-    ``hC`` are scratch with a slot per body, ``dcol`` with six per body. ``f_body`` as for
-    :func:`~.rnea.rnea_kernel` (body coordinates). The outputs are zeroed first.
+    ``hC`` are scratch with a slot per body, ``dcol`` and ``scol`` with six per body (a
+    column's ``(s, α, β, α')``, and its ``s`` from the pass that sums ``v_J``). ``f_body`` as
+    for :func:`~.rnea.rnea_kernel` (body coordinates). The outputs are zeroed first.
     """
     NB = len(rows) - 1
     zero = 0.0 * gx
@@ -106,6 +108,7 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
                                                  rx, ry, rz, s0, s1, s2, s3, s4, s5)
             s0, s1, s2, s3, s4, s5 = mul * s0, mul * s1, mul * s2, mul * s3, mul * s4, mul * s5
+            scol[6 * i + c] = (s0, s1, s2, s3, s4, s5)
             qdi, qddi = qd[kv + c], qdd[kv + c]
             j0, j1, j2, j3, j4, j5 = (j0 + s0 * qdi, j1 + s1 * qdi, j2 + s2 * qdi,
                                       j3 + s3 * qdi, j4 + s4 * qdi, j5 + s5 * qdi)
@@ -116,10 +119,7 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
         a0, a1, a2, l0, l1, l2 = a0 + c0, a1 + c1, a2 + c2, l0 + c3, l1 + c4, l2 + c5
         for c in range(dof):
             # per column: ψ = s × v_λ;  α = -(s × a_λ + v_λ × ψ),  β = -ψ;  α' = (v_λ + v_i) × s
-            s0, s1, s2, s3, s4, s5 = joint_axis(code, c, ax, ay, az)
-            s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
-                                                 rx, ry, rz, s0, s1, s2, s3, s4, s5)
-            s0, s1, s2, s3, s4, s5 = mul * s0, mul * s1, mul * s2, mul * s3, mul * s4, mul * s5
+            s0, s1, s2, s3, s4, s5 = scol[6 * i + c]     # the pass above's, taken once
             if i == 1:
                 # (α, β, α') of body 1's columns are not read: they are taken at once
                 dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5, zero, zero, zero, zero, zero, zero,

@@ -339,16 +339,24 @@ def _lanes_c(returns: dict, lanes: int, flat) -> str:
                            kernels='\n\n'.join(kernels), **each)
 
 
+def target_region(isa: str, text: str) -> str:
+    """Return the C ``text`` compiled for the instruction set ``isa`` (GCC's and Clang's pragmas).
+
+    The caller checks at run time that the CPU has ``isa`` before it calls a function of it.
+    """
+    return ('#ifdef __clang__\n#pragma clang attribute push (__attribute__((target('
+            f'"{isa}"))), apply_to = function)\n#else\n#pragma GCC push_options\n'
+            f'#pragma GCC target("{isa}")\n#endif\n' + text
+            + '#ifdef __clang__\n#pragma clang attribute pop\n#else\n#pragma GCC pop_options\n'
+            '#endif\n')
+
+
 def lanes_c(returns: dict, flat) -> str:
     """Return the C of the lane kernels: 2 lanes, and on x86-64 4 with AVX, 8 with AVX-512F.
 
     ``flat(fn)`` is the flat syntax tree of a source function (:func:`.codegen._flat`).
     """
-    wide = ''.join(
-        '#ifdef __clang__\n#pragma clang attribute push (__attribute__((target('
-        f'"{isa}"))), apply_to = function)\n#else\n#pragma GCC push_options\n'
-        f'#pragma GCC target("{isa}")\n#endif\n' + _lanes_c(returns, lanes, flat)
-        + '#ifdef __clang__\n#pragma clang attribute pop\n#else\n#pragma GCC pop_options\n'
-        '#endif\n\n' for lanes, isa in ((4, 'avx'), (8, 'avx512f')))
+    wide = ''.join(target_region(isa, _lanes_c(returns, lanes, flat)) + '\n'
+                   for lanes, isa in ((4, 'avx'), (8, 'avx512f')))
     return (_LANES_HEAD + _lanes_c(returns, 2, flat) + '\n#ifdef SD_AVX\n' + wide
             + '#endif  /* SD_AVX */\n\n' + _LANES_TAIL)

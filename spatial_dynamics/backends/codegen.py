@@ -56,7 +56,7 @@ import types
 from typing import Optional, Sequence
 
 from . import layout
-from .c_lanes import lanes_c
+from .c_lanes import lanes_c, target_region
 from .c_printer import _ToC
 from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_pair,
                       joint_torque, joint_transform, joint_velocity, rotation_product)
@@ -70,13 +70,15 @@ STORES = {'Xup': ('XUP', 0, 12), 'vel': ('VEL', 12, 6), 'acc': ('ACC', 18, 6),
 WORK = 40
 #: The derivatives' scratch after the per-body rows (``rows * WORK`` doubles in): per body
 #: its world transform ``oX`` (12), ``İC`` (9) and ``hC`` (6) in ``DWORK`` doubles, then six
-#: columns a body of ``(s, α, β, α')`` (24 each); name -> (constant, offset, values, start,
-#: stride), a slot ``work[start + index * stride + offset + j]``.
-DWORK, CWORK = 27, 24
+#: columns a body of ``(s, α, β, α')`` (24 each) and ``s`` alone (6: the forward pass's, read
+#: again by the pass of α, β, α'); name -> (constant, offset, values, start, stride), a slot
+#: ``work[start + index * stride + offset + j]``.
+DWORK, CWORK = 27, 30
 MORE_STORES = {'oX': ('OXS', 0, 12, 'K.shape[0] * WORK', 'DWORK'),
                'dIC': ('DIC', 12, 9, 'K.shape[0] * WORK', 'DWORK'),
                'hC': ('HCS', 21, 6, 'K.shape[0] * WORK', 'DWORK'),
-               'dcol': ('DCOL', 0, 24, 'K.shape[0] * (WORK + DWORK)', 'CWORK')}
+               'dcol': ('DCOL', 0, 24, 'K.shape[0] * (WORK + DWORK)', 'CWORK'),
+               'scol': ('SCOL', 24, 6, 'K.shape[0] * (WORK + DWORK)', 'CWORK')}
 #: Every store's number of values.
 WIDTHS = {**{k: v[2] for k, v in STORES.items()}, **{k: v[2] for k, v in MORE_STORES.items()}}
 #: The functions translated, in order (a function is generated after those it calls).
@@ -100,6 +102,9 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'split_kernel': 'QR, k, n, nb, wts, res, scr, tol',
               'derivatives_kernel': 'K, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, work',
               'forward_kernel': 'K, H, qdd, lam, run, seg, info'}
+#: The kernels printed a second time for CPUs with AVX (``name_avx``, chosen at run time by
+#: ``run_state``): the same operations in VEX encodings, the same bits (see :func:`_vex`).
+VEX = ('derivatives_kernel',)
 #: The generated files' names. Build products, not sources: ``setup.py`` writes the header
 #: into its build directory when it compiles the extension; ``python -m
 #: spatial_dynamics.backends.codegen DIR`` writes both for reading.
@@ -319,6 +324,19 @@ import numpy as np
     return header + '\n\n' + body + '\n'
 
 
+def _vex(text: str, name: str) -> str:
+    """Return the C function ``text`` (of ``name``) again as ``name_avx``, compiled for AVX.
+
+    The same statements in the same order, without fused multiply-adds: only the encoding
+    changes (VEX, three operands), so each result has the bits of the scalar function's.
+    The inline components it calls are inlined into it (their ISA is a subset of AVX).
+    """
+    return ('#ifdef SD_VEX\n' + target_region('avx', text.replace(
+        f' {name}(', f' {name}_avx(', 1).replace(
+            'generated from it.', 'generated from it (AVX encodings).', 1) + '\n')
+        + '#endif  /* SD_VEX */')
+
+
 def generate_c() -> str:
     """Return the text of ``_kernels_generated.h``: the same kernels as C functions."""
     consts = dict(_constants(), WIDTH=layout.WIDTH, QIDX=layout.COLUMN['qidx'],
@@ -331,6 +349,8 @@ def generate_c() -> str:
         if ret:     # how many values it returns (0: it writes into an array it is given)
             returns[fn.__name__] = len(ret[0].value.elts) if ret[0].value is not None else 0
         funcs.append(_ToC(func, returns).function())
+        if fn.__name__ in VEX:
+            funcs.append(_vex(funcs[-1], fn.__name__))
     header = '''\
 /* Copyright 2026 spatial_dynamics contributors
  * SPDX-License-Identifier: Apache-2.0
@@ -343,6 +363,10 @@ def generate_c() -> str:
 #define SPATIAL_DYNAMICS_KERNELS_GENERATED_H
 
 #include <math.h>
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define SD_VEX 1        /* the kernels of codegen.VEX have an AVX copy, name_avx */
+#endif
 
 '''
     enum = 'enum {\n' + ',\n'.join(f'    {k} = {v}' for k, v in consts.items()) + '\n};\n'

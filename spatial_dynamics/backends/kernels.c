@@ -206,6 +206,13 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
         bodies_kernel(K, rows, work, out1);
         break;
     case DERIVATIVES:
+#ifdef SD_VEX
+        if (__builtin_cpu_supports("avx")) {   /* the same operations, VEX encoded */
+            derivatives_kernel_avx(K, rows, qd, qdd, g[0], g[1], g[2], f, f != NULL, out1,
+                                   out2, out3, work);
+            break;
+        }
+#endif
         derivatives_kernel(K, rows, qd, qdd, g[0], g[1], g[2], f, f != NULL, out1, out2, out3,
                            work);
         break;

@@ -260,7 +260,8 @@ def derivatives_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> tuple:
         for b, f in f_body.items():
             fb[b] = f
     derivatives_kernel(rows, qd, qdd, gx, gy, gz, fb, fb is not None, dq, dv, H, Xup,
-                       *([None] * slots for _ in range(7)), [None] * (6 * slots))
+                       *([None] * slots for _ in range(7)), [None] * (6 * slots),
+                       [None] * (6 * slots))
     return dq, dv, H
 
 
