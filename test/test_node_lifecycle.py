@@ -231,7 +231,14 @@ def test_bad_start_up_configuration_exits_1_with_reason(install, tmp_path):
                          ([good, 'payload.link:=hand', 'payload.mass:=1.0e300'],
                           'payload.mass'),
                          ([good, 'thread_priority:=1000000000'],
-                          'thread_priority: need a value from 0 to 99, got 1000000000')]:
+                          'thread_priority: need a value from 0 to 99, got 1000000000'),
+                         # the middleware refuses a negative queue deep in rcl
+                         ([good, 'qos_overrides./desired_joint_states.subscription.depth:=-1'],
+                          "QoS of subscription '/desired_joint_states' (qos_overrides."
+                          "/desired_joint_states.subscription.depth = -1"),
+                         ([good, 'qos_overrides./effort_commands.publisher.depth:=-3'],
+                          "QoS of publisher '/effort_commands' (qos_overrides./effort_commands"
+                          ".publisher.depth = -3")]:
         command = [install.executable, '--ros-args']
         for arg in args:
             command += ['-p', arg]

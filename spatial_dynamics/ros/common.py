@@ -11,6 +11,7 @@ start-up configuration).
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 import signal
 import sys
 import threading
@@ -83,19 +84,42 @@ def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1, group=
     148 µs without). The inputs' best effort + volatile accepts every publisher anyway, and
     the other end of an incompatible pair still reports it with its own default handlers.
     """
-    return node.create_subscription(
-        msg_type, topic, callback, input_qos(depth) if qos is None else qos,
-        callback_group=group, raw=raw,
-        qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-        event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+    with _overrides_checked(node, topic, 'subscription'):
+        return node.create_subscription(
+            msg_type, topic, callback, input_qos(depth) if qos is None else qos,
+            callback_group=group, raw=raw,
+            qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
 
 
 def advertise(node: Node, msg_type, topic: str):
     """Create a publisher with :func:`output_qos`, QoS overrides, no QoS event handlers."""
-    return node.create_publisher(
-        msg_type, topic, output_qos(),
-        qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-        event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
+    with _overrides_checked(node, topic, 'publisher'):
+        return node.create_publisher(
+            msg_type, topic, output_qos(),
+            qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
+
+
+@contextmanager
+def _overrides_checked(node: Node, topic: str, kind: str):
+    """Turn the middleware refusing an endpoint's QoS into a :class:`ConfigError` naming it.
+
+    rclpy takes any integer for ``qos_overrides.<topic>.<kind>.depth``; the middleware then
+    refuses a negative one deep inside ``create_subscription`` (``RCLError: invalid
+    allocator``), which would end the node with a traceback instead of a ``cannot start:``
+    line naming the override.
+    """
+    try:
+        yield
+    except _rclpy.RCLError as err:
+        name = node.resolve_topic_name(topic)
+        prefix = f'qos_overrides.{name}.{kind}'
+        values = ', '.join(f'{prefix}.{k} = {p.value!r}' for k, p in
+                           sorted(node.get_parameters_by_prefix(prefix).items()))
+        raise ConfigError(f'the middleware refused the QoS of {kind} {name!r}'
+                          + (f' ({values})' if values else '') + ': '
+                          + str(err).strip().split('\n')[-1]) from None
 
 
 def _context_shut_down(grace: float = 1.0) -> bool:
