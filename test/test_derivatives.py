@@ -354,6 +354,33 @@ def test_a_batch_is_each_state_alone_bit_for_bit(robot, rng):
                     assert np.array_equal(b[s], o), (N, s, f_ext is None)
 
 
+def test_a_batch_over_threads_is_each_state_alone_bit_for_bit(rng):
+    """A batch on 1, 2, 3 and 7 threads (a block of its states each) is each state's call.
+
+    Thousands of states (each thread takes 4096 body-states at least), a count that is no
+    multiple of the lanes or of a thread's chunk, and an odd ``nv`` (``3 nv²`` numbers a
+    state: the four lanes' results are transposed four numbers at a time, the rest one by
+    one); ``∂τ/∂q``, ``∂τ/∂q̇``, ``M`` bit for bit those of the single-state calls.
+    """
+    from spatial_dynamics.backends import compiled
+    from urdf_gen import random_tree_urdf
+    if compiled.ext is None:
+        pytest.skip('the batch entry is C')
+    model = sd.Model.from_urdf(random_tree_urdf(np.random.default_rng(11), 7, branching=True))
+    lay = layout.of(model)
+    assert model.nv % 2 == 1
+    N = 7 * compiled.ext.MIN_WORK // lay.table.shape[0] + 13
+    q, qd, qdd = random_state(rng, (N,), model.nq)
+    qd[::5] = 0.0
+    g = (0.5, -1.0, -9.0)
+    alone = np.array([np.stack(sd.rnea_derivatives(model, q[s], qd[s], qdd[s], g))
+                      for s in range(N)])
+    for threads in (1, 2, 3, 7):
+        D = np.full((N, 3, model.nv, model.nv), np.nan)
+        compiled.ext.derivatives_batch(lay.kernels, N, q, qd, qdd, g, None, D, threads)
+        np.testing.assert_array_equal(D.view(np.int64), alone.view(np.int64), err_msg=threads)
+
+
 def test_a_moving_base_differentiates_the_joint_rows(rng):
     """On a moving base: the joint block, by central differences of ``rnea(base=)``."""
     model = sd.Model.from_urdf(robot_urdf_path('ur5'))

@@ -12,7 +12,8 @@
  *                 types, numpy arrays, buffers, lists, tuples), a C-contiguous float64 table
  *   entries.c     ALGORITHMS, one row per algorithm, and the two generic entries that serve
  *                 them all: one state, and a batch
- *   threads.c     a batch on POSIX threads, claimed chunk by chunk, without the GIL
+ *   threads.c     a batch on POSIX threads, a block each claimed chunk by chunk, without
+ *                 the GIL
  *   door.c        Door: a public function of spatial_dynamics entered in C for one state
  *
  * Every function declared here is private to the shared object (setup.py compiles with

@@ -1,9 +1,11 @@
 /* Copyright 2026 spatial_dynamics contributors
  * SPDX-License-Identifier: Apache-2.0
  *
- * A batch on threads: run_batch releases the GIL and lets POSIX threads (the caller's
- * included) claim the states of a batch chunk by chunk, each chunk run by run_states
- * (kernels.c). Without POSIX threads and GCC/Clang atomics, the caller runs them all.
+ * A batch on threads: run_batch releases the GIL and gives each of its POSIX threads (the
+ * caller's included) a contiguous block of the batch's states, which the thread claims
+ * chunk by chunk, each chunk run by run_states (kernels.c); a thread done with its block
+ * claims the chunks left in the others'. Without POSIX threads and GCC/Clang atomics, the
+ * caller runs them all.
  */
 #include "_compiled.h"
 
@@ -20,7 +22,10 @@
 /* The threads of a batch claim its states a chunk at a time, about CHUNK_WORK body-states
  * (~25 us) in a multiple of 8 states (the widest SIMD lanes): a thread that a busy machine
  * holds back leaves the rest to the others, and the lanes group the same states whatever
- * the thread count. */
+ * the thread count. Each thread starts in a block of its own, so that the threads write
+ * their results to pages apart: two threads that first touch the same page of a new result
+ * array (a 2 MB page, as numpy asks for) each have the kernel clear it, one in vain, and
+ * wait for each other. */
 #define CHUNK_WORK 1024
 
 #if !defined(_WIN32) && (defined(__GNUC__) || defined(__clang__))
@@ -30,13 +35,17 @@
 #define ATOMIC_ADD(p, x) (*(p) += (x))     /* one thread: run_batch starts no other */
 #endif
 
-/* One batch as its threads share it: the states [0, N) claimed chunk by chunk. The caller
+/* One batch as its threads share it: the states [0, N) in T blocks, block t's states
+ * [t N / T, (t + 1) N / T) (rounded to the chunks) claimed chunk by chunk. The caller
  * waits until every state is done, not for the threads: a thread that a busy machine starts
  * late finds nothing left and ends; the last thread out frees this. */
 typedef struct {
     Slice job;
     Py_ssize_t N, chunk;
-    Py_ssize_t next;                     /* the first state not claimed yet */
+    long T;                              /* blocks: the threads asked for */
+    Py_ssize_t next[MAX_THREADS];        /* the first state of each block not claimed yet */
+    Py_ssize_t end[MAX_THREADS];         /* each block's end */
+    long started;                        /* threads that took a block, in the order they start */
     Py_ssize_t done;                     /* states finished */
     int failed;                          /* chunks left undone (no memory for a scratch) */
     int refs;                            /* threads (the caller's included) holding this */
@@ -46,19 +55,24 @@ typedef struct {
 #endif
 } Batch;
 
-/* Claim chunks of b until none is left, and count them done (a chunk without memory too:
- * then b->failed). The thread that finishes the last state wakes the caller. */
+/* Claim chunks of b, its own block's first, then those left in the blocks after it, until
+ * none is left, and count them done (a chunk without memory too: then b->failed). The
+ * thread that finishes the last state wakes the caller. */
 static void
 run_chunks(Batch *b)
 {
     const Slice *s = &b->job;
     const long rows = s->rows;
+    const long own = (ATOMIC_ADD(&b->started, 1) - 1) % b->T;
     double *work = malloc(sizeof(double) * work_size(s->kernel, rows, s->nv));
-    for (;;) {
-        Py_ssize_t lo = ATOMIC_ADD(&b->next, b->chunk) - b->chunk;
-        if (lo >= b->N)
-            break;
-        Py_ssize_t hi = b->N - lo < b->chunk ? b->N : lo + b->chunk;
+    for (long t = own, left = b->T; left > 0;) {
+        Py_ssize_t lo = ATOMIC_ADD(&b->next[t], b->chunk) - b->chunk;
+        if (lo >= b->end[t]) {
+            t = (t + 1) % b->T;     /* this block is claimed: the next one's chunks */
+            left--;
+            continue;
+        }
+        Py_ssize_t hi = b->end[t] - lo < b->chunk ? b->end[t] : lo + b->chunk;
         if (run_states(s, work, lo, hi) < 0)
             ATOMIC_ADD(&b->failed, 1);
         if (ATOMIC_ADD(&b->done, hi - lo) == b->N) {
@@ -113,6 +127,12 @@ run_batch(const Slice *job, Py_ssize_t N, long threads)
     b->chunk = (CHUNK_WORK / job->rows + 7) / 8 * 8;
     if (b->chunk < 8)
         b->chunk = 8;
+    b->T = T;
+    for (long t = 0; t < T; t++) {     /* block t: its share of the chunks */
+        const Py_ssize_t chunks = (N + b->chunk - 1) / b->chunk;
+        b->next[t] = chunks * t / T * b->chunk;
+        b->end[t] = t + 1 < T ? chunks * (t + 1) / T * b->chunk : N;
+    }
     b->refs = 1;
     int failed;
     Py_BEGIN_ALLOW_THREADS
