@@ -302,11 +302,11 @@ def bench_robot(name: str, model: sd.Model, xml: str, settings: Settings, log: C
     if pin is not None:
         fd = forward_row(name, model, xml, states, settings)
         log(f'{name}: a batch of {settings.batch} states against a loop of Pinocchio')
-        batch = batch_row(name, model, xml, settings, rng)
+        batch = batch_row(name, model, (pin, pm, P, joints), settings, rng)
     return rows, fd, batch, notes
 
 
-def batch_row(name: str, model: sd.Model, xml: str, settings: Settings,
+def batch_row(name: str, model: sd.Model, pinocchio: tuple, settings: Settings,
               rng: np.random.Generator) -> dict:
     """Time one ``sd.rnea_derivatives`` call on a batch against Pinocchio looped over it.
 
@@ -315,7 +315,7 @@ def batch_row(name: str, model: sd.Model, xml: str, settings: Settings,
     same states, in alternating rounds (median). The largest difference of the batch from
     the one-state calls on its first states, relative to the largest entry, is in the row.
     """
-    pin, pm, P, joints, _ = _pinocchio(model, xml)
+    pin, pm, P, joints = pinocchio     # bench_robot's model of the robot (_pinocchio)
     data = pm.createData()
     Q, QD, QDD = random_states(model, rng, settings.batch)
     pstates = [to_pinocchio(model, pm, P, joints, *s) for s in zip(Q, QD, QDD)]
