@@ -236,6 +236,9 @@ def test_bad_start_up_configuration_exits_1_with_reason(install, tmp_path):
                          ([good, 'qos_overrides./desired_joint_states.subscription.depth:=-1'],
                           "QoS of subscription '/desired_joint_states' (qos_overrides."
                           "/desired_joint_states.subscription.depth = -1"),
+                         ([good, 'qos_overrides./desired_joint_states.subscription.depth'
+                                 ':=2147483648'],
+                          "qos_overrides./desired_joint_states.subscription.depth = 2147483648"),
                          ([good, 'qos_overrides./joint_states.subscription.reliability:=foo'],
                           "QoS of subscription '/joint_states'"),
                          ([good, 'qos_overrides./effort_commands.publisher.depth:=-3'],

@@ -107,13 +107,14 @@ def _overrides_checked(node: Node, topic: str, kind: str):
 
     rclpy takes any integer for ``qos_overrides.<topic>.<kind>.depth``; the middleware then
     refuses a negative one deep inside ``create_subscription`` (``RCLError: invalid
-    allocator``), and rclpy itself raises ``RuntimeError`` for a policy it does not know
-    (``reliability: foo``): either would end the node with a traceback instead of a
-    ``cannot start:`` line naming the override.
+    allocator``), rclpy itself raises ``RuntimeError`` for a policy it does not know
+    (``reliability: foo``) and ``TypeError`` for a depth of 2³¹ or more (its QoS profile
+    holds a C int): each would end the node with a traceback instead of a ``cannot start:``
+    line naming the override.
     """
     try:
         yield
-    except (_rclpy.RCLError, RuntimeError) as err:
+    except (_rclpy.RCLError, RuntimeError, TypeError) as err:
         name = node.resolve_topic_name(topic)
         prefix = f'qos_overrides.{name}.{kind}'
         values = ', '.join(f'{prefix}.{k} = {p.value!r}' for k, p in
