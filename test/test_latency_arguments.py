@@ -405,3 +405,31 @@ def test_the_json_has_null_where_a_target_had_no_answer():
     text = json.dumps(rows, allow_nan=False)
     assert json.loads(text)[0]['max_ms'] is None and json.loads(text)[0]['mean_ms'] is None
     assert json.loads(text)[0]['sent'] == 2 and json.loads(text)[0]['answered'] == 0
+
+
+@pytest.mark.parametrize('count', [0, 999, 1000])
+def test_the_machines_floor_is_the_pacers_wake_ups_with_the_kernels_preemption(count):
+    """The floor line: quantiles of how late the pacer woke, those over 1 ms counted."""
+    import json
+
+    import numpy as np
+
+    from spatial_dynamics.tools.latency import json_safe, machine_line, wake_ups
+    late_ns = [50_000] * (count - 2) + [1_500_000, 900_000] if count else []
+    machine = wake_ups(late_ns, 'none')
+    assert machine['wake_ups'] == count and machine['over_1ms'] == (1 if count else 0)
+    if count:
+        assert machine['max_ms'] == pytest.approx(1.5)
+        assert machine['p50_ms'] == pytest.approx(0.05)
+        assert machine['p99.9_ms'] == (pytest.approx(np.percentile(np.array(late_ns) * 1e-6,
+                                                                   99.9))
+                                       if count >= 1000 else None)
+    line = machine_line(machine, 'SCHED_FIFO 51')
+    assert 'SCHED_FIFO 51' in line and 'kernel preemption: none' in line, line
+    assert f'({machine["over_1ms"]} of {count} wake-ups over 1 ms)' in line, line
+    json.dumps(json_safe([machine]), allow_nan=False)   # no NaN reaches the JSON
+
+
+def test_the_kernels_preemption_model_is_one_of_linuxs():
+    from spatial_dynamics.tools.latency import kernel_preemption
+    assert kernel_preemption() in ('none', 'voluntary', 'full', 'lazy', 'rt', 'unknown')

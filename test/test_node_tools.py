@@ -2,6 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """The demo, the latency benchmark and their pieces."""
 
+import json
 import os
 import subprocess
 import sys
@@ -100,7 +101,10 @@ def test_latency_benchmark_runs(tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     for target in ('relay', 'inverse_dynamics'):
         assert f'\n{target} ' in proc.stdout
-    assert (tmp_path / 'latency.json').exists()
+    assert '\nmachine: the publisher woke late from its sleeps' in proc.stdout, proc.stdout
+    machine = json.loads((tmp_path / 'latency.json').read_text())['machine']
+    # 1 s at 200 Hz per target: every tick that was not late slept, then woke
+    assert 0 < machine['wake_ups'] <= 400 and machine['max_ms'] >= machine['p50_ms'] > -1e-3
 
 
 @pytest.mark.ros

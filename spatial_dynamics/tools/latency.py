@@ -29,6 +29,11 @@ of a busy machine; ``--priority P`` gives node, relay and this process's receive
 SCHED_FIFO P, the publishing process P + 1 (a tick never waits for a target's thread); 0:
 normal scheduling for all; it needs the rtprio limit, see the node's ``thread_priority``.
 ``--plot`` draws the histograms of the round trips (matplotlib).
+
+The machine's floor, measured in the same run: how late the publishing process woke from
+each sleep to its grid (it sleeps at a priority above the targets', so no thread of theirs
+wakes sooner), with the kernel's preemption model (:func:`kernel_preemption`). A round trip
+wakes at least one thread: its tail cannot be shorter than the wake-ups' tail.
 """
 
 from __future__ import annotations
@@ -198,6 +203,7 @@ class Pacer:
     def __init__(self, namespaces: Sequence[str], trajectory: Sinusoids, priority: int,
                  watch: Callable[[], None] = lambda: None) -> None:
         self.watch = watch   # raises RuntimeError when a target has exited
+        self.woke_late_ns: List[int] = []   # of the measured blocks and the warm-up
         setup = {'namespaces': list(namespaces), 'joint_names': list(trajectory.joint_names),
                  'lower': (trajectory.c - 2.0 * trajectory.a).tolist(),
                  'upper': (trajectory.c + 2.0 * trajectory.a).tolist(), 'priority': priority}
@@ -249,9 +255,14 @@ class Pacer:
         self._reply(executor, 10.0)
 
     def block(self, executor, index: int, rate: float, count: int, t0: float) -> List[int]:
-        """Publish ``count`` inputs at ``rate`` Hz to target ``index``; their stamps (ns)."""
+        """Publish ``count`` inputs at ``rate`` Hz to target ``index``; their stamps (ns).
+
+        How late the pacer woke from each sleep to its grid is added to ``woke_late_ns``.
+        """
         self._send(['block', index, rate, count, t0])
-        return self._reply(executor, count / rate + 60.0)
+        reply = self._reply(executor, count / rate + 60.0)
+        self.woke_late_ns.extend(reply['woke_late_ns'])
+        return reply['stamps']
 
     def close(self, interrupted: bool = False) -> None:
         """Stop the process (it also dies with this one); ``interrupted``: at once.
@@ -311,7 +322,7 @@ def pace_inputs() -> None:
                 continue
             _, _, rate, count, t0 = command
             period = 1.0 / rate
-            stamps = []
+            stamps, woke_late = [], []
             start_time = time.monotonic()
             for k in range(count):
                 fill(msg, trajectory, time.monotonic() - t0)
@@ -319,10 +330,12 @@ def pace_inputs() -> None:
                 msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
                 publisher.publish(msg)
                 stamps.append(stamp)
-                delay = start_time + (k + 1) * period - time.monotonic()
+                due = start_time + (k + 1) * period
+                delay = due - time.monotonic()
                 if delay > 0.0:   # a late tick is published at once, not skipped
                     time.sleep(delay)
-            reply(stamps)
+                    woke_late.append(round((time.monotonic() - due) * 1e9))
+            reply({'stamps': stamps, 'woke_late_ns': woke_late})
     except BrokenPipeError:   # the benchmark is gone
         return
     finally:
@@ -426,6 +439,70 @@ def difference_line(node: Dict[str, float], relay: Dict[str, float]) -> str:
         f'{key} {diff(key)}' for key, _, _ in QUANTILES)
 
 
+def kernel_preemption() -> str:
+    """Return the running kernel's preemption model: none, voluntary, full, rt or unknown.
+
+    A thread woken at a high priority still waits for the kernel code running on its core to
+    reach a point where it may be preempted: with ``none`` (servers' kernels) that can be
+    milliseconds; PREEMPT_RT kernels are what real-time control runs on. Read from the
+    scheduler's debug file, else ``uname -v``, the boot options and the kernel's config.
+    """
+    try:   # e.g. 'none voluntary (full) lazy': the one in parentheses is in effect
+        with open('/sys/kernel/debug/sched/preempt') as f:
+            text = f.read()
+        if '(' in text:
+            return text[text.index('(') + 1:text.index(')')]
+    except (OSError, ValueError):
+        pass
+    if 'PREEMPT_RT' in os.uname().version:
+        return 'rt'
+    try:
+        with open('/proc/cmdline') as f:
+            for option in f.read().split():
+                if option.startswith('preempt='):
+                    return option.split('=', 1)[1]
+    except OSError:
+        pass
+    try:
+        import gzip
+        with gzip.open('/proc/config.gz', 'rt') as f:
+            config = set(line.strip() for line in f)
+    except OSError:
+        return 'unknown'
+    for option, model in (('CONFIG_PREEMPT_RT=y', 'rt'), ('CONFIG_PREEMPT=y', 'full'),
+                          ('CONFIG_PREEMPT_VOLUNTARY=y', 'voluntary'),
+                          ('CONFIG_PREEMPT_NONE=y', 'none')):
+        if option in config:
+            return model
+    return 'unknown'
+
+
+def wake_ups(late_ns: Sequence[int], preemption: str) -> Dict[str, object]:
+    """Return how late the pacer woke from its sleeps: the machine's floor for any target.
+
+    Each round trip waits for at least one thread woken by the input; none is woken sooner
+    than the pacer, which sleeps at a priority above the targets'. Quantiles in ms as
+    :func:`Target.summary` reports them (None from too few wake-ups).
+    """
+    ms = np.array(late_ns, dtype=float) * 1e-6
+    out: Dict[str, object] = {'wake_ups': len(ms), 'kernel_preemption': preemption}
+    for key, _, _ in QUANTILES:
+        out[f'{key}_ms'] = quantile(ms, key)
+    out['max_ms'] = float(ms.max()) if len(ms) else float('nan')
+    out['over_1ms'] = int((ms > 1.0).sum())
+    return out
+
+
+def machine_line(machine: Dict[str, object], scheduling: str) -> str:
+    """Return the line of the machine's floor (:func:`wake_ups`) under ``scheduling``."""
+    keys = [key for key, _, _ in QUANTILES] + ['max']
+    return (f'machine: the publisher woke late from its sleeps to the grid ({scheduling}) by '
+            + ', '.join(f'{key} {cell(machine[key + "_ms"])}' for key in keys)
+            + f' ms ({machine["over_1ms"]} of {machine["wake_ups"]} wake-ups over 1 ms); '
+            f'kernel preemption: {machine["kernel_preemption"]} — no round trip has a '
+            'shorter tail than a wake-up')
+
+
 def legend(name: str, values: np.ndarray, sent: int) -> str:
     """Return a histogram's legend: answered, and the highest quantile the answers tell."""
     told = [(key, quantile(values, key)) for key, _, _ in QUANTILES]
@@ -505,8 +582,12 @@ def prioritize(priority: int, this_thread: bool = True) -> str:
     return f'SCHED_FIFO {priority}'
 
 
-def plot(path: str, targets: List[Target], title: str) -> Optional[str]:
-    """Draw the histograms of the round trips (log counts) to ``path``; None if no matplotlib."""
+def plot(path: str, targets: List[Target], title: str,
+         woke_late_ns: Sequence[int] = ()) -> Optional[str]:
+    """Draw the histograms of the round trips (log counts) to ``path``; None if no matplotlib.
+
+    With ``woke_late_ns``, that of the pacer's wake-ups too (the machine's floor, dotted).
+    """
     plt = pyplot()
     if plt is None:
         return None
@@ -517,6 +598,12 @@ def plot(path: str, targets: List[Target], title: str) -> Optional[str]:
     for target, v in zip(targets, values):
         ax.hist(np.minimum(v, bins[-1]), bins=bins, histtype='step', log=True,
                 label=legend(target.name, v, len(target.sent)))
+    if len(woke_late_ns):
+        late = np.array(woke_late_ns, dtype=float) * 1e-6
+        ax.hist(np.minimum(late, bins[-1]), bins=bins, histtype='step', log=True,
+                linestyle=':', color='0.4',
+                label=legend('publisher woke late', late, len(late)).replace(
+                    ' % answered', ' % of its wake-ups'))
     ax.set_xlabel('round trip, ms (the last bin holds everything beyond)')
     ax.set_ylabel('answers')
     ax.set_title('\n'.join(textwrap.wrap(title, 100)), fontsize=8)
@@ -703,6 +790,7 @@ def run(args: argparse.Namespace) -> int:
         t0 = time.monotonic()
         for index, target in enumerate(targets):
             pacer.block(executor, index, args.rate, int(round(args.rate * args.warmup)), t0)
+        pacer.woke_late_ns.clear()   # the machine's floor: of the measured blocks only
         for target in targets:
             target.period_ns = int(1e9 / args.rate)
         for block in counts(args.rate, args.seconds, args.block):
@@ -739,6 +827,8 @@ def run(args: argparse.Namespace) -> int:
             print(not_answered_line(r))
         print(compute.text())
         print(difference_line(rows[1], rows[0]))
+        machine = wake_ups(pacer.woke_late_ns, kernel_preemption())
+        print(machine_line(machine, pacer.scheduling))
         status = 0 if all(r['answered'] for r in rows) else 1
         try:   # the results first: a plot that fails to be written loses nothing else
             if args.json:
@@ -747,8 +837,9 @@ def run(args: argparse.Namespace) -> int:
                                'scheduling': scheduling, 'seconds_per_target': args.seconds,
                                'load': os.getloadavg()[0],
                                'compute_us_means': compute.means_us,
+                               'machine': json_safe([machine])[0],
                                'targets': json_safe(rows)}, f, indent=2, allow_nan=False)
-            if args.plot and plot(args.plot, targets, title) is None:
+            if args.plot and plot(args.plot, targets, title, pacer.woke_late_ns) is None:
                 print('--plot: matplotlib is not installed, no histogram drawn')
         except OSError as err:
             print(f'latency: cannot write {err.filename!r}: {err.strerror}', file=sys.stderr)
