@@ -291,6 +291,30 @@ def test_floating_solo12_standing_is_contact_inverse_dynamics(solo_path):
     assert level == 'OK' and dict(values)['contact solutions'] == '1'
 
 
+def test_contact_wrenches_are_computed_when_read_not_on_every_answer(solo_path, monkeypatch):
+    """An answer carries its contact wrenches unread: the node reads them for a subscriber."""
+    from spatial_dynamics.ros import floating as floating_module
+    computed = []
+    compute = floating_module.contact_wrenches
+    monkeypatch.setattr(floating_module, 'contact_wrenches',
+                        lambda *args: computed.append(args) or compute(*args))
+    cfg = floating(solo_path)
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    q = standing(robot.joints)
+    zero = np.zeros(12)
+    out = answering.joint_state(cfg, joint_state(robot.joints, 1.0, q, zero, zero))
+    assert out.answer is not None and computed == []
+    first = list(out.answer.contacts)
+    assert len(computed) == 1 and [link for link, _ in first] == list(FEET)
+    again = list(out.answer.contacts)          # computed once, read as often as wanted
+    assert len(computed) == 1 and all(a[1] is b[1] for a, b in zip(first, again))
+    forces = world_forces(robot.model, np.r_[base_q, q], first)
+    weight = robot.model.inertia[:, 3, 3].sum() * 9.81
+    np.testing.assert_allclose(sum(forces.values()), [0.0, 0.0, weight], atol=1e-9)
+
+
 def test_floating_contacts_follow_contact_states_and_violations_are_reported(solo_path):
     cfg = floating(solo_path, **{'contacts.mu': 0.01})
     robot = cfg.robot

@@ -45,7 +45,7 @@ from spatial_dynamics.effort import with_gravity
 from spatial_dynamics.ros.bases import BaseInputs, observer_off
 from spatial_dynamics.ros.control import answer, Dynamics, FEEDBACK_MODES, measured_arrays
 from spatial_dynamics.ros.diagnostics import Totals, Window
-from spatial_dynamics.ros.floating import contact_wrenches
+from spatial_dynamics.ros.floating import ContactWrenches
 from spatial_dynamics.ros.inputs import (InputError, joint_state_arrays, stamp_ns,
                                          trajectory_arrays)
 from spatial_dynamics.ros.observer import (
@@ -70,8 +70,9 @@ class Held(NamedTuple):
 class Answer(NamedTuple):
     """One answer to publish: the input's header, the model joints, q_d, q̇_d, τ, the terms.
 
-    ``contacts``: on a floating base, ``((link, [n; f] in the link's frame), ...)`` of the
-    contact solution, published on ``contact_wrenches``; None otherwise.
+    ``contacts``: on a floating base, ``(link, [n; f] in the link's frame)`` pairs of the
+    contact solution (a :class:`~.floating.ContactWrenches`, computed when first iterated),
+    published on ``contact_wrenches`` while somebody subscribes; None otherwise.
     """
 
     header: object
@@ -495,7 +496,7 @@ class Answering:
             result = dynamics.results[-1]
             self.base_inputs.solved(result, robot.pull_tolerance)
             q = measured[0] if params.control_mode == 'computed_torque' else desired[0]
-            contacts = contact_wrenches(robot.model, dynamics.base_q, q, result)
+            contacts = ContactWrenches(robot.model, dynamics.base_q, q, result)
         t1 = time.monotonic_ns()
         self._count_answer(self.window, header.stamp, t0, t1)
         return Answer(header, robot.joints, desired[0], desired[1], tau, terms, contacts)

@@ -199,7 +199,7 @@ class BaseWindow:
     residual_max: float = 0.0
     violations: Counter = field(default_factory=Counter)   # 'contact kind' -> count
     worst: dict = field(default_factory=dict)               # 'contact kind' -> largest N
-    last: str = ''
+    last: object = None         # the last solution (its summary() when diagnostics are sent)
     resolved: int = 0           # answers re-solved by qp: the split made a contact pull
     refused: Counter = field(default_factory=Counter)      # pulling answers refused, by reason
     pull_max: float = 0.0       # the worst pull seen (N) of those, and its contact
@@ -454,7 +454,7 @@ class BaseInputs:
             key = f'{violation.contact} {violation.kind}'
             window.violations[key] += 1
             window.worst[key] = max(window.worst.get(key, 0.0), violation.amount)
-        window.last = result.summary()
+        window.last = result   # summarized when diagnostics are sent, not on every answer
 
     def pulled(self, pulls: list, refused: Optional[InputError] = None) -> None:
         """Count an answer whose split made a contact pull: re-solved by qp, or ``refused``.

@@ -371,7 +371,7 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
                    ('contacts method', params.contacts_method),
                    ('contact solutions', str(window.solved)),
                    ('base residual max', f'{window.residual_max:.3g}'),
-                   ('last solution', window.last)]
+                   ('last solution', '' if window.last is None else window.last.summary())]
         values += [(f'violation {key}', f'{count} (worst {window.worst[key]:.3g} N)')
                    for key, count in window.violations.items()]
         values += [('contact pull tolerance [N]', f'{robot.pull_tolerance:.3g}' if robot

@@ -204,6 +204,29 @@ def _world(R: np.ndarray, wrench: np.ndarray, rows: int) -> np.ndarray:
     return np.r_[R @ wrench[:3], R @ wrench[3:]]
 
 
+class ContactWrenches:
+    """One answer's contact wrenches, computed when first read (:func:`contact_wrenches`).
+
+    Iterated as ``(link, [n; f])`` pairs. An answer carries this instead of the wrenches: the
+    node reads them only while somebody subscribes to ``contact_wrenches`` (measured on
+    Solo12: 20-25 µs to compute, ~45 µs each of the four messages to build and publish, on
+    every answer nobody listens to).
+    """
+
+    __slots__ = ('_state', '_wrenches')
+
+    def __init__(self, model: 'sd.Model', base_q: np.ndarray, q: np.ndarray,
+                 result: 'sd.ContactResult') -> None:
+        self._state = (model, base_q, q, result)
+        self._wrenches: Optional[tuple] = None
+
+    def __iter__(self):
+        if self._wrenches is None:
+            self._wrenches = contact_wrenches(*self._state)
+            self._state = None
+        return iter(self._wrenches)
+
+
 def contact_wrenches(model: 'sd.Model', base_q: np.ndarray, q: np.ndarray,
                      result: 'sd.ContactResult') -> Tuple[Tuple[str, np.ndarray], ...]:
     """Each contact's wrench ``[n; f]`` (6,) on the robot, in its link's frame, at its origin.

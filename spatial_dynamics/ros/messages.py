@@ -25,7 +25,7 @@ def wrench_stamped(header, link: str, wrench: np.ndarray) -> WrenchStamped:
     msg.header.stamp = header.stamp
     msg.header.frame_id = link
     n, f = msg.wrench.torque, msg.wrench.force
-    n.x, n.y, n.z, f.x, f.y, f.z = (float(x) for x in wrench)
+    n.x, n.y, n.z, f.x, f.y, f.z = np.asarray(wrench, dtype=float).tolist()
     return msg
 
 

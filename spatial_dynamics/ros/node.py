@@ -453,7 +453,8 @@ class InverseDynamicsNode(Node):
         """Publish what one message gave: an answer, an estimate, a wrench, an annotated plan."""
         if out.answer is not None:
             self._publish(*out.answer[:6])
-            if out.answer.contacts is not None:
+            if (out.answer.contacts is not None
+                    and self.contacts_pub.get_subscription_count() > 0):
                 for link, wrench in out.answer.contacts:
                     self.contacts_pub.publish(messages.wrench_stamped(out.answer.header, link,
                                                                       wrench))
