@@ -41,10 +41,14 @@ def test_feedforward_tracks_20x_better_than_pd_alone(install, tmp_path, robot):
     assert set(laws) == {'PD alone', 'PD + feed-forward', 'computed torque'}
     for law in laws.values():
         assert law['simulated_s'] >= 1.5 and law['samples'] >= 1400, law
-        # the answers were computed from the desired state of their own step (the node echoes
-        # the q_d it used), all but the rare one DDS delivers after the next state (messages
-        # of two topics are not ordered): seen 0-1 in 6000 with two CPU burners
-        assert law['answers'] >= 1400 and law['stale_desired'] <= law['answers'] // 100, law
+        # each answer was computed from the desired state of its own step (the node echoes
+        # the q_d it used) or, when DDS delivered that one after the simulator's state
+        # (messages of two topics are not ordered; the relay's pause before the state is a
+        # wall-clock margin: 0-2 in 3000 with three busy loops, 28 in 3000 under builds),
+        # from the step before's, which the node held then: never an older one. How many is
+        # the machine's timing, not the node's: reported, not bounded
+        # (``--plan`` has no second message to race: test_node_observer)
+        assert law['answers'] >= 1400 and law['stale_older_than_previous'] == 0, law
         assert law['repeated_answers'] == 0, law
     pd = laws['PD alone']['rms']
     assert pd > 1e-3, 'PD alone should visibly lag a loaded arm'

@@ -175,6 +175,7 @@ class Run:
         self.e: List[np.ndarray] = []
         self.answers = 0        # answers of the node seen
         self.stale = 0          # of them computed from another step's desired state
+        self.stale_older = 0    # of those, from one older than the step before (none may be)
         self.repeated = 0       # of them answering a state answered already (not forwarded)
         self.replaced_at: Optional[float] = None   # --plan: when the second plan took over
         self.end_from_start = float('nan')         # --plan: max |q - q0| at the end
@@ -186,6 +187,7 @@ class Run:
                 'rms': float(np.sqrt(np.mean(e ** 2))) if e.size else float('nan'),
                 'max': float(e.max()) if e.size else float('nan'),
                 'answers': self.answers, 'stale_desired': self.stale,
+                'stale_older_than_previous': self.stale_older,
                 'repeated_answers': self.repeated, 'plan_replaced_at_s': self.replaced_at,
                 'end_from_start': self.end_from_start,
                 'rms_per_joint': dict(zip(self.names, np.sqrt(np.mean(e ** 2, axis=0)).tolist()
@@ -209,7 +211,9 @@ class Lockstep:
     loops: 0-2 in 3000; 9-49 in 3000 with builds sharing the cores; a wait for the node's
     reader to acknowledge the desired state cannot replace the pause: a best-effort reader
     acknowledges nothing, and a reliable one only at the writer's heartbeat, every few
-    seconds): :attr:`stale` counts them from the q_d the node echoes. Where none may
+    seconds): :attr:`stale` counts them from the q_d the node echoes, :attr:`stale_older` those
+    of them whose q_d is not the step before's (none may be: the node answers with the
+    desired state it holds, and it held the step before's). Where none may
     come from another step, send the trajectory as a plan (``--plan``).
     An answer to a state answered already (the simulator republishes the state it waits on)
     is not forwarded; :attr:`repeated` counts those to a stamped state (step 0 is stamped 0,
@@ -233,6 +237,7 @@ class Lockstep:
         self.steps = 0                  # torques forwarded: the simulator is at step `steps`
         self.answers = 0                # answers seen
         self.stale = 0                  # of them computed from another step's desired state
+        self.stale_older = 0            # of those, from one older than the step before
         self.repeated = 0               # of them answering a state answered already
         self.sent = {}                  # step -> desired q published for it
         self.msg = JointState(name=list(names))
@@ -278,6 +283,9 @@ class Lockstep:
             return
         if list(msg.position) != self.sent.get(step):
             self.stale += 1
+            # the one a late delivery explains: the setpoint of the step before, held by the
+            # node while this step's was on its way; anything else would be the node's fault
+            self.stale_older += list(msg.position) != self.sent.get(step - 1)
         self.steps += 1
         self.publish_desired(self.steps * self.timestep)
         time.sleep(DELIVERY)
@@ -480,8 +488,8 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
                 next_show += 0.25
     finally:
         if lockstep is not None:
-            run.answers, run.stale, run.repeated = (lockstep.answers, lockstep.stale,
-                                                    lockstep.repeated)
+            run.answers, run.stale, run.stale_older, run.repeated = (
+                lockstep.answers, lockstep.stale, lockstep.stale_older, lockstep.repeated)
         else:
             run.replaced_at = plans.replaced
             if plans.last_q is not None:
@@ -602,7 +610,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     for s in summaries:
         print(f'{s["law"]:<20} rms {s["rms"]:.3e}  max {s["max"]:.3e}  '
               f'({s["samples"]} states, {s["simulated_s"]:.2f} s; {s["answers"]} answers, '
-              f'{s["stale_desired"]} from another step\'s desired state, '
+              f'{s["stale_desired"]} from another step\'s desired state '
+              f'({s["stale_older_than_previous"]} older than the step before), '
               f'{s["repeated_answers"]} to a state answered already)')
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
