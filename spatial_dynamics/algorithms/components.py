@@ -188,7 +188,7 @@ def I_rate(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, w0, w1, w2, u0, u1, u
 
 
 def I_articulated(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz):
-    """A rigid body's spatial inertia as a symmetric 6x6: its upper triangle, 21 scalars.
+    """Write a rigid body's spatial inertia as a symmetric 6x6: its upper triangle, 21 scalars.
 
     ``I = [[Ibar, h×], [h×ᵀ, m 1]]`` (RBDA eq. 2.63), row by row: ``I_00 … I_05, I_11 …
     I_15, …, I_55``, the form of an articulated-body inertia (RBDA §7.1), which is no rigid

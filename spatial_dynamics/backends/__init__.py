@@ -318,10 +318,12 @@ def forward_dynamics(model: Model, q, qd, tau, gravity: Sequence[float] = GRAVIT
     The exact inverse of :func:`rnea`: ``rnea(model, q, qd, forward_dynamics(model, q, qd,
     tau, ...), ...) == tau`` to rounding, with the same arguments (``q``, ``qd``, ``gravity``,
     ``f_ext``, ``backend``, ``base``; ``tau`` (..., nv) in place of ``qdd``), checked and
-    refused as :func:`rnea` checks them. ``M`` from CRBA (RBDA table 6.2), the bias ``h`` from
-    RNEA at ``q̈ = 0``, then ``M q̈ = τ - h`` by the sparse ``LᵀL`` factorization of RBDA
-    §6.5 (:mod:`spatial_dynamics.algorithms.forward`), one C call a state on the compiled
-    backend, batches on threads.
+    refused as :func:`rnea` checks them. The articulated-body algorithm (RBDA table 7.1,
+    :mod:`spatial_dynamics.algorithms.aba`), one C call a state on the compiled backend,
+    batches on threads; where two bodies share a coordinate (a mimic joint), on a moving
+    ``base`` and for a batch with armature: ``M`` from CRBA (RBDA table 6.2), the bias ``h``
+    from RNEA at ``q̈ = 0``, then ``M q̈ = τ - h`` by the sparse ``LᵀL`` factorization of
+    RBDA §6.5 (:mod:`spatial_dynamics.algorithms.forward`).
 
     A floating-base model's ``tau`` has the base's six rows first: the wrench ``[n; f]`` on
     the base (base frame), zero for a robot in free flight, as :func:`rnea` returns it; ``q̈``

@@ -5,7 +5,9 @@
 The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
 :mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`,
 :mod:`~spatial_dynamics.algorithms.momentum`, :mod:`~spatial_dynamics.algorithms.regressor`,
-:mod:`~spatial_dynamics.algorithms.jacobian`'s bodies, :mod:`~spatial_dynamics.algorithms.split`)
+:mod:`~spatial_dynamics.algorithms.jacobian`'s bodies, :mod:`~spatial_dynamics.algorithms.split`,
+:mod:`~spatial_dynamics.algorithms.derivatives`, :mod:`~spatial_dynamics.algorithms.forward`,
+:mod:`~spatial_dynamics.algorithms.aba`)
 are plain Python over tuples and lists. This module rewrites their syntax tree statement for
 statement onto flat float64 arrays (``_kernels_generated.py``, a readable listing the tests
 run, :func:`flat_module`) and prints the result as C (``_kernels_generated.h``, written into
