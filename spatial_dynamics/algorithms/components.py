@@ -185,3 +185,119 @@ def I_rate(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, w0, w1, w2, u0, u1, u
             -2.0 * p00 - 2.0 * u0 * hx + d, -(p01 + p10) - (u0 * hy + hx * u1),
             -(p02 + p20) - (u0 * hz + hx * u2), -2.0 * p11 - 2.0 * u1 * hy + d,
             -(p12 + p21) - (u1 * hz + hy * u2), -2.0 * p22 - 2.0 * u2 * hz + d)
+
+
+def I_articulated(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz):
+    """Write a rigid body's spatial inertia as a symmetric 6x6: its upper triangle, 21 scalars.
+
+    ``I = [[Ibar, h×], [h×ᵀ, m 1]]`` (RBDA eq. 2.63), row by row: ``I_00 … I_05, I_11 …
+    I_15, …, I_55``, the form of an articulated-body inertia (RBDA §7.1), which is no rigid
+    body's.
+    """
+    zero = 0.0 * mass
+    return (Ixx, Ixy, Ixz, zero, -hz, hy,
+            Iyy, Iyz, hz, zero, -hx,
+            Izz, -hy, hx, zero,
+            mass, zero, zero,
+            mass, zero,
+            mass)
+
+
+def IA_motion(i00, i01, i02, i03, i04, i05, i11, i12, i13, i14, i15, i22, i23, i24, i25,
+              i33, i34, i35, i44, i45, i55, m0, m1, m2, m3, m4, m5):
+    """Apply a symmetric 6x6 (its upper triangle, :func:`I_articulated`) to a 6-vector."""
+    return (i00 * m0 + i01 * m1 + i02 * m2 + i03 * m3 + i04 * m4 + i05 * m5,
+            i01 * m0 + i11 * m1 + i12 * m2 + i13 * m3 + i14 * m4 + i15 * m5,
+            i02 * m0 + i12 * m1 + i22 * m2 + i23 * m3 + i24 * m4 + i25 * m5,
+            i03 * m0 + i13 * m1 + i23 * m2 + i33 * m3 + i34 * m4 + i35 * m5,
+            i04 * m0 + i14 * m1 + i24 * m2 + i34 * m3 + i44 * m4 + i45 * m5,
+            i05 * m0 + i15 * m1 + i25 * m2 + i35 * m3 + i45 * m4 + i55 * m5)
+
+
+def XT_IA_X_plus(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
+                 i00, i01, i02, i03, i04, i05, i11, i12, i13, i14, i15, i22, i23, i24, i25,
+                 i33, i34, i35, i44, i45, i55,
+                 c00, c01, c02, c03, c04, c05, c11, c12, c13, c14, c15, c22, c23, c24, c25,
+                 c33, c34, c35, c44, c45, c55):
+    """``c + Xᵀ I X``: a child's articulated inertia added to its parent's (RBDA table 7.1).
+
+    ``I = [[A, B], [Bᵀ, C]]`` any symmetric 6x6 (upper triangles, :func:`I_articulated`),
+    ``X = (E, r) = [[E, 0], [0, E]] [[1, 0], [-r×, 1]]``. Rotated, ``A' = Eᵀ A E``,
+    ``B' = Eᵀ B E``, ``C' = Eᵀ C E``; then moved by ``r``: ``C'' = C'``,
+    ``B'' = B' + r× C'``, ``A'' = A' + r× B'ᵀ - B'' r×``.
+    """
+    # A' = Eᵀ A E (upper triangle), via A E
+    t00 = i00 * e00 + i01 * e10 + i02 * e20
+    t01 = i00 * e01 + i01 * e11 + i02 * e21
+    t02 = i00 * e02 + i01 * e12 + i02 * e22
+    t10 = i01 * e00 + i11 * e10 + i12 * e20
+    t11 = i01 * e01 + i11 * e11 + i12 * e21
+    t12 = i01 * e02 + i11 * e12 + i12 * e22
+    t20 = i02 * e00 + i12 * e10 + i22 * e20
+    t21 = i02 * e01 + i12 * e11 + i22 * e21
+    t22 = i02 * e02 + i12 * e12 + i22 * e22
+    a00 = e00 * t00 + e10 * t10 + e20 * t20
+    a01 = e00 * t01 + e10 * t11 + e20 * t21
+    a02 = e00 * t02 + e10 * t12 + e20 * t22
+    a11 = e01 * t01 + e11 * t11 + e21 * t21
+    a12 = e01 * t02 + e11 * t12 + e21 * t22
+    a22 = e02 * t02 + e12 * t12 + e22 * t22
+    # C' = Eᵀ C E
+    t00 = i33 * e00 + i34 * e10 + i35 * e20
+    t01 = i33 * e01 + i34 * e11 + i35 * e21
+    t02 = i33 * e02 + i34 * e12 + i35 * e22
+    t10 = i34 * e00 + i44 * e10 + i45 * e20
+    t11 = i34 * e01 + i44 * e11 + i45 * e21
+    t12 = i34 * e02 + i44 * e12 + i45 * e22
+    t20 = i35 * e00 + i45 * e10 + i55 * e20
+    t21 = i35 * e01 + i45 * e11 + i55 * e21
+    t22 = i35 * e02 + i45 * e12 + i55 * e22
+    k00 = e00 * t00 + e10 * t10 + e20 * t20
+    k01 = e00 * t01 + e10 * t11 + e20 * t21
+    k02 = e00 * t02 + e10 * t12 + e20 * t22
+    k11 = e01 * t01 + e11 * t11 + e21 * t21
+    k12 = e01 * t02 + e11 * t12 + e21 * t22
+    k22 = e02 * t02 + e12 * t12 + e22 * t22
+    # B' = Eᵀ B E (B_jk = I_j,3+k)
+    t00 = i03 * e00 + i04 * e10 + i05 * e20
+    t01 = i03 * e01 + i04 * e11 + i05 * e21
+    t02 = i03 * e02 + i04 * e12 + i05 * e22
+    t10 = i13 * e00 + i14 * e10 + i15 * e20
+    t11 = i13 * e01 + i14 * e11 + i15 * e21
+    t12 = i13 * e02 + i14 * e12 + i15 * e22
+    t20 = i23 * e00 + i24 * e10 + i25 * e20
+    t21 = i23 * e01 + i24 * e11 + i25 * e21
+    t22 = i23 * e02 + i24 * e12 + i25 * e22
+    b00 = e00 * t00 + e10 * t10 + e20 * t20
+    b01 = e00 * t01 + e10 * t11 + e20 * t21
+    b02 = e00 * t02 + e10 * t12 + e20 * t22
+    b10 = e01 * t00 + e11 * t10 + e21 * t20
+    b11 = e01 * t01 + e11 * t11 + e21 * t21
+    b12 = e01 * t02 + e11 * t12 + e21 * t22
+    b20 = e02 * t00 + e12 * t10 + e22 * t20
+    b21 = e02 * t01 + e12 * t11 + e22 * t21
+    b22 = e02 * t02 + e12 * t12 + e22 * t22
+    # B'' = B' + r× C'
+    d00 = b00 + (ry * k02 - rz * k01)
+    d01 = b01 + (ry * k12 - rz * k11)
+    d02 = b02 + (ry * k22 - rz * k12)
+    d10 = b10 + (rz * k00 - rx * k02)
+    d11 = b11 + (rz * k01 - rx * k12)
+    d12 = b12 + (rz * k02 - rx * k22)
+    d20 = b20 + (rx * k01 - ry * k00)
+    d21 = b21 + (rx * k11 - ry * k01)
+    d22 = b22 + (rx * k12 - ry * k02)
+    # A'' = A' + r× B'ᵀ - B'' r×:  (r× M)_0k = ry M_2k - rz M_1k, …;  (M r×)_j0 = rz M_j1 -
+    # ry M_j2, (M r×)_j1 = rx M_j2 - rz M_j0, (M r×)_j2 = ry M_j0 - rx M_j1
+    return (c00 + (a00 + (ry * b02 - rz * b01) - (rz * d01 - ry * d02)),
+            c01 + (a01 + (ry * b12 - rz * b11) - (rx * d02 - rz * d00)),
+            c02 + (a02 + (ry * b22 - rz * b21) - (ry * d00 - rx * d01)),
+            c03 + d00, c04 + d01, c05 + d02,
+            c11 + (a11 + (rz * b10 - rx * b12) - (rx * d12 - rz * d10)),
+            c12 + (a12 + (rz * b20 - rx * b22) - (ry * d10 - rx * d11)),
+            c13 + d10, c14 + d11, c15 + d12,
+            c22 + (a22 + (rx * b21 - ry * b20) - (ry * d20 - rx * d21)),
+            c23 + d20, c24 + d21, c25 + d22,
+            c33 + k00, c34 + k01, c35 + k02,
+            c44 + k11, c45 + k12,
+            c55 + k22)

@@ -2,6 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """Forward dynamics ``q̈ = M(q)⁻¹ (τ - C(q, q̇) q̇ - g(q))``: the sparse ``LᵀL`` solve, one source.
 
+Forward dynamics runs the articulated-body algorithm (:mod:`.aba`) where it exists; this
+solve is the path of a model where two bodies share a coordinate (a mimic joint), of a moving
+base and of batches with armature, and it names the joint of a pivot that is not positive.
 With ``M`` from :mod:`.crba` and the bias ``h = C q̇ + g`` from :mod:`.rnea` at ``q̈ = 0``,
 ``M q̈ = τ - h`` is solved by the factorization of RBDA §6.5 (tables 6.3 and 6.4), which keeps
 the sparsity that branches give ``M``: ``M_ij ≠ 0`` only when coordinate ``i`` is an ancestor

@@ -318,10 +318,12 @@ def forward_dynamics(model: Model, q, qd, tau, gravity: Sequence[float] = GRAVIT
     The exact inverse of :func:`rnea`: ``rnea(model, q, qd, forward_dynamics(model, q, qd,
     tau, ...), ...) == tau`` to rounding, with the same arguments (``q``, ``qd``, ``gravity``,
     ``f_ext``, ``backend``, ``base``; ``tau`` (..., nv) in place of ``qdd``), checked and
-    refused as :func:`rnea` checks them. ``M`` from CRBA (RBDA table 6.2), the bias ``h`` from
-    RNEA at ``q̈ = 0``, then ``M q̈ = τ - h`` by the sparse ``LᵀL`` factorization of RBDA
-    §6.5 (:mod:`spatial_dynamics.algorithms.forward`), one C call a state on the compiled
-    backend, batches on threads.
+    refused as :func:`rnea` checks them. The articulated-body algorithm (RBDA table 7.1,
+    :mod:`spatial_dynamics.algorithms.aba`), one C call a state on the compiled backend,
+    batches on threads; where two bodies share a coordinate (a mimic joint), on a moving
+    ``base`` and for a batch with armature: ``M`` from CRBA (RBDA table 6.2), the bias ``h``
+    from RNEA at ``q̈ = 0``, then ``M q̈ = τ - h`` by the sparse ``LᵀL`` factorization of
+    RBDA §6.5 (:mod:`spatial_dynamics.algorithms.forward`).
 
     A floating-base model's ``tau`` has the base's six rows first: the wrench ``[n; f]`` on
     the base (base frame), zero for a robot in free flight, as :func:`rnea` returns it; ``q̈``
@@ -354,25 +356,36 @@ def _forward(model: Model, q, qd, tau, gravity, f_ext, backend: str,
              base: Optional[BaseMotion], armature) -> np.ndarray:
     """Run :func:`forward_dynamics` beyond its single-state entry: checks, terms, batches."""
     lay, kern, _ = _entered(model, backend, None)
-    if base is None and armature is None:
+    if base is None:
         q, qd, tau = as_joint_arrays(model, q, qd, tau, names=('q', 'qd', 'tau'))
         g = tuple(as_vector('gravity', gravity, 3).tolist())
         fb = f_ext_in_bodies(model, f_ext)
+        arm = (None if armature is None
+               else per_joint(model, 'armature', armature, nonnegative=True))
         if fb:  # batched wrenches broadcast against the batch of states
             batch = np.broadcast_shapes(q.shape[:-1],
                                         *(np.shape(f)[:-1] for f in fb.values()))
             q, qd, tau = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, tau))
+        single = q.size == q.shape[-1] > 0
         if kern is not None and q.dtype in _KERNEL_DTYPES:
-            if q.size == q.shape[-1] > 0:
+            if single:
                 fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
                         if fb else None)
-                qdd = _c_forward(kern, *(x.reshape(-1) for x in (q, qd, tau)), g, fext)
+                qdd = _c_forward(kern, *(x.reshape(-1) for x in (q, qd, tau)), g, fext, arm)
                 if qdd is not None:
                     return qdd.reshape(tau.shape)
-            else:
+            elif arm is None:
                 qdd = compiled.forward_dynamics(lay, q, qd, tau, g, fb)
                 if not np.isnan(qdd).any():
                     return qdd
+        elif single and q.dtype == np.float64 and tau.dtype == np.float64:
+            # the articulated-body algorithm on floats, as the compiled kernels run it
+            qdd, info = python.aba_rows(
+                lay.rows, *(x.reshape(-1).tolist() for x in (q, qd, tau)), g,
+                {b: np.reshape(f, -1)[-6:].tolist() for b, f in fb.items()},
+                None if arm is None else arm.tolist())
+            if info == -1:
+                return np.array(qdd).reshape(tau.shape)
     # M, and the bias h: rnea at q̈ = 0 with every term rnea takes (and checks)
     zero = np.zeros(lay.nv, dtype=np.float16)      # the least float: q, q̇ decide the dtype
     h = rnea(model, q, qd, zero, gravity, f_ext, backend, base=base)

@@ -93,8 +93,8 @@ typedef struct {
 int result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count);
 Py_ssize_t work_size(int kernel, long rows, long nv);
 int run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
-              const double *qdd, const double *g, const double *f, double *out1,
-              double *out2, double *out3, double *work);
+              const double *qdd, const double *g, const double *f, const double *arm,
+              double *out1, double *out2, double *out3, double *work);
 int run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi);
 int kernels_add(PyObject *m);
 

@@ -21,13 +21,14 @@ _C_RESERVED = {'auto', 'case', 'char', 'const', 'default', 'double', 'enum', 'ex
                'volatile'}
 #: Parameters of the generated kernels that are arrays (the rest are doubles, or int flags).
 _C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'dq', 'dv', 'f_body', 'tau', 'work', 'H', 'D', 'mom',
-             'ctq', 'Y', 'axes', 'J', 'QR', 'wts', 'res', 'scr', 'lam', 'run', 'seg', 'info'}
+             'ctq', 'Y', 'axes', 'J', 'QR', 'wts', 'res', 'scr', 'lam', 'run', 'seg', 'info',
+             'arm', 'T'}
 #: Parameters that are integers: flags, and the joints' code, indices and column.
-_C_FLAGS = {'has_fext', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row', 'nb'}
+_C_FLAGS = {'has_fext', 'has_arm', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row', 'nb'}
 #: Kernels whose written arrays never overlap (every caller passes distinct results and
 #: scratch): printed ``restrict``, so the compiler keeps values read from one in registers
 #: across stores to the others (~4 % fewer instructions for the derivatives).
-_C_RESTRICT = {'derivatives_kernel', 'forward_kernel'}
+_C_RESTRICT = {'derivatives_kernel', 'forward_kernel', 'aba_kernel'}
 #: ``len(x)`` of an array parameter: the number of velocity coordinates ``nv`` (``q̇``, ``τ``),
 #: ``nv * nv`` for M(q), ``nv * 10 NB`` for the regressor.
 _C_LENGTH = {'H': 'nv * nv', 'Y': 'nv * 10 * (rows - 1)'}

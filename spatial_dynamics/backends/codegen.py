@@ -5,7 +5,9 @@
 The component kernels there (:mod:`~spatial_dynamics.algorithms.components`,
 :mod:`~spatial_dynamics.algorithms.rnea`, :mod:`~spatial_dynamics.algorithms.crba`,
 :mod:`~spatial_dynamics.algorithms.momentum`, :mod:`~spatial_dynamics.algorithms.regressor`,
-:mod:`~spatial_dynamics.algorithms.jacobian`'s bodies, :mod:`~spatial_dynamics.algorithms.split`)
+:mod:`~spatial_dynamics.algorithms.jacobian`'s bodies, :mod:`~spatial_dynamics.algorithms.split`,
+:mod:`~spatial_dynamics.algorithms.derivatives`, :mod:`~spatial_dynamics.algorithms.forward`,
+:mod:`~spatial_dynamics.algorithms.aba`)
 are plain Python over tuples and lists. This module rewrites their syntax tree statement for
 statement onto flat float64 arrays (``_kernels_generated.py``, a readable listing the tests
 run, :func:`flat_module`) and prints the result as C (``_kernels_generated.h``, written into
@@ -60,7 +62,7 @@ from .c_lanes import lanes_c, target_region
 from .c_printer import _ToC
 from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_pair,
                       joint_torque, joint_transform, joint_velocity, rotation_product)
-from ..algorithms import (components, crba, derivatives, forward, jacobian, momentum,
+from ..algorithms import (aba, components, crba, derivatives, forward, jacobian, momentum,
                           regressor, rnea, split)
 
 #: Per-body scratch ``work``: Xup = (E, r) (12), v (6), a (6), f (6), composite inertia
@@ -74,11 +76,19 @@ WORK = 40
 #: again by the pass of α, β, α'); name -> (constant, offset, values, start, stride), a slot
 #: ``work[start + index * stride + offset + j]``.
 DWORK, CWORK = 27, 30
+#: The articulated-body algorithm's scratch after the per-body rows, ``AWORK`` doubles a body:
+#: its articulated inertia ``IA`` (21, an upper triangle), bias force ``pA`` (6), velocity
+#: product ``c`` (6), and its joint's ``U``, ``D⁻¹``, ``u`` (8).
+AWORK = 41
 MORE_STORES = {'oX': ('OXS', 0, 12, 'K.shape[0] * WORK', 'DWORK'),
                'dIC': ('DIC', 12, 9, 'K.shape[0] * WORK', 'DWORK'),
                'hC': ('HCS', 21, 6, 'K.shape[0] * WORK', 'DWORK'),
                'dcol': ('DCOL', 0, 24, 'K.shape[0] * (WORK + DWORK)', 'CWORK'),
-               'scol': ('SCOL', 24, 6, 'K.shape[0] * (WORK + DWORK)', 'CWORK')}
+               'scol': ('SCOL', 24, 6, 'K.shape[0] * (WORK + DWORK)', 'CWORK'),
+               'IA': ('IAS', 0, 21, 'K.shape[0] * WORK', 'AWORK'),
+               'pA': ('PAS', 21, 6, 'K.shape[0] * WORK', 'AWORK'),
+               'cJ': ('CJS', 27, 6, 'K.shape[0] * WORK', 'AWORK'),
+               'UD': ('UDS', 33, 8, 'K.shape[0] * WORK', 'AWORK')}
 #: Every store's number of values.
 WIDTHS = {**{k: v[2] for k, v in STORES.items()}, **{k: v[2] for k, v in MORE_STORES.items()}}
 #: The functions translated, in order (a function is generated after those it calls).
@@ -91,7 +101,8 @@ SOURCES = (components.cross, components.X_motion, components.XT_force, component
            components.crm_motion, components.crf_force, components.I_rate,
            rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
            regressor.regressor_kernel, jacobian.bodies_kernel, split.split_kernel,
-           derivatives.derivatives_kernel, forward.forward_kernel)
+           derivatives.derivatives_kernel, forward.forward_kernel, components.I_articulated,
+           components.IA_motion, components.XT_IA_X_plus, aba.aba_kernel)
 #: Parameters of the generated functions (the source's, with the stores replaced by work).
 SIGNATURES = {'xup_kernel': 'K, q, work',
               'rnea_kernel': 'K, q, qd, qdd, gx, gy, gz, f_body, has_fext, tau, work',
@@ -101,7 +112,9 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'bodies_kernel': 'K, work, J',
               'split_kernel': 'QR, k, n, nb, wts, res, scr, tol',
               'derivatives_kernel': 'K, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, work',
-              'forward_kernel': 'K, H, qdd, lam, run, seg, info'}
+              'forward_kernel': 'K, H, qdd, lam, run, seg, info',
+              'aba_kernel': 'K, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T, '
+                            'info, work'}
 #: The kernels printed a second time for CPUs with AVX (``name_avx``, chosen at run time by
 #: ``run_state``): the same operations in VEX encodings, the same bits (see :func:`_vex`).
 VEX = ('derivatives_kernel',)
@@ -300,7 +313,7 @@ def _constants() -> dict:
     consts = dict(CODES)
     consts['WORK'] = WORK
     consts.update((const, offset) for const, offset, _ in STORES.values())
-    consts.update(DWORK=DWORK, CWORK=CWORK)
+    consts.update(DWORK=DWORK, CWORK=CWORK, AWORK=AWORK)
     consts.update((v[0], v[1]) for v in MORE_STORES.values())
     return consts
 

@@ -65,10 +65,13 @@ const Algorithm ALGORITHMS[] = {
      "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, D, threads) -> None: the\n"
      "derivatives of N states into D (N x 3 n x n); fext as for rnea_batch."},
     {"forward_dynamics", "forward_dynamics_batch", 3, 1, 1, FORWARD, {"qdd"},
-     "forward_dynamics(kernels, q, qd, tau, gravity, f_body=None) -> qdd (n,), or None\n\n"
-     "One state: qdd = M(q)^-1 (tau - h(q, qd)), h the rnea at qdd = 0 (arguments as for\n"
-     "rnea, tau in place of qdd). None when an argument is not such a state, or M has a\n"
-     "pivot that is not positive (the caller's general path names the joint).",
+     "forward_dynamics(kernels, q, qd, tau, gravity, f_body=None, armature=None) -> qdd (n,),\n"
+     "or None\n\n"
+     "One state: qdd = (M(q) + diag(armature))^-1 (tau - h(q, qd)), h the rnea at qdd = 0, by\n"
+     "the articulated-body algorithm (algorithms/aba.py; M's factorization where two bodies\n"
+     "share a coordinate); arguments as for rnea, tau in place of qdd, armature n numbers or\n"
+     "None. None when an argument is not such a state, or a pivot is not positive (the\n"
+     "caller's general path names the joint), or a model with armature has no ABA.",
      "forward_dynamics_batch(kernels, N, q, qd, tau, gravity, fext, qdd, threads) -> None\n\n"
      "N states as rnea_batch, tau in place of qdd; writes qdd (N x n), NaN in a state whose M\n"
      "has a pivot that is not positive."},
@@ -119,10 +122,11 @@ PyObject *
 single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
 {
     const Py_ssize_t fixed = 1 + a->vectors + a->gravity;
-    if (nargs != fixed && !(a->fext && nargs == fixed + 1)) {
+    const Py_ssize_t most = fixed + a->fext + (a->kernel == FORWARD);     /* + armature */
+    if (nargs < fixed || nargs > most) {
         PyErr_Format(PyExc_TypeError,
-                     a->fext ? "%s takes %zd or %zd arguments" : "%s takes %zd arguments",
-                     a->name, fixed, fixed + 1);
+                     most > fixed ? "%s takes %zd to %zd arguments" : "%s takes %zd arguments",
+                     a->name, fixed, most);
         return NULL;
     }
     KernelsObject *h = kernels_arg(args[0]);
@@ -146,12 +150,13 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         : !(PyList_CheckExact(q_arg) || PyTuple_CheckExact(q_arg));
     double stack[STACK_DOUBLES];
     const Py_ssize_t nv = h->nv;
-    double *buf = scratch(stack, n + 2 * nv + 3 + (may_float ? count * size : 0)
+    double *buf = scratch(stack, n + 3 * nv + 3 + (may_float ? count * size : 0)
                                  + work_size(a->kernel, rows, h->nv));
     if (buf == NULL)
         return NULL;
     double *x[3] = {buf, buf + n, buf + n + nv}, *g = buf + n + 2 * nv, *res = g + 3;
-    double *work = res + (may_float ? count * size : 0);
+    double *arm = res + (may_float ? count * size : 0), *work = arm + nv;
+    const double *armature = NULL;
     PyObject *results[3] = {NULL, NULL, NULL}, *out = NULL;
     Py_buffer fb = {0};
     const double *f = NULL;
@@ -182,6 +187,11 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         }
         f = fb.buf;
     }
+    if (nargs > fixed + 1 && args[fixed + 1] != Py_None) {     /* FORWARD's armature */
+        if (!as_doubles(args[fixed + 1], nv, arm))
+            goto declined;
+        armature = arm;
+    }
     const int single_precision = may_float && floats == a->vectors;   /* res has room */
     double *data[3] = {NULL, NULL, NULL};
     for (int k = 0; k < count; k++) {
@@ -191,8 +201,8 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         data[k] = single_precision ? res + k * size
                                    : (double *)PyArray_DATA((PyArrayObject *)results[k]);
     }
-    if (run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, data[0], data[1], data[2],
-                  work) < 0)
+    if (run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, armature, data[0], data[1],
+                  data[2], work) < 0)
         goto declined;      /* M not positive definite: the general path names the joint */
     for (int k = 0; single_precision && k < count; k++) {
         float *out32 = (float *)PyArray_DATA((PyArrayObject *)results[k]);

@@ -169,27 +169,34 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 }
 
 /* Scratch doubles of one state: the per-body rows, the regressor's carried axes, the
- * derivatives' per-body rows and columns (codegen.MORE_STORES), forward dynamics' M
- * (nv x nv), the coordinates' parents and chains (nv each), the chains of one coordinate's
- * ancestors (2 nv) and its status (1). */
+ * derivatives' per-body rows and columns (codegen.MORE_STORES); for forward dynamics the
+ * larger of the articulated-body algorithm's per-body rows (AWORK), a free-flyer's 6 x 6
+ * factor and its status (1), and the composite-rigid-body path's M (nv x nv), the
+ * coordinates' parents and chains (nv each), the chains of one coordinate's ancestors (2 nv)
+ * and its status (1). */
 Py_ssize_t
 work_size(int kernel, long rows, long nv)
 {
+    const Py_ssize_t aba = (Py_ssize_t)rows * AWORK + 37;
+    const Py_ssize_t crba = (Py_ssize_t)nv * ((Py_ssize_t)nv + 4) + 1;
     return (Py_ssize_t)rows * WORK
         + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * ((Py_ssize_t)rows + 5) : 0)
         + (kernel == DERIVATIVES ? (Py_ssize_t)rows * (DWORK + 6 * CWORK) : 0)
-        + (kernel == FORWARD ? (Py_ssize_t)nv * ((Py_ssize_t)nv + 4) + 1 : 0);
+        + (kernel == FORWARD ? (aba > crba ? aba : crba) : 0);
 }
 
 /* One state through the generated kernels: the body transforms, then `kernel`'s passes.
  * g: 3 numbers; f: rows x 6 external forces or NULL; out2: momentum's second result, out2
  * and out3 the derivatives' second and third (dtau/dqd, M). FORWARD reads tau in place of
- * qdd: q̈ = M⁻¹ (τ - h) (algorithms/forward.py), with h the RNEA at q̈ = 0; 0, or -1 (q̈ all
+ * qdd and arm (nv armatures, or NULL): q̈ by the articulated-body algorithm
+ * (algorithms/aba.py); on a model where two
+ * bodies share a coordinate (a mimic joint), or a pivot D_i that is not positive, by
+ * q̈ = M⁻¹ (τ - h) (algorithms/forward.py) with h the RNEA at q̈ = 0; 0, or -1 (q̈ all
  * NaN) when M has a pivot that is not positive. */
 int
 run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
-          const double *qdd, const double *g, const double *f, double *out1, double *out2,
-          double *out3, double *work)
+          const double *qdd, const double *g, const double *f, const double *arm,
+          double *out1, double *out2, double *out3, double *work)
 {
     xup_kernel(K, rows, q, work);
     switch (kernel) {
@@ -220,6 +227,13 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
         const long nv = (long)K[VIDX];
         double *H = work + (Py_ssize_t)rows * WORK, *lam = H + (Py_ssize_t)nv * nv;
         double *run = lam + nv, *seg = run + nv, *info = seg + 2 * nv;
+        double *T = H + (Py_ssize_t)rows * AWORK;
+        aba_kernel(K, rows, qd, qdd, g[0], g[1], g[2], f, f != NULL, arm ? arm : qdd,
+                   arm != NULL, out1, T, T + 36, work);
+        if (T[36] == -1.0)
+            break;
+        if (arm != NULL)
+            return -1;      /* the general path adds the armature to M and names the joint */
         for (long k = 0; k < nv; k++)
             lam[k] = 0.0;       /* q̈ = 0: the bias h into out1 */
         rnea_kernel(K, rows, q, qd, lam, g[0], g[1], g[2], f, f != NULL, out1, work);
@@ -277,7 +291,7 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
         const double *f = s->fext ? s->fext + (s->fext_per_state ? k : 0) * rows * 6 : NULL;
         double *out = s->out1 + k * s->size;
         run_state(s->kernel, s->K, rows, s->q + k * n, s->qd ? s->qd + k * nv : NULL,
-                  s->qdd ? s->qdd + k * nv : NULL, s->g, f, out,
+                  s->qdd ? s->qdd + k * nv : NULL, s->g, f, NULL, out,
                   s->out2 ? s->out2 + k * s->size : (nv2 ? out + nv2 : NULL),
                   nv2 ? out + 2 * nv2 : NULL, work);
     }

@@ -20,6 +20,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..algorithms.aba import aba_kernel
 from ..algorithms.crba import crba_kernel
 from ..algorithms.derivatives import derivatives_kernel
 from ..algorithms.forward import forward_kernel
@@ -240,6 +241,31 @@ def _solve(rows, H: np.ndarray, b: np.ndarray) -> tuple:
             return None, (s, int(info[0]))
         out[s] = x
     return out.reshape(batch + (n,)), None
+
+
+def aba_rows(rows, q, qd, tau, gravity, f_body=None, arm=None, m=math) -> tuple:
+    """``(q̈, info)``: the articulated-body algorithm on scalars, ``q̈`` a list of ``nv``.
+
+    Arguments as for :func:`rnea_rows`, ``tau`` in place of ``qdd``; ``arm`` ``nv`` armatures
+    or None. ``info`` -1 when solved, else what
+    :func:`~spatial_dynamics.algorithms.aba.aba_kernel` leaves (-2: two bodies share a
+    coordinate; ``k``: the pivot of coordinate ``k`` is not positive), ``q̈`` then unfinished.
+    """
+    gx, gy, gz = gravity
+    slots = len(rows)
+    Xup = [None] * slots
+    transforms(rows, q, m, Xup)
+    zero = 0.0 * gx
+    qdd = [zero] * rows[0][3]
+    fb = None
+    if f_body:
+        fb = [(zero,) * 6] * slots
+        for b, f in f_body.items():
+            fb[b] = f
+    info = [-1]
+    aba_kernel(rows, qd, tau, gx, gy, gz, fb, fb is not None, arm, arm is not None, qdd,
+               [zero] * 36, info, Xup, *([None] * slots for _ in range(6)))
+    return qdd, int(info[0])
 
 
 def derivatives_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> tuple:
