@@ -2,33 +2,29 @@
 # SPDX-License-Identifier: Apache-2.0
 """Time contact-consistent inverse dynamics per state from Python (Solo12 on four feet).
 
-``python -m benchmarks.contacts`` (from the checkout): ``time.thread_time``, the minimum of
-7 repeats of 300 calls, for ``contact_jacobian`` and ``contact_inverse_dynamics`` with each
-method, on a standing Solo12 (example-robot-data); and, in the same run, Pinocchio's ``rnea``
-and its four feet's Jacobians (``computeJointJacobians`` + ``getFrameJacobian``) of the same
-state, with each of ours as a multiple of them: the ratios hold on a busy machine, where the
-microseconds do not. The load average (``uptime``'s) is printed with them.
+``python -m benchmarks.contacts`` (from the checkout): ``contact_jacobian`` and
+``contact_inverse_dynamics`` with each method, on a standing Solo12 (example-robot-data),
+and in the same run Pinocchio's ``rnea`` and its four feet's Jacobians
+(``computeJointJacobians`` + ``getFrameJacobian``) of the same state. Every implementation
+is timed in interleaved rounds (:func:`benchmarks.bench.interleaved`: one block of ~20 ms of
+each per round, the order rotated, the median over the rounds), so that a machine that
+slows down or speeds up meanwhile hits all of them alike; each of ours is printed as a
+multiple of Pinocchio's: the ratios hold on a busy machine, where the microseconds do not.
+The load average (``uptime``'s) is printed with them.
 """
 
 import os
 import sysconfig
-import time
 
 import numpy as np
 import spatial_dynamics as sd
 
+from .bench import interleaved
 from .floating import solo_standing
 
-
-def per_call(f, n=300, repeats=7) -> float:
-    """Return the least thread time of one call of ``f`` (µs) over ``repeats`` runs."""
-    best = float('inf')
-    for _ in range(repeats):
-        t = time.thread_time()
-        for _ in range(n):
-            f()
-        best = min(best, (time.thread_time() - t) / n)
-    return best * 1e6
+#: Interleaved rounds, and the length of one block of calls (s).
+ROUNDS = 15
+BLOCK_S = 0.02
 
 
 def main() -> None:
@@ -37,32 +33,37 @@ def main() -> None:
     model_path = os.path.join(robots, 'solo_description', 'robots', 'solo12.urdf')
     model = sd.Model.from_urdf(model_path, base='floating')
     q, qd, qdd, feet = solo_standing(model)
-    print(f'rnea (M q̈ + h):       {per_call(lambda: sd.rnea(model, q, qd, qdd)):8.1f} µs')
-    t = per_call(lambda: sd.contact_jacobian(model, q, feet))
-    print(f'contact_jacobian:       {t:8.1f} µs')
-    ours = {'jacobian': t}
+    entries = {'rnea': (lambda: sd.rnea(model, q, qd, qdd), [()]),
+               'jacobian': (lambda: sd.contact_jacobian(model, q, feet), [()])}
     for method in ('torques', 'forces', 'qp'):
-        t = per_call(lambda: sd.contact_inverse_dynamics(model, q, qd, qdd, feet, method=method),
-                     n=100 if method == 'qp' else 300)
-        ours[method] = t
-        print(f'contact_inverse_dynamics {method!r:9} {t:8.1f} µs')
+        entries[method] = (lambda m=method: sd.contact_inverse_dynamics(
+            model, q, qd, qdd, feet, method=m), [()])
     try:
         import pinocchio as pin
     except ImportError:
+        pin = None
+    if pin is not None:
+        pm = pin.buildModelFromUrdf(model_path, pin.JointModelFreeFlyer())
+        pd = pm.createData()
+        frames = [pm.getFrameId(c.link) for c in feet]
+        vp, ap = (np.r_[x[3:6], x[:3], x[6:]] for x in (qd, qdd))    # Pinocchio: [v; ω] first
+
+        def jacobians():
+            pin.computeJointJacobians(pm, pd, q)
+            pin.updateFramePlacements(pm, pd)
+            return [pin.getFrameJacobian(pm, pd, f, pin.LOCAL_WORLD_ALIGNED) for f in frames]
+        entries['pin_rnea'] = (lambda: pin.rnea(pm, pd, q, vp, ap), [()])
+        entries['pin_jacobians'] = (jacobians, [()])
+    us = {name: t * 1e6 for name, t in interleaved(entries, ROUNDS, BLOCK_S, 1).items()}
+    print(f'rnea (M q̈ + h):       {us["rnea"]:8.1f} µs')
+    print(f'contact_jacobian:       {us["jacobian"]:8.1f} µs')
+    for method in ('torques', 'forces', 'qp'):
+        print(f'contact_inverse_dynamics {method!r:9} {us[method]:8.1f} µs')
+    if pin is None:
         print('(Pinocchio is not installed: no ratios)')
         return
-    pm = pin.buildModelFromUrdf(model_path, pin.JointModelFreeFlyer())
-    pd = pm.createData()
-    frames = [pm.getFrameId(c.link) for c in feet]
-    vp, ap = (np.r_[x[3:6], x[:3], x[6:]] for x in (qd, qdd))    # Pinocchio: [v; ω] first
-
-    def jacobians():
-        pin.computeJointJacobians(pm, pd, q)
-        pin.updateFramePlacements(pm, pd)
-        return [pin.getFrameJacobian(pm, pd, f, pin.LOCAL_WORLD_ALIGNED) for f in frames]
-
-    pin_rnea = per_call(lambda: pin.rnea(pm, pd, q, vp, ap))
-    pin_jac = per_call(jacobians)
+    pin_rnea, pin_jac = us['pin_rnea'], us['pin_jacobians']
+    ours = us
     print(f'Pinocchio rnea:         {pin_rnea:8.1f} µs; the feet\'s Jacobians {pin_jac:8.1f} µs')
     print('load average (1, 5, 15 min): ' + ', '.join(f'{x:.2f}' for x in os.getloadavg()))
     print(f'ratios, same run: contact_jacobian {ours["jacobian"] / pin_jac:.1f}x Pinocchio\'s '
