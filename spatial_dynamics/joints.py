@@ -13,11 +13,12 @@ know about a kind is here, so an algorithm asks the joint instead of branching o
   :data:`RX`, :data:`RY`, :data:`RZ` (the axis keeps its sign), any other axis :data:`RA`.
 * **Operations on scalar components** (:func:`joint_transform`, :func:`joint_motion`,
   :func:`joint_velocity`, :func:`joint_torque`, :func:`joint_ctq`, :func:`joint_axis`,
-  :func:`joint_crba`): what the component kernels of :mod:`spatial_dynamics.algorithms`
-  call per body, on any scalar kind (floats, (N,) arrays, mpmath); the compiled backend
-  translates them with the kernels (:mod:`spatial_dynamics.backends.codegen`), and the C
-  compiler inlines them. A joint's coordinates start at ``k`` in ``q`` and at ``kv`` in
-  ``q̇``, ``q̈`` and ``τ``; a mimic joint moves by ``mul q + off`` of its source.
+  :func:`joint_world_axis`, :func:`joint_crba`, :func:`joint_pair`): what the component
+  kernels of :mod:`spatial_dynamics.algorithms` call per body, on any scalar kind (floats,
+  (N,) arrays, mpmath); the compiled backend translates them with the kernels
+  (:mod:`spatial_dynamics.backends.codegen`), and the C compiler inlines them. A joint's
+  coordinates start at ``k`` in ``q`` and at ``kv`` in ``q̇``, ``q̈`` and ``τ``; a mimic
+  joint moves by ``mul q + off`` of its source.
 * :func:`jcalc`: the same on 6×6 matrices, batch-aware (the executable specifications).
 
 The free-flyer's conventions: ``q = [x, y, z, qx, qy, qz, qw]``, the position of the body's
@@ -431,6 +432,29 @@ def joint_axis(code, col, ax, ay, az):
             1.0 if col == 3 else 0.0, 1.0 if col == 4 else 0.0, 1.0 if col == 5 else 0.0)
 
 
+def joint_world_axis(code, e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz, ax, ay, az):
+    """Return a 1-dof joint's ``S`` in the coordinates ``X = (E, r)`` maps from: ``X⁻¹ S``.
+
+    ``X⁻¹ [ω; v] = [Eᵀ ω; Eᵀ v + r × Eᵀ ω]`` without the products with the zeros of ``S``:
+    revolute ``[w; r × w]`` with ``w = Eᵀ a`` (about a frame axis ``±e_k``: a row of ``E``
+    times ``±1``), prismatic ``[0; Eᵀ a]``.
+    """
+    if code == RX:
+        w0, w1, w2 = e00 * ax, e01 * ax, e02 * ax
+    elif code == RY:
+        w0, w1, w2 = e10 * ay, e11 * ay, e12 * ay
+    elif code == RZ:
+        w0, w1, w2 = e20 * az, e21 * az, e22 * az
+    elif code == RA:
+        w0 = e00 * ax + e10 * ay + e20 * az
+        w1 = e01 * ax + e11 * ay + e21 * az
+        w2 = e02 * ax + e12 * ay + e22 * az
+    else:       # prismatic
+        return (0.0, 0.0, 0.0, e00 * ax + e10 * ay + e20 * az, e01 * ax + e11 * ay + e21 * az,
+                e02 * ax + e12 * ay + e22 * az)
+    return w0, w1, w2, ry * w2 - rz * w1, rz * w0 - rx * w2, rx * w1 - ry * w0
+
+
 def joint_crba(code, H, n, row, kj, mm, both, ax, ay, az, F0, F1, F2, F3, F4, F5) -> None:
     """``H[row, kj + d] += mm S[:, d]ᵀ F`` for each column ``d`` of the joint's ``S`` (CRBA).
 
@@ -467,7 +491,7 @@ def joint_pair(code, D, n, row, kj, mm, ax, ay, az, F0, F1, F2, F3, F4, F5, P0, 
     """``D[row, kj + d] += mm S[:, d]ᵀ F``, ``D[kj + d, row] += mm S[:, d]ᵀ P`` for each ``d``.
 
     ``D`` is ``n × n`` row-major: a row and a column of a matrix that is not symmetric (the
-    derivatives' ``∂τ/∂q`` and ``∂τ/∂q̇``), each from its own force.
+    derivatives' ``∂τ/∂q`` and ``∂τ/∂q̇``), each from its own force (``M``'s: ``F = P``).
     """
     if code <= RA:          # revolute
         t = ax * F0 + ay * F1 + az * F2
@@ -475,20 +499,21 @@ def joint_pair(code, D, n, row, kj, mm, ax, ay, az, F0, F1, F2, F3, F4, F5, P0, 
     elif code == PR:
         t = ax * F3 + ay * F4 + az * F5
         u = ax * P3 + ay * P4 + az * P5
-    else:       # free-flyer: S = 1, the six components of F and of P
+    else:       # free-flyer: S = 1, the six components of F and of P (its mm is 1: a
+        # free-flyer mimics no joint)
         r = row * n + kj
-        D[r] = D[r] + mm * F0
-        D[r + 1] = D[r + 1] + mm * F1
-        D[r + 2] = D[r + 2] + mm * F2
-        D[r + 3] = D[r + 3] + mm * F3
-        D[r + 4] = D[r + 4] + mm * F4
-        D[r + 5] = D[r + 5] + mm * F5
-        D[kj * n + row] = D[kj * n + row] + mm * P0
-        D[(kj + 1) * n + row] = D[(kj + 1) * n + row] + mm * P1
-        D[(kj + 2) * n + row] = D[(kj + 2) * n + row] + mm * P2
-        D[(kj + 3) * n + row] = D[(kj + 3) * n + row] + mm * P3
-        D[(kj + 4) * n + row] = D[(kj + 4) * n + row] + mm * P4
-        D[(kj + 5) * n + row] = D[(kj + 5) * n + row] + mm * P5
+        D[r] = D[r] + F0
+        D[r + 1] = D[r + 1] + F1
+        D[r + 2] = D[r + 2] + F2
+        D[r + 3] = D[r + 3] + F3
+        D[r + 4] = D[r + 4] + F4
+        D[r + 5] = D[r + 5] + F5
+        D[kj * n + row] = D[kj * n + row] + P0
+        D[(kj + 1) * n + row] = D[(kj + 1) * n + row] + P1
+        D[(kj + 2) * n + row] = D[(kj + 2) * n + row] + P2
+        D[(kj + 3) * n + row] = D[(kj + 3) * n + row] + P3
+        D[(kj + 4) * n + row] = D[(kj + 4) * n + row] + P4
+        D[(kj + 5) * n + row] = D[(kj + 5) * n + row] + P5
         return
     D[row * n + kj] = D[row * n + kj] + mm * t
     D[kj * n + row] = D[kj * n + row] + mm * u

@@ -69,6 +69,17 @@ def I_motion(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, m0, m1, m2, m3, m4,
             mass * m5 - (hx * m1 - hy * m0))
 
 
+def Irate_motion(g0, g1, g2, g3, g4, g5, g6, g7, g8, m0, m1, m2, m3, m4, m5):
+    """Apply an inertia of no mass (:func:`I_rate`'s ``(g, Ī')``) to a motion vector.
+
+    :func:`I_motion` with ``mass = 0`` and its products with it left out.
+    """
+    return (g3 * m0 + g4 * m1 + g5 * m2 + (g1 * m5 - g2 * m4),
+            g4 * m0 + g6 * m1 + g7 * m2 + (g2 * m3 - g0 * m5),
+            g5 * m0 + g7 * m1 + g8 * m2 + (g0 * m4 - g1 * m3),
+            -(g1 * m2 - g2 * m1), -(g2 * m0 - g0 * m2), -(g0 * m1 - g1 * m0))
+
+
 def XT_I_X(e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
            mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz):
     """Express a spatial inertia in the parent's coordinates: ``Xᵀ I X`` (RBDA table 2.8).

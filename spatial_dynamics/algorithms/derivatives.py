@@ -30,27 +30,32 @@ An ancestor ``i`` of ``j`` sees the whole subtree of ``j`` move: ``∂τ_i = S_i
 ``(α, β) = (s, 0)``. A free-flyer's six columns are its tangent directions ``q ⊕ δ``
 (:func:`~spatial_dynamics.algorithms.configuration.integrate`): a twist in its own frame.
 
-Body 1's columns are taken at once: in its own frame ``s = mul S``, and ``v_0 = 0`` (so
-``β = 0``); with ``f·(m × s) = -(m ×* f)·s`` its entries in the row of a column ``k`` of a
-body below it (or of its own) are each one force against ``S``, as are those in the column
-``k`` (``Q_k·s``, ``V_k·s``: the forces the ancestors' rows take;
-:func:`~spatial_dynamics.joints.joint_pair`, ``joint_crba``)::
+A 1-dof column needs no product for ``α'``: ``v_j = v_λ + s q̇``, so ``α' = 2 v_λ × s = 2β``.
+Body 1's frame is the world: its inertia needs no transform, nor do its children's ``Xup``.
+
+Body 1's columns, when it has several (a free-flyer's six), are taken at once: in its own
+frame ``s = mul S``, and ``v_0 = 0`` (so ``β = 0``); with ``f·(m × s) = -(m ×* f)·s`` its
+entries in the row of a column ``k`` of a body below it (or of its own) are each one force
+against ``S``, as are those in the column ``k`` (``Q_k·s``, ``V_k·s``: the forces the
+ancestors' rows take; :func:`~spatial_dynamics.joints.joint_pair`, ``joint_crba``)::
 
     ∂τ_k/∂q = -(a_0 ×* A_k)·s,   ∂τ_k/∂q̇ = (B_k - v_1 ×* A_k)·s,   M_k = A_k·s
 
-instead of a product a column (a free-flyer's six, above every other body).
+instead of a product a column (six, above every other body). One column (a fixed base's
+first joint) is walked as any ancestor's: one product a column below it, not two.
 
 :func:`derivatives_kernel` is written on scalar components in the subset of
 :mod:`~.rnea` (per-body rows unpacked whole, whole-tuple stores, the products of
 :mod:`.components`); per column it keeps ``(s, α, β, α')`` in ``dcol[6 i + c]``, and ``s``
-(``mul ᵂX_i⁻¹ S``, computed once, where ``v_J`` is summed) in ``scol[6 i + c]``.
+(``mul ᵂX_i⁻¹ S``, computed once, where ``v_J`` is summed; of a 1-dof joint from S's
+nonzeros, :func:`~spatial_dynamics.joints.joint_world_axis`) in ``scol[6 i + c]``.
 """
 
 from __future__ import annotations
 
-from .components import (crf_force, crm_motion, I_motion, I_rate, X_compose, X_motion,
-                         Xinv_motion, XT_force, XT_I_X)
-from ..joints import joint_axis, joint_crba, joint_pair
+from .components import (crf_force, crm_motion, I_motion, I_rate, Irate_motion, X_compose,
+                         X_motion, Xinv_motion, XT_force, XT_I_X)
+from ..joints import joint_axis, joint_crba, joint_pair, joint_world_axis
 
 
 def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, Xup, oX, vel,
@@ -94,6 +99,9 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
          mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz, mul, _) = rows[i]
         if i == 1:
             oX[i] = (one, zero, zero, zero, one, zero, zero, zero, one, zero, zero, zero)
+        elif p == 1:                                        # ᵢX_W = Xup_i (ᵂX_1 = 1)
+            e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = Xup[i]
+            oX[i] = (e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz)
         else:
             oX[i] = X_compose(*Xup[i], *oX[p])             # ᵢX_W = Xup_i λX_W
         e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz = oX[i]
@@ -104,9 +112,13 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
         a0, a1, a2, l0, l1, l2 = pa0, pa1, pa2, pl0, pl1, pl2
         for c in range(dof):
             # vJ = Σ s q̇ and a_λ + Σ s q̈
-            s0, s1, s2, s3, s4, s5 = joint_axis(code, c, ax, ay, az)
-            s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21, e22,
-                                                 rx, ry, rz, s0, s1, s2, s3, s4, s5)
+            if dof == 1:        # S's nonzeros only
+                s0, s1, s2, s3, s4, s5 = joint_world_axis(code, e00, e01, e02, e10, e11, e12,
+                                                          e20, e21, e22, rx, ry, rz, ax, ay, az)
+            else:               # a unit column of several (the free-flyer's)
+                s0, s1, s2, s3, s4, s5 = joint_axis(code, c, ax, ay, az)
+                s0, s1, s2, s3, s4, s5 = Xinv_motion(e00, e01, e02, e10, e11, e12, e20, e21,
+                                                     e22, rx, ry, rz, s0, s1, s2, s3, s4, s5)
             s0, s1, s2, s3, s4, s5 = mul * s0, mul * s1, mul * s2, mul * s3, mul * s4, mul * s5
             scol[6 * i + c] = (s0, s1, s2, s3, s4, s5)
             qdi, qddi = qd[kv + c], qdd[kv + c]
@@ -120,7 +132,7 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
         for c in range(dof):
             # per column: ψ = s × v_λ;  α = -(s × a_λ + v_λ × ψ),  β = -ψ;  α' = (v_λ + v_i) × s
             s0, s1, s2, s3, s4, s5 = scol[6 * i + c]     # the pass above's, taken once
-            if i == 1:
+            if i == 1 and dof > 1:
                 # (α, β, α') of body 1's columns are not read: they are taken at once
                 dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5, zero, zero, zero, zero, zero, zero,
                                    zero, zero, zero, zero, zero, zero, zero, zero, zero, zero,
@@ -132,18 +144,27 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                                                     pa0, pa1, pa2, pl0, pl1, pl2)
                 d0, d1, d2, d3, d4, d5 = crm_motion(pw0, pw1, pw2, pv0, pv1, pv2,
                                                     y0, y1, y2, y3, y4, y5)
-                x0, x1, x2, x3, x4, x5 = crm_motion(pw0 + w0, pw1 + w1, pw2 + w2,
-                                                    pv0 + v0, pv1 + v1, pv2 + v2,
-                                                    s0, s1, s2, s3, s4, s5)
+                if dof == 1:
+                    # v_i = v_λ + s q̇: α' = 2 v_λ × s = 2β
+                    x0, x1, x2, x3, x4, x5 = (-2.0 * y0, -2.0 * y1, -2.0 * y2, -2.0 * y3,
+                                              -2.0 * y4, -2.0 * y5)
+                else:
+                    x0, x1, x2, x3, x4, x5 = crm_motion(pw0 + w0, pw1 + w1, pw2 + w2,
+                                                        pv0 + v0, pv1 + v1, pv2 + v2,
+                                                        s0, s1, s2, s3, s4, s5)
                 dcol[6 * i + c] = (s0, s1, s2, s3, s4, s5, -(b0 + d0), -(b1 + d1), -(b2 + d2),
                                    -(b3 + d3), -(b4 + d4), -(b5 + d5), -y0, -y1, -y2, -y3, -y4,
                                    -y5, x0, x1, x2, x3, x4, x5)
         vel[i] = (w0, w1, w2, v0, v1, v2)
         acc[i] = (a0, a1, a2, l0, l1, l2)
         # I_i in world coordinates, h_i = I_i v_i, f_i = I_i a_i + v_i ×* h_i - f_ext_i
-        om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz = XT_I_X(
-            e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
-            mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz)
+        if i == 1:
+            om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz = (mass, hx, hy, hz, Ixx, Ixy, Ixz,
+                                                               Iyy, Iyz, Izz)
+        else:
+            om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz = XT_I_X(
+                e00, e01, e02, e10, e11, e12, e20, e21, e22, rx, ry, rz,
+                mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz)
         IC[i] = (om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz)
         m0, m1, m2, k0, k1, k2 = I_motion(om, ohx, ohy, ohz, oxx, oxy, oxz, oyy, oyz, ozz,
                                           w0, w1, w2, v0, v1, v2)
@@ -180,7 +201,15 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             y0, y1, y2, y3, y4, y5 = frc[p]
             frc[p] = (y0 + x0, y1 + x1, y2 + x2, y3 + x3, y4 + x4, y5 + x5)
 
-    # Each column of body i against itself and its ancestors j
+    # Each column of body i against itself and its ancestors j; body 1's columns at once
+    # when it has several (a free-flyer's six), else as any ancestor's
+    once = False
+    last = 0
+    if NB > 0:
+        (_, _, _, _, dof1, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
+         _, _, _, _, _, _, _, _, _, _, _, _) = rows[1]
+        once = dof1 > 1
+        last = 1 if once else 0
     for i in range(1, NB + 1):
         (p, _, _, kv, dof, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
          _, _, _, _, _, _, _, _, _, _, _, _) = rows[i]
@@ -195,8 +224,8 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
             # rows of body i: A = IC s, B = İC s - s ×* hC
             A0, A1, A2, A3, A4, A5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
                                               s0, s1, s2, s3, s4, s5)
-            u0, u1, u2, u3, u4, u5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
-                                              s0, s1, s2, s3, s4, s5)       # İC s
+            u0, u1, u2, u3, u4, u5 = Irate_motion(g0, g1, g2, g3, g4, g5, g6, g7, g8,
+                                                  s0, s1, s2, s3, s4, s5)       # İC s
             o0, o1, o2, o3, o4, o5 = crf_force(s0, s1, s2, s3, s4, s5,
                                                hn0, hn1, hn2, hf0, hf1, hf2)   # s ×* hC
             B0, B1, B2, B3, B4, B5 = u0 - o0, u1 - o1, u2 - o2, u3 - o3, u4 - o4, u5 - o5
@@ -205,8 +234,8 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                 # IC α + İC β + β ×* hC + s ×* F, and q̇'s
                 Q0, Q1, Q2, Q3, Q4, Q5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz,
                                                   czz, al0, al1, al2, al3, al4, al5)
-                x0, x1, x2, x3, x4, x5 = I_motion(zero, g0, g1, g2, g3, g4, g5, g6, g7, g8,
-                                                  be0, be1, be2, be3, be4, be5)
+                x0, x1, x2, x3, x4, x5 = Irate_motion(g0, g1, g2, g3, g4, g5, g6, g7, g8,
+                                                      be0, be1, be2, be3, be4, be5)
                 y0, y1, y2, y3, y4, y5 = crf_force(be0, be1, be2, be3, be4, be5,
                                                    hn0, hn1, hn2, hf0, hf1, hf2)
                 z0, z1, z2, z3, z4, z5 = crf_force(s0, s1, s2, s3, s4, s5,
@@ -217,8 +246,8 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                                                   czz, ad0, ad1, ad2, ad3, ad4, ad5)
                 V0, V1, V2 = V0 + u0 + o0, V1 + u1 + o1, V2 + u2 + o2   # + İC s + s ×* hC
                 V3, V4, V5 = V3 + u3 + o3, V4 + u4 + o4, V5 + u5 + o5
-            # body i's own columns: the subtree formula (body 1's below, at once)
-            for d in range(dof if i != 1 else 0):
+            # body i's own columns: the subtree formula (body 1's several below, at once)
+            for d in range(dof if i != 1 or not once else 0):
                 r = kv + d
                 (t0, t1, t2, t3, t4, t5, bl0, bl1, bl2, bl3, bl4, bl5, bb0, bb1, bb2, bb3, bb4,
                  bb5, bd0, bd1, bd2, bd3, bd4, bd5) = dcol[6 * i + d]
@@ -230,9 +259,9 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                     + (B0 * t0 + B1 * t1 + B2 * t2 + B3 * t3 + B4 * t4 + B5 * t5))
                 H[k * n + r] = H[k * n + r] + (
                     A0 * t0 + A1 * t1 + A2 * t2 + A3 * t3 + A4 * t4 + A5 * t5)
-            # the ancestors j of body i but body 1
+            # the ancestors j of body i (but body 1 when its columns are taken at once)
             j = p
-            while j > 1:
+            while j > last:
                 (pj, _, _, kj, dj, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
                  _, _, _, _, _, _, _, _, _, _, _, _) = rows[j]
                 for d in range(dj):
@@ -255,7 +284,7 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                         t0 * V0 + t1 * V1 + t2 * V2 + t3 * V3 + t4 * V4 + t5 * V5)
                     H[r * n + k] = H[r * n + k] + Mt
                 j = pj
-            if j == 1 or i == 1:
+            if once and (j == 1 or i == 1):
                 # body 1 (v_0 = 0, so β = 0; ᵂX_1 = 1, so s = mul S): its columns at once,
                 # A·α = -(a_0 ×* A)·s,  A·α' + B·s = (B - v_1 ×* A)·s,  and Q·s, V·s, A·s
                 (_, code1, _, kv1, _, bx, by, bz, _, _, _, _, _, _, _, _, _, _, _, _,
@@ -274,5 +303,5 @@ def derivatives_kernel(rows, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, X
                                -x0, -x1, -x2, -x3, -x4, -x5, Q0, Q1, Q2, Q3, Q4, Q5)
                     joint_pair(code1, dv, n, k, kv1, mul1, bx, by, bz, B0 - y0, B1 - y1,
                                B2 - y2, B3 - y3, B4 - y4, B5 - y5, V0, V1, V2, V3, V4, V5)
-                    joint_crba(code1, H, n, k, kv1, mul1, True, bx, by, bz,
+                    joint_pair(code1, H, n, k, kv1, mul1, bx, by, bz, A0, A1, A2, A3, A4, A5,
                                A0, A1, A2, A3, A4, A5)

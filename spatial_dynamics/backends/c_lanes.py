@@ -14,16 +14,17 @@ import ast
 
 from ..algorithms import components, derivatives, rnea
 from ..joints import (joint_axis, joint_crba, joint_motion, joint_pair, joint_torque,
-                      joint_transform, joint_velocity, rotation_product)
+                      joint_transform, joint_velocity, joint_world_axis, rotation_product)
 from .c_printer import _C_ARRAYS, _C_RESTRICT, _c_name, _ToC
 
 
 #: The kernels printed a second time on lanes, and the arrays holding one value per state.
 LANE_SOURCES = (components.cross, components.X_motion, components.XT_force,
                 components.XT_force_plus, components.I_motion, rotation_product, joint_transform,
-                joint_motion, joint_velocity, joint_torque, joint_axis, joint_crba, joint_pair,
-                components.X_compose, components.Xinv_motion, components.crm_motion,
-                components.crf_force, components.I_rate, components.XT_I_X, rnea.xup_kernel,
+                joint_motion, joint_velocity, joint_torque, joint_axis, joint_world_axis,
+                joint_crba, joint_pair, components.X_compose, components.Xinv_motion,
+                components.crm_motion, components.crf_force, components.I_rate,
+                components.Irate_motion, components.XT_I_X, rnea.xup_kernel,
                 rnea.rnea_kernel, derivatives.derivatives_kernel)
 _LANE_ARRAYS = {'q', 'qd', 'qdd', 'f_body', 'tau', 'work', 'dq', 'dv', 'H', 'D'}
 

@@ -61,7 +61,8 @@ from . import layout
 from .c_lanes import lanes_c, target_region
 from .c_printer import _ToC
 from ..joints import (CODES, joint_axis, joint_crba, joint_ctq, joint_motion, joint_pair,
-                      joint_torque, joint_transform, joint_velocity, rotation_product)
+                      joint_torque, joint_transform, joint_velocity, joint_world_axis,
+                      rotation_product)
 from ..algorithms import (aba, components, crba, derivatives, forward, jacobian, momentum,
                           regressor, rnea, split)
 
@@ -97,8 +98,9 @@ WIDTHS = {**{k: v[2] for k, v in STORES.items()}, **{k: v[2] for k, v in MORE_ST
 SOURCES = (components.cross, components.X_motion, components.XT_force, components.XT_force_plus,
            components.I_motion, components.XT_I_X, components.XT_I_X_plus, rotation_product,
            joint_transform, joint_motion, joint_velocity, joint_torque, joint_ctq, joint_axis,
-           joint_crba, joint_pair, components.X_compose, components.Xinv_motion,
-           components.crm_motion, components.crf_force, components.I_rate,
+           joint_world_axis, joint_crba, joint_pair, components.X_compose,
+           components.Xinv_motion, components.crm_motion, components.crf_force,
+           components.I_rate, components.Irate_motion,
            rnea.xup_kernel, rnea.rnea_kernel, crba.crba_kernel, momentum.momentum_kernel,
            regressor.regressor_kernel, jacobian.bodies_kernel, split.split_kernel,
            derivatives.derivatives_kernel, forward.forward_kernel, components.I_articulated,
