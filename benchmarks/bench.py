@@ -544,6 +544,12 @@ def interleaved(entries: dict, rounds: int, block_s: float, per: int) -> dict:
     One round times one block of every entry, the order rotated every round, so slow drifts
     of the machine hit all of them alike.
     """
+    return {name: statistics.median(t)
+            for name, t in interleaved_rounds(entries, rounds, block_s, per).items()}
+
+
+def interleaved_rounds(entries: dict, rounds: int, block_s: float, per: int) -> dict:
+    """Seconds per ``per`` of each entry in every round of :func:`interleaved` (a list each)."""
     calls = {name: _calls_for(run, args, block_s) for name, (run, args) in entries.items()}
     times = {name: [] for name in entries}
     names = list(entries)
@@ -557,7 +563,7 @@ def interleaved(entries: dict, rounds: int, block_s: float, per: int) -> dict:
     finally:
         if gc_was:
             gc.enable()
-    return {name: statistics.median(t) for name, t in times.items()}
+    return times
 
 
 # --------------------------------------------------------------------------------------------
