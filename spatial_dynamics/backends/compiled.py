@@ -28,7 +28,7 @@ import warnings
 import numpy as np
 
 #: The interface of ``_compiled.c`` this module speaks (its ``API``).
-API = 16
+API = 17
 
 try:
     ext = importlib.import_module(__package__ + '._compiled')
