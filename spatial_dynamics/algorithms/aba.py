@@ -61,7 +61,8 @@ def aba_kernel(rows, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T
     them; with ``has_arm``, ``arm`` holds ``nv`` armatures. ``vel acc IC IA pA cJ UD`` are
     scratch with a slot per body (``IC`` a composite inertia ``(m, h, Ibar)``; ``IA`` the upper
     triangle of a symmetric 6x6, 21 scalars; ``UD`` a joint's ``U`` (6), ``D⁻¹`` and ``u``),
-    ``T`` scratch of 42 scalars (the free-flyer's factor, 36, and ``IC_1``'s diagonal). ``info[0]``: -1 when solved, else as the module docstring says.
+    ``T`` scratch of 42 scalars (the free-flyer's factor, 36, and ``IC_1``'s diagonal).
+    ``info[0]``: -1 when solved, else as the module docstring says.
     """
     NB = len(rows) - 1
     (_, _, _, n, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
