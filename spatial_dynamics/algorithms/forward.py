@@ -46,7 +46,7 @@ from __future__ import annotations
 #: (both with the armature), that forward dynamics takes: below it the joint's motion is made
 #: by the rest of its subtree to within ``PIVOT_TOL`` of its inertia, and ``q̈`` is refused.
 #: Measured (``python -m benchmarks.pivots``): the real robots of example-robot-data at random
-#: states have ``d_k / M_kk`` of 1e-5 and more (iCub's), down to 1e-9 only within 1e-4 rad of a
+#: states have ``d_k / M_kk`` of 2e-6 and more (iCub), down to 1e-9 only within 1e-4 rad of a
 #: gimbal lock of three revolute joints through massless links (a ball joint, human and iCub:
 #: singular at the lock); rounding leaves an exactly singular ``M`` at 1e-13 and less.
 PIVOT_TOL = 1e-12

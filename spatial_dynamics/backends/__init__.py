@@ -344,7 +344,7 @@ def forward_dynamics(model: Model, q, qd, tau, gravity: Sequence[float] = GRAVIT
     pivot ``d_k`` of ``M``'s factorization from the leaves (ABA's ``D_i``) at most
     ``PIVOT_TOL M_kk``, every path alike (one state or a batch, either backend, armature, a
     moving base). Exactly singular, rounding leaves ``d_k / M_kk`` at 1e-13 or less, and
-    ``q̈`` would be ~1e16 and wrong; the robots of example-robot-data have 1e-5 and more at
+    ``q̈`` would be ~1e16 and wrong; the robots of example-robot-data have 2e-6 and more at
     random states (1e-9 within 1e-4 rad of a ball joint's gimbal lock through massless
     links, where ``M`` is singular). ``d_k / M_kk >= 1 / cond(M)``: an ``M`` whose
     condition number is below 1e12 is never refused.
