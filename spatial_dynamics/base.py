@@ -76,7 +76,8 @@ class BaseMotion:
             reflected matrix) is refused (:func:`~spatial_dynamics.joints.check_quaternion`,
             :func:`~spatial_dynamics.joints.check_rotation`).
         gravity_included: ``a`` already holds gravity (an IMU's specific force): the
-            algorithms add none.
+            algorithms add none. A bool (Python's or numpy's); anything else (``'yes'``,
+            ``'False'``, 1) is refused with ``TypeError``, never read as true.
     """
 
     v: np.ndarray
@@ -85,6 +86,11 @@ class BaseMotion:
     gravity_included: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.gravity_included, (bool, np.bool_)):
+            raise TypeError('base.gravity_included must be a bool (True: a holds gravity), got '
+                            f'{type(self.gravity_included).__name__} '
+                            f'{shown(self.gravity_included)}')
+        object.__setattr__(self, 'gravity_included', bool(self.gravity_included))
         for what in ('v', 'a'):
             x = as_real_array(f'base.{what}', getattr(self, what)).astype(float)
             if x.ndim == 0 or x.shape[-1] != 6:

@@ -38,6 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from .spatial import Eaxis, Erotx, Eroty, Erotz, _rot, plux, xlt
+from .text import at_state
 
 #: Joint kinds stored in ``Model.jtype``. Body 0 (the world or the fixed base) has ``FIXED``.
 FIXED, REVOLUTE, PRISMATIC, FREE_FLYER = 0, 1, 2, 3
@@ -182,7 +183,7 @@ def check_quaternion(what: str, quat) -> None:
     x = quat[k]
     big = float(np.max(np.abs(x))) if np.isfinite(x).all() else 0.0
     norm = big * float(np.linalg.norm(x / big)) if big > 0.0 else float(np.linalg.norm(x))
-    state = '' if not k else f' (state {k[0] if len(k) == 1 else k})'
+    state = at_state(k)
     raise ValueError(f'{what}{state} has norm {norm:.6g} ({", ".join(f"{v:g}" for v in x)}); '
                      f'a unit quaternion (x, y, z, w) within {QUATERNION_TOLERANCE:g} is '
                      'expected')
@@ -204,7 +205,7 @@ def check_rotation(what: str, R) -> None:
     if ok.all():
         return
     k = tuple(int(i) for i in np.argwhere(~ok)[0])
-    state = '' if not k else f' (state {k[0] if len(k) == 1 else k})'
+    state = at_state(k)
     why = ('is not finite' if not finite[k] else
            f'is not orthonormal (RᵀR − 1 has an entry of {off[k]:.3g})'
            if off[k] > ROTATION_TOLERANCE else f'is a reflection (det {det[k]:.6g})')

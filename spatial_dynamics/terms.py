@@ -34,8 +34,9 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
     so the six base rows (the wrench on the base) are 0. A list may then also hold all
     ``nv`` numbers with the six base rows 0 (Pinocchio's ``model.armature``).
 
-    ``ValueError`` names the joint of an unknown name or a non-finite (or, with
-    ``nonnegative``, negative) value, and the free-flyer given a value; ``TypeError`` names
+    ``ValueError`` names the joint of an unknown name (a mimic joint: the joint it follows,
+    whose coordinate takes its value) or a non-finite (or, with ``nonnegative``, negative)
+    value, and the free-flyer given a value; ``TypeError`` names
     ``what`` given anything but real numbers (a string, a complex number, a boolean:
     ``armature=True`` is no armature of 1).
     """
@@ -51,7 +52,7 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
                                  'which has no drive (its six rows, the wrench on the base, are '
                                  '0)')
             if name not in names:
-                raise ValueError(f'{what}: unknown joint {shown(name)}')
+                raise ValueError(f'{what}: {_not_a_coordinate(model, what, name)}')
             out[names.index(name)] = _number(f'{what} of joint {shown(name)}', v)
     else:
         out = real_numbers(what, values)
@@ -73,6 +74,23 @@ def per_joint(model: Model, what: str, values: PerJoint, default: float = 0.0,
             raise ValueError(f'{what}: joint {shown(name)} has the value {v}, need a finite '
                              + ('non-negative ' if nonnegative else '') + 'number')
     return np.concatenate([np.zeros(base), out])
+
+
+def _not_a_coordinate(model: Model, what: str, name) -> str:
+    """Say why ``name`` has no value of its own: a mimic joint (and whose), or no joint."""
+    if name not in model.mimics:
+        return f'unknown joint {shown(name)}'
+    follows = model.mimics[name][0]
+    source, seen = follows, {name}
+    while source in model.mimics and source not in seen:   # a mimic of a mimic
+        seen.add(source)
+        source = model.mimics[source][0]
+    via = '' if source == follows else f', which follows {shown(source)}'
+    names = model.joint_names[1:] if model.floating else model.joint_names
+    where = (f'; give it to {shown(source)}, whose coordinate it is' if source in names
+             else '')
+    return (f'joint {shown(name)} is a mimic joint: it follows {shown(follows)}{via} and has '
+            f'no coordinate of its own, so no {what} of its own{where}')
 
 
 def _number(what: str, value) -> float:

@@ -48,3 +48,16 @@ def listed(names: Sequence[str], quote: bool = True, count: int = LISTED) -> str
     names = list(names)
     head = ', '.join(shown(name, quote) for name in names[:count])
     return head + (', ...' if len(names) > count else '')
+
+
+def at_state(index: Sequence[int]) -> str:
+    """Return where in a batch a message's state is: ``' (state 3)'``, ``' (state (1, 2))'``.
+
+    ``index`` is the state's index in the batch shape, its integers numpy's (``np.argwhere``,
+    ``np.unravel_index``) or Python's, written as plain numbers (never ``np.int64(3)``); one
+    number alone; ``''`` for no batch (an empty index).
+    """
+    k = tuple(int(i) for i in index)
+    if not k:
+        return ''
+    return f' (state {k[0] if len(k) == 1 else k})'

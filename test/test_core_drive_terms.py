@@ -381,10 +381,13 @@ def test_per_joint_forms():
 def test_per_joint_rejects_bad_values():
     model = model_of('demo_arm')
     n = model.nq
-    # a mimic joint is not a coordinate: naming it is an unknown joint
-    for name in ('no_such_joint', 'finger_joint2', 'world_joint'):
+    for name in ('no_such_joint', 'world_joint'):
         with pytest.raises(ValueError, match=f"armature: unknown joint '{name}'"):
             sd.per_joint(model, 'armature', {'joint1': 0.1, name: 0.2})
+    # a mimic joint is not a coordinate: said so, with the joint whose coordinate it is
+    with pytest.raises(ValueError, match="armature: joint 'finger_joint2' is a mimic joint: it "
+                                         "follows 'finger_joint1' .*give it to 'finger_joint1'"):
+        sd.per_joint(model, 'armature', {'joint1': 0.1, 'finger_joint2': 0.2})
     for bad, got in (([0.1] * (n - 1), n - 1), ([0.1] * (n + 1), n + 1),
                      (np.ones((n, 1)), r'\(8, 1\)'), ([], 0)):
         with pytest.raises(ValueError, match=rf'armature: expected {n} values for .*'

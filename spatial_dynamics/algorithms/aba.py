@@ -23,14 +23,22 @@ so ``IA a_1 = τ_1 - pA_1`` is solved directly (``IA = L diag(d) Lᵀ``, 6x6) an
 on the free-flyer): it is ``M + diag(armature)`` the algorithm inverts.
 
 ``D_i`` are the pivots of the factorization of ``M`` from its last coordinate back (RBDA
-§6.5 and §7.3, :mod:`.forward`): a ``D_i`` that is not positive (a joint that moves no mass
-and carries no armature) leaves ``info`` at its coordinate, ``q̈`` unfinished. A model where two
+§6.5 and §7.3, :mod:`.forward`), and ``M_kk = S_iᵀ IC_i S_i`` (+ armature) its diagonal, with
+``IC_i`` the composite inertia of ``i``'s subtree (RBDA table 6.2), accumulated alongside::
+
+    IC_i = I_i;   M_kk = S_iᵀ IC_i S_i;   IC_λ(i) += Xup_iᵀ IC_i Xup_i
+
+A pivot ``D_i <= PIVOT_TOL M_kk`` (:data:`~.forward.PIVOT_TOL`: the rest of ``i``'s subtree
+makes its motion to within that of its inertia; a joint that moves no mass and carries no
+armature, two joints repeating each other's motion through massless links) leaves ``info``
+at its coordinate, ``q̈`` unfinished; on the free-flyer the pivots of ``IA_1``'s factor
+against ``IC_1``'s diagonal (a massless root link whose motion a joint repeats). A model where two
 bodies share a coordinate (a mimic joint and its source) has no articulated-body recursion (the
 coordinate's ``D`` is no single body's): ``info`` is then ``-2`` before any work, and the
 caller takes the composite-rigid-body path (:mod:`.crba`, :mod:`.forward`). ``-1``: solved.
 
 :func:`aba_kernel` is written on scalars under the rules of :mod:`.rnea` (per-body rows, the
-stores ``Xup vel acc`` and ``IA pA cJ UD`` read and written whole, the products of
+stores ``Xup vel acc IC`` and ``IA pA cJ UD`` read and written whole, the products of
 :mod:`.components`), so the Python backend runs it on floats and the compiled backend is
 generated from it.
 """
@@ -38,21 +46,23 @@ generated from it.
 from __future__ import annotations
 
 from .components import (I_articulated, I_motion, IA_motion, X_motion, XT_force_plus,
-                         XT_IA_X_plus)
+                         XT_I_X_plus, XT_IA_X_plus)
+from .forward import PIVOT_TOL
 from .rnea import nonzero
 from ..joints import joint_axis, joint_motion, joint_velocity
 
 
 def aba_kernel(rows, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T, info, Xup,
-               vel, acc, IA, pA, cJ, UD) -> None:
+               vel, acc, IC, IA, pA, cJ, UD) -> None:
     """``q̈`` into ``qdd`` (``nv`` scalars) from ``τ`` and the ``Xup`` of ``q`` (see above).
 
     ``rows`` are the layout's per-body rows (row 0 the base), ``Xup`` the transforms of
     :func:`~.rnea.xup_kernel`; ``f_body`` and ``has_fext`` as :func:`~.rnea.rnea_kernel` takes
-    them; with ``has_arm``, ``arm`` holds ``nv`` armatures. ``vel acc IA pA cJ UD`` are scratch
-    with a slot per body (``IA`` the upper triangle of a symmetric 6x6, 21 scalars; ``UD`` a
-    joint's ``U`` (6), ``D⁻¹`` and ``u``), ``T`` scratch of 36 scalars (the free-flyer's
-    factor). ``info[0]``: -1 when solved, else as the module docstring says.
+    them; with ``has_arm``, ``arm`` holds ``nv`` armatures. ``vel acc IC IA pA cJ UD`` are
+    scratch with a slot per body (``IC`` a composite inertia ``(m, h, Ibar)``; ``IA`` the upper
+    triangle of a symmetric 6x6, 21 scalars; ``UD`` a joint's ``U`` (6), ``D⁻¹`` and ``u``),
+    ``T`` scratch of 42 scalars (the free-flyer's factor, 36, and ``IC_1``'s diagonal).
+    ``info[0]``: -1 when solved, else as the module docstring says.
     """
     NB = len(rows) - 1
     (_, _, _, n, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _,
@@ -106,8 +116,9 @@ def aba_kernel(rows, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T
             f0, f1, f2 = f0 - fe3, f1 - fe4, f2 - fe5
         pA[i] = (n0, n1, n2, f0, f1, f2)
         IA[i] = I_articulated(mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz)
+        IC[i] = (mass, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz)
 
-    # U_i, D_i, u_i; the articulated inertia and bias force handed to the parent
+    # U_i, D_i, u_i; the articulated inertia and bias force handed to the parent; M_kk
     for i in range(NB, 0, -1):
         (p, code, _, kv, dof, ax, ay, az, _, _, _, _, _, _, _, _, _, _, _, _,
          _, _, _, _, _, _, _, _, _, _, mul, _) = rows[i]
@@ -123,9 +134,15 @@ def aba_kernel(rows, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T
                                                i14, i15, i22, i23, i24, i25, i33, i34, i35,
                                                i44, i45, i55, s0, s1, s2, s3, s4, s5)
             D = s0 * U0 + s1 * U1 + s2 * U2 + s3 * U3 + s4 * U4 + s5 * U5
+            # M_kk = S_iᵀ IC_i S_i
+            cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz = IC[i]
+            F0, F1, F2, F3, F4, F5 = I_motion(cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
+                                              s0, s1, s2, s3, s4, s5)
+            Mkk = s0 * F0 + s1 * F1 + s2 * F2 + s3 * F3 + s4 * F4 + s5 * F5
             if has_arm:
                 D = D + arm[kv]
-            if D <= 0.0:        # (a NaN state goes through: NaN in, NaN out, as in rnea)
+                Mkk = Mkk + arm[kv]
+            if D <= PIVOT_TOL * Mkk:    # (a NaN state goes through: NaN in, NaN out)
                 info[0] = kv
                 return
             Dinv = 1.0 / D
@@ -156,6 +173,8 @@ def aba_kernel(rows, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T
                                      i14, i15, i22, i23, i24, i25, i33, i34, i35, i44, i45,
                                      i55, *IA[p])
                 pA[p] = XT_force_plus(*Xup[i], p0, p1, p2, p3, p4, p5, *pA[p])
+                IC[p] = XT_I_X_plus(*Xup[i], cm, chx, chy, chz, cxx, cxy, cxz, cyy, cyz, czz,
+                                    *IC[p])
 
     # a' = Xup_i a_λ(i) + c_i;  q̈_i = D_i⁻¹ (u_i - U_iᵀ a');  a_i = a' + S_i q̈_i
     for i in range(1, NB + 1):
@@ -200,9 +219,18 @@ def aba_kernel(rows, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T
             T[28] = i44
             T[29] = i45
             T[35] = i55
+            # IC_1's diagonal: the pivots' M_kk
+            cm, _, _, _, cxx, _, _, cyy, _, czz = IC[i]
+            T[36] = cxx
+            T[37] = cyy
+            T[38] = czz
+            T[39] = cm
+            T[40] = cm
+            T[41] = cm
             if has_arm:
                 for c in range(6):
                     T[7 * c] = T[7 * c] + arm[kv + c]
+                    T[36 + c] = T[36 + c] + arm[kv + c]
             qdd[kv] = tau[kv] - p0
             qdd[kv + 1] = tau[kv + 1] - p1
             qdd[kv + 2] = tau[kv + 2] - p2
@@ -219,7 +247,7 @@ def aba_kernel(rows, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T
                 d = T[7 * j]
                 for t in range(j):
                     d = d - T[6 * t + j] * T[6 * t + j] * T[7 * t]
-                if d <= 0.0:
+                if d <= PIVOT_TOL * T[36 + j]:
                     info[0] = kv + j
                     return
                 T[7 * j] = d

@@ -22,7 +22,7 @@ _C_RESERVED = {'auto', 'case', 'char', 'const', 'default', 'double', 'enum', 'ex
 #: Parameters of the generated kernels that are arrays (the rest are doubles, or int flags).
 _C_ARRAYS = {'K', 'q', 'qd', 'qdd', 'dq', 'dv', 'f_body', 'tau', 'work', 'H', 'D', 'mom',
              'ctq', 'Y', 'axes', 'J', 'QR', 'wts', 'res', 'scr', 'lam', 'run', 'seg', 'info',
-             'arm', 'T'}
+             'arm', 'T', 'Hkk'}
 #: Parameters that are integers: flags, and the joints' code, indices and column.
 _C_FLAGS = {'has_fext', 'has_arm', 'both', 'code', 'k', 'kv', 'kj', 'col', 'n', 'row', 'nb'}
 #: Kernels whose written arrays never overlap (every caller passes distinct results and

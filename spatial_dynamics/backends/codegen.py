@@ -114,7 +114,7 @@ SIGNATURES = {'xup_kernel': 'K, q, work',
               'bodies_kernel': 'K, work, J',
               'split_kernel': 'QR, k, n, nb, wts, res, scr, tol',
               'derivatives_kernel': 'K, qd, qdd, gx, gy, gz, f_body, has_fext, dq, dv, H, work',
-              'forward_kernel': 'K, H, qdd, lam, run, seg, info',
+              'forward_kernel': 'K, H, qdd, lam, run, seg, Hkk, info',
               'aba_kernel': 'K, qd, tau, gx, gy, gz, f_body, has_fext, arm, has_arm, qdd, T, '
                             'info, work'}
 #: The kernels printed a second time for CPUs with AVX (``name_avx``, chosen at run time by
@@ -310,6 +310,10 @@ def _kernel_source(fn) -> str:
     return ast.unparse(func)
 
 
+#: The real constants the kernels name (printed ``static const double`` in C).
+REALS = {'PIVOT_TOL': forward.PIVOT_TOL}
+
+
 def _constants() -> dict:
     """Return the constants the kernels name: joint codes and the scratch layout."""
     consts = dict(CODES)
@@ -333,7 +337,7 @@ Change the source, not this listing: codegen prints it from the source.
 """
 import numpy as np
 
-{chr(10).join(f'{k} = {v}' for k, v in _constants().items())}
+{chr(10).join(f'{k} = {v!r}' for k, v in {**_constants(), **REALS}.items())}
 '''
     body = '\n\n\n'.join(_kernel_source(fn) for fn in SOURCES)
     return header + '\n\n' + body + '\n'
@@ -385,6 +389,7 @@ def generate_c() -> str:
 
 '''
     enum = 'enum {\n' + ',\n'.join(f'    {k} = {v}' for k, v in consts.items()) + '\n};\n'
+    enum += ''.join(f'static const double {k} = {v!r};\n' for k, v in REALS.items())
     return (header + enum + '\n' + '\n\n'.join(funcs) + '\n\n' + lanes_c(returns, _flat)
             + '\n#endif  /* SPATIAL_DYNAMICS_KERNELS_GENERATED_H */\n')
 

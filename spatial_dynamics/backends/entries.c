@@ -70,11 +70,12 @@ const Algorithm ALGORITHMS[] = {
      "One state: qdd = (M(q) + diag(armature))^-1 (tau - h(q, qd)), h the rnea at qdd = 0, by\n"
      "the articulated-body algorithm (algorithms/aba.py; M's factorization where two bodies\n"
      "share a coordinate); arguments as for rnea, tau in place of qdd, armature n numbers or\n"
-     "None. None when an argument is not such a state, or a pivot is not positive (the\n"
-     "caller's general path names the joint), or a model with armature has no ABA.",
+     "None. None when an argument is not such a state, or a pivot d_k is at most\n"
+     "PIVOT_TOL M_kk (the caller's general path names the joint), or a model with armature\n"
+     "has no ABA.",
      "forward_dynamics_batch(kernels, N, q, qd, tau, gravity, fext, qdd, threads) -> None\n\n"
      "N states as rnea_batch, tau in place of qdd; writes qdd (N x n), NaN in a state whose M\n"
-     "has a pivot that is not positive."},
+     "has a pivot d_k at most PIVOT_TOL M_kk."},
 };
 #define ROWS (sizeof ALGORITHMS / sizeof ALGORITHMS[0])
 const int ALGORITHM_COUNT = (int)ROWS;

@@ -171,14 +171,14 @@ result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 /* Scratch doubles of one state: the per-body rows, the regressor's carried axes, the
  * derivatives' per-body rows and columns (codegen.MORE_STORES); for forward dynamics the
  * larger of the articulated-body algorithm's per-body rows (AWORK), a free-flyer's 6 x 6
- * factor and its status (1), and the composite-rigid-body path's M (nv x nv), the
- * coordinates' parents and chains (nv each), the chains of one coordinate's ancestors (2 nv)
- * and its status (1). */
+ * factor and its composite inertia's diagonal (42) and its status (1), and the
+ * composite-rigid-body path's M (nv x nv), the coordinates' parents and chains (nv each), the
+ * chains of one coordinate's ancestors (2 nv), M's diagonal (nv) and its status (1). */
 Py_ssize_t
 work_size(int kernel, long rows, long nv)
 {
-    const Py_ssize_t aba = (Py_ssize_t)rows * AWORK + 37;
-    const Py_ssize_t crba = (Py_ssize_t)nv * ((Py_ssize_t)nv + 4) + 1;
+    const Py_ssize_t aba = (Py_ssize_t)rows * AWORK + 43;
+    const Py_ssize_t crba = (Py_ssize_t)nv * ((Py_ssize_t)nv + 5) + 1;
     return (Py_ssize_t)rows * WORK
         + (kernel == REGRESSOR ? 6 * (Py_ssize_t)rows * ((Py_ssize_t)rows + 5) : 0)
         + (kernel == DERIVATIVES ? (Py_ssize_t)rows * (DWORK + 6 * CWORK) : 0)
@@ -190,9 +190,9 @@ work_size(int kernel, long rows, long nv)
  * and out3 the derivatives' second and third (dtau/dqd, M). FORWARD reads tau in place of
  * qdd and arm (nv armatures, or NULL): q̈ by the articulated-body algorithm
  * (algorithms/aba.py); on a model where two
- * bodies share a coordinate (a mimic joint), or a pivot D_i that is not positive, by
+ * bodies share a coordinate (a mimic joint), or a pivot D_i <= PIVOT_TOL M_kk, by
  * q̈ = M⁻¹ (τ - h) (algorithms/forward.py) with h the RNEA at q̈ = 0; 0, or -1 (q̈ all
- * NaN) when M has a pivot that is not positive. */
+ * NaN) when M has a pivot d_k <= PIVOT_TOL M_kk (with armature: -1 at ABA's refusal). */
 int
 run_state(int kernel, const double *K, long rows, const double *q, const double *qd,
           const double *qdd, const double *g, const double *f, const double *arm,
@@ -226,11 +226,11 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
     case FORWARD: {
         const long nv = (long)K[VIDX];
         double *H = work + (Py_ssize_t)rows * WORK, *lam = H + (Py_ssize_t)nv * nv;
-        double *run = lam + nv, *seg = run + nv, *info = seg + 2 * nv;
+        double *run = lam + nv, *seg = run + nv, *Hkk = seg + 2 * nv, *info = Hkk + nv;
         double *T = H + (Py_ssize_t)rows * AWORK;
         aba_kernel(K, rows, qd, qdd, g[0], g[1], g[2], f, f != NULL, arm ? arm : qdd,
-                   arm != NULL, out1, T, T + 36, work);
-        if (T[36] == -1.0)
+                   arm != NULL, out1, T, T + 42, work);
+        if (T[42] == -1.0)
             break;
         if (arm != NULL)
             return -1;      /* the general path adds the armature to M and names the joint */
@@ -240,7 +240,7 @@ run_state(int kernel, const double *K, long rows, const double *q, const double 
         for (long k = 0; k < nv; k++)
             out1[k] = qdd[k] - out1[k];
         crba_kernel(K, rows, work, H);
-        forward_kernel(K, rows, H, out1, lam, run, seg, info);
+        forward_kernel(K, rows, H, out1, lam, run, seg, Hkk, info);
         if (info[0] >= 0.0) {
             for (long k = 0; k < nv; k++)
                 out1[k] = NAN;

@@ -23,7 +23,7 @@ import numpy as np
 from ..algorithms.aba import aba_kernel
 from ..algorithms.crba import crba_kernel
 from ..algorithms.derivatives import derivatives_kernel
-from ..algorithms.forward import forward_kernel
+from ..algorithms.forward import forward_kernel, PIVOT_TOL
 from ..algorithms.momentum import momentum_kernel
 from ..algorithms.regressor import regressor_kernel
 from ..algorithms.rnea import rnea_kernel, xup_kernel
@@ -205,11 +205,13 @@ def forward_solve(rows, H: np.ndarray, b: np.ndarray) -> tuple:
     """Solve ``H q̈ = b`` per state: ``(q̈, None)``, or ``(None, (state, k))`` if a pivot fails.
 
     ``H`` (..., nv, nv) and ``b`` (..., nv) broadcast; ``(state, k)`` is the first state (flat
-    index) whose ``H`` has a pivot ``k`` that is not positive.
+    index) whose ``H`` has a pivot ``d_k <= PIVOT_TOL H_kk``
+    (:data:`~spatial_dynamics.algorithms.forward.PIVOT_TOL`).
 
     :func:`~spatial_dynamics.algorithms.forward.forward_kernel` on the floats of each state (a
     float64 state on Python floats, other dtypes on numpy scalars); a batch of float32 or
-    float64 states on numpy's Cholesky (LAPACK), which gives the same ``q̈`` to rounding.
+    float64 states on numpy's Cholesky (LAPACK) of ``H`` with its coordinates reversed (the
+    kernel's pivots), which gives the same ``q̈`` to rounding.
     """
     with np.errstate(**QUIET):
         return _solve(rows, H, b)
@@ -223,20 +225,25 @@ def _solve(rows, H: np.ndarray, b: np.ndarray) -> tuple:
     H = np.broadcast_to(H, batch + (n, n)).reshape(N, n, n)
     b = np.broadcast_to(b, batch + (n,)).reshape(N, n)
     if N > 1 and b.dtype in (np.float32, np.float64):
+        # H = Lᵀ L from the last coordinate back, as the kernel: the Cholesky factor of H with
+        # its rows and columns reversed, whose pivots are the kernel's d_k
+        R = H[:, ::-1, ::-1]
         try:
-            L = np.linalg.cholesky(H)
+            L = np.linalg.cholesky(R)
         except np.linalg.LinAlgError:
-            pass        # the loop below finds the state and the coordinate
-        else:
-            y = np.linalg.solve(L, b[..., None])
-            return np.linalg.solve(np.swapaxes(L, -1, -2), y)[..., 0].reshape(batch + (n,)), None
+            L = None    # the loop below finds the state and the coordinate
+        if L is not None and not np.any(np.diagonal(L, axis1=1, axis2=2) ** 2
+                                        <= PIVOT_TOL * np.diagonal(R, axis1=1, axis2=2)):
+            y = np.linalg.solve(L, b[:, ::-1, None])
+            x = np.linalg.solve(np.swapaxes(L, -1, -2), y)[:, ::-1, 0]
+            return x.reshape(batch + (n,)), None
     out = np.empty((N, n), dtype=b.dtype)
     m = math if b.dtype == np.float64 else np
     for s in range(N):
         Hs, x = ((H[s].ravel().tolist(), b[s].tolist()) if m is math
                  else (list(H[s].ravel()), list(b[s])))
         info = [0]
-        forward_kernel(rows, Hs, x, [0] * n, [0] * n, [0] * (2 * n), info, m)
+        forward_kernel(rows, Hs, x, [0] * n, [0] * n, [0] * (2 * n), [0] * n, info, m)
         if info[0] >= 0:
             return None, (s, int(info[0]))
         out[s] = x
@@ -264,7 +271,7 @@ def aba_rows(rows, q, qd, tau, gravity, f_body=None, arm=None, m=math) -> tuple:
             fb[b] = f
     info = [-1]
     aba_kernel(rows, qd, tau, gx, gy, gz, fb, fb is not None, arm, arm is not None, qdd,
-               [zero] * 36, info, Xup, *([None] * slots for _ in range(6)))
+               [zero] * 42, info, Xup, *([None] * slots for _ in range(7)))
     return qdd, int(info[0])
 
 
