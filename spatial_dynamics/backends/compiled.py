@@ -28,7 +28,7 @@ import warnings
 import numpy as np
 
 #: The interface of ``_compiled.c`` this module speaks (its ``API``).
-API = 17
+API = 18
 
 try:
     ext = importlib.import_module(__package__ + '._compiled')
