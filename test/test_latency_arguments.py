@@ -424,6 +424,9 @@ def test_the_machines_floor_is_the_pacers_wake_ups_with_the_kernels_preemption(c
         assert machine['p99.9_ms'] == (pytest.approx(np.percentile(np.array(late_ns) * 1e-6,
                                                                    99.9))
                                        if count >= 1000 else None)
+    from spatial_dynamics.tools.latency import machine_legend
+    label = machine_legend(np.array(late_ns) * 1e-6)
+    assert f'{count} wake-ups' in label and (', p99.9 ' in label) == (count >= 1000), label
     line = machine_line(machine, 'SCHED_FIFO 51')
     assert 'SCHED_FIFO 51' in line and 'kernel preemption: none' in line, line
     assert f'({machine["over_1ms"]} of {count} wake-ups over 1 ms)' in line, line

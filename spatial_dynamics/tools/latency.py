@@ -503,6 +503,14 @@ def machine_line(machine: Dict[str, object], scheduling: str) -> str:
             'shorter tail than a wake-up')
 
 
+def machine_legend(late_ms: np.ndarray) -> str:
+    """Return the legend of the pacer's wake-ups: the highest quantile they tell."""
+    told = [(key, quantile(late_ms, key)) for key, _, _ in QUANTILES]
+    told = [(key, value) for key, value in told if value is not None]
+    top = f', {told[-1][0]} {told[-1][1]:.2f} ms' if told else ''
+    return f'publisher woke late (the machine\'s floor): {len(late_ms)} wake-ups{top}'
+
+
 def legend(name: str, values: np.ndarray, sent: int) -> str:
     """Return a histogram's legend: answered, and the highest quantile the answers tell."""
     told = [(key, quantile(values, key)) for key, _, _ in QUANTILES]
@@ -602,9 +610,9 @@ def plot(path: str, targets: List[Target], title: str,
         late = np.array(woke_late_ns, dtype=float) * 1e-6
         ax.hist(np.minimum(late, bins[-1]), bins=bins, histtype='step', log=True,
                 linestyle=':', color='0.4',
-                label=legend('publisher woke late', late, len(late)).replace(
-                    ' % answered', ' % of its wake-ups'))
-    ax.set_xlabel('round trip, ms (the last bin holds everything beyond)')
+                label=machine_legend(late))
+    ax.set_xlabel('round trip; the publisher\'s lateness waking, ms (the last bin holds '
+                  'everything beyond)')
     ax.set_ylabel('answers')
     ax.set_title('\n'.join(textwrap.wrap(title, 100)), fontsize=8)
     ax.legend(fontsize=8)
