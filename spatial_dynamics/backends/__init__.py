@@ -351,7 +351,8 @@ def forward_dynamics(model: Model, q, qd, tau, gravity: Sequence[float] = GRAVIT
 
     Returns:
         q̈ (rad/s², m/s²), shape (..., nv): the broadcast batch shape; float64, or the inputs'
-        floating dtype.
+        floating dtype (float32 and float16 states computed in float64 and rounded once: in
+        their own precision a singular ``M`` would not be told from rounding).
     """
     if base is None and armature is None and (f_ext is None or (type(f_ext) is dict
                                                                 and not f_ext)):
@@ -364,6 +365,13 @@ def forward_dynamics(model: Model, q, qd, tau, gravity: Sequence[float] = GRAVIT
 def _forward(model: Model, q, qd, tau, gravity, f_ext, backend: str,
              base: Optional[BaseMotion], armature) -> np.ndarray:
     """Run :func:`forward_dynamics` beyond its single-state entry: checks, terms, batches."""
+    low = _narrow_float(q, qd, tau)
+    if low is not None:
+        # float32 / float16 states: q̈ computed in float64 and rounded once. In their own
+        # precision M's pivots keep ~eps M_kk of rounding (1e-8, 1e-3), far above
+        # PIVOT_TOL: a singular M would answer q̈ of no digit instead of being refused
+        wide = (x.astype(np.float64) for x in (q, qd, tau))
+        return _forward(model, *wide, gravity, f_ext, backend, base, armature).astype(low)
     lay, kern, _ = _entered(model, backend, None)
     if base is None:
         q, qd, tau = as_joint_arrays(model, q, qd, tau, names=('q', 'qd', 'tau'))
@@ -502,6 +510,18 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
     else:
         out = python.derivatives(lay.rows, q, qd, qdd, g, fb)
     return _drive_terms(model, out, qd, armature, friction_threshold)
+
+
+def _narrow_float(*arrays) -> Optional[np.dtype]:
+    """Return float32 or float16 when the arrays are all of them (the result's dtype), else None.
+
+    Only numpy arrays of a floating dtype count: anything else goes the usual way (and its
+    checks), so that nothing is converted here that the checks would refuse.
+    """
+    if not all(type(x) is _ndarray and x.dtype.kind == 'f' for x in arrays):
+        return None
+    dtype = np.result_type(*arrays)
+    return dtype if dtype in (np.float32, np.float16) else None
 
 
 def _drive_terms(model: Model, out: tuple, qd, armature, friction_threshold) -> tuple:
