@@ -409,6 +409,35 @@ def test_an_interrupted_run_says_so_in_one_line_and_leaves_no_temporary(small, t
     assert [f for _, _, files in os.walk(out) for f in files if f.endswith('.tmp')] == []
 
 
+def test_a_local_worker_drops_only_the_heartbeat_its_closing_scheduler_fails():
+    """The command's workers drop the heartbeat failure of a closing cluster, and only that.
+
+    Closing the cluster (Ctrl-C too) closes its scheduler first: a worker whose heartbeat then
+    found it gone logged a traceback at ERROR after ``interrupted`` (seen in CI).
+    """
+    import io
+    import logging
+    from spatial_dynamics.fleet.engine import quiet_closing
+    logger = logging.getLogger('distributed.worker')
+    stream = io.StringIO()
+    handler = logging.StreamHandler(stream)
+    logger.addHandler(handler)
+    filters = list(logger.filters)
+    try:
+        quiet_closing()
+        quiet_closing()           # once is enough: not a second filter
+        assert len(logger.filters) == len(filters) + 1
+        try:
+            raise OSError('Stream is closed')
+        except OSError:
+            logger.exception('Failed to communicate with scheduler during heartbeat.')
+        logger.error('Compute Failed: a real error')
+        assert stream.getvalue() == 'Compute Failed: a real error\n'
+    finally:
+        logger.removeHandler(handler)
+        logger.filters[:] = filters
+
+
 def test_ctrl_c_on_a_local_cluster_is_one_line_not_a_traceback_per_worker(small, tmp_path):
     pytest.importorskip('distributed')
     # Ctrl-C goes to every process of the terminal's group; the command's own is held back

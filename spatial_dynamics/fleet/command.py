@@ -345,7 +345,7 @@ def _on_cluster(args, tasks, cache, progress, digests) -> List[Dict]:
     scratch = tempfile.mkdtemp(prefix='.dask-scratch-', dir=args.out)    # Dask's files
     try:
         with local_cluster(workers, scratch) as cluster, Client(cluster) as client:
-            warm(client)
+            warm(client, local=True)
             return run_tasks(tasks, cache, client, progress, digests)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)

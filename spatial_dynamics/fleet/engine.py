@@ -23,6 +23,7 @@ import contextlib
 import hashlib
 import importlib
 import json
+import logging
 import os
 import signal
 import sys
@@ -493,9 +494,39 @@ def _bytes(path: str) -> int:
         return 0
 
 
-def warm(client) -> None:
-    """Import what the tasks need on every worker (part of starting the cluster, not a bag)."""
+def warm(client, local: bool = False) -> None:
+    """Import what the tasks need on every worker (part of starting the cluster, not a bag).
+
+    ``local``: the command's own cluster, whose workers also drop the heartbeat failure that
+    closing it can make them log (:func:`quiet_closing`).
+    """
     client.run(load_modules)
+    if local:
+        client.run(quiet_closing)
+
+
+#: What a worker of a local cluster logs (ERROR, with a traceback) when its heartbeat finds
+#: the scheduler gone: closing the cluster (after Ctrl-C too) closes the scheduler first.
+HEARTBEAT_LOST = 'Failed to communicate with scheduler during heartbeat'
+
+
+class _NotHeartbeatLost(logging.Filter):
+    """Drop :data:`HEARTBEAT_LOST` records; let every other record through."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not record.getMessage().startswith(HEARTBEAT_LOST)
+
+
+def quiet_closing() -> None:
+    """Keep a local worker from logging :data:`HEARTBEAT_LOST` (its scheduler is the command's).
+
+    The command's scheduler goes only when the command closes it (or the command fails on its
+    own, with its message): the record is a traceback on the terminal after ``interrupted``,
+    never news. Every other record of the worker is kept.
+    """
+    logger = logging.getLogger('distributed.worker')
+    if not any(isinstance(f, _NotHeartbeatLost) for f in logger.filters):
+        logger.addFilter(_NotHeartbeatLost())
 
 
 #: The modules a task imports when it first runs.
