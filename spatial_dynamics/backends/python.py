@@ -62,6 +62,20 @@ def transforms(rows, q, m, Xup) -> None:
         xup_kernel(rows, q, _LIBM, Xup)
 
 
+def _body_forces(f_body, slots: int, zero):
+    """Return the kernels' ``f_body`` table (a 6-tuple a body slot, ``zero`` elsewhere), or None.
+
+    ``f_body`` maps a body index to its ``[n; f]``; None or empty: no table (``has_fext``
+    false).
+    """
+    if not f_body:
+        return None
+    fb = [(zero,) * 6] * slots
+    for b, f in f_body.items():
+        fb[b] = f
+    return fb
+
+
 def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
     """τ as a list of ``nv`` scalars from the per-body ``rows`` of :mod:`.layout`.
 
@@ -76,11 +90,7 @@ def rnea_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> list:
     transforms(rows, q, m, Xup)
     zero = 0.0 * gx
     tau = [zero] * rows[0][3]
-    fb = None
-    if f_body:
-        fb = [(zero,) * 6] * slots
-        for b, f in f_body.items():
-            fb[b] = f
+    fb = _body_forces(f_body, slots, zero)
     rnea_kernel(rows, q, qd, qdd, gx, gy, gz, fb, fb is not None, tau, Xup, vel, acc, frc)
     return tau
 
@@ -256,7 +266,8 @@ def aba_rows(rows, q, qd, tau, gravity, f_body=None, arm=None, m=math) -> tuple:
     Arguments as for :func:`rnea_rows`, ``tau`` in place of ``qdd``; ``arm`` ``nv`` armatures
     or None. ``info`` -1 when solved, else what
     :func:`~spatial_dynamics.algorithms.aba.aba_kernel` leaves (-2: two bodies share a
-    coordinate; ``k``: the pivot of coordinate ``k`` is not positive), ``q̈`` then unfinished.
+    coordinate; ``k``: the pivot of coordinate ``k`` is at most ``PIVOT_TOL M_kk``), ``q̈``
+    then unfinished.
     """
     gx, gy, gz = gravity
     slots = len(rows)
@@ -264,11 +275,7 @@ def aba_rows(rows, q, qd, tau, gravity, f_body=None, arm=None, m=math) -> tuple:
     transforms(rows, q, m, Xup)
     zero = 0.0 * gx
     qdd = [zero] * rows[0][3]
-    fb = None
-    if f_body:
-        fb = [(zero,) * 6] * slots
-        for b, f in f_body.items():
-            fb[b] = f
+    fb = _body_forces(f_body, slots, zero)
     info = [-1]
     aba_kernel(rows, qd, tau, gx, gy, gz, fb, fb is not None, arm, arm is not None, qdd,
                [zero] * 42, info, Xup, *([None] * slots for _ in range(7)))
@@ -287,11 +294,7 @@ def derivatives_rows(rows, q, qd, qdd, gravity, f_body=None, m=math) -> tuple:
     zero = 0.0 * gx
     n = rows[0][3]
     dq, dv, H = [zero] * (n * n), [zero] * (n * n), [zero] * (n * n)
-    fb = None
-    if f_body:
-        fb = [(zero,) * 6] * slots
-        for b, f in f_body.items():
-            fb[b] = f
+    fb = _body_forces(f_body, slots, zero)
     derivatives_kernel(rows, qd, qdd, gx, gy, gz, fb, fb is not None, dq, dv, H, Xup,
                        *([None] * slots for _ in range(7)), [None] * (6 * slots),
                        [None] * (6 * slots))
