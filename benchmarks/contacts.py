@@ -63,12 +63,11 @@ def main() -> None:
         print('(Pinocchio is not installed: no ratios)')
         return
     pin_rnea, pin_jac = us['pin_rnea'], us['pin_jacobians']
-    ours = us
     print(f'Pinocchio rnea:         {pin_rnea:8.1f} µs; the feet\'s Jacobians {pin_jac:8.1f} µs')
     print('load average (1, 5, 15 min): ' + ', '.join(f'{x:.2f}' for x in os.getloadavg()))
-    print(f'ratios, same run: contact_jacobian {ours["jacobian"] / pin_jac:.1f}x Pinocchio\'s '
-          f'Jacobians; contact_inverse_dynamics torques {ours["torques"] / pin_rnea:.1f}x, '
-          f'forces {ours["forces"] / pin_rnea:.1f}x, qp {ours["qp"] / pin_rnea:.0f}x '
+    print(f'ratios, same run: contact_jacobian {us["jacobian"] / pin_jac:.1f}x Pinocchio\'s '
+          f'Jacobians; contact_inverse_dynamics torques {us["torques"] / pin_rnea:.1f}x, '
+          f'forces {us["forces"] / pin_rnea:.1f}x, qp {us["qp"] / pin_rnea:.0f}x '
           f'Pinocchio\'s rnea')
 
 
