@@ -18,6 +18,7 @@ test, excepted). Then the batch error's state index, a mimic joint's armature, a
 
 import glob
 import os
+import re
 import warnings
 
 from conftest import example_robot_data_dir, robot_urdf_path
@@ -222,6 +223,27 @@ def test_a_joint_off_the_line_by_a_picometre_is_refused(rng):
     for backend in BACKENDS:
         qdd = sd.forward_dynamics(model, q, qd, tau, backend=backend)
         assert np.allclose(sd.rnea(model, q, qd, qdd), tau, rtol=0.0, atol=1e-9), backend
+
+
+def test_the_refusal_says_the_pivot_against_the_tolerance():
+    """The message gives ``d_k / M_kk`` (numpy's Cholesky the oracle) and ``PIVOT_TOL``.
+
+    ``j2`` 1e-7 m off ``j1``'s line: ``M`` is not singular, only too badly conditioned
+    (``d_k ~ 1.6e-13 M_kk``, cond 3e13); on the line, rounding's ~1e-16 is left.
+    """
+    for offset, low, high in ((1e-7, 1e-14, 1e-12), (0.0, 0.0, 1e-15)):
+        model = load(coincident(offset=offset))
+        oracle = pivot_ratios(sd.mass_matrix(model, TRAP[0], backend='numpy'))[0]
+        assert low < oracle < high
+        for backend in BACKENDS:
+            with pytest.raises(ValueError, match=r'\(pivot d_k = (\S+) M_kk, at most PIVOT_TOL '
+                                                 r'= 1e-12 M_kk; rounding') as refused:
+                sd.forward_dynamics(model, *TRAP, backend=backend)
+            shown = float(re.search(r'pivot d_k = (\S+) M_kk', str(refused.value)).group(1))
+            if offset:          # two digits of a pivot well above rounding
+                assert shown == pytest.approx(oracle, rel=0.05), backend
+            else:               # rounding: as small as numpy's
+                assert abs(shown) < 1e-15, backend
 
 
 BASE = example_robot_data_dir()

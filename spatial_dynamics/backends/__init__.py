@@ -39,6 +39,7 @@ from . import compiled, layout, python
 from .layout import LAYOUTS
 from ..algorithms.arguments import (as_joint_arrays, as_vector, check_configuration,
                                     f_ext_in_bodies)
+from ..algorithms.forward import PIVOT_TOL
 from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
 from ..terms import check_threshold, friction_derivative, per_joint
@@ -432,15 +433,26 @@ def _singular_reason(model: Model, H: np.ndarray, k: int) -> str:
     ``δ_k = 1`` that moves no mass (to within the tolerance) has its later coordinates from
     it. Its joints are those
     that repeat coordinate ``k``'s motion; armature on any of them removes the singularity,
-    on the free-flyer none (it has no drive: its root link needs an ``<inertial>``).
+    on the free-flyer none (it has no drive: its root link needs an ``<inertial>``). Last,
+    in parentheses, the pivot ``d_k = H_kk + H[k, k+1:] δ[k+1:]`` against the tolerance
+    (``d_k / H_kk >= 1 / cond(H)``; ``H`` exactly singular leaves a few eps ``H_kk``).
     """
-    names, base = model.joint_names, 6 if model.floating else 0
     later = np.linalg.solve(H[k + 1:, k + 1:], -H[k + 1:, k]) if k + 1 < len(H) else H[:0, 0]
+    pivot = (' (M_kk = 0)' if not H[k, k] > 0.0 else
+             f' (pivot d_k = {(H[k, k] + H[k, k + 1:] @ later) / H[k, k]:.1e} M_kk, at most '
+             f'PIVOT_TOL = {PIVOT_TOL:.0e} M_kk; rounding leaves ~1e-16 M_kk of an exactly '
+             'singular M)')
+    return _remedy(model, later, k) + pivot
+
+
+def _remedy(model: Model, later: np.ndarray, k: int) -> str:
+    """Say which joints repeat coordinate ``k``'s motion (``later``) and what removes it."""
+    names, base, nv = model.joint_names, 6 if model.floating else 0, k + 1 + len(later)
     size = np.abs(later)
     small = 1e-6 * max(1.0, size.max(initial=0.0))
     # the joint of velocity coordinate c: one each, after the free-flyer's six
     repeating = [names[c - base + (1 if base else 0)]
-                 for c in range(max(k + 1, base), len(H)) if size[c - k - 1] > small]
+                 for c in range(max(k + 1, base), nv) if size[c - k - 1] > small]
     joints = ', '.join(shown(j) for j in dict.fromkeys(repeating))
     if k < base:
         root = shown(model.body_names[1])
