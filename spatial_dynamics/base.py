@@ -48,7 +48,7 @@ import weakref
 
 import numpy as np
 
-from .algorithms.arguments import as_joint_arrays, as_real_array
+from .algorithms.arguments import as_joint_arrays, as_real_array, batch_of
 from .joints import (check_quaternion, check_rotation, FIXED, FREE_FLYER,
                      quaternion_matrix)
 from .model import Frame, Model
@@ -351,6 +351,13 @@ def check_base_motion(base, model: Optional[Model] = None) -> None:
                          'give a base motion')
 
 
+def base_batches(base: BaseMotion) -> list:
+    """Return the batch shapes of ``base``'s arrays, labelled for :func:`.arguments.batch_of`."""
+    arrays = [('base.v', base.v), ('base.a', base.a)] + (
+        [] if base.orientation is None else [('base.orientation', base.orientation)])
+    return [(f'{name} of shape {x.shape}', x.shape[:-1]) for name, x in arrays]
+
+
 def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=None):
     """Return the twin's ``(q, q̇, q̈, gravity)`` for ``model``'s ``q, q̇, q̈`` on ``base``.
 
@@ -362,8 +369,8 @@ def twin_state(model: Model, base: BaseMotion, q, qd=None, qdd=None, gravity=Non
     q, qd, qdd = as_joint_arrays(model, q, zero if qd is None else qd,
                                  zero if qdd is None else qdd)
     quat = base.orientation if base.orientation is not None else np.array([0.0, 0, 0, 1])
-    batch = np.broadcast_shapes(q.shape[:-1], base.v.shape[:-1], base.a.shape[:-1],
-                                quat.shape[:-1])
+    batch = batch_of((f'the joints\' states of shape {q.shape}', q.shape[:-1]),
+                     *base_batches(base))
 
     def joined(head, x):
         head = np.broadcast_to(head, batch + head.shape[-1:])

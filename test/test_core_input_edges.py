@@ -287,3 +287,56 @@ def test_booleans_and_text_are_refused_for_numeric_terms_naming_them(rng):
                                                          com=(0.0, 0.0, 1.0)).inertia)
     assert sd.Model.from_urdf(path, joints=model.joint_names[1:],
                               locked={joint: np.float32(0.5)}).locked[joint] == 0.5
+
+
+# Batches that do not broadcast, and masked arrays: refused naming the arguments
+
+THREE_VECTORS = {
+    'rnea': lambda m, q, qd, x, **kw: sd.rnea(m, q, qd, x, **kw),
+    'rnea_derivatives': lambda m, q, qd, x, **kw: sd.rnea_derivatives(m, q, qd, x, **kw),
+    'forward_dynamics': lambda m, q, qd, x, **kw: sd.forward_dynamics(m, q, qd, x, **kw),
+}
+
+
+@pytest.mark.parametrize('backend', BACKENDS)
+@pytest.mark.parametrize('function', sorted(THREE_VECTORS))
+def test_batches_that_do_not_broadcast_are_refused_naming_the_arguments(function, backend):
+    """The user's names, where numpy's own message says ``arg 0 with shape (3,)``."""
+    model, call = robot('ur5'), THREE_VECTORS[function]
+    n = model.nv
+    third = 'tau' if function == 'forward_dynamics' else 'qdd'
+    with pytest.raises(ValueError, match=rf'do not broadcast: q of shape \(3, {n}\), qd of '
+                                         rf'shape \(2, {n}\), {third} of shape \({n},\)'):
+        call(model, np.zeros((3, n)), np.zeros((2, n)), np.zeros(n), backend=backend)
+    with pytest.raises(ValueError, match=r"do not broadcast: .*f_ext\['wrist_3_link'\] of "
+                                         r'shape \(2, 6\)'):
+        call(model, np.zeros((3, n)), np.zeros(n), np.zeros(n), backend=backend,
+             f_ext={'wrist_3_link': np.zeros((2, 6))})
+    motion = sd.BaseMotion(np.zeros((2, 6)), np.zeros(6))
+    with pytest.raises(ValueError, match=r'do not broadcast: .* of shape \(3, 6\), base\.v of '
+                                         r'shape \(2, 6\), base\.a of shape \(6,\)$'):
+        call(model, np.zeros((3, n)), np.zeros(n), np.zeros(n), backend=backend, base=motion)
+    with pytest.raises(ValueError, match=r'do not broadcast: q of shape \(3, 6\), base\.v of '
+                                         r'shape \(2, 6\)'):
+        sd.mass_matrix(model, np.zeros((3, n)), backend=backend, base=motion)
+
+
+@pytest.mark.parametrize('backend', BACKENDS)
+@pytest.mark.parametrize('function', sorted(THREE_VECTORS))
+def test_a_masked_entry_is_refused_and_an_unmasked_array_read(function, backend, rng):
+    """A masked array's mask must not be dropped silently (numpy reads the data under it).
+
+    A masked array with nothing masked is its numbers (the answer equals the plain array's, to
+    the bit); one with a masked entry is refused naming the argument, one state or a batch.
+    """
+    model, call = robot('ur5'), THREE_VECTORS[function]
+    q, qd, x = (rng.uniform(-1, 1, (3, model.nv)) for _ in range(3))
+    for s in (0, slice(None)):
+        plain = call(model, q[s], qd[s], x[s], backend=backend)
+        unmasked = call(model, np.ma.masked_array(q[s]), qd[s], x[s], backend=backend)
+        for a, b in zip(*(o if isinstance(o, tuple) else (o,) for o in (plain, unmasked))):
+            assert np.array_equal(np.asarray(a), np.asarray(b))
+        masked = np.ma.masked_array(qd[s], mask=np.zeros_like(qd[s], dtype=bool))
+        masked[..., 2] = np.ma.masked
+        with pytest.raises(ValueError, match=r'qd has [13] masked entries: give the numbers'):
+            call(model, q[s], masked, x[s], backend=backend)

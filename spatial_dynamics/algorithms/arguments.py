@@ -24,8 +24,13 @@ def as_real_array(what: str, x) -> np.ndarray:
 
     Booleans and integers are kept as they are (the caller promotes them). ``TypeError``
     names ``what`` when ``x`` is no array of real numbers: strings, complex numbers, objects,
-    ``None``, ragged lists, a buffer numpy cannot read (suboffsets, an unknown format).
+    ``None``, ragged lists, a buffer numpy cannot read (suboffsets, an unknown format);
+    ``ValueError`` when it is a masked array with masked entries (numpy would drop the mask
+    and read what lies under it).
     """
+    if isinstance(x, np.ma.MaskedArray) and np.ma.is_masked(x):
+        raise ValueError(f'{what} has {np.ma.count_masked(x)} masked entries: give the numbers '
+                         f'to use in their place (e.g. {what}.filled(...))')
     try:
         a = np.asarray(x)
     except (TypeError, ValueError, BufferError) as err:
@@ -35,6 +40,19 @@ def as_real_array(what: str, x) -> np.ndarray:
         raise TypeError(f'{what} must be an array of real numbers, got {type(x).__name__} '
                         f'of dtype {a.dtype}')
     return a
+
+
+def batch_of(*named) -> tuple:
+    """Return the broadcast of batch shapes ``(label, batch)``; ``ValueError`` saying the labels.
+
+    A label names the argument and its shape (``'qd of shape (2, 6)'``): numpy's own message
+    names positions (``arg 0 with shape (3,)``), not the user's arguments.
+    """
+    try:
+        return np.broadcast_shapes(*(batch for _, batch in named))
+    except ValueError:
+        raise ValueError('the batch dimensions (all but the last) do not broadcast: '
+                         + ', '.join(label for label, _ in named)) from None
 
 
 def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) -> list:
@@ -63,7 +81,8 @@ def as_joint_arrays(model: Model, *arrays, names: tuple = ('q', 'qd', 'qdd')) ->
         out.append(a)
     dtype = np.result_type(*out, np.float64) if not all(
         np.issubdtype(a.dtype, np.floating) for a in out) else np.result_type(*out)
-    batch = np.broadcast_shapes(*(a.shape[:-1] for a in out))
+    batch = batch_of(*((f'{what} of shape {a.shape}', a.shape[:-1])
+                       for what, a in zip(names, out)))
     if model.free_flyers and names[0] == 'q':
         check_configuration(model, out[0])
     return [np.broadcast_to(a.astype(dtype, copy=False), batch + a.shape[-1:]) for a in out]
@@ -114,6 +133,18 @@ def f_ext_in_bodies(model: Model, f_ext) -> dict:
             continue  # acts on the fixed base: no joint feels it
         fb[frame.body] = fb.get(frame.body, 0.0) + _transposed_times(frame.lXb, f)
     return fb
+
+
+def with_wrenches(f_ext, arrays: list, names: tuple) -> list:
+    """Return ``arrays`` (checked joint arrays) broadcast against ``f_ext``'s batched wrenches.
+
+    ``ValueError`` naming the arguments when their batch dimensions do not broadcast.
+    """
+    batch = batch_of(*((f'{what} of shape {a.shape}', a.shape[:-1])
+                       for what, a in zip(names, arrays)),
+                     *((f'f_ext[{shown(link)}] of shape {np.shape(f)}', np.shape(f)[:-1])
+                       for link, f in f_ext.items()))
+    return [np.broadcast_to(a, batch + a.shape[-1:]) for a in arrays]
 
 
 def _transposed_times(X: np.ndarray, f: np.ndarray) -> np.ndarray:

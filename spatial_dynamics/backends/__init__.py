@@ -38,9 +38,9 @@ import numpy as np
 from . import compiled, layout, python
 from .layout import LAYOUTS
 from ..algorithms.arguments import (as_joint_arrays, as_vector, check_configuration,
-                                    f_ext_in_bodies)
+                                    batch_of, f_ext_in_bodies, with_wrenches)
 from ..algorithms.forward import PIVOT_TOL
-from ..base import BaseMotion, check_base_motion, floating_twin, twin_state
+from ..base import base_batches, BaseMotion, check_base_motion, floating_twin, twin_state
 from ..model import Model
 from ..terms import check_threshold, friction_derivative, per_joint
 from ..text import at_state, shown
@@ -239,8 +239,8 @@ def mass_matrix(model: Model, q, backend: str = 'auto', *,
     if base is not None:
         check_base_motion(base, model)
         H = mass_matrix(model, q, backend)
-        shape = np.broadcast_shapes(H.shape[:-2], base.v.shape[:-1], base.a.shape[:-1], (
-            () if base.orientation is None else base.orientation.shape[:-1])) + H.shape[-2:]
+        shape = batch_of((f'q of shape {np.shape(q)}', H.shape[:-2]),
+                         *base_batches(base)) + H.shape[-2:]
         return H if H.shape == shape else np.broadcast_to(H, shape).copy()
     lay, kern, H = _entered(model, backend, _c_mass_matrix, q)
     if H is not None:
@@ -381,9 +381,7 @@ def _forward(model: Model, q, qd, tau, gravity, f_ext, backend: str,
         arm = (None if armature is None
                else per_joint(model, 'armature', armature, nonnegative=True))
         if fb:  # batched wrenches broadcast against the batch of states
-            batch = np.broadcast_shapes(q.shape[:-1],
-                                        *(np.shape(f)[:-1] for f in fb.values()))
-            q, qd, tau = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, tau))
+            q, qd, tau = with_wrenches(f_ext, [q, qd, tau], ('q', 'qd', 'tau'))
         single = q.size == q.shape[-1] > 0
         if kern is not None and q.dtype in _KERNEL_DTYPES:
             if single:
@@ -433,21 +431,15 @@ def _singular_reason(model: Model, H: np.ndarray, k: int) -> str:
     ``δ_k = 1`` that moves no mass (to within the tolerance) has its later coordinates from
     it. Its joints are those
     that repeat coordinate ``k``'s motion; armature on any of them removes the singularity,
-    on the free-flyer none (it has no drive: its root link needs an ``<inertial>``). Last,
-    in parentheses, the pivot ``d_k = H_kk + H[k, k+1:] δ[k+1:]`` against the tolerance
+    on the free-flyer none (it has no drive: its root link needs an ``<inertial>``). In
+    parentheses the pivot ``d_k = H_kk + H[k, k+1:] δ[k+1:]`` against the tolerance
     (``d_k / H_kk >= 1 / cond(H)``; ``H`` exactly singular leaves a few eps ``H_kk``).
     """
     later = np.linalg.solve(H[k + 1:, k + 1:], -H[k + 1:, k]) if k + 1 < len(H) else H[:0, 0]
-    pivot = (' (M_kk = 0)' if not H[k, k] > 0.0 else
-             f' (pivot d_k = {(H[k, k] + H[k, k + 1:] @ later) / H[k, k]:.1e} M_kk, at most '
-             f'PIVOT_TOL = {PIVOT_TOL:.0e} M_kk; rounding leaves ~1e-16 M_kk of an exactly '
-             'singular M)')
-    return _remedy(model, later, k) + pivot
-
-
-def _remedy(model: Model, later: np.ndarray, k: int) -> str:
-    """Say which joints repeat coordinate ``k``'s motion (``later``) and what removes it."""
-    names, base, nv = model.joint_names, 6 if model.floating else 0, k + 1 + len(later)
+    pivot = ('(M_kk = 0)' if not H[k, k] > 0.0 else
+             f'(pivot d_k = {(H[k, k] + H[k, k + 1:] @ later) / H[k, k]:.1e} M_kk, at most '
+             f'PIVOT_TOL = {PIVOT_TOL:.0e} M_kk; an exactly singular M leaves ~1e-16)')
+    names, base, nv = model.joint_names, 6 if model.floating else 0, len(H)
     size = np.abs(later)
     small = 1e-6 * max(1.0, size.max(initial=0.0))
     # the joint of velocity coordinate c: one each, after the free-flyer's six
@@ -457,18 +449,18 @@ def _remedy(model: Model, later: np.ndarray, k: int) -> str:
     if k < base:
         root = shown(model.body_names[1])
         if not repeating:
-            return (f'the floating base moves no mass along it: its root link {root} (with the '
-                    'links fixed to it) needs an <inertial> (the free-flyer has no drive to '
-                    'give armature)')
+            return (f'the floating base moves no mass along it {pivot}: its root link {root} '
+                    '(with the links fixed to it) needs an <inertial> (the free-flyer has no '
+                    'drive to give armature)')
         return (f'the floating base\'s motion along it is repeated by the joint(s) {joints} '
-                f'and its root link {root} has no mass of its own, so no acceleration of it '
-                f'follows from tau; give {joints} armature, or the root link an <inertial> '
-                '(the free-flyer has no drive to give armature)')
+                f'and its root link {root} has no mass of its own {pivot}, so no acceleration '
+                f'of it follows from tau; give {joints} armature, or the root link an '
+                '<inertial> (the free-flyer has no drive to give armature)')
     if not repeating:
-        return ('the joint moves no mass, so no acceleration of it follows from tau; give it '
-                'armature')
-    return (f'the joint moves no mass that the joint(s) {joints} do not move too, so no '
-            f'acceleration of it follows from tau; give it or {joints} armature')
+        return (f'the joint moves no mass {pivot}, so no acceleration of it follows from tau; '
+                'give it armature')
+    return (f'the joint moves no mass that the joint(s) {joints} do not move too {pivot}, so '
+            f'no acceleration of it follows from tau; give it or {joints} armature')
 
 
 def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
@@ -603,8 +595,7 @@ def _states(model: Model, q, qd, qdd, gravity, f_ext) -> tuple:
     g = tuple(as_vector('gravity', gravity, 3).tolist())
     fb = f_ext_in_bodies(model, f_ext)
     if fb:  # batched wrenches broadcast against the batch of states
-        batch = np.broadcast_shapes(q.shape[:-1], *(np.shape(f)[:-1] for f in fb.values()))
-        q, qd, qdd = (np.broadcast_to(x, batch + x.shape[-1:]) for x in (q, qd, qdd))
+        q, qd, qdd = with_wrenches(f_ext, [q, qd, qdd], ('q', 'qd', 'qdd'))
     return q, qd, qdd, g, fb
 
 

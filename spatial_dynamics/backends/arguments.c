@@ -90,14 +90,16 @@ read_buffer(const Py_buffer *v, double *out)
 }
 
 /* ``obj`` as n doubles: AS_DOUBLE or AS_FLOAT (read from float32); DECLINED when it is not
- * one state of n numbers this entry reads; never an error. Read: a 1-D numpy array of
- * READ_TYPES in native byte order (any strides), a list or tuple of Python floats and ints,
+ * one state of n numbers this entry reads; never an error. Read: a 1-D numpy array (not
+ * of a subclass) of READ_TYPES in native byte order (any strides), a list or tuple of Python floats and ints,
  * another 1-D buffer of such items. */
 int
 as_doubles(PyObject *obj, Py_ssize_t n, double *out)
 {
     if (PyArray_Check(obj)) {
         PyArrayObject *a = (PyArrayObject *)obj;
+        if (!PyArray_CheckExact(obj))
+            return DECLINED;    /* a subclass (a masked array: its mask) is the caller's */
         if (PyArray_NDIM(a) != 1 || PyArray_DIM(a, 0) != n || !PyArray_ISNOTSWAPPED(a))
             return DECLINED;
         if (PyArray_TYPE(a) == NPY_DOUBLE && PyArray_STRIDE(a, 0) == sizeof(double)) {
