@@ -758,3 +758,18 @@ def test_a_cpu_time_not_kept_is_not_printed_and_counts_are_said_in_the_singular(
     row.update(not_answered=1, not_answered_superseded=0)
     assert not_answered_line(row) == 'node: 1 input not answered'
     assert (plural(0, 'busy loop'), plural(1, 'busy loop')) == ('0 busy loops', '1 busy loop')
+
+
+@pytest.mark.parametrize('tool, option', [('closed_loop', '--log-dir'), ('closed_loop', '--json'),
+                                          ('closed_loop', '--plot'), ('startup', '--log-dir'),
+                                          ('startup', '--json')])
+def test_the_other_tools_refuse_an_output_no_file_can_be_created_in_first(tool, option, capsys):
+    """`--log-dir /sys/foo` of closed_loop and startup: os.makedirs' PermissionError traceback."""
+    import importlib
+    parse = importlib.import_module(f'spatial_dynamics.tools.{tool}').parse_args
+    path = {'--log-dir': '/proc/sd_logs', '--json': '/proc/version',
+            '--plot': '/proc/sd.png'}[option]
+    with pytest.raises(SystemExit) as exit:
+        parse([option, path])
+    err = capsys.readouterr().err
+    assert exit.value.code == 2 and option in err and path in err, err

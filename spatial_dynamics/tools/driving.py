@@ -12,11 +12,12 @@ import os
 import signal
 import subprocess
 import sys
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 import spatial_dynamics as sd
+from spatial_dynamics.files import check_folder, check_output
 
 # Imported inside the functions that use them: ament_index_python (present only where ROS
 # is sourced) and matplotlib (optional; seconds to import, for the plots only).
@@ -300,6 +301,27 @@ def save_figure(plt, fig, path: str) -> None:
 #: What matplotlib's Agg backend writes, by the file's suffix.
 PLOT_FORMATS = ('eps', 'jpeg', 'jpg', 'pdf', 'pgf', 'png', 'ps', 'raw', 'rgba', 'svg', 'svgz',
                 'tif', 'tiff', 'webp')
+
+
+def outputs_error(files: Sequence[Tuple[str, Optional[str]]],
+                  folders: Sequence[Tuple[str, Optional[str]]] = ()) -> Optional[str]:
+    """Why an output of a tool cannot be written (None if all can), checked before its run.
+
+    ``files`` and ``folders``: ``(option, path)``, None or '' for an option not given. A
+    file must not be a folder, a named pipe or a device; a folder must be one a file can be
+    created in. Folders that do not exist yet pass where they would be created: the tool
+    creates them (``os.makedirs``) before its run.
+    """
+    try:
+        for option, folder in folders:
+            if folder:
+                check_folder(folder, f'{option} {folder!r}', missing=True)
+        for option, path in files:
+            if path:
+                check_output(path, option, missing_folders=True)
+    except ValueError as err:
+        return str(err)
+    return None
 
 
 def plot_path_error(plot: str, *others: Optional[str]) -> Optional[str]:

@@ -65,11 +65,12 @@ from typing import Callable, Dict, List, NamedTuple, Optional, Sequence, Set, Tu
 
 import numpy as np
 
-from spatial_dynamics.files import check_folder, check_output, write_atomic
+from spatial_dynamics.files import write_atomic
 
 from .driving import (
     cpu_ns_between, die_with_parent_ignoring_ctrl_c, Interrupt, last_error, node_command,
-    plot_path_error, pyplot, robot_model, save_figure, Sinusoids, start, stop, thread_cpu_ns)
+    outputs_error, plot_path_error, pyplot, robot_model, save_figure, Sinusoids, start, stop,
+    thread_cpu_ns)
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -927,14 +928,9 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
         outputs.append(('--plot', args.plot))
     if args.log_dir is not None:
         outputs += [('--log-dir', os.path.join(args.log_dir, name)) for name in LOGS.values()]
-    try:
-        if args.log_dir is not None:
-            check_folder(args.log_dir, f'--log-dir {args.log_dir!r}', missing=True)
-        for option, path in outputs:
-            if path is not None:
-                check_output(path, option, missing_folders=True)
-    except ValueError as err:
-        parser.error(str(err))
+    error = outputs_error(outputs, [('--log-dir', args.log_dir)])
+    if error:
+        parser.error(error)
     if args.plot is not None:
         error = plot_path_error(args.plot, args.json)
         if error:
