@@ -18,9 +18,9 @@ import os
 import stat
 from typing import Any, Callable, Iterator, Optional, Sequence, Tuple, Union
 
-# yaml (load_yaml and its checks) and tempfile (write_atomic) are imported inside the functions
-# that use them: the core imports this module to read a URDF, and they would add some 20 ms
-# each to `import spatial_dynamics` (python -X importtime -c 'import spatial_dynamics').
+# yaml (load_yaml and its checks) and tempfile (write_atomic, check_folder) are imported inside
+# the functions that use them: the core imports this module to read a URDF, and they would add
+# some 20 ms each to `import spatial_dynamics` (python -X importtime -c 'import spatial_dynamics').
 
 #: What a path is when it is not a regular file, by the test of its mode.
 _KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a named pipe'),
@@ -218,13 +218,15 @@ def _same_file(a: Union[str, os.PathLike], b: Union[str, os.PathLike]) -> bool:
 
 
 def check_output(path: Union[str, os.PathLike], what: str,
-                 inputs: Sequence[Union[str, os.PathLike]] = ()) -> None:
+                 inputs: Sequence[Union[str, os.PathLike]] = (),
+                 missing_folders: bool = False) -> None:
     """Refuse an output path before any work is done for it.
 
     ``path`` must not be one of ``inputs`` (the files the command reads: writing over them
     would lose what the output was made from), must not be a directory, a named pipe or any
     other special file (writing would fail late or block forever), and its folder must exist
-    and be writable. ``ValueError`` names the file as ``what`` and says why.
+    and be writable (:func:`check_folder`; ``missing_folders``: or be creatable, for a command
+    that creates it). ``ValueError`` names the file as ``what`` and says why.
     """
     for source in inputs:
         if source is not None and _same_file(path, source):
@@ -239,11 +241,35 @@ def check_output(path: Union[str, os.PathLike], what: str,
     if info is not None and not stat.S_ISREG(info.st_mode):
         raise ValueError(f'{what} {os.fspath(path)!r} is not a regular file '
                          f'({_kind(info.st_mode)})')
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise ValueError(f'{what} {os.fspath(path)!r}: the folder {folder!r} does not exist')
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise ValueError(f'{what} {os.fspath(path)!r}: the folder {folder!r} is not writable')
+    check_folder(os.path.dirname(os.path.abspath(path)), f'{what} {os.fspath(path)!r}',
+                 missing_folders)
+
+
+def check_folder(folder: Union[str, os.PathLike], what: str, missing: bool = False) -> None:
+    """Refuse a folder outputs cannot be written in, before any work.
+
+    It must be a folder in which a file can be created: tried, with a temporary that is
+    removed at once (``os.access`` tells root that ``/proc`` is writable). ``missing``: a
+    folder that does not exist yet passes if the first of its parents that exists is a
+    folder a folder can be created in (the command creates it). ``ValueError`` names it as
+    ``what`` and says why.
+    """
+    import tempfile
+    folder = os.path.abspath(folder)
+    head = folder
+    while not os.path.exists(head):
+        if not missing:
+            raise ValueError(f'{what}: the folder {folder!r} does not exist')
+        head = os.path.dirname(head)
+    if not os.path.isdir(head):
+        raise ValueError(f'{what}: {head!r} is not a folder')
+    try:
+        fd, probe = tempfile.mkstemp(prefix='.probe.', dir=head)
+    except OSError as err:
+        raise ValueError(f'{what}: the folder {head!r} is not writable ({err.strerror})'
+                         ) from None
+    os.close(fd)
+    _remove_quietly(probe)
 
 
 def within(path: Union[str, os.PathLike], folder: Union[str, os.PathLike]) -> bool:

@@ -119,3 +119,27 @@ def test_a_missing_or_unusable_folder_is_refused(tmp_path):
         files.check_output(tmp_path / 'a_file' / 'out.urdf', '--write-urdf')
     files.check_output(tmp_path / 'fresh.urdf', '--write-urdf')     # a new file: fine
     assert listing(tmp_path) == ['a_file']                          # and nothing created
+
+
+@pytest.mark.parametrize('path', ['/proc/version', '/proc/out.json'])
+def test_a_folder_no_file_can_be_created_in_is_refused_even_where_access_says_writable(path):
+    """As root, os.access calls /proc writable: `--json /proc/version` passed, then failed."""
+    with pytest.raises(ValueError, match='not writable') as caught:
+        files.check_output(path, '--json')
+    assert path in str(caught.value) and '--json' in str(caught.value)
+
+
+def test_missing_folders_pass_for_a_command_that_creates_them(tmp_path):
+    """Refused by default; with ``missing_folders``, checked where they would be created."""
+    path = tmp_path / 'a' / 'b' / 'out.json'
+    with pytest.raises(ValueError, match='does not exist'):
+        files.check_output(path, '--json')
+    files.check_output(path, '--json', missing_folders=True)
+    assert listing(tmp_path) == []   # nothing created, no probe left
+    (tmp_path / 'a').write_text('x')
+    with pytest.raises(ValueError, match='Not a directory|is not a folder'):
+        files.check_output(path, '--json', missing_folders=True)
+    with pytest.raises(ValueError, match='is not a folder'):
+        files.check_folder(tmp_path / 'a' / 'b', '--log-dir', missing=True)
+    with pytest.raises(ValueError, match='not writable'):
+        files.check_folder('/proc/sd_logs', '--log-dir', missing=True)

@@ -15,6 +15,8 @@ from spatial_dynamics.tools.latency import parse_args
     ('--busy', '-1'), ('--busy', str(4 * (os.cpu_count() or 1) + 1)),
     ('--priority', '-1'), ('--priority', '100'),
     ('--input-depth', '0'), ('--block', '0'), ('--warmup', '-1'), ('--warmup', 'inf'),
+    ('--warmup', '1e300'), ('--warmup', '61'), ('--input-depth', '2147483648'),
+    ('--input-depth', '100001'),
 ])
 def test_out_of_range_numbers_are_refused(option, value, capsys):
     with pytest.raises(SystemExit) as exit:
@@ -29,10 +31,12 @@ def test_the_ranges_keep_the_defaults_and_real_values():
     assert (args.rate, args.seconds, args.priority, args.input_depth) == (1e5, 3600, 99, 1)
     defaults = parse_args([])
     assert (defaults.rate, defaults.seconds, defaults.warmup) == (1000.0, 10.0, 1.0)
+    longest = parse_args(['--warmup', '60', '--input-depth', '100000'])
+    assert (longest.warmup, longest.input_depth) == (60.0, 100_000)
 
 
 @pytest.mark.parametrize('option', ['--plot', '--json'])
-@pytest.mark.parametrize('kind', ['directory', 'fifo', 'missing folder'])
+@pytest.mark.parametrize('kind', ['directory', 'fifo', 'folder under a file'])
 def test_an_output_that_cannot_be_written_is_refused_first(option, kind, tmp_path, capsys):
     path = tmp_path / 'out'
     if kind == 'directory':
@@ -40,12 +44,60 @@ def test_an_output_that_cannot_be_written_is_refused_first(option, kind, tmp_pat
     elif kind == 'fifo':
         os.mkfifo(path)
     else:
-        path = tmp_path / 'missing' / 'out'
+        (tmp_path / 'file').write_text('x')
+        path = tmp_path / 'file' / 'missing' / 'out'
     with pytest.raises(SystemExit) as exit:
         parse_args([option, str(path)])
     assert exit.value.code == 2
     err = capsys.readouterr().err
     assert option in err and str(path) in err, err
+
+
+@pytest.mark.parametrize('option, path', [('--json', '/proc/version'),
+                                          ('--plot', '/proc/latency.png'),
+                                          ('--log-dir', '/proc/sd_latency_logs'),
+                                          ('--log-dir', '/sys/sd_latency_logs')])
+def test_an_output_in_a_folder_no_file_can_be_created_in_is_refused_first(option, path, capsys):
+    """As root, os.access called /proc writable: `--json /proc/version` ran, then failed.
+
+    `--log-dir /sys/foo` ended in os.makedirs' PermissionError traceback. Both are refused
+    before the run, with one line naming the option.
+    """
+    with pytest.raises(SystemExit) as exit:
+        parse_args([option, path])
+    err = capsys.readouterr().err
+    assert exit.value.code == 2 and option in err and path in err, err
+    assert 'Traceback' not in err and err.rstrip().splitlines()[-1].count(path) == 1, err
+
+
+def test_the_results_not_written_at_the_end_name_the_file():
+    """A JSON that cannot be written at the end: 'cannot write None: Input/output error'."""
+    from spatial_dynamics.tools.latency import write_json
+    with pytest.raises(ValueError) as caught:
+        write_json('/proc/version', {'robot': 'x'})
+    assert '--json' in str(caught.value) and "'/proc/version'" in str(caught.value)
+
+
+@pytest.mark.parametrize('option', ['--plot', '--json', '--urdf', '--log-dir'])
+def test_an_empty_path_is_refused(option, capsys):
+    """`--plot ''` became '.png'; `--json ''` and `--urdf ''` were silently ignored."""
+    with pytest.raises(SystemExit) as exit:
+        parse_args([option, ''])
+    err = capsys.readouterr().err
+    assert exit.value.code == 2 and option in err and 'empty path' in err, err
+
+
+def test_every_output_creates_its_missing_folders_before_the_run(tmp_path):
+    """--log-dir created missing folders while --json and --plot refused them: all create."""
+    from spatial_dynamics.tools.latency import make_folders
+    args = parse_args(['--plot', str(tmp_path / 'a' / 'h.png'),
+                       '--json', str(tmp_path / 'b' / 'c' / 'r.json'),
+                       '--log-dir', str(tmp_path / 'd' / 'logs')])
+    assert sorted(os.listdir(tmp_path)) == []   # checked, nothing made yet
+    make_folders(args)
+    assert (tmp_path / 'a').is_dir() and (tmp_path / 'b' / 'c').is_dir()
+    assert (tmp_path / 'd' / 'logs').is_dir()
+    assert not any(p.is_file() for p in tmp_path.rglob('*'))   # the checks left nothing
 
 
 def test_a_plot_without_a_suffix_is_checked_as_the_file_written(tmp_path, capsys):
@@ -65,6 +117,11 @@ def test_a_log_dir_that_is_a_file_is_refused_first(inside, tmp_path, capsys):
         parse_args(['--log-dir', str(path / 'sub' if inside else path)])
     assert exit.value.code == 2 and 'not a folder' in capsys.readouterr().err
     assert parse_args(['--log-dir', str(tmp_path / 'new' / 'logs')]).log_dir
+    (tmp_path / 'logs').mkdir()
+    os.mkfifo(tmp_path / 'logs' / 'relay.log')   # a log of the run that cannot be written
+    with pytest.raises(SystemExit) as exit:
+        parse_args(['--log-dir', str(tmp_path / 'logs')])
+    assert exit.value.code == 2 and 'relay.log' in capsys.readouterr().err
 
 
 def test_a_run_that_sends_nothing_is_refused(capsys):
@@ -98,7 +155,8 @@ def test_answers_before_their_stamps_are_known_count_and_late_ticks_are_told_apa
     from spatial_dynamics.tools.latency import Target
     target = Target.__new__(Target)
     target.name, target.sent, target.latency_ns, target.to_answer_ns = 'node', set(), {}, {}
-    target.early, target.measuring, target.answers, target.cpu_s = {}, True, 0, 0.0
+    target.early, target.measuring, target.answers, target.cpu_ns = {}, True, 0, 0
+    target.sending_s = 0.0
     target.period_ns = 1_000_000
     stamps = [10_000_000, 11_000_000, 11_950_000, 12_000_000, 13_000_000]
 
@@ -328,7 +386,8 @@ def measured_target(latencies_ms, late_stamps=()):
     from spatial_dynamics.tools.latency import Target
     target = Target.__new__(Target)
     target.name, target.latency_ns, target.to_answer_ns = 'node', {}, {}
-    target.early, target.measuring, target.answers, target.cpu_s = {}, True, 0, 0.0
+    target.early, target.measuring, target.answers, target.cpu_ns = {}, True, 0, 0
+    target.sending_s = 0.0
     target.period_ns = 1_000_000
     stamps = [10_000_000 + 1_000_000 * k for k in range(len(latencies_ms))]
     target.sent = set(stamps) | {stamps[k] - 50_000 for k in late_stamps}
@@ -398,7 +457,8 @@ def test_the_json_has_null_where_a_target_had_no_answer():
     from spatial_dynamics.tools.latency import json_safe, Target
     target = Target.__new__(Target)
     target.name, target.sent, target.latency_ns, target.to_answer_ns = 'node', set(), {}, {}
-    target.early, target.measuring, target.answers, target.cpu_s = {}, True, 0, 0.0
+    target.early, target.measuring, target.answers, target.cpu_ns = {}, True, 0, 0
+    target.sending_s = 0.0
     target.period_ns = 1_000_000
     target.add_sent([10_000_000, 11_000_000])
     rows = json_safe([target.summary()])
@@ -429,10 +489,287 @@ def test_the_machines_floor_is_the_pacers_wake_ups_with_the_kernels_preemption(c
     assert f'{count} wake-ups' in label and (', p99.9 ' in label) == (count >= 1000), label
     line = machine_line(machine, 'SCHED_FIFO 51')
     assert 'SCHED_FIFO 51' in line and 'kernel preemption: none' in line, line
-    assert f'({machine["over_1ms"]} of {count} wake-ups over 1 ms)' in line, line
+    if count:
+        assert f'({machine["over_1ms"]} of {count} wake-ups over 1 ms)' in line, line
+    else:   # it never slept: no floor, said so (not '0 of 0 wake-ups' and '-')
+        assert 'never slept' in line and 'wake-ups' not in line, line
     json.dumps(json_safe([machine]), allow_nan=False)   # no NaN reaches the JSON
 
 
 def test_the_kernels_preemption_model_is_one_of_linuxs():
     from spatial_dynamics.tools.latency import kernel_preemption
     assert kernel_preemption() in ('none', 'voluntary', 'full', 'lazy', 'rt', 'unknown')
+
+
+_NAMED_THREADS = """
+import ctypes, os, sys, threading
+done = threading.Event()
+def run(name):
+    ctypes.CDLL(None).prctl(15, name.encode())   # PR_SET_NAME, as the node names its threads
+    sys.stdout.write(f'{name} {threading.get_native_id()}\\n')   # one write: whole lines
+    sys.stdout.flush()
+    done.wait()
+for name in sys.argv[1:]:
+    threading.Thread(target=run, args=(name,), daemon=True).start()
+sys.stdin.read()
+"""
+
+
+def test_the_scheduling_reported_is_read_from_the_threads_not_taken_from_the_request():
+    """`--priority 50` without the privilege: the header said 'node and relay SCHED_FIFO 50'.
+
+    Node and relay logged EPERM and answered under normal scheduling. What each ran under is
+    now read from its answering thread (and the receive threads that share a real-time one).
+    """
+    import subprocess
+    import sys
+    from spatial_dynamics.tools.latency import scheduling_of, scheduling_text
+    child = subprocess.Popen(
+        [sys.executable, '-c', _NAMED_THREADS, 'answering', 'dds.udp.7411'],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    plain = subprocess.Popen([sys.executable, '-c', 'import sys; sys.stdin.read()'],
+                             stdin=subprocess.PIPE)
+    try:
+        tids = dict(child.stdout.readline().split() for _ in range(2))
+        answering, receive = int(tids['answering']), int(tids['dds.udp.7411'])
+        assert scheduling_of(child.pid) == 'normal scheduling'
+        assert scheduling_of(plain.pid).startswith('unknown')   # not answering yet
+        refused = 'normal scheduling (SCHED_FIFO 51 not permitted: EPERM)'
+        text = scheduling_text(50, {'inverse_dynamics': scheduling_of(child.pid),
+                                    'relay': 'normal scheduling', 'publisher': refused,
+                                    'receiver': 'SCHED_FIFO 50'})
+        assert text.startswith('node and relay normal scheduling'), text
+        assert 'not granted to node, relay, publisher:' in text, text
+        assert 'SCHED_FIFO 50 not' not in text and "receive threads SCHED_FIFO 50" in text
+        assert scheduling_text(0, dict.fromkeys(
+            ('inverse_dynamics', 'relay', 'publisher', 'receiver'),
+            'normal scheduling')) == 'normal scheduling for all'
+        try:   # granted (root, or the rtprio limit): said as it is
+            os.sched_setscheduler(answering, os.SCHED_FIFO, os.sched_param(1))
+        except PermissionError:
+            return
+        assert scheduling_of(child.pid) == (
+            'SCHED_FIFO 1 (answering thread, 0 of 1 receive thread)')
+        os.sched_setscheduler(receive, os.SCHED_FIFO, os.sched_param(1))
+        assert scheduling_of(child.pid) == (
+            'SCHED_FIFO 1 (answering thread, 1 of 1 receive thread)')
+        granted = 'SCHED_FIFO 1 (answering thread, 1 of 1 receive thread)'
+        assert 'not granted' not in scheduling_text(1, {
+            'inverse_dynamics': granted, 'relay': granted, 'publisher': 'SCHED_FIFO 2',
+            'receiver': 'SCHED_FIFO 1'})
+    finally:
+        for process in (child, plain):
+            process.kill()
+            process.wait()
+
+
+def test_a_robot_without_joints_is_refused_before_anything_starts(
+        tmp_path, capsys, monkeypatch):
+    """One link, no joint: the node refused every input as `empty` and the run hung silent."""
+    import signal
+    from spatial_dynamics.tools import latency
+    box = tmp_path / 'box.urdf'
+    box.write_text('<robot name="box"><link name="box"><inertial><mass value="2"/><inertia '
+                   'ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>'
+                   '</robot>')
+
+    def started(*args, **kwargs):
+        raise AssertionError('a node was started')
+    monkeypatch.setattr(latency, 'start', started)
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        assert latency.main(['--urdf', str(box)]) == 1
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and '--urdf' in err and 'no joint' in err, err
+
+
+class _Status:
+    """A diagnostics status as the node publishes it (name, key-values), without ROS."""
+
+    def __init__(self, name, values):
+        self.name = name
+        self.values = [type('KeyValue', (), {'key': k, 'value': v})() for k, v in values.items()]
+
+
+def _diagnostics():
+    from spatial_dynamics.tools.latency import NodeDiagnostics
+    bench = type('Bench', (), {'create_subscription': lambda *args: None})()
+    return NodeDiagnostics(bench, '/ns/node')
+
+
+def _period(diagnostics, answered, rejected, **reasons):
+    values = {'answered': str(answered), 'rejected': str(rejected)}
+    values.update({f'rejected {reason}': str(n) for reason, n in reasons.items()})
+    diagnostics._on_diagnostics(type('Array', (), {
+        'status': [_Status('ns/node/inverse_dynamics: feedforward', values)]})())
+
+
+def test_a_node_that_refuses_its_inputs_ends_the_run_with_its_reason(tmp_path):
+    """Every input refused (a robot the inputs do not fit): the run waited, silent.
+
+    Rejected inputs and none answered for REFUSING_PERIODS diagnostics periods end it, with
+    the node's counts by reason and its log's line; a start-up's rejections (a floating base
+    before its odometry) followed by answers, and periods without input, do not.
+    """
+    import subprocess
+    import sys
+    from spatial_dynamics.tools.latency import Pacer, REFUSING_PERIODS, Target, watch
+    starting = _diagnostics()
+    _period(starting, 0, 5, base_stale=5)
+    _period(starting, 300, 5, base_stale=5)
+    for _ in range(REFUSING_PERIODS):
+        _period(starting, 300, 5, base_stale=5)   # no input meanwhile (the relay's block)
+    assert starting.refusal() is None
+    assert 'rejected 5 inputs in the run (base_stale 5)' in starting.text()
+    refusing = _diagnostics()
+    for k in range(1, REFUSING_PERIODS + 1):
+        assert refusing.refusal() is None
+        _period(refusing, 0, 20 * k, empty=20 * k)
+    log = tmp_path / 'inverse_dynamics.log'
+    log.write_text("[WARN] [1.0] [node]: desired_joint_states: message rejected (empty): field "
+                   "'name' is empty: no joints in the message\n[WARN] [1.1] [node]: other\n")
+    pacer = Pacer.__new__(Pacer)
+    pacer.process = subprocess.Popen([sys.executable, '-c', 'import sys; sys.stdin.read()'],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    pacer.watch = lambda: watch({}, {'inverse_dynamics': str(log)}, refusing)
+    target = Target.__new__(Target)
+    target.name, target.answers = 'inverse_dynamics', 0
+    try:
+        with pytest.raises(RuntimeError) as caught:
+            pacer.prime(_Idle(), 0, target, timeout=600.0)
+    finally:
+        pacer.process.kill()
+        pacer.process.wait()
+    text = str(caught.value)
+    assert 'inverse_dynamics refuses its inputs: 60 rejected (empty 60)' in text, text
+    assert "field 'name' is empty" in text, text
+
+
+def test_a_target_that_exits_says_its_own_error_line(tmp_path):
+    """`--input-depth 2147483648`: only 'inverse_dynamics exited (1) during the run'."""
+    import subprocess
+    import sys
+    from spatial_dynamics.tools.driving import last_error
+    from spatial_dynamics.tools.latency import exited
+    log = tmp_path / 'node.log'
+    log.write_text('[INFO] [1.0] [node]: model loaded\nTraceback (most recent call last):\n'
+                   '  File "node.py", line 1, in <module>\n    main()\nTypeError: '
+                   '__init__(): incompatible constructor arguments.\n\nInvoked with: 2147483648\n')
+    node = subprocess.Popen([sys.executable, '-c', 'raise SystemExit(1)'])
+    node.wait()
+    with pytest.raises(RuntimeError) as caught:
+        exited({'inverse_dynamics': node}, {'inverse_dynamics': str(log)})
+    assert str(caught.value) == ('inverse_dynamics exited (1) during the run: TypeError: '
+                                 '__init__(): incompatible constructor arguments.')
+    log.write_text("[INFO] [1.0] [node]: x\n[FATAL] [1.1] [node]: cannot start: the "
+                   "middleware refused the QoS\n[INFO] [1.2] [node]: shutting down\n")
+    assert last_error(str(log)).startswith('[FATAL]') and 'QoS' in last_error(str(log))
+    log.write_text('[INFO] [1.0] [node]: last words\n')
+    assert last_error(str(log)) == '[INFO] [1.0] [node]: last words'
+    assert last_error(str(tmp_path / 'none.log')) == '' and last_error(None) == ''
+
+
+def test_a_publisher_that_cannot_keep_up_stops_and_says_the_rate_it_sent():
+    """`--rate 100000 --seconds 0.5`: 18.6 s, and the header still said 100000 Hz.
+
+    A sender slower than the rate (each input 5 ms, asked 0.1 ms) never sleeps and stops
+    `late_limit` after the block's due time with fewer inputs; the rate it sent is reported,
+    with a warning, and the machine line says it never slept (not '0 of 0 wake-ups').
+    """
+    import time
+    from spatial_dynamics.tools.latency import (
+        machine_line, rate_warning, send_block, wake_ups)
+    sent = []
+
+    def slow(k):
+        time.sleep(0.005)
+        sent.append(k)
+        return k
+    block = send_block(slow, 1e4, 1000, late_limit=0.2)
+    assert len(block.stamps) == len(sent) < 1000 and block.woke_late_ns == []
+    line = machine_line(wake_ups(block.woke_late_ns, 'none'), 'SCHED_FIFO 51')
+    assert 'never slept' in line and 'of 0 wake-ups' not in line, line
+    target = measured_target([0.4] * 5)
+    target.sending_s = 5 / 800.0   # five inputs sent at 800 Hz
+    rows = [target.summary()]
+    assert rows[0]['input_rate_hz'] == pytest.approx(800.0)
+    warning = rate_warning(1000.0, rows)
+    assert 'sent 800 Hz of the 1000 Hz asked' in warning and 'keep up' in warning, warning
+    target.sending_s = 5 / 999.0   # a tick's lateness short of the rate: met
+    assert rate_warning(1000.0, [target.summary()]) is None
+    on_time = send_block(lambda k: k, 10.0, 3)   # 0.1 s to send each: it sleeps each time
+    assert on_time.stamps == [0, 1, 2] and len(on_time.woke_late_ns) == 3
+    assert on_time.seconds == pytest.approx(0.3)   # the grid's, not the last wake-up's
+
+
+def test_the_cpu_clock_resolves_less_than_a_clock_tick():
+    """'CPU us/msg' of 0.02 s: 0.0 for the relay, 500.0 for the node (10 ms ticks / 20 inputs).
+
+    A child answers a line (a few microseconds of work) and waits again: the CPU time its
+    threads ran meanwhile is above 0 and below one clock tick, which a tick count cannot be.
+    """
+    import subprocess
+    import sys
+    from spatial_dynamics.tools.driving import cpu_ns_between, thread_cpu_ns
+    child = subprocess.Popen([sys.executable, '-c', 'import sys\nfor line in sys.stdin: '
+                              'print(line, end="", flush=True)'],
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+
+    def asleep():   # blocked in its read: its counters are brought up to date
+        while True:
+            with open(f'/proc/{child.pid}/stat') as f:
+                if f.read().rsplit(')', 1)[1].split()[0] == 'S':
+                    return thread_cpu_ns(child.pid)
+
+    def exchange():
+        child.stdin.write('x\n')
+        child.stdin.flush()
+        assert child.stdout.readline() == 'x\n'
+    try:
+        exchange()   # its first line: start-up done
+        before = asleep()
+        if before is None:
+            pytest.skip('this kernel keeps no schedstat')
+        exchange()
+        used = cpu_ns_between(before, asleep())
+        assert 0 < used < 1e9 / os.sysconf('SC_CLK_TCK'), used
+    finally:
+        child.kill()
+        child.wait()
+    assert cpu_ns_between(None, {1: 5}) is None
+    assert cpu_ns_between({1: 5, 2: 7}, {1: 9, 3: 4}) == 8   # a new thread counts whole
+
+
+def test_a_cpu_time_not_kept_is_not_printed_and_counts_are_said_in_the_singular():
+    """'1 periods' in the compute line; a CPU time the kernel did not keep printed as nan."""
+    from spatial_dynamics.tools.latency import format_table, not_answered_line, plural
+    target = measured_target([0.4] * 5)
+    target.cpu_ns = None
+    row = target.summary()
+    assert format_table([row]).splitlines()[-1].split()[-1] == '-'
+    target.cpu_ns = 1_234_567
+    assert format_table([target.summary()]).splitlines()[-1].split()[-1] == '246.9'
+    diagnostics = _diagnostics()
+    diagnostics.means_us, diagnostics.maxima_us = [100.0], [150.0]
+    assert '(its /diagnostics, 1 period)' in diagnostics.text()
+    row.update(not_answered=1, not_answered_superseded=0)
+    assert not_answered_line(row) == 'node: 1 input not answered'
+    assert (plural(0, 'busy loop'), plural(1, 'busy loop')) == ('0 busy loops', '1 busy loop')
+
+
+@pytest.mark.parametrize('tool, option', [('closed_loop', '--log-dir'), ('closed_loop', '--json'),
+                                          ('closed_loop', '--plot'), ('startup', '--log-dir'),
+                                          ('startup', '--json')])
+def test_the_other_tools_refuse_an_output_no_file_can_be_created_in_first(tool, option, capsys):
+    """`--log-dir /sys/foo` of closed_loop and startup: os.makedirs' PermissionError traceback."""
+    import importlib
+    parse = importlib.import_module(f'spatial_dynamics.tools.{tool}').parse_args
+    path = {'--log-dir': '/proc/sd_logs', '--json': '/proc/version',
+            '--plot': '/proc/sd.png'}[option]
+    with pytest.raises(SystemExit) as exit:
+        parse([option, path])
+    err = capsys.readouterr().err
+    assert exit.value.code == 2 and option in err and path in err, err

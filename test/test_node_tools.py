@@ -102,9 +102,13 @@ def test_latency_benchmark_runs(tmp_path):
     for target in ('relay', 'inverse_dynamics'):
         assert f'\n{target} ' in proc.stdout
     assert '\nmachine: the publisher woke late from its sleeps' in proc.stdout, proc.stdout
-    machine = json.loads((tmp_path / 'latency.json').read_text())['machine']
+    results = json.loads((tmp_path / 'latency.json').read_text())
+    machine = results['machine']
     # 1 s at 200 Hz per target: every tick that was not late slept, then woke
     assert 0 < machine['wake_ups'] <= 400 and machine['max_ms'] >= machine['p50_ms'] > -1e-3
+    # what node and relay ran under is read from their answering threads (found by name)
+    for target in ('relay', 'inverse_dynamics'):
+        assert not results['scheduling_of'][target].startswith('unknown'), results
 
 
 @pytest.mark.ros

@@ -101,6 +101,11 @@ def name_thread(name: str) -> None:
     ctypes.CDLL(None, use_errno=True).prctl(PR_SET_NAME, name.encode()[:15])
 
 
+def receiving(name: str) -> bool:
+    """Tell whether a thread named ``name`` is a middleware receive thread (see above)."""
+    return name.startswith(RECEIVE_THREADS) and name not in _NOT_RECEIVING
+
+
 def receive_threads() -> List[int]:
     """Thread ids of this process's middleware receive threads (by name, see above)."""
     tids = []
@@ -110,7 +115,7 @@ def receive_threads() -> List[int]:
                 name = f.read().strip()
         except OSError:   # the thread ended meanwhile
             continue
-        if name.startswith(RECEIVE_THREADS) and name not in _NOT_RECEIVING:
+        if receiving(name):
             tids.append(int(tid))
     return tids
 

@@ -56,8 +56,8 @@ import numpy as np
 
 import spatial_dynamics as sd
 from .driving import (
-    Interrupt, node_command, plot_path_error, pyplot, redraw, robot_model, save_figure, start,
-    stop)
+    Interrupt, node_command, outputs_error, plot_path_error, pyplot, redraw, robot_model,
+    save_figure, start, stop)
 from .latency import busy_loops, in_range
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
@@ -130,6 +130,11 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
             parser.error(error)
     if args.json and os.path.isdir(args.json):
         parser.error(f'--json {args.json!r} is a folder')
+    # their folders are created before the run: one a file cannot be created in is refused
+    error = outputs_error([('--plot', args.plot), ('--json', args.json)],
+                          [('--log-dir', args.log_dir)])
+    if error:
+        parser.error(error)
     return args
 
 

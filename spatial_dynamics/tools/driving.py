@@ -12,11 +12,12 @@ import os
 import signal
 import subprocess
 import sys
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 import spatial_dynamics as sd
+from spatial_dynamics.files import check_folder, check_output
 
 # Imported inside the functions that use them: ament_index_python (present only where ROS
 # is sourced) and matplotlib (optional; seconds to import, for the plots only).
@@ -170,6 +171,67 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
+def thread_cpu_ns(pid: int) -> Optional[Dict[int, int]]:
+    """CPU time each thread of process ``pid`` has run, ns, by thread id (Linux); None if unkept.
+
+    The first field of ``/proc/<pid>/task/<tid>/schedstat``: the scheduler's own sum, in ns,
+    brought up to date at each switch of the thread (:func:`cpu_seconds` counts clock ticks,
+    10 ms each: a short measurement of a thread that mostly sleeps reads 0 or a whole tick).
+    None where the kernel keeps no schedstat (built without ``CONFIG_SCHED_INFO``).
+    """
+    out: Dict[int, int] = {}
+    for tid in os.listdir(f'/proc/{pid}/task'):
+        try:
+            with open(f'/proc/{pid}/task/{tid}/schedstat') as f:
+                out[int(tid)] = int(f.read().split()[0])
+        except FileNotFoundError:
+            if os.path.exists(f'/proc/{pid}/task/{tid}'):
+                return None
+        except ProcessLookupError:   # the thread ended meanwhile
+            continue
+    return out
+
+
+def cpu_ns_between(before: Optional[Dict[int, int]],
+                   after: Optional[Dict[int, int]]) -> Optional[int]:
+    """CPU ns the threads ran between two :func:`thread_cpu_ns` readings; None if either is.
+
+    A thread started in between counts whole; one that ended in between is missing from
+    ``after`` (its last part cannot be read): the threads of a node live as long as it.
+    """
+    if before is None or after is None:
+        return None
+    return sum(ns - before.get(tid, 0) for tid, ns in after.items())
+
+
+def last_error(log_path: Optional[str], marker: str = '', limit: int = 300) -> str:
+    """Return the line of a node's log that says why it ended: '' if none (or no log).
+
+    Its last line containing ``marker`` if given; else its last ``[FATAL]`` or ``[ERROR]``
+    line; else the exception of its last traceback; else its last line. At most ``limit``
+    characters, from the log's last 16 KiB.
+    """
+    if not log_path:
+        return ''
+    try:
+        with open(log_path, 'rb') as f:
+            f.seek(max(os.fstat(f.fileno()).st_size - (1 << 14), 0))
+            lines = [line.rstrip() for line in f.read().decode('utf-8', 'replace').splitlines()]
+    except OSError:
+        return ''
+    lines = [line for line in lines if line.strip()]
+    logged = [line for line in lines if marker and marker in line] or [
+        line for line in lines if line.startswith(('[FATAL]', '[ERROR]'))]
+    if logged:
+        line = logged[-1]
+    elif 'Traceback (most recent call last):' in lines:
+        start = len(lines) - lines[::-1].index('Traceback (most recent call last):')
+        line = next((x for x in lines[start:] if not x[0].isspace()), lines[-1])
+    else:
+        line = lines[-1] if lines else ''
+    return line if len(line) <= limit else line[:limit - 3] + '...'
+
+
 class Sinusoids:
     """A smooth, consistent joint trajectory: q, qd = dq/dt, qdd = d²q/dt² of sinusoids.
 
@@ -239,6 +301,27 @@ def save_figure(plt, fig, path: str) -> None:
 #: What matplotlib's Agg backend writes, by the file's suffix.
 PLOT_FORMATS = ('eps', 'jpeg', 'jpg', 'pdf', 'pgf', 'png', 'ps', 'raw', 'rgba', 'svg', 'svgz',
                 'tif', 'tiff', 'webp')
+
+
+def outputs_error(files: Sequence[Tuple[str, Optional[str]]],
+                  folders: Sequence[Tuple[str, Optional[str]]] = ()) -> Optional[str]:
+    """Why an output of a tool cannot be written (None if all can), checked before its run.
+
+    ``files`` and ``folders``: ``(option, path)``, None or '' for an option not given. A
+    file must not be a folder, a named pipe or a device; a folder must be one a file can be
+    created in. Folders that do not exist yet pass where they would be created: the tool
+    creates them (``os.makedirs``) before its run.
+    """
+    try:
+        for option, folder in folders:
+            if folder:
+                check_folder(folder, f'{option} {folder!r}', missing=True)
+        for option, path in files:
+            if path:
+                check_output(path, option, missing_folders=True)
+    except ValueError as err:
+        return str(err)
+    return None
 
 
 def plot_path_error(plot: str, *others: Optional[str]) -> Optional[str]:

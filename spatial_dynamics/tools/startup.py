@@ -45,7 +45,7 @@ from typing import Dict, Iterator, List, Optional, Sequence
 import numpy as np
 
 import spatial_dynamics as sd
-from .driving import demo_urdf, node_command, rss_bytes, Sinusoids, start, stop
+from .driving import demo_urdf, node_command, outputs_error, rss_bytes, Sinusoids, start, stop
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -289,7 +289,12 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         help='give up on a node after this many seconds (default 300)')
     parser.add_argument('--json', default=None, help='also write the rows here')
     parser.add_argument('--log-dir', default=None, help='node logs (default: none)')
-    return parser.parse_args(argv)
+    args = parser.parse_args(argv)
+    # their folders are created before the run: one a file cannot be created in is refused
+    error = outputs_error([('--json', args.json)], [('--log-dir', args.log_dir)])
+    if error:
+        parser.error(error)
+    return args
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
