@@ -19,7 +19,7 @@ from spatial_dynamics.ros.bases import BaseInputs, BaseWindow, source_hint
 from spatial_dynamics.ros.config import NODE_REASONS, URDF_WARNINGS_LISTED, WRENCH_REASONS
 from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
 from spatial_dynamics.ros.inputs import REASONS
-from spatial_dynamics.ros.observer import EstimateWindow, MomentumObserver
+from spatial_dynamics.ros.observer import BASE_SKIP_REASONS, EstimateWindow, MomentumObserver
 from spatial_dynamics.ros.records import Robot
 from spatial_dynamics.ros.text import shown
 
@@ -310,6 +310,14 @@ def observer_status(robot: Optional[Robot], gain: float,
                    ('last refused sample', observer.refused_reason)]
     rms = window.rms()
     if rms is None or len(rms) != len(robot.joints):
+        skipped = [f'{reason} {count}' for reason, count in window.skipped.items()
+                   if count and reason != 'no_effort']
+        if skipped:   # measured states came and were skipped: why, not "no effort"
+            base = any(window.skipped.get(reason) for reason in BASE_SKIP_REASONS)
+            return 'WARN', ('no estimate in this period: measured states skipped ('
+                            + ', '.join(skipped) + ')' + (
+                                '; the base status names the base input' if base else '')
+                            ), values
         return 'OK', 'no measured effort in this period (observer waiting)', values
     wrench = _wrench_text(window.wrench, values)
     warn = robot.external_torque_warn
