@@ -10,6 +10,7 @@ refused with its reason and no answer, never computed as if the base were fixed.
 
 import os
 import sys
+import time
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped, TwistStamped
@@ -1173,3 +1174,211 @@ def test_a_measured_state_refused_for_its_base_is_answered_when_sent_again(demo_
     np.testing.assert_allclose(answer.tau, expected, rtol=1e-9, atol=1e-9)
     assert answering.measured(cfg, state).answer is None    # answered once: not again
     assert answering.totals.rejected['repeated'] == 1
+
+
+# -------------------------------------------------------------------------------------------
+# contact inputs: what an answer takes of them, and what /diagnostics says when they block it
+
+def solo_answer(cfg, answering, t=1.0):
+    """Answer Solo12 standing (``standing``), at rest; return the answer (None: refused)."""
+    joints = cfg.robot.joints
+    zero = np.zeros(12)
+    return answering.joint_state(cfg, joint_state(joints, t, standing(joints), zero,
+                                                  zero)).answer
+
+
+def on_feet(cfg, base_q, feet):
+    """Return the oracle: Solo12 standing, at rest, on ``feet`` (``contact_inverse_dynamics``)."""
+    model = cfg.robot.model
+    return sd.contact_inverse_dynamics(model, np.r_[base_q, standing(cfg.robot.joints)],
+                                       np.zeros(18), np.zeros(18), [sd.Contact(f) for f in feet])
+
+
+def statuses(cfg, answering, now_ns):
+    """Return the ``feedforward`` and ``base`` statuses at ``now_ns`` of the period ended."""
+    from spatial_dynamics.ros.diagnostics import feedforward_status
+    window, _ = answering.period()
+    inputs = answering.base_inputs
+    return (feedforward_status(cfg.robot, window, answering.totals, cfg.params, {}, now_ns),
+            base_status(cfg.params, cfg.robot, inputs, inputs.period(), now_ns))
+
+
+def test_without_contact_states_every_link_is_in_contact(solo_path):
+    """The documented default: nothing on contact_states, contacts.links all in contact."""
+    cfg = floating(solo_path)
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    out = solo_answer(cfg, answering)
+    np.testing.assert_allclose(out.tau, on_feet(cfg, base_q, FEET).tau, rtol=1e-9, atol=1e-9)
+    assert [link for link, _ in out.contacts] == list(FEET)
+
+
+@pytest.mark.parametrize('flags', [[1, 0, 0, 0, 0], [1, 0, 0]])
+def test_contact_states_all_refused_give_no_answer_never_all_feet(solo_path, flags):
+    """contact_states arrive, each of the wrong length: no answer, never four feet assumed.
+
+    Once messages come on contact_states, only a valid one says which feet touch: before the
+    first, every answer is refused (``contacts_missing``) and /diagnostics names contact_states
+    and what was wrong with the last one refused; a valid one held then goes stale whatever
+    refused messages follow (``contacts_stale``), as every base input does.
+    """
+    cfg = floating(solo_path)
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    for t in (1.0, 1.005, 1.01):
+        answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=flags))
+        assert solo_answer(cfg, answering, t) is None
+    assert answering.base_inputs.rejected['contact_states length_mismatch'] == 3
+    assert answering.totals.rejected['contacts_missing'] == 3
+    said = answering.log.said[-1][1]
+    assert 'contact_states' in said and 'length_mismatch' in said, said
+    (level, text, _), (base_level, base_text, values) = statuses(cfg, answering,
+                                                                 time.monotonic_ns())
+    assert level == 'ERROR' and 'contacts_missing' in text and 'contact_states' in text, text
+    assert base_level == 'ERROR', base_text
+    assert 'contact_states' in base_text and 'length_mismatch' in base_text, base_text
+    assert f'{len(flags)} flags for the 4 contacts.links' in base_text, base_text
+    assert dict(values)['rejected contact_states length_mismatch'] == '3'
+
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 1, 0, 1]))
+    out = solo_answer(cfg, answering, 1.02)
+    three = ('FL_FOOT', 'FR_FOOT', 'HR_FOOT')
+    np.testing.assert_allclose(out.tau, on_feet(cfg, base_q, three).tau, rtol=1e-9, atol=1e-9)
+    assert [link for link, _ in out.contacts] == list(three)
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=flags))   # refused
+    inputs = answering.base_inputs
+    inputs.flags.receipt_ns -= int(1e9)          # the valid one is 1 s old: stale
+    inputs.pose.receipt_ns = inputs.twist.receipt_ns = time.monotonic_ns()
+    assert solo_answer(cfg, answering, 1.03) is None
+    assert answering.totals.rejected['contacts_stale'] == 1
+    (level, text, _), (base_level, base_text, _) = statuses(cfg, answering, time.monotonic_ns())
+    assert base_level == 'ERROR' and 'contact_states stale' in base_text, base_text
+    assert 'length_mismatch' in base_text, base_text
+    assert 'contacts_stale' in text, text
+
+
+def test_stale_contact_states_make_the_base_status_an_error(solo_path):
+    cfg = floating(solo_path)
+    answering = Answering(Log())
+    feed_base(cfg, answering)
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 1, 1, 1]))
+    assert solo_answer(cfg, answering) is not None
+    inputs = answering.base_inputs
+    now = inputs.flags.receipt_ns + int(0.6e9)      # base_input.timeout 0.5 s
+    inputs.pose.receipt_ns = inputs.twist.receipt_ns = now
+    _, (level, text, values) = statuses(cfg, answering, now)
+    assert level == 'ERROR' and 'contact_states stale' in text and 'not publishing' in text, text
+    assert dict(values)['contact_states age [s]'] == '0.600'
+
+
+def measured_feet(cfg, answering, base_q, skip=()):
+    """Send each foot's sensor reading of Solo12 standing (the oracle's forces, link frames)."""
+    solved = on_feet(cfg, base_q, FEET)
+    R = sd.contacts.link_orientations(cfg.robot.model, np.r_[base_q, standing(cfg.robot.joints)],
+                                      FEET)
+    for link in FEET:
+        if link not in skip:
+            answering.base_input(cfg, 'measured_contact_wrenches', wrench_msg(
+                link, np.r_[np.zeros(3), R[link].T @ solved.forces[link]]))
+    return solved
+
+
+@pytest.mark.parametrize('bad', ['none', 'nan', '../HR_FOOT', 'HR_LOWER_LEG'])
+def test_a_foot_without_a_good_measured_wrench_is_named_not_the_base(solo_path, bad):
+    """contacts.measured, HR_FOOT's sensor silent or refused: contacts_stale, not base_stale.
+
+    The base's inputs are fresh: the ``base`` status is ERROR naming the foot's
+    measured_contact_wrenches (and the last refusal), the refusals are counted under
+    contacts_stale, the ``feedforward`` status names them.
+    """
+    cfg = floating(solo_path, **{'contacts.measured': True})
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    solved = measured_feet(cfg, answering, base_q)
+    out = solo_answer(cfg, answering)
+    np.testing.assert_allclose(out.tau, solved.tau, rtol=1e-9, atol=1e-9)
+    inputs = answering.base_inputs
+    for link in FEET:                 # 0.6 s later: the three others come again, HR does not
+        inputs.measured[link].receipt_ns -= int(0.6e9)
+    inputs.pose.receipt_ns = inputs.twist.receipt_ns = time.monotonic_ns()
+    measured_feet(cfg, answering, base_q, skip=('HR_FOOT',))
+    if bad == 'nan':
+        answering.base_input(cfg, 'measured_contact_wrenches',
+                             wrench_msg('HR_FOOT', [0, 0, 0, float('nan'), 0, 10.0]))
+    elif bad != 'none':
+        answering.base_input(cfg, 'measured_contact_wrenches',
+                             wrench_msg(bad, [0, 0, 0, 0, 0, 10.0]))
+    for t in (1.01, 1.02):
+        assert solo_answer(cfg, answering, t) is None
+    rejected = answering.totals.rejected
+    assert rejected['contacts_stale'] == 2 and rejected['base_stale'] == 0, rejected
+    said = answering.log.said[-1][1]
+    assert "measured_contact_wrenches of 'HR_FOOT' stale" in said, said
+    (level, text, _), (base_level, base_text, _) = statuses(cfg, answering, time.monotonic_ns())
+    assert base_level == 'ERROR', base_text
+    assert "measured_contact_wrenches of 'HR_FOOT' stale" in base_text, base_text
+    refusal = {'none': None, 'nan': 'non_finite'}.get(bad, 'unknown_link')
+    if refusal:
+        assert refusal in base_text, base_text
+    assert 'contacts_stale' in text, text
+
+
+def test_the_feedforward_status_names_why_inputs_are_not_answered(solo_path):
+    """Desired states arrive and are refused: the status says the refusal, not 'no input'.
+
+    Before any measured wrench (contacts.measured) every input is refused contacts_missing;
+    later, the base's pose going stale while desired states still come, base_stale.
+    """
+    cfg = floating(solo_path, **{'contacts.measured': True})
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    for k in range(50):
+        assert solo_answer(cfg, answering, 1.0 + 0.02 * k) is None
+    assert answering.totals.rejected['contacts_missing'] == 50
+    (level, text, values), _ = statuses(cfg, answering, time.monotonic_ns())
+    assert level == 'ERROR' and 'no answer yet' in text, text
+    assert 'contacts_missing' in text and 'measured_contact_wrenches' in text, text
+    assert 'contacts_missing' in dict(values)['last rejection']
+    measured_feet(cfg, answering, base_q)
+    assert solo_answer(cfg, answering, 2.0) is not None
+    answering.totals.last_input_ns -= int(3e9)     # answered 3 s ago
+    inputs = answering.base_inputs
+    inputs.pose.receipt_ns -= int(3e9)
+    for link in FEET:
+        inputs.measured[link].receipt_ns = time.monotonic_ns()
+    for k in range(5):                              # desired states still come
+        assert solo_answer(cfg, answering, 2.1 + 0.02 * k) is None
+    assert answering.totals.rejected['base_stale'] == 5
+    (level, text, _), (base_level, base_text, _) = statuses(cfg, answering, time.monotonic_ns())
+    assert level == 'ERROR' and 'no answer for' in text, text
+    assert 'base_stale' in text and 'base/pose stale' in text, text
+    assert 'input stale' not in text, text
+    assert base_level == 'ERROR' and 'base/pose stale' in base_text, base_text
+
+
+def test_unstamped_odometry_is_named_in_the_base_status(solo_path):
+    """Odometry stamped 0 with base_input.acceleration difference: refused, and said so.
+
+    Then one good twist: the acceleration needs a second one, and the status says that
+    (every answer is refused base_missing meanwhile).
+    """
+    cfg = floating(solo_path, **{'base_input.acceleration': 'difference'})
+    answering = Answering(Log())
+    msg = odometry(0.0, [0.1, 0.2, 0.25], [0.0, 0.0, 0.0, 1.0], np.zeros(6), 'base_link')
+    for _ in range(3):
+        answering.base_input(cfg, 'base/odometry', msg)
+    assert answering.base_inputs.rejected['base/odometry unstamped'] == 3
+    assert solo_answer(cfg, answering) is None
+    assert answering.totals.rejected['base_missing'] == 1
+    said = answering.log.said[-1][1]
+    assert 'no good base/pose yet' in said and 'unstamped' in said, said
+    (level, text, _), (base_level, base_text, _) = statuses(cfg, answering, time.monotonic_ns())
+    assert base_level == 'ERROR' and 'no good base/pose yet' in base_text, base_text
+    assert 'base/odometry (unstamped)' in base_text, base_text
+    assert 'base_missing' in text and 'unstamped' in text, text
+    answering.base_input(cfg, 'base/odometry', odometry(
+        1.0, [0.1, 0.2, 0.25], [0.0, 0.0, 0.0, 1.0], np.zeros(6), 'base_link'))
+    assert solo_answer(cfg, answering) is None
+    assert answering.totals.rejected['base_missing'] == 2
+    _, (base_level, base_text, _) = statuses(cfg, answering, time.monotonic_ns())
+    assert base_level == 'ERROR' and 'two successive twists' in base_text, base_text

@@ -13,6 +13,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -295,6 +296,27 @@ def test_each_term_is_its_part_of_the_dynamics(model):
                                   gains.kp * e + gains.kd * (desired[1] - measured[1]))
     names = control.terms_names(('a', 'b'), ('gravity', 'feedback'))
     assert names == ['a/gravity', 'b/gravity', 'a/feedback', 'b/feedback']
+
+
+def test_feedback_status_names_why_the_measured_state_is_refused(model):
+    """Measured states that come and are refused: the status names the refusal, not 'none'."""
+    from sensor_msgs.msg import JointState
+    from spatial_dynamics.ros.answering import Answering
+    from node_harness import Log
+    text = open(DEMO_URDF).read()
+    cfg = configure.prepare({}, defaults(robot_description=text, control_mode='pd_feedforward'),
+                            None)
+    answering = Answering(Log())
+    joints = cfg.robot.joints
+    rest = len(joints) - 1
+    msg = JointState(name=list(joints[1:]), position=[0.0] * rest, velocity=[0.0] * rest)
+    assert answering.measured(cfg, msg).answer is None      # the first joint missing
+    window, _ = answering.period()
+    level, message, values = diagnostics.feedforward_status(cfg.robot, window, answering.totals,
+                                                            cfg.params, {}, time.monotonic_ns())
+    assert level == 'ERROR' and 'no measured state on joint_states yet' in message, message
+    assert 'missing_joint' in message and joints[0] in message, message
+    assert 'missing_joint' in dict(values)['last measured state rejection']
 
 
 def test_feedback_status_names_the_stale_measured_state(model):

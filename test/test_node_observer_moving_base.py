@@ -143,6 +143,10 @@ def test_without_the_base_twist_nothing_is_estimated(demo_text):
     assert all(r is None for r in out['r'])
     _, estimates = answering.period()
     assert estimates.count == 0 and estimates.skipped['base_missing'] == 20
+    level, text, _ = observer_status(cfg.robot, K, answering.observer, estimates,
+                                     observer_off(cfg.params))
+    assert level == 'WARN' and 'skipped (base_missing 20)' in text, text
+    assert 'no measured effort' not in text, text
 
 
 def test_the_observer_is_off_with_an_imu_and_says_why(demo_text):

@@ -618,11 +618,15 @@ class Answering:
                       throttle_duration_sec=1.0)
 
     def _reject_measured(self, reason: str, text: str) -> None:
-        self.totals.measured_rejected[reason] += 1
+        totals = self.totals
+        totals.measured_rejected[reason] += 1
+        totals.last_measured_rejected = (reason, text, time.monotonic_ns())
         self.log.warn(f'joint_states: measured state rejected ({reason}): {text}',
                       throttle_duration_sec=1.0)
 
     def _reject(self, topic: str, reason: str, text: str) -> None:
-        self.totals.rejected[reason] += 1
+        totals = self.totals
+        totals.rejected[reason] += 1
+        totals.last_rejected = (reason, f'{topic}: {text}', time.monotonic_ns())
         self.log.warn(f'{topic}: message rejected ({reason}): {text}',
                       throttle_duration_sec=1.0)

@@ -54,7 +54,10 @@ Inputs (each sampled, checked and held; an answer whose base input is missing or
   :func:`~.base_messages.twist_rate`; a refused twist keeps the last good one) or zero
   (``zero``: a base at constant twist).
 * ``contact_states`` (``std_msgs/UInt8MultiArray``): one flag per ``contacts.links``, non-zero
-  = in contact; until the first message every link of ``contacts.links`` is in contact.
+  = in contact. While nothing comes on it every link of ``contacts.links`` is in contact (a
+  robot without contact detection); once a message comes (taken or refused), only a valid one
+  younger than ``base_input.timeout`` says which links touch: none valid yet is
+  ``contacts_missing``, an old one ``contacts_stale``, and the answer is refused.
 * ``measured_contact_wrenches`` (``geometry_msgs/WrenchStamped``, with ``contacts.measured``):
   a foot sensor's wrench on the robot, ``header.frame_id`` the link of ``contacts.links``,
   ``[n; f]`` in its frame at its origin; the efforts are then ``(M q̈ + h − J_cᵀ λ)`` of the
@@ -89,6 +92,10 @@ CONTACT_METHODS = sd.contacts.METHODS
 #: Why an answer is refused on a moving or floating base (diagnostics counter keys).
 BASE_REASONS = ('base_missing', 'base_stale', 'contacts_stale', 'contacts_unsolved',
                 'contacts_missing', 'contacts_pull', 'no_contact')
+#: The topics whose messages are held as each input an answer needs (their refusals name it).
+SOURCES = {'base/imu': ('base/imu',), 'base/pose': ('base/odometry', 'base/pose'),
+           'base/twist': ('base/odometry', 'base/twist'), 'contact_states': ('contact_states',),
+           'measured_contact_wrenches': ('measured_contact_wrenches',)}
 #: Why a base input message is refused.
 BASE_INPUT_REASONS = ('non_finite', 'out_of_bounds', 'not_unit', 'wrong_frame', 'unstamped',
                       'stamp_not_increasing', 'interval_too_short', 'length_mismatch',
@@ -179,6 +186,19 @@ def source_hint(params, inputs: 'BaseInputs') -> str:
     return ''
 
 
+def _say(problems: list, err: InputError) -> None:
+    """Add an answer's refusal to ``problems`` as a status says it.
+
+    Without its '; not publishing', and without the refused message a problem before it
+    named already (base/pose and base/twist are both missing when odometry is refused).
+    """
+    text = str(err).removesuffix('; not publishing')
+    head, said, refused = text.partition('; last refused ')
+    if said and any(problem.endswith(said + refused) for problem in problems):
+        text = head
+    problems.append(text)
+
+
 def _same(a: Optional[tuple], b: tuple) -> bool:
     """Whether two keys hold the same objects (identity: a model is not compared by value)."""
     return a is not None and len(a) == len(b) and all(x is y for x, y in zip(a, b))
@@ -221,6 +241,7 @@ class BaseInputs:
         self.flags: Optional[Held] = None
         self.measured: dict = {}                   # link -> Held([n; f] in the link's frame)
         self.received: Counter = Counter()
+        self.refused: dict = {}    # topic -> (reason, text, receipt ns) of its last refusal
         self._contacts: tuple = (None, ())    # (key, the Contacts of contacts.links in force)
         self.rejected: Counter = Counter()
         self.window = BaseWindow()
@@ -242,8 +263,26 @@ class BaseInputs:
             getattr(self, '_take_' + topic.replace('/', '_'))(config, msg, now_ns)
         except InputError as err:
             self.rejected[f'{topic} {err.reason}'] += 1
+            self.refused[topic] = (err.reason, str(err), now_ns)
             return f'{topic}: message rejected ({err.reason}): {err}'
         return None
+
+    def last_refused(self, topic: str, since_ns: Optional[int] = None) -> str:
+        """Say the last refused message of the topics held as ``topic`` (after ``since_ns``).
+
+        ``'; last refused <topic> (<reason>): <why>'``, '' when none: what an answer refused
+        for a missing or stale ``topic`` adds, and the ``base`` status (formatted only then).
+        """
+        last = None
+        for source in SOURCES[topic]:
+            refused = self.refused.get(source)
+            if (refused is not None and (since_ns is None or refused[2] > since_ns)
+                    and (last is None or refused[2] > last[1][2])):
+                last = (source, refused)
+        if last is None:
+            return ''
+        source, (reason, text, _) = last
+        return f'; last refused {source} ({reason}): {text}'
 
     def _take_base_imu(self, config, msg, now_ns: int) -> None:
         params = config.params
@@ -329,33 +368,41 @@ class BaseInputs:
         """Link -> measured ``[n; f]`` (link frame) of each contact in force, or None (off)."""
         if not params.contacts_measured:
             return None
+        measured = self.measured
         result = {}
         for contact in contacts:
-            held = self.measured.get(contact.link)
-            if held is None:
-                raise InputError('contacts_missing', f'contacts.measured: no measured wrench '
-                                 f'of {shown(contact.link)} yet; not publishing')
-            result[contact.link] = self._fresh(params, held, 'measured_contact_wrenches of '
-                                               f'{shown(contact.link)}', now_ns)
+            link = contact.link
+            result[link] = self._fresh(params, measured.get(link), 'measured_contact_wrenches',
+                                       now_ns, 'contacts', link)
         return result
 
     # -- what an answer needs -------------------------------------------------------------------
-    def _fresh(self, params, held: Optional[Held], topic: str, now_ns: int) -> tuple:
+    def _fresh(self, params, held: Optional[Held], topic: str, now_ns: int,
+               kind: str = 'base', link: str = '') -> tuple:
+        """Return ``held``'s value; InputError ``<kind>_missing`` or ``<kind>_stale`` if none.
+
+        ``topic`` (a key of :data:`SOURCES`, of ``link`` for a contact's wrench) is named in
+        the error, with its last refused message (:meth:`last_refused`).
+        """
+        if held is not None:
+            age = (now_ns - held.receipt_ns) * 1e-9
+            if age <= params.base_input_timeout:
+                return held.value
+        what = f'{topic} of {shown(link)}' if link else topic
         if held is None:
-            raise InputError('base_missing', f'no good {topic} yet (base {params.base}); '
-                             'not publishing')
-        age = (now_ns - held.receipt_ns) * 1e-9
-        if age > params.base_input_timeout:
-            raise InputError('base_stale', f'{topic} is {age:.3f} s old (base_input.timeout '
-                             f'{params.base_input_timeout} s); not publishing')
-        return held.value
+            raise InputError(f'{kind}_missing', f'no good {what} yet (base {params.base})'
+                             f'{self.last_refused(topic)}; not publishing')
+        since = self.last_refused(topic, held.receipt_ns)
+        raise InputError(f'{kind}_stale', f'{what} stale: {age:.3f} s old (base_input.timeout '
+                         f'{params.base_input_timeout} s){since}; not publishing')
 
     def _rate(self, params, topic: str) -> np.ndarray:
         if params.base_input_acceleration == 'zero':
             return np.zeros(6)
         if self.rate is None:
             raise InputError('base_missing', f'{topic}: base_input.acceleration difference needs '
-                             'two successive twists (one so far, or a gap); not publishing')
+                             'two successive twists (one so far, or a gap)'
+                             f'{self.last_refused(topic, self.twist.receipt_ns)}; not publishing')
         return self.rate
 
     def motion(self, config, now_ns: int) -> 'sd.BaseMotion':
@@ -403,24 +450,77 @@ class BaseInputs:
         """Return the contacts in force now (``contacts.links`` filtered by ``contact_states``)."""
         params = config.params
         links = tuple(params.contacts_links or ())
-        flags = (True,) * len(links)
-        if self.flags is not None:
-            age = (now_ns - self.flags.receipt_ns) * 1e-9
-            if age > params.base_input_timeout:
-                raise InputError('contacts_stale', f'contact_states is {age:.3f} s old '
-                                 f'(base_input.timeout {params.base_input_timeout} s); '
-                                 'not publishing')
-            if len(self.flags.value) != len(links):   # contacts.links changed since
-                raise InputError('contacts_stale', f'contact_states has '
-                                 f'{len(self.flags.value)} flags for the {len(links)} '
-                                 f'contacts.links {list(links)}; not publishing')
-            flags = self.flags.value
+        flags = self._flags(params, links, now_ns)
         key = (links, params.contacts_kind, params.contacts_mu, flags)
         if self._contacts[0] != key:     # the same Contacts each answer: the library's plan
             self._contacts = key, tuple(   # for them is cached, their checks made once
                 sd.Contact(link, kind=params.contacts_kind, mu=params.contacts_mu)
                 for link, touching in zip(links, flags) if touching)
         return self._contacts[1]
+
+    def _flags(self, params, links: tuple, now_ns: int) -> tuple:
+        """Return whether each of ``links`` is in contact now (InputError: not known).
+
+        All of them while nothing came on ``contact_states`` (``contacts.links``' default);
+        once something came, the valid one held: ``contacts_missing`` before the first,
+        ``contacts_stale`` when it is older than ``base_input.timeout`` or for other
+        ``contacts.links`` than today's.
+        """
+        held = self.flags
+        if held is None:
+            received = self.received.get('contact_states')
+            if not received:
+                return (True,) * len(links)
+            raise InputError('contacts_missing', f'no valid contact_states yet ({received} '
+                             'received: contacts.links are all in contact only while nothing '
+                             f'comes on it){self.last_refused("contact_states")}; '
+                             'not publishing')
+        flags = self._fresh(params, held, 'contact_states', now_ns, 'contacts')
+        if len(flags) != len(links):   # contacts.links changed since
+            raise InputError('contacts_stale', f'contact_states has {len(flags)} flags for '
+                             f'the {len(links)} contacts.links {list(links)}'
+                             f'{self.last_refused("contact_states", held.receipt_ns)}; '
+                             'not publishing')
+        return flags
+
+    def blocked(self, params, now_ns: int) -> list:
+        """Say each input an answer needs now that is missing or stale ([]: none).
+
+        The texts of the refusals an answer would get (:meth:`dynamics`'s checks, without
+        computing it), for the ``base`` status.
+        """
+        if params.base == 'moving' and params.base_input_source == 'imu':
+            needed = [(self.imu, 'base/imu')]
+        else:
+            needed = [(self.pose, 'base/pose'), (self.twist, 'base/twist')]
+        problems = []
+        for held, topic in needed:
+            try:
+                self._fresh(params, held, topic, now_ns)
+            except InputError as err:
+                _say(problems, err)
+        if not problems and needed[-1][1] == 'base/twist':
+            try:
+                self._rate(params, 'base/twist')
+            except InputError as err:
+                _say(problems, err)
+        if params.base != 'floating':
+            return problems
+        links = tuple(params.contacts_links or ())
+        try:
+            flags = self._flags(params, links, now_ns)
+        except InputError as err:
+            _say(problems, err)
+            flags = (True,) * len(links)
+        if params.contacts_measured:
+            for link, touching in zip(links, flags):
+                if touching:
+                    try:
+                        self._fresh(params, self.measured.get(link), 'measured_contact_wrenches',
+                                    now_ns, 'contacts', link)
+                    except InputError as err:
+                        _say(problems, err)
+        return problems
 
     def dynamics(self, config, f_ext, now_ns: int) -> Dynamics:
         """Return the :class:`~.control.Dynamics` of an answer on this base (InputError: none)."""

@@ -369,10 +369,12 @@ PARAMETERS = Table(NODE_NAME, [
         bounds=(1e-3, 3600.0)),
     Param('contacts.links', 'string[]', None, (
         'Floating base (required: nothing else carries the base): the links that may touch '
-        'the ground (feet, soles), each a contact at its origin; all in contact until '
-        'contact_states (std_msgs/UInt8MultiArray, one flag per link in this order) says '
-        'otherwise. An answer whose contacts in contact cannot carry the base (base residual '
-        'above 1e-6 m g), or with none in contact (in flight), is not published. Live.'),
+        'the ground (feet, soles), each a contact at its origin; all in contact while '
+        'nothing comes on contact_states (std_msgs/UInt8MultiArray, one flag per link in this '
+        'order); once something comes, only a valid one younger than base_input.timeout says '
+        'which (none valid yet, or stale: no output). An answer whose contacts in contact '
+        'cannot carry the base (base residual above 1e-6 m g), or with none in contact (in '
+        'flight), is not published. Live.'),
         rules=(distinct,)),
     Param('contacts.kind', 'string', 'point', (
         '"point" (a force: feet) or "surface" (a wrench: soles). Live.'),

@@ -19,7 +19,7 @@ from spatial_dynamics.ros.bases import BaseInputs, BaseWindow, source_hint
 from spatial_dynamics.ros.config import NODE_REASONS, URDF_WARNINGS_LISTED, WRENCH_REASONS
 from spatial_dynamics.ros.control import FEEDBACK_MODES, MEASURED_REASONS
 from spatial_dynamics.ros.inputs import REASONS
-from spatial_dynamics.ros.observer import EstimateWindow, MomentumObserver
+from spatial_dynamics.ros.observer import BASE_SKIP_REASONS, EstimateWindow, MomentumObserver
 from spatial_dynamics.ros.records import Robot
 from spatial_dynamics.ros.text import shown
 
@@ -56,6 +56,10 @@ class Totals:
         self.measured_received = 0
         self.measured_rejected: Counter = Counter({reason: 0 for reason in MEASURED_REASONS})
         self.rejected: Counter = Counter({reason: 0 for reason in REASONS + NODE_REASONS})
+        #: (reason, 'topic: why', monotonic ns) of the last input refused an answer, and of
+        #: the last measured state refused: what the ``feedforward`` status names
+        self.last_rejected: Optional[Tuple[str, str, int]] = None
+        self.last_measured_rejected: Optional[Tuple[str, str, int]] = None
         self.saturated = 0                  # answers with at least one clamped joint
         self.saturated_joints: Counter = Counter()
         self.wrenches_received = 0
@@ -139,37 +143,62 @@ def _feedback_state(params, totals: Totals, now_ns: int) -> Optional[Tuple[str, 
              'measured_timeout'),
             ('desired', '', 'desired input', totals.last_desired_ns, 'input_timeout')):
         age, limit = _age(last_ns, now_ns), getattr(params, timeout)
+        refused = (_refused(totals.last_measured_rejected, last_ns, now_ns, 'joint_states')
+                   if what == 'measured' else '')
         if age is None:
-            return 'ERROR', f'no {what} state{where} yet ({mode}); not publishing'
+            return 'ERROR', f'no {what} state{where} yet ({mode}){refused}; not publishing'
         if age > limit:
             return 'ERROR', (f'{what} state stale: no good {source} for {age:.2f} s '
-                             f'({timeout} {limit} s, {mode}); not publishing')
+                             f'({timeout} {limit} s, {mode}){refused}; not publishing')
     return None
+
+
+def _refused(last: Optional[Tuple[str, str, int]], since_ns: Optional[int], now_ns: int,
+             what: str = 'input') -> str:
+    """Say ``last`` (reason, why, when) rejected, if after ``since_ns``: '' when not."""
+    if last is None or (since_ns is not None and last[2] <= since_ns):
+        return ''
+    reason, text, when_ns = last
+    return (f'; the last {what}, {(now_ns - when_ns) * 1e-9:.2f} s ago, was rejected '
+            f"({reason}): {text.removesuffix('; not publishing')}")
 
 
 def _input_state(robot: Optional[Robot], window: Window, params, period: float,
                  age: Optional[float], totals: Optional[Totals] = None, now_ns: int = 0
                  ) -> Tuple[str, str]:
-    """Level and message of the ``feedforward`` status."""
+    """Level and message of the ``feedforward`` status.
+
+    No answer (yet, or for longer than ``input_timeout``) while inputs were rejected since
+    the last one: ERROR naming the last rejection, not "no input" (the base's or the
+    contacts' inputs, a refused plan, ...).
+    """
     rejected_now = window.received - window.answered
     if robot is None:
         return 'ERROR', 'no robot model'
-    if params.control_mode in FEEDBACK_MODES and totals is not None:
+    feedback = params.control_mode in FEEDBACK_MODES and totals is not None
+    if feedback:
         stale = _feedback_state(params, totals, now_ns)
         if stale is not None:
             return stale
-    elif age is None:
-        return 'WARN', 'no input received yet'
-    elif age > params.input_timeout:
-        return 'ERROR', (f'input stale: no good input for {age:.2f} s '
-                         f'(input_timeout {params.input_timeout} s); not publishing')
+    last = None if totals is None else totals.last_rejected
+    refused = _refused(last, None if totals is None else totals.last_input_ns, now_ns)
+    if refused and (age is None or age > params.input_timeout):
+        return 'ERROR', ('no answer yet' if age is None else f'no answer for {age:.2f} s') + (
+            f'{refused}; not publishing')
+    if not feedback:
+        if age is None:
+            return 'WARN', 'no input received yet'
+        if age > params.input_timeout:
+            return 'ERROR', (f'input stale: no good input for {age:.2f} s '
+                             f'(input_timeout {params.input_timeout} s); not publishing')
     above = ''    # said, not a fault: the URDF's limits are often wrong, clamping is opt-in
     if window.above_limit:
         ratio, joint, value, limit = window.above_worst
         above = (f', {window.above_limit} answer(s) above the URDF effort limit (worst '
                  f'{shown(joint)} {value:+.4g}, limit {limit:g}, {ratio:.3g}x)')
     if rejected_now:
-        return 'WARN', f'{window.answered / period:.1f} Hz, {rejected_now} rejected{above}'
+        return 'WARN', (f'{window.answered / period:.1f} Hz, {rejected_now} rejected{above}'
+                        + _refused(last, window.start_ns, now_ns))
     return 'OK', f'{window.answered / period:.1f} Hz{above}'
 
 
@@ -218,7 +247,9 @@ def feedforward_status(robot: Optional[Robot], window: Window, totals: Totals,
         ('input timeout [s]', str(params.input_timeout)),
         ('stale', str(age is None or age > params.input_timeout)),
         ('answered', str(totals.answered)),
-        ('rejected', str(sum(totals.rejected.values())))]
+        ('rejected', str(sum(totals.rejected.values()))),
+        ('last rejection', '' if totals.last_rejected is None else
+         '({}) {}'.format(*totals.last_rejected[:2]))]
     values += [(f'rejected {reason}', str(count)) for reason, count in totals.rejected.items()]
     values += [
         ('control mode', params.control_mode), ('output', params.output),
@@ -228,7 +259,9 @@ def feedforward_status(robot: Optional[Robot], window: Window, totals: Totals,
         ('measured state stale', str(measured_age is None
                                      or measured_age > params.measured_timeout)),
         ('measured states received', str(totals.measured_received)),
-        ('measured states rejected', str(sum(totals.measured_rejected.values())))]
+        ('measured states rejected', str(sum(totals.measured_rejected.values()))),
+        ('last measured state rejection', '' if totals.last_measured_rejected is None else
+         '({}) {}'.format(*totals.last_measured_rejected[:2]))]
     values += [(f'measured states rejected {reason}', str(count))
                for reason, count in totals.measured_rejected.items()]
     values += [('gravity [m/s^2]', str(list(params.gravity))),
@@ -277,6 +310,14 @@ def observer_status(robot: Optional[Robot], gain: float,
                    ('last refused sample', observer.refused_reason)]
     rms = window.rms()
     if rms is None or len(rms) != len(robot.joints):
+        skipped = [f'{reason} {count}' for reason, count in window.skipped.items()
+                   if count and reason != 'no_effort']
+        if skipped:   # measured states came and were skipped: why, not "no effort"
+            base = any(window.skipped.get(reason) for reason in BASE_SKIP_REASONS)
+            return 'WARN', ('no estimate in this period: measured states skipped ('
+                            + ', '.join(skipped) + ')' + (
+                                '; the base status names the base input' if base else '')
+                            ), values
         return 'OK', 'no measured effort in this period (observer waiting)', values
     wrench = _wrench_text(window.wrench, values)
     warn = robot.external_torque_warn
@@ -337,7 +378,8 @@ def _wrench_text(wrench: Optional[dict], values: list) -> str:
 def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: int):
     """Return the ``base`` status: what the base's inputs are, the contacts' figures.
 
-    ERROR while a needed input is missing or stale (nothing is published), WARN when a
+    ERROR while a needed input is missing or stale (nothing is published; the text says
+    which, and its last refused message: :meth:`~.bases.BaseInputs.blocked`), WARN when a
     contact solution of the period violated a friction cone or pulled on the ground, left
     a base residual above :func:`~.floating.residual_tolerance` (measured wrenches), when an answer
     was refused because its split made a contact pull and the QP could not re-solve it, or
@@ -352,20 +394,20 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
         needed = ([('base/imu', inputs.imu)] if params.base_input_source == 'imu'
                   else [('base/pose', inputs.pose), ('base/twist', inputs.twist)])
     elif params.base == 'floating':
-        needed = [('base/pose', inputs.pose), ('base/twist', inputs.twist)]
+        needed = [('base/pose', inputs.pose), ('base/twist', inputs.twist),
+                  ('contact_states', inputs.flags)]
+        if params.contacts_measured:
+            needed += [(f'measured_contact_wrenches {link}', inputs.measured.get(link))
+                       for link in params.contacts_links or ()]
     values += [('base acceleration', params.base_input_acceleration),
                ('base timeout [s]', str(params.base_input_timeout))]
-    problems = []
     for topic, held in needed:
         age = None if held is None else (now_ns - held.receipt_ns) * 1e-9
         values.append((f'{topic} age [s]', '' if age is None else f'{age:.3f}'))
-        if age is None:
-            problems.append(f'no {topic} yet')
-        elif age > params.base_input_timeout:
-            problems.append(f'{topic} stale ({age:.2f} s, base_input.timeout '
-                            f'{params.base_input_timeout} s)')
     values += [(f'{topic} received', str(count)) for topic, count in inputs.received.items()]
     values += [(f'rejected {key}', str(count)) for key, count in inputs.rejected.items()]
+    values += [(f'last refused {topic}', f'({reason}) {text}')
+               for topic, (reason, text, _) in inputs.refused.items()]
     if params.base == 'floating':
         values += [('contacts', ', '.join(params.contacts_links or ())),
                    ('contacts method', params.contacts_method),
@@ -387,6 +429,7 @@ def base_status(params, robot, inputs: BaseInputs, window: BaseWindow, now_ns: i
                    ('worst refused base residual', f'{window.unsolved_residual:.3g}')]
     if robot is None:
         return 'ERROR', 'no robot model', values
+    problems = inputs.blocked(params, now_ns)
     hint = source_hint(params, inputs)
     if problems and hint:
         problems.append(hint)
