@@ -18,6 +18,8 @@ import os
 import stat
 from typing import Any, Callable, Iterator, Optional, Sequence, Tuple, Union
 
+from .text import shown
+
 # yaml (load_yaml and its checks) and tempfile (write_atomic, check_folder) are imported inside
 # the functions that use them: the core imports this module to read a URDF, and they would add
 # some 20 ms each to `import spatial_dynamics` (python -X importtime -c 'import spatial_dynamics').
@@ -198,7 +200,7 @@ def load_yaml(data: Union[str, bytes], what: str, max_nodes: int = MAX_YAML_NODE
                              'once its aliases are expanded (an alias bomb?)')
         twice = _duplicate_key(node)
         if twice:
-            raise ValueError(f'{what}: the key {twice[0]!r} is given twice in one mapping '
+            raise ValueError(f'{what}: the key {shown(twice[0])} is given twice in one mapping '
                              f'(line {twice[1]}); YAML keys are unique')
         return loader.construct_document(node)
     except yaml.YAMLError as err:

@@ -250,7 +250,7 @@ def test_a_glob_that_matches_nothing_is_one_failed_line_naming_its_row(small, tm
     assert status != 1, err
     failed = [line for line in text.splitlines() if line.startswith('failed:')]
     assert len(failed) == 1, text
-    assert f'{path}, {where}' in failed[0] and '*.mcap' in failed[0], failed
+    assert f'{str(path)!r}, {where}' in failed[0] and '*.mcap' in failed[0], failed
     assert 'no bag matches' in failed[0], failed
     assert {r['bag'] for r in table(tmp_path / 'o')} == {
         os.path.join(small, r, d) for r in ('r01', 'r02') for d in ('day01', 'day02')}

@@ -79,7 +79,7 @@ def test_a_bag_without_the_base_topic_is_one_failed_line(bag, tmp_path, capsys):
     status = main([str(manifest), '--out', str(tmp_path / 'out'), '--serial', '--no-plots'])
     out = capsys.readouterr().out
     assert status != 0
-    assert '--base-odometry /base/odom' in out and "'/base/odom' is not in the bag" in out, out
+    assert "--base-odometry '/base/odom'" in out and "'/base/odom' is not in the bag" in out, out
 
 
 @pytest.mark.parametrize('columns, values, said', [

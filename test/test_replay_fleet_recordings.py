@@ -99,7 +99,8 @@ def test_a_bag_recorded_on_a_simulated_clock_is_dated_by_it_and_said(worn, tmp_p
                  recorder_too=True)
     status, out = run([folder, '--out', tmp_path / 'o'], capsys)
     notes = [line for line in out.splitlines() if line.startswith('note:')]
-    assert notes == [f'note: {command.EARLY} (1): r01 {folder}/r01/day03 on 1970-01-01'], out
+    day03 = str(folder / 'r01' / 'day03')
+    assert notes == [f'note: {command.EARLY} (1): r01 {day03!r} on 1970-01-01'], out
     assert ('day03', '1970-01-01T00:00:05+00:00') in dates(tmp_path / 'o')
 
 
@@ -124,7 +125,7 @@ def test_a_damaged_mcap_is_refused_saying_how_much_of_it_could_be_read(worn, tmp
     for path in (str(bag), mcap):                  # metadata.yaml's count, the MCAP summary's
         with pytest.raises(bags.BagError) as err:
             bags.read_joint_states(path, '/joint_states', _names(source))
-        assert f'of the {listed} messages of /joint_states' in str(err.value)
+        assert f"of the {listed} messages of '/joint_states'" in str(err.value)
         assert 'damaged' in str(err.value)
     status, out = run([folder, '--out', tmp_path / 'o'], capsys)
     failed = [line for line in out.splitlines() if line.startswith('failed:')]

@@ -180,11 +180,11 @@ def test_out_that_cannot_be_a_directory_is_refused_before_the_computation(tmp_pa
     a_file.write_text('x')
     for out in (a_file, '/proc/spatial_dynamics_out'):
         status, stdout, err = replay('residual', bag, '--urdf', urdf, '--no-plots', '--out', out)
-        assert status == 1 and f'--out {out}' in one_line(err), err
+        assert status == 1 and f'--out {str(out)!r}' in one_line(err), err
         assert stdout == ''          # refused before anything was computed
         status, stdout, err = replay('trajectory', tmp_path / 'none.yaml', '--urdf', urdf,
                                      '--out', out)
-        assert status == 1 and f'--out {out}' in one_line(err), err
+        assert status == 1 and f'--out {str(out)!r}' in one_line(err), err
 
 
 def _plan(tmp_path, text: str, name='plan.yaml'):

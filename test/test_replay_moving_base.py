@@ -189,7 +189,7 @@ def test_the_bags_base_gives_the_residual_of_a_moving_base(bag, tmp_path, capsys
         rms[option[0] if option else 'fixed'] = np.sqrt(np.mean(
             residual_less_drives(out) ** 2, axis=0))
     said = capsys.readouterr().out
-    assert 'base: moving, its motion from --base-imu /imu' in said
+    assert "base: moving, its motion from --base-imu '/imu'" in said
     # without the base: the base's acceleration (up to 6 m/s^2, 2 rad/s^2) times the arm
     assert rms['fixed'].max() > 5.0
     # with it: what the Savitzky-Golay derivative of the joints (and of the base's 100 Hz
@@ -223,10 +223,10 @@ def test_a_base_topic_that_is_not_there_is_refused_naming_it(bag, tmp_path, caps
     urdf = robot_urdf_path('ur5')
     err = refusal(capsys, ['residual', bag, '--urdf', urdf, '--out', str(tmp_path / 'o'),
                            '--no-plots', '--base-imu', '/base/imu'])
-    assert "--base-imu /base/imu" in err and "'/base/imu' is not in the bag" in err
+    assert "--base-imu '/base/imu'" in err and "'/base/imu' is not in the bag" in err
     err = refusal(capsys, ['residual', bag, '--urdf', urdf, '--out', str(tmp_path / 'o'),
                            '--no-plots', '--base-odometry', '/imu'])
-    assert '--base-odometry /imu' in err and 'expected nav_msgs/msg/Odometry' in err
+    assert "--base-odometry '/imu'" in err and 'expected nav_msgs/msg/Odometry' in err
 
 
 @pytest.mark.parametrize('odometry, hole, said', [
@@ -240,7 +240,7 @@ def test_a_base_topic_that_does_not_cover_the_joints_is_refused(
     bag = write_bag(tmp_path / 'short', odometry=odometry, imu=(0.0, 0.02), hole=hole)
     err = refusal(capsys, ['residual', bag, '--urdf', robot_urdf_path('ur5'), '--out',
                            str(tmp_path / 'o'), '--no-plots', '--base-odometry', '/odom'])
-    assert '--base-odometry /odom' in err and said in err, err
+    assert "--base-odometry '/odom'" in err and said in err, err
 
 
 @pytest.mark.parametrize('options, said', [

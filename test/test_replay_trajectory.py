@@ -139,7 +139,7 @@ def test_trajectory_topic_of_a_bag(tmp_path, capsys):
     assert main(['trajectory', bag, '--topic', '/traj', '--urdf', robot_urdf_path('ur5'),
                  '--out', str(tmp_path / 'o'), '--no-plots']) == 1
     text = capsys.readouterr().out
-    first, second = text.split('/traj #1')
+    first, second = text.split("'/traj' #1")
     assert 'cubic interpolation' in first and 'EXCEEDED' not in first
     assert 'EXCEEDED' in second
 

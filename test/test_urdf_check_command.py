@@ -202,7 +202,7 @@ def test_refused_description_exits_1_with_the_element_named(capsys, tmp_path, xm
 def test_missing_file_and_directory_exit_1(capsys, tmp_path):
     missing = tmp_path / 'nothing.urdf'
     status, out, err = run(capsys, missing)
-    assert (status, out, err) == (1, '', f'error: {missing}: no such file\n')
+    assert (status, out, err) == (1, '', f'error: {str(missing)!r}: no such file\n')
     status, out, err = run(capsys, tmp_path)
     assert (status, out) == (1, '') and 'not a regular file' in err
 

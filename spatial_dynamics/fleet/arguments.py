@@ -20,6 +20,7 @@ import threading
 from typing import List, Optional
 
 from ..files import regular_file
+from ..text import shown
 from ..urdf import MAX_FILE_BYTES
 from . import drift as drift_of
 from .chunks import CHUNK, MIN_CHUNK
@@ -100,7 +101,7 @@ def chunk_seconds(text: str) -> float:
     value = _number(text)
     if not (value == 0 or MIN_CHUNK <= value <= MAX_CHUNK):
         raise argparse.ArgumentTypeError(
-            f'{text!r}: 0 (one task per bag) or a number of seconds >= {MIN_CHUNK:g} and <= '
+            f'{shown(text)}: 0 (one task per bag) or a number of seconds >= {MIN_CHUNK:g} and <= '
             f'{MAX_CHUNK:.0f} (a year)')
     return value
 
@@ -109,7 +110,7 @@ def baseline_days(text: str) -> float:
     """``--baseline-days``: a number of days > 0, at most ten years."""
     value = _number(text)
     if not 0.0 < value <= 3660.0:
-        raise argparse.ArgumentTypeError(f'{text!r}: a number of days > 0 and <= 3660')
+        raise argparse.ArgumentTypeError(f'{shown(text)}: a number of days > 0 and <= 3660')
     return value
 
 
@@ -120,7 +121,7 @@ def workers_count(text: str) -> int:
     except ValueError:
         value = 0
     if not 1 <= value <= 4096:
-        raise argparse.ArgumentTypeError(f'{text!r}: a whole number of processes, 1 to 4096')
+        raise argparse.ArgumentTypeError(f'{shown(text)}: a whole number of processes, 1 to 4096')
     return value
 
 
@@ -146,20 +147,20 @@ def scheduler_address(text: str) -> str:
             f'an empty value; a scheduler address is tcp://host:port ({example})')
     if not sep:
         raise argparse.ArgumentTypeError(
-            f'{text!r}: give the protocol, tcp://{text} ({example})')
+            f'{shown(text)}: give the protocol, tcp://{shown(text, quote=False)} ({example})')
     if protocol == 'tls':
         raise argparse.ArgumentTypeError(
-            f'{text!r}: tls:// needs certificates (a Dask security context), which this '
+            f'{shown(text)}: tls:// needs certificates (a Dask security context), which this '
             'command does not take; give tcp://host:port (a scheduler reached through an SSH '
             'tunnel or a private network)')
     if protocol != 'tcp':
         raise argparse.ArgumentTypeError(
-            f'{text!r}: the protocol {protocol!r} is not supported here; give '
+            f'{shown(text)}: the protocol {shown(protocol)} is not supported here; give '
             f'tcp://host:port ({example})')
     host, _, port = rest.rpartition(':')
     if not port.isdigit() or not 1 <= int(port) <= 65535:
         raise argparse.ArgumentTypeError(
-            f'{text!r}: a scheduler address is tcp://host:port, the port 1 to 65535 '
+            f'{shown(text)}: a scheduler address is tcp://host:port, the port 1 to 65535 '
             f'({example})')
     literal = host[1:-1] if host.startswith('[') and host.endswith(']') else host
     try:
@@ -171,12 +172,12 @@ def scheduler_address(text: str) -> str:
                       or not all(_LABEL.match(label) for label in name.split('.'))
                       or name.replace('.', '').isdigit()):
         raise argparse.ArgumentTypeError(
-            f'{text!r}: the host {host!r} is neither a host name (letters, digits, - and .) '
-            f'nor an IP address (IPv6 in brackets); no user@, path or space ({example})')
+            f'{shown(text)}: the host {shown(host)} is neither a host name (letters, digits, - '
+            f'and .) nor an IP address (IPv6 in brackets); no user@, path or space ({example})')
     if not is_ip:
         why = _resolve(name, int(port))
         if why:
-            raise argparse.ArgumentTypeError(f'{text!r}: the host {host!r} {why}')
+            raise argparse.ArgumentTypeError(f'{shown(text)}: the host {shown(host)} {why}')
     return f'tcp://{host}:{int(port)}'
 
 

@@ -54,6 +54,7 @@ import numpy as np
 from ..drives import PARAMETERS
 from ..files import check_output, check_outside_recordings, read_regular, write_atomic
 from ..recordings.errors import one_line
+from ..text import shown
 from . import drift as drift_of
 from .arguments import add_arguments
 from .chunks import merge, split
@@ -320,7 +321,7 @@ def check_folders(args, tasks: Sequence[Task]) -> None:
             continue
         check_outside_recordings(folder, option, recordings)
         if os.path.realpath(folder) == os.path.realpath(args.source):
-            raise ValueError(f'{option} {folder}: the fleet\'s own SOURCE; choose another '
+            raise ValueError(f'{option} {folder!r}: the fleet\'s own SOURCE; choose another '
                              'place (an input is left as it is)')
 
 
@@ -329,7 +330,7 @@ def make_folder(path: str, option: str) -> str:
     try:
         os.makedirs(path, exist_ok=True)
     except OSError as err:
-        raise ValueError(f'{option} {path}: cannot be created ({err.strerror})') from None
+        raise ValueError(f'{option} {path!r}: cannot be created ({err.strerror})') from None
     return path
 
 
@@ -380,7 +381,7 @@ def verdict(judgement: drift_of.Judgement, unusable: Optional[Dict[str, int]] = 
     grouped: Dict[Tuple[str, str, str], List[str]] = {}
     for (robot, joint, parameter), reason in judgement.not_judged.items():
         grouped.setdefault((robot, joint, reason), []).append(drift_of.LABELS[parameter])
-    lines += [f'not judged: {robot} {joint} ({", ".join(labels)}): {reason}'
+    lines += [f'not judged: {robot} {shown(joint, quote=False)} ({", ".join(labels)}): {reason}'
               for (robot, joint, reason), labels in sorted(grouped.items())]
     return lines
 
@@ -433,7 +434,7 @@ def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> 
     lines = [f'{count(len(results), "bag")} of {count(n_robots, "robot")}, '
              f'{hours:.3g} h of data ({cached} from the cache, {len(failed)} failed)']
     lines += noted(list(notes) + [
-        (EARLY, f'{r["robot"]} {r["bag"]} on {drift_of.day(r["recorded"])}') for r in results
+        (EARLY, f'{r["robot"]} {r["bag"]!r} on {drift_of.day(r["recorded"])}') for r in results
         if r.get('ok') and r['recorded'] < PLAUSIBLE])
     usable = {r['robot'] for r in results if r.get('ok')}
     unusable: Dict[str, int] = {}
@@ -441,7 +442,7 @@ def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> 
         if r['robot'] not in usable:
             unusable[r['robot']] = unusable.get(r['robot'], 0) + 1
     lines += verdict(judgement, unusable)
-    lines += [f'failed: {r["robot"]} {r["bag"]}'
+    lines += [f'failed: {r["robot"]} {r["bag"]!r}'
               + (f' ({r["where"]})' if r.get('where') else '') + f': {r["reason"]}'
               for r in failed]
     text = '\n'.join(lines) + '\n'
@@ -454,7 +455,7 @@ def report(args, results: List[Dict], notes: Sequence[Tuple[str, str]] = ()) -> 
     status = DRIFTED if drifts else NOT_JUDGED if judgement.not_judged or unusable else 0
     if not rows:
         status = 1
-    say(text + f'written to {args.out}: {", ".join(written)}')
+    say(text + f'written to {args.out!r}: {", ".join(written)}')
     if not rows:
         print('error: no bag could be used (see failed above)', file=sys.stderr)
     return status

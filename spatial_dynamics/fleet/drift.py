@@ -38,6 +38,8 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from ..text import shown
+
 #: CUSUM allowance and decision interval, in σ: a steady shift of 3σ is found after ~5 bags,
 #: of 5σ after ~2-3, while a series without change (Gaussian z) alarms about once in 10⁷
 #: bags (Siegmund's approximation): thousands of robot-joint-parameter series stay quiet.
@@ -70,8 +72,8 @@ class Drift:
         change = (f'{100 * (self.latest / self.baseline - 1):+.0f} %' if self.baseline
                   else f'{self.latest - self.baseline:+.3g}')
         where = ' (within its baseline days)' if self.within_baseline else ''
-        return (f'{self.robot} {self.joint}: {LABELS[self.parameter]} {change} since '
-                f'{day(self.since)}, {abs(self.z):.0f}σ{where}')
+        return (f'{self.robot} {shown(self.joint, quote=False)}: {LABELS[self.parameter]} '
+                f'{change} since {day(self.since)}, {abs(self.z):.0f}σ{where}')
 
 
 @dataclass

@@ -440,7 +440,7 @@ def _head(task: Task) -> Dict:
 def unreadable(task: Task, err: Exception) -> Dict:
     """Return the failed result of a bag that cannot be read to be hashed."""
     if isinstance(err, OSError):
-        reason = f'{err.strerror or type(err).__name__} ({err.filename or task.bag})'
+        reason = f'{err.strerror or type(err).__name__} ({(err.filename or task.bag)!r})'
     else:
         reason = ' '.join(str(err).split())
     return dict(_head(task), ok=False, reason=f'cannot read the bag: {reason}')

@@ -32,6 +32,7 @@ from ..bounds import MAX_GRAVITY
 from ..effort import MEASURED_EFFORT
 from ..files import load_yaml, read_regular
 from ..recordings.ranges import gravity_component, velocity_threshold, window_s
+from ..text import listed, shown
 from .task import BASE_TOPICS, DEFAULTS, Task
 
 #: Largest manifest read (a fleet of thousands of bags is a few MB).
@@ -67,7 +68,7 @@ def robot_name(name, where: str) -> str:
     space, path separator, dot, quote, glob or control character, no leading ``-``.
     """
     if not isinstance(name, str):
-        raise ManifestError(f'{where}: robot name {name!r} is a {type(name).__name__}, not '
+        raise ManifestError(f'{where}: robot name {shown(name)} is a {type(name).__name__}, not '
                             f'text (quote it in YAML); {NAME_RULE}')
     odd = [c for c in name if not (_name_char(c) or c in '-_')]
     why = ('is empty' if not name else
@@ -75,14 +76,14 @@ def robot_name(name, where: str) -> str:
            f'has {odd[0]!r} ({unicodedata.name(odd[0], "a control character")})' if odd else
            f'starts with {name[0]!r}' if not _name_char(name[0]) else None)
     if why:
-        raise ManifestError(f'{where}: robot name {name[:NAME_LIMIT + 8]!r} {why}; '
+        raise ManifestError(f'{where}: robot name {shown(name)} {why}; '
                             f'{NAME_RULE}')
     return name
 
 
 def _option(name: str, value, where: str):
     if name not in DEFAULTS:
-        raise ManifestError(f'{where}: unknown option {name!r} (known: '
+        raise ManifestError(f'{where}: unknown option {shown(name)} (known: '
                             f'{", ".join(sorted(DEFAULTS))})')
     try:
         if name in CHECKED:
@@ -101,7 +102,7 @@ def _option(name: str, value, where: str):
             except argparse.ArgumentTypeError:
                 g = ()
             if len(g) != 3 or not float(np.linalg.norm(g)) <= MAX_GRAVITY:
-                raise ManifestError(f'{where}: option gravity = {value!r}: three numbers, '
+                raise ManifestError(f'{where}: option gravity = {shown(value)}: three numbers, '
                                     f'm/s², |g| at most {MAX_GRAVITY:g} (100 g)')
             return g
         if name == 'measured_effort':
@@ -113,7 +114,7 @@ def _option(name: str, value, where: str):
     except argparse.ArgumentTypeError as err:
         raise ManifestError(f'{where}: option {name}: {err}') from None
     except (TypeError, ValueError):
-        raise ManifestError(f'{where}: option {name} = {value!r} is not valid') from None
+        raise ManifestError(f'{where}: option {name} = {shown(value)} is not valid') from None
 
 
 def _bags(pattern: str, base: str) -> Tuple[str, List[str]]:
@@ -140,7 +141,7 @@ CSV_COLUMNS = ('robot', 'urdf', 'bag')
 def _text(value, what: str, where: str) -> str:
     """Return ``value`` if it is text; refuse any other type (YAML's ``1``, ``null``, ``{}``)."""
     if not isinstance(value, str) or not value:
-        raise ManifestError(f'{where}: {what} {value!r} is not a path (text)')
+        raise ManifestError(f'{where}: {what} {shown(value)} is not a path (text)')
     return value
 
 
@@ -197,26 +198,26 @@ def _same_robot(robot: str, here: Tuple[str, Dict, str], before: Tuple[str, Dict
 def _yaml_rows(text: bytes, path: str) -> List[Tuple[str, Dict]]:
     """Return ``(where, entry)`` of each robot of a YAML manifest, its keys checked."""
     try:
-        doc = load_yaml(text, f'manifest {path}')
+        doc = load_yaml(text, f'manifest {path!r}')
     except ValueError as err:       # not YAML, a key twice, an alias bomb: the file's fault
         raise ManifestError(str(err)) from None
     if isinstance(doc, dict) and 'robots' in doc:
         extra = sorted(map(str, set(doc) - {'robots'}))
         if extra:
-            raise ManifestError(f'manifest {path}: unknown key {extra[0]!r} (the top level '
+            raise ManifestError(f'manifest {path!r}: unknown key {shown(extra[0])} (the top level '
                                 'is a list of robots, or robots: that list)')
         doc = doc['robots']
     if not isinstance(doc, list):
-        raise ManifestError(f'manifest {path}: a list of robots is needed')
+        raise ManifestError(f'manifest {path!r}: a list of robots is needed')
     rows = []
     for k, entry in enumerate(doc):
-        where = f'manifest {path}, robot {k + 1}'
+        where = f'manifest {path!r}, robot {k + 1}'
         if not isinstance(entry, dict):
             raise ManifestError(f'{where}: a mapping (robot, urdf, bags) is needed')
         for key in entry:
             if key not in YAML_KEYS:
                 hint = ' (an option goes under options:)' if key in DEFAULTS else ''
-                raise ManifestError(f'{where}: unknown key {key!r}{hint}; the keys are '
+                raise ManifestError(f'{where}: unknown key {shown(key)}{hint}; the keys are '
                                     f'{", ".join(YAML_KEYS)}')
         if 'bag' in entry and 'bags' in entry:
             raise ManifestError(f'{where}: bag and bags: give one')
@@ -235,25 +236,25 @@ def _csv_rows(text: bytes, path: str) -> List[Tuple[str, Dict]]:
         reader = csv.reader(io.StringIO(text.decode('utf-8-sig')))
         header = next(reader, None)
         if header is None:
-            raise ManifestError(f'manifest {path}: empty (a header robot,urdf,bag is needed)')
+            raise ManifestError(f'manifest {path!r}: empty (a header robot,urdf,bag is needed)')
         header = [c.strip() for c in header]
         twice = sorted({c for c in header if header.count(c) > 1})
         if twice:
-            raise ManifestError(f'manifest {path}: the column {twice[0]!r} is in the header '
-                                'twice')
+            raise ManifestError(f'manifest {path!r}: the column {shown(twice[0])} is in the '
+                                'header twice')
         missing = [c for c in CSV_COLUMNS if c not in header]
         if missing:
-            raise ManifestError(f'manifest {path}: no {", ".join(map(repr, missing))} column '
-                                f'(the header has {", ".join(header)}; it needs '
+            raise ManifestError(f'manifest {path!r}: no {", ".join(map(repr, missing))} column '
+                                f'(the header has {listed(header)}; it needs '
                                 f'{", ".join(CSV_COLUMNS)} and options)')
         for c in header:
             if c not in CSV_COLUMNS and c not in DEFAULTS:
-                raise ManifestError(f'manifest {path}: unknown column {c!r} (the columns are '
-                                    f'{", ".join(CSV_COLUMNS)} and the options '
+                raise ManifestError(f'manifest {path!r}: unknown column {shown(c)} (the columns '
+                                    f'are {", ".join(CSV_COLUMNS)} and the options '
                                     f'{", ".join(sorted(DEFAULTS))})')
         rows = []
         for fields in reader:
-            where = f'manifest {path}, line {reader.line_num}'
+            where = f'manifest {path!r}, line {reader.line_num}'
             if not any(f.strip() for f in fields):
                 continue
             if len(fields) > len(header):
@@ -262,7 +263,7 @@ def _csv_rows(text: bytes, path: str) -> List[Tuple[str, Dict]]:
             rows.append((where, dict(zip(header, fields))))
         return rows
     except (UnicodeDecodeError, csv.Error) as err:
-        raise ManifestError(f'manifest {path}: not a CSV file ({err})') from None
+        raise ManifestError(f'manifest {path!r}: not a CSV file ({err})') from None
 
 
 def read_manifest(path: str) -> Tuple[List[Task], List[Dict]]:
@@ -274,7 +275,7 @@ def read_manifest(path: str) -> Tuple[List[Task], List[Dict]]:
     (``{robot, bag: the glob's path, where: the row, ok: False, reason}``), the other rows
     are used.
     """
-    text = read_regular(path, f'manifest {path}', MANIFEST_LIMIT)
+    text = read_regular(path, f'manifest {path!r}', MANIFEST_LIMIT)
     base = os.path.dirname(os.path.abspath(path))
     tasks: List[Task] = []
     unmatched: List[Dict] = []
@@ -302,7 +303,7 @@ def read_manifest(path: str) -> Tuple[List[Task], List[Dict]]:
             tasks += found
             unmatched += none
     if not tasks and not unmatched:
-        raise ManifestError(f'manifest {path}: no bags')
+        raise ManifestError(f'manifest {path!r}: no bags')
     return tasks, unmatched
 
 
@@ -339,7 +340,7 @@ def once(tasks: Sequence[Task]) -> Tuple[List[Task], List[Tuple[str, str]]]:
         ids = storage_identity(t.bag)
         seen = next((first[i] for i in ids if i in first), None)
         if seen is not None:
-            notes.append((LISTED_TWICE, f'{t.bag} ({t.where}) is {seen.bag} of {seen.robot} '
+            notes.append((LISTED_TWICE, f'{t.bag!r} ({t.where}) is {seen.bag!r} of {seen.robot} '
                           f'({seen.where})'))
             continue
         first.update((i, t) for i in ids)
@@ -358,7 +359,7 @@ def scan_folder(folder: str, urdf: Optional[str]) -> List[Task]:
         top = os.path.join(folder, robot)
         if not os.path.isdir(top):
             continue
-        where = f'{folder}: robot folder {robot!r}'
+        where = f'{folder!r}: robot folder {shown(robot)}'
         own = os.path.join(top, 'robot.urdf')
         robot_urdf = urdf or (own if os.path.isfile(own) else None)
         found = []
@@ -374,8 +375,8 @@ def scan_folder(folder: str, urdf: Optional[str]) -> List[Task]:
             continue
         robot_name(robot, where)
         if robot_urdf is None:
-            raise ManifestError(f'robot {robot}: no --urdf and no {own}')
+            raise ManifestError(f'robot {robot}: no --urdf and no {own!r}')
         tasks += [Task(robot, robot_urdf, bag, {}, where=where) for bag in found]
     if not tasks:
-        raise ManifestError(f'{folder}: no bags found in ROBOT/…/BAG')
+        raise ManifestError(f'{folder!r}: no bags found in ROBOT/…/BAG')
     return tasks

@@ -21,6 +21,7 @@ import weakref
 import numpy as np
 
 from ..files import load_yaml, read_regular, regular_file
+from ..text import shown
 from . import mcap, sqlite
 from .cdr import (Batch, decode_fixed, decode_joint_states, encode_joint_states, FIELDS,
                   INSTALL_HINT, JOINT_STATE, joint_states_from_raw, JointStates, layout,
@@ -63,7 +64,7 @@ def _staged(path: str) -> Tuple[str, str]:
         if not os.path.isdir(path):
             ext = os.path.splitext(path)[1]
             if ext not in ('.db3', '.mcap'):
-                raise BagError(f'{path}: a bag is a rosbag2 directory or a .db3 / .mcap file')
+                raise BagError(f'{path!r}: a bag is a rosbag2 directory or a .db3 / .mcap file')
             regular_file(path, f'bag file {path!r}', MAX_STORAGE_BYTES)
             os.symlink(os.path.abspath(path), os.path.join(stage, 'bag' + ext))
             return os.path.join(stage, 'bag' + ext), stage
@@ -96,7 +97,7 @@ def _staged(path: str) -> Tuple[str, str]:
 def _stage(path: str) -> Tuple[str, str]:
     """:func:`_staged` with its refusals as :class:`BagError`."""
     if not os.path.exists(path):
-        raise BagError(f'{path}: no such bag')
+        raise BagError(f'{path!r}: no such bag')
     try:
         return _staged(path)
     except ValueError as err:      # BagError, and the safe reader's refusals name the file
@@ -129,7 +130,8 @@ def open_reader(path: str):
     except Exception as err:     # rosbags' ReaderError and the storage plugins' errors
         shutil.rmtree(stage, ignore_errors=True)
         text = str(err).replace(stage, path)
-        raise BagError(f'{path}: cannot open as a rosbag2 bag: {text}') from None
+        text = shown(text, quote=False, limit=len(text))     # the path: escaped, whole
+        raise BagError(f'{path!r}: cannot open as a rosbag2 bag: {text}') from None
     except BaseException:       # Ctrl-C: the staging folder goes too
         shutil.rmtree(stage, ignore_errors=True)
         raise
@@ -154,10 +156,12 @@ def topics(reader) -> Dict[str, Tuple[str, int]]:
 def check_topic(found: Dict[str, Tuple[str, int]], topic: str, msgtype: str) -> None:
     """:class:`BagError` naming the topics there are unless ``topic`` of ``msgtype`` is one."""
     if topic not in found:
-        have = ', '.join(f'{t} ({m})' for t, (m, _) in sorted(found.items())) or 'none'
-        raise BagError(f'topic {topic!r} is not in the bag; its topics: {have}')
+        have = ', '.join(f'{shown(t)} ({shown(m, quote=False)})'
+                         for t, (m, _) in sorted(found.items())) or 'none'
+        raise BagError(f'topic {shown(topic)} is not in the bag; its topics: {have}')
     if found[topic][0] != msgtype:
-        raise BagError(f'topic {topic!r} has type {found[topic][0]}, expected {msgtype}')
+        raise BagError(f'topic {shown(topic)} has type {shown(found[topic][0], quote=False)}, '
+                       f'expected {msgtype}')
 
 
 def connections_of(reader, topic: str, msgtype: str) -> list:
@@ -265,7 +269,7 @@ def check_complete(js: JointStates, listed: int, path: str, topic: str) -> None:
     """
     read = len(js.stamp) + sum(js.skipped.values())
     if read < listed:
-        raise BagError(f'{path}: {read} of the {listed} messages of {topic} its MCAP '
+        raise BagError(f'{path!r}: {read} of the {listed} messages of {shown(topic)} its MCAP '
                        'statistics list could be read: the file is damaged (mcap recover may '
                        'repair it)')
 
@@ -360,7 +364,7 @@ def time_range(path: str, topic: str) -> Tuple[int, int]:
     try:
         connections_of(reader, topic, JOINT_STATE)
         if not reader.message_count:
-            raise BagError(f'{path}: topic {topic!r} has no message')
+            raise BagError(f'{path!r}: topic {shown(topic)} has no message')
         return int(reader.start_time), int(reader.end_time)
     finally:
         reader.close()

@@ -36,6 +36,7 @@ from ..bounds import (MAX_BASE_ANGULAR_ACCELERATION, MAX_BASE_LINEAR_ACCELERATIO
                       MIN_STAMP_INTERVAL)
 from ..joints import unit_norms
 from ..model import Model
+from ..text import shown
 from . import bags, differentiate
 from .cdr import IMU, ODOMETRY, Stamped
 from .errors import Refused
@@ -78,7 +79,7 @@ def base_motion(base: BaseTopic, bag: str, model: Model, t: np.ndarray,
         return None
     option, topic, msgtype = (('--base-odometry', odometry, ODOMETRY) if odometry else
                               ('--base-imu', imu, IMU))
-    where = f'{option} {topic}'
+    where = f'{option} {shown(topic)}'
     try:
         found = bags.read_stamped(bag, topic, msgtype, *between)
     except bags.BagError as err:
@@ -191,10 +192,10 @@ def link_of(model: Model, given: Optional[str], frames: Sequence[str], where: st
     """Return the link the base topic's vectors are in: ``given``, else the message's frame."""
     if given:
         if given not in model.frames:
-            raise Refused(f'{option} {given!r} is not a link of {model.name!r}')
+            raise Refused(f'{option} {shown(given)} is not a link of {shown(model.name)}')
         return given
     frame = frames[0] if frames else ''
     if frame.lstrip('/') in model.frames:
         return frame.lstrip('/')
-    raise Refused(f'{where}: its {field} {frame!r} is not a link of {model.name!r}; name the '
-                  f'link (fixed to the base) it is of with {option}')
+    raise Refused(f'{where}: its {field} {shown(frame)} is not a link of {shown(model.name)}; '
+                  f'name the link (fixed to the base) it is of with {option}')

@@ -15,7 +15,7 @@ from .errors import Refused
 
 def read_description(path: str) -> bytes:
     """Return the URDF XML of a file (a xacro file expanded), read as the node reads it."""
-    return urdf.read_description(path, urdf.MAX_DESCRIPTION_BYTES, path).encode('utf-8')
+    return urdf.read_description(path, urdf.MAX_DESCRIPTION_BYTES, repr(path)).encode('utf-8')
 
 
 def load_model(path: str, joints: Optional[Sequence[str]] = None,

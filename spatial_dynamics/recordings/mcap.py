@@ -93,7 +93,7 @@ def buffers(paths: Sequence[str]) -> Iterator[memoryview]:
             buf = memoryview(mm)
             try:
                 if bytes(buf[:8]) != MAGIC:
-                    raise BagError(f'{path}: not an MCAP file')
+                    raise BagError(f'{path!r}: not an MCAP file')
                 yield buf
             finally:
                 buf.release()

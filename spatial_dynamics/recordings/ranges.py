@@ -14,6 +14,7 @@ import math
 from typing import Callable, Tuple
 
 from ..bounds import FRICTION_THRESHOLD_RANGE, MAX_EFFORT, MAX_GRAVITY, MAX_POSITION
+from ..text import shown
 
 
 def checked(parse: Callable[[str], float], ok: Callable[[float], bool], need: str):
@@ -27,7 +28,7 @@ def checked(parse: Callable[[str], float], ok: Callable[[float], bool], need: st
         except ValueError:
             x = math.nan
         if not ok(x):
-            raise argparse.ArgumentTypeError(f'{text!r}: need {need}')
+            raise argparse.ArgumentTypeError(f'{shown(text)}: need {need}')
         return x
     return convert
 
@@ -75,5 +76,5 @@ def locked_item(item: str) -> Tuple[str, float]:
             return name, float(value)
     except ValueError:
         pass
-    raise argparse.ArgumentTypeError(f'{item!r}: expected NAME=VALUE, the value in rad or m '
+    raise argparse.ArgumentTypeError(f'{shown(item)}: expected NAME=VALUE, the value in rad or m '
                                      f'within ±{MAX_POSITION:g}')

@@ -21,6 +21,7 @@ import numpy as np
 from .. import effort as effort_model
 from ..bounds import JOINT_BOUNDS, MIN_STAMP_INTERVAL
 from ..model import Model
+from ..text import listed, shown
 from . import bags, base_topics, differentiate
 from .base_topics import BaseTopic
 from .errors import Refused
@@ -115,7 +116,7 @@ def clean(js: bags.JointStates, window: float) -> Dict:
     have_q = np.isfinite(js.position)
     never = [n for n, seen in zip(names, have_q.any(axis=0)) if not seen]
     if never:
-        raise Refused(f'joint(s) {", ".join(never)} never have a position in the topic; keep '
+        raise Refused(f'joint(s) {listed(never)} never have a position in the topic; keep '
                       'only the recorded joints with --joints (the others are locked)')
     if not np.isfinite(js.effort).any():
         raise Refused('the topic has no measured effort: JointState.effort is empty or NaN in '
@@ -136,8 +137,8 @@ def clean(js: bags.JointStates, window: float) -> Dict:
         for j, name in enumerate(names):
             for rows, reason in (
                     (bad[:, j] & keep,
-                     f'{name}: no finite {what} (joint missing from the message, or NaN)'),
-                    (huge[:, j] & keep, f'{name}: {what} beyond ±{bound:g} {unit}')):
+                     f'{shown(name)}: no finite {what} (joint missing from the message, or NaN)'),
+                    (huge[:, j] & keep, f'{shown(name)}: {what} beyond ±{bound:g} {unit}')):
                 if rows.any():
                     skipped[reason] = skipped.get(reason, 0) + int(rows.sum())
                     keep &= ~rows
@@ -228,7 +229,7 @@ def recording(reading: Reading, bag: str, model: Model, stages: Stages) -> Dict:
         s = clean(js, reading.window)
     except (Refused, bags.BagError) as err:     # with --also and --validate: which bag
         text = str(err)
-        raise Refused(text if bag in text else f'bag {bag}: {text}') from None
+        raise Refused(text if bag in text else f'bag {bag!r}: {text}') from None
     finally:
         bar.close()
     t, q, spans = s['t'], s['q'], s['spans']
@@ -240,7 +241,7 @@ def recording(reading: Reading, bag: str, model: Model, stages: Stages) -> Dict:
         base = base_topics.base_motion(reading.base, bag, model, t, spans, reading.window,
                                        reading.order)
     except Refused as err:
-        raise Refused(f'bag {bag}: {err}') from None
+        raise Refused(f'bag {bag!r}: {err}') from None
     if base is not None:
         stages.done('base')
     effort = effort_model.with_gravity(model, q, s['effort'], reading.measured_effort,

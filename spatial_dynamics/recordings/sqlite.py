@@ -17,6 +17,7 @@ from urllib.parse import quote
 
 import numpy as np
 
+from ..text import shown
 from .cdr import Batch
 from .errors import BagError
 
@@ -32,7 +33,7 @@ def connect(path: str):
 
 
 def not_a_bag(path: str, why: str) -> BagError:
-    return BagError(f'{os.path.realpath(path)}: not a rosbag2 sqlite3 database ({why})')
+    return BagError(f'{os.path.realpath(path)!r}: not a rosbag2 sqlite3 database ({why})')
 
 
 def batches(paths: Sequence[str], topic: str, start: Optional[int] = None,
@@ -138,5 +139,5 @@ def time_range(files: Sequence[str], path: str, topic: str) -> Tuple[int, int]:
             con.close()
     ends = [e for e in ends if isinstance(e[0], int) and isinstance(e[1], int)]
     if not ends:
-        raise BagError(f'{path}: topic {topic!r} has no message')
+        raise BagError(f'{path!r}: topic {shown(topic)} has no message')
     return min(e[0] for e in ends), max(e[1] for e in ends)

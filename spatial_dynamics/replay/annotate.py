@@ -18,6 +18,7 @@ import sys
 
 from .. import effort, files
 from ..recordings.ranges import effort_tolerance
+from ..text import listed
 from . import report, splines
 from .arguments import add_command, model_of
 
@@ -34,23 +35,23 @@ def run(args) -> int:
     model = model_of(args, args.joints or list(traj.joint_names))
     missing = [j for j in model.joint_names if j not in traj.joint_names]
     if missing:
-        raise ValueError(f'{args.plan}: joint(s) {", ".join(missing)} not in the '
+        raise ValueError(f'{args.plan!r}: joint(s) {listed(missing)} not in the '
                          'trajectory')
     extra = [j for j in traj.joint_names if j not in model.joint_names]
     if extra:
-        raise ValueError(f'{args.plan}: joint(s) {", ".join(extra)} are not movable '
+        raise ValueError(f'{args.plan!r}: joint(s) {listed(extra)} are not movable '
                          'joints of the model (locked or unknown)')
     try:
         result = effort.annotate(model, traj, args.tolerance, args.output, args.gravity)
     except effort.AnnotationError as err:
-        raise ValueError(f'{args.plan}: not annotated: {err}') from None
+        raise ValueError(f'{args.plan!r}: not annotated: {err}') from None
     doc = effort.message_dict(result.trajectory, result.effort)
     import yaml       # optional (the replay extra): the command starts without it
     files.write_atomic(args.out, lambda f: f.write(yaml.safe_dump(
         doc, default_flow_style=None, sort_keys=False, width=1 << 16).encode('utf-8')),
         '--out')
     met = result.max_error <= args.tolerance
-    print(f'{args.plan}: {len(traj.time)} points ({traj.kind}) -> {args.out}: '
+    print(f'{args.plan!r}: {len(traj.time)} points ({traj.kind}) -> {args.out!r}: '
           f'{len(result.trajectory.time)} points with effort ({args.output}); JTC\'s linear '
           f'interpolation of effort within {result.max_error:.3g} of the model torque '
           f'(tolerance {args.tolerance:g} N m{"" if met else ", NOT met"})')

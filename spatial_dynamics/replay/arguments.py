@@ -133,7 +133,7 @@ def run(work, p: argparse.ArgumentParser, args) -> int:
     except (Refused, bags.BagError, bags.MissingDependency, ValueError) as err:
         print(f'error: {one_line(err)}', file=sys.stderr)
     except OSError as err:
-        where = f'{err.filename}: ' if err.filename else ''
+        where = f'{err.filename!r}: ' if err.filename else ''
         print(f'error: {where}{err.strerror or one_line(err)}', file=sys.stderr)
     except MemoryError:
         print('error: out of memory (a smaller --rate, a shorter bag or fewer joints?)',

@@ -23,6 +23,7 @@ from ..algorithms.regressor import PARAMETERS
 from ..backends import rnea
 from ..files import write_atomic
 from ..model import Model
+from ..text import shown
 from . import report, urdf_writer
 
 # matplotlib is imported where a plot is drawn (start-up time, and optional: the plot extra)
@@ -166,8 +167,8 @@ class Correction:
         bodies = {i: v for i, v in self.bodies.items() if i not in rejected}
         out, notes = urdf_writer.corrected_urdf(text, self.model, bodies, additions, dynamics)
         write_atomic(path, out, 'the corrected URDF')
-        return [f'link {self.model.body_names[i]!r} not written, the URDF\'s <inertial> kept: '
-                f'{why}; the fit did not find this link (give the URDF a rough <inertial> '
+        return [f'link {shown(self.model.body_names[i])} not written, the URDF\'s <inertial> '
+                f'kept: {why}; the fit did not find this link (give the URDF a rough <inertial> '
                 'for it, or record motion that loads it more)'
                 for i, why in rejected.items()] + notes
 
@@ -249,7 +250,7 @@ def print_inertias(correction: Correction) -> None:
                 '' if correction.undetermined[body][0] < 0.5 else ' *')
         if body in rejected:
             mass += ' NOT WRITTEN'
-        rows.append([correction.model.body_names[body], f'{old[0]:.4g}', mass,
+        rows.append([shown(correction.model.body_names[body], quote=False), f'{old[0]:.4g}', mass,
                      ' '.join(f'{x:.4g}' for x in com(old)),
                      ' '.join(f'{x:.4g}' for x in com(new))])
     print('\nidentified inertias (bodies with the links fixed to them; centre of mass in the '
@@ -262,7 +263,7 @@ def print_inertias(correction: Correction) -> None:
     print(report.table(['link', 'mass URDF', 'mass identified (kg)', 'com URDF',
                         'com identified'], rows))
     for body, why in rejected.items():
-        print(f'  {correction.model.body_names[body]}: NOT WRITTEN: {why}')
+        print(f'  {shown(correction.model.body_names[body])}: NOT WRITTEN: {why}')
 
 
 def write_parameters(correction: Correction, out: str) -> None:
@@ -288,7 +289,8 @@ def print_validation(names: Sequence[str], train: Tuple[np.ndarray, np.ndarray],
     if held is not None:
         head += ['held-out URDF', 'held-out corrected']
         columns += [held[0], held[1]]
-    rows = [[n] + [f'{c[j]:.4g}' for c in columns] for j, n in enumerate(names)]
+    rows = [[shown(n, quote=False)] + [f'{c[j]:.4g}' for c in columns]
+            for j, n in enumerate(names)]
     print('\nresidual RMS per joint, measured - model (N m or N), with the URDF and with the '
           'correction' + (' (held-out: --validate)' if held is not None else ''))
     print(report.table(head, rows))

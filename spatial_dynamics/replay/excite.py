@@ -53,6 +53,7 @@ from ..files import check_output, load_yaml, write_atomic
 from ..trajectory import evaluate, sample, Trajectory, trajectory
 from ..recordings.errors import one_line, Refused
 from ..recordings.ranges import checked, finite
+from ..text import shown
 from .arguments import check_model, model_of, model_parser, Parser
 from . import report
 
@@ -81,7 +82,7 @@ def non_negative(text: str) -> float:
     """Parse a margin, rad or m: ≥ 0, at most MAX_POSITION (argparse type)."""
     x = finite(text)
     if not 0.0 <= x <= MAX_POSITION:
-        raise argparse.ArgumentTypeError(f'{text!r}: need a number >= 0, at most '
+        raise argparse.ArgumentTypeError(f'{shown(text)}: need a number >= 0, at most '
                                          f'{MAX_POSITION:g} (rad or m)')
     return x
 
@@ -90,14 +91,14 @@ def fraction(text: str) -> float:
     """Parse a number in (0, 1] (argparse type)."""
     x = finite(text)
     if not 0.0 < x <= 1.0:
-        raise argparse.ArgumentTypeError(f'{text!r}: need a number in (0, 1]')
+        raise argparse.ArgumentTypeError(f'{shown(text)}: need a number in (0, 1]')
     return x
 
 
 def controller_name(text: str) -> str:
     """Parse a controller's ROS name (argparse type): it is printed into shell commands."""
     if not CONTROLLER_NAME.fullmatch(text):
-        raise argparse.ArgumentTypeError(f'{text!r}: need a ROS name (letters, digits, _ and '
+        raise argparse.ArgumentTypeError(f'{shown(text)}: need a ROS name (letters, digits, _ and '
                                          '/, not starting with a digit)')
     return text.lstrip('/')
 
@@ -383,18 +384,20 @@ def structural(plan: Excitation) -> List[str]:
     for name in plan.base.unexcited_names():
         parameter, _, link = name.partition(' of ')
         by_link.setdefault(link, []).append(parameter)
-    return [f'{link}: ' + ('all ten' if len(ps) == 10 else ', '.join(ps))
+    return [f'{shown(link)}: ' + ('all ten' if len(ps) == 10 else ', '.join(ps))
             for link, ps in by_link.items()]
 
 
 def print_plan(plan: Excitation, model: Model, count: int, args) -> None:
     """Print the optimisation's outcome and what its series determines."""
     n_std = len(plan.base.names)
-    print(f'excitation of {len(model.joint_names)} joints ({", ".join(model.joint_names)}): '
+    print(f'excitation of {len(model.joint_names)} joints '
+          f'({", ".join(map(shown, model.joint_names))}): '
           f'{plan.harmonics} harmonics, period {plan.period:.4g} s x {count} = '
           f'{plan.period * count:.4g} s')
     if model.locked:
-        print('  locked: ' + ', '.join(f'{j}={v:g}' for j, v in model.locked.items()))
+        print('  locked: ' + ', '.join(f'{shown(j, quote=False)}={v:g}'
+                                       for j, v in model.locked.items()))
     if plan.converged:
         outcome = f'optimised ({plan.iterations} iterations, converged)'
     elif plan.iteration_limit:
@@ -461,13 +464,13 @@ def run(args, period: float, count: int) -> int:
     if wrong:
         for reason in wrong:
             print(f'error: {reason}', file=sys.stderr)
-        print(f'not written: {args.out}', file=sys.stderr)
+        print(f'not written: {args.out!r}', file=sys.stderr)
         return 1
     try:
         write_atomic(args.out, text, '--out')
     except ValueError as err:
         raise Refused(str(err)) from None
-    print(f'\nwritten: {args.out} ({len(text) // 1024} KiB)')
+    print(f'\nwritten: {args.out!r} ({len(text) // 1024} KiB)')
     print_commands(args.out, plan, args.controller, len(text.encode()))
     return 0
 

@@ -26,6 +26,7 @@ from ..recordings import base_topics
 from ..recordings.errors import Refused
 from ..recordings.loading import read_description
 from ..recordings.recording import Stages
+from ..text import shown
 from ..urdf import read_urdf_file
 from . import correction as correction_of
 from . import report, urdf_writer
@@ -40,7 +41,8 @@ def mimic_notes(model: Model) -> List[str]:
         followers = [model.body_joints[i] for i in range(1, model.NB + 1)
                      if model.qidx[i] == k and model.body_joints[i] != name]
         if followers:
-            notes.append(f'{name} drives mimic joint(s) {", ".join(followers)}: its fitted '
+            notes.append(f'{shown(name)} drives mimic joint(s) '
+                         f'{", ".join(map(shown, followers))}: its fitted '
                          'terms include theirs (set their <dynamics> to 0)')
     return notes
 
@@ -55,15 +57,15 @@ def to_sigma(x: float, sigma: float) -> str:
 def print_payload(payload, names: Sequence[str], args) -> None:
     """Print an identified payload: values with one σ, the node's parameters, a URDF tag."""
     s = payload.sigma
-    rms = ', '.join(f'{n} {r:.3g}' for n, r in zip(names, payload.rms))
-    print(f'\npayload on {payload.link!r}: {to_sigma(payload.mass, s[0])} kg (σ {s[0]:.2g}), '
+    rms = ', '.join(f'{shown(n, quote=False)} {r:.3g}' for n, r in zip(names, payload.rms))
+    print(f'\npayload on {shown(payload.link)}: {to_sigma(payload.mass, s[0])} kg (σ {s[0]:.2g}), '
           'centre of '
           f'mass {np.array2string(payload.com, precision=4)} m (link frame); residual RMS '
           f'per joint after the fit {rms}')
     print('\n# node parameters (the payload):')
     print(payload.node_parameters(), end='')
     print('\n<!-- URDF: the payload as an <inertial> in the frame of '
-          f'{payload.link!r} -->')
+          f'{shown(payload.link)} -->')
     print(payload.urdf_inertial())
 
 
@@ -117,7 +119,7 @@ class Identification:
             more = [recording(args, bag, model, stages) for bag in args.also]
             train = {k: np.concatenate([train[k]] + [m[k] for m in more]) for k in train}
             train['base'] = base_topics.joined([s['base']] + [m['base'] for m in more])
-            print(f'fitted on {args.bag} and {len(more)} more bag(s): {len(train["q"])} '
+            print(f'fitted on {args.bag!r} and {len(more)} more bag(s): {len(train["q"])} '
                   'samples')
         else:
             train['base'] = s['base']
@@ -241,12 +243,12 @@ def corrected(args, model: Model, correction, data: Dict, stages: Stages,
         written.append('identification.png')
     if args.write_urdf:
         if args.urdf.endswith('.xacro'):
-            print(f'note: {args.urdf} is a xacro file: {args.write_urdf} is its expansion '
+            print(f'note: {args.urdf!r} is a xacro file: {args.write_urdf!r} is its expansion '
                   'with the identified elements replaced')
         for note in correction.write_urdf(urdf_source, args.write_urdf):
             print(f'note: {note}')
-        print(f'\ncorrected URDF: {args.write_urdf} (only the identified <inertial> and '
-              '<dynamics> elements differ from ' + os.path.basename(args.urdf) + ')')
+        print(f'\ncorrected URDF: {args.write_urdf!r} (only the identified <inertial> and '
+              '<dynamics> elements differ from ' + repr(os.path.basename(args.urdf)) + ')')
         if correction.drives is not None:
             print('  with the node: friction_model: urdf, friction_velocity_threshold: '
                   f'{args.threshold:g} and the armature above')

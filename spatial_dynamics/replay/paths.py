@@ -67,7 +67,7 @@ def check_paths(args) -> None:
             raise Refused(str(err) if option == 'BAG' else f'{option} {err}') from None
         for before, other in given[:k]:
             if os.path.samefile(path, other):
-                raise Refused(f'{option} {path}: the same recording as {before} {other} ('
+                raise Refused(f'{option} {path!r}: the same recording as {before} {other!r} ('
                               + ('a held-out check needs another recording)'
                                  if option == '--validate' else 'fitted once is enough)'))
     names = output_files(args)
@@ -77,8 +77,8 @@ def check_paths(args) -> None:
         outputs.append(('--write-urdf', write_urdf))
         for _, path in outputs[1:-1]:
             if os.path.abspath(path) == os.path.abspath(write_urdf):
-                raise Refused(f'--write-urdf {write_urdf}: the command writes '
-                              f'{os.path.basename(path)} there (--out {args.out})')
+                raise Refused(f'--write-urdf {write_urdf!r}: the command writes '
+                              f'{os.path.basename(path)} there (--out {args.out!r})')
     for what, path in outputs:
         try:
             check_outside_recordings(path, what, given)
@@ -96,9 +96,9 @@ def output_dir(path: str) -> None:
     try:
         report.ensure_dir(path)
     except OSError as err:
-        raise Refused(f'--out {path}: cannot be the output directory ({err.strerror})') from None
+        raise Refused(f'--out {path!r}: cannot be the output directory ({err.strerror})') from None
     if not os.access(path, os.W_OK | os.X_OK):
-        raise Refused(f'--out {path}: cannot write in this directory')
+        raise Refused(f'--out {path!r}: cannot write in this directory')
 
 
 def check_matplotlib(args) -> None:

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..backends import compiled     # compiled.THREADS: the threads this process may use
 from ..files import write_atomic
+from ..text import shown
 
 # matplotlib is imported where a plot is drawn (start-up time, and optional: the plot extra)
 
@@ -182,15 +183,16 @@ def effort_rows(names: Sequence[str], t: np.ndarray, tau: np.ndarray, limit: np.
     rows, exceeded = [], False
     for j, name in enumerate(names):
         has = bool(limit[j] > 0 and np.isfinite(limit[j]))
-        shown = f'{limit[j]:g}' if has else '-'
+        limit_text = f'{limit[j]:g}' if has else '-'
         if not finite[:, j].all():
             exceeded = True
-            rows.append([name, 'non-finite', f'{at[j]:.3f}', shown, '-', 'NOT FINITE'])
+            rows.append([shown(name, quote=False), 'non-finite', f'{at[j]:.3f}', limit_text, '-',
+                         'NOT FINITE'])
             continue
         use = peak[j] / limit[j] if has else np.nan
         over = bool(has and use > 1.0)
         exceeded |= over
-        rows.append([name, f'{peak[j]:.4g}', f'{at[j]:.3f}', shown,
+        rows.append([shown(name, quote=False), f'{peak[j]:.4g}', f'{at[j]:.3f}', limit_text,
                      f'{100 * use:.1f} %' if has else '-', 'EXCEEDED' if over else ''])
     return rows, exceeded
 
@@ -218,7 +220,7 @@ def node_parameters(names: Sequence[str], armature: np.ndarray, threshold: float
         f'    joints: [{", ".join(repr(n).replace(chr(39), chr(34)) for n in names)}]',
         f'    armature: [{arm}]'] + ([
             f'    # armature undetermined (the recording cannot tell it; 0.0 is the node\'s '
-            f'default): {", ".join(unknown)}'] if unknown else []) + [
+            f'default): {", ".join(map(shown, unknown))}'] if unknown else []) + [
         '    friction_model: "urdf"',
         f'    friction_velocity_threshold: {yaml_double(threshold)}'])
 
@@ -232,7 +234,8 @@ def urdf_dynamics(names: Sequence[str], damping: np.ndarray, friction: np.ndarra
     element.
     """
     lines = []
-    for n, d, f, ud, uf in zip(names, damping, friction, urdf_damping, urdf_friction):
+    for name, d, f, ud, uf in zip(names, damping, friction, urdf_damping, urdf_friction):
+        n = shown(name, quote=False)        # a comment's joint: escaped, cut
         unknown = [w for w, x in (('damping', d), ('friction', f)) if math.isnan(x)]
         if len(unknown) == 2:
             lines.append(f'<!-- joint {n}: damping and friction undetermined (the recording '

@@ -22,6 +22,7 @@ from ..model import Model
 from ..recordings import differentiate
 from ..recordings.base_topics import BaseTopic
 from ..recordings.recording import Reading, recording as read_recording, Stages
+from ..text import shown
 from . import report
 from .arguments import add_command, model_of, recording_parser
 from .paths import check_matplotlib, check_paths
@@ -143,7 +144,7 @@ def compare(args, plotter, fit=None) -> int:
     written = residual_files(args.residual, drawn)
     if fitted is not None:
         written += fit.report(model, fitted, stages)
-    print(f'\nwritten to {args.out}: {", ".join(written)}')
+    print(f'\nwritten to {args.out!r}: {", ".join(written)}')
     if args.timings:
         print('stages:\n' + stages.text(), file=sys.stderr)
     return 0
@@ -210,8 +211,8 @@ def print_recording(args, model: Model, s: Dict) -> None:
     js, t = s['js'], s['t']
     window = differentiate.window_samples(args.window, s['period'])
     rate = 1.0 / s['period']
-    print(f'{args.bag} {args.topic}: {len(js.stamp) + sum(js.skipped.values())} messages, '
-          f'{len(t)} samples used over {t[-1] - t[0]:.3f} s at {rate:.6g} Hz '
+    print(f'{args.bag!r} {shown(args.topic)}: {len(js.stamp) + sum(js.skipped.values())} '
+          f'messages, {len(t)} samples used over {t[-1] - t[0]:.3f} s at {rate:.6g} Hz '
           f'(median period), {len(s["spans"])} stretch(es) between gaps')
     print(f'model: {model.summary()}; torque = rigid-body RNEA only (no URDF <dynamics>, no '
           'armature)')
@@ -222,9 +223,9 @@ def print_recording(args, model: Model, s: Dict) -> None:
              if s['resampled'] else ''))
     if s['base'] is not None:
         print('base: moving, its motion from '
-              + (f'--base-odometry {args.base_odometry} (twist differentiated with the same '
-                 'filter, orientation for gravity)' if args.base_odometry else
-                 f'--base-imu {args.base_imu} (gyro differentiated with the same filter, '
+              + (f'--base-odometry {shown(args.base_odometry)} (twist differentiated with the '
+                 'same filter, orientation for gravity)' if args.base_odometry else
+                 f'--base-imu {shown(args.base_imu)} (gyro differentiated with the same filter, '
                  'accelerometer with gravity in it)') + ', interpolated to the joint stamps')
     if s['out_of_order']:
         print(f'{s["out_of_order"]} stamp(s) earlier than the one before: samples sorted by '
@@ -239,8 +240,8 @@ def print_recording(args, model: Model, s: Dict) -> None:
 
 def print_table(names: Sequence[str], res: Residual, fitted) -> None:
     """Print the residual RMS per joint (and the drive terms fitted, the drop)."""
-    table_rows = [[n, f'{res.rms_measured[j]:.4g}', f'{res.rms_residual[j]:.4g}']
-                  for j, n in enumerate(names)]
+    table_rows = [[shown(n, quote=False), f'{res.rms_measured[j]:.4g}',
+                   f'{res.rms_residual[j]:.4g}'] for j, n in enumerate(names)]
     head = ['joint', 'rms measured', 'rms residual']
     if fitted is not None and fitted.shown is not None:
         before, after = fitted.rms_before, fitted.rms_after

@@ -57,7 +57,7 @@ def from_yaml(path: str) -> Trajectory:
     doc = load_yaml(read_regular(path, f'trajectory file {path!r}', MAX_YAML_BYTES),
                     f'trajectory file {path!r}', MAX_YAML_NODES)
     if not isinstance(doc, dict):
-        raise ValueError(f'{path}: no JointTrajectory mapping in the file')
+        raise ValueError(f'{path!r}: no JointTrajectory mapping in the file')
     if 'joint_names' not in doc or 'points' not in doc:
-        raise ValueError(f'{path}: a JointTrajectory needs joint_names and points')
-    return trajectory(doc['joint_names'], doc['points'], what=path)
+        raise ValueError(f'{path!r}: a JointTrajectory needs joint_names and points')
+    return trajectory(doc['joint_names'], doc['points'], what=repr(path))

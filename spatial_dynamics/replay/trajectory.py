@@ -17,6 +17,7 @@ from ..files import check_output
 from ..recordings import bags
 from ..recordings.errors import Refused
 from ..recordings.ranges import sampling_rate
+from ..text import listed, shown
 from . import report, splines
 from .arguments import add_command, add_threshold, model_of
 from .paths import check_matplotlib, check_paths, input_files
@@ -33,16 +34,16 @@ def run(args) -> int:
         try:
             trajectories = [splines.from_yaml(args.source)]
         except OSError as err:
-            raise Refused(f'{args.source}: {err.strerror}') from None
+            raise Refused(f'{args.source!r}: {err.strerror}') from None
         except ValueError as err:
             raise Refused(str(err)) from None
-        labels = [os.path.basename(args.source)]
+        labels = [repr(os.path.basename(args.source))]
     else:
         msgs = bags.read_messages(args.source, args.topic, bags.JOINT_TRAJECTORY)
         if not msgs:
-            raise Refused(f'no messages on {args.topic}')
+            raise Refused(f'no messages on {shown(args.topic)}')
         trajectories = [splines.from_message(m) for m in msgs]
-        labels = [f'{args.topic} #{k}' for k in range(len(msgs))]
+        labels = [f'{shown(args.topic)} #{k}' for k in range(len(msgs))]
     bases = [os.path.join(args.out, 'trajectory' + (f'_{k}' if len(trajectories) > 1 else ''))
              for k in range(len(trajectories))]
     for base in bases:            # the names are known now: checked before any work
@@ -53,7 +54,7 @@ def run(args) -> int:
         model = model_of(args, args.joints or list(traj.joint_names))
         unknown = [j for j in model.joint_names if j not in traj.joint_names]
         if unknown:
-            raise Refused(f'{label}: joint(s) {", ".join(unknown)} not in the trajectory')
+            raise Refused(f'{label}: joint(s) {listed(unknown)} not in the trajectory')
         cols = [traj.joint_names.index(j) for j in model.joint_names]
         t, q, qd, qdd = splines.sample(traj, args.rate)
         q, qd, qdd = q[:, cols], qd[:, cols], qdd[:, cols]
@@ -67,8 +68,8 @@ def run(args) -> int:
               f'{t[-1] - t[0]:.3f} s sampled at {args.rate:g} Hz ({len(t)} samples); '
               'torque = RNEA' + (' + URDF friction' if args.friction_model == 'urdf' else ''))
         if model.locked:
-            print(f'  joints not in the trajectory, locked: '
-                  f'{", ".join(f"{j}={v:g}" for j, v in model.locked.items())}')
+            print('  joints not in the trajectory, locked: ' + ', '.join(
+                f'{shown(j, quote=False)}={v:g}' for j, v in model.locked.items()))
         print(report.table(report.EFFORT_HEADER, rows))
         report.write_csv(base + '.csv', ['t'] + [f'tau_{n}' for n in model.joint_names],
                          [t] + [tau[:, j] for j in range(model.nq)], [6] + [4] * model.nq)

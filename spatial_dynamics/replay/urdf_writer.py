@@ -27,6 +27,7 @@ import numpy as np
 
 from ..identification import _ten, mass_com_inertia, pseudo_inertia
 from ..model import Model
+from ..text import shown
 from ..urdf import _parse_urdf, _Report
 
 
@@ -133,8 +134,8 @@ def prepare(text: bytes, model: Model, what: str = 'the URDF') -> Source:
         links = _parse_urdf(text[_LEAD.match(text).end():], _Report(strict=False))[1]
     except ValueError as err:
         raise ValueError(f'{what}: cannot write the corrected URDF: {err}') from None
-    missing = [f'{tag} {name!r}' for tag, names in (('link', model.frames),
-                                                    ('joint', model.joint_names))
+    missing = [f'{tag} {shown(name)}' for tag, names in (('link', model.frames),
+                                                         ('joint', model.joint_names))
                for name in names if (tag, name) not in found]
     if missing:
         raise ValueError(f'{what}: cannot write the corrected URDF: the writer does not find '
@@ -205,9 +206,9 @@ def corrected_urdf(text: Union[bytes, Source], model: Model, body_inertia: Dict[
         for name in fixed:
             if 'inertial' in found[('link', name)].children:
                 new_inertial[name] = None
-        notes.append(f'link {link!r}: the identified body less its fixed links '
-                     f'({", ".join(map(repr, fixed))}) is not a rigid body, so the whole body is '
-                     f'written into {link!r} and their <inertial> removed')
+        notes.append(f'link {shown(link)}: the identified body less its fixed links '
+                     f'({", ".join(map(shown, fixed))}) is not a rigid body, so the whole body is '
+                     f'written into {shown(link)} and their <inertial> removed')
     for link, added in (link_additions or {}).items():
         base = new_inertial.get(link)
         new_inertial[link] = (link_inertia(link) if base is None else base) + added
