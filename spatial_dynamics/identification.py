@@ -89,8 +89,13 @@ class BaseParameters:
 
 
 def parameter_names(model: Model) -> Tuple[str, ...]:
-    """Return ``'<parameter> of <link>'`` for every standard parameter, in ``π``'s order."""
-    return tuple(f'{p} of {link}' for link in model.body_names[1:] for p in PARAMETERS)
+    """Return ``'<parameter> of <link>'`` for every standard parameter, in ``π``'s order.
+
+    The link as :func:`~spatial_dynamics.text.shown` writes it (escaped, cut): these
+    names are printed (a link's name comes from a URDF).
+    """
+    return tuple(f'{p} of {shown(link, quote=False)}' for link in model.body_names[1:]
+                 for p in PARAMETERS)
 
 
 def random_states(model: Model, count: int, seed: int = 0) -> Tuple[np.ndarray, ...]:

@@ -62,7 +62,7 @@ def refused(command, argv, capsys, status=1) -> str:
 
 @pytest.fixture(scope='module')
 def hostile_bag(tmp_path_factory):
-    """A UR5 bag with /joint_states, and /odom topics whose name or child frame is hostile.
+    """Return a UR5 bag with /joint_states, and /odom topics of a hostile name or child frame.
 
     ``/odom_forged`` and ``/odom_long`` give the base's motion of the joint states' 2 s in
     frames named :data:`FORGED` and :data:`LONG`; the topics named so hold the same odometry.
@@ -195,3 +195,41 @@ def test_a_motion_bag_of_plain_names_still_reads(tmp_path, capsys):
     for joint in UR5_JOINTS:
         assert f'  {joint} ' in out
     assert f"{bag!r} '/joint_states': " in out
+
+
+# Names written into files: quoted as the file's format needs, read back whole
+
+ODD = ('plain', 'with,comma', 'with "double" and \'single\' quotes', 'line\nbreak', 'ünï')
+
+
+def test_a_summary_csv_keeps_each_name_in_its_cell(tmp_path):
+    """A comma, a quote or a line break in a joint name broke the summary's row."""
+    import csv
+    from spatial_dynamics.replay.report import write_summary
+    path = tmp_path / 'summary.csv'
+    write_summary(str(path), [[name, 1.5, None] for name in ODD], ['joint', 'rms', 'peak'])
+    with open(path, newline='') as f:
+        rows = list(csv.reader(f))
+    assert rows == [['joint', 'rms', 'peak']] + [[name, '1.5', 'nan'] for name in ODD]
+
+
+def test_the_node_parameters_yaml_reads_back_every_joint_name():
+    """``repr`` with ``'`` swapped for ``"`` broke on a name holding a quote."""
+    import yaml
+    from spatial_dynamics.replay.report import node_parameters
+    text = node_parameters(ODD, np.array([0.1, np.nan, 0.2, 0.3, 0.0]), 0.05)
+    params = yaml.safe_load(text)['inverse_dynamics']['ros__parameters']
+    assert params['joints'] == list(ODD)
+    assert params['armature'] == [0.1, 0.0, 0.2, 0.3, 0.0]
+
+
+def test_identification_names_a_urdfs_link_escaped():
+    """A parameter's name is printed (undetermined parameters): its link escaped, one line."""
+    from spatial_dynamics.identification import parameter_names
+    urdf = ('<robot name="r"><link name="base"/><link name="arm&#10;&#13;x"><inertial><mass '
+            'value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>'
+            '</inertial></link><joint name="j" type="revolute"><parent link="base"/><child '
+            'link="arm&#10;&#13;x"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" '
+            'velocity="1"/></joint></robot>')
+    names = parameter_names(sd.Model.from_urdf(urdf))
+    assert len(names) == 10 and all(n.endswith(r' of arm\n\rx') for n in names), names

@@ -16,6 +16,9 @@ from __future__ import annotations
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 import contextlib
+import csv
+import io
+import json
 import math
 import multiprocessing
 import os
@@ -139,13 +142,19 @@ def write_csv(path: str, header: Sequence[str], columns: Sequence[np.ndarray],
 
 
 def write_summary(path: str, rows: Sequence[Sequence], header: Sequence[str]) -> None:
-    """Write a small CSV (one row per joint): numbers with ``%.6g``, text as is; whole or not."""
+    """Write a small CSV (one row per joint): numbers with ``%.6g``, text quoted as CSV needs.
+
+    A joint name with a comma, a quote or a line break is quoted by the ``csv`` module (it
+    broke the row). Whole or not at all.
+    """
     def cell(v) -> str:
         if isinstance(v, str):
             return v
         return 'nan' if v is None or (isinstance(v, float) and math.isnan(v)) else f'{v:.6g}'
-    write_atomic(path, ''.join(','.join(cell(v) for v in r) + '\n'
-                               for r in [header] + list(rows)), 'output file')
+    text = io.StringIO()
+    csv.writer(text, lineterminator='\n').writerows(
+        [cell(v) for v in r] for r in [header] + list(rows))
+    write_atomic(path, text.getvalue(), 'output file')
 
 
 def write_npy(path: str, array: np.ndarray) -> None:
@@ -217,7 +226,7 @@ def node_parameters(names: Sequence[str], armature: np.ndarray, threshold: float
     return '\n'.join([
         'inverse_dynamics:',
         '  ros__parameters:',
-        f'    joints: [{", ".join(repr(n).replace(chr(39), chr(34)) for n in names)}]',
+        f'    joints: [{", ".join(json.dumps(n) for n in names)}]',   # YAML reads JSON's strings
         f'    armature: [{arm}]'] + ([
             f'    # armature undetermined (the recording cannot tell it; 0.0 is the node\'s '
             f'default): {", ".join(map(shown, unknown))}'] if unknown else []) + [
