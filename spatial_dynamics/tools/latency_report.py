@@ -35,7 +35,10 @@ def json_safe(rows: List[Dict[str, float]]) -> List[Dict[str, object]]:
 
 
 def cell(value: Optional[float], digits: int = 3) -> str:
-    """Return a table cell (milliseconds: 3 digits): ``-`` for a value not reported (None, NaN)."""
+    """Return the text of a cell of the table (milliseconds: 3 digits); ``-`` if not reported.
+
+    Not reported: None or NaN.
+    """
     return '-' if value is None or math.isnan(value) else f'{value:.{digits}f}'
 
 
