@@ -353,7 +353,7 @@ def random_states(seed: int, count: int, n: int) -> np.ndarray:
 
 def drive(driver: Driver, publish: Callable[[int], None], count: int, rate: float) -> None:
     """Call ``publish(k)`` for k in range(count) at ``rate`` Hz, spinning in between."""
-    from spatial_dynamics.tools.latency import pace     # the latency and soak tools' pacing
+    from spatial_dynamics.tools.latency_pacer import pace   # the latency and soak tools' pacing
     assert pace(driver.executor, rate, count / rate, publish) == count
 
 

@@ -72,7 +72,7 @@ def test_an_output_in_a_folder_no_file_can_be_created_in_is_refused_first(option
 
 def test_the_results_not_written_at_the_end_name_the_file():
     """A JSON that cannot be written at the end: 'cannot write None: Input/output error'."""
-    from spatial_dynamics.tools.latency import write_json
+    from spatial_dynamics.tools.latency_report import write_json
     with pytest.raises(ValueError) as caught:
         write_json('/proc/version', {'robot': 'x'})
     assert '--json' in str(caught.value) and "'/proc/version'" in str(caught.value)
@@ -152,7 +152,7 @@ def test_answers_before_their_stamps_are_known_count_and_late_ticks_are_told_apa
     answered, one of them superseded; the early answers match once the stamps are known,
     with their reception time as given.
     """
-    from spatial_dynamics.tools.latency import Target
+    from spatial_dynamics.tools.latency_targets import Target
     target = Target.__new__(Target)
     target.name, target.sent, target.latency_ns, target.to_answer_ns = 'node', set(), {}, {}
     target.early, target.measuring, target.answers, target.cpu_ns = {}, True, 0, 0
@@ -186,7 +186,7 @@ def test_busy_loops_ignore_the_terminals_ctrl_c():
     import subprocess
     import time
     from spatial_dynamics.tools.driving import cpu_seconds
-    from spatial_dynamics.tools.latency import busy_loops
+    from spatial_dynamics.tools.latency_targets import busy_loops
     (loop,) = busy_loops(1)
     try:
         deadline = time.monotonic() + 60.0
@@ -234,7 +234,7 @@ def test_busy_loops_ignore_a_ctrl_c_while_python_starts():
     """SIGINT before the loop's own code ran ended it (killed, or a traceback from Python)."""
     import signal
     import subprocess
-    from spatial_dynamics.tools.latency import busy_loops
+    from spatial_dynamics.tools.latency_targets import busy_loops
     (loop,) = busy_loops(1)
     try:
         loop.send_signal(signal.SIGINT)    # at once: its Python is still starting
@@ -260,7 +260,7 @@ def _gone_pacer():
     """Return a Pacer whose process has exited."""
     import subprocess
     import sys
-    from spatial_dynamics.tools.latency import Pacer
+    from spatial_dynamics.tools.latency_pacer import Pacer
     pacer = Pacer.__new__(Pacer)
     pacer.watch = lambda: None
     pacer.process = subprocess.Popen([sys.executable, '-c', 'pass'], stdin=subprocess.PIPE,
@@ -271,7 +271,7 @@ def _gone_pacer():
 
 def test_a_pacer_that_exited_is_said_at_once_not_as_a_broken_pipe_or_a_timeout():
     """Killed mid-run: a BrokenPipeError traceback; while priming: 60 s, then 'did not answer'."""
-    from spatial_dynamics.tools.latency import Target
+    from spatial_dynamics.tools.latency_targets import Target
     target = Target.__new__(Target)
     target.name, target.answers = 'relay', 0
     for command in (lambda p: p.block(_Idle(), 0, 1000.0, 10, 0.0),
@@ -285,7 +285,8 @@ def test_a_target_that_exits_while_primed_or_measured_ends_the_run():
     """The node killed mid-run: the benchmark went on and printed its numbers, exit 0."""
     import subprocess
     import sys
-    from spatial_dynamics.tools.latency import exited, Pacer, Target
+    from spatial_dynamics.tools.latency_pacer import Pacer
+    from spatial_dynamics.tools.latency_targets import exited, Target
     node = subprocess.Popen([sys.executable, '-c', 'pass'])
     node.wait()
     with pytest.raises(RuntimeError, match='inverse_dynamics exited'):
@@ -383,7 +384,7 @@ def measured_target(latencies_ms, late_stamps=()):
     ``late_stamps``: extra inputs, not answered, each 0.05 ms before the next one (the
     publisher late).
     """
-    from spatial_dynamics.tools.latency import Target
+    from spatial_dynamics.tools.latency_targets import Target
     target = Target.__new__(Target)
     target.name, target.latency_ns, target.to_answer_ns = 'node', {}, {}
     target.early, target.measuring, target.answers, target.cpu_ns = {}, True, 0, 0
@@ -404,7 +405,7 @@ def test_a_quantile_is_reported_only_from_enough_answers_to_tell_it_from_the_max
 
     import numpy as np
 
-    from spatial_dynamics.tools.latency import format_table, legend
+    from spatial_dynamics.tools.latency_report import format_table, legend
     latencies = np.linspace(0.1, 2.0, count)
     summary = measured_target(latencies).summary()
     assert summary['max_ms'] == pytest.approx(latencies.max())
@@ -426,7 +427,7 @@ def test_a_quantile_is_reported_only_from_enough_answers_to_tell_it_from_the_max
 
 
 def test_the_late_publication_note_is_printed_only_when_an_input_was_late():
-    from spatial_dynamics.tools.latency import difference_line, not_answered_line
+    from spatial_dynamics.tools.latency_report import difference_line, not_answered_line
     on_time = measured_target([0.4] * 5).summary()
     assert not_answered_line(on_time) == 'node: 0 inputs not answered'
     late = measured_target([0.4] * 5, late_stamps=[2]).summary()
@@ -454,7 +455,8 @@ def test_an_integer_option_given_a_fraction_says_it_is_not_an_integer(tool, opti
 def test_the_json_has_null_where_a_target_had_no_answer():
     """A target that answered nothing has no maximum or mean: null in the JSON, never NaN."""
     import json
-    from spatial_dynamics.tools.latency import json_safe, Target
+    from spatial_dynamics.tools.latency_report import json_safe
+    from spatial_dynamics.tools.latency_targets import Target
     target = Target.__new__(Target)
     target.name, target.sent, target.latency_ns, target.to_answer_ns = 'node', set(), {}, {}
     target.early, target.measuring, target.answers, target.cpu_ns = {}, True, 0, 0
@@ -474,7 +476,7 @@ def test_the_machines_floor_is_the_pacers_wake_ups_with_the_kernels_preemption(c
 
     import numpy as np
 
-    from spatial_dynamics.tools.latency import json_safe, machine_line, wake_ups
+    from spatial_dynamics.tools.latency_report import json_safe, machine_line, wake_ups
     late_ns = [50_000] * (count - 2) + [1_500_000, 900_000] if count else []
     machine = wake_ups(late_ns, 'none')
     assert machine['wake_ups'] == count and machine['over_1ms'] == (1 if count else 0)
@@ -484,7 +486,7 @@ def test_the_machines_floor_is_the_pacers_wake_ups_with_the_kernels_preemption(c
         assert machine['p99.9_ms'] == (pytest.approx(np.percentile(np.array(late_ns) * 1e-6,
                                                                    99.9))
                                        if count >= 1000 else None)
-    from spatial_dynamics.tools.latency import machine_legend
+    from spatial_dynamics.tools.latency_report import machine_legend
     label = machine_legend(np.array(late_ns) * 1e-6)
     assert f'{count} wake-ups' in label and (', p99.9 ' in label) == (count >= 1000), label
     line = machine_line(machine, 'SCHED_FIFO 51')
@@ -497,7 +499,7 @@ def test_the_machines_floor_is_the_pacers_wake_ups_with_the_kernels_preemption(c
 
 
 def test_the_kernels_preemption_model_is_one_of_linuxs():
-    from spatial_dynamics.tools.latency import kernel_preemption
+    from spatial_dynamics.tools.latency_targets import kernel_preemption
     assert kernel_preemption() in ('none', 'voluntary', 'full', 'lazy', 'rt', 'unknown')
 
 
@@ -523,7 +525,7 @@ def test_the_scheduling_reported_is_read_from_the_threads_not_taken_from_the_req
     """
     import subprocess
     import sys
-    from spatial_dynamics.tools.latency import scheduling_of, scheduling_text
+    from spatial_dynamics.tools.latency_targets import scheduling_of, scheduling_text
     child = subprocess.Popen(
         [sys.executable, '-c', _NAMED_THREADS, 'answering', 'dds.udp.7411'],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
@@ -595,7 +597,7 @@ class _Status:
 
 
 def _diagnostics():
-    from spatial_dynamics.tools.latency import NodeDiagnostics
+    from spatial_dynamics.tools.latency_targets import NodeDiagnostics
     bench = type('Bench', (), {'create_subscription': lambda *args: None})()
     return NodeDiagnostics(bench, '/ns/node')
 
@@ -616,7 +618,8 @@ def test_a_node_that_refuses_its_inputs_ends_the_run_with_its_reason(tmp_path):
     """
     import subprocess
     import sys
-    from spatial_dynamics.tools.latency import Pacer, REFUSING_PERIODS, Target, watch
+    from spatial_dynamics.tools.latency_pacer import Pacer
+    from spatial_dynamics.tools.latency_targets import REFUSING_PERIODS, Target, watch
     starting = _diagnostics()
     _period(starting, 0, 5, base_stale=5)
     _period(starting, 300, 5, base_stale=5)
@@ -653,7 +656,7 @@ def test_a_target_that_exits_says_its_own_error_line(tmp_path):
     import subprocess
     import sys
     from spatial_dynamics.tools.driving import last_error
-    from spatial_dynamics.tools.latency import exited
+    from spatial_dynamics.tools.latency_targets import exited
     log = tmp_path / 'node.log'
     log.write_text('[INFO] [1.0] [node]: model loaded\nTraceback (most recent call last):\n'
                    '  File "node.py", line 1, in <module>\n    main()\nTypeError: '
@@ -680,8 +683,8 @@ def test_a_publisher_that_cannot_keep_up_stops_and_says_the_rate_it_sent():
     with a warning, and the machine line says it never slept (not '0 of 0 wake-ups').
     """
     import time
-    from spatial_dynamics.tools.latency import (
-        machine_line, rate_warning, send_block, wake_ups)
+    from spatial_dynamics.tools.latency_pacer import send_block
+    from spatial_dynamics.tools.latency_report import machine_line, rate_warning, wake_ups
     sent = []
 
     def slow(k):
@@ -745,7 +748,8 @@ def test_the_cpu_clock_resolves_less_than_a_clock_tick():
 
 def test_a_cpu_time_not_kept_is_not_printed_and_counts_are_said_in_the_singular():
     """'1 periods' in the compute line; a CPU time the kernel did not keep printed as nan."""
-    from spatial_dynamics.tools.latency import format_table, not_answered_line, plural
+    from spatial_dynamics.tools.latency_report import format_table, not_answered_line
+    from spatial_dynamics.tools.latency_targets import plural
     target = measured_target([0.4] * 5)
     target.cpu_ns = None
     row = target.summary()

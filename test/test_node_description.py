@@ -254,7 +254,7 @@ def test_big_description_does_not_stall_answers(install, driver, tmp_path, via):
     """
     from rcl_interfaces.srv import SetParameters
     from rclpy.parameter import Parameter
-    from spatial_dynamics.tools.latency import pace
+    from spatial_dynamics.tools.latency_pacer import pace
     from std_msgs.msg import String
     demo = sd.Model.from_urdf(DEMO_URDF)
     names = demo.joint_names

@@ -8,4 +8,6 @@
 (``ros2 param set`` and ``ros2 topic pub`` where ros2cli is not installed). They use
 everything and nothing uses them: ``python -m spatial_dynamics.tools.<name>``. The benchmark
 and the robot generators are not installed: ``benchmarks/`` in the checkout.
+``latency_pacer``, ``latency_targets`` and ``latency_report`` are parts of ``latency``,
+not commands.
 """

@@ -58,7 +58,8 @@ import spatial_dynamics as sd
 from .driving import (
     Interrupt, node_command, outputs_error, plot_path_error, pyplot, redraw, robot_model,
     save_figure, start, stop)
-from .latency import busy_loops, in_range
+from .latency import in_range
+from .latency_targets import busy_loops
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.

@@ -31,8 +31,9 @@ import time
 from typing import List, Optional, Sequence, Tuple
 
 from .driving import node_command, robot_model, rss_bytes, Sinusoids, start, stop
-from .latency import (cell, fill, input_depth, joint_state_for, pace, prime, spin_until,
-                      Target)
+from .latency_pacer import fill, joint_state_for, pace, prime, spin_until
+from .latency_report import cell
+from .latency_targets import input_depth, Target
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
