@@ -192,9 +192,9 @@ def test_a_damaged_bag_is_reported_not_a_crash(recording, tmp_path, capsys):
     out = str(tmp_path / 'out')
     assert main(['residual', bag, '--urdf', urdf, '--out', out, '--no-plots']) == 0
     text = capsys.readouterr().out
-    assert f'1 sample(s): {names[2]}: no finite position' in text
-    assert f'3 sample(s): {names[4]}: no finite effort' in text
-    assert f'10 sample(s): {names[-1]}: no finite position' in text
+    assert f"1 sample(s): '{names[2]}': no finite position" in text
+    assert f"3 sample(s): '{names[4]}': no finite effort" in text
+    assert f"10 sample(s): '{names[-1]}': no finite position" in text
     assert '1 stamp(s) earlier than the one before' in text
     assert summary(out)[names[0]]['samples'] == m - 14
 
