@@ -521,6 +521,31 @@ def test_contact_states_for_other_contacts_links_are_not_applied(solo_path):
     assert out.answer is None and answering.totals.rejected['contacts_stale'] == 1
 
 
+def test_contact_states_are_a_links_flags_not_a_places(solo_path):
+    """The same feet in another order, changed live: the held flags are not read anew.
+
+    ``[1, 0, 1, 1]`` was sent for FL, FR, HL, HR (FR in the air); read against FR, FL, HL, HR
+    it would put FR on the ground and lift FL. No answer until a message for the new list,
+    which is then applied (the oracle: the library's contact split on those feet).
+    """
+    cfg = floating(solo_path)
+    robot = cfg.robot
+    answering = Answering(Log())
+    base_q = feed_base(cfg, answering)
+    answering.base_input(cfg, 'contact_states', UInt8MultiArray(data=[1, 0, 1, 1]))
+    order = [FEET[1], FEET[0], FEET[2], FEET[3]]
+    swapped = floating(solo_path, **{'contacts.links': order})     # changed live
+    q, zero = standing(robot.joints), np.zeros(12)
+    out = answering.joint_state(swapped, joint_state(robot.joints, 1.0, q, zero, zero))
+    assert out.answer is None and answering.totals.rejected['contacts_stale'] == 1
+    answering.base_input(swapped, 'contact_states', UInt8MultiArray(data=[1, 1, 1, 1]))
+    out = answering.joint_state(swapped, joint_state(robot.joints, 1.001, q, zero, zero))
+    solved = sd.contact_inverse_dynamics(robot.model, np.r_[base_q, q], np.zeros(18),
+                                         np.zeros(18), [sd.Contact(f) for f in order])
+    assert out.answer is not None, answering.totals.rejected
+    np.testing.assert_allclose(out.answer.tau, solved.tau, rtol=1e-9, atol=1e-9)
+
+
 def wrench_msg(link, wrench):
     from geometry_msgs.msg import WrenchStamped
     msg = WrenchStamped(header=header(1.0, link))

@@ -353,7 +353,8 @@ class BaseInputs:
         if len(msg.data) != len(links):
             raise InputError('length_mismatch', f'{len(msg.data)} flags for the '
                              f'{len(links)} contacts.links {list(links)}')
-        self.flags = Held(tuple(bool(x) for x in msg.data), 0, now_ns)
+        # the flags with the contacts.links they were sent for: a flag is a link's, not a place's
+        self.flags = Held((links, tuple(bool(x) for x in msg.data)), 0, now_ns)
 
     def _take_measured_contact_wrenches(self, config, msg, now_ns: int) -> None:
         link = msg.header.frame_id
@@ -463,8 +464,8 @@ class BaseInputs:
 
         All of them while nothing came on ``contact_states`` (``contacts.links``' default);
         once something came, the valid one held: ``contacts_missing`` before the first,
-        ``contacts_stale`` when it is older than ``base_input.timeout`` or for other
-        ``contacts.links`` than today's.
+        ``contacts_stale`` when it is older than ``base_input.timeout`` or was sent for
+        other ``contacts.links`` than today's (the same links in another order too).
         """
         held = self.flags
         if held is None:
@@ -475,10 +476,10 @@ class BaseInputs:
                              'received: contacts.links are all in contact only while nothing '
                              f'comes on it){self.last_refused("contact_states")}; '
                              'not publishing')
-        flags = self._fresh(params, held, 'contact_states', now_ns, 'contacts')
-        if len(flags) != len(links):   # contacts.links changed since
-            raise InputError('contacts_stale', f'contact_states has {len(flags)} flags for '
-                             f'the {len(links)} contacts.links {list(links)}'
+        sent_for, flags = self._fresh(params, held, 'contact_states', now_ns, 'contacts')
+        if sent_for != links:   # contacts.links changed since: a flag would go to another link
+            raise InputError('contacts_stale', f'contact_states was sent for contacts.links '
+                             f'{list(sent_for)}, not for today\'s {list(links)}'
                              f'{self.last_refused("contact_states", held.receipt_ns)}; '
                              'not publishing')
         return flags
