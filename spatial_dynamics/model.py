@@ -184,13 +184,26 @@ class Model:
 # --------------------------------------------------------------------------------------------
 # Rigid bodies: validated inertias, payloads
 
+def refuse_masked(what: str, values) -> None:
+    """``ValueError`` naming ``what`` when ``values`` is a masked array with masked entries.
+
+    numpy reads a masked array as the numbers under its mask (``np.asarray`` drops it): a
+    value the user marked as missing would be computed with. One with none masked is read.
+    """
+    if isinstance(values, np.ma.MaskedArray) and np.ma.is_masked(values):
+        raise ValueError(f'{what} has {np.ma.count_masked(values)} masked entries: give the '
+                         'numbers to use in their place (a masked array\'s filled())')
+
+
 def real_numbers(what: str, values) -> np.ndarray:
     """Return ``values`` (a number, or a list, tuple or array of them) as a float array.
 
     ``TypeError`` naming ``what`` for anything but real numbers: text (``'0.1'``), ``None``,
     complex numbers, objects, ragged lists, and booleans (``True`` is no mass, armature or
-    friction). Integers and floats of any width are numbers.
+    friction). Integers and floats of any width are numbers. ``ValueError`` for masked
+    entries (:func:`refuse_masked`).
     """
+    refuse_masked(what, values)
     try:
         a = np.asarray(values)
     except (TypeError, ValueError) as err:

@@ -16,7 +16,7 @@ from typing import Mapping, Sequence, Union
 
 import numpy as np
 
-from .algorithms.arguments import as_joint_arrays, as_real_array, check_model
+from .algorithms.arguments import as_joint_arrays, as_real_array, batch_of, check_model
 from .model import Model, real_numbers
 from .text import listed, shown
 
@@ -119,7 +119,12 @@ def armature_torque(armature: np.ndarray, qdd) -> np.ndarray:
 
     ``armature`` as :func:`per_joint` returns it (real numbers: ``TypeError`` otherwise).
     """
-    return real_numbers('armature', armature) * as_real_array('qdd', qdd).astype(float)
+    a, qdd = real_numbers('armature', armature), as_real_array('qdd', qdd).astype(float)
+    if a.ndim and qdd.ndim and a.shape[-1] != qdd.shape[-1]:
+        raise ValueError(f'armature has {a.shape[-1]} values a state and qdd {qdd.shape[-1]}')
+    batch_of((f'armature of shape {a.shape}', a.shape[:-1]), (f'qdd of shape {qdd.shape}',
+                                                              qdd.shape[:-1]))
+    return a * qdd
 
 
 def friction_torque(model: Model, qd, threshold: float) -> np.ndarray:

@@ -340,3 +340,57 @@ def test_a_masked_entry_is_refused_and_an_unmasked_array_read(function, backend,
         masked[..., 2] = np.ma.masked
         with pytest.raises(ValueError, match=r'qd has [13] masked entries: give the numbers'):
             call(model, q[s], masked, x[s], backend=backend)
+
+
+def test_a_masked_entry_is_refused_in_every_number_the_library_reads(rng):
+    """Armature, per-joint terms, thresholds, a payload, a locked joint: no mask dropped."""
+    model = robot('ur5')
+    n = model.nv
+    q, qd, x = (rng.uniform(-1, 1, n) for _ in range(3))
+    one = np.ma.masked_array(np.full(n, 0.1), mask=[True] + [False] * (n - 1))
+    calls = {
+        'armature': lambda: sd.forward_dynamics(model, q, qd, x, armature=one),
+        'armature ': lambda: sd.rnea_derivatives(model, q, qd, x, armature=one),
+        'armature  ': lambda: sd.armature_torque(one, x),
+        'damping': lambda: sd.per_joint(model, 'damping', one),
+        'friction_threshold': lambda: sd.rnea_derivatives(
+            model, q, qd, x, friction_threshold=np.ma.masked_array(0.05, mask=True)),
+        'payload mass': lambda: sd.with_payload(model, 'wrist_3_link',
+                                                np.ma.masked_array(1.0, mask=True)),
+        'payload centre of mass': lambda: sd.with_payload(
+            model, 'wrist_3_link', 1.0, np.ma.masked_array([0, 0, 1.0], mask=[0, 1, 0])),
+        'locked joint': lambda: sd.Model.from_urdf(
+            robot_urdf_path('ur5'), joints=model.joint_names[1:],
+            locked={model.joint_names[0]: np.ma.masked_array(0.3, mask=True)}),
+    }
+    for what, call in calls.items():
+        with pytest.raises(ValueError, match=rf'{what.strip().replace(" ", ".*")}.* has 1 '
+                                             'masked entries'):
+            call()
+    # nothing masked: the numbers
+    plain = sd.forward_dynamics(model, q, qd, x, armature=np.full(n, 0.1))
+    assert np.array_equal(sd.forward_dynamics(model, q, qd, x,
+                                              armature=np.ma.masked_array(np.full(n, 0.1))),
+                          plain)
+
+
+def test_a_jacobian_and_armature_torque_name_arguments_that_do_not_broadcast():
+    """Name the arguments where numpy said "operands could not be broadcast"; 'local' too."""
+    model = robot('ur5')
+    n = model.nv
+    base = sd.BaseMotion(np.zeros(6), np.zeros(6), orientation=np.tile([0, 0, 0, 1.0], (4, 1)))
+    for frame in ('world', 'local'):
+        with pytest.raises(ValueError, match=rf'do not broadcast: q of shape \(3, {n}\), '
+                                             r'base\.v .*base\.orientation of shape \(4, 4\)'):
+            sd.jacobian(model, np.zeros((3, n)), 'wrist_3_link', frame, base=base)
+    with pytest.raises(ValueError, match=rf'do not broadcast: armature of shape \(4, {n}\), '
+                                         rf'qdd of shape \(3, {n}\)'):
+        sd.armature_torque(np.ones((4, n)), np.ones((3, n)))
+    with pytest.raises(ValueError, match='armature has 6 values a state and qdd 5'):
+        sd.armature_torque(np.ones(6), np.ones(5))
+    # what broadcasts is answered, as a loop over the states
+    Q = np.random.default_rng(0).uniform(-1, 1, (4, n))
+    J = sd.jacobian(model, Q, 'wrist_3_link', 'world', base=base)
+    for k in range(4):
+        assert np.array_equal(J[k], sd.jacobian(model, Q[k], 'wrist_3_link', 'world',
+                                                base=sd.BaseMotion(np.zeros(6), np.zeros(6))))

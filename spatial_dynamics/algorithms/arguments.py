@@ -9,7 +9,7 @@ from typing import Mapping
 import numpy as np
 
 from ..joints import check_quaternion, is_unit
-from ..model import Model
+from ..model import Model, refuse_masked
 from ..text import listed, shown
 
 
@@ -28,9 +28,7 @@ def as_real_array(what: str, x) -> np.ndarray:
     ``ValueError`` when it is a masked array with masked entries (numpy would drop the mask
     and read what lies under it).
     """
-    if isinstance(x, np.ma.MaskedArray) and np.ma.is_masked(x):
-        raise ValueError(f'{what} has {np.ma.count_masked(x)} masked entries: give the numbers '
-                         f'to use in their place (e.g. {what}.filled(...))')
+    refuse_masked(what, x)
     try:
         a = np.asarray(x)
     except (TypeError, ValueError, BufferError) as err:

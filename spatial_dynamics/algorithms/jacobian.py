@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .arguments import as_joint_arrays, check_model
-from ..base import check_base_motion
+from .arguments import as_joint_arrays, batch_of, check_model
+from ..base import base_batches, check_base_motion
 from ..joints import jcalc, joint_axis, joint_coordinates, NV, quaternion_matrix
 from ..model import Model
 from ..text import shown
@@ -65,6 +65,8 @@ def jacobian(model: Model, q, link: str, frame: str = 'local', *, base=None) -> 
     if base is not None:
         check_base_motion(base, model)      # a floating model's rows are the world's already
     J, lX0 = local_jacobian(model, q, link)
+    if base is not None:    # a base of another batch is refused in either frame
+        batch_of((f'q of shape {np.shape(q)}', J.shape[:-2]), *base_batches(base))
     if frame == 'world':
         E = np.swapaxes(lX0[..., :3, :3], -1, -2)      # lX0 = [[E, 0], [-E r×, E]]: 0 ← l is Eᵀ
         if base is not None and base.orientation is not None:
