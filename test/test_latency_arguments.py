@@ -836,12 +836,22 @@ def test_a_runtime_error_raised_by_an_interrupted_rclpy_call_says_interrupted(
     assert err.count('\n') == 1 and 'interrupted (SIGINT)' in err, err
 
 
-def test_every_child_is_waited_for_when_a_signal_comes_while_one_starts(monkeypatch, capsys):
-    """SIGINT while a busy loop started (after its fork): it was lost, never killed nor waited."""
+@pytest.mark.parametrize('tool, argv, started', [
+    ('latency', ['--seconds', '1', '--busy', '3'], 4),   # relay, node, then 2 busy loops
+    ('closed_loop', ['--plot', '', '--busy', '3'], 2),
+])
+def test_every_child_is_waited_for_when_a_signal_comes_while_one_starts(
+        tool, argv, started, monkeypatch, capsys):
+    """SIGINT while a busy loop started (after its fork): it was lost, never killed nor waited.
+
+    Left running until the tool exited, then killed by its parent-death signal: a zombie
+    where nothing reaps orphans. closed_loop also printed a KeyboardInterrupt traceback.
+    """
+    import importlib
     import signal
     import subprocess
     import sys
-    from spatial_dynamics.tools import latency
+    module = importlib.import_module(f'spatial_dynamics.tools.{tool}')
     children = []
     real = subprocess.Popen
 
@@ -849,14 +859,14 @@ def test_every_child_is_waited_for_when_a_signal_comes_while_one_starts(monkeypa
         def __init__(self, command, *args, **kwargs):
             super().__init__(command, *args, **kwargs)
             children.append(self)
-            if command[-1] == 'while True: pass' and len(children) == 4:
+            if len(children) == started:
                 os.kill(os.getpid(), signal.SIGINT)   # arrives before Popen returns
     sleeper = [sys.executable, '-c', 'import time; time.sleep(60)']
     monkeypatch.setattr(subprocess, 'Popen', Recorded)
-    monkeypatch.setattr(latency, 'node_command', lambda *names: sleeper)
+    monkeypatch.setattr(module, 'node_command', lambda *names: sleeper)
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
-        assert latency.main(['--seconds', '1', '--busy', '3']) == 130
+        assert module.main(argv) == 130
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
@@ -864,5 +874,26 @@ def test_every_child_is_waited_for_when_a_signal_comes_while_one_starts(monkeypa
         for child in children:
             child.kill()
             child.wait()
-    assert len(children) == 4 and not left, [c.args for c in left]
+    assert len(children) == started and not left, [c.args for c in left]
+    assert children[-1].args[-1] == 'while True: pass'
     assert 'interrupted (SIGINT)' in capsys.readouterr().err
+
+
+def test_a_plot_through_a_missing_folder_and_dotdot_is_saved_where_its_folder_was_made(
+        tmp_path):
+    """`--plot a/new1/../new2/h.png`: new2 was made, then savefig failed (no a/new1)."""
+    from spatial_dynamics.tools.driving import save_figure
+
+    class Figure:
+        def tight_layout(self):
+            pass
+
+        def savefig(self, path):
+            with open(path, 'wb') as f:   # as matplotlib opens it
+                f.write(b'png')
+
+    class Pyplot:
+        def close(self, fig):
+            pass
+    save_figure(Pyplot(), Figure(), os.path.join(tmp_path, 'new1', '..', 'new2', 'h.png'))
+    assert (tmp_path / 'new2' / 'h.png').read_bytes() == b'png'

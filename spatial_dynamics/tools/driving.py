@@ -319,8 +319,9 @@ def save_figure(plt, fig, path: str) -> None:
     The folder made is that of the file written (:func:`~spatial_dynamics.files.output_path`).
     """
     fig.tight_layout()
-    os.makedirs(os.path.dirname(output_path(path)), exist_ok=True)
-    fig.savefig(path)
+    target = output_path(path)
+    os.makedirs(os.path.dirname(target), exist_ok=True)
+    fig.savefig(target)
     plt.close(fig)
 
 
