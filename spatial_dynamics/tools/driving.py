@@ -353,13 +353,16 @@ def outputs_error(files: Sequence[Tuple[str, Optional[str]]],
         return str(err)
     given = [(option, path, k < len(files))
              for k, (option, path) in enumerate(list(files) + list(folders)) if path]
-    for i, (option, path, is_file) in enumerate(given):
-        for j, (other, where, _) in enumerate(given):
-            if is_file and i != j and within(where, path):
-                same = output_path(where) == output_path(path)
-                return (f'{option} {path!r} and {other} {where!r} '
-                        + ('are the same file: one would be written over the other' if same
-                           else f'would be inside it: the {option} file cannot be a folder'))
+    pairs = [(option, path, other, where) for i, (option, path, is_file) in enumerate(given)
+             for j, (other, where, _) in enumerate(given) if is_file and i != j]
+    for option, path, other, where in pairs:   # the same path first: the plainer to say
+        if output_path(where) == output_path(path):
+            return (f'{option} {path!r} and {other} {where!r} name the same path: one would '
+                    'be written over the other')
+    for option, path, other, where in pairs:
+        if within(where, path):
+            return (f'{other} {where!r} is inside {option} {path!r}: the {option} file cannot '
+                    'be a folder')
     return None
 
 
