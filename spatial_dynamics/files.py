@@ -14,6 +14,7 @@ them.
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
 from typing import Any, Callable, Iterator, Optional, Sequence, Tuple, Union
@@ -219,6 +220,18 @@ def _same_file(a: Union[str, os.PathLike], b: Union[str, os.PathLike]) -> bool:
         return os.path.abspath(a) == os.path.abspath(b)
 
 
+def output_path(path: Union[str, os.PathLike]) -> str:
+    """Return the file an output ``path`` names, as it is checked, its folder made and written.
+
+    ``os.path.realpath``: a link is followed (an output that is a link is written through to
+    its target, the link kept), and a ``..`` after a folder that does not exist yet takes it
+    back (``a/new1/../new2/x`` is ``a/new2/x``: ``new1`` is never made). The check
+    (:func:`check_output`), the folders a command creates and the write (:func:`write_atomic`)
+    all go through this one function, so they agree on the file.
+    """
+    return os.path.realpath(path)
+
+
 def check_output(path: Union[str, os.PathLike], what: str,
                  inputs: Sequence[Union[str, os.PathLike]] = (),
                  missing_folders: bool = False) -> None:
@@ -228,14 +241,16 @@ def check_output(path: Union[str, os.PathLike], what: str,
     would lose what the output was made from), must not be a directory, a named pipe or any
     other special file (writing would fail late or block forever), and its folder must exist
     and be writable (:func:`check_folder`; ``missing_folders``: or be creatable, for a command
-    that creates it). ``ValueError`` names the file as ``what`` and says why.
+    that creates it). The file checked is the one written, :func:`output_path`. ``ValueError``
+    names the file as ``what`` and says why.
     """
     for source in inputs:
         if source is not None and _same_file(path, source):
             raise ValueError(f'{what} {os.fspath(path)!r} is also an input of this command; '
                              'choose another file (the input would be overwritten)')
+    target = output_path(path)
     try:
-        info = os.stat(path)
+        info = os.stat(target)
     except FileNotFoundError:
         info = None
     except OSError as err:
@@ -243,21 +258,21 @@ def check_output(path: Union[str, os.PathLike], what: str,
     if info is not None and not stat.S_ISREG(info.st_mode):
         raise ValueError(f'{what} {os.fspath(path)!r} is not a regular file '
                          f'({_kind(info.st_mode)})')
-    check_folder(os.path.dirname(os.path.abspath(path)), f'{what} {os.fspath(path)!r}',
-                 missing_folders)
+    check_folder(os.path.dirname(target), f'{what} {os.fspath(path)!r}', missing_folders)
 
 
 def check_folder(folder: Union[str, os.PathLike], what: str, missing: bool = False) -> None:
     """Refuse a folder outputs cannot be written in, before any work.
 
     It must be a folder in which a file can be created: tried, with a temporary that is
-    removed at once (``os.access`` tells root that ``/proc`` is writable). ``missing``: a
+    removed at once (``os.access`` tells root that ``/proc`` is writable; creating one there
+    fails with ENOENT, said as what it means). ``missing``: a
     folder that does not exist yet passes if the first of its parents that exists is a
     folder a folder can be created in (the command creates it). ``ValueError`` names it as
     ``what`` and says why.
     """
     import tempfile
-    folder = os.path.abspath(folder)
+    folder = output_path(folder)
     head = folder
     while not os.path.exists(head):
         if not missing:
@@ -268,7 +283,10 @@ def check_folder(folder: Union[str, os.PathLike], what: str, missing: bool = Fal
     try:
         fd, probe = tempfile.mkstemp(prefix='.probe.', dir=head)
     except OSError as err:
-        raise ValueError(f'{what}: the folder {head!r} is not writable ({err.strerror})'
+        # ENOENT in a folder that exists: a file system that holds no files of its own
+        why = ('the file system makes no new file there' if err.errno == errno.ENOENT
+               else err.strerror)
+        raise ValueError(f'{what}: cannot create a file in the folder {head!r} ({why})'
                          ) from None
     os.close(fd)
     _remove_quietly(probe)
@@ -302,17 +320,20 @@ def write_atomic(path: Union[str, os.PathLike], data: Union[str, bytes, Callable
     it is given. A write that fails midway (a full disk, a quota) leaves ``path`` as it was
     and removes the temporary; the rename replaces ``path`` in one step, so a reader sees
     the old file or the new one, never half of one. The new file gets the permissions a
-    plain ``open(path, 'w')`` would have given it (kept from the file it replaces).
-    ``ValueError`` names the file as ``what`` and the reason.
+    plain ``open(path, 'w')`` would have given it (kept from the file it replaces). A
+    ``path`` that is a link is written through to its target (:func:`output_path`: the file
+    :func:`check_output` checked), the link kept. ``ValueError`` names the file as ``what``
+    and the reason.
     """
     import tempfile
-    target = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(target))
+    shown_path = os.fspath(path)
+    target = output_path(path)
+    folder = os.path.dirname(target)
     try:
         fd, tmp = tempfile.mkstemp(prefix='.' + os.path.basename(target) + '.', suffix='.tmp',
                                    dir=folder)
     except OSError as err:
-        raise ValueError(f'cannot write {what} {target!r}: {err.strerror}') from None
+        raise ValueError(f'cannot write {what} {shown_path!r}: {err.strerror}') from None
     try:
         with os.fdopen(fd, 'wb') as f:
             if callable(data):
@@ -331,7 +352,7 @@ def write_atomic(path: Union[str, os.PathLike], data: Union[str, bytes, Callable
         os.replace(tmp, target)
     except OSError as err:
         _remove_quietly(tmp)
-        raise ValueError(f'cannot write {what} {target!r}: {err.strerror}') from None
+        raise ValueError(f'cannot write {what} {shown_path!r}: {err.strerror}') from None
     except BaseException:
         _remove_quietly(tmp)
         raise

@@ -124,7 +124,7 @@ def test_a_missing_or_unusable_folder_is_refused(tmp_path):
 @pytest.mark.parametrize('path', ['/proc/version', '/proc/out.json'])
 def test_a_folder_no_file_can_be_created_in_is_refused_even_where_access_says_writable(path):
     """As root, os.access calls /proc writable: `--json /proc/version` passed, then failed."""
-    with pytest.raises(ValueError, match='not writable') as caught:
+    with pytest.raises(ValueError, match='cannot create a file in the folder') as caught:
         files.check_output(path, '--json')
     assert path in str(caught.value) and '--json' in str(caught.value)
 
@@ -141,5 +141,34 @@ def test_missing_folders_pass_for_a_command_that_creates_them(tmp_path):
         files.check_output(path, '--json', missing_folders=True)
     with pytest.raises(ValueError, match='is not a folder'):
         files.check_folder(tmp_path / 'a' / 'b', '--log-dir', missing=True)
-    with pytest.raises(ValueError, match='not writable'):
+    with pytest.raises(ValueError, match='cannot create a file in the folder'):
         files.check_folder('/proc/sd_logs', '--log-dir', missing=True)
+
+
+def test_an_output_that_is_a_link_is_written_through_to_its_target(tmp_path):
+    """`--json link.json` replaced the link by a regular file; the link's target kept the old."""
+    (tmp_path / 'real').mkdir()
+    target = tmp_path / 'real' / 'results.json'
+    target.write_text('old\n')
+    link = tmp_path / 'results.json'
+    os.symlink(target, link)
+    files.check_output(link, '--json')
+    files.write_atomic(link, 'new\n', '--json')
+    assert os.path.islink(link) and target.read_text() == 'new\n'
+    assert listing(tmp_path / 'real') == ['results.json']   # no temporary left beside it
+
+
+def test_a_path_through_a_missing_folder_and_dotdot_is_checked_and_written_alike(tmp_path):
+    """`a/new1/../new2/x.json`: the check passed, new2 was made, the write failed (ENOENT)."""
+    path = os.path.join(tmp_path, 'new1', '..', 'new2', 'x.json')
+    files.check_output(path, '--json', missing_folders=True)
+    os.makedirs(os.path.dirname(files.output_path(path)))
+    files.write_atomic(path, '{}\n', '--json')
+    assert (tmp_path / 'new2' / 'x.json').read_text() == '{}\n'
+
+
+def test_a_folder_that_makes_no_file_says_so_not_no_such_file():
+    """`--json /proc/x.json`: "the folder '/proc' is not writable (No such file or directory)"."""
+    with pytest.raises(ValueError, match='cannot create a file in the folder') as caught:
+        files.check_output('/proc/x.json', '--json')
+    assert 'No such file' not in str(caught.value)

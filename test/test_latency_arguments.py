@@ -777,3 +777,123 @@ def test_the_other_tools_refuse_an_output_no_file_can_be_created_in_first(tool, 
         parse([option, path])
     err = capsys.readouterr().err
     assert exit.value.code == 2 and option in err and path in err, err
+
+
+@pytest.mark.parametrize('argv, options', [
+    (['--plot', '{t}/x.png', '--log-dir', '{t}/x.png'], ('--plot', '--log-dir')),
+    (['--json', '{t}/logs/relay.log', '--log-dir', '{t}/logs'], ('--json', '--log-dir')),
+    (['--json', '{t}/logs/inverse_dynamics.log', '--log-dir', '{t}/logs'],
+     ('--json', '--log-dir')),
+    (['--json', '{t}/r.json', '--plot', '{t}/r.json/h.png'], ('--json', '--plot')),
+    (['--json', '{t}/r.json', '--log-dir', '{t}/r.json/logs'], ('--json', '--log-dir')),
+    (['--json', '{t}/link.json', '--plot', '{t}/real.png'], ('--json', '--plot')),
+])
+def test_an_output_that_is_or_holds_another_output_is_refused_first(
+        argv, options, tmp_path, capsys):
+    """`--plot x.png --log-dir x.png` ran, then 'Is a directory'; a JSON over the relay's log."""
+    os.symlink(tmp_path / 'real.png', tmp_path / 'link.json')
+    with pytest.raises(SystemExit) as exit:
+        parse_args([a.format(t=tmp_path) for a in argv])
+    err = capsys.readouterr().err.rstrip().splitlines()[-1]   # the error, not the usage
+    assert exit.value.code == 2 and all(option in err for option in options), err
+    # a file of its own in the log folder is fine
+    assert parse_args(['--json', str(tmp_path / 'logs' / 'r.json'),
+                       '--log-dir', str(tmp_path / 'logs')])
+
+
+def test_a_json_through_a_missing_folder_and_dotdot_is_written_where_it_was_checked(tmp_path):
+    """`--json a/new1/../new2/x.json` made new2, then 'cannot write --json: No such file'."""
+    from spatial_dynamics.tools.latency import make_folders
+    from spatial_dynamics.tools.latency_report import write_json
+    args = parse_args(['--json', os.path.join(tmp_path, 'a', 'new1', '..', 'new2', 'x.json')])
+    make_folders(args)
+    write_json(args.json, {'robot': 'x'})
+    assert os.path.isfile(tmp_path / 'a' / 'new2' / 'x.json')
+
+
+def test_a_runtime_error_raised_by_an_interrupted_rclpy_call_says_interrupted(
+        monkeypatch, capsys):
+    """A SIGINT mid-run printed pybind11's 'Unable to convert call argument '0' ...' (exit 1).
+
+    rclpy turns a KeyboardInterrupt raised while it builds a message into that RuntimeError.
+    """
+    import signal
+    from spatial_dynamics.tools import latency
+    previous = signal.getsignal(signal.SIGINT)
+
+    def loading(urdf):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            raise AssertionError('the signal did not interrupt')
+        except KeyboardInterrupt:
+            raise RuntimeError("Unable to convert call argument '0' to Python object") from None
+    monkeypatch.setattr(latency, 'robot_model', loading)
+    try:
+        assert latency.main(['--seconds', '1']) == 130
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'interrupted (SIGINT)' in err, err
+
+
+@pytest.mark.parametrize('tool, argv, started', [
+    ('latency', ['--seconds', '1', '--busy', '3'], 4),   # relay, node, then 2 busy loops
+    ('closed_loop', ['--plot', '', '--busy', '3'], 2),
+])
+def test_every_child_is_waited_for_when_a_signal_comes_while_one_starts(
+        tool, argv, started, monkeypatch, capsys):
+    """SIGINT while a busy loop started (after its fork): it was lost, never killed nor waited.
+
+    Left running until the tool exited, then killed by its parent-death signal: a zombie
+    where nothing reaps orphans. closed_loop also printed a KeyboardInterrupt traceback.
+    """
+    import importlib
+    import signal
+    import subprocess
+    import sys
+    module = importlib.import_module(f'spatial_dynamics.tools.{tool}')
+    children = []
+    real = subprocess.Popen
+
+    class Recorded(real):
+        def __init__(self, command, *args, **kwargs):
+            super().__init__(command, *args, **kwargs)
+            children.append(self)
+            if len(children) == started:
+                os.kill(os.getpid(), signal.SIGINT)   # arrives before Popen returns
+    sleeper = [sys.executable, '-c', 'import time; time.sleep(60)']
+    monkeypatch.setattr(subprocess, 'Popen', Recorded)
+    monkeypatch.setattr(module, 'node_command', lambda *names: sleeper)
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        assert module.main(argv) == 130
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        left = [child for child in children if child.returncode is None]
+        for child in children:
+            child.kill()
+            child.wait()
+    assert len(children) == started and not left, [c.args for c in left]
+    assert children[-1].args[-1] == 'while True: pass'
+    assert 'interrupted (SIGINT)' in capsys.readouterr().err
+
+
+def test_a_plot_through_a_missing_folder_and_dotdot_is_saved_where_its_folder_was_made(
+        tmp_path):
+    """`--plot a/new1/../new2/h.png`: new2 was made, then savefig failed (no a/new1)."""
+    from spatial_dynamics.tools.driving import save_figure
+
+    class Figure:
+        def tight_layout(self):
+            pass
+
+        def savefig(self, path):
+            with open(path, 'wb') as f:   # as matplotlib opens it
+                f.write(b'png')
+
+    class Pyplot:
+        def close(self, fig):
+            pass
+    save_figure(Pyplot(), Figure(), os.path.join(tmp_path, 'new1', '..', 'new2', 'h.png'))
+    assert (tmp_path / 'new2' / 'h.png').read_bytes() == b'png'

@@ -44,10 +44,12 @@ over time (log scale) for the three laws, and ``--json`` writes the figures.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
 import signal
+import subprocess
 import sys
 import time
 from typing import Dict, List, Optional, Sequence
@@ -59,7 +61,7 @@ from .driving import (
     Interrupt, node_command, outputs_error, plot_path_error, pyplot, redraw, robot_model,
     save_figure, start, stop)
 from .latency import in_range
-from .latency_targets import busy_loops
+from .latency_targets import busy_loop, end_loop
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -586,11 +588,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
           f'controller: {" ".join(node_command("inverse_dynamics", "spatial_dynamics.ros.node"))}'
           f'\n(their output in {args.log_dir}/)', flush=True)
     status = 0
-    loops = busy_loops(args.busy)
-    if args.busy or args.priority:
-        print(f'{args.busy} busy loops beside the run; node thread_priority {args.priority}; '
-              f'load {os.getloadavg()[0]:.2f}', flush=True)
+    loops: List[subprocess.Popen] = []
     try:
+        for _ in range(args.busy):   # each recorded before a signal may interrupt
+            with interrupt.held():
+                loops.append(busy_loop())
+        if args.busy or args.priority:
+            print(f'{args.busy} busy loops beside the run; node thread_priority '
+                  f'{args.priority}; load {os.getloadavg()[0]:.2f}', flush=True)
         for k in picks:
             name, settings = LAWS[k]
             runs.append(run_law(name, settings, urdf, model, args, (rclpy, JointState), show,
@@ -608,10 +613,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                   file=sys.stderr)
             status = interrupt.status
     finally:
-        rclpy.try_shutdown()
-        for loop in loops:
-            loop.kill()
-            loop.wait()
+        try:
+            with interrupt.held(), contextlib.ExitStack() as ending:   # each, whatever one raised
+                for loop in loops:
+                    ending.callback(end_loop, loop)
+                ending.callback(rclpy.try_shutdown)
+        except KeyboardInterrupt:   # a second signal while they were ended: its status
+            status = interrupt.status
     summaries = [run.summary() for run in runs]
     for s in summaries:
         print(f'{s["law"]:<20} rms {s["rms"]:.3e}  max {s["max"]:.3e}  '

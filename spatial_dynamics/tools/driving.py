@@ -7,17 +7,18 @@ No rclpy import at module level: :func:`node_command` and :class:`Sinusoids` wor
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
 import signal
 import subprocess
 import sys
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 import spatial_dynamics as sd
-from spatial_dynamics.files import check_folder, check_output
+from spatial_dynamics.files import check_folder, check_output, output_path, within
 
 # Imported inside the functions that use them: ament_index_python (present only where ROS
 # is sourced) and matplotlib (optional; seconds to import, for the plots only).
@@ -120,11 +121,33 @@ class Interrupt:
 
     def __init__(self) -> None:
         self.signal: Optional[int] = None
+        self._held = 0   # nested held() blocks running
+        self._pending = False   # a signal came while held: raise when the blocks end
 
     def __call__(self, signum: int, frame) -> None:
-        """Remember ``signum`` and raise KeyboardInterrupt where Python is."""
+        """Remember ``signum`` and raise KeyboardInterrupt where Python is (or once released)."""
         self.signal = signum
+        if self._held:
+            self._pending = True
+            return
         raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        """Hold a signal while the block runs; it interrupts once the block has ended.
+
+        Around starting a child and recording it (a signal inside ``subprocess.Popen`` after
+        the fork lost the child: never stopped nor waited for) and around ending them all (a
+        second Ctrl-C skipped the rest).
+        """
+        self._held += 1
+        try:
+            yield
+        finally:
+            self._held -= 1
+        if not self._held and self._pending:
+            self._pending = False
+            raise KeyboardInterrupt
 
     def install(self) -> 'Interrupt':
         """Handle SIGINT (even if it was ignored when the tool started) and SIGTERM."""
@@ -291,10 +314,14 @@ def robot_model(urdf: Optional[str]):
 
 
 def save_figure(plt, fig, path: str) -> None:
-    """Lay ``fig`` out, write it to ``path`` (its directory created) and close it."""
+    """Lay ``fig`` out, write it to ``path`` (its directory created) and close it.
+
+    The folder made is that of the file written (:func:`~spatial_dynamics.files.output_path`).
+    """
     fig.tight_layout()
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    fig.savefig(path)
+    target = output_path(path)
+    os.makedirs(os.path.dirname(target), exist_ok=True)
+    fig.savefig(target)
     plt.close(fig)
 
 
@@ -310,7 +337,10 @@ def outputs_error(files: Sequence[Tuple[str, Optional[str]]],
     ``files`` and ``folders``: ``(option, path)``, None or '' for an option not given. A
     file must not be a folder, a named pipe or a device; a folder must be one a file can be
     created in. Folders that do not exist yet pass where they would be created: the tool
-    creates them (``os.makedirs``) before its run.
+    creates them (``os.makedirs``) before its run. No output may be another (a file also
+    another file or a folder of the run, one written over the other) or be inside a file
+    (its folder would be made where the file goes): compared as written,
+    :func:`~spatial_dynamics.files.output_path` (links followed).
     """
     try:
         for option, folder in folders:
@@ -321,6 +351,18 @@ def outputs_error(files: Sequence[Tuple[str, Optional[str]]],
                 check_output(path, option, missing_folders=True)
     except ValueError as err:
         return str(err)
+    given = [(option, path, k < len(files))
+             for k, (option, path) in enumerate(list(files) + list(folders)) if path]
+    pairs = [(option, path, other, where) for i, (option, path, is_file) in enumerate(given)
+             for j, (other, where, _) in enumerate(given) if is_file and i != j]
+    for option, path, other, where in pairs:   # the same path first: the plainer to say
+        if output_path(where) == output_path(path):
+            return (f'{option} {path!r} and {other} {where!r} name the same path: one would '
+                    'be written over the other')
+    for option, path, other, where in pairs:
+        if within(where, path):
+            return (f'{other} {where!r} is inside {option} {path!r}: the {option} file cannot '
+                    'be a folder')
     return None
 
 
@@ -335,7 +377,7 @@ def plot_path_error(plot: str, *others: Optional[str]) -> Optional[str]:
         return (f'--plot {plot!r}: .{suffix} is not a format matplotlib writes (one of '
                 f'{", ".join(PLOT_FORMATS)})')
     for other in others:
-        if other and os.path.abspath(other) == os.path.abspath(plot):
+        if other and output_path(other) == output_path(plot):
             return f'--plot {plot!r} is also another output of the run'
     return None
 

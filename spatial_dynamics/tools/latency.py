@@ -58,6 +58,7 @@ plot in :mod:`.latency_report`.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import subprocess
@@ -69,6 +70,8 @@ from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 
+from spatial_dynamics.files import output_path
+
 from .driving import (
     cpu_ns_between, Interrupt, last_error, node_command, outputs_error, plot_path_error,
     robot_model, Sinusoids, start, stop)
@@ -77,8 +80,8 @@ from .latency_report import (
     difference_line, format_table, json_safe, machine_line, not_answered_line, plot, rate_text,
     rate_warning, sent_rate, wake_ups, write_json)
 from .latency_targets import (
-    busy_loops, cpu_reading, exited, input_depth, kernel_preemption, LOGS, NodeDiagnostics,
-    plural, prioritize, scheduling_of, scheduling_text, Target, watch)
+    busy_loop, cpu_reading, end_loop, exited, input_depth, kernel_preemption, LOGS,
+    NodeDiagnostics, plural, prioritize, scheduling_of, scheduling_text, Target, watch)
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -169,7 +172,12 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
         prog='python -m spatial_dynamics.tools.latency', description=__doc__.split('\n\n')[0],
         epilog='--plot, --json and --log-dir create the folders they name that do not exist '
                'yet; each is checked before the run (a folder a file can be created in, an '
-               'output that is not a folder, a named pipe or a device).')
+               'output that is not a folder, a named pipe or a device, nor another output or '
+               "one of --log-dir's logs). A path is taken as realpath resolves it: a link is "
+               "written through to its target, and a '..' after a folder not made yet cancels "
+               'it (a/new/../b/x.json is a/b/x.json). CPU per input is all the time the '
+               "target's threads ran while measured over the inputs sent: it includes the "
+               "target's idle cost (timers, the middleware), a larger share at a low --rate.")
     parser.add_argument('--rate', type=in_range(float, 0.0, 1e5, True), default=1000.0,
                         help='Hz, above 0 and at most 1e5 (default 1000); the rate the inputs '
                              'were sent at is reported beside it')
@@ -207,10 +215,13 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         help='write node and relay logs (' + ', '.join(LOGS.values())
                              + ') here (default: none kept)')
     args = parser.parse_args(argv)
-    outputs = [('--plot', args.plot), ('--json', args.json)]
+    # a --plot without a suffix: its name checked as a file too, the .png written compared
+    error = outputs_error([('--plot', args.plot)])
+    if error:
+        parser.error(error)
     if args.plot is not None and not os.path.splitext(args.plot)[1]:
         args.plot += '.png'   # what matplotlib writes for a name without a suffix
-        outputs.append(('--plot', args.plot))
+    outputs = [('--plot', args.plot), ('--json', args.json)]
     if args.log_dir is not None:
         outputs += [('--log-dir', os.path.join(args.log_dir, name)) for name in LOGS.values()]
     error = outputs_error(outputs, [('--log-dir', args.log_dir)])
@@ -230,12 +241,14 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
 def make_folders(args: argparse.Namespace) -> None:
     """Create the folders of ``--plot``, ``--json`` and ``--log-dir`` that do not exist yet.
 
+    Those of the files written, :func:`~spatial_dynamics.files.output_path` (as checked).
+
     RuntimeError names the option (:func:`parse_args` checked them: this fails only when the
     file system changed since).
     """
-    for option, folder in (('--plot', args.plot and os.path.dirname(os.path.abspath(args.plot))),
-                           ('--json', args.json and os.path.dirname(os.path.abspath(args.json))),
-                           ('--log-dir', args.log_dir)):
+    for option, folder in (('--plot', args.plot and os.path.dirname(output_path(args.plot))),
+                           ('--json', args.json and os.path.dirname(output_path(args.json))),
+                           ('--log-dir', args.log_dir and output_path(args.log_dir))):
         if folder:
             try:
                 os.makedirs(folder, exist_ok=True)
@@ -263,18 +276,28 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parse_args(argv)
     interrupt = Interrupt().install()   # from here on: also while loading and starting
     try:
-        return run(args)
-    except KeyboardInterrupt:
-        print(f'latency: interrupted ({interrupt.name}); the node, the relay and the '
-              'publisher stopped', file=sys.stderr)
-        return interrupt.status
-    except RuntimeError as err:
-        print(f'latency: {err}', file=sys.stderr)
-        return 1
+        return run(args, interrupt)
+    except (KeyboardInterrupt, Exception) as err:
+        # after a signal, whatever it raised is the interrupt: rclpy turns a KeyboardInterrupt
+        # raised while it builds a message (Subscription.take_message) into pybind11's
+        # RuntimeError 'Unable to convert call argument '0' to Python object'
+        if isinstance(err, KeyboardInterrupt) or interrupt.signal is not None:
+            print(f'latency: interrupted ({interrupt.name}); the node, the relay and the '
+                  'publisher stopped', file=sys.stderr)
+            return interrupt.status
+        if isinstance(err, RuntimeError):
+            print(f'latency: {err}', file=sys.stderr)
+            return 1
+        raise
 
 
-def run(args: argparse.Namespace) -> int:
-    """Run the benchmark of ``args`` (see :func:`main`); raises on a process that exited."""
+def run(args: argparse.Namespace, interrupt: Optional[Interrupt] = None) -> int:
+    """Run the benchmark of ``args`` (see :func:`main`); raises on a process that exited.
+
+    Every process it starts is recorded as it starts (``interrupt`` held meanwhile), and
+    each is stopped and waited for however the run ends, a step that fails included.
+    """
+    interrupt = interrupt or Interrupt()
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
@@ -296,7 +319,7 @@ def run(args: argparse.Namespace) -> int:
     # the targets' logs: kept in --log-dir, else for the run only (their error line is the
     # reason said when one exits or refuses its inputs)
     scratch = None if args.log_dir else tempfile.TemporaryDirectory(prefix='sd_latency_')
-    folder = args.log_dir or scratch.name
+    folder = output_path(args.log_dir) if args.log_dir else scratch.name
     logs = {name: os.path.join(folder, file) for name, file in LOGS.items()}
     priority = {'thread_priority': str(args.priority)}
     floating, root = FLOATING.get(args.robot, ({}, None)) if args.urdf is None else ({}, None)
@@ -307,16 +330,21 @@ def run(args: argparse.Namespace) -> int:
     status = 0
     interrupted = True   # until the run ends by itself
     try:
-        procs['relay'] = start(node_command('relay', 'spatial_dynamics.tools.relay'),
-                               f'{namespace}/relay',
-                               {**priority, **input_depth(f'{namespace}/relay', args.input_depth)},
-                               logs['relay'])
-        procs['inverse_dynamics'] = start(
-            node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), f'{namespace}/node',
-            {'robot_description_file': urdf, **priority, **floating,
-             **input_depth(f'{namespace}/node', args.input_depth)},
-            logs['inverse_dynamics'])
-        loops += busy_loops(args.busy)
+        # each child recorded before a signal may interrupt: it is stopped and waited for
+        with interrupt.held():
+            procs['relay'] = start(
+                node_command('relay', 'spatial_dynamics.tools.relay'), f'{namespace}/relay',
+                {**priority, **input_depth(f'{namespace}/relay', args.input_depth)},
+                logs['relay'])
+        with interrupt.held():
+            procs['inverse_dynamics'] = start(
+                node_command('inverse_dynamics', 'spatial_dynamics.ros.node'),
+                f'{namespace}/node', {'robot_description_file': urdf, **priority, **floating,
+                                      **input_depth(f'{namespace}/node', args.input_depth)},
+                logs['inverse_dynamics'])
+        for _ in range(args.busy):
+            with interrupt.held():
+                loops.append(busy_loop())
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
         bench = rclpy.create_node('latency_bench')
         executor = SingleThreadedExecutor()
@@ -332,8 +360,10 @@ def run(args: argparse.Namespace) -> int:
         # this process's receive threads stamp the answers' reception; its Python thread that
         # reads them stays under normal scheduling, off the node's and the pacer's cores' way
         receiver = prioritize(args.priority, this_thread=False)
-        pacer = Pacer([t.namespace for t in targets], trajectory, args.priority,
-                      lambda: watch(procs, logs, diagnostics))
+        with interrupt.held():
+            pacer = Pacer([t.namespace for t in targets], trajectory, args.priority,
+                          lambda: watch(procs, logs, diagnostics))
+        pacer.wait_ready()
         for index, target in enumerate(targets):
             try:
                 pacer.prime(executor, index, target, timeout=60.0)
@@ -419,18 +449,20 @@ def run(args: argparse.Namespace) -> int:
                 status = 1
         interrupted = False
     finally:
-        if pacer is not None:
-            pacer.close(interrupted)
-        if bench is not None:
-            bench.destroy_node()
-        rclpy.try_shutdown()
-        for proc in procs.values():
-            stop(proc)
-        for loop in loops:
-            loop.kill()
-            loop.wait()
-        if scratch is not None:
-            scratch.cleanup()
+        # every step runs whatever one before it raised (an ExitStack runs them last first),
+        # and a second signal waits until each child has been waited for
+        with interrupt.held(), contextlib.ExitStack() as ending:
+            if scratch is not None:
+                ending.callback(scratch.cleanup)
+            for loop in loops:
+                ending.callback(end_loop, loop)
+            for proc in procs.values():
+                ending.callback(stop, proc)
+            ending.callback(rclpy.try_shutdown)
+            if bench is not None:
+                ending.callback(bench.destroy_node)
+            if pacer is not None:
+                ending.callback(pacer.close, interrupted)
     return status
 
 

@@ -118,7 +118,15 @@ class Pacer:
              'pace_inputs()'], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
             preexec_fn=die_with_parent_ignoring_ctrl_c)
         self._send(setup)
-        self.scheduling = self._reply(None, 60.0)
+        self.scheduling = ''   # what it runs under: :meth:`wait_ready` reads it
+
+    def wait_ready(self, timeout: float = 60.0) -> None:
+        """Wait until the process has started its node, and read what it runs under.
+
+        Apart from starting it: a caller records the process first, so a signal while it
+        starts (a second or so of imports) leaves nothing unstopped.
+        """
+        self.scheduling = self._reply(None, timeout)
 
     def _send(self, command) -> None:
         try:

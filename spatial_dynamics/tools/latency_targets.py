@@ -10,7 +10,7 @@ their logs (:data:`LOGS`), one that exited or refuses its inputs, with its log's
 (:func:`exited`, :func:`watch`), the CPU time their threads ran (:func:`cpu_reading`), the
 scheduling each ran under (:func:`prioritize`, :func:`scheduling_of`,
 :func:`scheduling_text`) and the kernel's preemption model (:func:`kernel_preemption`); the
-busy loops run beside them (:func:`busy_loops`).
+busy loops run beside them (:func:`busy_loop`, :func:`end_loop`).
 """
 
 from __future__ import annotations
@@ -247,11 +247,22 @@ class NodeDiagnostics:
         return line
 
 
+def busy_loop() -> subprocess.Popen:
+    """Start a process that spins a core (the load of a busy machine); end it with SIGKILL."""
+    # SIGINT ignored: a Ctrl-C at the terminal reaches it too, and it is killed
+    return subprocess.Popen([sys.executable, '-c', 'while True: pass'],
+                            preexec_fn=die_with_parent_ignoring_ctrl_c)
+
+
 def busy_loops(count: int) -> List[subprocess.Popen]:
-    """Start ``count`` processes that spin a core each (the load of a busy machine)."""
-    # SIGINT ignored: a Ctrl-C at the terminal reaches them too, and they are killed
-    return [subprocess.Popen([sys.executable, '-c', 'while True: pass'],
-                             preexec_fn=die_with_parent_ignoring_ctrl_c) for _ in range(count)]
+    """Start ``count`` :func:`busy_loop` processes."""
+    return [busy_loop() for _ in range(count)]
+
+
+def end_loop(loop: subprocess.Popen) -> None:
+    """Kill a :func:`busy_loop` and wait for it (none is left a zombie)."""
+    loop.kill()
+    loop.wait()
 
 
 def prioritize(priority: int, this_thread: bool = True) -> str:
