@@ -57,13 +57,17 @@ const Algorithm ALGORITHMS[] = {
      "axes.",
      "bodies_batch(kernels, N, q, J, threads) -> None: the rows of bodies() of N states into\n"
      "J (N x (NB + 1) x (16 + 6 n))."},
-    {"rnea_derivatives", "derivatives_batch", 3, 1, 1, DERIVATIVES, {"D"},
-     "rnea_derivatives(kernels, q, qd, qdd, gravity, f_body=None) -> (dq, dqd, M), or None\n\n"
+    {"rnea_derivatives", "derivatives_batch", 3, 1, 1, DERIVATIVES, {"dq", "dqd", "M"},
+     "rnea_derivatives(kernels, q, qd, qdd, gravity, f_body=None, out=None) -> (dq, dqd, M),\n"
+     "or None\n\n"
      "The analytical derivatives of rnea (algorithms/derivatives.py) of one state: dtau/dq\n"
-     "(tangent space), dtau/dqd and M = dtau/dqdd, each a new (n, n) array; arguments as\n"
+     "(tangent space), dtau/dqd and M = dtau/dqdd, each a new (n, n) array, or written into\n"
+     "out: a tuple of three numpy arrays (exactly ndarray), float64, C-contiguous, writeable,\n"
+     "(n, n) each (None when they are not, or the result would be float32); arguments as\n"
      "for rnea.",
-     "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, D, threads) -> None: the\n"
-     "derivatives of N states into D (N x 3 n x n); fext as for rnea_batch."},
+     "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, dq, dqd, M, threads) -> None:\n"
+     "the derivatives of N states into dq, dqd and M (N x n x n each); fext as for\n"
+     "rnea_batch."},
     {"forward_dynamics", "forward_dynamics_batch", 3, 1, 1, FORWARD, {"qdd"},
      "forward_dynamics(kernels, q, qd, tau, gravity, f_body=None, armature=None) -> qdd (n,),\n"
      "or None\n\n"
@@ -116,14 +120,19 @@ scratch_free(double *p, double *stack)
  * One state: the entry of every algorithm */
 
 /* args: kernels, the joint vectors, gravity (if the algorithm reads it), f_body (optional,
- * if it takes one). None when a vector or gravity is not one state that as_doubles reads.
- * The results are float32 when every joint vector is float32 (what numpy's promotion of
- * them gives), computed in float64 and rounded once; else float64. */
+ * if it takes one), then FORWARD's armature or DERIVATIVES' out (optional). None when a
+ * vector or gravity is not one state that as_doubles reads. The results are float32 when
+ * every joint vector is float32 (what numpy's promotion of them gives), computed in float64
+ * and rounded once; else float64. out (None, or a tuple of as many arrays as results): the
+ * results are written into them when each is an exact ndarray, float64, C-contiguous,
+ * aligned, writeable and of the result's shape and the results are float64; else None
+ * (the caller checks and copies). The caller has checked that they share no memory. */
 PyObject *
 single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
 {
     const Py_ssize_t fixed = 1 + a->vectors + a->gravity;
-    const Py_ssize_t most = fixed + a->fext + (a->kernel == FORWARD);     /* + armature */
+    /* + FORWARD's armature, DERIVATIVES' out */
+    const Py_ssize_t most = fixed + a->fext + (a->kernel == FORWARD || a->kernel == DERIVATIVES);
     if (nargs < fixed || nargs > most) {
         PyErr_Format(PyExc_TypeError,
                      most > fixed ? "%s takes %zd to %zd arguments" : "%s takes %zd arguments",
@@ -137,11 +146,20 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     npy_intp dims[2];
     int count;
     const int ndim = result_shape(h, a->kernel, dims, &count);
-    if (a->kernel == DERIVATIVES) {
-        /* three arrays (nv, nv), not views of one stacked (3 nv, nv): a view costs as much
-         * as an array, and the stacked one and its reshaping come on top */
-        count = 3;
-        dims[0] = dims[1];
+    PyObject *given = nargs > fixed + 1 && a->kernel == DERIVATIVES ? args[fixed + 1] : Py_None;
+    if (given != Py_None) {
+        if (!PyTuple_CheckExact(given) || PyTuple_GET_SIZE(given) != count)
+            Py_RETURN_NONE;
+        for (int k = 0; k < count; k++) {
+            PyObject *o = PyTuple_GET_ITEM(given, k);
+            PyArrayObject *arr = (PyArrayObject *)o;
+            if (!PyArray_CheckExact(o) || PyArray_TYPE(arr) != NPY_DOUBLE
+                    || !PyArray_ISCARRAY(arr) || PyArray_NDIM(arr) != ndim)
+                Py_RETURN_NONE;
+            for (int d = 0; d < ndim; d++)
+                if (PyArray_DIM(arr, d) != dims[d])
+                    Py_RETURN_NONE;
+        }
     }
     const Py_ssize_t size = dims[0] * dims[1];
     /* Room for float32 results, computed in doubles first, only when q may be float32. */
@@ -188,13 +206,25 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         }
         f = fb.buf;
     }
-    if (nargs > fixed + 1 && args[fixed + 1] != Py_None) {     /* FORWARD's armature */
+    if (a->kernel == FORWARD && nargs > fixed + 1 && args[fixed + 1] != Py_None) {
         if (!as_doubles(args[fixed + 1], nv, arm))
             goto declined;
         armature = arm;
     }
     const int single_precision = may_float && floats == a->vectors;   /* res has room */
     double *data[3] = {NULL, NULL, NULL};
+    if (given != Py_None) {
+        if (single_precision)
+            goto declined;      /* float32 results: the caller's */
+        for (int k = 0; k < count; k++)
+            data[k] = (double *)PyArray_DATA((PyArrayObject *)PyTuple_GET_ITEM(given, k));
+        if (run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, armature, data[0],
+                      data[1], data[2], work) < 0)
+            goto declined;
+        out = given;
+        Py_INCREF(out);
+        goto done;
+    }
     for (int k = 0; k < count; k++) {
         results[k] = PyArray_SimpleNew(ndim, dims, single_precision ? NPY_FLOAT : NPY_DOUBLE);
         if (results[k] == NULL)
@@ -242,7 +272,8 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
 {
     npy_intp dims[2];
     int count;
-    const Py_ssize_t want = 3 + a->vectors + a->gravity + a->fext + (a->kernel == MOMENTUM);
+    const int results = a->kernel == MOMENTUM ? 2 : (a->kernel == DERIVATIVES ? 3 : 1);
+    const Py_ssize_t want = 2 + a->vectors + a->gravity + a->fext + results;
     if (nargs != want + 1) {
         PyErr_Format(PyExc_TypeError, "%s takes %zd arguments", a->batch, want + 1);
         return NULL;
@@ -269,7 +300,7 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     }
     PyObject *fext = a->fext ? args[next++] : Py_None;
     /* the buffers: the joint vectors, the results, then the external forces */
-    Py_buffer v[6];
+    Py_buffer v[7];     /* three joint vectors, three results, the external forces */
     int held = 0;
     for (int i = 0; i < a->vectors + count; i++, held++) {
         const int result = i >= a->vectors;
@@ -308,7 +339,8 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     for (int i = 0; i < a->vectors; i++)
         *vectors[i] = v[i].buf;
     job.out1 = v[a->vectors].buf;
-    job.out2 = count == 2 ? v[a->vectors + 1].buf : NULL;
+    job.out2 = count >= 2 ? v[a->vectors + 1].buf : NULL;
+    job.out3 = count == 3 ? v[a->vectors + 2].buf : NULL;
     /* no state, or states without results (a model without joints): nothing to compute */
     int rc = N == 0 || job.size == 0 ? 0 : run_batch(&job, N, threads);
     for (int i = 0; i < held; i++)
