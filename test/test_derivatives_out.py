@@ -43,7 +43,7 @@ def empty_out(shape, dtype=np.float64, order='C'):
 
 
 def variants(model, rng, shape):
-    """(what, states, keyword arguments): every path of :func:`rnea_derivatives`."""
+    """Return (what, states, keyword arguments): every path of :func:`rnea_derivatives`."""
     q, qd, qdd = state(model, rng, shape)
     link = model.body_names[-1]
     out = [('plain', (q, qd, qdd), {}),
@@ -188,12 +188,13 @@ def test_a_call_with_out_allocates_no_result(name, rng):
         assert peak(lambda: sd.rnea_derivatives(model, q, qd, qdd, out=out)) < size
 
 
-@pytest.mark.parametrize('backend', ['numpy', 'compiled'])
-def test_a_batch_gives_three_contiguous_arrays(backend, rng):
+def test_a_batch_gives_three_contiguous_arrays(rng):
     """A batch's ``(∂τ/∂q, ∂τ/∂q̇, M)``: three C-contiguous arrays, no strided views of one."""
     model = robot('ur5')
-    for N in (7, 300):
-        D = sd.rnea_derivatives(model, *random_state(rng, (N,), model.nq), backend=backend)
-        for k, x in enumerate(D):
-            assert x.shape == (N, model.nv, model.nv) and x.flags.c_contiguous, (N, k)
-            assert not any(np.shares_memory(x, y) for y in D[k + 1:]), (N, k)
+    for backend in ('numpy', 'compiled'):
+        for N in (7, 300):
+            D = sd.rnea_derivatives(model, *random_state(rng, (N,), model.nq), backend=backend)
+            for k, x in enumerate(D):
+                assert x.shape == (N, model.nv, model.nv), (backend, N, k)
+                assert x.flags.c_contiguous, (backend, N, k)
+                assert not any(np.shares_memory(x, y) for y in D[k + 1:]), (backend, N, k)

@@ -541,7 +541,7 @@ def _out_arrays(out, inputs: tuple) -> tuple:
     the argument it shares memory with (or the other ``out[j]``). Bounds first
     (``may_share_memory``, cheap), then exactly: three views of one stacked array are fine.
     """
-    if type(out) not in (tuple, list) or len(out) != 3:
+    if not isinstance(out, (tuple, list)) or len(out) != 3:
         raise TypeError('out must be a tuple of three numpy arrays (dq, dv, M), got '
                         + shown(out))
     for k, x in enumerate(out):
