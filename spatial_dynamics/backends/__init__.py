@@ -493,16 +493,17 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
     kernels (one state and batches), any others get a copy. ``TypeError`` or ``ValueError``
     naming ``out[k]`` when they are not such arrays.
     """
-    if out is not None:
-        out = _out_arrays(out, (('q', q), ('qd', qd), ('qdd', qdd), ('gravity', gravity),
-                                ('f_ext', f_ext), ('armature', armature)))
     if (base is None and armature is None and friction_threshold is None
             and (f_ext is None or (type(f_ext) is dict and not f_ext))):
-        # one state that the extension reads as it is: answered in C (into out when it can)
+        # one state that the extension reads as it is: answered in C; into out when the
+        # entry sees that it can (a tuple of arrays whose bounds meet no argument's)
         lay, kern, D = _entered(model, backend, _c_derivatives, q, qd, qdd, gravity,
                                 *(() if out is None else (None, out)))
         if D is not None:
             return D
+    if out is not None:
+        out = _out_arrays(out, (('q', q), ('qd', qd), ('qdd', qdd), ('gravity', gravity),
+                                ('f_ext', f_ext), ('armature', armature)))
     if base is not None:
         check_base_motion(base, model)
         twin = floating_twin(model)

@@ -119,14 +119,66 @@ scratch_free(double *p, double *stack)
 /* ------------------------------------------------------------------------------------------
  * One state: the entry of every algorithm */
 
+/* The bytes [*lo, *hi) that the elements of `arr` lie in (any strides; empty: lo == hi). */
+static void
+extent(PyArrayObject *arr, const char **lo, const char **hi)
+{
+    const char *p = PyArray_BYTES(arr);
+    npy_intp low = 0, high = PyArray_ITEMSIZE(arr);
+    for (int d = 0; d < PyArray_NDIM(arr); d++) {
+        const npy_intp dim = PyArray_DIM(arr, d), stride = PyArray_STRIDE(arr, d);
+        if (dim == 0) {
+            *lo = *hi = p;
+            return;
+        }
+        if (stride < 0)
+            low += stride * (dim - 1);
+        else
+            high += stride * (dim - 1);
+    }
+    *lo = p + low;
+    *hi = p + high;
+}
+
+/* Whether the `count` arrays of the tuple `out` certainly share no memory with each other
+ * or with the arguments args[1..nargs): bounds that do not meet. An argument that is an
+ * exact ndarray is bounded; a list, tuple, number or None holds no array memory; anything
+ * else (another buffer) may share: 0, and the caller's exact check decides. */
+static int
+apart(PyObject *out, int count, PyObject *const *args, Py_ssize_t nargs)
+{
+    const char *lo[3], *hi[3];
+    for (int k = 0; k < count; k++) {
+        extent((PyArrayObject *)PyTuple_GET_ITEM(out, k), &lo[k], &hi[k]);
+        for (int j = 0; j < k; j++)
+            if (lo[k] < hi[j] && lo[j] < hi[k])
+                return 0;
+    }
+    for (Py_ssize_t i = 1; i < nargs; i++) {
+        PyObject *x = args[i];
+        if (PyList_CheckExact(x) || PyTuple_CheckExact(x) || PyFloat_CheckExact(x)
+                || PyLong_CheckExact(x) || x == Py_None)
+            continue;
+        if (!PyArray_CheckExact(x))
+            return 0;
+        const char *xlo, *xhi;
+        extent((PyArrayObject *)x, &xlo, &xhi);
+        for (int k = 0; k < count; k++)
+            if (xlo < hi[k] && lo[k] < xhi)
+                return 0;
+    }
+    return 1;
+}
+
 /* args: kernels, the joint vectors, gravity (if the algorithm reads it), f_body (optional,
  * if it takes one), then FORWARD's armature or DERIVATIVES' out (optional). None when a
  * vector or gravity is not one state that as_doubles reads. The results are float32 when
  * every joint vector is float32 (what numpy's promotion of them gives), computed in float64
  * and rounded once; else float64. out (None, or a tuple of as many arrays as results): the
  * results are written into them when each is an exact ndarray, float64, C-contiguous,
- * aligned, writeable and of the result's shape and the results are float64; else None
- * (the caller checks and copies). The caller has checked that they share no memory. */
+ * aligned, writeable and of the result's shape, their bounds meet neither each other's nor
+ * an argument's (apart), and the results are float64; else None (the caller checks exactly,
+ * refuses or copies). */
 PyObject *
 single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
 {
@@ -160,6 +212,8 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
                 if (PyArray_DIM(arr, d) != dims[d])
                     Py_RETURN_NONE;
         }
+        if (!apart(given, count, args, fixed + 1))     /* the vectors, gravity, f_body */
+            Py_RETURN_NONE;
     }
     const Py_ssize_t size = dims[0] * dims[1];
     /* Room for float32 results, computed in doubles first, only when q may be float32. */
