@@ -14,7 +14,8 @@ reference: ``max |D - D_ref| / max |D_ref|`` over both matrices ``D = [∂τ/∂
   :mod:`spatial_dynamics.algorithms.rnea`) evaluated in mpmath at 50 digits, step 1e-15
   (truncation ~1e-30, rounding ~1e-35; in q̇ the RNEA is quadratic, so its central
   difference is exact);
-* ``sd.rnea_derivatives`` (the analytic derivatives), timed as the bare call;
+* ``sd.rnea_derivatives`` (the analytic derivatives), timed as the bare call, and with
+  ``out=`` (three arrays made once and reused: a controller's loop, as Pinocchio's ``data``);
 * central finite differences of ``sd.rnea`` with steps 1e-3 to 1e-8, the ``4 nv`` perturbed
   states of one state in one batched call;
 * Pinocchio's ``computeRNEADerivatives`` (its free-flyer rows and columns ``[v; ω]`` mapped to
@@ -28,8 +29,9 @@ On a floating base the derivative in ``q`` is taken on the tangent space, the co
 velocity order ``[ω; v; joints]``: ``d/dε τ(q ⊕ ε e_k)`` with ``q ⊕ δ`` the base moved along
 ``δ`` in its own frame (``sd.integrate``, Pinocchio's ``integrate``). Then forward dynamics:
 ``sd.forward_dynamics`` against ``pin.aba``, time per state and the largest relative
-difference; and a batch of 10,000 states in one ``sd.rnea_derivatives`` call against a
-Python loop of ``computeRNEADerivatives`` over the same states. Writes
+difference; and a batch of 10,000 states in one ``sd.rnea_derivatives`` call (bare, and
+with ``out=`` arrays made once and reused across the rounds) against a Python loop of
+``computeRNEADerivatives`` over the same states. Writes
 ``DIR/derivatives.csv`` and ``DIR/derivatives_vs_error.png``; prints markdown tables on
 stdout, progress on stderr.
 """
@@ -39,6 +41,7 @@ from __future__ import annotations
 import argparse
 import csv
 from dataclasses import dataclass
+from functools import partial
 import os
 from pathlib import Path
 import re
@@ -202,6 +205,16 @@ def _analytic(model: sd.Model) -> Callable:
     return run
 
 
+def _analytic_out(model: sd.Model) -> Callable:
+    """``sd.rnea_derivatives`` with ``out=``: three arrays made once, written each call."""
+    out = tuple(np.empty((model.nv, model.nv)) for _ in range(3))
+
+    def run(q, qd, qdd):
+        dq, dv = sd.rnea_derivatives(model, q, qd, qdd, out=out)[:2]
+        return np.hstack([dq, dv])
+    return run
+
+
 def _pinocchio_model(model: sd.Model, xml: str):
     """Pinocchio's model of ``xml`` (mimic tags stripped) and ``P``: ``v_pin = P q̇``, q map."""
     import pinocchio as pin
@@ -270,7 +283,8 @@ def bench_robot(name: str, model: sd.Model, xml: str, settings: Settings, log: C
     refs = [reference(model, Q[k], QD[k], QDD[k]) for k in range(settings.ref_states)]
     errors, notes = {}, []
     states = list(zip(Q, QD, QDD))
-    entries = {'sd.rnea_derivatives': (_analytic(model), states)}
+    entries = {'sd.rnea_derivatives': (_analytic(model), states),
+               'sd.rnea_derivatives, out=': (_analytic_out(model), states)}
     for step in STEPS:
         entries[f'central differences of sd.rnea, h={step:g}'] = (
             _finite_differences(step)(model), states)
@@ -279,6 +293,9 @@ def bench_robot(name: str, model: sd.Model, xml: str, settings: Settings, log: C
     # finite-difference row is the whole of its method.
     timed = dict(entries)
     timed['sd.rnea_derivatives'] = (sd.rnea_derivatives, [(model,) + s for s in states])
+    out = tuple(np.empty((model.nv, model.nv)) for _ in range(3))      # made once, reused
+    timed['sd.rnea_derivatives, out='] = (partial(sd.rnea_derivatives, out=out),
+                                          [(model,) + s for s in states])
     pin = None
     try:
         pin, pm, P, joints, prun = _pinocchio(model, xml)
@@ -316,9 +333,10 @@ def batch_row(name: str, model: sd.Model, pinocchio: tuple, settings: Settings,
     """Time one ``sd.rnea_derivatives`` call on a batch against Pinocchio looped over it.
 
     Per state: the batch call's time over ``settings.batch`` states (the compiled backend's
-    threads on the cores there are), and a Python loop of ``computeRNEADerivatives`` over the
-    same states, in alternating rounds (median). The largest difference of the batch from
-    the one-state calls on its first states, relative to the largest entry, is in the row.
+    threads on the cores there are), bare and with ``out=`` (three arrays made once, written
+    every round), and a Python loop of ``computeRNEADerivatives`` over the same states, in
+    alternating rounds (median). The largest difference of the batch from the one-state calls
+    on its first states, relative to the largest entry, is in the row (``out=``'s too).
     """
     pin, pm, P, joints = pinocchio     # bench_robot's model of the robot (_pinocchio)
     data = pm.createData()
@@ -326,22 +344,29 @@ def batch_row(name: str, model: sd.Model, pinocchio: tuple, settings: Settings,
     pstates = [to_pinocchio(model, pm, P, joints, *s) for s in zip(Q, QD, QDD)]
     derivatives = pin.computeRNEADerivatives
 
+    out = tuple(np.empty((settings.batch, model.nv, model.nv)) for _ in range(3))
+
     def ours() -> None:
         sd.rnea_derivatives(model, Q, QD, QDD)
+
+    def ours_out() -> None:
+        sd.rnea_derivatives(model, Q, QD, QDD, out=out)
 
     def theirs() -> None:
         for qp, vp, ap in pstates:
             derivatives(pm, data, qp, vp, ap)
     batched = sd.rnea_derivatives(model, Q, QD, QDD)
-    worst = 0.0
+    ours_out()
+    worst = worst_out = 0.0
     for k in range(8):
         one = sd.rnea_derivatives(model, Q[k], QD[k], QDD[k])
         worst = max(worst, max(_rel(b[k], o) for b, o in zip(batched, one)))
-    times = interleaved({'ours': (ours, [()]), 'pin': (theirs, [()])},
-                        settings.batch_rounds, 0.0, settings.batch)
+        worst_out = max(worst_out, max(_rel(b[k], o) for b, o in zip(out, one)))
+    times = interleaved({'ours': (ours, [()]), 'ours_out': (ours_out, [()]),
+                         'pin': (theirs, [()])}, settings.batch_rounds, 0.0, settings.batch)
     return {'robot': name, 'nv': model.nv, 'states': settings.batch,
             'batch_us': times['ours'] * 1e6, 'pin_loop_us': times['pin'] * 1e6,
-            'rel_diff': worst}
+            'rel_diff': worst, 'out_us': times['ours_out'] * 1e6, 'out_rel_diff': worst_out}
 
 
 def forward_row(name: str, model: sd.Model, xml: str, states: list, settings: Settings) -> dict:
@@ -398,6 +423,10 @@ def markdown(rows: list, fds: list, batches: list = ()) -> str:
             out.append(f"| {b['robot']} ({b['nv']}) | {b['states']:,} | {b['batch_us']:.3g} | "
                        f"{b['pin_loop_us']:.3g} | {b['batch_us'] / b['pin_loop_us']:.2f}× | "
                        f"{b['rel_diff']:.1e} |")
+        for b in batches:       # the same call with out=, below the bare calls
+            out.append(f"| {b['robot']} ({b['nv']}) | {b['states']:,}, out= | "
+                       f"{b['out_us']:.3g} | {b['pin_loop_us']:.3g} | "
+                       f"{b['out_us'] / b['pin_loop_us']:.2f}× | {b['out_rel_diff']:.1e} |")
     return '\n'.join(out)
 
 

@@ -41,6 +41,7 @@ def test_a_tiny_run_prints_every_row_and_the_reference_is_pinocchios(
         assert 1e-14 < by[(robot, 'central differences of sd.rnea, h=1e-05')] < 1e-8
         assert 1e-9 < by[(robot, 'central differences of sd.rnea, h=0.001')] < 1e-4
         assert by[(robot, 'sd.rnea_derivatives')] <= 1e-13     # rounding, as Pinocchio's
+        assert by[(robot, 'sd.rnea_derivatives, out=')] == by[(robot, 'sd.rnea_derivatives')]
     assert '| ur5 (6) |' in out and '| solo12 (18) |' in out
     lines = out.splitlines()
     head = next(k for k, line in enumerate(lines) if 'sd.forward_dynamics µs' in line)
@@ -54,6 +55,11 @@ def test_a_tiny_run_prints_every_row_and_the_reference_is_pinocchios(
     assert [line.split('|')[1].strip() for line in batch] == ['ur5 (6)', 'solo12 (18)']
     assert all(line.split('|')[2].strip() == '16' for line in batch)
     assert all(float(line.split('|')[6]) <= 1e-13 for line in batch)
+    # then the same batches with out= (arrays made once, reused), each its bare call's
+    batch_out = lines[head + 4:head + 6]
+    assert [line.split('|')[1:3] for line in batch_out] == [
+        [' ur5 (6) ', ' 16, out= '], [' solo12 (18) ', ' 16, out= ']]
+    assert [line.split('|')[6] for line in batch_out] == [line.split('|')[6] for line in batch]
     assert 'Complex step: not measured' in out
     assert (tmp_path / 'derivatives_vs_error.png').is_file() or 'no plot' in out
 
@@ -81,5 +87,8 @@ def test_the_analytic_rows_time_the_bare_calls(monkeypatch):
                             np.random.default_rng(0))
     run, args = seen['sd.rnea_derivatives']
     assert run is sd.rnea_derivatives and args[0][0] is model
+    run, args = seen['sd.rnea_derivatives, out=']    # the call, its arrays bound once
+    assert run.func is sd.rnea_derivatives and list(run.keywords) == ['out']
+    assert args[0][0] is model and len(run.keywords['out']) == 3
     run, args = seen['pinocchio computeRNEADerivatives']
     assert run is pin.computeRNEADerivatives

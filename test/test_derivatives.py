@@ -358,9 +358,9 @@ def test_a_batch_over_threads_is_each_state_alone_bit_for_bit(rng):
     """A batch on 1, 2, 3 and 7 threads (a block of its states each) is each state's call.
 
     Thousands of states (each thread takes 4096 body-states at least), a count that is no
-    multiple of the lanes or of a thread's chunk, and an odd ``nv`` (``3 nv²`` numbers a
-    state: the four lanes' results are transposed four numbers at a time, the rest one by
-    one); ``∂τ/∂q``, ``∂τ/∂q̇``, ``M`` bit for bit those of the single-state calls.
+    multiple of the lanes or of a thread's chunk, and an odd ``nv`` (``nv²`` numbers a
+    state each: the four lanes' results are transposed four numbers at a time, the rest one
+    by one); ``∂τ/∂q``, ``∂τ/∂q̇``, ``M`` bit for bit those of the single-state calls.
     """
     from spatial_dynamics.backends import compiled
     from urdf_gen import random_tree_urdf
@@ -376,9 +376,10 @@ def test_a_batch_over_threads_is_each_state_alone_bit_for_bit(rng):
     alone = np.array([np.stack(sd.rnea_derivatives(model, q[s], qd[s], qdd[s], g))
                       for s in range(N)])
     for threads in (1, 2, 3, 7):
-        D = np.full((N, 3, model.nv, model.nv), np.nan)
-        compiled.ext.derivatives_batch(lay.kernels, N, q, qd, qdd, g, None, D, threads)
-        np.testing.assert_array_equal(D.view(np.int64), alone.view(np.int64), err_msg=threads)
+        D = np.full((3, N, model.nv, model.nv), np.nan)
+        compiled.ext.derivatives_batch(lay.kernels, N, q, qd, qdd, g, None, *D, threads)
+        np.testing.assert_array_equal(D.transpose(1, 0, 2, 3).view(np.int64),
+                                      alone.view(np.int64), err_msg=threads)
 
 
 def test_a_moving_base_differentiates_the_joint_rows(rng):

@@ -466,7 +466,8 @@ def _singular_reason(model: Model, H: np.ndarray, k: int) -> str:
 def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVITY,
                      f_ext: Optional[Mapping[str, np.ndarray]] = None, backend: str = 'auto',
                      *, base: Optional[BaseMotion] = None, armature=None,
-                     friction_threshold: Optional[float] = None) -> tuple:
+                     friction_threshold: Optional[float] = None,
+                     out: Optional[Sequence[np.ndarray]] = None) -> tuple:
     """Return ``(∂τ/∂q, ∂τ/∂q̇, M)`` of :func:`rnea`, analytically (Carpentier & Mansard 2018).
 
     Each of shape (..., nv, nv), row ``r`` the derivative of ``τ[r]``, column ``c`` that with
@@ -484,36 +485,101 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
     :func:`~spatial_dynamics.terms.friction_torque` (the URDF's ``<dynamics>``) to
     ``∂τ/∂q̇``. On a moving ``base`` the derivatives with respect to the joints of the joint
     rows (the base's motion is given, not a coordinate).
+
+    ``out``: three arrays ``(dq, dv, M)`` to write the results into (a controller's loop that
+    allocates nothing, as Pinocchio's ``data``), each numpy, writeable, of the result's shape
+    (..., nv, nv) and dtype, sharing no memory with an input or with each other; that tuple's
+    arrays are returned. C-contiguous float64 ones are written in place by the compiled
+    kernels (one state and batches), any others get a copy. ``TypeError`` or ``ValueError``
+    naming ``out[k]`` when they are not such arrays.
     """
     if (base is None and armature is None and friction_threshold is None
             and (f_ext is None or (type(f_ext) is dict and not f_ext))):
-        # one state that the extension reads as it is: answered in C
-        lay, kern, D = _entered(model, backend, _c_derivatives, q, qd, qdd, gravity)
+        # one state that the extension reads as it is: answered in C; into out when the
+        # entry sees that it can (a tuple of arrays whose bounds meet no argument's)
+        lay, kern, D = _entered(model, backend, _c_derivatives, q, qd, qdd, gravity,
+                                *(() if out is None else (None, out)))
         if D is not None:
             return D
+    if out is not None:
+        out = _out_arrays(out, (('q', q), ('qd', qd), ('qdd', qdd), ('gravity', gravity),
+                                ('f_ext', f_ext), ('armature', armature)))
     if base is not None:
         check_base_motion(base, model)
         twin = floating_twin(model)
         tq, tqd, tqdd, tg = twin_state(model, base, q, qd, qdd, gravity)
         twin_f = None if f_ext is None else f_ext
-        out = rnea_derivatives(twin, tq, tqd, tqdd, tg, twin_f, backend)
-        out = tuple(x[..., 6:, 6:] for x in out)
-        return _drive_terms(model, out, qd, armature, friction_threshold)
+        res = rnea_derivatives(twin, tq, tqd, tqdd, tg, twin_f, backend)
+        res = tuple(x[..., 6:, 6:] for x in res)
+        return _drive_terms(model, res, qd, armature, friction_threshold, out)
     lay = _layout_of(id(model)) or layout.of(model)
     kern = lay.kernels if backend == 'auto' else _select(backend, lay)
     q, qd, qdd, g, fb = _states(model, q, qd, qdd, gravity, f_ext)
+    if out is not None:
+        _check_out(out, qd.shape + (lay.nv,), q.dtype)
     if kern is not None and _c_derivatives is not None and q.dtype in _KERNEL_DTYPES:
         if q.size == q.shape[-1] > 0:
             # One state (maybe with batch dimensions of 1): the single-state entry.
             fext = (compiled.f_body_table(lay, {b: np.reshape(f, -1) for b, f in fb.items()})
                     if fb else None)
-            D = _c_derivatives(kern, *(x.reshape(-1) for x in (q, qd, qdd)), g, fext)
-            out = tuple(x.reshape(qd.shape + (lay.nv,)) for x in D)
+            vectors = [x.reshape(-1) for x in (q, qd, qdd)]
+            direct = out is not None and q.ndim == 1 and q.dtype == _F8
+            D = _c_derivatives(kern, *vectors, g, fext, out) if direct else None
+            if D is None:   # no out, or out that the entry declines: new arrays to copy
+                D = _c_derivatives(kern, *vectors, g, fext)
+            res = tuple(x.reshape(qd.shape + (lay.nv,)) for x in D)
         else:
-            out = compiled.derivatives(lay, q, qd, qdd, g, fb)
+            res = compiled.derivatives(lay, q, qd, qdd, g, fb, out)
     else:
-        out = python.derivatives(lay.rows, q, qd, qdd, g, fb)
-    return _drive_terms(model, out, qd, armature, friction_threshold)
+        res = python.derivatives(lay.rows, q, qd, qdd, g, fb)
+    return _drive_terms(model, res, qd, armature, friction_threshold, out)
+
+
+def _out_arrays(out, inputs: tuple) -> tuple:
+    """Return ``out`` of :func:`rnea_derivatives` as a tuple of three writeable arrays.
+
+    ``inputs``: (name, value) of the call's arguments; ``ValueError`` naming ``out[k]`` and
+    the argument it shares memory with (or the other ``out[j]``). Bounds first
+    (``may_share_memory``, cheap), then exactly: three views of one stacked array are fine.
+    """
+    if not isinstance(out, (tuple, list)) or len(out) != 3:
+        raise TypeError('out must be a tuple of three numpy arrays (dq, dv, M), got '
+                        + shown(out))
+    for k, x in enumerate(out):
+        if not isinstance(x, _ndarray):
+            raise TypeError(f'out[{k}] must be a numpy array, got {type(x).__name__}')
+        if not x.flags.writeable:
+            raise ValueError(f'out[{k}] must be writeable (it is read-only)')
+    given = [(name, a) for name, value in inputs for a in _arrays_in(value)]
+    for k, x in enumerate(out):
+        others = [(f'out[{j}]', out[j]) for j in range(k)] + given
+        for name, a in others:
+            if np.may_share_memory(x, a) and np.shares_memory(x, a):
+                raise ValueError(f'out[{k}] shares memory with {name}: the results would '
+                                 'overwrite it; pass separate arrays')
+    return tuple(out)
+
+
+def _arrays_in(value) -> list:
+    """Return the numpy arrays in an argument: itself, or those in a dict's values or a list.
+
+    (A :class:`~spatial_dynamics.base.BaseMotion` holds copies of its own.)
+    """
+    if isinstance(value, _ndarray):
+        return [value]
+    if isinstance(value, dict):
+        return [a for x in value.values() for a in _arrays_in(x)]
+    if isinstance(value, (list, tuple)):
+        return [a for x in value for a in _arrays_in(x)]
+    return []
+
+
+def _check_out(out: tuple, shape: tuple, dtype) -> None:
+    """Refuse ``out`` arrays that are not of the results' ``shape`` and ``dtype``."""
+    for k, x in enumerate(out):
+        if x.shape != shape or x.dtype != dtype:
+            raise ValueError(f'out[{k}] must be an array of the result\'s shape {shape} and '
+                             f'dtype {np.dtype(dtype)}, got {x.shape} {x.dtype}')
 
 
 def _narrow_float(*arrays) -> Optional[np.dtype]:
@@ -528,16 +594,29 @@ def _narrow_float(*arrays) -> Optional[np.dtype]:
     return dtype if dtype in (np.float32, np.float16) else None
 
 
-def _drive_terms(model: Model, out: tuple, qd, armature, friction_threshold) -> tuple:
-    """Add the drive terms' derivatives to ``(∂τ/∂q, ∂τ/∂q̇, M)`` (:func:`rnea_derivatives`)."""
-    dq, dv, M = out
+def _drive_terms(model: Model, res: tuple, qd, armature, friction_threshold,
+                 out: Optional[tuple] = None) -> tuple:
+    """Add the drive terms' derivatives to ``(∂τ/∂q, ∂τ/∂q̇, M)`` (:func:`rnea_derivatives`).
+
+    ``out``: the caller's arrays: the sums are made in those of ``res`` that are they (written
+    in place), the rest copied into them (after :func:`_check_out`).
+    """
+    dq, dv, M = res
     if armature is not None:     # in the states' dtype, as the rest
-        M = M + np.diag(per_joint(model, 'armature', armature, nonnegative=True)).astype(
-            M.dtype, copy=False)
+        M = np.add(M, np.diag(per_joint(model, 'armature', armature, nonnegative=True)).astype(
+            M.dtype, copy=False), out=M if out is not None and M is out[2] else None)
     if friction_threshold is not None:
         threshold = check_threshold(friction_threshold, 'friction_threshold')
-        dv = dv + friction_derivative(model, qd, threshold).astype(dv.dtype, copy=False)
-    return dq, dv, M
+        dv = np.add(dv, friction_derivative(model, qd, threshold).astype(dv.dtype, copy=False),
+                    out=dv if out is not None and dv is out[1] else None)
+    if out is None:
+        return dq, dv, M
+    if not all(x is o for x, o in zip((dq, dv, M), out)):
+        _check_out(out, M.shape, M.dtype)
+        for o, x in zip(out, (dq, dv, M)):
+            if x is not o:
+                np.copyto(o, x)
+    return out
 
 
 def _on_base(algorithm, model: Model, base: BaseMotion, q, qd, qdd, gravity, **options):

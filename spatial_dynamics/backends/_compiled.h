@@ -87,7 +87,7 @@ typedef struct {
     const double *q, *qd, *qdd, *fext;  /* (N, n) each or NULL; fext (1 or N, rows, 6) or NULL */
     int fext_per_state;
     double g[3];
-    double *out1, *out2;                 /* tau | H | mom, ctq | Y | J | dq, dv, M | qdd */
+    double *out1, *out2, *out3;          /* tau | H | mom, ctq | Y | J | dq, dv, M | qdd */
 } Slice;
 
 int result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count);
@@ -119,9 +119,9 @@ typedef struct {
     int fext;               /* then, optionally, the external forces (rnea's f_body) */
     int kernel;             /* results: RNEA tau (n,), CRBA H (n, n), MOMENTUM two (n,), */
                             /* REGRESSOR Y (n, 10 NB), BODIES (NB + 1, 16 + 6 n), */
-                            /* DERIVATIVES dq, dv, M stacked (3 n, n), */
+                            /* DERIVATIVES three (n, n): dq, dv, M, */
                             /* FORWARD qdd (n,), reading tau as its third vector */
-    const char *outputs[2]; /* the batch entry's result arguments, as its errors name them */
+    const char *outputs[3]; /* the batch entry's result arguments, as its errors name them */
     const char *doc, *batch_doc;
 } Algorithm;
 

@@ -194,14 +194,14 @@ static void rnea_batch_lanes{L}(const double *K, long rows, long N, const double
     }}
 }}
 
-/* The derivatives (dtau/dq, dtau/dqd, M stacked: 3 nv x nv numbers a state, into the rows
- * of D) of the states [0, N - N % {L}) of a batch, {L} at a time; arguments as for
+/* The derivatives (dtau/dq, dtau/dqd, M: nv x nv numbers a state each, into the rows of
+ * DQ, DV and DM) of the states [0, N - N % {L}) of a batch, {L} at a time; arguments as for
  * rnea_batch_lanes{L}, `work` holding rows * (WORK + DWORK + 6 CWORK) + nq + 2 nv
  * + 6 rows + 3 nv nv vectors. Each state's, bit for bit, those of derivatives_kernel on it
  * alone. */
 static void derivatives_batch_lanes{L}(const double *K, long rows, long N, const double *Q,
     const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
-    long F_each, double *D, sd_vd{L} *work)
+    long F_each, double *DQ, double *DV, double *DM, sd_vd{L} *work)
 {{
     const long nq = (long)K[QIDX], nv = (long)K[VIDX], nv2 = nv * nv;
     sd_vd{L} *q = work + rows * (WORK + DWORK + 6 * CWORK), *qd = q + nq, *qdd = qd + nv;
@@ -221,7 +221,9 @@ static void derivatives_batch_lanes{L}(const double *K, long rows, long N, const
         xup_kernel_lanes{L}(K, rows, q, work);
         derivatives_kernel_lanes{L}(K, rows, qd, qdd, gx, gy, gz, f_body, F != NULL, dq, dv, H,
                                     work);
-        sd_out{L}(dq, 3 * nv2, D + b * 3 * nv2, 3 * nv2);     /* dq, dv, H: one run */
+        sd_out{L}(dq, nv2, DQ + b * nv2, nv2);
+        sd_out{L}(dv, nv2, DV + b * nv2, nv2);
+        sd_out{L}(H, nv2, DM + b * nv2, nv2);
     }}
 }}
 """
@@ -280,7 +282,7 @@ static long rnea_batch_lanes(const double *K, long rows, long N, const double *Q
  * states done (N rounded down to the lanes), or -1 without memory. */
 static long derivatives_batch_lanes(const double *K, long rows, long N, const double *Q,
     const double *QD, const double *QDD, double gx, double gy, double gz, const double *F,
-    long F_each, double *D)
+    long F_each, double *DQ, double *DV, double *DM)
 {
     const long nq = (long)K[QIDX], nv = (long)K[VIDX];
     const long size = 8 * (rows * (WORK + DWORK + 6 * CWORK) + nq + 2 * nv + 6 * rows
@@ -297,12 +299,15 @@ static long derivatives_batch_lanes(const double *K, long rows, long N, const do
     void *work = (void *)(((uintptr_t)raw + 63) & ~(uintptr_t)63);
 #ifdef SD_AVX
     if (lanes == 8)
-        derivatives_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, D, work);
+        derivatives_batch_lanes8(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, DQ, DV,
+            DM, work);
     else if (lanes == 4)
-        derivatives_batch_lanes4(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, D, work);
+        derivatives_batch_lanes4(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, DQ, DV,
+            DM, work);
     else
 #endif
-        derivatives_batch_lanes2(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, D, work);
+        derivatives_batch_lanes2(K, rows, N, Q, QD, QDD, gx, gy, gz, F, F_each, DQ, DV,
+            DM, work);
     free(raw);
     return N - N % lanes;
 }

@@ -28,7 +28,7 @@ import warnings
 import numpy as np
 
 #: The interface of ``_compiled.c`` this module speaks (its ``API``).
-API = 18
+API = 19
 
 try:
     ext = importlib.import_module(__package__ + '._compiled')
@@ -83,19 +83,24 @@ def kernels(table: np.ndarray):
 DTYPES = (np.dtype(np.float64), np.dtype(np.float32))
 
 
-def _batch(entry, lay, vectors: tuple, middle: tuple, shape: tuple, results: int = 1) -> list:
+def _batch(entry, lay, vectors: tuple, middle: tuple, shape: tuple, results: int = 1,
+           into: Optional[tuple] = None) -> list:
     """Run the batch ``entry`` on validated arrays ``vectors`` of one batch shape (...).
 
     Each is made one C-contiguous float64 (N, nq) or (N, nv) copy (none when it is one already);
     ``middle`` are the entry's arguments between the vectors and the results (gravity,
     external forces). Returns ``results`` arrays of shape (...,) + ``shape`` in the vectors'
-    dtype (float32 rounded once from the float64 results).
+    dtype (float32 rounded once from the float64 results): new ones, or ``into`` (C-contiguous
+    float64 arrays of that shape, written in place; float64 vectors only).
     """
     batch = vectors[0].shape[:-1]
     N = math.prod(batch)        # (np.prod takes ~2 µs: a batch of a few states feels it)
     rows = [np.ascontiguousarray(x.reshape(N, x.shape[-1]), dtype=np.float64) for x in vectors]
-    outs = [np.empty((N,) + shape) for _ in range(results)]
+    outs = ([np.empty((N,) + shape) for _ in range(results)] if into is None else
+            [x.reshape((N,) + shape) for x in into])    # (C-contiguous: views)
     entry(lay.kernels, N, *rows, *middle, *outs, THREADS)
+    if into is not None:
+        return list(into)
     dtype = vectors[0].dtype
     return [out.reshape(batch + shape).astype(dtype, copy=False) for out in outs]
 
@@ -158,12 +163,23 @@ def regressor(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tupl
 
 
 def derivatives(lay, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, gravity: tuple,
-                f_body: dict) -> tuple:
-    """``(∂τ/∂q, ∂τ/∂q̇, M)``, each (..., nv, nv), from validated arrays (as :func:`rnea`)."""
+                f_body: dict, out: Optional[tuple] = None) -> tuple:
+    """``(∂τ/∂q, ∂τ/∂q̇, M)``, each (..., nv, nv), from validated arrays (as :func:`rnea`).
+
+    Three C-contiguous arrays; or ``out``, three checked arrays of the results' shape and
+    dtype: written in place when they are C-contiguous float64 (and so are the results),
+    else the results are copied into them.
+    """
     nv = lay.nv
-    D = _batch(ext.derivatives_batch, lay, (q, qd, qdd), (gravity, _fext(lay, q, f_body)),
-               (3, nv, nv))[0]
-    return D[..., 0, :, :], D[..., 1, :, :], D[..., 2, :, :]
+    direct = out is not None and q.dtype == np.float64 and all(
+        x.dtype == np.float64 and x.flags.c_contiguous for x in out)
+    results = _batch(ext.derivatives_batch, lay, (q, qd, qdd),
+                     (gravity, _fext(lay, q, f_body)), (nv, nv), 3, out if direct else None)
+    if out is not None and not direct:
+        for x, r in zip(out, results):
+            np.copyto(x, r)
+        return tuple(out)
+    return tuple(results)
 
 
 def describe() -> str:

@@ -6,7 +6,8 @@
  * Door(function, kind, kernels, gravity) is called as `function` is (same arguments, and it
  * carries its __doc__, __name__ and __wrapped__); `kind` is the row of `function` in
  * ALGORITHMS (the module's ALGORITHMS names them in order). One state with gravity given or
- * default (`gravity` when not given), no f_ext and backend 'auto' or 'compiled', of a model
+ * default (`gravity` when not given), no f_ext and backend 'auto' or 'compiled' (and
+ * rnea_derivatives' `out` arrays, which its entry writes into or declines), of a model
  * whose Kernels are in the dict `kernels` (id(model) -> Kernels), runs here; every other
  * call, or one whose arguments the entry declines, is passed on to `function` unchanged (it
  * validates, derives the table, runs batches and the other backends). This saves the Python
@@ -19,7 +20,7 @@
 
 #include <stddef.h>
 
-static PyObject *str_gravity, *str_f_ext, *str_backend, *str_auto, *str_compiled;
+static PyObject *str_gravity, *str_f_ext, *str_backend, *str_auto, *str_compiled, *str_out;
 
 typedef struct {
     PyObject_HEAD
@@ -82,7 +83,7 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     Py_ssize_t nargs = PyVectorcall_NARGS(nargsf);
     const Algorithm *a = &ALGORITHMS[self->kind];
     const int nv = a->vectors;
-    PyObject *gravity = self->gravity, *f_ext = NULL, *backend = NULL;
+    PyObject *gravity = self->gravity, *f_ext = NULL, *backend = NULL, *out_arrays = NULL;
     Py_ssize_t nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
     int ok = nargs >= 1 + nv;
     /* optional arguments by position: gravity, f_ext, backend (those the function has) */
@@ -108,6 +109,8 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
         } else if (is_name(name, str_backend)) {
             ok = backend == NULL;
             backend = value;
+        } else if (a->kernel == DERIVATIVES && is_name(name, str_out)) {
+            out_arrays = value;     /* rnea_derivatives' out: the entry takes or declines it */
         } else {
             ok = 0;
         }
@@ -145,9 +148,14 @@ door_call(DoorObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     if (ok) {
         Py_INCREF(kern);
         /* kernels, the joint vectors, gravity (read when the algorithm takes it) */
-        PyObject *call[5] = {kern, args[1], nv > 1 ? args[2] : NULL, nv > 2 ? args[3] : NULL};
+        PyObject *call[7] = {kern, args[1], nv > 1 ? args[2] : NULL, nv > 2 ? args[3] : NULL};
         call[1 + nv] = gravity;
-        PyObject *out = single(a, call, 1 + nv + a->gravity);
+        Py_ssize_t count = 1 + nv + a->gravity;
+        if (out_arrays != NULL && out_arrays != Py_None) {     /* then f_body None, out */
+            call[count++] = Py_None;
+            call[count++] = out_arrays;
+        }
+        PyObject *out = single(a, call, count);
         Py_DECREF(kern);
         if (out != Py_None)
             return out;        /* the answer, or an error (no memory) */
@@ -272,7 +280,8 @@ door_add(PyObject *m)
     str_backend = PyUnicode_InternFromString("backend");
     str_auto = PyUnicode_InternFromString("auto");
     str_compiled = PyUnicode_InternFromString("compiled");
-    if (!(str_gravity && str_f_ext && str_backend && str_auto && str_compiled))
+    str_out = PyUnicode_InternFromString("out");
+    if (!(str_gravity && str_f_ext && str_backend && str_auto && str_compiled && str_out))
         return -1;
     Py_INCREF(&DoorType);
     if (PyModule_AddObject(m, "Door", (PyObject *)&DoorType) < 0) {

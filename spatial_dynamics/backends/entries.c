@@ -57,13 +57,17 @@ const Algorithm ALGORITHMS[] = {
      "axes.",
      "bodies_batch(kernels, N, q, J, threads) -> None: the rows of bodies() of N states into\n"
      "J (N x (NB + 1) x (16 + 6 n))."},
-    {"rnea_derivatives", "derivatives_batch", 3, 1, 1, DERIVATIVES, {"D"},
-     "rnea_derivatives(kernels, q, qd, qdd, gravity, f_body=None) -> (dq, dqd, M), or None\n\n"
+    {"rnea_derivatives", "derivatives_batch", 3, 1, 1, DERIVATIVES, {"dq", "dqd", "M"},
+     "rnea_derivatives(kernels, q, qd, qdd, gravity, f_body=None, out=None) -> (dq, dqd, M),\n"
+     "or None\n\n"
      "The analytical derivatives of rnea (algorithms/derivatives.py) of one state: dtau/dq\n"
-     "(tangent space), dtau/dqd and M = dtau/dqdd, each a new (n, n) array; arguments as\n"
+     "(tangent space), dtau/dqd and M = dtau/dqdd, each a new (n, n) array, or written into\n"
+     "out: a tuple of three numpy arrays (exactly ndarray), float64, C-contiguous, writeable,\n"
+     "(n, n) each (None when they are not, or the result would be float32); arguments as\n"
      "for rnea.",
-     "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, D, threads) -> None: the\n"
-     "derivatives of N states into D (N x 3 n x n); fext as for rnea_batch."},
+     "derivatives_batch(kernels, N, q, qd, qdd, gravity, fext, dq, dqd, M, threads) -> None:\n"
+     "the derivatives of N states into dq, dqd and M (N x n x n each); fext as for\n"
+     "rnea_batch."},
     {"forward_dynamics", "forward_dynamics_batch", 3, 1, 1, FORWARD, {"qdd"},
      "forward_dynamics(kernels, q, qd, tau, gravity, f_body=None, armature=None) -> qdd (n,),\n"
      "or None\n\n"
@@ -115,15 +119,72 @@ scratch_free(double *p, double *stack)
 /* ------------------------------------------------------------------------------------------
  * One state: the entry of every algorithm */
 
+/* The bytes [*lo, *hi) that the elements of `arr` lie in (any strides; empty: lo == hi). */
+static void
+extent(PyArrayObject *arr, const char **lo, const char **hi)
+{
+    const char *p = PyArray_BYTES(arr);
+    npy_intp low = 0, high = PyArray_ITEMSIZE(arr);
+    for (int d = 0; d < PyArray_NDIM(arr); d++) {
+        const npy_intp dim = PyArray_DIM(arr, d), stride = PyArray_STRIDE(arr, d);
+        if (dim == 0) {
+            *lo = *hi = p;
+            return;
+        }
+        if (stride < 0)
+            low += stride * (dim - 1);
+        else
+            high += stride * (dim - 1);
+    }
+    *lo = p + low;
+    *hi = p + high;
+}
+
+/* Whether the `count` arrays of the tuple `out` certainly share no memory with each other
+ * or with the arguments args[1..nargs): bounds that do not meet. An argument that is an
+ * exact ndarray is bounded; a list, tuple, number or None holds no array memory; anything
+ * else (another buffer) may share: 0, and the caller's exact check decides. */
+static int
+apart(PyObject *out, int count, PyObject *const *args, Py_ssize_t nargs)
+{
+    const char *lo[3], *hi[3];
+    for (int k = 0; k < count; k++) {
+        extent((PyArrayObject *)PyTuple_GET_ITEM(out, k), &lo[k], &hi[k]);
+        for (int j = 0; j < k; j++)
+            if (lo[k] < hi[j] && lo[j] < hi[k])
+                return 0;
+    }
+    for (Py_ssize_t i = 1; i < nargs; i++) {
+        PyObject *x = args[i];
+        if (PyList_CheckExact(x) || PyTuple_CheckExact(x) || PyFloat_CheckExact(x)
+                || PyLong_CheckExact(x) || x == Py_None)
+            continue;
+        if (!PyArray_CheckExact(x))
+            return 0;
+        const char *xlo, *xhi;
+        extent((PyArrayObject *)x, &xlo, &xhi);
+        for (int k = 0; k < count; k++)
+            if (xlo < hi[k] && lo[k] < xhi)
+                return 0;
+    }
+    return 1;
+}
+
 /* args: kernels, the joint vectors, gravity (if the algorithm reads it), f_body (optional,
- * if it takes one). None when a vector or gravity is not one state that as_doubles reads.
- * The results are float32 when every joint vector is float32 (what numpy's promotion of
- * them gives), computed in float64 and rounded once; else float64. */
+ * if it takes one), then FORWARD's armature or DERIVATIVES' out (optional). None when a
+ * vector or gravity is not one state that as_doubles reads. The results are float32 when
+ * every joint vector is float32 (what numpy's promotion of them gives), computed in float64
+ * and rounded once; else float64. out (None, or a tuple of as many arrays as results): the
+ * results are written into them when each is an exact ndarray, float64, C-contiguous,
+ * aligned, writeable and of the result's shape, their bounds meet neither each other's nor
+ * an argument's (apart), and the results are float64; else None (the caller checks exactly,
+ * refuses or copies). */
 PyObject *
 single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
 {
     const Py_ssize_t fixed = 1 + a->vectors + a->gravity;
-    const Py_ssize_t most = fixed + a->fext + (a->kernel == FORWARD);     /* + armature */
+    /* + FORWARD's armature, DERIVATIVES' out */
+    const Py_ssize_t most = fixed + a->fext + (a->kernel == FORWARD || a->kernel == DERIVATIVES);
     if (nargs < fixed || nargs > most) {
         PyErr_Format(PyExc_TypeError,
                      most > fixed ? "%s takes %zd to %zd arguments" : "%s takes %zd arguments",
@@ -137,11 +198,22 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     npy_intp dims[2];
     int count;
     const int ndim = result_shape(h, a->kernel, dims, &count);
-    if (a->kernel == DERIVATIVES) {
-        /* three arrays (nv, nv), not views of one stacked (3 nv, nv): a view costs as much
-         * as an array, and the stacked one and its reshaping come on top */
-        count = 3;
-        dims[0] = dims[1];
+    PyObject *given = nargs > fixed + 1 && a->kernel == DERIVATIVES ? args[fixed + 1] : Py_None;
+    if (given != Py_None) {
+        if (!PyTuple_CheckExact(given) || PyTuple_GET_SIZE(given) != count)
+            Py_RETURN_NONE;
+        for (int k = 0; k < count; k++) {
+            PyObject *o = PyTuple_GET_ITEM(given, k);
+            PyArrayObject *arr = (PyArrayObject *)o;
+            if (!PyArray_CheckExact(o) || PyArray_TYPE(arr) != NPY_DOUBLE
+                    || !PyArray_ISCARRAY(arr) || PyArray_NDIM(arr) != ndim)
+                Py_RETURN_NONE;
+            for (int d = 0; d < ndim; d++)
+                if (PyArray_DIM(arr, d) != dims[d])
+                    Py_RETURN_NONE;
+        }
+        if (!apart(given, count, args, fixed + 1))     /* the vectors, gravity, f_body */
+            Py_RETURN_NONE;
     }
     const Py_ssize_t size = dims[0] * dims[1];
     /* Room for float32 results, computed in doubles first, only when q may be float32. */
@@ -188,13 +260,25 @@ single(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
         }
         f = fb.buf;
     }
-    if (nargs > fixed + 1 && args[fixed + 1] != Py_None) {     /* FORWARD's armature */
+    if (a->kernel == FORWARD && nargs > fixed + 1 && args[fixed + 1] != Py_None) {
         if (!as_doubles(args[fixed + 1], nv, arm))
             goto declined;
         armature = arm;
     }
     const int single_precision = may_float && floats == a->vectors;   /* res has room */
     double *data[3] = {NULL, NULL, NULL};
+    if (given != Py_None) {
+        if (single_precision)
+            goto declined;      /* float32 results: the caller's */
+        for (int k = 0; k < count; k++)
+            data[k] = (double *)PyArray_DATA((PyArrayObject *)PyTuple_GET_ITEM(given, k));
+        if (run_state(a->kernel, h->K, rows, x[0], x[1], x[2], g, f, armature, data[0],
+                      data[1], data[2], work) < 0)
+            goto declined;
+        out = given;
+        Py_INCREF(out);
+        goto done;
+    }
     for (int k = 0; k < count; k++) {
         results[k] = PyArray_SimpleNew(ndim, dims, single_precision ? NPY_FLOAT : NPY_DOUBLE);
         if (results[k] == NULL)
@@ -242,7 +326,8 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
 {
     npy_intp dims[2];
     int count;
-    const Py_ssize_t want = 3 + a->vectors + a->gravity + a->fext + (a->kernel == MOMENTUM);
+    const int results = a->kernel == MOMENTUM ? 2 : (a->kernel == DERIVATIVES ? 3 : 1);
+    const Py_ssize_t want = 2 + a->vectors + a->gravity + a->fext + results;
     if (nargs != want + 1) {
         PyErr_Format(PyExc_TypeError, "%s takes %zd arguments", a->batch, want + 1);
         return NULL;
@@ -269,7 +354,7 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     }
     PyObject *fext = a->fext ? args[next++] : Py_None;
     /* the buffers: the joint vectors, the results, then the external forces */
-    Py_buffer v[6];
+    Py_buffer v[7];     /* three joint vectors, three results, the external forces */
     int held = 0;
     for (int i = 0; i < a->vectors + count; i++, held++) {
         const int result = i >= a->vectors;
@@ -308,7 +393,8 @@ batch(const Algorithm *a, PyObject *const *args, Py_ssize_t nargs)
     for (int i = 0; i < a->vectors; i++)
         *vectors[i] = v[i].buf;
     job.out1 = v[a->vectors].buf;
-    job.out2 = count == 2 ? v[a->vectors + 1].buf : NULL;
+    job.out2 = count >= 2 ? v[a->vectors + 1].buf : NULL;
+    job.out3 = count == 3 ? v[a->vectors + 2].buf : NULL;
     /* no state, or states without results (a model without joints): nothing to compute */
     int rc = N == 0 || job.size == 0 ? 0 : run_batch(&job, N, threads);
     for (int i = 0; i < held; i++)

@@ -147,25 +147,21 @@ PyTypeObject KernelsType = {
 /* ------------------------------------------------------------------------------------------
  * The generated kernels on one state, or on a slice of a batch */
 
-/* The results of `kernel` for one state: how many (momentum's two, else one), their shape
- * dims[:ndim] (returned), and dims[0] x dims[1] doubles each. */
+/* The results of `kernel` for one state: how many (momentum's two, the derivatives' three,
+ * else one), their shape dims[:ndim] (returned), and dims[0] x dims[1] doubles each. */
 int
 result_shape(const KernelsObject *h, int kernel, npy_intp *dims, int *count)
 {
-    *count = kernel == MOMENTUM ? 2 : 1;
+    *count = kernel == MOMENTUM ? 2 : (kernel == DERIVATIVES ? 3 : 1);
     if (kernel == BODIES) {     /* a row per body: [R p; 0 1], then J (6 x nv) */
         dims[0] = h->rows;
         dims[1] = 16 + 6 * (npy_intp)h->nv;
         return 2;
     }
-    if (kernel == DERIVATIVES) {    /* dtau/dq, dtau/dqd, M stacked: (3 nv, nv) */
-        dims[0] = 3 * (npy_intp)h->nv;
-        dims[1] = h->nv;
-        return 2;
-    }
     dims[0] = h->nv;
-    dims[1] = kernel == CRBA ? h->nv : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
-    return kernel == CRBA || kernel == REGRESSOR ? 2 : 1;
+    dims[1] = kernel == CRBA || kernel == DERIVATIVES
+        ? h->nv : (kernel == REGRESSOR ? 10 * (npy_intp)(h->rows - 1) : 1);
+    return kernel == CRBA || kernel == REGRESSOR || kernel == DERIVATIVES ? 2 : 1;
 }
 
 /* Scratch doubles of one state: the per-body rows, the regressor's carried axes, the
@@ -279,21 +275,21 @@ run_states(const Slice *s, double *work, Py_ssize_t lo, Py_ssize_t hi)
         long done = derivatives_batch_lanes(s->K, rows, (long)(hi - lo), s->q + lo * n,
                                             s->qd + lo * nv, s->qdd + lo * nv, s->g[0],
                                             s->g[1], s->g[2], f, s->fext_per_state,
-                                            s->out1 + lo * s->size);
+                                            s->out1 + lo * s->size, s->out2 + lo * s->size,
+                                            s->out3 + lo * s->size);
         if (done < 0)
             return -1;
         lo += done;
     }
 #endif
-    /* the derivatives of a state stacked: dtau/dq, dtau/dqd, M (nv x nv each) */
-    const Py_ssize_t nv2 = s->kernel == DERIVATIVES ? (Py_ssize_t)nv * nv : 0;
+    /* each state's results at k x size in each result (the derivatives' dtau/dq, dtau/dqd
+     * and M in three) */
     for (Py_ssize_t k = lo; k < hi; k++) {
         const double *f = s->fext ? s->fext + (s->fext_per_state ? k : 0) * rows * 6 : NULL;
-        double *out = s->out1 + k * s->size;
         run_state(s->kernel, s->K, rows, s->q + k * n, s->qd ? s->qd + k * nv : NULL,
-                  s->qdd ? s->qdd + k * nv : NULL, s->g, f, NULL, out,
-                  s->out2 ? s->out2 + k * s->size : (nv2 ? out + nv2 : NULL),
-                  nv2 ? out + 2 * nv2 : NULL, work);
+                  s->qdd ? s->qdd + k * nv : NULL, s->g, f, NULL, s->out1 + k * s->size,
+                  s->out2 ? s->out2 + k * s->size : NULL,
+                  s->out3 ? s->out3 + k * s->size : NULL, work);
     }
     return 0;
 }
