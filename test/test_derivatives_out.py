@@ -198,3 +198,52 @@ def test_a_batch_gives_three_contiguous_arrays(rng):
                 assert x.shape == (N, model.nv, model.nv), (backend, N, k)
                 assert x.flags.c_contiguous, (backend, N, k)
                 assert not any(np.shares_memory(x, y) for y in D[k + 1:]), (backend, N, k)
+
+
+@pytest.mark.parametrize('backend', ['compiled', 'numpy'])
+@pytest.mark.parametrize('batch', [(), (3,)])
+def test_a_refused_drive_term_leaves_out_as_it_was(backend, batch, rng):
+    """A bad armature or threshold: refused before anything is written (it wrote M first)."""
+    model = sd.Model.from_urdf(robot_urdf_path('ur5'))
+    n = model.nv
+    q, qd, qdd = (rng.uniform(-1, 1, batch + (n,)) for _ in range(3))
+    out = tuple(np.full(batch + (n, n), -1.0) for _ in range(3))
+    for bad in ({'armature': True}, {'armature': np.full(n, -1.0)}, {'armature': '0.1'},
+                {'friction_threshold': 0.0}, {'friction_threshold': np.nan},
+                {'friction_threshold': True}):
+        with pytest.raises((TypeError, ValueError)):
+            sd.rnea_derivatives(model, q, qd, qdd, backend=backend, out=out, **bad)
+        assert all(np.all(o == -1.0) for o in out), bad
+
+
+def test_a_masked_or_self_overlapping_out_is_refused(rng):
+    """A masked out kept its mask (results hidden); a stride-0 out kept the last state only."""
+    from numpy.lib.stride_tricks import as_strided
+    model = sd.Model.from_urdf(robot_urdf_path('ur5'))
+    n = model.nv
+    q, qd, qdd = (rng.uniform(-1, 1, (4, n)) for _ in range(3))
+    masked = tuple(np.ma.masked_array(np.zeros((4, n, n))) for _ in range(3))
+    with pytest.raises(TypeError, match=r'out\[0\] must be a numpy array \(not masked\)'):
+        sd.rnea_derivatives(model, q, qd, qdd, out=masked)
+    stacked = tuple(as_strided(np.zeros((n, n)), (4, n, n), (0, 8 * n, 8)) for _ in range(3))
+    with pytest.raises(ValueError, match=r'out\[0\] overlaps itself \(strides \(0, '):
+        sd.rnea_derivatives(model, q, qd, qdd, out=stacked)
+    # transposed, negative strides and views of one stacked array do not overlap themselves
+    D = np.zeros((3, 4, n, n))
+    fine = (D[0][:, ::-1, :], np.swapaxes(D[1], -1, -2), D[2])
+    got = sd.rnea_derivatives(model, q, qd, qdd, out=fine)
+    for a, b in zip(got, sd.rnea_derivatives(model, q, qd, qdd)):
+        assert np.array_equal(a, b)
+
+
+def test_an_out_of_another_kind_is_said_by_its_kind_and_shapes_not_its_numbers():
+    """Two arrays, or one stacked array: the message says so, not 600 characters of data."""
+    model = sd.Model.from_urdf(robot_urdf_path('ur5'))
+    z = np.zeros(model.nv)
+    with pytest.raises(TypeError, match=r'got a tuple of 2$'):
+        sd.rnea_derivatives(model, z, z, z, out=(np.empty((6, 6)), np.empty((6, 6))))
+    with pytest.raises(TypeError, match=r'got ndarray of shape \(3, 6, 6\): tuple\(a\) gives'):
+        sd.rnea_derivatives(model, z, z, z, out=np.empty((3, 6, 6)))
+    with pytest.raises(ValueError, match=r"dtype float64 \('<f8'\), got shape \(6, 6\) and "
+                                         r"dtype >f8 \('>f8'\)"):
+        sd.rnea_derivatives(model, z, z, z, out=tuple(np.empty((6, 6), '>f8') for _ in 'abc'))

@@ -491,7 +491,8 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
     (..., nv, nv) and dtype, sharing no memory with an input or with each other; that tuple's
     arrays are returned. C-contiguous float64 ones are written in place by the compiled
     kernels (one state and batches), any others get a copy. ``TypeError`` or ``ValueError``
-    naming ``out[k]`` when they are not such arrays.
+    naming ``out[k]`` when they are not such arrays (a masked array, one overlapping itself
+    too). A refused call leaves ``out`` as it was.
     """
     if (base is None and armature is None and friction_threshold is None
             and (f_ext is None or (type(f_ext) is dict and not f_ext))):
@@ -504,6 +505,11 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
     if out is not None:
         out = _out_arrays(out, (('q', q), ('qd', qd), ('qdd', qdd), ('gravity', gravity),
                                 ('f_ext', f_ext), ('armature', armature)))
+    # the drive terms checked before anything is written into out: a refused call leaves it
+    if armature is not None:
+        armature = per_joint(model, 'armature', armature, nonnegative=True)
+    if friction_threshold is not None:
+        friction_threshold = check_threshold(friction_threshold, 'friction_threshold')
     if base is not None:
         check_base_motion(base, model)
         twin = floating_twin(model)
@@ -543,13 +549,22 @@ def _out_arrays(out, inputs: tuple) -> tuple:
     (``may_share_memory``, cheap), then exactly: three views of one stacked array are fine.
     """
     if not isinstance(out, (tuple, list)) or len(out) != 3:
-        raise TypeError('out must be a tuple of three numpy arrays (dq, dv, M), got '
-                        + shown(out))
+        got = (f'{type(out).__name__} of shape {out.shape}' if isinstance(out, _ndarray)
+               else f'a {type(out).__name__} of {len(out)}' if isinstance(out, (tuple, list))
+               else type(out).__name__)
+        hint = (': tuple(a) gives the three of a stacked (3, nv, nv) array'
+                if isinstance(out, _ndarray) and out.shape[:1] == (3,) else '')
+        raise TypeError(f'out must be a tuple (or list) of three numpy arrays (dq, dv, M), '
+                        f'got {got}{hint}')
     for k, x in enumerate(out):
-        if not isinstance(x, _ndarray):
-            raise TypeError(f'out[{k}] must be a numpy array, got {type(x).__name__}')
+        if not isinstance(x, _ndarray) or isinstance(x, np.ma.MaskedArray):
+            raise TypeError(f'out[{k}] must be a numpy array (not masked), got '
+                            f'{type(x).__name__}')
         if not x.flags.writeable:
             raise ValueError(f'out[{k}] must be writeable (it is read-only)')
+        if _overlaps_itself(x):
+            raise ValueError(f'out[{k}] overlaps itself (strides {x.strides} for shape '
+                             f'{x.shape}): its states would be written over each other')
     given = [(name, a) for name, value in inputs for a in _arrays_in(value)]
     for k, x in enumerate(out):
         others = [(f'out[{j}]', out[j]) for j in range(k)] + given
@@ -558,6 +573,20 @@ def _out_arrays(out, inputs: tuple) -> tuple:
                 raise ValueError(f'out[{k}] shares memory with {name}: the results would '
                                  'overwrite it; pass separate arrays')
     return tuple(out)
+
+
+def _overlaps_itself(x: np.ndarray) -> bool:
+    """Tell whether two elements of ``x`` may lie at one address (a stride of 0, say).
+
+    Sufficient test: each axis' stride (largest last) passes over all the smaller axes'
+    extent. An interleaving that never meets but fails it is refused too (none is usual).
+    """
+    reach = x.itemsize
+    for stride, dim in sorted((abs(s), d) for s, d in zip(x.strides, x.shape) if d > 1):
+        if stride < reach:
+            return True
+        reach += stride * (dim - 1)
+    return False
 
 
 def _arrays_in(value) -> list:
@@ -578,8 +607,10 @@ def _check_out(out: tuple, shape: tuple, dtype) -> None:
     """Refuse ``out`` arrays that are not of the results' ``shape`` and ``dtype``."""
     for k, x in enumerate(out):
         if x.shape != shape or x.dtype != dtype:
+            want = np.dtype(dtype)
             raise ValueError(f'out[{k}] must be an array of the result\'s shape {shape} and '
-                             f'dtype {np.dtype(dtype)}, got {x.shape} {x.dtype}')
+                             f'dtype {want} ({want.str!r}), got shape {x.shape} and dtype '
+                             f'{x.dtype} ({x.dtype.str!r})')
 
 
 def _narrow_float(*arrays) -> Optional[np.dtype]:
@@ -602,13 +633,12 @@ def _drive_terms(model: Model, res: tuple, qd, armature, friction_threshold,
     in place), the rest copied into them (after :func:`_check_out`).
     """
     dq, dv, M = res
-    if armature is not None:     # in the states' dtype, as the rest
-        M = np.add(M, np.diag(per_joint(model, 'armature', armature, nonnegative=True)).astype(
-            M.dtype, copy=False), out=M if out is not None and M is out[2] else None)
-    if friction_threshold is not None:
-        threshold = check_threshold(friction_threshold, 'friction_threshold')
-        dv = np.add(dv, friction_derivative(model, qd, threshold).astype(dv.dtype, copy=False),
-                    out=dv if out is not None and dv is out[1] else None)
+    if armature is not None:     # checked (per_joint's array); in the states' dtype
+        M = np.add(M, np.diag(armature).astype(M.dtype, copy=False),
+                   out=M if out is not None and M is out[2] else None)
+    if friction_threshold is not None:      # checked (check_threshold's float)
+        dv = np.add(dv, friction_derivative(model, qd, friction_threshold).astype(
+            dv.dtype, copy=False), out=dv if out is not None and dv is out[1] else None)
     if out is None:
         return dq, dv, M
     if not all(x is o for x, o in zip((dq, dv, M), out)):
