@@ -227,3 +227,45 @@ def test_the_plan_waits_until_the_watched_states_are_matched(driver):
         for n in (watcher, robot):
             driver.executor.remove_node(n)
             n.destroy_node()
+
+
+def test_the_first_plan_is_not_sent_again_once_the_node_follows_it(monkeypatch):
+    """A copy stamped 0 reaching a node that follows restarts the plan from that step.
+
+    A busy CI run: copies 0.2 s apart, the third arrived at step 3, the plan restarted 3 ms
+    late, PD + feed-forward's error 3e-3 rad. Now: resent only after ``RESEND_S`` with neither
+    an answer nor a stepped state; never once a state past the first was seen.
+    """
+    import numpy as np
+    from spatial_dynamics.tools import closed_loop
+    sent = []
+
+    class Endpoint:
+        def get_subscription_count(self):
+            return 1
+
+        def get_publisher_count(self):
+            return 1
+
+        def publish(self, msg):
+            sent.append(msg)
+
+    clock = [100.0]
+    monkeypatch.setattr(closed_loop.time, 'monotonic', lambda: clock[0])
+    plans = object.__new__(closed_loop.Plans)
+    plans.pub = plans.sub = plans.watched = Endpoint()
+    plans.run = closed_loop.Run('PD + feed-forward', ['a'])
+    plans.first, plans.last_sent, plans.stepped = 'plan', -float('inf'), False
+    plans.seen, plans.measured, plans.desired, plans.last_q = set(), {}, {}, None
+    plans.kick()
+    clock[0] += 0.2
+    plans.kick()                            # the node still starting: no copy yet
+    assert sent == ['plan']
+    clock[0] += closed_loop.RESEND_S
+    plans.kick()                            # nothing stepped for RESEND_S: sent again
+    assert sent == ['plan', 'plan']
+    plans.on_state(0.0, np.zeros(1))        # the state the simulator waits on
+    plans.on_state(0.003, np.zeros(1))      # a step: the node answered, it has the plan
+    clock[0] += 10 * closed_loop.RESEND_S
+    plans.kick()
+    assert sent == ['plan', 'plan'] and plans.run.answers == 0

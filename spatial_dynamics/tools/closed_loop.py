@@ -309,6 +309,7 @@ class Lockstep:
 
 PLAN_STEP = 0.05      # s between the points of a plan sent with --plan
 BACK_IN = 1.0         # s: the replacing plan reaches the start in this time, then holds it
+RESEND_S = 5.0        # s without an answer or a stepped state before the first plan is resent
 
 
 def plan_message(names: Sequence[str], points, start: float):
@@ -357,29 +358,36 @@ class Plans:
         self.pub = node.create_publisher(JointTrajectory, 'desired_trajectory', reliable)
         self.sub = node.create_subscription(JointState, 'feedforward_efforts', self._on_answer,
                                             reliable)
-        self.last_sent = -1.0
+        self.last_sent = -float('inf')
+        self.stepped = False       # a state past the first seen: the simulator steps
         self.last_q: Optional[np.ndarray] = None
         self.seen: set = set()     # stamps of the measured states seen
 
     def kick(self) -> None:
-        """Until the first answer: (re)send the first plan, once every endpoint is matched.
+        """Until the node follows: send the first plan, once every endpoint is matched.
 
         The node's plan input, its answers and the watched states: the simulator steps as
         soon as the node answers, so a state published before this process's subscription
         matched (discovery can take seconds on a busy machine) is never seen; a CI run saw
-        629 of 3001.
+        629 of 3001. Sent again only after :data:`RESEND_S` without an answer or a stepped
+        state: a copy is stamped 0 ("now"), so one that reaches a node already following
+        restarts the plan from that step (a busy CI run: a copy sent 0.2 s after the first
+        arrived at step 3, the plan restarted 3 ms late, PD + feed-forward's error 3e-3 rad
+        where it is 1.1e-3); on matched reliable endpoints the first copy is not lost, only
+        late while the node starts.
         """
         now = time.monotonic()
-        if (self.run.answers == 0 and self.pub.get_subscription_count() > 0
+        if (self.run.answers == 0 and not self.stepped and self.pub.get_subscription_count() > 0
                 and self.sub.get_publisher_count() > 0
                 and self.watched.get_publisher_count() > 0
-                and now - self.last_sent > 0.2):
+                and now - self.last_sent > RESEND_S):
             self.pub.publish(self.first)
             self.last_sent = now
 
     def on_state(self, t: float, q: np.ndarray) -> None:
         """Take a measured state: pair it with its echo."""
         key = round(t * 1e9)
+        self.stepped = self.stepped or key > 0     # the node answered: it has the plan
         if key in self.seen:     # the simulator republishes the state it waits on
             return
         self.seen.add(key)
