@@ -2,12 +2,13 @@
 # SPDX-License-Identifier: Apache-2.0
 """The fleet command: sums that add, the same results on every engine, the drift found."""
 
+import json
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -89,23 +90,33 @@ def test_local_cluster_and_a_real_scheduler_equal_the_serial_run(fleet, tmp_path
                     capsys)
     assert status == command.DRIFTED
     assert fleet_csv(tmp_path / 'l') == fleet_csv(tmp_path / 's')
-    with socket.socket() as s:
-        s.bind(('127.0.0.1', 0))
-        port = s.getsockname()[1]
+    # The scheduler picks its own port and writes its address to a file: a port probed free
+    # here and given to it could be taken first by a worker's own listener (a CI run's
+    # client waited 60 s on a port that answered but was no scheduler)
+    address_file = tmp_path / 'scheduler.json'
     procs = [subprocess.Popen([sys.executable, '-m', 'distributed.cli.dask_scheduler', '--host',
-                               '127.0.0.1', '--port', str(port), '--dashboard-address',
-                               ':0'], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+                               '127.0.0.1', '--port', '0', '--dashboard-address', ':0',
+                               '--scheduler-file', str(address_file)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
+        deadline, address = time.monotonic() + 120, None
+        while address is None:
+            assert procs[0].poll() is None, 'the scheduler exited'
+            assert time.monotonic() < deadline, 'the scheduler wrote no address in 120 s'
+            try:        # absent, or being written
+                address = json.loads(address_file.read_text())['address']
+            except (OSError, ValueError, KeyError):
+                time.sleep(0.1)
         for _ in range(2):
             procs.append(subprocess.Popen(
-                [sys.executable, '-m', 'distributed.cli.dask_worker', f'tcp://127.0.0.1:{port}',
+                [sys.executable, '-m', 'distributed.cli.dask_worker', address,
                  '--nthreads', '1', '--dashboard-address', ':0'],
                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         from distributed import Client
-        with Client(f'tcp://127.0.0.1:{port}', timeout=60) as client:
+        with Client(address, timeout=60) as client:
             client.wait_for_workers(2, timeout=120)
-        status, _ = run([fleet, '--out', str(tmp_path / 'r'), '--scheduler',
-                         f'tcp://127.0.0.1:{port}', '--no-plots'], capsys)
+        status, _ = run([fleet, '--out', str(tmp_path / 'r'), '--scheduler', address,
+                         '--no-plots'], capsys)
     finally:
         for p in procs:
             p.send_signal(signal.SIGINT)
