@@ -514,8 +514,7 @@ def rnea_derivatives(model: Model, q, qd, qdd, gravity: Sequence[float] = GRAVIT
         check_base_motion(base, model)
         twin = floating_twin(model)
         tq, tqd, tqdd, tg = twin_state(model, base, q, qd, qdd, gravity)
-        twin_f = None if f_ext is None else f_ext
-        res = rnea_derivatives(twin, tq, tqd, tqdd, tg, twin_f, backend)
+        res = rnea_derivatives(twin, tq, tqd, tqdd, tg, f_ext, backend)
         res = tuple(x[..., 6:, 6:] for x in res)
         return _drive_terms(model, res, qd, armature, friction_threshold, out)
     lay = _layout_of(id(model)) or layout.of(model)
