@@ -31,9 +31,10 @@ velocity order ``[ω; v; joints]``: ``d/dε τ(q ⊕ ε e_k)`` with ``q ⊕ δ``
 ``sd.forward_dynamics`` against ``pin.aba``, time per state and the largest relative
 difference; and a batch of 10,000 states in one ``sd.rnea_derivatives`` call (bare, and
 with ``out=`` arrays made once and reused across the rounds) against a Python loop of
-``computeRNEADerivatives`` over the same states. Writes
-``DIR/derivatives.csv`` and ``DIR/derivatives_vs_error.png``; prints markdown tables on
-stdout, progress on stderr.
+``computeRNEADerivatives`` over the same states. Last, each speed target (:data:`TARGETS`)
+robot by robot, met or not by the ratio of the least of the rounds, the median's beside it
+(:func:`targets`). Writes ``DIR/derivatives.csv`` and ``DIR/derivatives_vs_error.png``;
+prints markdown tables on stdout, progress on stderr.
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics.backends import layout, python as python_backend
-from benchmarks.bench import _erd_dir, interleaved, interleaved_rounds, Progress, versions
+from benchmarks.bench import _erd_dir, interleaved_rounds, Progress, versions
 
 GRAVITY = (0.0, 0.0, -9.81)
 DIGITS = 50
@@ -72,10 +73,10 @@ class Settings:
 
     ref_states: int = 3
     states: int = 16
-    rounds: int = 9
-    block_s: float = 0.02
+    rounds: int = 41        # short blocks, many: the least of them finds the machine's quiet
+    block_s: float = 0.007
     batch: int = 10_000
-    batch_rounds: int = 5
+    batch_rounds: int = 7
 
 
 FULL = Settings()
@@ -335,8 +336,9 @@ def batch_row(name: str, model: sd.Model, pinocchio: tuple, settings: Settings,
     Per state: the batch call's time over ``settings.batch`` states (the compiled backend's
     threads on the cores there are), bare and with ``out=`` (three arrays made once, written
     every round), and a Python loop of ``computeRNEADerivatives`` over the same states, in
-    alternating rounds (median). The largest difference of the batch from the one-state calls
-    on its first states, relative to the largest entry, is in the row (``out=``'s too).
+    alternating rounds (the median, and the ratio of the least of each). The largest
+    difference of the batch from the one-state calls on its first states, relative to the
+    largest entry, is in the row (``out=``'s too).
     """
     pin, pm, P, joints = pinocchio     # bench_robot's model of the robot (_pinocchio)
     data = pm.createData()
@@ -362,11 +364,15 @@ def batch_row(name: str, model: sd.Model, pinocchio: tuple, settings: Settings,
         one = sd.rnea_derivatives(model, Q[k], QD[k], QDD[k])
         worst = max(worst, max(_rel(b[k], o) for b, o in zip(batched, one)))
         worst_out = max(worst_out, max(_rel(b[k], o) for b, o in zip(out, one)))
-    times = interleaved({'ours': (ours, [()]), 'ours_out': (ours_out, [()]),
-                         'pin': (theirs, [()])}, settings.batch_rounds, 0.0, settings.batch)
+    times = interleaved_rounds({'ours': (ours, [()]), 'ours_out': (ours_out, [()]),
+                                'pin': (theirs, [()])}, settings.batch_rounds, 0.0,
+                               settings.batch)
+    median = {key: statistics.median(t) for key, t in times.items()}
     return {'robot': name, 'nv': model.nv, 'states': settings.batch,
-            'batch_us': times['ours'] * 1e6, 'pin_loop_us': times['pin'] * 1e6,
-            'rel_diff': worst, 'out_us': times['ours_out'] * 1e6, 'out_rel_diff': worst_out}
+            'batch_us': median['ours'] * 1e6, 'pin_loop_us': median['pin'] * 1e6,
+            'rel_diff': worst, 'out_us': median['ours_out'] * 1e6, 'out_rel_diff': worst_out,
+            'least_ratio': min(times['ours']) / min(times['pin']),
+            'out_least_ratio': min(times['ours_out']) / min(times['pin'])}
 
 
 def forward_row(name: str, model: sd.Model, xml: str, states: list, settings: Settings) -> dict:
@@ -418,15 +424,53 @@ def markdown(rows: list, fds: list, batches: list = ()) -> str:
     if batches:
         out += ['', '| robot (nv) | states | sd.rnea_derivatives batch µs a state | '
                 'computeRNEADerivatives loop µs a state | ratio | max rel. difference from '
-                'one state |', '|---|---|---|---|---|---|']
+                'one state | ratio, least |', '|---|---|---|---|---|---|---|']
         for b in batches:
             out.append(f"| {b['robot']} ({b['nv']}) | {b['states']:,} | {b['batch_us']:.3g} | "
                        f"{b['pin_loop_us']:.3g} | {b['batch_us'] / b['pin_loop_us']:.2f}× | "
-                       f"{b['rel_diff']:.1e} |")
+                       f"{b['rel_diff']:.1e} | {b['least_ratio']:.2f}× |")
         for b in batches:       # the same call with out=, below the bare calls
             out.append(f"| {b['robot']} ({b['nv']}) | {b['states']:,}, out= | "
                        f"{b['out_us']:.3g} | {b['pin_loop_us']:.3g} | "
-                       f"{b['out_us'] / b['pin_loop_us']:.2f}× | {b['out_rel_diff']:.1e} |")
+                       f"{b['out_us'] / b['pin_loop_us']:.2f}× | {b['out_rel_diff']:.1e} | "
+                       f"{b['out_least_ratio']:.2f}× |")
+    return '\n'.join(out)
+
+
+#: The speed targets the benchmark checks: (what, its bound on the ratio to Pinocchio).
+TARGETS = (('one state, sd.rnea_derivatives / computeRNEADerivatives', 0.5),
+           ('a batch, sd.rnea_derivatives(out=) / a loop of computeRNEADerivatives', 0.2),
+           ('a batch, sd.rnea_derivatives (fresh result) / a loop of computeRNEADerivatives',
+            0.2),
+           ('sd.forward_dynamics / pin.aba', 0.7))
+
+
+def targets(rows: list, fds: list, batches: list = ()) -> str:
+    """Return the table of each speed target, robot by robot, by the least and the median.
+
+    The verdict is by the ratio of the least of the rounds (each side's own least, as
+    ``timeit`` advises: what the code takes when nothing else runs on its core), the median's
+    ratio beside it. On a machine whose cores are shared the medians move by ±20 % from one
+    run to the next, ours more than Pinocchio's when a core's other thread is busy; the
+    least does not.
+    """
+    pin = {r['robot']: r for r in rows if r['implementation'].startswith('pinocchio')}
+    found = {TARGETS[0][0]: [(r['robot'], r['us_least'] / pin[r['robot']]['us_least'],
+                              r['us_per_state'] / pin[r['robot']]['us_per_state'])
+                             for r in rows if r['implementation'] == 'sd.rnea_derivatives'
+                             and r['robot'] in pin],
+             TARGETS[1][0]: [(b['robot'], b['out_least_ratio'], b['out_us'] / b['pin_loop_us'])
+                             for b in batches],
+             TARGETS[2][0]: [(b['robot'], b['least_ratio'], b['batch_us'] / b['pin_loop_us'])
+                             for b in batches],
+             TARGETS[3][0]: [(f['robot'], f['least_ratio'], f['fd_us'] / f['aba_us'])
+                             for f in fds]}
+    out = ['| target | robot | ratio, least | ratio, median | met (by the least) |',
+           '|---|---|---|---|---|']
+    for what, bound in TARGETS:
+        for robot, least, median in found[what]:
+            out.append(f"| {what} ≤ {bound}× | {robot} | {least:.2f}× | {median:.2f}× | "
+                       f"{'yes' if least <= bound else 'no'} |")
     return '\n'.join(out)
 
 
@@ -508,6 +552,9 @@ def main(argv: Optional[list] = None) -> int:
     print(f'Command: python -m benchmarks.derivatives {" ".join(argv or sys.argv[1:])}')
     print(f'Setup: {setup}\n')
     print(markdown(rows, fds, batches))
+    if any(r['implementation'].startswith('pinocchio') for r in rows):
+        print('\nThe targets, by the ratio of the least of the rounds (the median beside):\n')
+        print(targets(rows, fds, batches))
     print('\nComplex step: not measured (the library refuses complex arrays).')
     for note in notes:
         print(f'Note: {note}')

@@ -61,6 +61,11 @@ def test_a_tiny_run_prints_every_row_and_the_reference_is_pinocchios(
         [' ur5 (6) ', ' 16, out= '], [' solo12 (18) ', ' 16, out= ']]
     assert [line.split('|')[6] for line in batch_out] == [line.split('|')[6] for line in batch]
     assert 'Complex step: not measured' in out
+    # every target, robot by robot, with its verdict by the least
+    head = next(k for k, line in enumerate(lines) if line.startswith('| target |'))
+    verdicts = [line.split('|') for line in lines[head + 2:head + 10]]
+    assert [v[2].strip() for v in verdicts] == ['ur5', 'solo12'] * 4
+    assert all(v[5].strip() in ('yes', 'no') for v in verdicts)
     assert (tmp_path / 'derivatives_vs_error.png').is_file() or 'no plot' in out
 
 
@@ -77,7 +82,6 @@ def test_the_analytic_rows_time_the_bare_calls(monkeypatch):
     def capture(entries, rounds, block_s, per):
         seen.update(entries)
         return {name: 1e-6 for name in entries}
-    monkeypatch.setattr(derivatives, 'interleaved', capture)
     monkeypatch.setattr(derivatives, 'interleaved_rounds',
                         lambda *args: {name: [t] for name, t in capture(*args).items()})
     monkeypatch.setattr(derivatives, 'forward_row', lambda *args: {})
@@ -92,3 +96,30 @@ def test_the_analytic_rows_time_the_bare_calls(monkeypatch):
     assert args[0][0] is model and len(run.keywords['out']) == 3
     run, args = seen['pinocchio computeRNEADerivatives']
     assert run is pin.computeRNEADerivatives
+
+
+def test_the_targets_are_judged_by_the_least_of_the_rounds_not_the_median():
+    """Each target's verdict is the ratio of each side's least (``timeit``'s), not a median."""
+    rows = [{'robot': 'ur5', 'implementation': 'sd.rnea_derivatives', 'us_per_state': 3.0,
+             'us_least': 2.0},
+            {'robot': 'ur5', 'implementation': 'pinocchio computeRNEADerivatives',
+             'us_per_state': 5.0, 'us_least': 4.1},
+            {'robot': 'talos', 'implementation': 'sd.rnea_derivatives', 'us_per_state': 10.0,
+             'us_least': 9.0},
+            {'robot': 'talos', 'implementation': 'pinocchio computeRNEADerivatives',
+             'us_per_state': 30.0, 'us_least': 17.0}]
+    fds = [{'robot': 'ur5', 'fd_us': 2.0, 'aba_us': 3.0, 'least_ratio': 0.71}]
+    batches = [{'robot': 'ur5', 'batch_us': 1.0, 'pin_loop_us': 4.0, 'least_ratio': 0.19,
+                'out_us': 0.5, 'out_least_ratio': 0.21}]
+    table = [line.split('|') for line in derivatives.targets(rows, fds, batches).splitlines()]
+    got = {(cells[1].split(' ≤ ')[0].strip(), cells[2].strip()):
+           (cells[3].strip(), cells[4].strip(), cells[5].strip()) for cells in table[2:]}
+    one, out, fresh, fd = (what for what, _ in derivatives.TARGETS)
+    # median 0.60 over the bound, least 0.49 under it: met
+    assert got[(one, 'ur5')] == ('0.49×', '0.60×', 'yes')
+    # median 0.33 under the bound, least 0.53 over it: not met
+    assert got[(one, 'talos')] == ('0.53×', '0.33×', 'no')
+    assert got[(out, 'ur5')] == ('0.21×', '0.12×', 'no')
+    assert got[(fresh, 'ur5')] == ('0.19×', '0.25×', 'yes')
+    assert got[(fd, 'ur5')] == ('0.71×', '0.67×', 'no')
+    assert len(table) == 2 + 5

@@ -269,3 +269,46 @@ def test_the_first_plan_is_not_sent_again_once_the_node_follows_it(monkeypatch):
     clock[0] += 10 * closed_loop.RESEND_S
     plans.kick()
     assert sent == ['plan', 'plan'] and plans.run.answers == 0
+
+
+def test_a_law_whose_node_cannot_start_stops_the_simulator_it_started(monkeypatch, tmp_path):
+    """What ``run_law`` started is stopped whatever ends it, the start of the second too.
+
+    The simulator was started outside the ``try`` that stops it: a node that could not start
+    (a missing executable, no memory) left it running until this process ended.
+    """
+    import argparse
+    from spatial_dynamics.tools import closed_loop
+    started, stopped = [], []
+
+    def start(command, namespace, parameters, log_path=None):
+        if started:
+            raise FileNotFoundError('inverse_dynamics: no such file')
+        started.append(command)
+        return 'the sim'
+    monkeypatch.setattr(closed_loop, 'start', start)
+    monkeypatch.setattr(closed_loop, 'stop', stopped.append)
+    urdf, model = closed_loop.robot_model(None)     # the embedded demo arm
+    args = argparse.Namespace(plan=False, amplitude=0.2, frequency=2.0, log_dir=str(tmp_path),
+                              robot_urdf=None, priority=0, seconds=1.0, timeout=10.0)
+    with pytest.raises(FileNotFoundError):
+        closed_loop.run_law('PD', {'control_mode': 'feedforward', 'output': 'effort'}, urdf,
+                            model, args, (None, None), print)
+    assert len(started) == 1 and stopped == ['the sim']
+
+
+def test_a_law_without_samples_is_null_in_the_json_never_nan():
+    """``--json`` is strict JSON: a law that measured nothing has null figures, per joint too.
+
+    It was written with ``json.dump``'s default: ``NaN`` (which strict readers refuse) for
+    the RMS and maximum of a law that got no state, and inside ``rms_per_joint``.
+    """
+    import json
+    from spatial_dynamics.tools import closed_loop
+    from spatial_dynamics.tools.latency_report import json_safe
+    summary = closed_loop.Run('PD', ['shoulder', 'elbow']).summary()
+    text = json.dumps({'laws': json_safe([summary])}, allow_nan=False)
+    law = json.loads(text)['laws'][0]
+    assert law['rms'] is None and law['max'] is None and law['end_from_start'] is None
+    assert law['rms_per_joint'] == {'shoulder': None, 'elbow': None}
+    assert law['samples'] == 0 and law['law'] == 'PD'

@@ -101,6 +101,11 @@ def advertise(node: Node, msg_type, topic: str):
             event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
 
 
+#: The largest queue a QoS profile holds (a C int in rclpy's profile): a depth override
+#: beyond it, or below 0, is refused by the middleware with words of its own.
+DEPTH_MAX = 2 ** 31 - 1
+
+
 @contextmanager
 def _overrides_checked(node: Node, topic: str, kind: str):
     """Turn the middleware refusing an endpoint's QoS into a :class:`ConfigError` naming it.
@@ -117,11 +122,15 @@ def _overrides_checked(node: Node, topic: str, kind: str):
     except (_rclpy.RCLError, RuntimeError, TypeError) as err:
         name = node.resolve_topic_name(topic)
         prefix = f'qos_overrides.{name}.{kind}'
-        values = ', '.join(f'{prefix}.{k} = {p.value!r}' for k, p in
-                           sorted(node.get_parameters_by_prefix(prefix).items()))
+        given = node.get_parameters_by_prefix(prefix)
+        values = ', '.join(f'{prefix}.{k} = {p.value!r}' for k, p in sorted(given.items()))
+        depth = given['depth'].value if 'depth' in given else None
+        if isinstance(depth, int) and not 0 <= depth <= DEPTH_MAX:
+            reason = f'a depth is a queue of 0 to {DEPTH_MAX} messages'
+        else:       # the middleware's own words, its last line
+            reason = str(err).strip().split('\n')[-1]
         raise ConfigError(f'the middleware refused the QoS of {kind} {name!r}'
-                          + (f' ({values})' if values else '') + ': '
-                          + str(err).strip().split('\n')[-1]) from None
+                          + (f' ({values})' if values else '') + ': ' + reason) from None
 
 
 def _context_shut_down(grace: float = 1.0) -> bool:

@@ -57,10 +57,12 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 import spatial_dynamics as sd
+from spatial_dynamics import files
 from .driving import (
     Interrupt, node_command, outputs_error, plot_path_error, pyplot, redraw, robot_model,
     save_figure, start, stop)
 from .latency import in_range
+from .latency_report import json_safe
 from .latency_targets import busy_loop, end_loop
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
@@ -438,23 +440,34 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
     Raises KeyboardInterrupt once ``interrupt`` caught a signal, RuntimeError when the
     simulator or the node exits by itself or the run does not finish in time; both stop them.
     """
-    rclpy, JointState = rclpy_mods
-    names = model.joint_names
     q0 = start_point(model)
     trajectory = Trajectory(q0, args.amplitude)
     kp, kd = gains(model, q0, settings['control_mode'], args.frequency)
     namespace = ('/closed_loop_' + ('plan_' if args.plan else '') + settings['control_mode']
                  + '_' + settings['output'])
+    os.makedirs(args.log_dir, exist_ok=True)
+    slug = namespace.strip('/')
+    # every process and node made from here on is stopped on the way out, whatever stops the
+    # run (a node that cannot start, an interrupt while the driver is made, a timeout)
+    with contextlib.ExitStack() as made:
+        return _drive(name, settings, urdf, model, args, rclpy_mods, show, interrupt,
+                      namespace, slug, q0, trajectory, kp, kd, made)
+
+
+def _drive(name, settings, urdf, model, args, rclpy_mods, show, interrupt, namespace, slug,
+           q0, trajectory, kp, kd, made: contextlib.ExitStack) -> Run:
+    """Run the body of :func:`run_law`; what it starts is stopped by ``made`` when it closes."""
+    rclpy, JointState = rclpy_mods
+    names = model.joint_names
     fmt = '[' + ','.join(repr(float(x)) for x in q0) + ']'
     logs = args.log_dir
-    os.makedirs(logs, exist_ok=True)
-    slug = namespace.strip('/')
     sim = start(node_command('sim', 'spatial_dynamics.sim'), namespace, {
         'robot_description_file': os.path.abspath(args.robot_urdf or urdf),
         'mode': 'lockstep', 'timestep': str(TIMESTEP),
         'initial_positions': fmt,
         'command_topic': 'effort_commands' if args.plan else SIM_COMMANDS},
         os.path.join(logs, f'{slug}_sim.log'))
+    made.callback(stop, sim)
     node = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace, {
         'robot_description_file': urdf, 'control_mode': settings['control_mode'],
         'output': settings['output'],
@@ -462,8 +475,10 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
         'kd': '[' + ','.join(repr(float(x)) for x in kd) + ']',
         'thread_priority': str(args.priority)},
         os.path.join(logs, f'{slug}_node.log'))
+    made.callback(stop, node)      # stopped first (callbacks run last in, first out)
     run = Run(name, names)
     driver = rclpy.create_node('closed_loop_driver', namespace=namespace)
+    made.callback(driver.destroy_node)
     index = None
 
     def on_state(state) -> None:
@@ -512,9 +527,6 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
                 run.end_from_start = float(np.abs(plans.last_q - plans.q0).max())
             plans.sort()
             plans.close()
-        driver.destroy_node()
-        stop(sim)
-        stop(node)
     show(run)
     return run
 
@@ -635,13 +647,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               f'{s["stale_desired"]} from another step\'s desired state '
               f'({s["stale_older_than_previous"]} older than the step before), '
               f'{s["repeated_answers"]} to a state answered already)')
-    if args.json:
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, 'w') as f:
-            json.dump({'robot': model.name, 'urdf': urdf, 'robot_urdf': args.robot_urdf or urdf,
-                       'frequency_hz': args.frequency, 'busy': args.busy,
-                       'thread_priority': args.priority,
-                       'timestep_s': TIMESTEP, 'laws': summaries}, f, indent=1)
+    if args.json:       # whole or not at all: a reader never sees half of it
+        try:
+            os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+            files.write_atomic(args.json, json.dumps(
+                {'robot': model.name, 'urdf': urdf, 'robot_urdf': args.robot_urdf or urdf,
+                 'frequency_hz': args.frequency, 'busy': args.busy,
+                 'thread_priority': args.priority, 'timestep_s': TIMESTEP,
+                 'laws': json_safe(summaries)}, indent=1, allow_nan=False), '--json')
+        except (OSError, ValueError) as err:
+            print(f'closed loop: {err}', file=sys.stderr)
+            status = status or 1
     if args.plot and runs:
         print(plot(runs, args.plot, model.name, args.frequency))
     return status

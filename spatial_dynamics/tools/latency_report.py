@@ -29,9 +29,19 @@ RATE_SHORTFALL = 0.03
 
 
 def json_safe(rows: List[Dict[str, float]]) -> List[Dict[str, object]]:
-    """Return ``rows`` with NaN as None (null): JSON has no NaN, and strict readers refuse it."""
-    return [{key: None if isinstance(value, float) and math.isnan(value) else value
-             for key, value in row.items()} for row in rows]
+    """Return ``rows`` with NaN and ±inf as None (null), in nested dicts and lists too.
+
+    JSON has neither, and strict readers refuse them (``json.dumps(allow_nan=False)``).
+    """
+    def safe(value):
+        if isinstance(value, float):
+            return value if math.isfinite(value) else None
+        if isinstance(value, dict):
+            return {key: safe(v) for key, v in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [safe(v) for v in value]
+        return value
+    return [safe(row) for row in rows]
 
 
 def cell(value: Optional[float], digits: int = 3) -> str:

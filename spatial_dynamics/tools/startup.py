@@ -45,7 +45,9 @@ from typing import Dict, Iterator, List, Optional, Sequence
 import numpy as np
 
 import spatial_dynamics as sd
+from spatial_dynamics import files
 from .driving import demo_urdf, node_command, outputs_error, rss_bytes, Sinusoids, start, stop
+from .latency_report import json_safe
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -335,11 +337,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     print(f'start-up: {model.name} ({len(model.joint_names)} joints, {urdf}), inputs at '
           f'{args.rate:g} Hz from before the start; min / median / max of {args.runs} run(s)')
     print(format_table(rows))
-    if args.json:
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, 'w') as f:
-            json.dump({'robot': model.name, 'urdf': urdf, 'rate_hz': args.rate, 'rows': rows},
-                      f, indent=2)
+    if args.json:       # whole or not at all: a reader never sees half of it
+        try:
+            os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+            files.write_atomic(args.json, json.dumps(
+                {'robot': model.name, 'urdf': urdf, 'rate_hz': args.rate,
+                 'rows': json_safe(rows)}, indent=2, allow_nan=False), '--json')
+        except (OSError, ValueError) as err:
+            print(f'start-up: {err}', file=sys.stderr)
+            return 1
     return 0 if all(r['wrong'] == 0 and r['exit_status'] == 0 for r in rows) else 1
 
 
