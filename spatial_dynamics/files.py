@@ -21,6 +21,9 @@ from typing import Any, Callable, Iterator, Optional, Sequence, Tuple, Union
 
 from .text import shown
 
+#: The longest name of one file or folder (bytes), as Linux and macOS file systems take it.
+NAME_MAX = 255
+
 # yaml (load_yaml and its checks) and tempfile (write_atomic, check_folder) are imported inside
 # the functions that use them: the core imports this module to read a URDF, and they would add
 # some 20 ms each to `import spatial_dynamics` (python -X importtime -c 'import spatial_dynamics').
@@ -272,7 +275,18 @@ def check_folder(folder: Union[str, os.PathLike], what: str, missing: bool = Fal
     ``what`` and says why.
     """
     import tempfile
+    given = os.fspath(folder)
+    if not given:
+        raise ValueError(f'{what}: an empty path')
+    if os.path.lexists(given) and not os.path.exists(given):
+        # a link to nothing (its target missing) or a loop: makedirs would fail on the link
+        raise ValueError(f'{what}: {given!r} is a link that leads to no folder (its target '
+                         'is missing, or it leads back to itself)')
     folder = output_path(folder)
+    for part in folder.split(os.sep):
+        if len(os.fsencode(part)) > NAME_MAX:
+            raise ValueError(f'{what}: the name {shown(part)} is longer than a folder '
+                             f'name can be ({NAME_MAX} bytes)')
     head = folder
     while not os.path.exists(head):
         if not missing:

@@ -59,8 +59,8 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import files
 from .driving import (
-    Interrupt, node_command, outputs_error, plot_path_error, pyplot, redraw, robot_model,
-    save_figure, start, stop)
+    Interrupt, node_command, outputs_error, path_text, plot_path_error, pyplot, redraw,
+    robot_model, save_figure, start, stop)
 from .latency import in_range
 from .latency_report import json_safe
 from .latency_targets import busy_loop, end_loop
@@ -89,14 +89,56 @@ def laws(text: str) -> str:
     unknown = [name for name in names if name not in ('pd', 'pd_ff', 'ct')]
     if unknown or not names:
         raise argparse.ArgumentTypeError(f'{unknown} not among pd, pd_ff, ct (or all)')
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:       # a law run twice writes over its own logs, and twice into --json
+        raise argparse.ArgumentTypeError(f'{", ".join(twice)} given twice')
     return text
+
+
+def chosen_laws(text: str) -> List[int]:
+    """Return the rows of :data:`LAWS` that ``--laws`` (checked by :func:`laws`) picks."""
+    index = {'pd': 0, 'pd_ff': 1, 'ct': 2}
+    return list(range(len(LAWS))) if text == 'all' else [index[x] for x in text.split(',')]
+
+
+def law_slug(settings: Dict[str, str], plan: bool) -> str:
+    """Return the namespace of a law's run without its '/': its logs are named after it."""
+    return ('closed_loop_' + ('plan_' if plan else '') + settings['control_mode'] + '_'
+            + settings['output'])
+
+
+def laws_error(model, picks: Sequence[int], frequency: float) -> Optional[str]:
+    """Why the laws ``picks`` cannot run on ``model`` at ``frequency`` Hz (None if they can).
+
+    A robot without joints has nothing to control; a law's gains (:func:`gains`) must be
+    within the node's bounds (``kp`` ≤ MAX_KP, ``kd`` ≤ MAX_KD): the node refuses them at
+    start and the run would end with 'the node exited'. Says the highest frequency that fits.
+    """
+    from spatial_dynamics.ros.control import MAX_KD, MAX_KP
+    if not model.joint_names:
+        return f'the robot {model.name!r} has no joints: nothing to control'
+    q0 = start_point(model)
+    for k in picks:
+        name, settings = LAWS[k]
+        kp, kd = gains(model, q0, settings['control_mode'], frequency)
+        j = int(np.argmax(kp))
+        if kp[j] > MAX_KP or kd[j] > MAX_KD:
+            # kp = m w², kd = 2 m w (m = 1 under computed torque): both within their bounds
+            m = kp[j] / (2.0 * math.pi * frequency) ** 2
+            w = min(math.sqrt(MAX_KP / m), MAX_KD / (2.0 * m))
+            return (f'--frequency {frequency:g} gives {name} kp {kp[j]:.4g} and kd {kd[j]:.4g} '
+                    f'on joint {model.joint_names[j]!r}, beyond what the node takes (kp at '
+                    f'most {MAX_KP:g}, kd at most {MAX_KD:g}): at most '
+                    f'{math.floor(w / (2.0 * math.pi) * 10) / 10:g} Hz for this robot')
+    return None
 
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog='python -m spatial_dynamics.tools.closed_loop',
                                      description=__doc__.split('\n\n')[0])
-    parser.add_argument('--urdf', default=None, help='robot (default: the embedded demo arm)')
-    parser.add_argument('--robot-urdf', default=None,
+    parser.add_argument('--urdf', type=path_text, default=None,
+                        help='robot (default: the embedded demo arm)')
+    parser.add_argument('--robot-urdf', type=path_text, default=None,
                         help='the simulated robot when it is not the one the node is given '
                              '(default: --urdf): e.g. the true robot, with the node on an '
                              'original or a corrected URDF (replay --write-urdf)')
@@ -112,8 +154,10 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         help='comma-separated subset of: pd, pd_ff, ct (default all)')
     parser.add_argument('--plot', default=os.path.join('out', 'closed_loop.png'),
                         help="PNG of |e| over time (default out/closed_loop.png; '' for none)")
-    parser.add_argument('--json', default='', help='write the figures to this JSON file')
-    parser.add_argument('--log-dir', default='out',
+    parser.add_argument('--json', type=path_text, default=None,
+                        help='write the figures to this JSON file (only when every law ran '
+                             'to its end)')
+    parser.add_argument('--log-dir', type=path_text, default='out',
                         help="directory for the nodes' output (default out)")
     parser.add_argument('--plan', action='store_true',
                         help='send the node whole plans (desired_trajectory), replaced at half '
@@ -135,9 +179,14 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
             parser.error(error)
     if args.json and os.path.isdir(args.json):
         parser.error(f'--json {args.json!r} is a folder')
-    # their folders are created before the run: one a file cannot be created in is refused
-    error = outputs_error([('--plot', args.plot), ('--json', args.json)],
-                          [('--log-dir', args.log_dir)])
+    # their folders are created before the run: one a file cannot be created in is refused;
+    # no output may be a log of the run (named after its laws) or a description it reads
+    logs = [(f"--log-dir's log of {LAWS[k][0]}", os.path.join(args.log_dir, slug + end))
+            for k in chosen_laws(args.laws) for slug in [law_slug(LAWS[k][1], args.plan)]
+            for end in ('_sim.log', '_node.log')]
+    error = outputs_error([('--plot', args.plot), ('--json', args.json)] + logs,
+                          [('--log-dir', args.log_dir)],
+                          [('--urdf', args.urdf), ('--robot-urdf', args.robot_urdf)])
     if error:
         parser.error(error)
     return args
@@ -443,8 +492,7 @@ def run_law(name: str, settings: Dict[str, str], urdf: str, model, args, rclpy_m
     q0 = start_point(model)
     trajectory = Trajectory(q0, args.amplitude)
     kp, kd = gains(model, q0, settings['control_mode'], args.frequency)
-    namespace = ('/closed_loop_' + ('plan_' if args.plan else '') + settings['control_mode']
-                 + '_' + settings['output'])
+    namespace = '/' + law_slug(settings, args.plan)
     os.makedirs(args.log_dir, exist_ok=True)
     slug = namespace.strip('/')
     # every process and node made from here on is stopped on the way out, whatever stops the
@@ -571,7 +619,7 @@ def plot(runs: List[Run], path: str, robot: str, frequency: float) -> str:
     axes[0][0].legend(fontsize='small', loc='lower right')
     fig.suptitle(f'tracking error, {robot}, MuJoCo lockstep 1 ms, feedback {frequency:g} Hz')
     save_figure(plt, fig, path)
-    return f'plot written to {path}'
+    return f'plot written to {files.output_path(path)}'
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -582,15 +630,23 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         import rclpy
         from rclpy.signals import SignalHandlerOptions
         from sensor_msgs.msg import JointState
+        option = '--urdf'
         urdf, model = robot_model(args.urdf)
+        if args.robot_urdf:     # the simulator's: refused here, not as 'the sim exited'
+            option = '--robot-urdf'
+            robot_model(args.robot_urdf)
     except KeyboardInterrupt:
         print(f'closed loop: interrupted ({interrupt.name}) while loading', file=sys.stderr)
         return interrupt.status
     except ValueError as err:
-        print(f'closed loop: --urdf {args.urdf!r}: {err}', file=sys.stderr)
+        print(f'closed loop: {option} {getattr(args, option[2:].replace("-", "_"))!r}: {err}',
+              file=sys.stderr)
         return 1
-    chosen = {'pd': 0, 'pd_ff': 1, 'ct': 2}
-    picks = range(3) if args.laws == 'all' else [chosen[x] for x in args.laws.split(',')]
+    picks = chosen_laws(args.laws)
+    error = laws_error(model, picks, args.frequency)
+    if error:
+        print(f'closed loop: {error}', file=sys.stderr)
+        return 1
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     live = sys.stdout.isatty()
     runs: List[Run] = []
@@ -647,9 +703,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               f'{s["stale_desired"]} from another step\'s desired state '
               f'({s["stale_older_than_previous"]} older than the step before), '
               f'{s["repeated_answers"]} to a state answered already)')
-    if args.json:       # whole or not at all: a reader never sees half of it
+    if args.json and (status or len(runs) < len(picks)):
+        # figures of some of the laws are no run's figures: an earlier file is kept
+        print(f'closed loop: --json {args.json!r} not written (not every law ran to its end)',
+              file=sys.stderr)
+    elif args.json:     # whole or not at all: a reader never sees half of it
         try:
-            os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+            os.makedirs(os.path.dirname(files.output_path(args.json)), exist_ok=True)
             files.write_atomic(args.json, json.dumps(
                 {'robot': model.name, 'urdf': urdf, 'robot_urdf': args.robot_urdf or urdf,
                  'frequency_hz': args.frequency, 'busy': args.busy,

@@ -7,6 +7,7 @@ No rclpy import at module level: :func:`node_command` and :class:`Sinusoids` wor
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import ctypes
 import os
@@ -330,8 +331,16 @@ PLOT_FORMATS = ('eps', 'jpeg', 'jpg', 'pdf', 'pgf', 'png', 'ps', 'raw', 'rgba', 
                 'tif', 'tiff', 'webp')
 
 
+def path_text(text: str) -> str:
+    """Return ``text``, an argparse type of a path: an empty one is refused (it names nothing)."""
+    if not text:
+        raise argparse.ArgumentTypeError('an empty path names no file')
+    return text
+
+
 def outputs_error(files: Sequence[Tuple[str, Optional[str]]],
-                  folders: Sequence[Tuple[str, Optional[str]]] = ()) -> Optional[str]:
+                  folders: Sequence[Tuple[str, Optional[str]]] = (),
+                  inputs: Sequence[Tuple[str, Optional[str]]] = ()) -> Optional[str]:
     """Why an output of a tool cannot be written (None if all can), checked before its run.
 
     ``files`` and ``folders``: ``(option, path)``, None or '' for an option not given. A
@@ -340,15 +349,21 @@ def outputs_error(files: Sequence[Tuple[str, Optional[str]]],
     creates them (``os.makedirs``) before its run. No output may be another (a file also
     another file or a folder of the run, one written over the other) or be inside a file
     (its folder would be made where the file goes): compared as written,
-    :func:`~spatial_dynamics.files.output_path` (links followed).
+    :func:`~spatial_dynamics.files.output_path` (links followed). ``inputs``: ``(option,
+    path)`` of the files the run reads (a robot description): no output may be one of them
+    (the run would write over what it read).
     """
     try:
         for option, folder in folders:
-            if folder:
+            if folder is not None:      # '' given is refused (it names no folder)
                 check_folder(folder, f'{option} {folder!r}', missing=True)
         for option, path in files:
             if path:
                 check_output(path, option, missing_folders=True)
+                for source_option, source in inputs:
+                    if source and _same_path(path, source):
+                        raise ValueError(f'{option} {path!r} is the file {source_option} '
+                                         'reads; choose another (the run would write over it)')
     except ValueError as err:
         return str(err)
     given = [(option, path, k < len(files))
@@ -364,6 +379,16 @@ def outputs_error(files: Sequence[Tuple[str, Optional[str]]],
             return (f'{other} {where!r} is inside {option} {path!r}: the {option} file cannot '
                     'be a folder')
     return None
+
+
+def _same_path(a: str, b: str) -> bool:
+    """Tell whether ``a`` and ``b`` name one file (links followed; one inode if both exist)."""
+    if output_path(a) == output_path(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
 
 
 def plot_path_error(plot: str, *others: Optional[str]) -> Optional[str]:

@@ -73,8 +73,8 @@ import numpy as np
 from spatial_dynamics.files import output_path
 
 from .driving import (
-    cpu_ns_between, Interrupt, last_error, node_command, outputs_error, plot_path_error,
-    robot_model, Sinusoids, start, stop)
+    cpu_ns_between, Interrupt, last_error, node_command, outputs_error, path_text,
+    plot_path_error, robot_model, Sinusoids, start, stop)
 from .latency_pacer import NoAnswer, Pacer, spin_until
 from .latency_report import (
     difference_line, format_table, json_safe, machine_line, not_answered_line, plot, rate_text,
@@ -158,13 +158,6 @@ def in_range(kind: Callable[[str], float], low: float, high: float, low_open: bo
             raise argparse.ArgumentTypeError(f'{where}{limit}, got {text}')
         return value
     return convert
-
-
-def path_text(text: str) -> str:
-    """Return ``text``, an argparse type of a path: an empty one is refused (it names nothing)."""
-    if not text:
-        raise argparse.ArgumentTypeError('an empty path names no file')
-    return text
 
 
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
