@@ -33,8 +33,9 @@ difference; and a batch of 10,000 states in one ``sd.rnea_derivatives`` call (ba
 with ``out=`` arrays made once and reused across the rounds) against a Python loop of
 ``computeRNEADerivatives`` over the same states. Last, each speed target (:data:`TARGETS`)
 robot by robot, met or not by the ratio of the least of the rounds, the median's beside it
-(:func:`targets`). Writes ``DIR/derivatives.csv`` and ``DIR/derivatives_vs_error.png``;
-prints markdown tables on stdout, progress on stderr.
+(:func:`targets`). Writes ``DIR/derivatives.csv``, ``DIR/derivatives_targets.csv`` (the
+targets' ratios in full) and ``DIR/derivatives_vs_error.png``, ``DIR`` checked before the
+measurement; prints markdown tables on stdout, progress on stderr.
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics.backends import layout, python as python_backend
+from spatial_dynamics.files import check_folder, check_output
 from benchmarks.bench import _erd_dir, interleaved_rounds, Progress, versions
 
 GRAVITY = (0.0, 0.0, -9.81)
@@ -445,8 +447,8 @@ TARGETS = (('one state, sd.rnea_derivatives / computeRNEADerivatives', 0.5),
            ('sd.forward_dynamics / pin.aba', 0.7))
 
 
-def targets(rows: list, fds: list, batches: list = ()) -> str:
-    """Return the table of each speed target, robot by robot, by the least and the median.
+def target_rows(rows: list, fds: list, batches: list = ()) -> list:
+    """Return ``[what, bound, robot, least ratio, median ratio, met]`` of each target and robot.
 
     The verdict is by the ratio of the least of the rounds (each side's own least, as
     ``timeit`` advises: what the code takes when nothing else runs on its core), the median's
@@ -465,12 +467,17 @@ def targets(rows: list, fds: list, batches: list = ()) -> str:
                              for b in batches],
              TARGETS[3][0]: [(f['robot'], f['least_ratio'], f['fd_us'] / f['aba_us'])
                              for f in fds]}
+    return [[what, bound, robot, least, median, least <= bound]
+            for what, bound in TARGETS for robot, least, median in found[what]]
+
+
+def targets(rows: list, fds: list, batches: list = ()) -> str:
+    """Return the table of :func:`target_rows`: ratios to 3 digits (0.703 is over 0.7)."""
     out = ['| target | robot | ratio, least | ratio, median | met (by the least) |',
            '|---|---|---|---|---|']
-    for what, bound in TARGETS:
-        for robot, least, median in found[what]:
-            out.append(f"| {what} ≤ {bound}× | {robot} | {least:.2f}× | {median:.2f}× | "
-                       f"{'yes' if least <= bound else 'no'} |")
+    for what, bound, robot, least, median, met in target_rows(rows, fds, batches):
+        out.append(f"| {what} ≤ {bound}× | {robot} | {least:.3f}× | {median:.3f}× | "
+                   f"{'yes' if met else 'no'} |")
     return '\n'.join(out)
 
 
@@ -512,16 +519,35 @@ def plot(rows: list, out: Path, log: Callable) -> Optional[Path]:
     return path
 
 
+def out_folder(text: str) -> Path:
+    """Return ``--out`` as a Path; '' is refused (``Path('')`` is the current folder)."""
+    if not text:
+        raise argparse.ArgumentTypeError('an empty path names no folder')
+    return Path(text)
+
+
 def main(argv: Optional[list] = None) -> int:
     """Command-line entry point."""
     parser = argparse.ArgumentParser(prog='python -m benchmarks.derivatives',
                                      description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='fewer states and rounds')
-    parser.add_argument('--out', default='out/derivatives', type=Path,
+    parser.add_argument('--out', default='out/derivatives', type=out_folder,
                         help='output directory (default: out/derivatives)')
     parser.add_argument('--robots', nargs='+', choices=list(ROBOTS), metavar='ROBOT',
                         help=f'robots to run (default: all of {" ".join(ROBOTS)})')
     args = parser.parse_args(argv)
+    twice = sorted({r for r in args.robots or () if args.robots.count(r) > 1})
+    if twice:       # a robot run twice was judged against the other run's Pinocchio
+        parser.error(f'--robots: {", ".join(twice)} given twice')
+    try:            # before the measurement, not after it (its tables are printed last)
+        if not str(args.out):
+            raise ValueError('--out: an empty path')
+        check_folder(args.out, f'--out {str(args.out)!r}', missing=True)
+        for name in ('derivatives.csv', 'derivatives_targets.csv', 'derivatives_vs_error.png'):
+            check_output(args.out / name, f'--out {str(args.out)!r}: {name}',
+                         missing_folders=True)
+    except ValueError as err:
+        parser.error(str(err))
     settings = QUICK if args.quick else FULL
     args.out.mkdir(parents=True, exist_ok=True)
     log = Progress()
@@ -555,6 +581,10 @@ def main(argv: Optional[list] = None) -> int:
     if any(r['implementation'].startswith('pinocchio') for r in rows):
         print('\nThe targets, by the ratio of the least of the rounds (the median beside):\n')
         print(targets(rows, fds, batches))
+        with open(args.out / 'derivatives_targets.csv', 'w', newline='', encoding='utf-8') as f:
+            writer = csv.writer(f)
+            writer.writerow(['target', 'bound', 'robot', 'ratio_least', 'ratio_median', 'met'])
+            writer.writerows(target_rows(rows, fds, batches))
     print('\nComplex step: not measured (the library refuses complex arrays).')
     for note in notes:
         print(f'Note: {note}')

@@ -116,10 +116,41 @@ def test_the_targets_are_judged_by_the_least_of_the_rounds_not_the_median():
            (cells[3].strip(), cells[4].strip(), cells[5].strip()) for cells in table[2:]}
     one, out, fresh, fd = (what for what, _ in derivatives.TARGETS)
     # median 0.60 over the bound, least 0.49 under it: met
-    assert got[(one, 'ur5')] == ('0.49×', '0.60×', 'yes')
+    assert got[(one, 'ur5')] == ('0.488×', '0.600×', 'yes')
     # median 0.33 under the bound, least 0.53 over it: not met
-    assert got[(one, 'talos')] == ('0.53×', '0.33×', 'no')
-    assert got[(out, 'ur5')] == ('0.21×', '0.12×', 'no')
-    assert got[(fresh, 'ur5')] == ('0.19×', '0.25×', 'yes')
-    assert got[(fd, 'ur5')] == ('0.71×', '0.67×', 'no')
+    assert got[(one, 'talos')] == ('0.529×', '0.333×', 'no')
+    assert got[(out, 'ur5')] == ('0.210×', '0.125×', 'no')
+    assert got[(fresh, 'ur5')] == ('0.190×', '0.250×', 'yes')
+    assert got[(fd, 'ur5')] == ('0.710×', '0.667×', 'no')
     assert len(table) == 2 + 5
+
+
+def test_the_outputs_and_the_robots_are_checked_before_anything_is_measured(tmp_path, capsys):
+    """A robot named twice, an ``--out`` that cannot be written: refused before measuring.
+
+    The robot named twice was judged against its other run's Pinocchio (0.72× for 0.54×); an
+    ``--out`` that is a file, a FIFO or '' was a traceback, or the CSV in the current folder,
+    after the whole measurement.
+    """
+    import os
+    a_file = tmp_path / 'file.txt'
+    a_file.write_text('x')
+    fifo = tmp_path / 'fifo'
+    os.mkfifo(fifo)
+    for argv, said in [(['--robots', 'ur5', 'ur5'], 'ur5 given twice'),
+                       (['--out', str(a_file)], 'is not a folder'),
+                       (['--out', str(fifo)], 'is not a folder'),
+                       (['--out', ''], 'empty path'),
+                       (['--out', str(tmp_path / 'derivatives.csv' / 'x')], 'is not a folder')]:
+        if argv[-1].endswith('/x'):
+            (tmp_path / 'derivatives.csv').write_text('a file where a folder would be')
+        with pytest.raises(SystemExit) as exit:
+            derivatives.main(['--quick'] + argv)
+        err = capsys.readouterr().err
+        assert exit.value.code == 2 and said in err, (argv, err)
+        assert 'timing' not in err      # refused before the measurement began
+    (tmp_path / 'out').mkdir()
+    (tmp_path / 'out' / 'derivatives.csv').mkdir()      # the CSV's name taken by a folder
+    with pytest.raises(SystemExit) as exit:
+        derivatives.main(['--quick', '--out', str(tmp_path / 'out')])
+    assert exit.value.code == 2 and 'derivatives.csv' in capsys.readouterr().err

@@ -378,6 +378,137 @@ def test_closed_loop_says_a_bad_urdf_and_a_ctrl_c_while_loading_in_one_line(
             signal.signal(s, handler)
 
 
+def test_closed_loop_refuses_an_output_that_is_an_input_or_a_log_of_the_run(
+        tmp_path, capsys, monkeypatch):
+    """Written over the robot's URDF, or over the node's log of the same run, with exit 0."""
+    from spatial_dynamics.tools import closed_loop
+    monkeypatch.chdir(tmp_path)
+    robot = tmp_path / 'r.urdf'
+    robot.write_text('<robot name="r"/>')
+    (tmp_path / 'link.urdf').symlink_to(robot)
+    for argv, said in [
+            (['--urdf', str(robot), '--json', str(robot)], 'the file --urdf reads'),
+            (['--urdf', 'link.urdf', '--json', str(robot)], 'the file --urdf reads'),
+            (['--robot-urdf', str(robot), '--plot', '', '--json', 'r.urdf'],
+             'the file --robot-urdf reads'),
+            (['--laws', 'pd_ff', '--log-dir', 'logs', '--json',
+              'logs/closed_loop_pd_feedforward_full_node.log'], 'name the same path'),
+            (['--laws', 'ct', '--plan', '--log-dir', 'logs', '--plot',
+              'logs/closed_loop_plan_computed_torque_full_sim.log.png', '--json',
+              'logs/closed_loop_plan_computed_torque_full_sim.log'], 'name the same path')]:
+        with pytest.raises(SystemExit) as exit:
+            closed_loop.parse_args(argv)
+        err = capsys.readouterr().err
+        assert exit.value.code == 2 and said in err, (argv, err)
+    assert robot.read_text() == '<robot name="r"/>'
+
+
+@pytest.mark.parametrize('make, said', [
+    (lambda d: '', 'empty'),
+    (lambda d: os.symlink(d / 'nowhere', d / 'ld') or str(d / 'ld'), 'leads to no folder'),
+    (lambda d: os.symlink(d / 'loop', d / 'loop') or str(d / 'loop'), 'leads to no folder'),
+    (lambda d: str(d / ('b' * 300)), 'longer than a folder name can be')])
+def test_closed_loop_refuses_a_log_dir_it_cannot_make_first(make, said, tmp_path, capsys):
+    """A ``--log-dir`` that cannot be made is one line before anything starts.
+
+    '' printed '(their output in /)', a dangling link or a loop FileExistsError, a 300-byte
+    name OSError: tracebacks at os.makedirs, after the header.
+    """
+    from spatial_dynamics.tools import closed_loop
+    with pytest.raises(SystemExit) as exit:
+        closed_loop.parse_args(['--log-dir', make(tmp_path), '--plot', ''])
+    err = capsys.readouterr().err
+    assert exit.value.code == 2 and said in err, err
+
+
+def test_closed_loop_refuses_an_empty_json_and_a_law_given_twice(capsys):
+    """``--json ''`` and a law named twice are refused.
+
+    The first ran and wrote nothing (exit 0); ``pd_ff,pd_ff`` ran the law twice, its logs
+    written over and the law twice in the JSON.
+    """
+    from spatial_dynamics.tools import closed_loop
+    for argv, said in [(['--json', ''], 'empty path'),
+                       (['--laws', 'pd_ff,pd,pd_ff'], 'pd_ff given twice')]:
+        with pytest.raises(SystemExit) as exit:
+            closed_loop.parse_args(argv)
+        err = capsys.readouterr().err
+        assert exit.value.code == 2 and said in err, err
+
+
+def test_closed_loop_says_the_highest_frequency_whose_gains_the_node_takes():
+    """``--frequency 600`` is refused first, with the highest frequency that fits.
+
+    It ended with 'the node exited' (its log: kp 1.58e6 beyond 1e6). The frequency said has
+    its gains within the node's bounds, and 1 % more is beyond them.
+    """
+    import re
+    from spatial_dynamics.ros.control import MAX_KD, MAX_KP
+    from spatial_dynamics.tools import closed_loop
+    urdf, model = closed_loop.robot_model(None)
+    q0 = closed_loop.start_point(model)
+    for picks in ([0], [2], [0, 1, 2]):
+        assert closed_loop.laws_error(model, picks, 5.0) is None
+        error = closed_loop.laws_error(model, picks, 999.0)
+        assert error is not None and 'beyond what the node takes' in error, error
+        top = float(re.search(r'at most ([0-9.]+) Hz', error).group(1))
+        for k in picks:
+            kp, kd = closed_loop.gains(model, q0, closed_loop.LAWS[k][1]['control_mode'], top)
+            assert kp.max() <= MAX_KP and kd.max() <= MAX_KD
+        assert closed_loop.laws_error(model, picks, top) is None
+        assert closed_loop.laws_error(model, picks, 1.01 * top) is not None
+
+
+def test_closed_loop_refuses_a_robot_without_joints_and_a_bad_robot_urdf_first(
+        tmp_path, capsys):
+    """A robot without joints and a ``--robot-urdf`` it cannot read: one line, first.
+
+    No joints: 'the node exited' (its log: kp needs a value); a --robot-urdf FIFO: the run
+    started, then 'the sim exited'.
+    """
+    import signal
+    from spatial_dynamics.tools import closed_loop
+    lone = tmp_path / 'lone.urdf'
+    lone.write_text("<robot name='lone'><link name='base'/></robot>")
+    fifo = tmp_path / 'fifo'
+    os.mkfifo(fifo)
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        assert closed_loop.main(['--urdf', str(lone), '--plot', '']) == 1
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and 'no joints' in err, err
+        assert closed_loop.main(['--robot-urdf', str(fifo), '--plot', '']) == 1
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and '--robot-urdf' in err, err
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def test_closed_loop_keeps_an_earlier_json_when_a_law_does_not_finish(
+        tmp_path, capsys, monkeypatch):
+    """An interrupted or failed run replaced the file with the laws that had run (``[]``)."""
+    import signal
+    from spatial_dynamics.tools import closed_loop
+    kept = tmp_path / 'keep.json'
+    kept.write_text('{"laws": ["an earlier complete run"]}')
+
+    def run_law(name, *args):
+        if name == 'computed torque':
+            raise RuntimeError(f'{name}: the node exited')
+        return closed_loop.Run(name, ['j'])
+    monkeypatch.setattr(closed_loop, 'run_law', run_law)
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        assert closed_loop.main(['--plot', '', '--json', str(kept)]) == 1
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    err = capsys.readouterr().err
+    assert 'the node exited' in err and 'not written' in err, err
+    assert kept.read_text() == '{"laws": ["an earlier complete run"]}'
+
+
 def measured_target(latencies_ms, late_stamps=()):
     """Return a Target (no DDS) that sent one input per ms and got ``latencies_ms`` answers.
 
