@@ -342,6 +342,16 @@ def test_a_urdf_that_cannot_be_loaded_is_one_line(tmp_path, capsys):
     assert err.count('\n') == 1 and '--urdf' in err and 'malformed' in err, err
 
 
+@pytest.fixture
+def handlers_kept():
+    """Restore SIGINT's and SIGTERM's handlers after a tool's ``main`` installed its own."""
+    import signal
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    yield
+    for s, handler in previous.items():
+        signal.signal(s, handler)
+
+
 @pytest.mark.parametrize('argv', [['--plot', 'x.txt'], ['--plot', 'x.json', '--json', 'x.json'],
                                   ['--json', '.']])
 def test_closed_loop_refuses_outputs_it_cannot_write_first(argv, tmp_path, capsys, monkeypatch):
@@ -460,35 +470,28 @@ def test_closed_loop_says_the_highest_frequency_whose_gains_the_node_takes():
 
 
 def test_closed_loop_refuses_a_robot_without_joints_and_a_bad_robot_urdf_first(
-        tmp_path, capsys):
+        tmp_path, capsys, handlers_kept):
     """A robot without joints and a ``--robot-urdf`` it cannot read: one line, first.
 
     No joints: 'the node exited' (its log: kp needs a value); a --robot-urdf FIFO: the run
     started, then 'the sim exited'.
     """
-    import signal
     from spatial_dynamics.tools import closed_loop
     lone = tmp_path / 'lone.urdf'
     lone.write_text("<robot name='lone'><link name='base'/></robot>")
     fifo = tmp_path / 'fifo'
     os.mkfifo(fifo)
-    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        assert closed_loop.main(['--urdf', str(lone), '--plot', '']) == 1
-        err = capsys.readouterr().err
-        assert err.count('\n') == 1 and 'no joints' in err, err
-        assert closed_loop.main(['--robot-urdf', str(fifo), '--plot', '']) == 1
-        err = capsys.readouterr().err
-        assert err.count('\n') == 1 and '--robot-urdf' in err, err
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+    assert closed_loop.main(['--urdf', str(lone), '--plot', '']) == 1
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'no joints' in err, err
+    assert closed_loop.main(['--robot-urdf', str(fifo), '--plot', '']) == 1
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and '--robot-urdf' in err, err
 
 
 def test_closed_loop_keeps_an_earlier_json_when_a_law_does_not_finish(
-        tmp_path, capsys, monkeypatch):
+        tmp_path, capsys, monkeypatch, handlers_kept):
     """An interrupted or failed run replaced the file with the laws that had run (``[]``)."""
-    import signal
     from spatial_dynamics.tools import closed_loop
     kept = tmp_path / 'keep.json'
     kept.write_text('{"laws": ["an earlier complete run"]}')
@@ -498,12 +501,7 @@ def test_closed_loop_keeps_an_earlier_json_when_a_law_does_not_finish(
             raise RuntimeError(f'{name}: the node exited')
         return closed_loop.Run(name, ['j'])
     monkeypatch.setattr(closed_loop, 'run_law', run_law)
-    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        assert closed_loop.main(['--plot', '', '--json', str(kept)]) == 1
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+    assert closed_loop.main(['--plot', '', '--json', str(kept)]) == 1
     err = capsys.readouterr().err
     assert 'the node exited' in err and 'not written' in err, err
     assert kept.read_text() == '{"laws": ["an earlier complete run"]}'
