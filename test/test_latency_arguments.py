@@ -1026,3 +1026,15 @@ def test_a_plot_through_a_missing_folder_and_dotdot_is_saved_where_its_folder_wa
             pass
     save_figure(Pyplot(), Figure(), os.path.join(tmp_path, 'new1', '..', 'new2', 'h.png'))
     assert (tmp_path / 'new2' / 'h.png').read_bytes() == b'png'
+
+
+def test_closed_loop_says_what_a_plot_is_before_its_suffix(tmp_path, capsys):
+    """A ``--plot`` folder or FIFO said "'. is not a format matplotlib writes'"."""
+    from spatial_dynamics.tools import closed_loop
+    fifo = tmp_path / 'fifo'
+    os.mkfifo(fifo)
+    for path, said in [(tmp_path, 'not a regular file'), (fifo, 'not a regular file')]:
+        with pytest.raises(SystemExit) as exit:
+            closed_loop.parse_args(['--plot', str(path)])
+        err = capsys.readouterr().err
+        assert exit.value.code == 2 and said in err and 'format' not in err, err

@@ -173,12 +173,11 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         help="the node's thread_priority (SCHED_FIFO of its answering thread), "
                              '0 .. 99 (default 0: normal scheduling)')
     args = parser.parse_args(argv)
-    if args.plot:
-        error = plot_path_error(args.plot, args.json)
-        if error:
-            parser.error(error)
-    if args.json and os.path.isdir(args.json):
-        parser.error(f'--json {args.json!r} is a folder')
+    # what a --plot is (a folder, a pipe) before its suffix: '. is not a format' said nothing
+    error = outputs_error([('--plot', args.plot)]) or (
+        plot_path_error(args.plot, args.json) if args.plot else None)
+    if error:
+        parser.error(error)
     # their folders are created before the run: one a file cannot be created in is refused;
     # no output may be a log of the run (named after its laws) or a description it reads
     logs = [(f"--log-dir's log of {LAWS[k][0]}", os.path.join(args.log_dir, slug + end))
