@@ -30,8 +30,7 @@ PREFIX = f'qos_overrides.{TOPIC}.subscription.'
                                "got 'forever'",)),
     ('deadline', -1, ('deadline: the subscription', 'got -1')),
 ])
-def test_a_bad_override_is_refused_naming_it_the_value_and_what_is_allowed(policy, value,
-                                                                            words):
+def test_a_bad_override_is_refused_naming_it_the_value_and_allowed(policy, value, words):
     with pytest.raises(ParameterError) as caught:
         check_overrides({PREFIX + policy: value}, TOPIC, 'subscription')
     said = str(caught.value)
