@@ -3,8 +3,8 @@
 """A node's command line split into the program's and ROS's arguments (no rclpy import).
 
 Used by :mod:`.usage` (``--help``, unknown options) and :func:`.common.spin` (the
-``--params-file`` files checked before ``rclpy.init``); a module of its own so that neither
-imports the other.
+``--params-file`` files and the ``-p`` rules checked before ``rclpy.init``); a module of its
+own so that neither imports the other.
 """
 
 from __future__ import annotations
@@ -42,3 +42,18 @@ def params_files(argv: Sequence[str]) -> List[str]:
     """Return the files of the ``--params-file`` options in ``argv``'s ``--ros-args``."""
     return [value for option, value in split_args(argv)[1]
             if option == '--params-file' and value is not None]
+
+
+def empty_param_rules(argv: Sequence[str]) -> List[Tuple[str, str]]:
+    """Return each ``-p``/``--param`` rule of ``argv``'s ``--ros-args`` without a value.
+
+    As (parameter name, rule) pairs: ``-p name:=`` and ``-p node:name:=`` (also with only
+    blanks after ``:=``). rcl refuses them at ``rclpy.init`` with ``Error: error not set``.
+    """
+    empty = []
+    for option, rule in split_args(argv)[1]:
+        if option in ('-p', '--param') and rule is not None and ':=' in rule:
+            head, _, value = rule.partition(':=')
+            if not value.strip():
+                empty.append((head.split(':')[-1], rule))
+    return empty

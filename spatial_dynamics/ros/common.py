@@ -11,12 +11,13 @@ start-up configuration).
 
 from __future__ import annotations
 
-from contextlib import contextmanager
+import os
 import signal
 import sys
 import threading
 import time
-from typing import Callable, Optional, Sequence
+from typing import Any, Callable, Dict, Optional, Sequence
+import warnings
 
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
@@ -31,8 +32,9 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from spatial_dynamics.files import read_regular
 from spatial_dynamics.ros.parameters import ConfigError, ParameterError
+from spatial_dynamics.ros.qos_overrides import allowed, check_overrides, OVERRIDABLE
 from spatial_dynamics.ros.realtime import AnsweringLoop, OthersExecutor
-from spatial_dynamics.ros.arguments import params_files
+from spatial_dynamics.ros.arguments import empty_param_rules, params_files
 
 #: The largest ``--params-file`` read (rcl parses it whole at ``rclpy.init``).
 PARAMS_FILE_LIMIT = 64 << 20
@@ -84,53 +86,82 @@ def subscribe(node: Node, msg_type, topic: str, callback, depth: int = 1, group=
     148 µs without). The inputs' best effort + volatile accepts every publisher anyway, and
     the other end of an incompatible pair still reports it with its own default handlers.
     """
-    with _overrides_checked(node, topic, 'subscription'):
-        return node.create_subscription(
-            msg_type, topic, callback, input_qos(depth) if qos is None else qos,
-            callback_group=group, raw=raw,
-            qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
+    return _endpoint(node, topic, 'subscription', lambda: node.create_subscription(
+        msg_type, topic, callback, input_qos(depth) if qos is None else qos,
+        callback_group=group, raw=raw,
+        qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+        event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False)))
 
 
 def advertise(node: Node, msg_type, topic: str):
     """Create a publisher with :func:`output_qos`, QoS overrides, no QoS event handlers."""
-    with _overrides_checked(node, topic, 'publisher'):
-        return node.create_publisher(
-            msg_type, topic, output_qos(),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-            event_callbacks=PublisherEventCallbacks(use_default_callbacks=False))
+    return _endpoint(node, topic, 'publisher', lambda: node.create_publisher(
+        msg_type, topic, output_qos(),
+        qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+        event_callbacks=PublisherEventCallbacks(use_default_callbacks=False)))
 
 
-#: The largest queue a QoS profile holds (a C int in rclpy's profile): a depth override
-#: beyond it, or below 0, is refused by the middleware with words of its own.
-DEPTH_MAX = 2 ** 31 - 1
+#: The start of the warning rclpy's QoSProfile gives for keep last 0 (said by
+#: :func:`_endpoint` in a line of its own instead).
+ZERO_DEPTH_WARNING = "A zero depth with KEEP_LAST doesn't make sense"
 
 
-@contextmanager
-def _overrides_checked(node: Node, topic: str, kind: str):
-    """Turn the middleware refusing an endpoint's QoS into a :class:`ConfigError` naming it.
+def parameter_overrides(node: Node) -> Dict[str, Any]:
+    """Return the parameter overrides ``node`` was started with, name to value.
 
-    rclpy takes any integer for ``qos_overrides.<topic>.<kind>.depth``; the middleware then
-    refuses a negative one deep inside ``create_subscription`` (``RCLError: invalid
-    allocator``), rclpy itself raises ``RuntimeError`` for a policy it does not know
-    (``reliability: foo``) and ``TypeError`` for a depth of 2³¹ or more (its QoS profile
-    holds a C int): each would end the node with a traceback instead of a ``cannot start:``
-    line naming the override.
+    Those of the command line and the params files (rcl's, for this node and ``/**``) and
+    the ``parameter_overrides`` of its constructor. rclpy has no public accessor: Node keeps
+    them in ``_parameter_overrides`` (rclpy 7.1.6, Jazzy, and earlier). Without it, nothing
+    is checked before the endpoints are made and :func:`_endpoint` still turns what rcl
+    refuses into a :class:`ConfigError` (with rcl's own words and dumps).
     """
+    given = getattr(node, '_parameter_overrides', None)
+    if not isinstance(given, dict):
+        return {}
+    return {name: getattr(p, 'value', None) for name, p in given.items()}
+
+
+def _endpoint(node: Node, topic: str, kind: str, create: Callable[[], Any]):
+    """Make endpoint ``kind`` of ``topic`` by ``create()`` once its QoS overrides are checked.
+
+    The overrides are checked before rcl sees them (:func:`~.qos_overrides.check_overrides`:
+    a :class:`ParameterError` names the parameter, the value and what is allowed). A depth
+    of 0 with keep last is said in one INFO line (rclpy's ``UserWarning`` for it is not
+    shown). What rcl still refuses is a :class:`ConfigError` naming the endpoint, unless the
+    context was shut down meanwhile (a signal while starting): then rcl's error is raised
+    as it is, for :func:`spin` to end the process cleanly.
+    """
+    name = node.resolve_topic_name(topic)
+    check_overrides(parameter_overrides(node), name, kind)
     try:
-        yield
+        with warnings.catch_warnings():
+            warnings.filterwarnings('ignore', ZERO_DEPTH_WARNING, UserWarning)
+            endpoint = create()
     except (_rclpy.RCLError, RuntimeError, TypeError) as err:
-        name = node.resolve_topic_name(topic)
-        prefix = f'qos_overrides.{name}.{kind}'
-        given = node.get_parameters_by_prefix(prefix)
-        values = ', '.join(f'{prefix}.{k} = {p.value!r}' for k, p in sorted(given.items()))
-        depth = given['depth'].value if 'depth' in given else None
-        if isinstance(depth, int) and not 0 <= depth <= DEPTH_MAX:
-            reason = f'a depth is a queue of 0 to {DEPTH_MAX} messages'
-        else:       # the middleware's own words, its last line
-            reason = str(err).strip().split('\n')[-1]
-        raise ConfigError(f'the middleware refused the QoS of {kind} {name!r}'
-                          + (f' ({values})' if values else '') + ': ' + reason) from None
+        if not node.context.ok():
+            raise
+        reason = str(err).strip().split('\n')[-1]
+        raise ConfigError(f'the middleware refused the QoS of {kind} {name!r}: '
+                          f'{reason}') from None
+    qos = endpoint.qos_profile
+    if qos.history == HistoryPolicy.KEEP_LAST and qos.depth == 0:
+        node.get_logger().info(
+            f'qos_overrides.{name}.{kind}.depth: 0 with keep_last is the middleware\'s '
+            'default depth')
+    return endpoint
+
+
+def check_param_rules(argv: Sequence[str]) -> None:
+    """Refuse a ``-p NAME:=`` without a value (rcl's words: ``Error: error not set``).
+
+    Raises ValueError naming the parameter and, for a QoS override, what it takes.
+    """
+    for name, rule in empty_param_rules(argv):
+        policy = name.rsplit('.', 1)[-1]
+        if name.startswith('qos_overrides.') and policy in OVERRIDABLE:
+            raise ValueError(f'{name}: need {allowed(policy)}, got nothing (-p {rule})')
+        raise ValueError(f'{name}: no value after := (-p {rule}; an empty string is '
+                         f"-p \"{rule}''\")")
 
 
 def _context_shut_down(grace: float = 1.0) -> bool:
@@ -156,31 +187,57 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
     SingleThreadedExecutor.
 
     SIGINT is handled as SIGTERM is: rclpy's handler shuts the context down and wakes the
-    executor, which returns between two callbacks. Python's own SIGINT handler is not chained
-    to it: its KeyboardInterrupt would fire at any bytecode, inside rclpy's bookkeeping too
-    (half-built tasks, a taken message lost in pybind11's conversion).
+    executor, which returns between two callbacks. Python's KeyboardInterrupt is not used: it
+    would fire at any bytecode, inside rclpy's bookkeeping too (half-built tasks, a taken
+    message lost in pybind11's conversion). Before ``rclpy.init`` has returned, nothing needs
+    stopping: either signal ends the process at once with status 0 (as the launchers in
+    ``bin/`` do while Python imports). While ``make_node`` runs, a signal shuts the context
+    down: whatever that breaks (rcl refusing an endpoint on an invalid context) is the
+    requested stop, one INFO line ``interrupted while starting`` and status 0, never a
+    ``cannot start:`` line.
 
     Before ``rclpy.init``, each ``--params-file`` must be a readable regular file (rcl would
-    block on a named pipe); that, and what ``rclpy.init`` refuses (an unknown ROS argument, a
-    params file it cannot parse), is one ``cannot start:`` line and status 1.
+    block on a named pipe) and each ``-p`` rule must have a value; that, and what
+    ``rclpy.init`` refuses (an unknown ROS argument, a params file it cannot parse), is one
+    ``cannot start:`` line and status 1.
     """
+    started = threading.Event()     # rclpy.init returned: rclpy's handlers stop the node
+
+    def before_ros(signum: int, frame) -> None:
+        if not started.is_set():     # nothing started yet that needs stopping
+            os._exit(0)
+
     if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, before_ros)
+    logger = rclpy.logging.get_logger(name)
     try:
         for path in params_files(sys.argv if args is None else args):
             read_regular(path, f'params file {path!r}', PARAMS_FILE_LIMIT)
+        check_param_rules(sys.argv if args is None else args)
         rclpy.init(args=args)
     except (ValueError, _rclpy.UnknownROSArgsError, _rclpy.RCLError) as err:
         reason = str(err).strip().split('\n')[0]
         if isinstance(err, _rclpy.UnknownROSArgsError):
             reason = f'unknown ROS argument(s) {reason} (see --help)'
-        rclpy.logging.get_logger(name).fatal(f'cannot start: {reason}')
+        logger.fatal(f'cannot start: {reason}')
         return 1
+    started.set()
     node = None
     status = 0
     failed: list = []
     try:
-        node = make_node()
+        try:
+            node = make_node()
+        except Exception as err:
+            if rclpy.ok():
+                raise
+            # a signal shut the context down while the node was being made: whatever that
+            # broke (rcl refusing an endpoint on an invalid context) is the requested stop
+            logger.debug(f'while starting: {type(err).__name__}: {err}')
+        if not rclpy.ok():
+            logger.info('interrupted while starting')
+            return 0
         group = getattr(node, 'answering_group', None)
         if group is not None:
             _spin_answering(node, group, threads - 1, failed)
@@ -194,7 +251,7 @@ def spin(make_node: Callable[[], Node], args: Optional[Sequence[str]] = None,
     except (ConfigError, ParameterError, InvalidParameterTypeException,
             InvalidParameterValueException) as err:
         # e.g. -p gravity:=[0,0,-10] (integers) or -p input_timeout:=0.0 (out of range)
-        rclpy.logging.get_logger(name).fatal(f'cannot start: {err}')
+        logger.fatal(f'cannot start: {err}')
         status = 1
     except Exception:
         # SIGINT/SIGTERM shut the context down from rclpy's signal thread, wherever the
