@@ -24,7 +24,7 @@ NO_JOINTS = """<robot name="one_link">
 
 @pytest.fixture
 def handlers():
-    """Give back SIGINT's and SIGTERM's handlers of this process after ``main`` installed its own."""
+    """Give back the SIGINT and SIGTERM handlers after ``main`` installed its own."""
     saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     yield
     for s, handler in saved.items():
