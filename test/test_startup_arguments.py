@@ -32,7 +32,7 @@ def handlers():
 
 
 def refusal(argv, capsys) -> str:
-    """Return the message of parse_args' refusal (exit status 2)."""
+    """Return the message of the refusal of parse_args (exit status 2)."""
     with pytest.raises(SystemExit) as exit:
         parse_args(argv)
     assert exit.value.code == 2
