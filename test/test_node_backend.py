@@ -9,6 +9,7 @@ the start-up tool measures a correct first answer.
 import json
 import os
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -229,3 +230,61 @@ def test_startup_tool_measures_a_correct_first_answer(install, tmp_path):
     assert 'first answer s' in proc.stdout
     assert re.search(r'^numpy\s+cold\s+1\s+\d', proc.stdout, re.M), proc.stdout
     assert re.search(r'^numpy\s+warm\s+1\s+\d', proc.stdout, re.M), proc.stdout
+
+
+FAILING_NODE = """
+import sys
+from spatial_dynamics.tools import startup
+startup.node_command = lambda *names: [sys.executable, '-c', 'import sys; sys.exit(3)']
+sys.exit(startup.main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.ros
+def test_startup_tool_says_in_one_line_why_a_run_failed(install, tmp_path):
+    out = tmp_path / 'startup.json'
+    proc = subprocess.run(
+        [sys.executable, '-c', FAILING_NODE, '--urdf', DEMO_URDF, '--runs', '1',
+         '--backend', 'numpy', '--hold', '0.5', '--timeout', str(TIMEOUT), '--json', str(out)],
+        env=install.env(), capture_output=True, text=True, timeout=TIMEOUT + 60, cwd=tmp_path)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert 'Traceback' not in proc.stderr, proc.stderr
+    assert 'start-up: numpy cold: the node exited with status 3\n' in proc.stderr, proc.stderr
+    assert not out.exists()
+
+
+def tool_children(pid: int):
+    """Return the pids of the children of process ``pid`` (all its threads')."""
+    children = []
+    for tid in os.listdir(f'/proc/{pid}/task'):
+        with open(f'/proc/{pid}/task/{tid}/children') as f:
+            children += [int(c) for c in f.read().split()]
+    return children
+
+
+@pytest.mark.ros
+def test_startup_tool_on_sigterm_stops_its_node_before_it_exits(install, tmp_path):
+    log = tmp_path / 'logs' / 'numpy_cold_0.log'
+    # --hold: the node is still running when the signal comes, however slow the machine
+    tool = subprocess.Popen(
+        [sys.executable, '-m', 'spatial_dynamics.tools.startup', '--urdf', DEMO_URDF,
+         '--runs', '1', '--backend', 'numpy', '--hold', '600', '--log-dir',
+         str(tmp_path / 'logs')],
+        env=install.env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        cwd=tmp_path)
+    try:
+        deadline = time.monotonic() + TIMEOUT
+        while not (log.exists() and log.read_text().strip()):      # the node is up
+            assert tool.poll() is None and time.monotonic() < deadline, tool.communicate()
+            time.sleep(0.1)
+        nodes = tool_children(tool.pid)
+        assert len(nodes) == 1, nodes
+        tool.send_signal(signal.SIGTERM)       # to the tool only
+        out, err = tool.communicate(timeout=TIMEOUT)
+    finally:
+        if tool.poll() is None:
+            tool.kill()
+            tool.wait()
+    assert tool.returncode == 128 + signal.SIGTERM, out + err
+    assert 'Traceback' not in err and 'interrupted (SIGTERM)' in err, err
+    assert not os.path.exists(f'/proc/{nodes[0]}'), 'the node outlived the tool'

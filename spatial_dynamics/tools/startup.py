@@ -35,7 +35,6 @@ import contextlib
 import json
 import os
 import shutil
-import signal
 import sys
 import sysconfig
 import tempfile
@@ -46,7 +45,10 @@ import numpy as np
 
 import spatial_dynamics as sd
 from spatial_dynamics import files
-from .driving import demo_urdf, node_command, outputs_error, rss_bytes, Sinusoids, start, stop
+from .driving import (
+    demo_urdf, Interrupt, node_command, outputs_error, path_text, robot_model, rss_bytes,
+    Sinusoids, start, stop)
+from .latency import in_range
 from .latency_report import json_safe
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
@@ -56,6 +58,7 @@ BACKENDS = ('auto', 'numpy', 'compiled')
 TOLERANCE = 1e-9       # N m: an answer is correct when every effort is this close to τ
 UR5 = ('ur_description', 'urdf', 'ur5_robot.urdf')
 MB = 1024 * 1024
+SPIN = 0.1             # s: the longest wait in rclpy, so that a signal is handled this soon
 
 
 def example_robot(*parts: str) -> Optional[str]:
@@ -73,6 +76,11 @@ def example_robot(*parts: str) -> Optional[str]:
         if os.path.isfile(path):
             return path
     return None
+
+
+def robot_path(urdf: Optional[str]) -> str:
+    """Return the robot of ``--urdf``: it, else the UR5 of example-robot-data, else the demo."""
+    return urdf or example_robot(*UR5) or demo_urdf()
 
 
 def proc_status_bytes(pid: int, key: str) -> int:
@@ -181,36 +189,49 @@ class Probe:
         self.bench.destroy_publisher(self.publisher)
 
 
+def log_name(label: str, index: int) -> str:
+    """Return the name of a node's log in ``--log-dir``: ``<backend>_<cache>_<index>.log``."""
+    return f'{label.replace(" ", "_")}_{index}.log'
+
+
 def run_once(executor, bench, model, urdf: str, backend: str, cache_dir: str, label: str,
-             args: argparse.Namespace, index: int) -> Dict[str, object]:
-    """Start one node with inputs flowing; measure until it is settled; stop it."""
+             args: argparse.Namespace, index: int, interrupt: Interrupt) -> Dict[str, object]:
+    """Start one node with inputs flowing; measure until it is settled; stop it.
+
+    Raises RuntimeError when the node exits or gives no settled answer within
+    ``args.timeout`` s (of its start; after ``--hold``), KeyboardInterrupt on a signal
+    (``interrupt``); the node is stopped and waited for either way.
+    """
     namespace = f'/sd_startup_{os.getpid()}_{index}'
     probe = Probe(bench, namespace, model)
     trajectory = Sinusoids.for_model(model)
     period = 1.0 / args.rate
     t0 = time.monotonic()
 
-    def tick(until) -> None:
-        """Publish on the period's grid and spin until ``until()`` (or the timeout)."""
+    def tick(until, deadline: float, late: str) -> None:
+        """Publish on the period's grid and spin until ``until()`` (or ``deadline``)."""
         while not until():
             now = time.monotonic()
-            if now - t0 > args.timeout:
-                raise RuntimeError(f'{label}: no settled answer within {args.timeout:g} s '
-                                   f'(answers {probe.answers}, wrong {probe.wrong})')
+            if now > deadline:
+                raise RuntimeError(f'{label}: {late} (answers {probe.answers}, '
+                                   f'wrong {probe.wrong})')
             if now >= t0 + probe.sent * period:
                 probe.publish(*trajectory(now - t0))
-            executor.spin_once(timeout_sec=max(0.0, t0 + probe.sent * period
-                                               - time.monotonic()))
+            # bounded: a signal is handled only once rclpy returns
+            executor.spin_once(timeout_sec=min(SPIN, max(0.0, t0 + probe.sent * period
+                                                         - time.monotonic())))
 
-    tick(lambda: time.monotonic() - t0 > args.lead)     # inputs flowing before the start
-    log = args.log_dir and os.path.join(args.log_dir, f'{label.replace(" ", "_")}_{index}.log')
-    with bytecode_cache(cache_dir):
-        started = time.monotonic()
-        proc = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'), namespace,
-                     {'robot_description_file': urdf, 'backend': backend}, log)
-    rss_first: List[int] = []
-    probe.on_first = lambda: rss_first.append(proc_status_bytes(proc.pid, 'VmRSS'))
+    proc = None
     try:
+        # inputs flowing before the start
+        tick(lambda: time.monotonic() - t0 > args.lead, float('inf'), '')
+        log = args.log_dir and os.path.join(args.log_dir, log_name(label, index))
+        with bytecode_cache(cache_dir), interrupt.held():   # a signal: once proc is recorded
+            started = time.monotonic()
+            proc = start(node_command('inverse_dynamics', 'spatial_dynamics.ros.node'),
+                         namespace, {'robot_description_file': urdf, 'backend': backend}, log)
+        rss_first: List[int] = []
+        probe.on_first = lambda: rss_first.append(proc_status_bytes(proc.pid, 'VmRSS'))
         matched: List[float] = []
 
         def answered() -> bool:
@@ -218,11 +239,16 @@ def run_once(executor, bench, model, urdf: str, backend: str, cache_dir: str, la
                 matched.append(time.monotonic() - started)
             return probe.first is not None or proc.poll() is not None
 
-        tick(answered)
+        tick(answered, started + args.timeout,
+             f'no correct answer within --timeout {args.timeout:g} s of the start')
         if probe.first is None:
-            raise RuntimeError(f'{label}: the node exited with status {proc.returncode}')
+            raise RuntimeError(f'{label}: the node exited with status {proc.returncode}'
+                               + (f' (see {log})' if log else ''))
         tick(lambda: time.monotonic() - probe.first > args.hold and probe.backend
-             and 'preparing' not in probe.backend)
+             and 'preparing' not in probe.backend,
+             probe.first + args.hold + args.timeout,
+             f'its backend not settled within --timeout {args.timeout:g} s after --hold '
+             f'(backend {probe.backend!r})')
         row = {
             'backend': backend, 'cache': label.split()[-1],
             'first_answer_s': probe.first - started,
@@ -236,8 +262,9 @@ def run_once(executor, bench, model, urdf: str, backend: str, cache_dir: str, la
             'answers': probe.answers,
             'wrong': probe.wrong, 'backend_in_use': probe.backend}
     finally:
-        row_exit = stop(proc)
-        probe.close()
+        with interrupt.held():      # a second signal: once the node is waited for
+            row_exit = None if proc is None else stop(proc)
+            probe.close()
     row['exit_status'] = row_exit
     return row
 
@@ -273,50 +300,90 @@ def format_table(rows: List[Dict[str, object]]) -> str:
                      for row in cells)
 
 
+RUNS = 1000            # at most: each run is a few seconds per backend
+
+
 def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         prog='python -m spatial_dynamics.tools.startup', description=__doc__.split('\n\n')[0])
-    parser.add_argument('--urdf', default=None,
+    parser.add_argument('--urdf', type=path_text, default=None,
                         help='robot (default: the UR5 of example-robot-data, else the demo arm)')
-    parser.add_argument('--runs', type=int, default=3, help='cold + warm pairs (default 3)')
+    parser.add_argument('--runs', type=in_range(int, 1, RUNS), default=3,
+                        help=f'cold + warm pairs, 1 .. {RUNS} (default 3)')
     parser.add_argument('--backend', nargs='+', choices=BACKENDS, default=['auto'],
-                        help="the node's backend parameter, one or more (default auto)")
-    parser.add_argument('--rate', type=float, default=100.0, help='input Hz (default 100)')
-    parser.add_argument('--lead', type=float, default=0.5,
-                        help='seconds of input before the node starts (default 0.5)')
-    parser.add_argument('--hold', type=float, default=3.0,
-                        help='seconds after the first answer before the peak is read '
-                             '(default 3; longer while compiled kernels are prepared)')
-    parser.add_argument('--timeout', type=float, default=300.0,
-                        help='give up on a node after this many seconds (default 300)')
-    parser.add_argument('--json', default=None, help='also write the rows here')
-    parser.add_argument('--log-dir', default=None, help='node logs (default: none)')
+                        help="the node's backend parameter, one or more, each once "
+                             '(default auto)')
+    parser.add_argument('--rate', type=in_range(float, 1.0, 10000.0), default=100.0,
+                        help='input Hz, 1 .. 10000 (default 100)')
+    parser.add_argument('--lead', type=in_range(float, 0.0, 60.0), default=0.5,
+                        help='seconds of input before the node starts, 0 .. 60 (default 0.5)')
+    parser.add_argument('--hold', type=in_range(float, 0.0, 3600.0), default=3.0,
+                        help='seconds after the first answer before the peak is read, '
+                             '0 .. 3600 (default 3; longer while compiled kernels are '
+                             'prepared)')
+    parser.add_argument('--timeout', type=in_range(float, 0.0, 86400.0, True), default=300.0,
+                        help='give up on a node with no correct answer this many seconds '
+                             'after its start (and with its backend not settled this long '
+                             'after --hold), above 0, at most 86400 (default 300)')
+    parser.add_argument('--json', type=path_text, default=None,
+                        help='also write the rows here (only when every run ran to its end)')
+    parser.add_argument('--log-dir', type=path_text, default=None,
+                        help='node logs (default: none)')
     args = parser.parse_args(argv)
-    # their folders are created before the run: one a file cannot be created in is refused
-    error = outputs_error([('--json', args.json)], [('--log-dir', args.log_dir)])
+    twice = sorted({b for b in args.backend if args.backend.count(b) > 1})
+    if twice:
+        parser.error(f'--backend {" ".join(twice)} given more than once')
+    # their folders are created before the run: one a file cannot be created in is refused;
+    # no output may be the robot description read (the default one too) nor a node's log
+    urdf = robot_path(args.urdf)
+    outputs = [('--json', args.json)]
+    if args.log_dir:        # of its logs (thousands), those that are another path of the run
+        taken = {files.output_path(p) for p in (args.json, urdf) if p}
+        labels = [f'{backend} {cache}' for _ in range(args.runs) for backend in args.backend
+                  for cache in ('cold', 'warm')]
+        for index, label in enumerate(labels):
+            path = os.path.join(args.log_dir, log_name(label, index))
+            if files.output_path(path) in taken:
+                outputs.append(("--log-dir's log", path))
+    error = outputs_error(outputs, [('--log-dir', args.log_dir)], [('--urdf', urdf)])
     if error:
         parser.error(error)
     return args
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Measure; print the table; 0 if every run answered correctly."""
-    args = parse_args(argv)
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.signals import SignalHandlerOptions
+    """Measure; print the table; 0 if every run answered correctly.
 
-    urdf = os.path.abspath(args.urdf or example_robot(*UR5) or demo_urdf())
-    model = sd.Model.from_urdf(urdf)
+    1 when a run did not end (the node exited, no settled answer in time) or the robot
+    cannot be loaded or has no joints; 128 + the signal's number on SIGINT or SIGTERM, once
+    the node running is stopped.
+    """
+    args = parse_args(argv)
+    interrupt = Interrupt().install()   # from here on: also while loading
+    try:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.signals import SignalHandlerOptions
+        urdf, model = robot_model(robot_path(args.urdf))
+    except KeyboardInterrupt:
+        print(f'start-up: interrupted ({interrupt.name}) while loading', file=sys.stderr)
+        return interrupt.status
+    except (OSError, ValueError) as err:
+        print(f'start-up: --urdf {robot_path(args.urdf)!r}: {err}', file=sys.stderr)
+        return 1
+    if not model.joint_names:
+        print(f'start-up: --urdf {urdf!r}: the robot has no joints: nothing to answer',
+              file=sys.stderr)
+        return 1
     if args.log_dir:
         os.makedirs(args.log_dir, exist_ok=True)
-    signal.signal(signal.SIGINT, signal.default_int_handler)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     bench = rclpy.create_node('startup_bench')
     executor = SingleThreadedExecutor()
     executor.add_node(bench)
     rows: List[Dict[str, object]] = []
     index = 0
+    status = 0
     try:
         for run in range(args.runs):
             for backend in args.backend:
@@ -324,22 +391,43 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 try:
                     for cache in ('cold', 'warm'):
                         rows.append(run_once(executor, bench, model, urdf, backend, cache_dir,
-                                             f'{backend} {cache}', args, index))
+                                             f'{backend} {cache}', args, index, interrupt))
                         index += 1
                         print(_row_line(rows[-1]), flush=True)
                 finally:
                     shutil.rmtree(cache_dir, ignore_errors=True)
-    except KeyboardInterrupt:
-        return 130
+    except (KeyboardInterrupt, RuntimeError) as err:
+        # a KeyboardInterrupt raised inside rclpy's message conversion comes as RuntimeError;
+        # Ctrl-C reaches the node too: its exit then is no failure
+        if interrupt.signal is None and isinstance(err, RuntimeError):
+            print(f'start-up: {err}', file=sys.stderr)
+            status = 1
+        else:
+            print(f'start-up: interrupted ({interrupt.name}); the node stopped',
+                  file=sys.stderr)
+            status = interrupt.status
     finally:
-        bench.destroy_node()
-        rclpy.try_shutdown()
+        try:
+            with interrupt.held():
+                bench.destroy_node()
+                rclpy.try_shutdown()
+        except KeyboardInterrupt:   # a second signal meanwhile: its status
+            status = interrupt.status
+    if status and interrupt.signal is not None:
+        return status
     print(f'start-up: {model.name} ({len(model.joint_names)} joints, {urdf}), inputs at '
-          f'{args.rate:g} Hz from before the start; min / median / max of {args.runs} run(s)')
-    print(format_table(rows))
+          f'{args.rate:g} Hz from before the start; min / median / max of '
+          f'{len(rows) // (2 * len(args.backend))} run(s)')
+    if rows:
+        print(format_table(rows))
+    if status:
+        if args.json:   # figures of some of the runs are no run's figures: keep an earlier file
+            print(f'start-up: --json {args.json!r} not written (not every run ran to its end)',
+                  file=sys.stderr)
+        return status
     if args.json:       # whole or not at all: a reader never sees half of it
         try:
-            os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+            os.makedirs(os.path.dirname(files.output_path(args.json)), exist_ok=True)
             files.write_atomic(args.json, json.dumps(
                 {'robot': model.name, 'urdf': urdf, 'rate_hz': args.rate,
                  'rows': json_safe(rows)}, indent=2, allow_nan=False), '--json')
