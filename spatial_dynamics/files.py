@@ -344,8 +344,10 @@ def write_atomic(path: Union[str, os.PathLike], data: Union[str, bytes, Callable
     target = output_path(path)
     folder = os.path.dirname(target)
     try:
-        fd, tmp = tempfile.mkstemp(prefix='.' + os.path.basename(target) + '.', suffix='.tmp',
-                                   dir=folder)
+        # the temporary's name within NAME_MAX whatever the file's (a 250-byte name fits, its
+        # '.NAME.XXXXXXXX.tmp' would not): the name cut to 200 bytes in it
+        stem = os.fsencode(os.path.basename(target))[:200].decode(errors='ignore')
+        fd, tmp = tempfile.mkstemp(prefix='.' + stem + '.', suffix='.tmp', dir=folder)
     except OSError as err:
         raise ValueError(f'cannot write {what} {shown_path!r}: {err.strerror}') from None
     try:

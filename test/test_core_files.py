@@ -172,3 +172,16 @@ def test_a_folder_that_makes_no_file_says_so_not_no_such_file():
     with pytest.raises(ValueError, match='cannot create a file in the folder') as caught:
         files.check_output('/proc/x.json', '--json')
     assert 'No such file' not in str(caught.value)
+
+
+def test_a_file_whose_name_is_near_the_limit_is_written(tmp_path):
+    """A 250-byte name passes the check, and its file is written.
+
+    The temporary beside it ('.NAME.XXXXXXXX.tmp', 264 bytes) could not be made: the run's
+    result was lost at its very end.
+    """
+    name = 'r' * 245 + '.json'
+    files.check_output(tmp_path / name, '--json')
+    files.write_atomic(tmp_path / name, '{}', '--json')
+    assert (tmp_path / name).read_text() == '{}'
+    assert os.listdir(tmp_path) == [name]       # no temporary left beside it
