@@ -446,15 +446,32 @@ def test_closed_loop_refuses_an_empty_json_and_a_law_given_twice(capsys):
         assert exit.value.code == 2 and said in err, err
 
 
-def test_closed_loop_says_the_highest_frequency_whose_gains_the_node_takes():
+def test_closed_loop_refuses_a_frequency_its_1_ms_sampling_cannot_hold():
+    """The highest frequency it suggested (134 Hz on the demo arm) diverged at the 1 ms step.
+
+    That run's lockstep then stalled until ``--timeout``. Above ω·dt = 0.5 it is refused.
+    """
+    import math
+    from spatial_dynamics.tools import closed_loop
+    urdf, model = closed_loop.robot_model(None)
+    top = closed_loop.MAX_OMEGA_DT / (2.0 * math.pi * closed_loop.TIMESTEP)
+    assert closed_loop.laws_error(model, [0, 1, 2], 0.99 * top) is None
+    error = closed_loop.laws_error(model, [0], 1.01 * top)
+    assert error is not None and 'sampled every 1 ms' in error, error
+    assert f'at most {math.floor(top * 10) / 10:g} Hz' in error, error
+
+
+def test_closed_loop_says_the_highest_frequency_whose_gains_the_node_takes(monkeypatch):
     """``--frequency 600`` is refused first, with the highest frequency that fits.
 
     It ended with 'the node exited' (its log: kp 1.58e6 beyond 1e6). The frequency said has
-    its gains within the node's bounds, and 1 % more is beyond them.
+    its gains within the node's bounds, and 1 % more is beyond them (the sampling's bound
+    lifted here: it is lower on the demo arm).
     """
     import re
     from spatial_dynamics.ros.control import MAX_KD, MAX_KP
     from spatial_dynamics.tools import closed_loop
+    monkeypatch.setattr(closed_loop, 'MAX_OMEGA_DT', 1e9)
     urdf, model = closed_loop.robot_model(None)
     q0 = closed_loop.start_point(model)
     for picks in ([0], [2], [0, 1, 2]):
@@ -1038,3 +1055,23 @@ def test_closed_loop_says_what_a_plot_is_before_its_suffix(tmp_path, capsys):
             closed_loop.parse_args(['--plot', str(path)])
         err = capsys.readouterr().err
         assert exit.value.code == 2 and said in err and 'format' not in err, err
+
+
+def test_closed_loop_refuses_a_simulated_robot_of_other_joints_and_a_path_with_a_line_break(
+        tmp_path, capsys, handlers_kept):
+    """A --robot-urdf whose joints are not --urdf's, a path with a line break: refused first.
+
+    Both started the nodes, then "the sim exited" (its log: "q: expected 6 values, got shape
+    (8,)") or "the node exited" (the line break read as a space by the -p rule's YAML).
+    """
+    from spatial_dynamics.tools import closed_loop
+    lone = tmp_path / 'lone.urdf'
+    lone.write_text("<robot name='lone'><link name='base'/></robot>")
+    assert closed_loop.main(['--robot-urdf', str(lone), '--plot', '']) == 1
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'are not those of --urdf' in err, err
+    for option in ('--urdf', '--robot-urdf', '--json', '--log-dir'):
+        with pytest.raises(SystemExit) as exit:
+            closed_loop.parse_args([option, str(tmp_path / 'a\nb'), '--plot', ''])
+        err = capsys.readouterr().err
+        assert exit.value.code == 2 and 'line break' in err, err

@@ -71,6 +71,27 @@ def _children(pid: int):
         return [int(x) for x in f.read().split()]
 
 
+def test_a_loop_that_diverges_ends_its_law_with_the_simulators_refusal(install, tmp_path):
+    """PD alone at 78 Hz on the demo arm (coupled, light joints) diverges at the 1 ms step.
+
+    The simulator then refused the node's command (beyond 1e6 N m), republished its state,
+    and the node, which answers a measurement once, did not answer again: the law waited for
+    ``--timeout`` (120 s) and said only "without finishing". It now ends once no step came for
+    ``STALL_S``, saying the simulator waits for a command it takes and why it refused one.
+    """
+    from spatial_dynamics.tools import closed_loop
+    proc = subprocess.run(
+        [sys.executable, '-m', 'spatial_dynamics.tools.closed_loop', '--laws', 'pd',
+         '--frequency', '78', '--seconds', '3', '--timeout', '300', '--plot', '',
+         '--log-dir', str(tmp_path)],
+        env=install.env(), cwd=str(tmp_path), capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    said = proc.stderr
+    assert f'no step for {closed_loop.STALL_S:g} s' in said, said
+    assert 'the simulator waits for a command it takes' in said and 'refused' in said, said
+    assert 'without finishing' not in said, said
+
+
 def _running(pid: int) -> bool:
     try:
         with open(f'/proc/{pid}/stat') as f:

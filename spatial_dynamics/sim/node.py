@@ -41,8 +41,8 @@ Modes (parameter ``mode``):
   Stamps are wall-clock time.
 * ``lockstep``: the state of step k is published, then the node waits for exactly one good
   command, applies it for one step and publishes step k+1. While it waits, it republishes the
-  current state every 0.1 s of wall time, so a controller that starts late or a lost message
-  cannot deadlock it (a controller must therefore answer each state once, within 0.1 s, or
+  current state every 0.1 s of wall time, so a controller that starts late or a lost state
+  message cannot deadlock it (a controller must therefore answer each state once, within 0.1 s, or
   its extra answers drive the next steps). Stamps are sim time, from 0.
 
 A bad command (wrong length, NaN or infinite, magnitude above 1e6) is refused with the

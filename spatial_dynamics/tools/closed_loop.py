@@ -59,8 +59,8 @@ import numpy as np
 import spatial_dynamics as sd
 from spatial_dynamics import files
 from .driving import (
-    Interrupt, node_command, outputs_error, path_text, plot_path_error, pyplot, redraw,
-    robot_model, save_figure, start, stop)
+    Interrupt, last_error, node_command, outputs_error, path_text, plot_path_error, pyplot,
+    redraw, robot_model, save_figure, start, stop)
 from .latency import in_range
 from .latency_report import json_safe
 from .latency_targets import busy_loop, end_loop
@@ -77,6 +77,14 @@ TIMESTEP = 0.001
 #: answered within ~100 µs of a sample (its own answering loop), the simulator's next state
 #: overtook the desired state of its step in a quarter of the steps with no pause here.
 DELIVERY = 0.002
+#: Wall seconds without a simulated step that end a law: lockstep waits for a command it
+#: takes, and a command it refused (a loop that diverged past 1e6 N m) is not sent again for
+#: the same state (the node answers each measurement once).
+STALL_S = 10.0
+#: The closed loop's sampling: ω·dt of a critically damped PD beyond it diverges at the 1 ms
+#: step (semi-implicit Euler); on a coupled arm (the demo arm) it may diverge below it too, and
+#: the law then ends within STALL_S.
+MAX_OMEGA_DT = 0.5
 #: The simulator's command topic: the relay (:class:`Lockstep`) forwards the node's commands.
 SIM_COMMANDS = 'sim_effort_commands'
 
@@ -117,6 +125,11 @@ def laws_error(model, picks: Sequence[int], frequency: float) -> Optional[str]:
     from spatial_dynamics.ros.control import MAX_KD, MAX_KP
     if not model.joint_names:
         return f'the robot {model.name!r} has no joints: nothing to control'
+    sampled = MAX_OMEGA_DT / (2.0 * math.pi * TIMESTEP)
+    if frequency > sampled:
+        return (f'--frequency {frequency:g}: the loop is sampled every {TIMESTEP * 1e3:g} ms, '
+                f'and a critically damped PD diverges beyond ω·dt = {MAX_OMEGA_DT:g}: at most '
+                f'{math.floor(sampled * 10) / 10:g} Hz')
     q0 = start_point(model)
     for k in picks:
         name, settings = LAWS[k]
@@ -146,8 +159,9 @@ def parse_args(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         help='simulated seconds per control law, above 0, at most 3600 '
                              '(default 6)')
     parser.add_argument('--frequency', type=in_range(float, 0.0, 1000.0, True), default=5.0,
-                        help='natural frequency of the feedback loop, Hz, above 0, at most 1000 '
-                             '(default 5)')
+                        help='natural frequency of the feedback loop, Hz, above 0 (default 5); '
+                             'at most 79.5 at the 1 ms step, and the gains it gives must be '
+                             "ones the node takes (said before the run)")
     parser.add_argument('--amplitude', type=in_range(float, 0.0, 10.0), default=0.4,
                         help='amplitude A of each joint, rad or m, 0 .. 10 (default 0.4)')
     parser.add_argument('--laws', type=laws, default='all',
@@ -524,6 +538,7 @@ def _drive(name, settings, urdf, model, args, rclpy_mods, show, interrupt, names
         os.path.join(logs, f'{slug}_node.log'))
     made.callback(stop, node)      # stopped first (callbacks run last in, first out)
     run = Run(name, names)
+    progress = [-math.inf, None]        # the latest simulated time seen, and when
     driver = rclpy.create_node('closed_loop_driver', namespace=namespace)
     made.callback(driver.destroy_node)
     index = None
@@ -533,6 +548,8 @@ def _drive(name, settings, urdf, model, args, rclpy_mods, show, interrupt, names
         if index is None:
             index = [list(state.name).index(j) for j in names]
         t = state.header.stamp.sec + state.header.stamp.nanosec * 1e-9
+        if t > progress[0]:         # the simulator stepped
+            progress[:] = [t, time.monotonic()]
         q = np.array(state.position)[index]
         if plans is not None:
             plans.on_state(t, q)
@@ -549,6 +566,7 @@ def _drive(name, settings, urdf, model, args, rclpy_mods, show, interrupt, names
                                                watched=states, depth=depth)
     wall0 = time.monotonic()
     next_show = wall0
+    sim_log = os.path.join(logs, f'{slug}_sim.log')
     try:
         while not run.t or run.t[-1] < args.seconds:
             if interrupt is not None and interrupt.signal is not None:
@@ -556,6 +574,13 @@ def _drive(name, settings, urdf, model, args, rclpy_mods, show, interrupt, names
             if sim.poll() is not None or node.poll() is not None:
                 raise RuntimeError(f'{name}: the {"sim" if sim.poll() is not None else "node"} '
                                    f'exited (see {logs}/)')
+            if progress[1] is not None and time.monotonic() - progress[1] > STALL_S:
+                # a command the simulator refused (a diverged loop: beyond 1e6) is not sent
+                # again for the same state (one answer per measurement): lockstep waits
+                why = last_error(sim_log, 'refused') or last_error(sim_log)
+                raise RuntimeError(f'{name}: no step for {STALL_S:g} s at {progress[0]:.3f} s '
+                                   f'simulated: the simulator waits for a command it takes'
+                                   + (f' (its log: {why})' if why else ''))
             if time.monotonic() - wall0 > args.timeout:
                 raise RuntimeError(f'{name}: {args.timeout:g} s without finishing '
                                    f'({run.t[-1] if run.t else 0:.3f} s simulated)')
@@ -633,7 +658,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         urdf, model = robot_model(args.urdf)
         if args.robot_urdf:     # the simulator's: refused here, not as 'the sim exited'
             option = '--robot-urdf'
-            robot_model(args.robot_urdf)
+            simulated = robot_model(args.robot_urdf)[1]
+            if sorted(simulated.joint_names) != sorted(model.joint_names):
+                raise ValueError(f'its joints {sorted(simulated.joint_names)} are not those '
+                                 f'of --urdf {sorted(model.joint_names)}: the simulator '
+                                 'takes the node\'s command for every joint of --urdf')
     except KeyboardInterrupt:
         print(f'closed loop: interrupted ({interrupt.name}) while loading', file=sys.stderr)
         return interrupt.status

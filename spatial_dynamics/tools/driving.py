@@ -332,9 +332,17 @@ PLOT_FORMATS = ('eps', 'jpeg', 'jpg', 'pdf', 'pgf', 'png', 'ps', 'raw', 'rgba', 
 
 
 def path_text(text: str) -> str:
-    """Return ``text``, an argparse type of a path: an empty one is refused (it names nothing)."""
+    """Return ``text``, an argparse type of a path: an empty one is refused (it names nothing).
+
+    A line break or another control character is refused too: a path reaches the nodes as a
+    ``-p name:=value`` rule, whose value is YAML (a line break read as a space: the node
+    looked for another file).
+    """
     if not text:
         raise argparse.ArgumentTypeError('an empty path names no file')
+    if any(ord(c) < 32 or ord(c) == 127 for c in text):
+        raise argparse.ArgumentTypeError(f'{text!r}: a path with a line break or another '
+                                         'control character cannot be passed to a ROS node')
     return text
 
 
