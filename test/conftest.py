@@ -246,6 +246,16 @@ def least_torque_split(Jc, b, tol):
 
 
 @pytest.fixture
+def handlers_kept():
+    """Restore SIGINT's and SIGTERM's handlers after a tool's ``main`` installed its own."""
+    import signal
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    yield
+    for s, handler in previous.items():
+        signal.signal(s, handler)
+
+
+@pytest.fixture
 def rng():
     """Return a seeded random generator."""
     return np.random.default_rng(20260121)

@@ -342,16 +342,6 @@ def test_a_urdf_that_cannot_be_loaded_is_one_line(tmp_path, capsys):
     assert err.count('\n') == 1 and '--urdf' in err and 'malformed' in err, err
 
 
-@pytest.fixture
-def handlers_kept():
-    """Restore SIGINT's and SIGTERM's handlers after a tool's ``main`` installed its own."""
-    import signal
-    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    yield
-    for s, handler in previous.items():
-        signal.signal(s, handler)
-
-
 @pytest.mark.parametrize('argv', [['--plot', 'x.txt'], ['--plot', 'x.json', '--json', 'x.json'],
                                   ['--json', '.']])
 def test_closed_loop_refuses_outputs_it_cannot_write_first(argv, tmp_path, capsys, monkeypatch):

@@ -4,7 +4,6 @@
 
 import os
 import shutil
-import signal
 
 import pinocchio
 import pytest
@@ -20,15 +19,6 @@ NO_JOINTS = """<robot name="one_link">
   </link>
 </robot>
 """
-
-
-@pytest.fixture
-def handlers():
-    """Give back the SIGINT and SIGTERM handlers after ``main`` installed its own."""
-    saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    yield
-    for s, handler in saved.items():
-        signal.signal(s, handler)
 
 
 def refusal(argv, capsys) -> str:
@@ -124,7 +114,7 @@ def test_the_json_and_the_robot_cannot_be_a_node_log(tmp_path, capsys):
     assert '--urdf reads' in err, err
 
 
-def test_a_robot_with_no_joints_is_refused_at_start(tmp_path, capsys, handlers):
+def test_a_robot_with_no_joints_is_refused_at_start(tmp_path, capsys, handlers_kept):
     urdf = tmp_path / 'one_link.urdf'
     urdf.write_text(NO_JOINTS)
     assert pinocchio.buildModelFromUrdf(str(urdf)).nv == 0     # nothing to answer indeed
@@ -134,7 +124,7 @@ def test_a_robot_with_no_joints_is_refused_at_start(tmp_path, capsys, handlers):
     assert err == f"start-up: --urdf '{urdf}': the robot has no joints: nothing to answer\n"
 
 
-def test_a_fifo_as_the_robot_is_one_line(tmp_path, capsys, handlers):
+def test_a_fifo_as_the_robot_is_one_line(tmp_path, capsys, handlers_kept):
     fifo = tmp_path / 'robot.urdf'
     os.mkfifo(fifo)
     assert main(['--urdf', str(fifo), '--runs', '1', '--timeout', '1']) == 1

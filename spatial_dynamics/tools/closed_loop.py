@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import math
 import os
 import signal
@@ -62,7 +61,7 @@ from .driving import (
     Interrupt, last_error, node_command, outputs_error, path_text, plot_path_error, pyplot,
     redraw, robot_model, save_figure, start, stop)
 from .latency import in_range
-from .latency_report import json_safe
+from .latency_report import write_json
 from .latency_targets import busy_loop, end_loop
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
@@ -737,12 +736,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
               file=sys.stderr)
     elif args.json:     # whole or not at all: a reader never sees half of it
         try:
-            os.makedirs(os.path.dirname(files.output_path(args.json)), exist_ok=True)
-            files.write_atomic(args.json, json.dumps(
-                {'robot': model.name, 'urdf': urdf, 'robot_urdf': args.robot_urdf or urdf,
-                 'frequency_hz': args.frequency, 'busy': args.busy,
-                 'thread_priority': args.priority, 'timestep_s': TIMESTEP,
-                 'laws': json_safe(summaries)}, indent=1, allow_nan=False), '--json')
+            write_json(args.json, {
+                'robot': model.name, 'urdf': urdf, 'robot_urdf': args.robot_urdf or urdf,
+                'frequency_hz': args.frequency, 'busy': args.busy,
+                'thread_priority': args.priority, 'timestep_s': TIMESTEP, 'laws': summaries})
         except (OSError, ValueError) as err:
             print(f'closed loop: {err}', file=sys.stderr)
             status = status or 1

@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import textwrap
 from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-from spatial_dynamics.files import write_atomic
+from spatial_dynamics.files import output_path, write_atomic
 
 from .driving import pyplot, save_figure
 from .latency_pacer import LATE_LIMIT_S
@@ -182,7 +183,12 @@ def plot(path: str, targets: List[Target], title: str,
 
 
 def write_json(path: str, results: Dict[str, object]) -> None:
-    """Write ``results`` to ``path`` (``--json``), all or nothing; ValueError names the path."""
+    """Write ``results`` to ``path`` (``--json``), all or nothing; ValueError names the path.
+
+    Strict JSON (:func:`json_safe`: null for NaN and ±inf, nested too); the folder the file
+    goes in (:func:`~spatial_dynamics.files.output_path`) is made first.
+    """
+    os.makedirs(os.path.dirname(output_path(path)), exist_ok=True)
     write_atomic(path, json.dumps(json_safe([results])[0], indent=2, allow_nan=False) + '\n',
                  '--json')
 

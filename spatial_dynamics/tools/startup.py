@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import os
 import shutil
 import sys
@@ -49,7 +48,7 @@ from .driving import (
     demo_urdf, Interrupt, node_command, outputs_error, path_text, robot_model, rss_bytes,
     Sinusoids, start, stop)
 from .latency import in_range
-from .latency_report import json_safe
+from .latency_report import write_json
 
 # rclpy and the ROS messages are imported inside the functions that run a node: the options
 # are parsed (and --help printed) without ROS, and rclpy alone takes some 0.1 s to import.
@@ -427,10 +426,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return status
     if args.json:       # whole or not at all: a reader never sees half of it
         try:
-            os.makedirs(os.path.dirname(files.output_path(args.json)), exist_ok=True)
-            files.write_atomic(args.json, json.dumps(
-                {'robot': model.name, 'urdf': urdf, 'rate_hz': args.rate,
-                 'rows': json_safe(rows)}, indent=2, allow_nan=False), '--json')
+            write_json(args.json, {'robot': model.name, 'urdf': urdf, 'rate_hz': args.rate,
+                                   'rows': rows})
         except (OSError, ValueError) as err:
             print(f'start-up: {err}', file=sys.stderr)
             return 1
